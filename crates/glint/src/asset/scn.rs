@@ -1,0 +1,691 @@
+//! Meaning of `.scn` files: classnames and keys (see `docs/scn.md` for the full
+//! reference) turned into a [`SceneDesc`], checked without a GPU, and placed into
+//! a [`Renderer`] with [`SceneDesc::instantiate`].
+
+use super::scn_syntax::{parse_blocks, Block, Pair};
+use super::{load_texture, Diagnostic, ShapeKind, Texture};
+use crate::scene::{AlphaMode, Background, Camera, Entity, Environment, Light, Material, MaterialId};
+use crate::Renderer;
+use glam::{EulerRot, Mat4, Quat, Vec3, Vec4};
+use rand::{Rng, SeedableRng};
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+
+/// Most instances one scene file may place, over all blocks (10 million, 640 MB of
+/// transforms): counts above this are rejected rather than exhausting memory.
+pub const MAX_INSTANCES: u64 = 10_000_000;
+
+/// A texture a material uses: index into [`SceneDesc::textures`].
+pub type TextureRef = usize;
+
+/// A material from a `material` block, its maps as indices into [`SceneDesc::textures`].
+#[derive(Clone, Debug)]
+pub struct MaterialDesc {
+    /// Everything but the texture ids.
+    pub material: Material,
+    /// `diffuse_map` (sRGB).
+    pub diffuse_map: Option<TextureRef>,
+    /// `normal_map` (linear).
+    pub normal_map: Option<TextureRef>,
+    /// `specular_map` (linear).
+    pub specular_map: Option<TextureRef>,
+}
+
+/// One render task: every instance of one mesh with one material, gathered from
+/// all `entity` and `instances` blocks that use that pair.
+#[derive(Clone, Debug)]
+pub struct EntityDesc {
+    /// The shape.
+    pub mesh: ShapeKind,
+    /// Index into [`SceneDesc::materials`]; `None` for the default material.
+    pub material: Option<usize>,
+    /// One transform per instance.
+    pub transforms: Vec<Mat4>,
+}
+
+/// A parsed and validated scene file, ready to instantiate.
+#[derive(Clone, Debug)]
+pub struct SceneDesc {
+    /// The file it came from.
+    pub path: PathBuf,
+    /// Background and ambient light.
+    pub environment: Environment,
+    /// Cameras in file order (a default one when the file has none).
+    pub cameras: Vec<Camera>,
+    /// Lights in file order.
+    pub lights: Vec<Light>,
+    /// Materials in file order.
+    pub materials: Vec<MaterialDesc>,
+    /// Decoded textures, each file once.
+    pub textures: Vec<Texture>,
+    /// Render tasks, one per (mesh, material) pair, in first-use order.
+    pub entities: Vec<EntityDesc>,
+    /// Non-fatal problems (unknown keys, repeated keys), `path:line: message`.
+    pub warnings: Vec<Diagnostic>,
+}
+
+impl SceneDesc {
+    /// Total instances over all render tasks.
+    pub fn instance_count(&self) -> usize {
+        self.entities.iter().map(|e| e.transforms.len()).sum()
+    }
+
+    /// Add this scene's shapes, textures and materials to `renderer`, set its
+    /// environment, and return one entity per render task, ready to submit.
+    pub fn instantiate(&self, renderer: &mut Renderer) -> Vec<Entity> {
+        renderer.set_environment(self.environment);
+        let textures: Vec<_> = self.textures.iter().map(|t| renderer.add_texture(t.clone())).collect();
+        let materials: Vec<MaterialId> = self
+            .materials
+            .iter()
+            .map(|m| {
+                renderer.add_material(Material {
+                    diffuse_map: m.diffuse_map.map(|i| textures[i]),
+                    normal_map: m.normal_map.map(|i| textures[i]),
+                    specular_map: m.specular_map.map(|i| textures[i]),
+                    ..m.material.clone()
+                })
+            })
+            .collect();
+        let default_material = self
+            .entities
+            .iter()
+            .any(|e| e.material.is_none())
+            .then(|| renderer.add_material(Material::default()));
+        let mut shapes = HashMap::new();
+        self.entities
+            .iter()
+            .map(|e| {
+                let shape = *shapes.entry(e.mesh).or_insert_with(|| renderer.add_shape(e.mesh.mesh()));
+                let material = e.material.map_or_else(|| default_material.expect("added above"), |i| materials[i]);
+                Entity::instanced(shape, material, e.transforms.clone())
+            })
+            .collect()
+    }
+}
+
+/// Read, parse and validate a `.scn` file, decoding the textures it names.
+pub fn load_scene(path: &Path) -> Result<SceneDesc, Diagnostic> {
+    let text = std::fs::read_to_string(path).map_err(|e| Diagnostic::file(path, format!("cannot read scene: {e}")))?;
+    parse_scene(path, &text)
+}
+
+/// Parse and validate `.scn` text; `path` names it in messages and anchors
+/// relative texture paths.
+pub fn parse_scene(path: &Path, text: &str) -> Result<SceneDesc, Diagnostic> {
+    let blocks = parse_blocks(path, text)?;
+    let mut loader = Loader {
+        path,
+        dir: path.parent().unwrap_or(Path::new(".")).to_path_buf(),
+        scene: SceneDesc {
+            path: path.to_path_buf(),
+            environment: Environment::default(),
+            cameras: Vec::new(),
+            lights: Vec::new(),
+            materials: Vec::new(),
+            textures: Vec::new(),
+            entities: Vec::new(),
+            warnings: Vec::new(),
+        },
+        texture_index: HashMap::new(),
+        placements: Vec::new(),
+        instances: 0,
+    };
+    for block in &blocks {
+        loader.block(block)?;
+    }
+    loader.finish()
+}
+
+/// An `entity` or `instances` block before material names are resolved.
+struct Placement {
+    mesh: ShapeKind,
+    material: Option<(String, usize)>,
+    transforms: Vec<Mat4>,
+}
+
+struct Loader<'a> {
+    path: &'a Path,
+    dir: PathBuf,
+    scene: SceneDesc,
+    texture_index: HashMap<(PathBuf, bool), usize>,
+    placements: Vec<Placement>,
+    instances: u64,
+}
+
+/// The pairs of one block, looked up by key; reports keys never asked for.
+struct Fields<'b> {
+    path: &'b Path,
+    class: &'b str,
+    block: &'b Block,
+    used: Vec<bool>,
+}
+
+impl<'b> Fields<'b> {
+    fn get(&mut self, key: &str) -> Option<&'b Pair> {
+        let i = self.block.pairs.iter().rposition(|p| p.key == key)?;
+        self.used[i] = true;
+        Some(&self.block.pairs[i])
+    }
+
+    fn require(&mut self, key: &str) -> Result<&'b Pair, Diagnostic> {
+        self.get(key).ok_or_else(|| {
+            Diagnostic::at(self.path, self.block.line, format!("{} block is missing the required key \"{key}\"", self.class))
+        })
+    }
+
+    fn numbers<const N: usize>(&mut self, key: &str, what: &str) -> Result<Option<[f32; N]>, Diagnostic> {
+        self.get(key).map(|p| numbers::<N>(self.path, p, what)).transpose()
+    }
+
+    fn vec3(&mut self, key: &str) -> Result<Option<Vec3>, Diagnostic> {
+        Ok(self.numbers::<3>(key, "3 numbers (x y z)")?.map(Vec3::from))
+    }
+
+    fn color(&mut self, key: &str) -> Result<Option<Vec3>, Diagnostic> {
+        let Some(pair) = self.get(key) else { return Ok(None) };
+        let c = Vec3::from(numbers::<3>(self.path, pair, "3 numbers (r g b)")?);
+        if c.min_element() < 0.0 {
+            return Err(Diagnostic::at(self.path, pair.line, format!("\"{key}\" must not be negative")));
+        }
+        Ok(Some(c))
+    }
+
+    fn number(&mut self, key: &str, range: std::ops::RangeInclusive<f32>) -> Result<Option<f32>, Diagnostic> {
+        let Some(pair) = self.get(key) else { return Ok(None) };
+        let [v] = numbers::<1>(self.path, pair, "a number")?;
+        if !range.contains(&v) {
+            return Err(Diagnostic::at(
+                self.path,
+                pair.line,
+                format!("\"{key}\" is {v}, expected a value in {}..={}", range.start(), range.end()),
+            ));
+        }
+        Ok(Some(v))
+    }
+
+    fn flag(&mut self, key: &str) -> Result<Option<bool>, Diagnostic> {
+        let Some(pair) = self.get(key) else { return Ok(None) };
+        match pair.value.trim() {
+            "0" => Ok(Some(false)),
+            "1" => Ok(Some(true)),
+            v => Err(Diagnostic::at(self.path, pair.line, format!("\"{key}\" is '{v}', expected 0 or 1"))),
+        }
+    }
+
+    fn choice(&mut self, key: &str, options: &[&str]) -> Result<Option<(usize, &'b Pair)>, Diagnostic> {
+        let Some(pair) = self.get(key) else { return Ok(None) };
+        match options.iter().position(|o| *o == pair.value.trim()) {
+            Some(i) => Ok(Some((i, pair))),
+            None => Err(Diagnostic::at(
+                self.path,
+                pair.line,
+                format!("\"{key}\" is '{}', expected one of: {}", pair.value, options.join(", ")),
+            )),
+        }
+    }
+
+    fn mesh(&mut self) -> Result<ShapeKind, Diagnostic> {
+        let pair = self.require("mesh")?;
+        ShapeKind::from_name(pair.value.trim()).ok_or_else(|| {
+            let names: Vec<_> = ShapeKind::ALL.iter().map(|k| k.name()).collect();
+            Diagnostic::at(self.path, pair.line, format!("unknown mesh '{}', expected one of: {}", pair.value, names.join(", ")))
+        })
+    }
+
+    /// Warnings for keys this class does not know, and for keys given twice.
+    fn leftovers(&self) -> Vec<Diagnostic> {
+        let mut out = Vec::new();
+        for (i, pair) in self.block.pairs.iter().enumerate() {
+            if self.block.pairs[i + 1..].iter().any(|p| p.key == pair.key) {
+                out.push(Diagnostic::at(self.path, pair.line, format!("\"{}\" is given again later in this block; the last one is used", pair.key)));
+            } else if !self.used[i] && pair.key != "classname" {
+                out.push(Diagnostic::at(self.path, pair.line, format!("unknown key \"{}\" in {} block (ignored)", pair.key, self.class)));
+            }
+        }
+        out
+    }
+}
+
+/// Parse exactly `N` finite numbers from a pair's value.
+fn numbers<const N: usize>(path: &Path, pair: &Pair, what: &str) -> Result<[f32; N], Diagnostic> {
+    let bad = |detail: String| Diagnostic::at(path, pair.line, format!("\"{}\": {detail}, expected {what}", pair.key));
+    let mut out = [0.0; N];
+    let mut count = 0;
+    for word in pair.value.split_whitespace() {
+        let v: f32 = word.parse().map_err(|_| bad(format!("bad number '{word}'")))?;
+        if !v.is_finite() {
+            return Err(bad(format!("'{word}' is not a finite number")));
+        }
+        if count < N {
+            out[count] = v;
+        }
+        count += 1;
+    }
+    if count != N {
+        return Err(bad(format!("found {count} numbers")));
+    }
+    Ok(out)
+}
+
+/// Rotation from Quake-style angles in degrees: pitch about X, yaw about Y, roll about Z.
+fn rotation(angles: Vec3) -> Quat {
+    let r = angles * (std::f32::consts::PI / 180.0);
+    Quat::from_euler(EulerRot::YXZ, r.y, r.x, r.z)
+}
+
+impl Loader<'_> {
+    fn block(&mut self, block: &Block) -> Result<(), Diagnostic> {
+        let class_pair = block
+            .pairs
+            .iter()
+            .find(|p| p.key == "classname")
+            .ok_or_else(|| Diagnostic::at(self.path, block.line, "block has no \"classname\""))?;
+        let class = class_pair.value.trim();
+        let mut f = Fields {
+            path: self.path,
+            class,
+            block,
+            used: vec![false; block.pairs.len()],
+        };
+        match class {
+            "world" => self.world(&mut f)?,
+            "camera" => self.camera(&mut f)?,
+            "light_directional" => self.light_directional(&mut f)?,
+            "light_point" => self.light_point(&mut f)?,
+            "material" => self.material(&mut f)?,
+            "entity" => self.entity(&mut f)?,
+            "instances" => self.instances(&mut f)?,
+            other => {
+                return Err(Diagnostic::at(
+                    self.path,
+                    class_pair.line,
+                    format!("unknown classname '{other}', expected one of: world, camera, light_directional, light_point, material, entity, instances"),
+                ))
+            }
+        }
+        self.scene.warnings.extend(f.leftovers());
+        Ok(())
+    }
+
+    fn world(&mut self, f: &mut Fields) -> Result<(), Diagnostic> {
+        let env = &mut self.scene.environment;
+        if let Some(c) = f.color("background")? {
+            env.background = Background::Color(c);
+        }
+        match (f.color("sky_top")?, f.color("sky_bottom")?) {
+            (Some(top), Some(bottom)) => env.background = Background::Gradient { top, bottom },
+            (None, None) => {}
+            _ => return Err(Diagnostic::at(self.path, f.block.line, "\"sky_top\" and \"sky_bottom\" must be given together")),
+        }
+        if let Some(c) = f.color("ambient")? {
+            env.ambient = c;
+        }
+        Ok(())
+    }
+
+    fn camera(&mut self, f: &mut Fields) -> Result<(), Diagnostic> {
+        let origin = f.vec3("origin")?.unwrap_or(Vec3::new(0.0, 2.0, 6.0));
+        let near = f.number("near", 1e-4..=1e6)?.unwrap_or(0.1);
+        let far = f.number("far", 1e-3..=1e9)?.unwrap_or(200.0);
+        if far <= near {
+            return Err(Diagnostic::at(self.path, f.block.line, format!("camera \"far\" ({far}) must be greater than \"near\" ({near})")));
+        }
+        let fov = f.number("fov", 1.0..=179.0)?.unwrap_or(60.0);
+        let mut camera = match f.choice("projection", &["perspective", "orthographic"])? {
+            Some((1, _)) => Camera::orthographic(f.number("size", 1e-4..=1e9)?.unwrap_or(10.0), near, far),
+            _ => Camera::perspective(fov, near, far),
+        };
+        let target = match (f.vec3("target")?, f.vec3("angles")?) {
+            (Some(t), _) => t,
+            (None, Some(a)) => origin + rotation(a) * Vec3::NEG_Z,
+            (None, None) => Vec3::ZERO,
+        };
+        if target.distance_squared(origin) < 1e-12 {
+            return Err(Diagnostic::at(self.path, f.block.line, "camera \"target\" is the same point as its \"origin\""));
+        }
+        camera = camera.looking_at(origin, target);
+        self.scene.cameras.push(camera);
+        Ok(())
+    }
+
+    fn light_common(f: &mut Fields) -> Result<(Vec3, f32), Diagnostic> {
+        Ok((f.color("color")?.unwrap_or(Vec3::ONE), f.number("intensity", 0.0..=1e9)?.unwrap_or(1.0)))
+    }
+
+    fn light_directional(&mut self, f: &mut Fields) -> Result<(), Diagnostic> {
+        let pair = f.require("direction")?;
+        let direction = Vec3::from(numbers::<3>(self.path, pair, "3 numbers (x y z)")?);
+        if direction.length_squared() < 1e-12 {
+            return Err(Diagnostic::at(self.path, pair.line, "\"direction\" must not be zero"));
+        }
+        let (color, intensity) = Self::light_common(f)?;
+        self.scene.lights.push(Light::directional(direction, color, intensity));
+        Ok(())
+    }
+
+    fn light_point(&mut self, f: &mut Fields) -> Result<(), Diagnostic> {
+        let pair = f.require("origin")?;
+        let origin = Vec3::from(numbers::<3>(self.path, pair, "3 numbers (x y z)")?);
+        let (color, intensity) = Self::light_common(f)?;
+        let range = f.number("range", 1e-3..=1e9)?.unwrap_or(10.0);
+        self.scene.lights.push(Light::point(origin, color, intensity, range));
+        Ok(())
+    }
+
+    fn texture(&mut self, f: &mut Fields, key: &str, srgb: bool) -> Result<Option<TextureRef>, Diagnostic> {
+        let Some(pair) = f.get(key) else { return Ok(None) };
+        let file = self.dir.join(pair.value.trim());
+        if let Some(&i) = self.texture_index.get(&(file.clone(), srgb)) {
+            return Ok(Some(i));
+        }
+        let texture = load_texture(&file, srgb).map_err(|e| Diagnostic::at(self.path, pair.line, format!("\"{key}\": {e}")))?;
+        self.scene.textures.push(texture);
+        let i = self.scene.textures.len() - 1;
+        self.texture_index.insert((file, srgb), i);
+        Ok(Some(i))
+    }
+
+    fn material(&mut self, f: &mut Fields) -> Result<(), Diagnostic> {
+        let name_pair = f.require("name")?;
+        let name = name_pair.value.trim().to_string();
+        if self.scene.materials.iter().any(|m| m.material.name == name) {
+            return Err(Diagnostic::at(self.path, name_pair.line, format!("material '{name}' is defined twice")));
+        }
+        let defaults = Material::default();
+        let base_color = match f.get("base_color") {
+            None => defaults.base_color,
+            Some(pair) => {
+                let words = pair.value.split_whitespace().count();
+                let c = if words == 3 {
+                    Vec3::from(numbers::<3>(self.path, pair, "3 or 4 numbers (r g b [a])")?).extend(1.0)
+                } else {
+                    Vec4::from(numbers::<4>(self.path, pair, "3 or 4 numbers (r g b [a])")?)
+                };
+                if c.min_element() < 0.0 || c.w > 1.0 {
+                    return Err(Diagnostic::at(self.path, pair.line, "\"base_color\" must be non-negative with alpha at most 1"));
+                }
+                c
+            }
+        };
+        let cutoff = f.number("alpha_cutoff", 0.0..=1.0)?.unwrap_or(0.5);
+        let alpha_mode = match f.choice("alpha_mode", &["opaque", "mask", "blend"])? {
+            None | Some((0, _)) => AlphaMode::Opaque,
+            Some((1, _)) => AlphaMode::Mask { cutoff },
+            Some(_) => AlphaMode::Blend,
+        };
+        let material = Material {
+            name,
+            base_color,
+            ambient: f.number("ambient", 0.0..=100.0)?.unwrap_or(defaults.ambient),
+            diffuse: f.number("diffuse", 0.0..=100.0)?.unwrap_or(defaults.diffuse),
+            specular: f.number("specular", 0.0..=100.0)?.unwrap_or(defaults.specular),
+            smoothness: f.number("smoothness", 0.0..=1.0)?.unwrap_or(defaults.smoothness),
+            alpha_mode,
+            double_sided: f.flag("double_sided")?.unwrap_or(false),
+            ..defaults
+        };
+        let desc = MaterialDesc {
+            diffuse_map: self.texture(f, "diffuse_map", true)?,
+            normal_map: self.texture(f, "normal_map", false)?,
+            specular_map: self.texture(f, "specular_map", false)?,
+            material,
+        };
+        self.scene.materials.push(desc);
+        Ok(())
+    }
+
+    fn material_ref(f: &mut Fields) -> Option<(String, usize)> {
+        f.get("material").map(|p| (p.value.trim().to_string(), p.line))
+    }
+
+    fn count_instances(&mut self, n: u64, line: usize) -> Result<(), Diagnostic> {
+        self.instances += n;
+        if self.instances > MAX_INSTANCES {
+            return Err(Diagnostic::at(self.path, line, format!("the scene places {} instances, more than glint allows in one file ({MAX_INSTANCES})", self.instances)));
+        }
+        Ok(())
+    }
+
+    fn scale(f: &mut Fields) -> Result<Vec3, Diagnostic> {
+        let Some(pair) = f.get("scale") else { return Ok(Vec3::ONE) };
+        let s = if pair.value.split_whitespace().count() == 1 {
+            Vec3::splat(numbers::<1>(f.path, pair, "1 or 3 numbers")?[0])
+        } else {
+            Vec3::from(numbers::<3>(f.path, pair, "1 or 3 numbers")?)
+        };
+        if s.min_element() <= 0.0 {
+            return Err(Diagnostic::at(f.path, pair.line, "\"scale\" must be positive"));
+        }
+        Ok(s)
+    }
+
+    fn entity(&mut self, f: &mut Fields) -> Result<(), Diagnostic> {
+        let mesh = f.mesh()?;
+        let material = Self::material_ref(f);
+        let origin = f.vec3("origin")?.unwrap_or(Vec3::ZERO);
+        let angles = f.vec3("angles")?.unwrap_or(Vec3::ZERO);
+        let scale = Self::scale(f)?;
+        self.count_instances(1, f.block.line)?;
+        let transform = Mat4::from_scale_rotation_translation(scale, rotation(angles), origin);
+        self.placements.push(Placement { mesh, material, transforms: vec![transform] });
+        Ok(())
+    }
+
+    fn instances(&mut self, f: &mut Fields) -> Result<(), Diagnostic> {
+        let mesh = f.mesh()?;
+        let material = Self::material_ref(f);
+        let count_pair = f.require("count")?;
+        let count: i64 = count_pair
+            .value
+            .trim()
+            .parse()
+            .map_err(|_| Diagnostic::at(self.path, count_pair.line, format!("\"count\" is '{}', expected a whole number", count_pair.value)))?;
+        if count < 0 {
+            return Err(Diagnostic::at(self.path, count_pair.line, format!("\"count\" is {count}, expected 0 or more")));
+        }
+        let count = count as u64;
+        if count > MAX_INSTANCES {
+            return Err(Diagnostic::at(self.path, count_pair.line, format!("\"count\" is {count}, more than glint allows in one file ({MAX_INSTANCES})")));
+        }
+        self.count_instances(count, count_pair.line)?;
+        let random = matches!(f.choice("layout", &["grid", "random"])?, Some((1, _)));
+        let origin = f.vec3("origin")?.unwrap_or(Vec3::ZERO);
+        let extent = f.vec3("extent")?.unwrap_or(Vec3::new(10.0, 0.0, 10.0));
+        if extent.min_element() < 0.0 {
+            return Err(Diagnostic::at(self.path, f.block.line, "\"extent\" must not be negative"));
+        }
+        let seed = match f.get("seed") {
+            None => 1,
+            Some(p) => p.value.trim().parse::<u64>().map_err(|_| Diagnostic::at(self.path, p.line, format!("\"seed\" is '{}', expected a whole number 0 or more", p.value)))?,
+        };
+        let [lo, hi] = f.numbers::<2>("scale", "2 numbers (min max)")?.unwrap_or([1.0, 1.0]);
+        if lo <= 0.0 || hi < lo {
+            return Err(Diagnostic::at(self.path, f.block.line, "\"scale\" must be min max with 0 < min <= max"));
+        }
+        let random_yaw = f.flag("random_yaw")?.unwrap_or(false);
+        let transforms = place_instances(count as usize, random, origin, extent, seed, (lo, hi), random_yaw);
+        self.placements.push(Placement { mesh, material, transforms });
+        Ok(())
+    }
+
+    /// Resolve material names and gather placements into one task per (mesh, material).
+    fn finish(mut self) -> Result<SceneDesc, Diagnostic> {
+        let mut tasks: HashMap<(ShapeKind, Option<usize>), usize> = HashMap::new();
+        for placement in std::mem::take(&mut self.placements) {
+            let material = match placement.material {
+                None => None,
+                Some((name, line)) => Some(self.scene.materials.iter().position(|m| m.material.name == name).ok_or_else(|| {
+                    Diagnostic::at(self.path, line, format!("unknown material '{name}' (define it in a material block)"))
+                })?),
+            };
+            let task = *tasks.entry((placement.mesh, material)).or_insert_with(|| {
+                self.scene.entities.push(EntityDesc { mesh: placement.mesh, material, transforms: Vec::new() });
+                self.scene.entities.len() - 1
+            });
+            self.scene.entities[task].transforms.extend(placement.transforms);
+        }
+        if self.scene.cameras.is_empty() {
+            self.scene.cameras.push(Camera::perspective(60.0, 0.1, 200.0).looking_at(Vec3::new(0.0, 2.0, 6.0), Vec3::ZERO));
+        }
+        Ok(self.scene)
+    }
+}
+
+/// Place `count` instances in the box `origin ± extent/2`, on a grid over the axes
+/// whose extent is not zero, or uniformly at random; the same seed gives the same
+/// placement everywhere (PCG32).
+fn place_instances(count: usize, random: bool, origin: Vec3, extent: Vec3, seed: u64, scale: (f32, f32), random_yaw: bool) -> Vec<Mat4> {
+    let mut rng = rand_pcg::Pcg32::seed_from_u64(seed);
+    let axes: Vec<usize> = (0..3).filter(|&a| extent[a] > 0.0).collect();
+    let per_axis = if axes.is_empty() {
+        1
+    } else {
+        (count as f64).powf(1.0 / axes.len() as f64).ceil().max(1.0) as usize
+    };
+    let corner = origin - extent * 0.5;
+    (0..count)
+        .map(|i| {
+            let mut p = origin;
+            if random {
+                p = corner + extent * Vec3::new(rng.random(), rng.random(), rng.random());
+            } else {
+                let mut rest = i;
+                for &a in &axes {
+                    p[a] = corner[a] + extent[a] * ((rest % per_axis) as f32 + 0.5) / per_axis as f32;
+                    rest /= per_axis;
+                }
+            }
+            let s = scale.0 + (scale.1 - scale.0) * rng.random::<f32>();
+            let yaw = if random_yaw { rng.random::<f32>() * std::f32::consts::TAU } else { 0.0 };
+            Mat4::from_scale_rotation_translation(Vec3::splat(s), Quat::from_rotation_y(yaw), p)
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse(text: &str) -> Result<SceneDesc, Diagnostic> {
+        parse_scene(Path::new("dir/t.scn"), text)
+    }
+
+    #[test]
+    fn every_classname_parses() {
+        let scene = parse(
+            r#"
+{ "classname" "world"
+"sky_top" "0.2 0.4 0.8"
+"sky_bottom" "0.8 0.9 1"
+"ambient" "0.1 0.1 0.1" }
+{ "classname" "camera"
+"origin" "0 5 10"
+"target" "0 0 0"
+"fov" "50" }
+{ "classname" "light_directional"
+"direction" "-1 -1 -1" }
+{ "classname" "light_point"
+"origin" "0 2 0"
+"range" "5" }
+{ "classname" "material"
+"name" "red"
+"base_color" "1 0 0 0.5"
+"alpha_mode" "blend" }
+{ "classname" "entity"
+"mesh" "cube"
+"material" "red"
+"origin" "1 2 3"
+"scale" "2" }
+{ "classname" "entity"
+"mesh" "cube"
+"material" "red" }
+{ "classname" "instances"
+"mesh" "sphere"
+"count" "100"
+"layout" "random"
+"extent" "10 0 10"
+"seed" "7" }
+"#,
+        )
+        .unwrap();
+        assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+        assert!(matches!(scene.environment.background, Background::Gradient { .. }));
+        assert_eq!(scene.cameras.len(), 1);
+        assert_eq!(scene.lights.len(), 2);
+        assert_eq!(scene.materials[0].material.alpha_mode, AlphaMode::Blend);
+        assert_eq!(scene.materials[0].material.base_color.w, 0.5);
+        // Two cube entities with one material gather into one task.
+        assert_eq!(scene.entities.len(), 2);
+        assert_eq!(scene.entities[0].transforms.len(), 2);
+        assert_eq!(scene.entities[0].transforms[0].w_axis.truncate(), Vec3::new(1.0, 2.0, 3.0));
+        assert_eq!(scene.entities[1].transforms.len(), 100);
+        assert_eq!(scene.instance_count(), 102);
+    }
+
+    #[test]
+    fn same_seed_same_placement_and_grid_is_even() {
+        let a = place_instances(50, true, Vec3::ZERO, Vec3::new(10.0, 0.0, 10.0), 3, (0.5, 1.0), true);
+        let b = place_instances(50, true, Vec3::ZERO, Vec3::new(10.0, 0.0, 10.0), 3, (0.5, 1.0), true);
+        let c = place_instances(50, true, Vec3::ZERO, Vec3::new(10.0, 0.0, 10.0), 4, (0.5, 1.0), true);
+        assert_eq!(a, b);
+        assert_ne!(a, c);
+        for m in &a {
+            let p = m.w_axis.truncate();
+            assert!(p.x.abs() <= 5.0 && p.z.abs() <= 5.0 && p.y == 0.0);
+        }
+        let grid = place_instances(4, false, Vec3::ZERO, Vec3::new(2.0, 0.0, 2.0), 1, (1.0, 1.0), false);
+        let points: Vec<Vec3> = grid.iter().map(|m| m.w_axis.truncate()).collect();
+        assert_eq!(points, vec![Vec3::new(-0.5, 0.0, -0.5), Vec3::new(0.5, 0.0, -0.5), Vec3::new(-0.5, 0.0, 0.5), Vec3::new(0.5, 0.0, 0.5)]);
+    }
+
+    #[test]
+    fn angles_are_pitch_yaw_roll() {
+        // Yaw 90° turns −Z (forward) to −X; pitch 90° turns it up to +Y.
+        assert!((rotation(Vec3::new(0.0, 90.0, 0.0)) * Vec3::NEG_Z).abs_diff_eq(Vec3::NEG_X, 1e-6));
+        assert!((rotation(Vec3::new(90.0, 0.0, 0.0)) * Vec3::NEG_Z).abs_diff_eq(Vec3::Y, 1e-6));
+    }
+
+    #[test]
+    fn unknown_keys_warn_with_their_line() {
+        let scene = parse("{\n\"classname\" \"entity\"\n\"mesh\" \"cube\"\n\"colour\" \"1 0 0\"\n}\n").unwrap();
+        assert_eq!(scene.warnings.len(), 1);
+        assert_eq!(scene.warnings[0].line, Some(4));
+        assert!(scene.warnings[0].message.contains("unknown key \"colour\""));
+    }
+
+    #[test]
+    fn semantic_errors_name_file_line_and_expectation() {
+        let cases = [
+            ("{\n\"classname\" \"spaceship\"\n}", 2, "unknown classname"),
+            ("{\n\"mesh\" \"cube\"\n}", 1, "no \"classname\""),
+            ("{\n\"classname\" \"entity\"\n}", 1, "missing the required key \"mesh\""),
+            ("{\n\"classname\" \"entity\"\n\"mesh\" \"cube\"\n\"origin\" \"1 x 3\"\n}", 4, "bad number 'x'"),
+            ("{\n\"classname\" \"entity\"\n\"mesh\" \"cube\"\n\"origin\" \"1 2\"\n}", 4, "found 2 numbers"),
+            ("{\n\"classname\" \"entity\"\n\"mesh\" \"blob\"\n}", 3, "unknown mesh 'blob'"),
+            ("{\n\"classname\" \"entity\"\n\"mesh\" \"cube\"\n\"material\" \"gold\"\n}", 4, "unknown material 'gold'"),
+            ("{\n\"classname\" \"instances\"\n\"mesh\" \"cube\"\n\"count\" \"-5\"\n}", 4, "expected 0 or more"),
+            ("{\n\"classname\" \"instances\"\n\"mesh\" \"cube\"\n\"count\" \"99999999999\"\n}", 4, "more than glint allows"),
+            ("{\n\"classname\" \"instances\"\n\"mesh\" \"cube\"\n\"count\" \"lots\"\n}", 4, "expected a whole number"),
+            ("{\n\"classname\" \"material\"\n\"name\" \"m\"\n\"diffuse_map\" \"nope.png\"\n}", 4, "cannot open texture"),
+            ("{\n\"classname\" \"material\"\n\"name\" \"m\"\n\"alpha_mode\" \"glass\"\n}", 4, "expected one of: opaque, mask, blend"),
+            ("{\n\"classname\" \"material\"\n\"name\" \"m\"\n\"smoothness\" \"2\"\n}", 4, "expected a value in 0..=1"),
+            ("{\n\"classname\" \"camera\"\n\"near\" \"10\"\n\"far\" \"1\"\n}", 1, "must be greater than"),
+            ("{\n\"classname\" \"light_point\"\n\"origin\" \"0 0 inf\"\n}", 3, "not a finite number"),
+        ];
+        for (text, line, want) in cases {
+            let err = parse(text).unwrap_err();
+            assert_eq!(err.line, Some(line), "{text:?}: {err}");
+            assert!(err.message.contains(want), "{text:?}: {err}");
+            assert!(err.to_string().starts_with(&format!("dir/t.scn:{line}: ")), "{err}");
+        }
+    }
+
+    #[test]
+    fn total_instances_are_capped_across_blocks() {
+        let block = "{\n\"classname\" \"instances\"\n\"mesh\" \"cube\"\n\"count\" \"6000000\"\n\"extent\" \"0 0 0\"\n}\n";
+        let err = parse(&format!("{block}{block}")).unwrap_err();
+        assert_eq!(err.line, Some(10));
+        assert!(err.message.contains("12000000 instances"), "{err}");
+    }
+}

@@ -1,0 +1,62 @@
+use super::Diagnostic;
+use std::path::Path;
+
+/// Largest accepted side of a texture, in pixels.
+pub const MAX_TEXTURE_SIDE: u32 = 8192;
+
+/// A decoded texture waiting to be uploaded: RGBA8 pixels and how to read them.
+///
+/// Colour maps are sRGB (decoded to linear by the sampler); normal and specular
+/// maps are linear. Mipmaps are generated on the GPU when it is uploaded.
+#[derive(Clone, Debug)]
+pub struct Texture {
+    /// Name for labels and diagnostics (usually the file name).
+    pub name: String,
+    /// The pixels, top row first.
+    pub image: image::RgbaImage,
+    /// Whether the pixel values are sRGB-encoded colour.
+    pub srgb: bool,
+}
+
+impl Texture {
+    /// Wrap decoded pixels.
+    pub fn new(name: impl Into<String>, image: image::RgbaImage, srgb: bool) -> Self {
+        Self {
+            name: name.into(),
+            image,
+            srgb,
+        }
+    }
+
+    /// Number of mip levels down to 1×1.
+    pub fn mip_levels(&self) -> u32 {
+        32 - self.image.width().max(self.image.height()).max(1).leading_zeros()
+    }
+}
+
+/// Decode a PNG or JPEG file into a [`Texture`].
+///
+/// Rejects images wider or taller than [`MAX_TEXTURE_SIDE`] before decoding their
+/// pixels, and any file that is missing, unreadable or not a supported image.
+pub fn load_texture(path: &Path, srgb: bool) -> Result<Texture, Diagnostic> {
+    let fail = |m: String| Diagnostic::file(path, m);
+    let mut reader = image::ImageReader::open(path)
+        .map_err(|e| fail(format!("cannot open texture: {e}")))?
+        .with_guessed_format()
+        .map_err(|e| fail(format!("cannot read texture: {e}")))?;
+    match reader.format() {
+        Some(image::ImageFormat::Png | image::ImageFormat::Jpeg) => {}
+        other => return Err(fail(format!("expected a PNG or JPEG image, found {other:?}"))),
+    }
+    let mut limits = image::Limits::default();
+    limits.max_image_width = Some(MAX_TEXTURE_SIDE);
+    limits.max_image_height = Some(MAX_TEXTURE_SIDE);
+    limits.max_alloc = Some(4 * u64::from(MAX_TEXTURE_SIDE) * u64::from(MAX_TEXTURE_SIDE));
+    reader.limits(limits);
+    let image = reader
+        .decode()
+        .map_err(|e| fail(format!("cannot decode texture: {e}")))?
+        .into_rgba8();
+    let name = path.file_name().map_or_else(|| "texture".into(), |n| n.to_string_lossy().into_owned());
+    Ok(Texture::new(name, image, srgb))
+}

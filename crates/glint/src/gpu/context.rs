@@ -1,0 +1,175 @@
+use std::fmt;
+
+/// Errors from creating the GPU context or a target.
+#[derive(Debug, thiserror::Error)]
+pub enum GpuError {
+    /// No adapter matched the requested backends (and name, if any).
+    #[error("no GPU adapter found{0}; {fix}", fix = no_adapter_fix())]
+    NoAdapter(String),
+    /// The adapter refused to create a device.
+    #[error("could not create a GPU device on '{adapter}': {source}")]
+    Device {
+        /// Adapter name.
+        adapter: String,
+        /// What wgpu said.
+        source: wgpu::RequestDeviceError,
+    },
+    /// A target size was zero or beyond the device limits.
+    #[error("target size {width}x{height} is not supported (1..={max} per side)")]
+    TargetSize {
+        /// Requested width.
+        width: u32,
+        /// Requested height.
+        height: u32,
+        /// Largest side the device allows.
+        max: u32,
+    },
+    /// The sample count is not 1 or 4, or the adapter cannot do it.
+    #[error("MSAA sample count {0} is not supported here (use 1 or 4)")]
+    SampleCount(u32),
+    /// Reading a frame back from the GPU failed.
+    #[error("reading the frame back failed: {0}")]
+    Readback(String),
+    /// Writing a PNG failed.
+    #[error("{path}: cannot write PNG: {source}")]
+    Png {
+        /// Output path.
+        path: String,
+        /// What the encoder said.
+        source: image::ImageError,
+    },
+}
+
+fn no_adapter_fix() -> &'static str {
+    if cfg!(target_os = "linux") {
+        "install a Vulkan driver (for a CPU rasterizer: apt-get install mesa-vulkan-drivers)"
+    } else {
+        "install or update the GPU driver"
+    }
+}
+
+/// The GPU context: instance, adapter, device and queue, plus the capabilities
+/// glint cares about. Create one per process and share it by reference.
+pub struct Gpu {
+    /// The adapter the device was created on.
+    pub adapter: wgpu::Adapter,
+    /// The logical device.
+    pub device: wgpu::Device,
+    /// The device's queue.
+    pub queue: wgpu::Queue,
+    info: wgpu::AdapterInfo,
+    anisotropy: u16,
+}
+
+impl fmt::Debug for Gpu {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "Gpu({} on {:?})", self.info.name, self.info.backend)
+    }
+}
+
+impl Gpu {
+    /// Create a headless context on the best adapter.
+    ///
+    /// Honours `WGPU_BACKEND` (e.g. `vulkan`, `gl`) to choose backends and
+    /// `WGPU_ADAPTER_NAME` (a case-insensitive substring) to choose an adapter.
+    /// Returns [`GpuError::NoAdapter`] with the fix when nothing matches.
+    pub fn headless() -> Result<Self, GpuError> {
+        let desc = wgpu::InstanceDescriptor::new_without_display_handle_from_env();
+        let backends = desc.backends;
+        let instance = wgpu::Instance::new(desc);
+        let adapter = pollster::block_on(choose_adapter(&instance, backends))?;
+        Self::from_adapter(adapter)
+    }
+
+    /// Create the device and queue on a chosen adapter.
+    pub fn from_adapter(adapter: wgpu::Adapter) -> Result<Self, GpuError> {
+        let info = adapter.get_info();
+        let features = adapter.features();
+        let desc = wgpu::DeviceDescriptor {
+            label: Some("glint device"),
+            required_features: wgpu::Features::empty(),
+            required_limits: wgpu::Limits::downlevel_defaults().using_resolution(adapter.limits()),
+            ..Default::default()
+        };
+        let (device, queue) =
+            pollster::block_on(adapter.request_device(&desc)).map_err(|source| {
+                GpuError::Device {
+                    adapter: info.name.clone(),
+                    source,
+                }
+            })?;
+        let anisotropy = if adapter
+            .get_downlevel_capabilities()
+            .flags
+            .contains(wgpu::DownlevelFlags::ANISOTROPIC_FILTERING)
+        {
+            16
+        } else {
+            1
+        };
+        log::info!(
+            "glint: adapter '{}' ({:?}, {:?}); features {:?}",
+            info.name,
+            info.backend,
+            info.device_type,
+            features
+        );
+        Ok(Self {
+            adapter,
+            device,
+            queue,
+            info,
+            anisotropy,
+        })
+    }
+
+    /// Adapter name, backend and driver, for logs and benchmark reports.
+    pub fn info(&self) -> &wgpu::AdapterInfo {
+        &self.info
+    }
+
+    /// Whether a colour target can be multisampled with `samples` samples.
+    pub fn supports_msaa(&self, samples: u32) -> bool {
+        samples == 1
+            || self
+                .adapter
+                .get_texture_format_features(super::COLOR_FORMAT)
+                .flags
+                .sample_count_supported(samples)
+    }
+
+    /// Largest anisotropy the samplers use (1 when unsupported).
+    pub fn max_anisotropy(&self) -> u16 {
+        self.anisotropy
+    }
+}
+
+/// Pick the adapter: the first whose name contains `WGPU_ADAPTER_NAME` when set,
+/// else the high-performance default.
+async fn choose_adapter(
+    instance: &wgpu::Instance,
+    backends: wgpu::Backends,
+) -> Result<wgpu::Adapter, GpuError> {
+    if let Ok(wanted) = std::env::var("WGPU_ADAPTER_NAME") {
+        let wanted = wanted.to_lowercase();
+        let adapters = instance.enumerate_adapters(backends).await;
+        let names: Vec<String> = adapters.iter().map(|a| a.get_info().name).collect();
+        return adapters
+            .into_iter()
+            .find(|a| a.get_info().name.to_lowercase().contains(&wanted))
+            .ok_or_else(|| {
+                GpuError::NoAdapter(format!(
+                    " named like WGPU_ADAPTER_NAME='{wanted}' (have: {names:?})"
+                ))
+            });
+    }
+    let options = wgpu::RequestAdapterOptions {
+        power_preference: wgpu::PowerPreference::from_env()
+            .unwrap_or(wgpu::PowerPreference::HighPerformance),
+        ..Default::default()
+    };
+    instance
+        .request_adapter(&options)
+        .await
+        .map_err(|e| GpuError::NoAdapter(format!(" for backends {backends:?} ({e})")))
+}

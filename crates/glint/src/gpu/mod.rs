@@ -1,0 +1,17 @@
+//! Core layer: the GPU device, its capabilities, and render targets.
+//!
+//! `gpu::` owns every wgpu handle that is not tied to one renderer: the
+//! [`Gpu`] context (instance, adapter, device, queue) and the
+//! [`OffscreenTarget`] a frame is drawn into and read back from.
+
+mod context;
+mod target;
+
+pub use context::{Gpu, GpuError};
+pub use target::OffscreenTarget;
+
+/// Colour format of every glint target: 8-bit sRGB, so shaders write linear values
+/// and the hardware encodes them.
+pub const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
+/// Depth format of every glint target.
+pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;

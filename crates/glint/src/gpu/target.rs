@@ -1,0 +1,202 @@
+use super::{Gpu, GpuError, COLOR_FORMAT, DEPTH_FORMAT};
+
+/// An offscreen render target: sRGB colour plus depth, optionally multisampled,
+/// with a resolve texture that can be read back to RGBA8 and saved as PNG.
+pub struct OffscreenTarget {
+    width: u32,
+    height: u32,
+    samples: u32,
+    /// Single-sample colour: the resolve target with MSAA, the render target without.
+    resolved: wgpu::Texture,
+    resolved_view: wgpu::TextureView,
+    /// Multisampled colour, present only when `samples > 1`.
+    msaa_view: Option<wgpu::TextureView>,
+    depth_view: wgpu::TextureView,
+}
+
+/// Bytes per pixel of [`COLOR_FORMAT`].
+const BYTES_PER_PIXEL: u32 = 4;
+
+impl OffscreenTarget {
+    /// Create a `width` x `height` target with `samples` (1 or 4) samples per pixel.
+    ///
+    /// Errors when a side is 0 or above the device's 2D texture limit, or when the
+    /// adapter cannot multisample the colour format.
+    pub fn new(gpu: &Gpu, width: u32, height: u32, samples: u32) -> Result<Self, GpuError> {
+        let max = gpu.device.limits().max_texture_dimension_2d;
+        if width == 0 || height == 0 || width > max || height > max {
+            return Err(GpuError::TargetSize { width, height, max });
+        }
+        if !(samples == 1 || samples == 4) || !gpu.supports_msaa(samples) {
+            return Err(GpuError::SampleCount(samples));
+        }
+        let size = wgpu::Extent3d {
+            width,
+            height,
+            depth_or_array_layers: 1,
+        };
+        let texture = |label: &str, format, samples, usage| {
+            gpu.device.create_texture(&wgpu::TextureDescriptor {
+                label: Some(label),
+                size,
+                mip_level_count: 1,
+                sample_count: samples,
+                dimension: wgpu::TextureDimension::D2,
+                format,
+                usage,
+                view_formats: &[],
+            })
+        };
+        let resolved = texture(
+            "offscreen target: colour",
+            COLOR_FORMAT,
+            1,
+            wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+        );
+        let msaa_view = (samples > 1).then(|| {
+            texture(
+                "offscreen target: msaa colour",
+                COLOR_FORMAT,
+                samples,
+                wgpu::TextureUsages::RENDER_ATTACHMENT,
+            )
+            .create_view(&Default::default())
+        });
+        let depth = texture(
+            "offscreen target: depth",
+            DEPTH_FORMAT,
+            samples,
+            wgpu::TextureUsages::RENDER_ATTACHMENT,
+        );
+        Ok(Self {
+            width,
+            height,
+            samples,
+            resolved_view: resolved.create_view(&Default::default()),
+            resolved,
+            msaa_view,
+            depth_view: depth.create_view(&Default::default()),
+        })
+    }
+
+    /// Width in pixels.
+    pub fn width(&self) -> u32 {
+        self.width
+    }
+
+    /// Height in pixels.
+    pub fn height(&self) -> u32 {
+        self.height
+    }
+
+    /// Samples per pixel (1 or 4).
+    pub fn samples(&self) -> u32 {
+        self.samples
+    }
+
+    /// The colour attachment for a pass that clears with `clear`: renders into the
+    /// MSAA texture and resolves into the readable one, or renders straight into it.
+    pub(crate) fn color_attachment(&self, clear: wgpu::Color) -> wgpu::RenderPassColorAttachment<'_> {
+        let ops = wgpu::Operations {
+            load: wgpu::LoadOp::Clear(clear),
+            // The multisampled texture is only an intermediate: resolving is enough.
+            store: if self.msaa_view.is_some() {
+                wgpu::StoreOp::Discard
+            } else {
+                wgpu::StoreOp::Store
+            },
+        };
+        match &self.msaa_view {
+            Some(msaa) => wgpu::RenderPassColorAttachment {
+                view: msaa,
+                depth_slice: None,
+                resolve_target: Some(&self.resolved_view),
+                ops,
+            },
+            None => wgpu::RenderPassColorAttachment {
+                view: &self.resolved_view,
+                depth_slice: None,
+                resolve_target: None,
+                ops,
+            },
+        }
+    }
+
+    /// The depth attachment, cleared to the far plane (1.0).
+    pub(crate) fn depth_attachment(&self) -> wgpu::RenderPassDepthStencilAttachment<'_> {
+        wgpu::RenderPassDepthStencilAttachment {
+            view: &self.depth_view,
+            depth_ops: Some(wgpu::Operations {
+                load: wgpu::LoadOp::Clear(1.0),
+                store: wgpu::StoreOp::Discard,
+            }),
+            stencil_ops: None,
+        }
+    }
+
+    /// Copy the last rendered frame back to the CPU as an RGBA8 (sRGB) image.
+    ///
+    /// Blocks until the GPU has finished the frame.
+    pub fn read_rgba8(&self, gpu: &Gpu) -> Result<image::RgbaImage, GpuError> {
+        // Rows of a texture-to-buffer copy must be 256-byte aligned: pad, then strip.
+        let unpadded = self.width * BYTES_PER_PIXEL;
+        let padded = unpadded.div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT)
+            * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
+        let buffer = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("offscreen target: readback"),
+            size: u64::from(padded) * u64::from(self.height),
+            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+            mapped_at_creation: false,
+        });
+        let mut encoder = gpu
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("offscreen target: readback"),
+            });
+        encoder.copy_texture_to_buffer(
+            self.resolved.as_image_copy(),
+            wgpu::TexelCopyBufferInfo {
+                buffer: &buffer,
+                layout: wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(padded),
+                    rows_per_image: Some(self.height),
+                },
+            },
+            self.resolved.size(),
+        );
+        gpu.queue.submit([encoder.finish()]);
+        let (tx, rx) = std::sync::mpsc::channel();
+        buffer.map_async(wgpu::MapMode::Read, .., move |r| {
+            let _ = tx.send(r);
+        });
+        gpu.device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map_err(|e| GpuError::Readback(e.to_string()))?;
+        rx.recv()
+            .map_err(|e| GpuError::Readback(e.to_string()))?
+            .map_err(|e| GpuError::Readback(e.to_string()))?;
+        let view = buffer
+            .get_mapped_range(..)
+            .map_err(|e| GpuError::Readback(e.to_string()))?;
+        let mut pixels = Vec::with_capacity((unpadded * self.height) as usize);
+        for row in view.chunks_exact(padded as usize) {
+            pixels.extend_from_slice(&row[..unpadded as usize]);
+        }
+        drop(view);
+        buffer.unmap();
+        image::RgbaImage::from_raw(self.width, self.height, pixels)
+            .ok_or_else(|| GpuError::Readback("pixel count does not match the size".into()))
+    }
+
+    /// Read the frame back and write it to `path` as PNG.
+    pub fn save_png(&self, gpu: &Gpu, path: impl AsRef<std::path::Path>) -> Result<(), GpuError> {
+        let path = path.as_ref();
+        self.read_rgba8(gpu)?
+            .save_with_format(path, image::ImageFormat::Png)
+            .map_err(|source| GpuError::Png {
+                path: path.display().to_string(),
+                source,
+            })
+    }
+}

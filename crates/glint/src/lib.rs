@@ -1,0 +1,67 @@
+//! # glint
+//!
+//! A real-time 3D renderer on wgpu, built to be read. Two layers:
+//!
+//! - **Beginner layer** ([`scene`]): [`Mesh`], [`Material`], [`Entity`], [`Light`],
+//!   [`Camera`] — plain data, no wgpu.
+//! - **Core layer** ([`gpu`], [`render`], [`asset`], shaders): the [`Gpu`] context,
+//!   the [`Renderer`] with its sort keys, batching and shader data blocks, and
+//!   loaders that never trust a file.
+//!
+//! A frame follows Tiny Graphics' program structure:
+//!
+//! ```no_run
+//! use glint::{asset::ShapeKind, Camera, Entity, Gpu, Light, Material, OffscreenTarget, Renderer};
+//! use glam::{Mat4, Vec3};
+//!
+//! let gpu = Gpu::headless()?;
+//! let mut renderer = Renderer::new(&gpu);
+//! let cube = renderer.add_shape(ShapeKind::Cube.mesh());
+//! let red = renderer.add_material(Material::color("red", 0.8, 0.1, 0.1));
+//! let entity = Entity::new(cube, red, Mat4::IDENTITY);
+//! let camera = Camera::perspective(60.0, 0.1, 100.0).looking_at(Vec3::new(2.0, 2.0, 3.0), Vec3::ZERO);
+//! let lights = [Light::directional(Vec3::new(-1.0, -2.0, -1.0), Vec3::ONE, 2.0)];
+//! let mut target = OffscreenTarget::new(&gpu, 256, 256, 4)?;
+//!
+//! renderer.submit(&entity);
+//! let stats = renderer.flush(&camera, &lights, &mut target)?;
+//! assert_eq!(stats.draw_calls, 1);
+//! target.save_png(&gpu, "cube.png")?;
+//! # Ok::<(), glint::Error>(())
+//! ```
+
+pub mod asset;
+pub mod gpu;
+pub mod render;
+pub mod scene;
+mod shader;
+
+pub use asset::{Diagnostic, Texture};
+pub use gpu::{Gpu, GpuError, OffscreenTarget};
+pub use render::{FrameStats, RenderError, Renderer};
+pub use scene::{AlphaMode, Background, Camera, Entity, Environment, Light, Material, MaterialId, Mesh, ShapeId, TextureId};
+
+/// Any glint error, with the process exit code the CLI uses for it.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// Bad input file (exit code 1).
+    #[error(transparent)]
+    Asset(#[from] Diagnostic),
+    /// No adapter or device (exit code 2); other GPU failures (exit code 3).
+    #[error(transparent)]
+    Gpu(#[from] GpuError),
+    /// Invalid frame request (exit code 3).
+    #[error(transparent)]
+    Render(#[from] RenderError),
+}
+
+impl Error {
+    /// Exit code for the CLI: 1 bad input, 2 no GPU adapter, 3 other failures.
+    pub fn exit_code(&self) -> u8 {
+        match self {
+            Error::Asset(_) => 1,
+            Error::Gpu(GpuError::NoAdapter(_) | GpuError::Device { .. }) => 2,
+            Error::Gpu(_) | Error::Render(_) => 3,
+        }
+    }
+}

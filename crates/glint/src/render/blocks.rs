@@ -1,0 +1,163 @@
+//! Core layer: GPU twins of the shader data blocks (layouts match `shader/*.wgsl`)
+//! and [`UniformBlock`], which writes a block only when its bytes change.
+
+use crate::scene::{AlphaMode, Background, Camera, Environment, Light, LightKind, Material, MAX_LIGHTS};
+use glam::{Mat4, Vec4};
+
+/// One light as the shader reads it (32 bytes).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub(crate) struct LightGpu {
+    /// xyz direction travelled (w = 0) or position (w = 1) (16 bytes).
+    position: [f32; 4],
+    /// rgb colour × intensity, w range (16 bytes).
+    color: [f32; 4],
+}
+const _: () = assert!(std::mem::size_of::<LightGpu>() == 32);
+
+impl Light {
+    /// The shader's view of this light.
+    pub(crate) fn to_gpu(&self) -> LightGpu {
+        let (position, range) = match self.kind {
+            LightKind::Directional { direction } => (direction.normalize_or(glam::Vec3::NEG_Y).extend(0.0), 0.0),
+            LightKind::Point { position, range } => (position.extend(1.0), range.max(1e-3)),
+        };
+        LightGpu {
+            position: position.to_array(),
+            color: (self.color * self.intensity).extend(range).to_array(),
+        }
+    }
+}
+
+/// The Scene block, `@group(0) @binding(0)` (2,112 bytes).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub(crate) struct SceneGpu {
+    ambient: [f32; 4],          // 16
+    sky_top: [f32; 4],          // 16
+    sky_bottom: [f32; 4],       // 16
+    light_count: u32,           // 4
+    _pad: [u32; 3],             // 12: `lights` starts 16-aligned
+    lights: [LightGpu; MAX_LIGHTS], // 64 × 32
+}
+const _: () = assert!(std::mem::size_of::<SceneGpu>() == 64 + 32 * MAX_LIGHTS);
+
+impl SceneGpu {
+    /// Pack the environment and up to [`MAX_LIGHTS`] lights (the caller checks the count).
+    pub(crate) fn new(env: &Environment, lights: &[Light]) -> Self {
+        let (top, bottom) = match env.background {
+            Background::Color(c) => (c, c),
+            Background::Gradient { top, bottom } => (top, bottom),
+        };
+        let mut block = Self {
+            ambient: env.ambient.extend(0.0).to_array(),
+            sky_top: top.extend(1.0).to_array(),
+            sky_bottom: bottom.extend(1.0).to_array(),
+            light_count: lights.len().min(MAX_LIGHTS) as u32,
+            _pad: [0; 3],
+            lights: [LightGpu::default(); MAX_LIGHTS],
+        };
+        for (slot, light) in block.lights.iter_mut().zip(lights) {
+            *slot = light.to_gpu();
+        }
+        block
+    }
+}
+
+/// The Camera block, `@group(1) @binding(0)` (208 bytes).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub(crate) struct CameraGpu {
+    view_proj: [f32; 16],     // 64
+    view: [f32; 16],          // 64
+    inv_view_proj: [f32; 16], // 64
+    position: [f32; 4],       // 16
+}
+const _: () = assert!(std::mem::size_of::<CameraGpu>() == 208);
+
+impl Camera {
+    /// The shader's view of this camera for a target of `aspect` = width / height.
+    pub(crate) fn to_gpu(&self, aspect: f32) -> CameraGpu {
+        let view = self.view();
+        let view_proj = self.projection(aspect) * view;
+        CameraGpu {
+            view_proj: view_proj.to_cols_array(),
+            view: view.to_cols_array(),
+            inv_view_proj: view_proj.inverse().to_cols_array(),
+            position: self.eye.extend(1.0).to_array(),
+        }
+    }
+}
+
+/// Material flag bits, mirrored by the `FLAG_*` constants in `forward.wgsl`.
+pub(crate) const FLAG_ALPHA_MASK: u32 = 1;
+/// The material has a normal map.
+pub(crate) const FLAG_NORMAL_MAP: u32 = 2;
+/// The material blends: its alpha is written out.
+pub(crate) const FLAG_ALPHA_BLEND: u32 = 4;
+
+/// A material's uniform block, `@group(2) @binding(0)` (48 bytes).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub(crate) struct MaterialGpu {
+    base_color: [f32; 4], // 16
+    coeffs: [f32; 4],     // 16: ambient, diffuse, specular, Blinn-Phong exponent
+    alpha_cutoff: f32,    // 4
+    flags: u32,           // 4
+    _pad: [u32; 2],       // 8
+}
+const _: () = assert!(std::mem::size_of::<MaterialGpu>() == 48);
+
+impl Material {
+    /// The shader's view of this material.
+    pub(crate) fn to_gpu(&self) -> MaterialGpu {
+        let (cutoff, mode_flag) = match self.alpha_mode {
+            AlphaMode::Opaque => (0.0, 0),
+            AlphaMode::Mask { cutoff } => (cutoff, FLAG_ALPHA_MASK),
+            AlphaMode::Blend => (0.0, FLAG_ALPHA_BLEND),
+        };
+        let normal_flag = if self.normal_map.is_some() { FLAG_NORMAL_MAP } else { 0 };
+        let exponent = (1.0 + 11.0 * self.smoothness.clamp(0.0, 1.0)).exp2();
+        MaterialGpu {
+            base_color: self.base_color.to_array(),
+            coeffs: Vec4::new(self.ambient, self.diffuse, self.specular, exponent).to_array(),
+            alpha_cutoff: cutoff,
+            flags: mode_flag | normal_flag,
+            _pad: [0; 2],
+        }
+    }
+}
+
+/// One instance as the shader reads it: the object-to-world matrix (64 bytes).
+pub(crate) type InstanceGpu = Mat4;
+const _: () = assert!(std::mem::size_of::<InstanceGpu>() == 64);
+
+/// A uniform buffer holding one block, rewritten only when its bytes change.
+pub(crate) struct UniformBlock<T: bytemuck::Pod + PartialEq> {
+    pub(crate) buffer: wgpu::Buffer,
+    last: Option<T>,
+}
+
+impl<T: bytemuck::Pod + PartialEq> UniformBlock<T> {
+    pub(crate) fn new(device: &wgpu::Device, label: &str) -> Self {
+        Self {
+            buffer: device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: std::mem::size_of::<T>() as u64,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            }),
+            last: None,
+        }
+    }
+
+    /// Write `value` if it differs from what the buffer holds; returns bytes written.
+    pub(crate) fn update(&mut self, queue: &wgpu::Queue, value: T) -> u64 {
+        if self.last.as_ref() == Some(&value) {
+            return 0;
+        }
+        queue.write_buffer(&self.buffer, 0, bytemuck::bytes_of(&value));
+        self.last = Some(value);
+        std::mem::size_of::<T>() as u64
+    }
+}

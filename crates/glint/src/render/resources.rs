@@ -1,0 +1,215 @@
+//! Core layer: GPU twins of scene data — meshes, textures (with mipmaps made on
+//! the GPU), material bind groups — and the per-frame instance buffer.
+
+use super::blocks::InstanceGpu;
+use crate::asset::Texture;
+use crate::scene::Mesh;
+use wgpu::util::DeviceExt;
+
+/// A shape's vertex and index buffers.
+pub(crate) struct GpuMesh {
+    pub vertices: wgpu::Buffer,
+    pub indices: wgpu::Buffer,
+    pub index_count: u32,
+}
+
+impl GpuMesh {
+    pub(crate) fn new(device: &wgpu::Device, mesh: &Mesh, id: u32) -> Self {
+        let vertices = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some(&format!("shape {id}: vertices")),
+            contents: bytemuck::cast_slice(mesh.vertices()),
+            usage: wgpu::BufferUsages::VERTEX,
+        });
+        let indices = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some(&format!("shape {id}: indices")),
+            contents: bytemuck::cast_slice(mesh.indices()),
+            usage: wgpu::BufferUsages::INDEX,
+        });
+        Self {
+            vertices,
+            indices,
+            index_count: mesh.indices().len() as u32,
+        }
+    }
+}
+
+/// Builds textures and fills their mip chains by repeated half-size blits.
+pub(crate) struct TextureUploader {
+    layout: wgpu::BindGroupLayout,
+    sampler: wgpu::Sampler,
+    srgb: wgpu::RenderPipeline,
+    linear: wgpu::RenderPipeline,
+}
+
+impl TextureUploader {
+    pub(crate) fn new(device: &wgpu::Device) -> Self {
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("texture uploader: mip source layout"),
+            entries: &[
+                wgpu::BindGroupLayoutEntry {
+                    binding: 0,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Float { filterable: true },
+                        view_dimension: wgpu::TextureViewDimension::D2,
+                        multisampled: false,
+                    },
+                    count: None,
+                },
+                wgpu::BindGroupLayoutEntry {
+                    binding: 1,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+                    count: None,
+                },
+            ],
+        });
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("texture uploader: mip pipeline layout"),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("texture uploader: mip shader"),
+            source: wgpu::ShaderSource::Wgsl(crate::shader::MIPMAP.into()),
+        });
+        let pipeline = |format: wgpu::TextureFormat| {
+            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some(&format!("texture uploader: mip pipeline ({format:?})")),
+                layout: Some(&pipeline_layout),
+                vertex: wgpu::VertexState {
+                    module: &module,
+                    entry_point: Some("vs_blit"),
+                    compilation_options: Default::default(),
+                    buffers: &[],
+                },
+                primitive: Default::default(),
+                depth_stencil: None,
+                multisample: Default::default(),
+                fragment: Some(wgpu::FragmentState {
+                    module: &module,
+                    entry_point: Some("fs_blit"),
+                    compilation_options: Default::default(),
+                    targets: &[Some(format.into())],
+                }),
+                multiview_mask: None,
+                cache: None,
+            })
+        };
+        Self {
+            sampler: device.create_sampler(&wgpu::SamplerDescriptor {
+                label: Some("texture uploader: mip sampler"),
+                mag_filter: wgpu::FilterMode::Linear,
+                min_filter: wgpu::FilterMode::Linear,
+                ..Default::default()
+            }),
+            srgb: pipeline(wgpu::TextureFormat::Rgba8UnormSrgb),
+            linear: pipeline(wgpu::TextureFormat::Rgba8Unorm),
+            layout,
+        }
+    }
+
+    /// Create the GPU texture for `texture`, write level 0 and blit the rest of the
+    /// mip chain. Returns the view and the bytes written from the CPU.
+    pub(crate) fn upload(&self, device: &wgpu::Device, queue: &wgpu::Queue, texture: &Texture) -> (wgpu::TextureView, u64) {
+        let (width, height) = texture.image.dimensions();
+        let format = if texture.srgb { wgpu::TextureFormat::Rgba8UnormSrgb } else { wgpu::TextureFormat::Rgba8Unorm };
+        let levels = texture.mip_levels();
+        let size = wgpu::Extent3d { width, height, depth_or_array_layers: 1 };
+        let gpu_texture = device.create_texture(&wgpu::TextureDescriptor {
+            label: Some(&format!("texture '{}'", texture.name)),
+            size,
+            mip_level_count: levels,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST | wgpu::TextureUsages::RENDER_ATTACHMENT,
+            view_formats: &[],
+        });
+        // Only level 0 comes from the CPU; the blits below fill the rest.
+        queue.write_texture(
+            gpu_texture.as_image_copy(),
+            texture.image.as_raw(),
+            wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(4 * width), rows_per_image: Some(height) },
+            size,
+        );
+        let pipeline = if texture.srgb { &self.srgb } else { &self.linear };
+        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("texture uploader: mips") });
+        let level_view = |level| {
+            gpu_texture.create_view(&wgpu::TextureViewDescriptor {
+                base_mip_level: level,
+                mip_level_count: Some(1),
+                ..Default::default()
+            })
+        };
+        for level in 1..levels {
+            let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("texture uploader: mip source"),
+                layout: &self.layout,
+                entries: &[
+                    wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(&level_view(level - 1)) },
+                    wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::Sampler(&self.sampler) },
+                ],
+            });
+            let target = level_view(level);
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some(&format!("texture '{}': mip {level}", texture.name)),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view: &target,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations { load: wgpu::LoadOp::Clear(wgpu::Color::BLACK), store: wgpu::StoreOp::Store },
+                })],
+                ..Default::default()
+            });
+            pass.set_pipeline(pipeline);
+            pass.set_bind_group(0, &bind_group, &[]);
+            pass.draw(0..3, 0..1);
+        }
+        queue.submit([encoder.finish()]);
+        (gpu_texture.create_view(&Default::default()), texture.image.as_raw().len() as u64)
+    }
+}
+
+/// The per-frame instance storage buffer (`@group(3)`), grown by doubling.
+pub(crate) struct InstanceBuffer {
+    buffer: wgpu::Buffer,
+    pub bind_group: wgpu::BindGroup,
+    capacity: usize,
+}
+
+impl InstanceBuffer {
+    const INITIAL_CAPACITY: usize = 1024;
+
+    pub(crate) fn new(device: &wgpu::Device, layout: &wgpu::BindGroupLayout) -> Self {
+        Self::with_capacity(device, layout, Self::INITIAL_CAPACITY)
+    }
+
+    fn with_capacity(device: &wgpu::Device, layout: &wgpu::BindGroupLayout, capacity: usize) -> Self {
+        let buffer = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("renderer: instance transforms"),
+            size: (capacity * std::mem::size_of::<InstanceGpu>()) as u64,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("renderer: instance block (group 3)"),
+            layout,
+            entries: &[wgpu::BindGroupEntry { binding: 0, resource: buffer.as_entire_binding() }],
+        });
+        Self { buffer, bind_group, capacity }
+    }
+
+    /// Write this frame's instances in one upload, growing the buffer first if
+    /// needed. Returns bytes written.
+    pub(crate) fn write(&mut self, device: &wgpu::Device, queue: &wgpu::Queue, layout: &wgpu::BindGroupLayout, instances: &[InstanceGpu]) -> u64 {
+        if instances.len() > self.capacity {
+            *self = Self::with_capacity(device, layout, instances.len().next_power_of_two());
+        }
+        let bytes: &[u8] = bytemuck::cast_slice(instances);
+        if !bytes.is_empty() {
+            queue.write_buffer(&self.buffer, 0, bytes);
+        }
+        bytes.len() as u64
+    }
+}

@@ -1,0 +1,33 @@
+use glam::Vec3;
+
+/// What is drawn where no geometry is.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Background {
+    /// One linear colour (the clear colour).
+    Color(Vec3),
+    /// A sky: `bottom` at and below the horizon blending to `top` straight up.
+    Gradient {
+        /// Colour looking straight up.
+        top: Vec3,
+        /// Colour at the horizon and below.
+        bottom: Vec3,
+    },
+}
+
+/// Scene-wide lighting settings (the Scene block, `@group(0)`, with the lights).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Environment {
+    /// Background colour or sky gradient.
+    pub background: Background,
+    /// Ambient light colour, multiplied by each material's `ambient`.
+    pub ambient: Vec3,
+}
+
+impl Default for Environment {
+    fn default() -> Self {
+        Self {
+            background: Background::Color(Vec3::new(0.05, 0.05, 0.06)),
+            ambient: Vec3::splat(0.1),
+        }
+    }
+}

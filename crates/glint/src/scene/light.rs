@@ -1,0 +1,56 @@
+use glam::Vec3;
+
+/// Most lights one frame can use. All lights live in one uniform block
+/// (`@group(0)`); [`Renderer::flush`](crate::Renderer::flush) returns an error past this.
+pub const MAX_LIGHTS: usize = 64;
+
+/// What kind of light, with its geometry.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum LightKind {
+    /// Parallel light travelling along `direction` (like the sun).
+    Directional {
+        /// Direction the light travels (normalised when uploaded).
+        direction: Vec3,
+    },
+    /// Light radiating from `position`, fading smoothly to zero at `range`.
+    Point {
+        /// World position.
+        position: Vec3,
+        /// Distance at which the light reaches zero.
+        range: f32,
+    },
+}
+
+/// A light: kind, linear colour and intensity.
+///
+/// Point lights fall off as `intensity / d² · (1 − (d/range)⁴)²` (clamped), which
+/// reaches exactly zero at `range`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Light {
+    /// Directional or point, with its geometry.
+    pub kind: LightKind,
+    /// Linear RGB colour.
+    pub color: Vec3,
+    /// Scale of the colour.
+    pub intensity: f32,
+}
+
+impl Light {
+    /// A white-ish directional light travelling along `direction`.
+    pub fn directional(direction: Vec3, color: Vec3, intensity: f32) -> Self {
+        Self {
+            kind: LightKind::Directional { direction },
+            color,
+            intensity,
+        }
+    }
+
+    /// A point light at `position` reaching zero at `range`.
+    pub fn point(position: Vec3, color: Vec3, intensity: f32, range: f32) -> Self {
+        Self {
+            kind: LightKind::Point { position, range },
+            color,
+            intensity,
+        }
+    }
+}

@@ -1,0 +1,79 @@
+use super::TextureId;
+use glam::Vec4;
+
+/// How a material's alpha is used, which also picks its render queue.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum AlphaMode {
+    /// Alpha ignored; drawn in the opaque queue.
+    Opaque,
+    /// Fragments with alpha below the cutoff are discarded; alpha-test queue.
+    Mask {
+        /// Alpha below this is cut away (0..1).
+        cutoff: f32,
+    },
+    /// Alpha-blended over what is behind; transparent queue, far to near.
+    Blend,
+}
+
+/// A Blinn-Phong material: everything that decides a surface's colour.
+///
+/// Colours are linear RGB(A). The fragment shader computes
+/// `colour = base * diffuse_map`, then
+/// `ambient·env_ambient·colour + Σ lights (diffuse·N·L·colour + specular·spec_map·(N·H)^shininess)`
+/// with `shininess = 2^(1 + 11·smoothness)`. Bound at `@group(2)`:
+/// binding 0 the uniform block, 1 diffuse map, 2 normal map, 3 specular map, 4 sampler;
+/// a missing map is bound as a neutral 1×1 texture.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Material {
+    /// Name, for scene files and diagnostics.
+    pub name: String,
+    /// Base colour and alpha, linear.
+    pub base_color: Vec4,
+    /// How much environment ambient light the surface reflects.
+    pub ambient: f32,
+    /// Lambert diffuse coefficient.
+    pub diffuse: f32,
+    /// Specular coefficient.
+    pub specular: f32,
+    /// 0 (rough, broad highlight) to 1 (smooth, tight highlight).
+    pub smoothness: f32,
+    /// Colour texture (sRGB), multiplied into the base colour.
+    pub diffuse_map: Option<TextureId>,
+    /// Tangent-space normal map (linear, +Y up as in glTF/OpenGL).
+    pub normal_map: Option<TextureId>,
+    /// Specular intensity map (linear; red channel scales `specular`).
+    pub specular_map: Option<TextureId>,
+    /// Alpha handling and render queue.
+    pub alpha_mode: AlphaMode,
+    /// Draw back faces too (lit with the flipped normal).
+    pub double_sided: bool,
+}
+
+impl Default for Material {
+    fn default() -> Self {
+        Self {
+            name: "default".into(),
+            base_color: Vec4::new(0.8, 0.8, 0.8, 1.0),
+            ambient: 1.0,
+            diffuse: 1.0,
+            specular: 0.3,
+            smoothness: 0.5,
+            diffuse_map: None,
+            normal_map: None,
+            specular_map: None,
+            alpha_mode: AlphaMode::Opaque,
+            double_sided: false,
+        }
+    }
+}
+
+impl Material {
+    /// A plain opaque material of one linear RGB colour.
+    pub fn color(name: &str, r: f32, g: f32, b: f32) -> Self {
+        Self {
+            name: name.into(),
+            base_color: Vec4::new(r, g, b, 1.0),
+            ..Self::default()
+        }
+    }
+}

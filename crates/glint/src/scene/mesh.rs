@@ -1,0 +1,227 @@
+use glam::{Vec2, Vec3};
+
+/// One vertex of glint's single interleaved vertex layout (48 bytes).
+///
+/// Vertex shader inputs: `@location(0) position`, `@location(1) normal`,
+/// `@location(2) uv`, `@location(3) tangent` (xyz, w = bitangent sign:
+/// `bitangent = cross(normal, tangent.xyz) * tangent.w` points up the image, towards
+/// decreasing v, as in glTF).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct Vertex {
+    /// Object-space position (12 bytes).
+    pub position: [f32; 3],
+    /// Unit normal (12 bytes).
+    pub normal: [f32; 3],
+    /// Texture coordinate, origin at the image's top-left (8 bytes).
+    pub uv: [f32; 2],
+    /// Unit tangent along +u and bitangent sign (16 bytes).
+    pub tangent: [f32; 4],
+}
+const _: () = assert!(std::mem::size_of::<Vertex>() == 48);
+
+/// Axis-aligned bounding box.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Aabb {
+    /// Smallest corner.
+    pub min: Vec3,
+    /// Largest corner.
+    pub max: Vec3,
+}
+
+impl Aabb {
+    /// The box around `points`; `None` for no points.
+    pub fn from_points(points: impl IntoIterator<Item = Vec3>) -> Option<Self> {
+        let mut it = points.into_iter();
+        let first = it.next()?;
+        Some(it.fold(Self { min: first, max: first }, |b, p| Self {
+            min: b.min.min(p),
+            max: b.max.max(p),
+        }))
+    }
+
+    /// Centre of the box.
+    pub fn center(&self) -> Vec3 {
+        (self.min + self.max) * 0.5
+    }
+
+    /// Half the size of the box along each axis.
+    pub fn half_extent(&self) -> Vec3 {
+        (self.max - self.min) * 0.5
+    }
+}
+
+/// A sphere enclosing a mesh.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BoundingSphere {
+    /// Centre (the AABB's centre).
+    pub center: Vec3,
+    /// Radius reaching the farthest vertex.
+    pub radius: f32,
+}
+
+/// Why vertex data was rejected.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum MeshError {
+    /// No vertices or no triangles.
+    #[error("mesh has no triangles")]
+    Empty,
+    /// Index count not a multiple of 3.
+    #[error("index count {0} is not a multiple of 3")]
+    NotTriangles(usize),
+    /// An index past the vertex array.
+    #[error("index {index} is out of range ({vertices} vertices)")]
+    IndexOutOfRange {
+        /// The bad index.
+        index: u32,
+        /// How many vertices there are.
+        vertices: usize,
+    },
+    /// A position, normal or uv that is NaN or infinite.
+    #[error("vertex {0} has a non-finite component")]
+    NonFinite(usize),
+    /// The attribute arrays differ in length.
+    #[error("attribute arrays differ in length")]
+    AttributeLengths,
+}
+
+/// A triangle mesh on the CPU: interleaved vertices, u32 indices (counter-clockwise
+/// front faces) and its local bounds. Upload it with
+/// [`Renderer::add_shape`](crate::Renderer::add_shape).
+#[derive(Clone, Debug)]
+pub struct Mesh {
+    vertices: Vec<Vertex>,
+    indices: Vec<u32>,
+    aabb: Aabb,
+    sphere: BoundingSphere,
+}
+
+impl Mesh {
+    /// Build a mesh from attribute arrays; tangents are generated with MikkTSpace.
+    ///
+    /// Preconditions (checked): equal-length arrays, finite values, at least one
+    /// triangle, every index in range.
+    pub fn from_attributes(
+        positions: &[Vec3],
+        normals: &[Vec3],
+        uvs: &[Vec2],
+        indices: Vec<u32>,
+    ) -> Result<Self, MeshError> {
+        if positions.len() != normals.len() || positions.len() != uvs.len() {
+            return Err(MeshError::AttributeLengths);
+        }
+        let vertices = positions
+            .iter()
+            .zip(normals)
+            .zip(uvs)
+            .map(|((p, n), uv)| Vertex {
+                position: p.to_array(),
+                normal: n.normalize_or(Vec3::Y).to_array(),
+                uv: uv.to_array(),
+                tangent: [1.0, 0.0, 0.0, 1.0],
+            })
+            .collect();
+        let mut mesh = Self::from_vertices(vertices, indices)?;
+        mesh.generate_tangents();
+        Ok(mesh)
+    }
+
+    /// Build a mesh from finished vertices (tangents included) and indices.
+    pub fn from_vertices(vertices: Vec<Vertex>, indices: Vec<u32>) -> Result<Self, MeshError> {
+        if indices.is_empty() || vertices.is_empty() {
+            return Err(MeshError::Empty);
+        }
+        if indices.len() % 3 != 0 {
+            return Err(MeshError::NotTriangles(indices.len()));
+        }
+        if let Some(&index) = indices.iter().find(|&&i| i as usize >= vertices.len()) {
+            return Err(MeshError::IndexOutOfRange {
+                index,
+                vertices: vertices.len(),
+            });
+        }
+        if let Some(i) = vertices.iter().position(|v| {
+            !(v.position.iter().chain(&v.normal).chain(&v.uv)).all(|c| c.is_finite())
+        }) {
+            return Err(MeshError::NonFinite(i));
+        }
+        let aabb = Aabb::from_points(vertices.iter().map(|v| Vec3::from(v.position)))
+            .ok_or(MeshError::Empty)?;
+        let center = aabb.center();
+        let radius = vertices
+            .iter()
+            .map(|v| Vec3::from(v.position).distance(center))
+            .fold(0.0, f32::max);
+        Ok(Self {
+            vertices,
+            indices,
+            aabb,
+            sphere: BoundingSphere { center, radius },
+        })
+    }
+
+    /// The interleaved vertices.
+    pub fn vertices(&self) -> &[Vertex] {
+        &self.vertices
+    }
+
+    /// Triangle-list indices, counter-clockwise front faces.
+    pub fn indices(&self) -> &[u32] {
+        &self.indices
+    }
+
+    /// Local-space bounding box.
+    pub fn aabb(&self) -> Aabb {
+        self.aabb
+    }
+
+    /// Local-space bounding sphere.
+    pub fn bounding_sphere(&self) -> BoundingSphere {
+        self.sphere
+    }
+
+    /// Bytes this mesh takes on the GPU (vertices + indices).
+    pub fn gpu_bytes(&self) -> u64 {
+        (std::mem::size_of_val(self.vertices.as_slice()) + std::mem::size_of_val(self.indices.as_slice())) as u64
+    }
+
+    fn generate_tangents(&mut self) {
+        struct Geometry<'a>(&'a mut Mesh);
+        impl mikktspace::Geometry for Geometry<'_> {
+            fn num_faces(&self) -> usize {
+                self.0.indices.len() / 3
+            }
+            fn num_vertices_of_face(&self, _face: usize) -> usize {
+                3
+            }
+            fn position(&self, face: usize, vert: usize) -> [f32; 3] {
+                self.0.vertices[self.0.indices[face * 3 + vert] as usize].position
+            }
+            fn normal(&self, face: usize, vert: usize) -> [f32; 3] {
+                self.0.vertices[self.0.indices[face * 3 + vert] as usize].normal
+            }
+            fn tex_coord(&self, face: usize, vert: usize) -> [f32; 2] {
+                self.0.vertices[self.0.indices[face * 3 + vert] as usize].uv
+            }
+            fn set_tangent_encoded(&mut self, tangent: [f32; 4], face: usize, vert: usize) {
+                // Shared vertices get one tangent; smooth shapes agree across faces.
+                // MikkTSpace's bitangent follows +v, which runs down the image here;
+                // glint (like glTF) wants it up the image, so the sign flips.
+                let i = self.0.indices[face * 3 + vert] as usize;
+                self.0.vertices[i].tangent = [tangent[0], tangent[1], tangent[2], -tangent[3]];
+            }
+        }
+        if !mikktspace::generate_tangents(&mut Geometry(self)) {
+            log::warn!("tangent generation failed; normal maps on this mesh will be flat");
+        }
+        // Degenerate UVs leave tangents unusable: fall back to any vector ⟂ normal.
+        for v in &mut self.vertices {
+            let n = Vec3::from(v.normal);
+            let t = Vec3::new(v.tangent[0], v.tangent[1], v.tangent[2]);
+            if !t.is_finite() || t.length_squared() < 1e-12 || t.cross(n).length_squared() < 1e-12 {
+                let any = n.any_orthonormal_vector();
+                v.tangent = [any.x, any.y, any.z, 1.0];
+            }
+        }
+    }
+}

@@ -1,0 +1,33 @@
+//! Beginner layer: the nouns a scene is made of.
+//!
+//! Everything here is plain data with no wgpu handles: a [`Mesh`] is vertices and
+//! indices, a [`Material`] is numbers and texture ids, an [`Entity`] is a shape,
+//! a material and a list of instance transforms. The [`Renderer`](crate::Renderer)
+//! owns the GPU twins and turns submitted entities into draws.
+
+mod camera;
+mod entity;
+mod environment;
+mod light;
+mod material;
+mod mesh;
+
+pub use camera::{Camera, Projection};
+pub use entity::Entity;
+pub use environment::{Background, Environment};
+pub use light::{Light, LightKind, MAX_LIGHTS};
+pub use material::{AlphaMode, Material};
+pub use mesh::{Aabb, BoundingSphere, Mesh, MeshError, Vertex};
+
+/// Handle to a shape (a mesh uploaded by the renderer), returned by
+/// [`Renderer::add_shape`](crate::Renderer::add_shape).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct ShapeId(pub(crate) u32);
+
+/// Handle to a material, returned by [`Renderer::add_material`](crate::Renderer::add_material).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct MaterialId(pub(crate) u32);
+
+/// Handle to a texture, returned by [`Renderer::add_texture`](crate::Renderer::add_texture).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct TextureId(pub(crate) u32);
