@@ -1,1 +1,135 @@
-fn main(){}
+//! The `glint` command-line tool.
+
+use clap::{Parser, Subcommand};
+use glint::asset::{load_scene, SceneDesc};
+use glint::{Error, Gpu, OffscreenTarget, Renderer};
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+const EXIT_CODES: &str = "Exit codes: 0 ok, 1 bad input (file:line: message on stderr), 2 no GPU adapter, 3 other GPU or render failure.";
+
+/// glint: a real-time 3D renderer on wgpu.
+#[derive(Parser)]
+#[command(name = "glint", version, about, after_help = EXIT_CODES)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Render one frame of a .scn scene to a PNG file.
+    #[command(after_help = EXIT_CODES)]
+    Render {
+        /// The scene file.
+        scene: PathBuf,
+        /// Output PNG path.
+        #[arg(short, long, default_value = "out.png")]
+        output: PathBuf,
+        /// Image size, WIDTHxHEIGHT.
+        #[arg(long, default_value = "1280x720", value_parser = parse_size)]
+        size: (u32, u32),
+        /// Samples per pixel: 1 (no MSAA) or 4.
+        #[arg(long, default_value_t = 4, value_parser = parse_msaa)]
+        msaa: u32,
+        /// Which camera of the scene to render (0 = the first).
+        #[arg(long, default_value_t = 0)]
+        camera: usize,
+        /// Print the frame's statistics as one JSON object on stdout.
+        #[arg(long)]
+        stats: bool,
+    },
+    /// Parse and validate a .scn scene without a GPU, and summarise it.
+    #[command(after_help = EXIT_CODES)]
+    Check {
+        /// The scene file.
+        scene: PathBuf,
+    },
+}
+
+fn parse_size(s: &str) -> Result<(u32, u32), String> {
+    let (w, h) = s.split_once(['x', 'X']).ok_or_else(|| format!("'{s}' is not WIDTHxHEIGHT"))?;
+    let side = |v: &str| v.trim().parse::<u32>().ok().filter(|&n| (1..=16384).contains(&n));
+    match (side(w), side(h)) {
+        (Some(w), Some(h)) => Ok((w, h)),
+        _ => Err(format!("'{s}': each side must be a whole number in 1..=16384")),
+    }
+}
+
+fn parse_msaa(s: &str) -> Result<u32, String> {
+    match s {
+        "1" => Ok(1),
+        "4" => Ok(4),
+        _ => Err(format!("'{s}': MSAA must be 1 or 4")),
+    }
+}
+
+fn load(scene: &PathBuf) -> Result<SceneDesc, Error> {
+    let desc = load_scene(scene)?;
+    for warning in &desc.warnings {
+        eprintln!("warning: {warning}");
+    }
+    Ok(desc)
+}
+
+fn render(scene: &PathBuf, output: &PathBuf, (width, height): (u32, u32), msaa: u32, camera: usize, stats: bool) -> Result<(), Error> {
+    let desc = load(scene)?;
+    let Some(cam) = desc.cameras.get(camera) else {
+        return Err(glint::Diagnostic::file(scene, format!("camera {camera} requested, but the scene has {}", desc.cameras.len())).into());
+    };
+    let gpu = Gpu::headless()?;
+    let mut target = OffscreenTarget::new(&gpu, width, height, msaa)?;
+    let mut renderer = Renderer::new(&gpu);
+    let entities = desc.instantiate(&mut renderer);
+    for entity in &entities {
+        renderer.submit(entity);
+    }
+    let frame = renderer.flush(cam, &desc.lights, &mut target)?;
+    target.save_png(&gpu, output)?;
+    if stats {
+        let info = gpu.info();
+        let mut json = serde_json::to_value(frame).expect("FrameStats serialises");
+        json["adapter"] = format!("{} ({:?})", info.name, info.backend).into();
+        json["size"] = format!("{width}x{height}").into();
+        json["msaa"] = msaa.into();
+        println!("{json}");
+    }
+    Ok(())
+}
+
+fn check(scene: &PathBuf) -> Result<(), Error> {
+    let desc = load(scene)?;
+    println!("{}: ok", scene.display());
+    println!("  cameras:    {}", desc.cameras.len());
+    println!("  lights:     {}", desc.lights.len());
+    println!("  materials:  {}", desc.materials.len());
+    println!("  textures:   {}", desc.textures.len());
+    println!("  render tasks (mesh x material): {}", desc.entities.len());
+    println!("  instances:  {}", desc.instance_count());
+    println!("  warnings:   {}", desc.warnings.len());
+    if desc.lights.len() > glint::scene::MAX_LIGHTS {
+        return Err(glint::Diagnostic::file(scene, format!("{} lights, but a frame can use at most {}", desc.lights.len(), glint::scene::MAX_LIGHTS)).into());
+    }
+    Ok(())
+}
+
+fn main() -> ExitCode {
+    // Mesa's device-select Vulkan layer complains about XDG_RUNTIME_DIR on headless
+    // machines; it has nothing to select here. Set before any thread starts.
+    if std::env::var_os("NODEVICE_SELECT").is_none() {
+        std::env::set_var("NODEVICE_SELECT", "1");
+    }
+    env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn")).init();
+    let cli = Cli::parse();
+    let result = match &cli.command {
+        Command::Render { scene, output, size, msaa, camera, stats } => render(scene, output, *size, *msaa, *camera, *stats),
+        Command::Check { scene } => check(scene),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::from(e.exit_code())
+        }
+    }
+}

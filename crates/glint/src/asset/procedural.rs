@@ -55,7 +55,7 @@ impl ShapeKind {
     pub fn mesh(self) -> Mesh {
         match self {
             ShapeKind::Cube => cube(),
-            ShapeKind::Sphere => sphere(32, 16),
+            ShapeKind::Sphere => sphere(40, 20),
             ShapeKind::Plane => plane(1),
             ShapeKind::Cylinder => cylinder(32),
             ShapeKind::Cone => cone(32),
@@ -153,7 +153,9 @@ pub fn sphere(segments: u32, rings: u32) -> Mesh {
     let mut b = Builder::default();
     b.grid(segments, rings, |u, v| {
         let theta = v * std::f32::consts::PI;
-        let d = around_y(u * TAU) * theta.sin() + Vec3::Y * theta.cos();
+        // sin(π) is −8.7e-8 in f32, not 0: snap the poles so each is one exact point.
+        let (ring, height) = if v == 0.0 || v == 1.0 { (0.0, theta.cos().round()) } else { (theta.sin(), theta.cos()) };
+        let d = around_y(u * TAU) * ring + Vec3::Y * height;
         (d * 0.5, d, Vec2::new(u, v))
     });
     b.finish()

@@ -423,6 +423,7 @@ impl Loader<'_> {
             smoothness: f.number("smoothness", 0.0..=1.0)?.unwrap_or(defaults.smoothness),
             alpha_mode,
             double_sided: f.flag("double_sided")?.unwrap_or(false),
+            uv_scale: f.numbers::<2>("uv_scale", "2 numbers (u v)")?.map_or(defaults.uv_scale, glam::Vec2::from),
             ..defaults
         };
         let desc = MaterialDesc {
@@ -532,17 +533,18 @@ impl Loader<'_> {
     }
 }
 
-/// Place `count` instances in the box `origin ± extent/2`, on a grid over the axes
-/// whose extent is not zero, or uniformly at random; the same seed gives the same
+/// Place `count` instances in the box `origin ± extent/2`: on an evenly spaced grid
+/// over the axes whose extent is not zero (cells as square as the box allows, filled
+/// x first, then z, then y), or uniformly at random. The same seed gives the same
 /// placement everywhere (PCG32).
 fn place_instances(count: usize, random: bool, origin: Vec3, extent: Vec3, seed: u64, scale: (f32, f32), random_yaw: bool) -> Vec<Mat4> {
     let mut rng = rand_pcg::Pcg32::seed_from_u64(seed);
-    let axes: Vec<usize> = (0..3).filter(|&a| extent[a] > 0.0).collect();
-    let per_axis = if axes.is_empty() {
-        1
-    } else {
-        (count as f64).powf(1.0 / axes.len() as f64).ceil().max(1.0) as usize
-    };
+    let axes: Vec<usize> = [0, 2, 1].into_iter().filter(|&a| extent[a] > 0.0).collect();
+    // Cell side s with (product of extents) / s^k = count; rounding each axis' cell
+    // count up keeps at least `count` cells.
+    let volume: f64 = axes.iter().map(|&a| f64::from(extent[a])).product();
+    let side = (volume / count.max(1) as f64).powf(1.0 / axes.len().max(1) as f64);
+    let cells: Vec<usize> = axes.iter().map(|&a| ((f64::from(extent[a]) / side - 1e-9).ceil() as usize).max(1)).collect();
     let corner = origin - extent * 0.5;
     (0..count)
         .map(|i| {
@@ -551,9 +553,9 @@ fn place_instances(count: usize, random: bool, origin: Vec3, extent: Vec3, seed:
                 p = corner + extent * Vec3::new(rng.random(), rng.random(), rng.random());
             } else {
                 let mut rest = i;
-                for &a in &axes {
-                    p[a] = corner[a] + extent[a] * ((rest % per_axis) as f32 + 0.5) / per_axis as f32;
-                    rest /= per_axis;
+                for (&a, &n) in axes.iter().zip(&cells) {
+                    p[a] = corner[a] + extent[a] * ((rest % n) as f32 + 0.5) / n as f32;
+                    rest /= n;
                 }
             }
             let s = scale.0 + (scale.1 - scale.0) * rng.random::<f32>();
@@ -637,6 +639,11 @@ mod tests {
         let grid = place_instances(4, false, Vec3::ZERO, Vec3::new(2.0, 0.0, 2.0), 1, (1.0, 1.0), false);
         let points: Vec<Vec3> = grid.iter().map(|m| m.w_axis.truncate()).collect();
         assert_eq!(points, vec![Vec3::new(-0.5, 0.0, -0.5), Vec3::new(0.5, 0.0, -0.5), Vec3::new(-0.5, 0.0, 0.5), Vec3::new(0.5, 0.0, 0.5)]);
+        // A long box gets more cells along its long side: 16 in 8×2 is 8×2 cells of 1.
+        let long = place_instances(16, false, Vec3::ZERO, Vec3::new(8.0, 0.0, 2.0), 1, (1.0, 1.0), false);
+        let xs: std::collections::BTreeSet<i32> = long.iter().map(|m| (m.w_axis.x * 2.0) as i32).collect();
+        let zs: std::collections::BTreeSet<i32> = long.iter().map(|m| (m.w_axis.z * 2.0) as i32).collect();
+        assert_eq!((xs.len(), zs.len()), (8, 2));
     }
 
     #[test]

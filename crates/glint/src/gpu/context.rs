@@ -74,11 +74,24 @@ impl Gpu {
     /// `WGPU_ADAPTER_NAME` (a case-insensitive substring) to choose an adapter.
     /// Returns [`GpuError::NoAdapter`] with the fix when nothing matches.
     pub fn headless() -> Result<Self, GpuError> {
-        let desc = wgpu::InstanceDescriptor::new_without_display_handle_from_env();
-        let backends = desc.backends;
-        let instance = wgpu::Instance::new(desc);
-        let adapter = pollster::block_on(choose_adapter(&instance, backends))?;
-        Self::from_adapter(adapter)
+        let from_env = wgpu::Backends::from_env();
+        // Without WGPU_BACKEND, try the native APIs first and reach for GL only
+        // when they have no adapter: probing EGL logs errors on machines without it.
+        let attempts = match from_env {
+            Some(backends) => vec![backends],
+            None => vec![wgpu::Backends::PRIMARY, wgpu::Backends::all()],
+        };
+        let mut last = None;
+        for backends in attempts {
+            let mut desc = wgpu::InstanceDescriptor::new_without_display_handle_from_env();
+            desc.backends = backends;
+            let instance = wgpu::Instance::new(desc);
+            match pollster::block_on(choose_adapter(&instance, backends)) {
+                Ok(adapter) => return Self::from_adapter(adapter),
+                Err(e) => last = Some(e),
+            }
+        }
+        Err(last.unwrap_or_else(|| GpuError::NoAdapter(String::new())))
     }
 
     /// Create the device and queue on a chosen adapter.

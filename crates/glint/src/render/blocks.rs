@@ -104,7 +104,7 @@ pub(crate) struct MaterialGpu {
     coeffs: [f32; 4],     // 16: ambient, diffuse, specular, Blinn-Phong exponent
     alpha_cutoff: f32,    // 4
     flags: u32,           // 4
-    _pad: [u32; 2],       // 8
+    uv_scale: [f32; 2],   // 8
 }
 const _: () = assert!(std::mem::size_of::<MaterialGpu>() == 48);
 
@@ -123,7 +123,7 @@ impl Material {
             coeffs: Vec4::new(self.ambient, self.diffuse, self.specular, exponent).to_array(),
             alpha_cutoff: cutoff,
             flags: mode_flag | normal_flag,
-            _pad: [0; 2],
+            uv_scale: self.uv_scale.to_array(),
         }
     }
 }

@@ -79,7 +79,7 @@ impl Pipelines {
         let material_layout = layout(
             "renderer: material block layout (group 2)",
             &[
-                uniform_entry(0, wgpu::ShaderStages::FRAGMENT),
+                uniform_entry(0, all),
                 texture_entry(1),
                 texture_entry(2),
                 texture_entry(3),

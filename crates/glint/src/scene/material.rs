@@ -1,5 +1,5 @@
 use super::TextureId;
-use glam::Vec4;
+use glam::{Vec2, Vec4};
 
 /// How a material's alpha is used, which also picks its render queue.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -47,6 +47,8 @@ pub struct Material {
     pub alpha_mode: AlphaMode,
     /// Draw back faces too (lit with the flipped normal).
     pub double_sided: bool,
+    /// Texture repeats across the shape's 0..1 UV range (u, v).
+    pub uv_scale: Vec2,
 }
 
 impl Default for Material {
@@ -63,6 +65,7 @@ impl Default for Material {
             specular_map: None,
             alpha_mode: AlphaMode::Opaque,
             double_sided: false,
+            uv_scale: Vec2::ONE,
         }
     }
 }

@@ -6,7 +6,7 @@ struct MaterialBlock {
     coeffs: vec4<f32>,
     alpha_cutoff: f32,
     flags: u32,
-    _pad: vec2<u32>,
+    uv_scale: vec2<f32>,
 }
 
 const FLAG_ALPHA_MASK: u32 = 1u;
@@ -52,7 +52,7 @@ fn vs_main(v: VertexIn, @builtin(instance_index) instance: u32) -> VertexOut {
     out.clip = camera.view_proj * world;
     out.world_position = world.xyz;
     out.normal = cofactor * v.normal * det_sign;
-    out.uv = v.uv;
+    out.uv = v.uv * material.uv_scale;
     out.tangent = vec4<f32>(m * v.tangent.xyz, v.tangent.w * det_sign);
     return out;
 }

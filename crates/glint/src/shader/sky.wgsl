@@ -21,6 +21,7 @@ fn fs_sky(in: SkyOut) -> @location(0) vec4<f32> {
     let far = camera.inv_view_proj * vec4<f32>(in.ndc, 1.0, 1.0);
     let near = camera.inv_view_proj * vec4<f32>(in.ndc, 0.0, 1.0);
     let dir = normalize(far.xyz / far.w - near.xyz / near.w);
-    let t = saturate(dir.y);
-    return vec4<f32>(mix(scene.sky_bottom.rgb, scene.sky_top.rgb, sqrt(t)), 1.0);
+    // Flat at the horizon (no kink where the ground colour meets the sky).
+    let t = smoothstep(0.0, 0.6, dir.y);
+    return vec4<f32>(mix(scene.sky_bottom.rgb, scene.sky_top.rgb, t), 1.0);
 }

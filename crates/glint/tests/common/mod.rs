@@ -1,0 +1,96 @@
+//! Shared test helpers: one GPU per test binary (skipped when there is none),
+//! rendering a `.scn` file, and reference-image comparison.
+#![allow(dead_code)] // each test binary uses its own subset
+
+use glint::{FrameStats, Gpu, OffscreenTarget, Renderer};
+use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
+
+/// The repository root (reference images and scenes live there).
+pub fn repo_root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+/// The shared GPU, or `None` (after a message) when this machine has no adapter.
+/// With `GLINT_REQUIRE_ADAPTER=1` a missing adapter fails the test instead.
+pub fn gpu() -> Option<&'static Gpu> {
+    static GPU: OnceLock<Result<Gpu, String>> = OnceLock::new();
+    match GPU.get_or_init(|| Gpu::headless().map_err(|e| e.to_string())) {
+        Ok(gpu) => Some(gpu),
+        Err(e) if std::env::var("GLINT_REQUIRE_ADAPTER").as_deref() == Ok("1") => {
+            panic!("GLINT_REQUIRE_ADAPTER=1 but there is no adapter: {e}")
+        }
+        Err(e) => {
+            eprintln!("skipping GPU test: {e}");
+            None
+        }
+    }
+}
+
+/// Render one frame of a scene under `tests/scenes/` at `size`×`size` with 4× MSAA.
+pub fn render_scene(gpu: &Gpu, name: &str, size: u32) -> (image::RgbaImage, FrameStats) {
+    let path = repo_root().join("tests/scenes").join(format!("{name}.scn"));
+    let desc = glint::asset::load_scene(&path).unwrap_or_else(|e| panic!("{e}"));
+    assert!(desc.warnings.is_empty(), "{:?}", desc.warnings);
+    let mut renderer = Renderer::new(gpu);
+    let entities = desc.instantiate(&mut renderer);
+    let mut target = OffscreenTarget::new(gpu, size, size, 4).expect("target");
+    for e in &entities {
+        renderer.submit(e);
+    }
+    let stats = renderer.flush(&desc.cameras[0], &desc.lights, &mut target).expect("frame");
+    (target.read_rgba8(gpu).expect("readback"), stats)
+}
+
+/// Reference tolerance. Both must hold:
+/// - image-compare's hybrid similarity (MSSIM on luma, RMS on chroma) ≥ `MIN_SIMILARITY`;
+/// - at most `MAX_BAD_PIXELS` of the pixels differ by more than `BAD_PIXEL_DELTA`
+///   (of 255) in any channel, so a small missing detail cannot hide in the mean.
+pub const MIN_SIMILARITY: f64 = 0.97;
+/// Fraction of pixels allowed past [`BAD_PIXEL_DELTA`].
+pub const MAX_BAD_PIXELS: f64 = 0.005;
+/// Per-channel difference that makes a pixel "bad".
+pub const BAD_PIXEL_DELTA: u8 = 40;
+
+/// Compare `actual` with `tests/reference/NAME.png`.
+///
+/// `GLINT_BLESS=1` writes `actual` as the new reference instead. On mismatch the
+/// actual image and a diff map go to `tests/output/` and the test fails naming them.
+pub fn assert_matches_reference(name: &str, actual: &image::RgbaImage) {
+    let root = repo_root();
+    let reference_path = root.join("tests/reference").join(format!("{name}.png"));
+    if std::env::var("GLINT_BLESS").as_deref() == Ok("1") {
+        actual.save(&reference_path).expect("write reference");
+        eprintln!("blessed {}", reference_path.display());
+        return;
+    }
+    let expected = image::open(&reference_path)
+        .unwrap_or_else(|e| panic!("{}: {e} (run with GLINT_BLESS=1 to create it)", reference_path.display()))
+        .into_rgb8();
+    let actual_rgb = image::DynamicImage::ImageRgba8(actual.clone()).into_rgb8();
+    assert_eq!(expected.dimensions(), actual_rgb.dimensions(), "{name}: size differs from the reference");
+    let similarity = image_compare::rgb_hybrid_compare(&expected, &actual_rgb).expect("same size");
+    let bad = expected
+        .pixels()
+        .zip(actual_rgb.pixels())
+        .filter(|(a, b)| a.0.iter().zip(b.0.iter()).any(|(x, y)| x.abs_diff(*y) > BAD_PIXEL_DELTA))
+        .count() as f64
+        / f64::from(expected.width() * expected.height());
+    if similarity.score < MIN_SIMILARITY || bad > MAX_BAD_PIXELS {
+        let out = root.join("tests/output");
+        std::fs::create_dir_all(&out).expect("create tests/output");
+        let actual_path = out.join(format!("{name}.actual.png"));
+        let diff_path = out.join(format!("{name}.diff.png"));
+        actual.save(&actual_path).expect("write actual");
+        similarity.image.to_color_map().save(&diff_path).expect("write diff");
+        panic!(
+            "{name}: differs from {} (similarity {:.4} < {MIN_SIMILARITY} or {:.3}% pixels off by >{BAD_PIXEL_DELTA} > {:.3}%)\n  actual: {}\n  diff:   {}",
+            reference_path.display(),
+            similarity.score,
+            bad * 100.0,
+            MAX_BAD_PIXELS * 100.0,
+            actual_path.display(),
+            diff_path.display()
+        );
+    }
+}

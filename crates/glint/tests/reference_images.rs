@@ -1,0 +1,72 @@
+//! Reference-image tests: each scene under `tests/scenes/` rendered at 256×256
+//! (4× MSAA) must match `tests/reference/NAME.png` within the tolerance in
+//! `common`. Regenerate on purpose with `GLINT_BLESS=1 cargo test --test reference_images`.
+
+mod common;
+
+fn check(name: &str, expected_draws: u32) {
+    let Some(gpu) = common::gpu() else { return };
+    let (image, stats) = common::render_scene(gpu, name, 256);
+    assert_eq!(stats.draw_calls, expected_draws, "{name}: draw calls");
+    common::assert_matches_reference(name, &image);
+}
+
+#[test]
+fn every_shape() {
+    // Plane, two cube entities (one draw: same shape and material), sphere,
+    // cylinder, cone, torus, sky.
+    check("shapes", 7);
+}
+
+#[test]
+fn textures_srgb_colour_and_normal_maps() {
+    check("textures", 2);
+}
+
+#[test]
+fn alpha_mask_and_blend() {
+    // Bar (opaque), leaf (alpha-test), two glass spheres (transparent).
+    check("alpha", 4);
+}
+
+#[test]
+fn several_point_lights() {
+    check("lights", 2);
+}
+
+#[test]
+fn instancing_700_instances_in_two_draws() {
+    // Two instanced draws plus the sky.
+    check("instancing", 3);
+}
+
+#[test]
+fn orthographic_camera() {
+    check("ortho", 2);
+}
+
+#[test]
+fn a_reference_test_fails_on_a_visibly_different_image() {
+    // The comparison itself must be able to fail: a frame missing one light
+    // (lights.scn without its red lamp) is rejected against the reference.
+    let Some(gpu) = common::gpu() else { return };
+    if std::env::var("GLINT_BLESS").as_deref() == Ok("1") {
+        return;
+    }
+    let path = common::repo_root().join("tests/scenes/lights.scn");
+    let desc = glint::asset::load_scene(&path).expect("scene");
+    let mut renderer = glint::Renderer::new(gpu);
+    let entities = desc.instantiate(&mut renderer);
+    let mut target = glint::OffscreenTarget::new(gpu, 256, 256, 4).expect("target");
+    for e in &entities {
+        renderer.submit(e);
+    }
+    let without_red: Vec<_> = desc.lights.iter().copied().filter(|l| l.color.x < 0.99 || l.color.y > 0.5).collect();
+    assert_eq!(without_red.len(), desc.lights.len() - 1);
+    renderer.flush(&desc.cameras[0], &without_red, &mut target).expect("frame");
+    let image = target.read_rgba8(gpu).expect("readback");
+    let result = std::panic::catch_unwind(|| common::assert_matches_reference("lights", &image));
+    assert!(result.is_err(), "a frame without the red light must not match the reference");
+    let _ = std::fs::remove_file(common::repo_root().join("tests/output/lights.actual.png"));
+    let _ = std::fs::remove_file(common::repo_root().join("tests/output/lights.diff.png"));
+}

@@ -1,0 +1,67 @@
+//! Writes the textures glint ships under `assets/textures/`, so they can be
+//! regenerated rather than trusted: `cargo run --example gen_textures`.
+//!
+//! - `tiles.png` (sRGB colour): 4×4 glazed tiles with grout.
+//! - `tiles_normal.png` (linear, +Y up): the tiles' bevels as a normal map.
+//! - `leaf.png` (sRGB colour + alpha): a leaf on transparent ground, for alpha masking.
+
+use image::{Rgba, RgbaImage};
+
+const SIZE: u32 = 256;
+const TILE: f32 = 64.0;
+const GROUT: f32 = 3.0;
+const BEVEL: f32 = 6.0;
+
+/// Height of the tile surface at (x, y): 0 in the grout, rising to 1 across the bevel.
+fn height(x: f32, y: f32) -> f32 {
+    let edge = |v: f32| {
+        let d = v.rem_euclid(TILE).min(TILE - v.rem_euclid(TILE));
+        ((d - GROUT) / BEVEL).clamp(0.0, 1.0)
+    };
+    edge(x).min(edge(y))
+}
+
+fn main() -> Result<(), image::ImageError> {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/textures");
+    std::fs::create_dir_all(&dir).map_err(image::ImageError::IoError)?;
+
+    let tiles = RgbaImage::from_fn(SIZE, SIZE, |x, y| {
+        let (tx, ty) = (x / TILE as u32, y / TILE as u32);
+        let h = height(x as f32 + 0.5, y as f32 + 0.5);
+        // Two glazes in a checker, each tile a little lighter or darker.
+        let shade = 0.9 + 0.1 * (((tx * 7 + ty * 13) % 5) as f32 / 4.0);
+        let glaze = if (tx + ty) % 2 == 0 { [196.0, 98.0, 60.0] } else { [232.0, 220.0, 196.0] };
+        let grout = [90.0, 86.0, 80.0];
+        let c = |i: usize| (grout[i] + (glaze[i] * shade - grout[i]) * h) as u8;
+        Rgba([c(0), c(1), c(2), 255])
+    });
+    tiles.save(dir.join("tiles.png"))?;
+
+    let normal = RgbaImage::from_fn(SIZE, SIZE, |x, y| {
+        let (fx, fy) = (x as f32 + 0.5, y as f32 + 0.5);
+        let dx = height(fx + 1.0, fy) - height(fx - 1.0, fy);
+        // Image y runs down; the normal map's +Y is up the image.
+        let dy = height(fx, fy - 1.0) - height(fx, fy + 1.0);
+        let n = glam::Vec3::new(-dx * 2.0, -dy * 2.0, 1.0).normalize();
+        let e = |v: f32| ((v * 0.5 + 0.5) * 255.0).round() as u8;
+        Rgba([e(n.x), e(n.y), e(n.z), 255])
+    });
+    normal.save(dir.join("tiles_normal.png"))?;
+
+    let leaf = RgbaImage::from_fn(128, 128, |x, y| {
+        // A leaf along the diagonal: inside a lens of two circles, with a vein.
+        let (u, v) = (x as f32 / 127.0 - 0.5, y as f32 / 127.0 - 0.5);
+        let (a, b) = ((u + v) * std::f32::consts::FRAC_1_SQRT_2, (u - v) * std::f32::consts::FRAC_1_SQRT_2);
+        let inside = (b.abs() + 0.62).powi(2) + a * a < 0.9f32.powi(2) && a.abs() < 0.62;
+        let vein = b.abs() < 0.012;
+        let g = (140.0 + 60.0 * (0.5 - a)) as u8;
+        match (inside, vein) {
+            (false, _) => Rgba([0, 0, 0, 0]),
+            (true, true) => Rgba([190, 220, 120, 255]),
+            (true, false) => Rgba([50, g, 40, 255]),
+        }
+    });
+    leaf.save(dir.join("leaf.png"))?;
+    println!("wrote tiles.png, tiles_normal.png, leaf.png to {}", dir.display());
+    Ok(())
+}
