@@ -10,7 +10,8 @@ fn main() -> Result<(), glint::Error> {
     // Init: GPU, renderer, camera, lights, materials, shapes, entities.
     let gpu = Gpu::headless()?;
     let mut renderer = Renderer::new(&gpu);
-    let camera = Camera::perspective(45.0, 0.1, 100.0).looking_at(Vec3::new(0.0, 4.0, 9.0), Vec3::new(0.0, 0.5, 0.0));
+    let camera = Camera::perspective(45.0, 0.1, 100.0)
+        .looking_at(Vec3::new(0.0, 4.0, 9.0), Vec3::new(0.0, 0.5, 0.0));
     let lights = [
         Light::directional(Vec3::new(-1.0, -2.0, -1.5), Vec3::ONE, 1.2),
         Light::point(Vec3::new(0.0, 2.5, 0.0), Vec3::new(1.0, 0.6, 0.3), 6.0, 6.0),
@@ -38,7 +39,10 @@ fn main() -> Result<(), glint::Error> {
         renderer.submit(&ring);
         renderer.submit(&bouncer);
         let stats = renderer.flush(&camera, &lights, &mut target)?;
-        println!("frame {frame}: {} draws, {} instances, {} bytes uploaded", stats.draw_calls, stats.instances_drawn, stats.bytes_uploaded.total);
+        println!(
+            "frame {frame}: {} draws, {} instances, {} bytes uploaded",
+            stats.draw_calls, stats.instances_drawn, stats.bytes_uploaded.total
+        );
     }
     target.save_png(&gpu, "hello.png")?;
     Ok(())

@@ -3,7 +3,7 @@
 use clap::{Parser, Subcommand};
 use glint::asset::{load_scene, SceneDesc};
 use glint::{Error, Gpu, OffscreenTarget, Renderer};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 const EXIT_CODES: &str = "Exit codes: 0 ok, 1 bad input (file:line: message on stderr), 2 no GPU adapter, 3 other GPU or render failure.";
@@ -48,11 +48,20 @@ enum Command {
 }
 
 fn parse_size(s: &str) -> Result<(u32, u32), String> {
-    let (w, h) = s.split_once(['x', 'X']).ok_or_else(|| format!("'{s}' is not WIDTHxHEIGHT"))?;
-    let side = |v: &str| v.trim().parse::<u32>().ok().filter(|&n| (1..=16384).contains(&n));
+    let (w, h) = s
+        .split_once(['x', 'X'])
+        .ok_or_else(|| format!("'{s}' is not WIDTHxHEIGHT"))?;
+    let side = |v: &str| {
+        v.trim()
+            .parse::<u32>()
+            .ok()
+            .filter(|&n| (1..=16384).contains(&n))
+    };
     match (side(w), side(h)) {
         (Some(w), Some(h)) => Ok((w, h)),
-        _ => Err(format!("'{s}': each side must be a whole number in 1..=16384")),
+        _ => Err(format!(
+            "'{s}': each side must be a whole number in 1..=16384"
+        )),
     }
 }
 
@@ -64,7 +73,7 @@ fn parse_msaa(s: &str) -> Result<u32, String> {
     }
 }
 
-fn load(scene: &PathBuf) -> Result<SceneDesc, Error> {
+fn load(scene: &Path) -> Result<SceneDesc, Error> {
     let desc = load_scene(scene)?;
     for warning in &desc.warnings {
         eprintln!("warning: {warning}");
@@ -72,10 +81,24 @@ fn load(scene: &PathBuf) -> Result<SceneDesc, Error> {
     Ok(desc)
 }
 
-fn render(scene: &PathBuf, output: &PathBuf, (width, height): (u32, u32), msaa: u32, camera: usize, stats: bool) -> Result<(), Error> {
+fn render(
+    scene: &Path,
+    output: &Path,
+    (width, height): (u32, u32),
+    msaa: u32,
+    camera: usize,
+    stats: bool,
+) -> Result<(), Error> {
     let desc = load(scene)?;
     let Some(cam) = desc.cameras.get(camera) else {
-        return Err(glint::Diagnostic::file(scene, format!("camera {camera} requested, but the scene has {}", desc.cameras.len())).into());
+        return Err(glint::Diagnostic::file(
+            scene,
+            format!(
+                "camera {camera} requested, but the scene has {}",
+                desc.cameras.len()
+            ),
+        )
+        .into());
     };
     let gpu = Gpu::headless()?;
     let mut target = OffscreenTarget::new(&gpu, width, height, msaa)?;
@@ -97,7 +120,7 @@ fn render(scene: &PathBuf, output: &PathBuf, (width, height): (u32, u32), msaa: 
     Ok(())
 }
 
-fn check(scene: &PathBuf) -> Result<(), Error> {
+fn check(scene: &Path) -> Result<(), Error> {
     let desc = load(scene)?;
     println!("{}: ok", scene.display());
     println!("  cameras:    {}", desc.cameras.len());
@@ -108,7 +131,15 @@ fn check(scene: &PathBuf) -> Result<(), Error> {
     println!("  instances:  {}", desc.instance_count());
     println!("  warnings:   {}", desc.warnings.len());
     if desc.lights.len() > glint::scene::MAX_LIGHTS {
-        return Err(glint::Diagnostic::file(scene, format!("{} lights, but a frame can use at most {}", desc.lights.len(), glint::scene::MAX_LIGHTS)).into());
+        return Err(glint::Diagnostic::file(
+            scene,
+            format!(
+                "{} lights, but a frame can use at most {}",
+                desc.lights.len(),
+                glint::scene::MAX_LIGHTS
+            ),
+        )
+        .into());
     }
     Ok(())
 }
@@ -120,9 +151,24 @@ fn main() -> ExitCode {
         std::env::set_var("NODEVICE_SELECT", "1");
     }
     env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn")).init();
-    let cli = Cli::parse();
+    // clap exits 2 on usage errors, which here means "no GPU adapter": a bad
+    // argument is bad input, exit 1.
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) => {
+            let _ = e.print();
+            return ExitCode::from(if e.use_stderr() { 1 } else { 0 });
+        }
+    };
     let result = match &cli.command {
-        Command::Render { scene, output, size, msaa, camera, stats } => render(scene, output, *size, *msaa, *camera, *stats),
+        Command::Render {
+            scene,
+            output,
+            size,
+            msaa,
+            camera,
+            stats,
+        } => render(scene, output, *size, *msaa, *camera, *stats),
         Command::Check { scene } => check(scene),
     };
     match result {

@@ -61,12 +61,22 @@ fn a_reference_test_fails_on_a_visibly_different_image() {
     for e in &entities {
         renderer.submit(e);
     }
-    let without_red: Vec<_> = desc.lights.iter().copied().filter(|l| l.color.x < 0.99 || l.color.y > 0.5).collect();
+    let without_red: Vec<_> = desc
+        .lights
+        .iter()
+        .copied()
+        .filter(|l| l.color.x < 0.99 || l.color.y > 0.5)
+        .collect();
     assert_eq!(without_red.len(), desc.lights.len() - 1);
-    renderer.flush(&desc.cameras[0], &without_red, &mut target).expect("frame");
+    renderer
+        .flush(&desc.cameras[0], &without_red, &mut target)
+        .expect("frame");
     let image = target.read_rgba8(gpu).expect("readback");
     let result = std::panic::catch_unwind(|| common::assert_matches_reference("lights", &image));
-    assert!(result.is_err(), "a frame without the red light must not match the reference");
+    assert!(
+        result.is_err(),
+        "a frame without the red light must not match the reference"
+    );
     let _ = std::fs::remove_file(common::repo_root().join("tests/output/lights.actual.png"));
     let _ = std::fs::remove_file(common::repo_root().join("tests/output/lights.diff.png"));
 }

@@ -8,7 +8,9 @@ mod scn_syntax;
 mod texture;
 
 pub use procedural::ShapeKind;
-pub use scn::{load_scene, parse_scene, EntityDesc, MaterialDesc, SceneDesc, TextureRef, MAX_INSTANCES};
+pub use scn::{
+    load_scene, parse_scene, EntityDesc, MaterialDesc, SceneDesc, TextureRef, MAX_INSTANCES,
+};
 pub use texture::{load_texture, Texture, MAX_TEXTURE_SIDE};
 
 use std::fmt;

@@ -4,7 +4,9 @@
 
 use super::scn_syntax::{parse_blocks, Block, Pair};
 use super::{load_texture, Diagnostic, ShapeKind, Texture};
-use crate::scene::{AlphaMode, Background, Camera, Entity, Environment, Light, Material, MaterialId};
+use crate::scene::{
+    AlphaMode, Background, Camera, Entity, Environment, Light, Material, MaterialId,
+};
 use crate::Renderer;
 use glam::{EulerRot, Mat4, Quat, Vec3, Vec4};
 use rand::{Rng, SeedableRng};
@@ -74,7 +76,11 @@ impl SceneDesc {
     /// environment, and return one entity per render task, ready to submit.
     pub fn instantiate(&self, renderer: &mut Renderer) -> Vec<Entity> {
         renderer.set_environment(self.environment);
-        let textures: Vec<_> = self.textures.iter().map(|t| renderer.add_texture(t.clone())).collect();
+        let textures: Vec<_> = self
+            .textures
+            .iter()
+            .map(|t| renderer.add_texture(t.clone()))
+            .collect();
         let materials: Vec<MaterialId> = self
             .materials
             .iter()
@@ -96,8 +102,12 @@ impl SceneDesc {
         self.entities
             .iter()
             .map(|e| {
-                let shape = *shapes.entry(e.mesh).or_insert_with(|| renderer.add_shape(e.mesh.mesh()));
-                let material = e.material.map_or_else(|| default_material.expect("added above"), |i| materials[i]);
+                let shape = *shapes
+                    .entry(e.mesh)
+                    .or_insert_with(|| renderer.add_shape(e.mesh.mesh()));
+                let material = e
+                    .material
+                    .map_or_else(|| default_material.expect("added above"), |i| materials[i]);
                 Entity::instanced(shape, material, e.transforms.clone())
             })
             .collect()
@@ -106,7 +116,8 @@ impl SceneDesc {
 
 /// Read, parse and validate a `.scn` file, decoding the textures it names.
 pub fn load_scene(path: &Path) -> Result<SceneDesc, Diagnostic> {
-    let text = std::fs::read_to_string(path).map_err(|e| Diagnostic::file(path, format!("cannot read scene: {e}")))?;
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| Diagnostic::file(path, format!("cannot read scene: {e}")))?;
     parse_scene(path, &text)
 }
 
@@ -170,12 +181,22 @@ impl<'b> Fields<'b> {
 
     fn require(&mut self, key: &str) -> Result<&'b Pair, Diagnostic> {
         self.get(key).ok_or_else(|| {
-            Diagnostic::at(self.path, self.block.line, format!("{} block is missing the required key \"{key}\"", self.class))
+            Diagnostic::at(
+                self.path,
+                self.block.line,
+                format!("{} block is missing the required key \"{key}\"", self.class),
+            )
         })
     }
 
-    fn numbers<const N: usize>(&mut self, key: &str, what: &str) -> Result<Option<[f32; N]>, Diagnostic> {
-        self.get(key).map(|p| numbers::<N>(self.path, p, what)).transpose()
+    fn numbers<const N: usize>(
+        &mut self,
+        key: &str,
+        what: &str,
+    ) -> Result<Option<[f32; N]>, Diagnostic> {
+        self.get(key)
+            .map(|p| numbers::<N>(self.path, p, what))
+            .transpose()
     }
 
     fn vec3(&mut self, key: &str) -> Result<Option<Vec3>, Diagnostic> {
@@ -183,44 +204,76 @@ impl<'b> Fields<'b> {
     }
 
     fn color(&mut self, key: &str) -> Result<Option<Vec3>, Diagnostic> {
-        let Some(pair) = self.get(key) else { return Ok(None) };
+        let Some(pair) = self.get(key) else {
+            return Ok(None);
+        };
         let c = Vec3::from(numbers::<3>(self.path, pair, "3 numbers (r g b)")?);
         if c.min_element() < 0.0 {
-            return Err(Diagnostic::at(self.path, pair.line, format!("\"{key}\" must not be negative")));
+            return Err(Diagnostic::at(
+                self.path,
+                pair.line,
+                format!("\"{key}\" must not be negative"),
+            ));
         }
         Ok(Some(c))
     }
 
-    fn number(&mut self, key: &str, range: std::ops::RangeInclusive<f32>) -> Result<Option<f32>, Diagnostic> {
-        let Some(pair) = self.get(key) else { return Ok(None) };
+    fn number(
+        &mut self,
+        key: &str,
+        range: std::ops::RangeInclusive<f32>,
+    ) -> Result<Option<f32>, Diagnostic> {
+        let Some(pair) = self.get(key) else {
+            return Ok(None);
+        };
         let [v] = numbers::<1>(self.path, pair, "a number")?;
         if !range.contains(&v) {
             return Err(Diagnostic::at(
                 self.path,
                 pair.line,
-                format!("\"{key}\" is {v}, expected a value in {}..={}", range.start(), range.end()),
+                format!(
+                    "\"{key}\" is {v}, expected a value in {}..={}",
+                    range.start(),
+                    range.end()
+                ),
             ));
         }
         Ok(Some(v))
     }
 
     fn flag(&mut self, key: &str) -> Result<Option<bool>, Diagnostic> {
-        let Some(pair) = self.get(key) else { return Ok(None) };
+        let Some(pair) = self.get(key) else {
+            return Ok(None);
+        };
         match pair.value.trim() {
             "0" => Ok(Some(false)),
             "1" => Ok(Some(true)),
-            v => Err(Diagnostic::at(self.path, pair.line, format!("\"{key}\" is '{v}', expected 0 or 1"))),
+            v => Err(Diagnostic::at(
+                self.path,
+                pair.line,
+                format!("\"{key}\" is '{v}', expected 0 or 1"),
+            )),
         }
     }
 
-    fn choice(&mut self, key: &str, options: &[&str]) -> Result<Option<(usize, &'b Pair)>, Diagnostic> {
-        let Some(pair) = self.get(key) else { return Ok(None) };
+    fn choice(
+        &mut self,
+        key: &str,
+        options: &[&str],
+    ) -> Result<Option<(usize, &'b Pair)>, Diagnostic> {
+        let Some(pair) = self.get(key) else {
+            return Ok(None);
+        };
         match options.iter().position(|o| *o == pair.value.trim()) {
             Some(i) => Ok(Some((i, pair))),
             None => Err(Diagnostic::at(
                 self.path,
                 pair.line,
-                format!("\"{key}\" is '{}', expected one of: {}", pair.value, options.join(", ")),
+                format!(
+                    "\"{key}\" is '{}', expected one of: {}",
+                    pair.value,
+                    options.join(", ")
+                ),
             )),
         }
     }
@@ -229,7 +282,15 @@ impl<'b> Fields<'b> {
         let pair = self.require("mesh")?;
         ShapeKind::from_name(pair.value.trim()).ok_or_else(|| {
             let names: Vec<_> = ShapeKind::ALL.iter().map(|k| k.name()).collect();
-            Diagnostic::at(self.path, pair.line, format!("unknown mesh '{}', expected one of: {}", pair.value, names.join(", ")))
+            Diagnostic::at(
+                self.path,
+                pair.line,
+                format!(
+                    "unknown mesh '{}', expected one of: {}",
+                    pair.value,
+                    names.join(", ")
+                ),
+            )
         })
     }
 
@@ -238,9 +299,23 @@ impl<'b> Fields<'b> {
         let mut out = Vec::new();
         for (i, pair) in self.block.pairs.iter().enumerate() {
             if self.block.pairs[i + 1..].iter().any(|p| p.key == pair.key) {
-                out.push(Diagnostic::at(self.path, pair.line, format!("\"{}\" is given again later in this block; the last one is used", pair.key)));
+                out.push(Diagnostic::at(
+                    self.path,
+                    pair.line,
+                    format!(
+                        "\"{}\" is given again later in this block; the last one is used",
+                        pair.key
+                    ),
+                ));
             } else if !self.used[i] && pair.key != "classname" {
-                out.push(Diagnostic::at(self.path, pair.line, format!("unknown key \"{}\" in {} block (ignored)", pair.key, self.class)));
+                out.push(Diagnostic::at(
+                    self.path,
+                    pair.line,
+                    format!(
+                        "unknown key \"{}\" in {} block (ignored)",
+                        pair.key, self.class
+                    ),
+                ));
             }
         }
         out
@@ -249,11 +324,19 @@ impl<'b> Fields<'b> {
 
 /// Parse exactly `N` finite numbers from a pair's value.
 fn numbers<const N: usize>(path: &Path, pair: &Pair, what: &str) -> Result<[f32; N], Diagnostic> {
-    let bad = |detail: String| Diagnostic::at(path, pair.line, format!("\"{}\": {detail}, expected {what}", pair.key));
+    let bad = |detail: String| {
+        Diagnostic::at(
+            path,
+            pair.line,
+            format!("\"{}\": {detail}, expected {what}", pair.key),
+        )
+    };
     let mut out = [0.0; N];
     let mut count = 0;
     for word in pair.value.split_whitespace() {
-        let v: f32 = word.parse().map_err(|_| bad(format!("bad number '{word}'")))?;
+        let v: f32 = word
+            .parse()
+            .map_err(|_| bad(format!("bad number '{word}'")))?;
         if !v.is_finite() {
             return Err(bad(format!("'{word}' is not a finite number")));
         }
@@ -316,7 +399,13 @@ impl Loader<'_> {
         match (f.color("sky_top")?, f.color("sky_bottom")?) {
             (Some(top), Some(bottom)) => env.background = Background::Gradient { top, bottom },
             (None, None) => {}
-            _ => return Err(Diagnostic::at(self.path, f.block.line, "\"sky_top\" and \"sky_bottom\" must be given together")),
+            _ => {
+                return Err(Diagnostic::at(
+                    self.path,
+                    f.block.line,
+                    "\"sky_top\" and \"sky_bottom\" must be given together",
+                ))
+            }
         }
         if let Some(c) = f.color("ambient")? {
             env.ambient = c;
@@ -329,11 +418,17 @@ impl Loader<'_> {
         let near = f.number("near", 1e-4..=1e6)?.unwrap_or(0.1);
         let far = f.number("far", 1e-3..=1e9)?.unwrap_or(200.0);
         if far <= near {
-            return Err(Diagnostic::at(self.path, f.block.line, format!("camera \"far\" ({far}) must be greater than \"near\" ({near})")));
+            return Err(Diagnostic::at(
+                self.path,
+                f.block.line,
+                format!("camera \"far\" ({far}) must be greater than \"near\" ({near})"),
+            ));
         }
         let fov = f.number("fov", 1.0..=179.0)?.unwrap_or(60.0);
         let mut camera = match f.choice("projection", &["perspective", "orthographic"])? {
-            Some((1, _)) => Camera::orthographic(f.number("size", 1e-4..=1e9)?.unwrap_or(10.0), near, far),
+            Some((1, _)) => {
+                Camera::orthographic(f.number("size", 1e-4..=1e9)?.unwrap_or(10.0), near, far)
+            }
             _ => Camera::perspective(fov, near, far),
         };
         let target = match (f.vec3("target")?, f.vec3("angles")?) {
@@ -342,7 +437,11 @@ impl Loader<'_> {
             (None, None) => Vec3::ZERO,
         };
         if target.distance_squared(origin) < 1e-12 {
-            return Err(Diagnostic::at(self.path, f.block.line, "camera \"target\" is the same point as its \"origin\""));
+            return Err(Diagnostic::at(
+                self.path,
+                f.block.line,
+                "camera \"target\" is the same point as its \"origin\"",
+            ));
         }
         camera = camera.looking_at(origin, target);
         self.scene.cameras.push(camera);
@@ -350,17 +449,26 @@ impl Loader<'_> {
     }
 
     fn light_common(f: &mut Fields) -> Result<(Vec3, f32), Diagnostic> {
-        Ok((f.color("color")?.unwrap_or(Vec3::ONE), f.number("intensity", 0.0..=1e9)?.unwrap_or(1.0)))
+        Ok((
+            f.color("color")?.unwrap_or(Vec3::ONE),
+            f.number("intensity", 0.0..=1e9)?.unwrap_or(1.0),
+        ))
     }
 
     fn light_directional(&mut self, f: &mut Fields) -> Result<(), Diagnostic> {
         let pair = f.require("direction")?;
         let direction = Vec3::from(numbers::<3>(self.path, pair, "3 numbers (x y z)")?);
         if direction.length_squared() < 1e-12 {
-            return Err(Diagnostic::at(self.path, pair.line, "\"direction\" must not be zero"));
+            return Err(Diagnostic::at(
+                self.path,
+                pair.line,
+                "\"direction\" must not be zero",
+            ));
         }
         let (color, intensity) = Self::light_common(f)?;
-        self.scene.lights.push(Light::directional(direction, color, intensity));
+        self.scene
+            .lights
+            .push(Light::directional(direction, color, intensity));
         Ok(())
     }
 
@@ -369,17 +477,27 @@ impl Loader<'_> {
         let origin = Vec3::from(numbers::<3>(self.path, pair, "3 numbers (x y z)")?);
         let (color, intensity) = Self::light_common(f)?;
         let range = f.number("range", 1e-3..=1e9)?.unwrap_or(10.0);
-        self.scene.lights.push(Light::point(origin, color, intensity, range));
+        self.scene
+            .lights
+            .push(Light::point(origin, color, intensity, range));
         Ok(())
     }
 
-    fn texture(&mut self, f: &mut Fields, key: &str, srgb: bool) -> Result<Option<TextureRef>, Diagnostic> {
-        let Some(pair) = f.get(key) else { return Ok(None) };
+    fn texture(
+        &mut self,
+        f: &mut Fields,
+        key: &str,
+        srgb: bool,
+    ) -> Result<Option<TextureRef>, Diagnostic> {
+        let Some(pair) = f.get(key) else {
+            return Ok(None);
+        };
         let file = self.dir.join(pair.value.trim());
         if let Some(&i) = self.texture_index.get(&(file.clone(), srgb)) {
             return Ok(Some(i));
         }
-        let texture = load_texture(&file, srgb).map_err(|e| Diagnostic::at(self.path, pair.line, format!("\"{key}\": {e}")))?;
+        let texture = load_texture(&file, srgb)
+            .map_err(|e| Diagnostic::at(self.path, pair.line, format!("\"{key}\": {e}")))?;
         self.scene.textures.push(texture);
         let i = self.scene.textures.len() - 1;
         self.texture_index.insert((file, srgb), i);
@@ -390,7 +508,11 @@ impl Loader<'_> {
         let name_pair = f.require("name")?;
         let name = name_pair.value.trim().to_string();
         if self.scene.materials.iter().any(|m| m.material.name == name) {
-            return Err(Diagnostic::at(self.path, name_pair.line, format!("material '{name}' is defined twice")));
+            return Err(Diagnostic::at(
+                self.path,
+                name_pair.line,
+                format!("material '{name}' is defined twice"),
+            ));
         }
         let defaults = Material::default();
         let base_color = match f.get("base_color") {
@@ -398,12 +520,17 @@ impl Loader<'_> {
             Some(pair) => {
                 let words = pair.value.split_whitespace().count();
                 let c = if words == 3 {
-                    Vec3::from(numbers::<3>(self.path, pair, "3 or 4 numbers (r g b [a])")?).extend(1.0)
+                    Vec3::from(numbers::<3>(self.path, pair, "3 or 4 numbers (r g b [a])")?)
+                        .extend(1.0)
                 } else {
                     Vec4::from(numbers::<4>(self.path, pair, "3 or 4 numbers (r g b [a])")?)
                 };
                 if c.min_element() < 0.0 || c.w > 1.0 {
-                    return Err(Diagnostic::at(self.path, pair.line, "\"base_color\" must be non-negative with alpha at most 1"));
+                    return Err(Diagnostic::at(
+                        self.path,
+                        pair.line,
+                        "\"base_color\" must be non-negative with alpha at most 1",
+                    ));
                 }
                 c
             }
@@ -417,13 +544,23 @@ impl Loader<'_> {
         let material = Material {
             name,
             base_color,
-            ambient: f.number("ambient", 0.0..=100.0)?.unwrap_or(defaults.ambient),
-            diffuse: f.number("diffuse", 0.0..=100.0)?.unwrap_or(defaults.diffuse),
-            specular: f.number("specular", 0.0..=100.0)?.unwrap_or(defaults.specular),
-            smoothness: f.number("smoothness", 0.0..=1.0)?.unwrap_or(defaults.smoothness),
+            ambient: f
+                .number("ambient", 0.0..=100.0)?
+                .unwrap_or(defaults.ambient),
+            diffuse: f
+                .number("diffuse", 0.0..=100.0)?
+                .unwrap_or(defaults.diffuse),
+            specular: f
+                .number("specular", 0.0..=100.0)?
+                .unwrap_or(defaults.specular),
+            smoothness: f
+                .number("smoothness", 0.0..=1.0)?
+                .unwrap_or(defaults.smoothness),
             alpha_mode,
             double_sided: f.flag("double_sided")?.unwrap_or(false),
-            uv_scale: f.numbers::<2>("uv_scale", "2 numbers (u v)")?.map_or(defaults.uv_scale, glam::Vec2::from),
+            uv_scale: f
+                .numbers::<2>("uv_scale", "2 numbers (u v)")?
+                .map_or(defaults.uv_scale, glam::Vec2::from),
             ..defaults
         };
         let desc = MaterialDesc {
@@ -437,7 +574,8 @@ impl Loader<'_> {
     }
 
     fn material_ref(f: &mut Fields) -> Option<(String, usize)> {
-        f.get("material").map(|p| (p.value.trim().to_string(), p.line))
+        f.get("material")
+            .map(|p| (p.value.trim().to_string(), p.line))
     }
 
     fn count_instances(&mut self, n: u64, line: usize) -> Result<(), Diagnostic> {
@@ -449,14 +587,20 @@ impl Loader<'_> {
     }
 
     fn scale(f: &mut Fields) -> Result<Vec3, Diagnostic> {
-        let Some(pair) = f.get("scale") else { return Ok(Vec3::ONE) };
+        let Some(pair) = f.get("scale") else {
+            return Ok(Vec3::ONE);
+        };
         let s = if pair.value.split_whitespace().count() == 1 {
             Vec3::splat(numbers::<1>(f.path, pair, "1 or 3 numbers")?[0])
         } else {
             Vec3::from(numbers::<3>(f.path, pair, "1 or 3 numbers")?)
         };
         if s.min_element() <= 0.0 {
-            return Err(Diagnostic::at(f.path, pair.line, "\"scale\" must be positive"));
+            return Err(Diagnostic::at(
+                f.path,
+                pair.line,
+                "\"scale\" must be positive",
+            ));
         }
         Ok(s)
     }
@@ -469,7 +613,11 @@ impl Loader<'_> {
         let scale = Self::scale(f)?;
         self.count_instances(1, f.block.line)?;
         let transform = Mat4::from_scale_rotation_translation(scale, rotation(angles), origin);
-        self.placements.push(Placement { mesh, material, transforms: vec![transform] });
+        self.placements.push(Placement {
+            mesh,
+            material,
+            transforms: vec![transform],
+        });
         Ok(())
     }
 
@@ -477,36 +625,82 @@ impl Loader<'_> {
         let mesh = f.mesh()?;
         let material = Self::material_ref(f);
         let count_pair = f.require("count")?;
-        let count: i64 = count_pair
-            .value
-            .trim()
-            .parse()
-            .map_err(|_| Diagnostic::at(self.path, count_pair.line, format!("\"count\" is '{}', expected a whole number", count_pair.value)))?;
+        let count: i64 = count_pair.value.trim().parse().map_err(|_| {
+            Diagnostic::at(
+                self.path,
+                count_pair.line,
+                format!(
+                    "\"count\" is '{}', expected a whole number",
+                    count_pair.value
+                ),
+            )
+        })?;
         if count < 0 {
-            return Err(Diagnostic::at(self.path, count_pair.line, format!("\"count\" is {count}, expected 0 or more")));
+            return Err(Diagnostic::at(
+                self.path,
+                count_pair.line,
+                format!("\"count\" is {count}, expected 0 or more"),
+            ));
         }
         let count = count as u64;
         if count > MAX_INSTANCES {
-            return Err(Diagnostic::at(self.path, count_pair.line, format!("\"count\" is {count}, more than glint allows in one file ({MAX_INSTANCES})")));
+            return Err(Diagnostic::at(
+                self.path,
+                count_pair.line,
+                format!(
+                    "\"count\" is {count}, more than glint allows in one file ({MAX_INSTANCES})"
+                ),
+            ));
         }
         self.count_instances(count, count_pair.line)?;
         let random = matches!(f.choice("layout", &["grid", "random"])?, Some((1, _)));
         let origin = f.vec3("origin")?.unwrap_or(Vec3::ZERO);
         let extent = f.vec3("extent")?.unwrap_or(Vec3::new(10.0, 0.0, 10.0));
         if extent.min_element() < 0.0 {
-            return Err(Diagnostic::at(self.path, f.block.line, "\"extent\" must not be negative"));
+            return Err(Diagnostic::at(
+                self.path,
+                f.block.line,
+                "\"extent\" must not be negative",
+            ));
         }
         let seed = match f.get("seed") {
             None => 1,
-            Some(p) => p.value.trim().parse::<u64>().map_err(|_| Diagnostic::at(self.path, p.line, format!("\"seed\" is '{}', expected a whole number 0 or more", p.value)))?,
+            Some(p) => p.value.trim().parse::<u64>().map_err(|_| {
+                Diagnostic::at(
+                    self.path,
+                    p.line,
+                    format!(
+                        "\"seed\" is '{}', expected a whole number 0 or more",
+                        p.value
+                    ),
+                )
+            })?,
         };
-        let [lo, hi] = f.numbers::<2>("scale", "2 numbers (min max)")?.unwrap_or([1.0, 1.0]);
+        let [lo, hi] = f
+            .numbers::<2>("scale", "2 numbers (min max)")?
+            .unwrap_or([1.0, 1.0]);
         if lo <= 0.0 || hi < lo {
-            return Err(Diagnostic::at(self.path, f.block.line, "\"scale\" must be min max with 0 < min <= max"));
+            return Err(Diagnostic::at(
+                self.path,
+                f.block.line,
+                "\"scale\" must be min max with 0 < min <= max",
+            ));
         }
         let random_yaw = f.flag("random_yaw")?.unwrap_or(false);
-        let transforms = place_instances(count as usize, random, origin, extent, seed, (lo, hi), random_yaw);
-        self.placements.push(Placement { mesh, material, transforms });
+        let transforms = place_instances(
+            count as usize,
+            random,
+            origin,
+            extent,
+            seed,
+            (lo, hi),
+            random_yaw,
+        );
+        self.placements.push(Placement {
+            mesh,
+            material,
+            transforms,
+        });
         Ok(())
     }
 
@@ -516,18 +710,39 @@ impl Loader<'_> {
         for placement in std::mem::take(&mut self.placements) {
             let material = match placement.material {
                 None => None,
-                Some((name, line)) => Some(self.scene.materials.iter().position(|m| m.material.name == name).ok_or_else(|| {
-                    Diagnostic::at(self.path, line, format!("unknown material '{name}' (define it in a material block)"))
-                })?),
+                Some((name, line)) => Some(
+                    self.scene
+                        .materials
+                        .iter()
+                        .position(|m| m.material.name == name)
+                        .ok_or_else(|| {
+                            Diagnostic::at(
+                                self.path,
+                                line,
+                                format!(
+                                    "unknown material '{name}' (define it in a material block)"
+                                ),
+                            )
+                        })?,
+                ),
             };
             let task = *tasks.entry((placement.mesh, material)).or_insert_with(|| {
-                self.scene.entities.push(EntityDesc { mesh: placement.mesh, material, transforms: Vec::new() });
+                self.scene.entities.push(EntityDesc {
+                    mesh: placement.mesh,
+                    material,
+                    transforms: Vec::new(),
+                });
                 self.scene.entities.len() - 1
             });
-            self.scene.entities[task].transforms.extend(placement.transforms);
+            self.scene.entities[task]
+                .transforms
+                .extend(placement.transforms);
         }
         if self.scene.cameras.is_empty() {
-            self.scene.cameras.push(Camera::perspective(60.0, 0.1, 200.0).looking_at(Vec3::new(0.0, 2.0, 6.0), Vec3::ZERO));
+            self.scene.cameras.push(
+                Camera::perspective(60.0, 0.1, 200.0)
+                    .looking_at(Vec3::new(0.0, 2.0, 6.0), Vec3::ZERO),
+            );
         }
         Ok(self.scene)
     }
@@ -537,14 +752,25 @@ impl Loader<'_> {
 /// over the axes whose extent is not zero (cells as square as the box allows, filled
 /// x first, then z, then y), or uniformly at random. The same seed gives the same
 /// placement everywhere (PCG32).
-fn place_instances(count: usize, random: bool, origin: Vec3, extent: Vec3, seed: u64, scale: (f32, f32), random_yaw: bool) -> Vec<Mat4> {
+fn place_instances(
+    count: usize,
+    random: bool,
+    origin: Vec3,
+    extent: Vec3,
+    seed: u64,
+    scale: (f32, f32),
+    random_yaw: bool,
+) -> Vec<Mat4> {
     let mut rng = rand_pcg::Pcg32::seed_from_u64(seed);
     let axes: Vec<usize> = [0, 2, 1].into_iter().filter(|&a| extent[a] > 0.0).collect();
     // Cell side s with (product of extents) / s^k = count; rounding each axis' cell
     // count up keeps at least `count` cells.
     let volume: f64 = axes.iter().map(|&a| f64::from(extent[a])).product();
     let side = (volume / count.max(1) as f64).powf(1.0 / axes.len().max(1) as f64);
-    let cells: Vec<usize> = axes.iter().map(|&a| ((f64::from(extent[a]) / side - 1e-9).ceil() as usize).max(1)).collect();
+    let cells: Vec<usize> = axes
+        .iter()
+        .map(|&a| ((f64::from(extent[a]) / side - 1e-9).ceil() as usize).max(1))
+        .collect();
     let corner = origin - extent * 0.5;
     (0..count)
         .map(|i| {
@@ -559,7 +785,11 @@ fn place_instances(count: usize, random: bool, origin: Vec3, extent: Vec3, seed:
                 }
             }
             let s = scale.0 + (scale.1 - scale.0) * rng.random::<f32>();
-            let yaw = if random_yaw { rng.random::<f32>() * std::f32::consts::TAU } else { 0.0 };
+            let yaw = if random_yaw {
+                rng.random::<f32>() * std::f32::consts::TAU
+            } else {
+                0.0
+            };
             Mat4::from_scale_rotation_translation(Vec3::splat(s), Quat::from_rotation_y(yaw), p)
         })
         .collect()
@@ -612,7 +842,10 @@ mod tests {
         )
         .unwrap();
         assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
-        assert!(matches!(scene.environment.background, Background::Gradient { .. }));
+        assert!(matches!(
+            scene.environment.background,
+            Background::Gradient { .. }
+        ));
         assert_eq!(scene.cameras.len(), 1);
         assert_eq!(scene.lights.len(), 2);
         assert_eq!(scene.materials[0].material.alpha_mode, AlphaMode::Blend);
@@ -620,29 +853,82 @@ mod tests {
         // Two cube entities with one material gather into one task.
         assert_eq!(scene.entities.len(), 2);
         assert_eq!(scene.entities[0].transforms.len(), 2);
-        assert_eq!(scene.entities[0].transforms[0].w_axis.truncate(), Vec3::new(1.0, 2.0, 3.0));
+        assert_eq!(
+            scene.entities[0].transforms[0].w_axis.truncate(),
+            Vec3::new(1.0, 2.0, 3.0)
+        );
         assert_eq!(scene.entities[1].transforms.len(), 100);
         assert_eq!(scene.instance_count(), 102);
     }
 
     #[test]
     fn same_seed_same_placement_and_grid_is_even() {
-        let a = place_instances(50, true, Vec3::ZERO, Vec3::new(10.0, 0.0, 10.0), 3, (0.5, 1.0), true);
-        let b = place_instances(50, true, Vec3::ZERO, Vec3::new(10.0, 0.0, 10.0), 3, (0.5, 1.0), true);
-        let c = place_instances(50, true, Vec3::ZERO, Vec3::new(10.0, 0.0, 10.0), 4, (0.5, 1.0), true);
+        let a = place_instances(
+            50,
+            true,
+            Vec3::ZERO,
+            Vec3::new(10.0, 0.0, 10.0),
+            3,
+            (0.5, 1.0),
+            true,
+        );
+        let b = place_instances(
+            50,
+            true,
+            Vec3::ZERO,
+            Vec3::new(10.0, 0.0, 10.0),
+            3,
+            (0.5, 1.0),
+            true,
+        );
+        let c = place_instances(
+            50,
+            true,
+            Vec3::ZERO,
+            Vec3::new(10.0, 0.0, 10.0),
+            4,
+            (0.5, 1.0),
+            true,
+        );
         assert_eq!(a, b);
         assert_ne!(a, c);
         for m in &a {
             let p = m.w_axis.truncate();
             assert!(p.x.abs() <= 5.0 && p.z.abs() <= 5.0 && p.y == 0.0);
         }
-        let grid = place_instances(4, false, Vec3::ZERO, Vec3::new(2.0, 0.0, 2.0), 1, (1.0, 1.0), false);
+        let grid = place_instances(
+            4,
+            false,
+            Vec3::ZERO,
+            Vec3::new(2.0, 0.0, 2.0),
+            1,
+            (1.0, 1.0),
+            false,
+        );
         let points: Vec<Vec3> = grid.iter().map(|m| m.w_axis.truncate()).collect();
-        assert_eq!(points, vec![Vec3::new(-0.5, 0.0, -0.5), Vec3::new(0.5, 0.0, -0.5), Vec3::new(-0.5, 0.0, 0.5), Vec3::new(0.5, 0.0, 0.5)]);
+        assert_eq!(
+            points,
+            vec![
+                Vec3::new(-0.5, 0.0, -0.5),
+                Vec3::new(0.5, 0.0, -0.5),
+                Vec3::new(-0.5, 0.0, 0.5),
+                Vec3::new(0.5, 0.0, 0.5)
+            ]
+        );
         // A long box gets more cells along its long side: 16 in 8×2 is 8×2 cells of 1.
-        let long = place_instances(16, false, Vec3::ZERO, Vec3::new(8.0, 0.0, 2.0), 1, (1.0, 1.0), false);
-        let xs: std::collections::BTreeSet<i32> = long.iter().map(|m| (m.w_axis.x * 2.0) as i32).collect();
-        let zs: std::collections::BTreeSet<i32> = long.iter().map(|m| (m.w_axis.z * 2.0) as i32).collect();
+        let long = place_instances(
+            16,
+            false,
+            Vec3::ZERO,
+            Vec3::new(8.0, 0.0, 2.0),
+            1,
+            (1.0, 1.0),
+            false,
+        );
+        let xs: std::collections::BTreeSet<i32> =
+            long.iter().map(|m| (m.w_axis.x * 2.0) as i32).collect();
+        let zs: std::collections::BTreeSet<i32> =
+            long.iter().map(|m| (m.w_axis.z * 2.0) as i32).collect();
         assert_eq!((xs.len(), zs.len()), (8, 2));
     }
 
@@ -655,7 +941,9 @@ mod tests {
 
     #[test]
     fn unknown_keys_warn_with_their_line() {
-        let scene = parse("{\n\"classname\" \"entity\"\n\"mesh\" \"cube\"\n\"colour\" \"1 0 0\"\n}\n").unwrap();
+        let scene =
+            parse("{\n\"classname\" \"entity\"\n\"mesh\" \"cube\"\n\"colour\" \"1 0 0\"\n}\n")
+                .unwrap();
         assert_eq!(scene.warnings.len(), 1);
         assert_eq!(scene.warnings[0].line, Some(4));
         assert!(scene.warnings[0].message.contains("unknown key \"colour\""));
@@ -666,25 +954,80 @@ mod tests {
         let cases = [
             ("{\n\"classname\" \"spaceship\"\n}", 2, "unknown classname"),
             ("{\n\"mesh\" \"cube\"\n}", 1, "no \"classname\""),
-            ("{\n\"classname\" \"entity\"\n}", 1, "missing the required key \"mesh\""),
-            ("{\n\"classname\" \"entity\"\n\"mesh\" \"cube\"\n\"origin\" \"1 x 3\"\n}", 4, "bad number 'x'"),
-            ("{\n\"classname\" \"entity\"\n\"mesh\" \"cube\"\n\"origin\" \"1 2\"\n}", 4, "found 2 numbers"),
-            ("{\n\"classname\" \"entity\"\n\"mesh\" \"blob\"\n}", 3, "unknown mesh 'blob'"),
-            ("{\n\"classname\" \"entity\"\n\"mesh\" \"cube\"\n\"material\" \"gold\"\n}", 4, "unknown material 'gold'"),
-            ("{\n\"classname\" \"instances\"\n\"mesh\" \"cube\"\n\"count\" \"-5\"\n}", 4, "expected 0 or more"),
-            ("{\n\"classname\" \"instances\"\n\"mesh\" \"cube\"\n\"count\" \"99999999999\"\n}", 4, "more than glint allows"),
-            ("{\n\"classname\" \"instances\"\n\"mesh\" \"cube\"\n\"count\" \"lots\"\n}", 4, "expected a whole number"),
-            ("{\n\"classname\" \"material\"\n\"name\" \"m\"\n\"diffuse_map\" \"nope.png\"\n}", 4, "cannot open texture"),
-            ("{\n\"classname\" \"material\"\n\"name\" \"m\"\n\"alpha_mode\" \"glass\"\n}", 4, "expected one of: opaque, mask, blend"),
-            ("{\n\"classname\" \"material\"\n\"name\" \"m\"\n\"smoothness\" \"2\"\n}", 4, "expected a value in 0..=1"),
-            ("{\n\"classname\" \"camera\"\n\"near\" \"10\"\n\"far\" \"1\"\n}", 1, "must be greater than"),
-            ("{\n\"classname\" \"light_point\"\n\"origin\" \"0 0 inf\"\n}", 3, "not a finite number"),
+            (
+                "{\n\"classname\" \"entity\"\n}",
+                1,
+                "missing the required key \"mesh\"",
+            ),
+            (
+                "{\n\"classname\" \"entity\"\n\"mesh\" \"cube\"\n\"origin\" \"1 x 3\"\n}",
+                4,
+                "bad number 'x'",
+            ),
+            (
+                "{\n\"classname\" \"entity\"\n\"mesh\" \"cube\"\n\"origin\" \"1 2\"\n}",
+                4,
+                "found 2 numbers",
+            ),
+            (
+                "{\n\"classname\" \"entity\"\n\"mesh\" \"blob\"\n}",
+                3,
+                "unknown mesh 'blob'",
+            ),
+            (
+                "{\n\"classname\" \"entity\"\n\"mesh\" \"cube\"\n\"material\" \"gold\"\n}",
+                4,
+                "unknown material 'gold'",
+            ),
+            (
+                "{\n\"classname\" \"instances\"\n\"mesh\" \"cube\"\n\"count\" \"-5\"\n}",
+                4,
+                "expected 0 or more",
+            ),
+            (
+                "{\n\"classname\" \"instances\"\n\"mesh\" \"cube\"\n\"count\" \"99999999999\"\n}",
+                4,
+                "more than glint allows",
+            ),
+            (
+                "{\n\"classname\" \"instances\"\n\"mesh\" \"cube\"\n\"count\" \"lots\"\n}",
+                4,
+                "expected a whole number",
+            ),
+            (
+                "{\n\"classname\" \"material\"\n\"name\" \"m\"\n\"diffuse_map\" \"nope.png\"\n}",
+                4,
+                "cannot open texture",
+            ),
+            (
+                "{\n\"classname\" \"material\"\n\"name\" \"m\"\n\"alpha_mode\" \"glass\"\n}",
+                4,
+                "expected one of: opaque, mask, blend",
+            ),
+            (
+                "{\n\"classname\" \"material\"\n\"name\" \"m\"\n\"smoothness\" \"2\"\n}",
+                4,
+                "expected a value in 0..=1",
+            ),
+            (
+                "{\n\"classname\" \"camera\"\n\"near\" \"10\"\n\"far\" \"1\"\n}",
+                1,
+                "must be greater than",
+            ),
+            (
+                "{\n\"classname\" \"light_point\"\n\"origin\" \"0 0 inf\"\n}",
+                3,
+                "not a finite number",
+            ),
         ];
         for (text, line, want) in cases {
             let err = parse(text).unwrap_err();
             assert_eq!(err.line, Some(line), "{text:?}: {err}");
             assert!(err.message.contains(want), "{text:?}: {err}");
-            assert!(err.to_string().starts_with(&format!("dir/t.scn:{line}: ")), "{err}");
+            assert!(
+                err.to_string().starts_with(&format!("dir/t.scn:{line}: ")),
+                "{err}"
+            );
         }
     }
 

@@ -42,7 +42,13 @@ fn tokenize(path: &Path, line_no: usize, line: &str) -> Result<Vec<Token>, Diagn
                     match chars.next() {
                         Some((_, '"')) => break,
                         Some((_, c)) => text.push(c),
-                        None => return Err(Diagnostic::at(path, line_no, "unterminated quote: a string must end on the line it starts")),
+                        None => {
+                            return Err(Diagnostic::at(
+                                path,
+                                line_no,
+                                "unterminated quote: a string must end on the line it starts",
+                            ))
+                        }
                     }
                 }
                 tokens.push(Token::Quoted(text));
@@ -51,7 +57,9 @@ fn tokenize(path: &Path, line_no: usize, line: &str) -> Result<Vec<Token>, Diagn
                 return Err(Diagnostic::at(
                     path,
                     line_no,
-                    format!("unexpected '{other}': expected '{{', '}}' or a quoted \"key\" \"value\" pair"),
+                    format!(
+                    "unexpected '{other}': expected '{{', '}}' or a quoted \"key\" \"value\" pair"
+                ),
                 ))
             }
         }
@@ -61,17 +69,34 @@ fn tokenize(path: &Path, line_no: usize, line: &str) -> Result<Vec<Token>, Diagn
 
 /// Turn the strings gathered on a line into the open block's pair: none is fine,
 /// two make a pair, anything else (or a pair outside a block) is an error.
-fn flush_pair(path: &Path, line_no: usize, strings: &mut Vec<String>, open: Option<&mut Block>) -> Result<(), Diagnostic> {
+fn flush_pair(
+    path: &Path,
+    line_no: usize,
+    strings: &mut Vec<String>,
+    open: Option<&mut Block>,
+) -> Result<(), Diagnostic> {
     match (strings.len(), open) {
         (0, _) => Ok(()),
-        (_, None) => Err(Diagnostic::at(path, line_no, "\"key\" \"value\" pair outside a block: open one with '{'")),
+        (_, None) => Err(Diagnostic::at(
+            path,
+            line_no,
+            "\"key\" \"value\" pair outside a block: open one with '{'",
+        )),
         (2, Some(block)) => {
             let value = strings.pop().unwrap_or_default();
             let key = strings.pop().unwrap_or_default();
-            block.pairs.push(Pair { key, value, line: line_no });
+            block.pairs.push(Pair {
+                key,
+                value,
+                line: line_no,
+            });
             Ok(())
         }
-        (n, Some(_)) => Err(Diagnostic::at(path, line_no, format!("expected one \"key\" \"value\" pair on the line, found {n} strings"))),
+        (n, Some(_)) => Err(Diagnostic::at(
+            path,
+            line_no,
+            format!("expected one \"key\" \"value\" pair on the line, found {n} strings"),
+        )),
     }
 }
 
@@ -91,20 +116,35 @@ pub(crate) fn parse_blocks(path: &Path, text: &str) -> Result<Vec<Block>, Diagno
                 Token::Open => {
                     flush_pair(path, line_no, &mut strings, open.as_mut())?;
                     if open.is_some() {
-                        return Err(Diagnostic::at(path, line_no, "'{' inside a block: close the previous block with '}' first"));
+                        return Err(Diagnostic::at(
+                            path,
+                            line_no,
+                            "'{' inside a block: close the previous block with '}' first",
+                        ));
                     }
-                    open = Some(Block { line: line_no, pairs: Vec::new() });
+                    open = Some(Block {
+                        line: line_no,
+                        pairs: Vec::new(),
+                    });
                 }
                 Token::Close => {
                     flush_pair(path, line_no, &mut strings, open.as_mut())?;
-                    blocks.push(open.take().ok_or_else(|| Diagnostic::at(path, line_no, "'}' with no block open"))?);
+                    blocks.push(
+                        open.take().ok_or_else(|| {
+                            Diagnostic::at(path, line_no, "'}' with no block open")
+                        })?,
+                    );
                 }
             }
         }
         flush_pair(path, line_no, &mut strings, open.as_mut())?;
     }
     if let Some(block) = open {
-        return Err(Diagnostic::at(path, block.line, "unterminated block: '{' is never closed with '}'"));
+        return Err(Diagnostic::at(
+            path,
+            block.line,
+            "unterminated block: '{' is never closed with '}'",
+        ));
     }
     Ok(blocks)
 }
@@ -122,8 +162,18 @@ mod tests {
         let blocks = parse("// scene\n{\n\"classname\" \"world\" // trailing\n\"url\" \"a//b\"\n}\n{ \"classname\" \"camera\" }\n").unwrap();
         assert_eq!(blocks.len(), 2);
         assert_eq!(blocks[0].line, 2);
-        assert_eq!(blocks[0].pairs[0], Pair { key: "classname".into(), value: "world".into(), line: 3 });
-        assert_eq!(blocks[0].pairs[1].value, "a//b", "// inside quotes is not a comment");
+        assert_eq!(
+            blocks[0].pairs[0],
+            Pair {
+                key: "classname".into(),
+                value: "world".into(),
+                line: 3
+            }
+        );
+        assert_eq!(
+            blocks[0].pairs[1].value, "a//b",
+            "// inside quotes is not a comment"
+        );
         assert_eq!(blocks[1].pairs[0].value, "camera");
     }
 

@@ -30,7 +30,12 @@ impl Texture {
 
     /// Number of mip levels down to 1×1.
     pub fn mip_levels(&self) -> u32 {
-        32 - self.image.width().max(self.image.height()).max(1).leading_zeros()
+        32 - self
+            .image
+            .width()
+            .max(self.image.height())
+            .max(1)
+            .leading_zeros()
     }
 }
 
@@ -46,7 +51,11 @@ pub fn load_texture(path: &Path, srgb: bool) -> Result<Texture, Diagnostic> {
         .map_err(|e| fail(format!("cannot read texture: {e}")))?;
     match reader.format() {
         Some(image::ImageFormat::Png | image::ImageFormat::Jpeg) => {}
-        other => return Err(fail(format!("expected a PNG or JPEG image, found {other:?}"))),
+        other => {
+            return Err(fail(format!(
+                "expected a PNG or JPEG image, found {other:?}"
+            )))
+        }
     }
     let mut limits = image::Limits::default();
     limits.max_image_width = Some(MAX_TEXTURE_SIDE);
@@ -57,6 +66,8 @@ pub fn load_texture(path: &Path, srgb: bool) -> Result<Texture, Diagnostic> {
         .decode()
         .map_err(|e| fail(format!("cannot decode texture: {e}")))?
         .into_rgba8();
-    let name = path.file_name().map_or_else(|| "texture".into(), |n| n.to_string_lossy().into_owned());
+    let name = path
+        .file_name()
+        .map_or_else(|| "texture".into(), |n| n.to_string_lossy().into_owned());
     Ok(Texture::new(name, image, srgb))
 }

@@ -96,7 +96,10 @@ impl OffscreenTarget {
 
     /// The colour attachment for a pass that clears with `clear`: renders into the
     /// MSAA texture and resolves into the readable one, or renders straight into it.
-    pub(crate) fn color_attachment(&self, clear: wgpu::Color) -> wgpu::RenderPassColorAttachment<'_> {
+    pub(crate) fn color_attachment(
+        &self,
+        clear: wgpu::Color,
+    ) -> wgpu::RenderPassColorAttachment<'_> {
         let ops = wgpu::Operations {
             load: wgpu::LoadOp::Clear(clear),
             // The multisampled texture is only an intermediate: resolving is enough.

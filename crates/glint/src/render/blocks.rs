@@ -1,7 +1,9 @@
 //! Core layer: GPU twins of the shader data blocks (layouts match `shader/*.wgsl`)
 //! and [`UniformBlock`], which writes a block only when its bytes change.
 
-use crate::scene::{AlphaMode, Background, Camera, Environment, Light, LightKind, Material, MAX_LIGHTS};
+use crate::scene::{
+    AlphaMode, Background, Camera, Environment, Light, LightKind, Material, MAX_LIGHTS,
+};
 use glam::{Mat4, Vec4};
 
 /// One light as the shader reads it (32 bytes).
@@ -17,9 +19,11 @@ const _: () = assert!(std::mem::size_of::<LightGpu>() == 32);
 
 impl Light {
     /// The shader's view of this light.
-    pub(crate) fn to_gpu(&self) -> LightGpu {
+    pub(crate) fn to_gpu(self) -> LightGpu {
         let (position, range) = match self.kind {
-            LightKind::Directional { direction } => (direction.normalize_or(glam::Vec3::NEG_Y).extend(0.0), 0.0),
+            LightKind::Directional { direction } => {
+                (direction.normalize_or(glam::Vec3::NEG_Y).extend(0.0), 0.0)
+            }
             LightKind::Point { position, range } => (position.extend(1.0), range.max(1e-3)),
         };
         LightGpu {
@@ -33,11 +37,11 @@ impl Light {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub(crate) struct SceneGpu {
-    ambient: [f32; 4],          // 16
-    sky_top: [f32; 4],          // 16
-    sky_bottom: [f32; 4],       // 16
-    light_count: u32,           // 4
-    _pad: [u32; 3],             // 12: `lights` starts 16-aligned
+    ambient: [f32; 4],              // 16
+    sky_top: [f32; 4],              // 16
+    sky_bottom: [f32; 4],           // 16
+    light_count: u32,               // 4
+    _pad: [u32; 3],                 // 12: `lights` starts 16-aligned
     lights: [LightGpu; MAX_LIGHTS], // 64 × 32
 }
 const _: () = assert!(std::mem::size_of::<SceneGpu>() == 64 + 32 * MAX_LIGHTS);
@@ -77,7 +81,7 @@ const _: () = assert!(std::mem::size_of::<CameraGpu>() == 208);
 
 impl Camera {
     /// The shader's view of this camera for a target of `aspect` = width / height.
-    pub(crate) fn to_gpu(&self, aspect: f32) -> CameraGpu {
+    pub(crate) fn to_gpu(self, aspect: f32) -> CameraGpu {
         let view = self.view();
         let view_proj = self.projection(aspect) * view;
         CameraGpu {
@@ -116,7 +120,11 @@ impl Material {
             AlphaMode::Mask { cutoff } => (cutoff, FLAG_ALPHA_MASK),
             AlphaMode::Blend => (0.0, FLAG_ALPHA_BLEND),
         };
-        let normal_flag = if self.normal_map.is_some() { FLAG_NORMAL_MAP } else { 0 };
+        let normal_flag = if self.normal_map.is_some() {
+            FLAG_NORMAL_MAP
+        } else {
+            0
+        };
         let exponent = (1.0 + 11.0 * self.smoothness.clamp(0.0, 1.0)).exp2();
         MaterialGpu {
             base_color: self.base_color.to_array(),

@@ -23,7 +23,10 @@ pub use stats::{FrameStats, StageTimes, UploadStats};
 
 use crate::asset::Texture;
 use crate::gpu::{Gpu, OffscreenTarget};
-use crate::scene::{Background, Camera, Entity, Environment, Light, Material, MaterialId, Mesh, ShapeId, TextureId, MAX_LIGHTS};
+use crate::scene::{
+    Background, Camera, Entity, Environment, Light, Material, MaterialId, Mesh, ShapeId, TextureId,
+    MAX_LIGHTS,
+};
 use batch::Batch;
 use blocks::{CameraGpu, InstanceGpu, SceneGpu, UniformBlock};
 use pipelines::{PipelineKey, Pipelines};
@@ -142,14 +145,29 @@ impl Renderer {
             device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some(label),
                 layout,
-                entries: &[wgpu::BindGroupEntry { binding: 0, resource: buffer.as_entire_binding() }],
+                entries: &[wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: buffer.as_entire_binding(),
+                }],
             })
         };
-        let scene_group = group("renderer: scene block (group 0)", &pipelines.scene_layout, &scene_block.buffer);
-        let camera_group = group("renderer: camera block (group 1)", &pipelines.camera_layout, &camera_block.buffer);
+        let scene_group = group(
+            "renderer: scene block (group 0)",
+            &pipelines.scene_layout,
+            &scene_block.buffer,
+        );
+        let camera_group = group(
+            "renderer: camera block (group 1)",
+            &pipelines.camera_layout,
+            &camera_block.buffer,
+        );
         let uploader = TextureUploader::new(&device);
         let pixel = |name: &str, rgba: [u8; 4], srgb| {
-            let texture = Texture::new(name, image::RgbaImage::from_pixel(1, 1, image::Rgba(rgba)), srgb);
+            let texture = Texture::new(
+                name,
+                image::RgbaImage::from_pixel(1, 1, image::Rgba(rgba)),
+                srgb,
+            );
             uploader.upload(&device, &queue, &texture).0
         };
         let defaults = DefaultMaps {
@@ -211,13 +229,20 @@ impl Renderer {
             log::warn!("texture '{}' is empty; using one white pixel", texture.name);
             texture.image = image::RgbaImage::from_pixel(1, 1, image::Rgba([255; 4]));
         }
-        self.textures.push(TextureSlot { pending: Some(texture), view: None });
+        self.textures.push(TextureSlot {
+            pending: Some(texture),
+            view: None,
+        });
         TextureId(self.textures.len() as u32 - 1)
     }
 
     /// Add a material; its uniform block is written on first use.
     pub fn add_material(&mut self, material: Material) -> MaterialId {
-        self.materials.push(MaterialSlot { material, dirty: true, gpu: None });
+        self.materials.push(MaterialSlot {
+            material,
+            dirty: true,
+            gpu: None,
+        });
         MaterialId(self.materials.len() as u32 - 1)
     }
 
@@ -270,7 +295,12 @@ impl Renderer {
     ///
     /// Errors (the submitted entities are dropped): more than [`MAX_LIGHTS`] lights,
     /// or an id that is not this renderer's.
-    pub fn flush(&mut self, camera: &Camera, lights: &[Light], target: &mut OffscreenTarget) -> Result<FrameStats, RenderError> {
+    pub fn flush(
+        &mut self,
+        camera: &Camera,
+        lights: &[Light],
+        target: &mut OffscreenTarget,
+    ) -> Result<FrameStats, RenderError> {
         let start = Instant::now();
         let result = self.run_frame(camera, lights, target);
         self.submitted.clear();
@@ -281,7 +311,12 @@ impl Renderer {
         })
     }
 
-    fn run_frame(&mut self, camera: &Camera, lights: &[Light], target: &OffscreenTarget) -> Result<FrameStats, RenderError> {
+    fn run_frame(
+        &mut self,
+        camera: &Camera,
+        lights: &[Light],
+        target: &OffscreenTarget,
+    ) -> Result<FrameStats, RenderError> {
         if lights.len() > MAX_LIGHTS {
             return Err(RenderError::TooManyLights(lights.len()));
         }
@@ -303,7 +338,12 @@ impl Renderer {
         stats.cpu_ms.sort = ms_since(t);
 
         let t = Instant::now();
-        batch::merge(&self.items, &self.transforms, &mut self.packed, &mut self.batches);
+        batch::merge(
+            &self.items,
+            &self.transforms,
+            &mut self.packed,
+            &mut self.batches,
+        );
         stats.cpu_ms.batch = ms_since(t);
 
         let t = Instant::now();
@@ -328,7 +368,10 @@ impl Renderer {
     fn prepare(&mut self, samples: u32, stats: &mut FrameStats) -> Result<(), RenderError> {
         for i in 0..self.submitted.len() {
             let (shape, material) = (self.submitted[i].shape, self.submitted[i].material);
-            let slot = self.shapes.get_mut(shape.0 as usize).ok_or(RenderError::UnknownShape(shape))?;
+            let slot = self
+                .shapes
+                .get_mut(shape.0 as usize)
+                .ok_or(RenderError::UnknownShape(shape))?;
             if slot.gpu.is_none() {
                 slot.gpu = Some(GpuMesh::new(&self.device, &slot.mesh, shape.0));
                 stats.bytes_uploaded.meshes += slot.mesh.gpu_bytes();
@@ -341,17 +384,31 @@ impl Renderer {
         Ok(())
     }
 
-    fn prepare_material(&mut self, id: MaterialId, samples: u32, stats: &mut FrameStats) -> Result<(), RenderError> {
-        let slot = self.materials.get(id.0 as usize).ok_or(RenderError::UnknownMaterial(id))?;
+    fn prepare_material(
+        &mut self,
+        id: MaterialId,
+        samples: u32,
+        stats: &mut FrameStats,
+    ) -> Result<(), RenderError> {
+        let slot = self
+            .materials
+            .get(id.0 as usize)
+            .ok_or(RenderError::UnknownMaterial(id))?;
         if !slot.dirty && slot.gpu.as_ref().is_some_and(|g| g.samples == samples) {
             return Ok(());
         }
         let material = slot.material.clone();
-        let maps = [material.diffuse_map, material.normal_map, material.specular_map];
+        let maps = [
+            material.diffuse_map,
+            material.normal_map,
+            material.specular_map,
+        ];
         for texture in maps.into_iter().flatten() {
-            let tex = self.textures.get_mut(texture.0 as usize).ok_or_else(|| RenderError::UnknownTexture {
-                material: material.name.clone(),
-                texture,
+            let tex = self.textures.get_mut(texture.0 as usize).ok_or_else(|| {
+                RenderError::UnknownTexture {
+                    material: material.name.clone(),
+                    texture,
+                }
             })?;
             if let Some(pending) = tex.pending.take() {
                 let (view, bytes) = self.uploader.upload(&self.device, &self.queue, &pending);
@@ -359,7 +416,9 @@ impl Renderer {
                 stats.bytes_uploaded.textures += bytes;
             }
         }
-        let (pipeline, _built) = self.pipelines.forward_id(&self.device, PipelineKey::for_material(&material, samples));
+        let (pipeline, _built) = self
+            .pipelines
+            .forward_id(&self.device, PipelineKey::for_material(&material, samples));
         let slot = &mut self.materials[id.0 as usize];
         let stale_group = slot.gpu.as_ref().is_none_or(|g| g.maps != maps);
         if stale_group {
@@ -377,21 +436,52 @@ impl Renderer {
                 label: Some(&format!("material '{}' (group 2)", material.name)),
                 layout: &self.pipelines.material_layout,
                 entries: &[
-                    wgpu::BindGroupEntry { binding: 0, resource: uniform.as_entire_binding() },
-                    wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::TextureView(view(maps[0], &self.defaults.white_srgb)) },
-                    wgpu::BindGroupEntry { binding: 2, resource: wgpu::BindingResource::TextureView(view(maps[1], &self.defaults.flat_normal)) },
-                    wgpu::BindGroupEntry { binding: 3, resource: wgpu::BindingResource::TextureView(view(maps[2], &self.defaults.white_linear)) },
-                    wgpu::BindGroupEntry { binding: 4, resource: wgpu::BindingResource::Sampler(&self.sampler) },
+                    wgpu::BindGroupEntry {
+                        binding: 0,
+                        resource: uniform.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 1,
+                        resource: wgpu::BindingResource::TextureView(view(
+                            maps[0],
+                            &self.defaults.white_srgb,
+                        )),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 2,
+                        resource: wgpu::BindingResource::TextureView(view(
+                            maps[1],
+                            &self.defaults.flat_normal,
+                        )),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 3,
+                        resource: wgpu::BindingResource::TextureView(view(
+                            maps[2],
+                            &self.defaults.white_linear,
+                        )),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 4,
+                        resource: wgpu::BindingResource::Sampler(&self.sampler),
+                    },
                 ],
             });
-            slot.gpu = Some(MaterialGpuTwin { uniform, bind_group, maps, pipeline, samples });
+            slot.gpu = Some(MaterialGpuTwin {
+                uniform,
+                bind_group,
+                maps,
+                pipeline,
+                samples,
+            });
         }
         let twin = slot.gpu.as_mut().expect("created above");
         twin.pipeline = pipeline;
         twin.samples = samples;
         if slot.dirty {
             let block = material.to_gpu();
-            self.queue.write_buffer(&twin.uniform, 0, bytemuck::bytes_of(&block));
+            self.queue
+                .write_buffer(&twin.uniform, 0, bytemuck::bytes_of(&block));
             stats.bytes_uploaded.uniforms += std::mem::size_of_val(&block) as u64;
             slot.dirty = false;
         }
@@ -412,7 +502,10 @@ impl Renderer {
                 crate::scene::AlphaMode::Mask { .. } => Queue::AlphaTest,
                 crate::scene::AlphaMode::Blend => Queue::Transparent,
             };
-            let center = self.shapes[s.shape.0 as usize].mesh.bounding_sphere().center;
+            let center = self.shapes[s.shape.0 as usize]
+                .mesh
+                .bounding_sphere()
+                .center;
             let world = self.transforms[s.first as usize].transform_point3(center);
             let depth = -view.transform_point3(world).z / far;
             self.items.push(DrawItem {
@@ -427,20 +520,43 @@ impl Renderer {
     }
 
     /// Stage 5: write the blocks that changed and this frame's instances.
-    fn upload(&mut self, camera: &Camera, lights: &[Light], target: &OffscreenTarget, stats: &mut FrameStats) {
+    fn upload(
+        &mut self,
+        camera: &Camera,
+        lights: &[Light],
+        target: &OffscreenTarget,
+        stats: &mut FrameStats,
+    ) {
         let aspect = target.width() as f32 / target.height() as f32;
-        stats.bytes_uploaded.uniforms += self.scene_block.update(&self.queue, SceneGpu::new(&self.environment, lights));
-        stats.bytes_uploaded.uniforms += self.camera_block.update(&self.queue, camera.to_gpu(aspect));
-        stats.bytes_uploaded.instances += self.instances.write(&self.device, &self.queue, &self.pipelines.instance_layout, &self.packed);
+        stats.bytes_uploaded.uniforms += self
+            .scene_block
+            .update(&self.queue, SceneGpu::new(&self.environment, lights));
+        stats.bytes_uploaded.uniforms +=
+            self.camera_block.update(&self.queue, camera.to_gpu(aspect));
+        stats.bytes_uploaded.instances += self.instances.write(
+            &self.device,
+            &self.queue,
+            &self.pipelines.instance_layout,
+            &self.packed,
+        );
         stats.instances_drawn = self.packed.len() as u64;
     }
 
     /// Stage 6: record the forward pass.
     fn encode(&self, target: &OffscreenTarget, stats: &mut FrameStats) -> wgpu::CommandBuffer {
         let clear = match self.environment.background {
-            Background::Color(c) | Background::Gradient { bottom: c, .. } => wgpu::Color { r: c.x.into(), g: c.y.into(), b: c.z.into(), a: 1.0 },
+            Background::Color(c) | Background::Gradient { bottom: c, .. } => wgpu::Color {
+                r: c.x.into(),
+                g: c.y.into(),
+                b: c.z.into(),
+                a: 1.0,
+            },
         };
-        let mut encoder = self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("renderer: frame") });
+        let mut encoder = self
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("renderer: frame"),
+            });
         {
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("forward pass"),
@@ -453,11 +569,28 @@ impl Renderer {
             pass.set_bind_group(3, &self.instances.bind_group, &[]);
             stats.bind_groups_set += 3;
             let opaque_end = self.batches.partition_point(|b| b.queue == Queue::Opaque);
-            let alpha_end = self.batches.partition_point(|b| b.queue != Queue::Transparent);
+            let alpha_end = self
+                .batches
+                .partition_point(|b| b.queue != Queue::Transparent);
             let mut bound = Bound::default();
-            self.draw_batches(&mut pass, "opaque", &self.batches[..opaque_end], &mut bound, stats);
-            self.draw_batches(&mut pass, "alpha-test", &self.batches[opaque_end..alpha_end], &mut bound, stats);
-            if let (Background::Gradient { .. }, Some(sky)) = (self.environment.background, self.pipelines.sky_built(target.samples())) {
+            self.draw_batches(
+                &mut pass,
+                "opaque",
+                &self.batches[..opaque_end],
+                &mut bound,
+                stats,
+            );
+            self.draw_batches(
+                &mut pass,
+                "alpha-test",
+                &self.batches[opaque_end..alpha_end],
+                &mut bound,
+                stats,
+            );
+            if let (Background::Gradient { .. }, Some(sky)) = (
+                self.environment.background,
+                self.pipelines.sky_built(target.samples()),
+            ) {
                 pass.push_debug_group("sky");
                 pass.set_pipeline(sky);
                 pass.draw(0..3, 0..1);
@@ -466,13 +599,26 @@ impl Renderer {
                 stats.pipelines_bound += 1;
                 stats.draw_calls += 1;
             }
-            self.draw_batches(&mut pass, "transparent", &self.batches[alpha_end..], &mut bound, stats);
+            self.draw_batches(
+                &mut pass,
+                "transparent",
+                &self.batches[alpha_end..],
+                &mut bound,
+                stats,
+            );
         }
         encoder.finish()
     }
 
     /// Draw one queue's batches, setting only the state that changes.
-    fn draw_batches(&self, pass: &mut wgpu::RenderPass<'_>, name: &str, batches: &[Batch], bound: &mut Bound, stats: &mut FrameStats) {
+    fn draw_batches(
+        &self,
+        pass: &mut wgpu::RenderPass<'_>,
+        name: &str,
+        batches: &[Batch],
+        bound: &mut Bound,
+        stats: &mut FrameStats,
+    ) {
         if batches.is_empty() {
             return;
         }
@@ -484,18 +630,28 @@ impl Renderer {
                 stats.pipelines_bound += 1;
             }
             if bound.material != Some(b.material) {
-                let twin = self.materials[b.material.0 as usize].gpu.as_ref().expect("prepared");
+                let twin = self.materials[b.material.0 as usize]
+                    .gpu
+                    .as_ref()
+                    .expect("prepared");
                 pass.set_bind_group(2, &twin.bind_group, &[]);
                 bound.material = Some(b.material);
                 stats.bind_groups_set += 1;
             }
-            let mesh = self.shapes[b.shape.0 as usize].gpu.as_ref().expect("prepared");
+            let mesh = self.shapes[b.shape.0 as usize]
+                .gpu
+                .as_ref()
+                .expect("prepared");
             if bound.shape != Some(b.shape) {
                 pass.set_vertex_buffer(0, mesh.vertices.slice(..));
                 pass.set_index_buffer(mesh.indices.slice(..), wgpu::IndexFormat::Uint32);
                 bound.shape = Some(b.shape);
             }
-            pass.draw_indexed(0..mesh.index_count, 0, b.first_instance..b.first_instance + b.instance_count);
+            pass.draw_indexed(
+                0..mesh.index_count,
+                0,
+                b.first_instance..b.first_instance + b.instance_count,
+            );
             stats.draw_calls += 1;
         }
         pass.pop_debug_group();

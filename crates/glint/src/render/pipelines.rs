@@ -72,10 +72,19 @@ impl Pipelines {
     pub(crate) fn new(device: &wgpu::Device) -> Self {
         let all = wgpu::ShaderStages::VERTEX_FRAGMENT;
         let layout = |label, entries: &[wgpu::BindGroupLayoutEntry]| {
-            device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some(label), entries })
+            device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some(label),
+                entries,
+            })
         };
-        let scene_layout = layout("renderer: scene block layout (group 0)", &[uniform_entry(0, all)]);
-        let camera_layout = layout("renderer: camera block layout (group 1)", &[uniform_entry(0, all)]);
+        let scene_layout = layout(
+            "renderer: scene block layout (group 0)",
+            &[uniform_entry(0, all)],
+        );
+        let camera_layout = layout(
+            "renderer: camera block layout (group 1)",
+            &[uniform_entry(0, all)],
+        );
         let material_layout = layout(
             "renderer: material block layout (group 2)",
             &[
@@ -108,7 +117,12 @@ impl Pipelines {
         // between sky and forward pipelines never disturbs bound groups.
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("renderer: forward pipeline layout"),
-            bind_group_layouts: &[Some(&scene_layout), Some(&camera_layout), Some(&material_layout), Some(&instance_layout)],
+            bind_group_layouts: &[
+                Some(&scene_layout),
+                Some(&camera_layout),
+                Some(&material_layout),
+                Some(&instance_layout),
+            ],
             immediate_size: 0,
         });
         let module = |label, source: String| {
@@ -168,7 +182,10 @@ impl Pipelines {
                 },
                 primitive: wgpu::PrimitiveState::default(),
                 depth_stencil: Some(depth_state(false, wgpu::CompareFunction::LessEqual)),
-                multisample: wgpu::MultisampleState { count: samples, ..Default::default() },
+                multisample: wgpu::MultisampleState {
+                    count: samples,
+                    ..Default::default()
+                },
                 fragment: Some(wgpu::FragmentState {
                     module,
                     entry_point: Some("fs_sky"),
@@ -182,12 +199,15 @@ impl Pipelines {
     }
 
     fn build_forward(&self, device: &wgpu::Device, key: PipelineKey) -> wgpu::RenderPipeline {
-        const ATTRIBUTES: [wgpu::VertexAttribute; 4] =
-            wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x2, 3 => Float32x4];
+        const ATTRIBUTES: [wgpu::VertexAttribute; 4] = wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x2, 3 => Float32x4];
         let label = format!(
             "renderer: forward pipeline ({}, {}, {}x)",
             if key.blend { "blend" } else { "opaque" },
-            if key.double_sided { "double-sided" } else { "back-face culled" },
+            if key.double_sided {
+                "double-sided"
+            } else {
+                "back-face culled"
+            },
             key.samples
         );
         device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
@@ -205,11 +225,18 @@ impl Pipelines {
             },
             primitive: wgpu::PrimitiveState {
                 front_face: wgpu::FrontFace::Ccw,
-                cull_mode: if key.double_sided { None } else { Some(wgpu::Face::Back) },
+                cull_mode: if key.double_sided {
+                    None
+                } else {
+                    Some(wgpu::Face::Back)
+                },
                 ..Default::default()
             },
             depth_stencil: Some(depth_state(!key.blend, wgpu::CompareFunction::Less)),
-            multisample: wgpu::MultisampleState { count: key.samples, ..Default::default() },
+            multisample: wgpu::MultisampleState {
+                count: key.samples,
+                ..Default::default()
+            },
             fragment: Some(wgpu::FragmentState {
                 module: &self.forward,
                 entry_point: Some("fs_main"),

@@ -60,7 +60,13 @@ const fn mask(bits: u32) -> u64 {
 /// Build the sort key of one draw item.
 ///
 /// `depth` is the view distance divided by the far plane, clamped to 0..1.
-pub fn sort_key(queue: Queue, pipeline: u16, material: MaterialId, shape: ShapeId, depth: f32) -> u64 {
+pub fn sort_key(
+    queue: Queue,
+    pipeline: u16,
+    material: MaterialId,
+    shape: ShapeId,
+    depth: f32,
+) -> u64 {
     // f64: 2^30 − 1 is not representable in f32 and would round past the field.
     let depth = f64::from(depth.clamp(0.0, 1.0));
     let q = (queue as u64) << QUEUE_SHIFT;
@@ -132,23 +138,44 @@ mod tests {
     #[test]
     fn opaque_bins_by_pipeline_then_material_then_shape_then_near_to_far() {
         let k = |p, m, s, d| sort_key(Queue::Opaque, p, m, s, d);
-        assert!(k(0, M1, S1, 1.0) < k(1, M0, S0, 0.0), "pipeline dominates material");
-        assert!(k(0, M0, S1, 1.0) < k(0, M1, S0, 0.0), "material dominates shape");
-        assert!(k(0, M0, S0, 1.0) < k(0, M0, S1, 0.0), "shape dominates depth");
+        assert!(
+            k(0, M1, S1, 1.0) < k(1, M0, S0, 0.0),
+            "pipeline dominates material"
+        );
+        assert!(
+            k(0, M0, S1, 1.0) < k(0, M1, S0, 0.0),
+            "material dominates shape"
+        );
+        assert!(
+            k(0, M0, S0, 1.0) < k(0, M0, S1, 0.0),
+            "shape dominates depth"
+        );
         assert!(k(0, M0, S0, 0.1) < k(0, M0, S0, 0.9), "near before far");
     }
 
     #[test]
     fn transparent_sorts_far_to_near_before_state() {
         let k = |m, s, d| sort_key(Queue::Transparent, 0, m, s, d);
-        assert!(k(M1, S1, 0.9) < k(M0, S0, 0.1), "far first, whatever the state");
-        assert!(k(M0, S0, 0.5) < k(M1, S0, 0.5), "equal depth: grouped by material");
+        assert!(
+            k(M1, S1, 0.9) < k(M0, S0, 0.1),
+            "far first, whatever the state"
+        );
+        assert!(
+            k(M0, S0, 0.5) < k(M1, S0, 0.5),
+            "equal depth: grouped by material"
+        );
     }
 
     #[test]
     fn depth_is_clamped_and_ids_are_masked_into_their_fields() {
-        assert_eq!(sort_key(Queue::Opaque, 0, M0, S0, -3.0), sort_key(Queue::Opaque, 0, M0, S0, 0.0));
-        assert_eq!(sort_key(Queue::Opaque, 0, M0, S0, 7.0), sort_key(Queue::Opaque, 0, M0, S0, 1.0));
+        assert_eq!(
+            sort_key(Queue::Opaque, 0, M0, S0, -3.0),
+            sort_key(Queue::Opaque, 0, M0, S0, 0.0)
+        );
+        assert_eq!(
+            sort_key(Queue::Opaque, 0, M0, S0, 7.0),
+            sort_key(Queue::Opaque, 0, M0, S0, 1.0)
+        );
         // Material 65536 wraps to 0 in the key: same bin, still the opaque queue.
         let wrapped = sort_key(Queue::Opaque, 0, MaterialId(1 << 16), S0, 0.5);
         assert_eq!(wrapped, sort_key(Queue::Opaque, 0, M0, S0, 0.5));
@@ -156,8 +183,21 @@ mod tests {
 
     #[test]
     fn radix_sort_orders_by_key_and_is_stable() {
-        let item = |key, first| DrawItem { key, pipeline: 0, material: M0, shape: S0, first, count: 1 };
-        let mut items = vec![item(5, 0), item(1, 1), item(5, 2), item(u64::MAX, 3), item(0, 4)];
+        let item = |key, first| DrawItem {
+            key,
+            pipeline: 0,
+            material: M0,
+            shape: S0,
+            first,
+            count: 1,
+        };
+        let mut items = vec![
+            item(5, 0),
+            item(1, 1),
+            item(5, 2),
+            item(u64::MAX, 3),
+            item(0, 4),
+        ];
         sort(&mut items);
         let firsts: Vec<u32> = items.iter().map(|i| i.first).collect();
         assert_eq!(firsts, vec![4, 1, 0, 2, 3]);

@@ -111,11 +111,24 @@ impl TextureUploader {
 
     /// Create the GPU texture for `texture`, write level 0 and blit the rest of the
     /// mip chain. Returns the view and the bytes written from the CPU.
-    pub(crate) fn upload(&self, device: &wgpu::Device, queue: &wgpu::Queue, texture: &Texture) -> (wgpu::TextureView, u64) {
+    pub(crate) fn upload(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        texture: &Texture,
+    ) -> (wgpu::TextureView, u64) {
         let (width, height) = texture.image.dimensions();
-        let format = if texture.srgb { wgpu::TextureFormat::Rgba8UnormSrgb } else { wgpu::TextureFormat::Rgba8Unorm };
+        let format = if texture.srgb {
+            wgpu::TextureFormat::Rgba8UnormSrgb
+        } else {
+            wgpu::TextureFormat::Rgba8Unorm
+        };
         let levels = texture.mip_levels();
-        let size = wgpu::Extent3d { width, height, depth_or_array_layers: 1 };
+        let size = wgpu::Extent3d {
+            width,
+            height,
+            depth_or_array_layers: 1,
+        };
         let gpu_texture = device.create_texture(&wgpu::TextureDescriptor {
             label: Some(&format!("texture '{}'", texture.name)),
             size,
@@ -123,18 +136,30 @@ impl TextureUploader {
             sample_count: 1,
             dimension: wgpu::TextureDimension::D2,
             format,
-            usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST | wgpu::TextureUsages::RENDER_ATTACHMENT,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING
+                | wgpu::TextureUsages::COPY_DST
+                | wgpu::TextureUsages::RENDER_ATTACHMENT,
             view_formats: &[],
         });
         // Only level 0 comes from the CPU; the blits below fill the rest.
         queue.write_texture(
             gpu_texture.as_image_copy(),
             texture.image.as_raw(),
-            wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(4 * width), rows_per_image: Some(height) },
+            wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(4 * width),
+                rows_per_image: Some(height),
+            },
             size,
         );
-        let pipeline = if texture.srgb { &self.srgb } else { &self.linear };
-        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("texture uploader: mips") });
+        let pipeline = if texture.srgb {
+            &self.srgb
+        } else {
+            &self.linear
+        };
+        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("texture uploader: mips"),
+        });
         let level_view = |level| {
             gpu_texture.create_view(&wgpu::TextureViewDescriptor {
                 base_mip_level: level,
@@ -147,8 +172,14 @@ impl TextureUploader {
                 label: Some("texture uploader: mip source"),
                 layout: &self.layout,
                 entries: &[
-                    wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(&level_view(level - 1)) },
-                    wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::Sampler(&self.sampler) },
+                    wgpu::BindGroupEntry {
+                        binding: 0,
+                        resource: wgpu::BindingResource::TextureView(&level_view(level - 1)),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 1,
+                        resource: wgpu::BindingResource::Sampler(&self.sampler),
+                    },
                 ],
             });
             let target = level_view(level);
@@ -158,7 +189,10 @@ impl TextureUploader {
                     view: &target,
                     depth_slice: None,
                     resolve_target: None,
-                    ops: wgpu::Operations { load: wgpu::LoadOp::Clear(wgpu::Color::BLACK), store: wgpu::StoreOp::Store },
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
+                        store: wgpu::StoreOp::Store,
+                    },
                 })],
                 ..Default::default()
             });
@@ -167,7 +201,10 @@ impl TextureUploader {
             pass.draw(0..3, 0..1);
         }
         queue.submit([encoder.finish()]);
-        (gpu_texture.create_view(&Default::default()), texture.image.as_raw().len() as u64)
+        (
+            gpu_texture.create_view(&Default::default()),
+            texture.image.as_raw().len() as u64,
+        )
     }
 }
 
@@ -185,7 +222,11 @@ impl InstanceBuffer {
         Self::with_capacity(device, layout, Self::INITIAL_CAPACITY)
     }
 
-    fn with_capacity(device: &wgpu::Device, layout: &wgpu::BindGroupLayout, capacity: usize) -> Self {
+    fn with_capacity(
+        device: &wgpu::Device,
+        layout: &wgpu::BindGroupLayout,
+        capacity: usize,
+    ) -> Self {
         let buffer = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("renderer: instance transforms"),
             size: (capacity * std::mem::size_of::<InstanceGpu>()) as u64,
@@ -195,14 +236,27 @@ impl InstanceBuffer {
         let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("renderer: instance block (group 3)"),
             layout,
-            entries: &[wgpu::BindGroupEntry { binding: 0, resource: buffer.as_entire_binding() }],
+            entries: &[wgpu::BindGroupEntry {
+                binding: 0,
+                resource: buffer.as_entire_binding(),
+            }],
         });
-        Self { buffer, bind_group, capacity }
+        Self {
+            buffer,
+            bind_group,
+            capacity,
+        }
     }
 
     /// Write this frame's instances in one upload, growing the buffer first if
     /// needed. Returns bytes written.
-    pub(crate) fn write(&mut self, device: &wgpu::Device, queue: &wgpu::Queue, layout: &wgpu::BindGroupLayout, instances: &[InstanceGpu]) -> u64 {
+    pub(crate) fn write(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        layout: &wgpu::BindGroupLayout,
+        instances: &[InstanceGpu],
+    ) -> u64 {
         if instances.len() > self.capacity {
             *self = Self::with_capacity(device, layout, instances.len().next_power_of_two());
         }

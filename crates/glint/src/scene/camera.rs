@@ -65,7 +65,12 @@ impl Camera {
     pub fn looking_at(mut self, eye: Vec3, target: Vec3) -> Self {
         self.eye = eye;
         self.target = target;
-        self.up = if (target - eye).normalize_or_zero().cross(Vec3::Y).length_squared() < 1e-8 {
+        self.up = if (target - eye)
+            .normalize_or_zero()
+            .cross(Vec3::Y)
+            .length_squared()
+            < 1e-8
+        {
             Vec3::Z // looking straight up or down: any horizontal up works
         } else {
             Vec3::Y
@@ -82,7 +87,9 @@ impl Camera {
     pub fn projection(&self, aspect: f32) -> Mat4 {
         use glam::camera::rh::proj::directx;
         match self.projection {
-            Projection::Perspective { fov_y, near, far } => directx::perspective(fov_y, aspect, near, far),
+            Projection::Perspective { fov_y, near, far } => {
+                directx::perspective(fov_y, aspect, near, far)
+            }
             Projection::Orthographic { height, near, far } => {
                 let (h, w) = (height * 0.5, height * 0.5 * aspect);
                 directx::orthographic(-w, w, -h, h, near, far)

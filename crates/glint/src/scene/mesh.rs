@@ -34,10 +34,16 @@ impl Aabb {
     pub fn from_points(points: impl IntoIterator<Item = Vec3>) -> Option<Self> {
         let mut it = points.into_iter();
         let first = it.next()?;
-        Some(it.fold(Self { min: first, max: first }, |b, p| Self {
-            min: b.min.min(p),
-            max: b.max.max(p),
-        }))
+        Some(it.fold(
+            Self {
+                min: first,
+                max: first,
+            },
+            |b, p| Self {
+                min: b.min.min(p),
+                max: b.max.max(p),
+            },
+        ))
     }
 
     /// Centre of the box.
@@ -140,9 +146,10 @@ impl Mesh {
                 vertices: vertices.len(),
             });
         }
-        if let Some(i) = vertices.iter().position(|v| {
-            !(v.position.iter().chain(&v.normal).chain(&v.uv)).all(|c| c.is_finite())
-        }) {
+        if let Some(i) = vertices
+            .iter()
+            .position(|v| !(v.position.iter().chain(&v.normal).chain(&v.uv)).all(|c| c.is_finite()))
+        {
             return Err(MeshError::NonFinite(i));
         }
         let aabb = Aabb::from_points(vertices.iter().map(|v| Vec3::from(v.position)))
@@ -182,7 +189,8 @@ impl Mesh {
 
     /// Bytes this mesh takes on the GPU (vertices + indices).
     pub fn gpu_bytes(&self) -> u64 {
-        (std::mem::size_of_val(self.vertices.as_slice()) + std::mem::size_of_val(self.indices.as_slice())) as u64
+        (std::mem::size_of_val(self.vertices.as_slice())
+            + std::mem::size_of_val(self.indices.as_slice())) as u64
     }
 
     fn generate_tangents(&mut self) {
