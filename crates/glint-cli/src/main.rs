@@ -101,6 +101,15 @@ fn render(
         .into());
     };
     let gpu = Gpu::headless()?;
+    let msaa = if gpu.supports_msaa(msaa) {
+        msaa
+    } else {
+        eprintln!(
+            "warning: {} cannot do {msaa}x MSAA; rendering without it",
+            gpu.info().name
+        );
+        1
+    };
     let mut target = OffscreenTarget::new(&gpu, width, height, msaa)?;
     let mut renderer = Renderer::new(&gpu);
     let entities = desc.instantiate(&mut renderer);

@@ -30,6 +30,8 @@
 //! # Ok::<(), glint::Error>(())
 //! ```
 
+#![warn(missing_docs)]
+
 pub mod asset;
 pub mod gpu;
 pub mod render;

@@ -1,6 +1,6 @@
 //! Reference-image tests: each scene under `tests/scenes/` rendered at 256×256
 //! (4× MSAA) must match `tests/reference/NAME.png` within the tolerance in
-//! `common`. Regenerate on purpose with `GLINT_BLESS=1 cargo test --test reference_images`.
+//! `common`. Regenerate on purpose with `GLINT_BLESS=1 cargo test -p glint --test reference_images`.
 
 mod common;
 

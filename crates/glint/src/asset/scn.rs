@@ -2,14 +2,14 @@
 //! reference) turned into a [`SceneDesc`], checked without a GPU, and placed into
 //! a [`Renderer`] with [`SceneDesc::instantiate`].
 
+use super::placement::place_instances;
 use super::scn_syntax::{parse_blocks, Block, Pair};
 use super::{load_texture, Diagnostic, ShapeKind, Texture};
 use crate::scene::{
-    AlphaMode, Background, Camera, Entity, Environment, Light, Material, MaterialId,
+    AlphaMode, Background, Camera, Entity, Environment, Light, Material, MaterialId, MAX_LIGHTS,
 };
 use crate::Renderer;
 use glam::{EulerRot, Mat4, Quat, Vec3, Vec4};
-use rand::{Rng, SeedableRng};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
@@ -448,6 +448,18 @@ impl Loader<'_> {
         Ok(())
     }
 
+    fn add_light(&mut self, f: &Fields, light: Light) -> Result<(), Diagnostic> {
+        if self.scene.lights.len() == MAX_LIGHTS {
+            return Err(Diagnostic::at(
+                self.path,
+                f.block.line,
+                format!("more than {MAX_LIGHTS} lights: a frame can use at most {MAX_LIGHTS}"),
+            ));
+        }
+        self.scene.lights.push(light);
+        Ok(())
+    }
+
     fn light_common(f: &mut Fields) -> Result<(Vec3, f32), Diagnostic> {
         Ok((
             f.color("color")?.unwrap_or(Vec3::ONE),
@@ -466,10 +478,7 @@ impl Loader<'_> {
             ));
         }
         let (color, intensity) = Self::light_common(f)?;
-        self.scene
-            .lights
-            .push(Light::directional(direction, color, intensity));
-        Ok(())
+        self.add_light(f, Light::directional(direction, color, intensity))
     }
 
     fn light_point(&mut self, f: &mut Fields) -> Result<(), Diagnostic> {
@@ -477,10 +486,7 @@ impl Loader<'_> {
         let origin = Vec3::from(numbers::<3>(self.path, pair, "3 numbers (x y z)")?);
         let (color, intensity) = Self::light_common(f)?;
         let range = f.number("range", 1e-3..=1e9)?.unwrap_or(10.0);
-        self.scene
-            .lights
-            .push(Light::point(origin, color, intensity, range));
-        Ok(())
+        self.add_light(f, Light::point(origin, color, intensity, range))
     }
 
     fn texture(
@@ -748,53 +754,6 @@ impl Loader<'_> {
     }
 }
 
-/// Place `count` instances in the box `origin ± extent/2`: on an evenly spaced grid
-/// over the axes whose extent is not zero (cells as square as the box allows, filled
-/// x first, then z, then y), or uniformly at random. The same seed gives the same
-/// placement everywhere (PCG32).
-fn place_instances(
-    count: usize,
-    random: bool,
-    origin: Vec3,
-    extent: Vec3,
-    seed: u64,
-    scale: (f32, f32),
-    random_yaw: bool,
-) -> Vec<Mat4> {
-    let mut rng = rand_pcg::Pcg32::seed_from_u64(seed);
-    let axes: Vec<usize> = [0, 2, 1].into_iter().filter(|&a| extent[a] > 0.0).collect();
-    // Cell side s with (product of extents) / s^k = count; rounding each axis' cell
-    // count up keeps at least `count` cells.
-    let volume: f64 = axes.iter().map(|&a| f64::from(extent[a])).product();
-    let side = (volume / count.max(1) as f64).powf(1.0 / axes.len().max(1) as f64);
-    let cells: Vec<usize> = axes
-        .iter()
-        .map(|&a| ((f64::from(extent[a]) / side - 1e-9).ceil() as usize).max(1))
-        .collect();
-    let corner = origin - extent * 0.5;
-    (0..count)
-        .map(|i| {
-            let mut p = origin;
-            if random {
-                p = corner + extent * Vec3::new(rng.random(), rng.random(), rng.random());
-            } else {
-                let mut rest = i;
-                for (&a, &n) in axes.iter().zip(&cells) {
-                    p[a] = corner[a] + extent[a] * ((rest % n) as f32 + 0.5) / n as f32;
-                    rest /= n;
-                }
-            }
-            let s = scale.0 + (scale.1 - scale.0) * rng.random::<f32>();
-            let yaw = if random_yaw {
-                rng.random::<f32>() * std::f32::consts::TAU
-            } else {
-                0.0
-            };
-            Mat4::from_scale_rotation_translation(Vec3::splat(s), Quat::from_rotation_y(yaw), p)
-        })
-        .collect()
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -859,77 +818,6 @@ mod tests {
         );
         assert_eq!(scene.entities[1].transforms.len(), 100);
         assert_eq!(scene.instance_count(), 102);
-    }
-
-    #[test]
-    fn same_seed_same_placement_and_grid_is_even() {
-        let a = place_instances(
-            50,
-            true,
-            Vec3::ZERO,
-            Vec3::new(10.0, 0.0, 10.0),
-            3,
-            (0.5, 1.0),
-            true,
-        );
-        let b = place_instances(
-            50,
-            true,
-            Vec3::ZERO,
-            Vec3::new(10.0, 0.0, 10.0),
-            3,
-            (0.5, 1.0),
-            true,
-        );
-        let c = place_instances(
-            50,
-            true,
-            Vec3::ZERO,
-            Vec3::new(10.0, 0.0, 10.0),
-            4,
-            (0.5, 1.0),
-            true,
-        );
-        assert_eq!(a, b);
-        assert_ne!(a, c);
-        for m in &a {
-            let p = m.w_axis.truncate();
-            assert!(p.x.abs() <= 5.0 && p.z.abs() <= 5.0 && p.y == 0.0);
-        }
-        let grid = place_instances(
-            4,
-            false,
-            Vec3::ZERO,
-            Vec3::new(2.0, 0.0, 2.0),
-            1,
-            (1.0, 1.0),
-            false,
-        );
-        let points: Vec<Vec3> = grid.iter().map(|m| m.w_axis.truncate()).collect();
-        assert_eq!(
-            points,
-            vec![
-                Vec3::new(-0.5, 0.0, -0.5),
-                Vec3::new(0.5, 0.0, -0.5),
-                Vec3::new(-0.5, 0.0, 0.5),
-                Vec3::new(0.5, 0.0, 0.5)
-            ]
-        );
-        // A long box gets more cells along its long side: 16 in 8×2 is 8×2 cells of 1.
-        let long = place_instances(
-            16,
-            false,
-            Vec3::ZERO,
-            Vec3::new(8.0, 0.0, 2.0),
-            1,
-            (1.0, 1.0),
-            false,
-        );
-        let xs: std::collections::BTreeSet<i32> =
-            long.iter().map(|m| (m.w_axis.x * 2.0) as i32).collect();
-        let zs: std::collections::BTreeSet<i32> =
-            long.iter().map(|m| (m.w_axis.z * 2.0) as i32).collect();
-        assert_eq!((xs.len(), zs.len()), (8, 2));
     }
 
     #[test]
@@ -1029,6 +917,18 @@ mod tests {
                 "{err}"
             );
         }
+    }
+
+    #[test]
+    fn more_lights_than_a_frame_holds_is_an_error_at_the_extra_light() {
+        let light = "{\n\"classname\" \"light_point\"\n\"origin\" \"0 1 0\"\n}\n";
+        assert_eq!(
+            parse(&light.repeat(MAX_LIGHTS)).unwrap().lights.len(),
+            MAX_LIGHTS
+        );
+        let err = parse(&light.repeat(MAX_LIGHTS + 1)).unwrap_err();
+        assert_eq!(err.line, Some(4 * MAX_LIGHTS + 1));
+        assert!(err.message.contains("more than 64 lights"), "{err}");
     }
 
     #[test]
