@@ -56,33 +56,18 @@ mod tests {
 
     #[test]
     fn same_seed_same_placement_and_grid_is_even() {
-        let a = place_instances(
-            50,
-            true,
-            Vec3::ZERO,
-            Vec3::new(10.0, 0.0, 10.0),
-            3,
-            (0.5, 1.0),
-            true,
-        );
-        let b = place_instances(
-            50,
-            true,
-            Vec3::ZERO,
-            Vec3::new(10.0, 0.0, 10.0),
-            3,
-            (0.5, 1.0),
-            true,
-        );
-        let c = place_instances(
-            50,
-            true,
-            Vec3::ZERO,
-            Vec3::new(10.0, 0.0, 10.0),
-            4,
-            (0.5, 1.0),
-            true,
-        );
+        let scatter = |seed| {
+            place_instances(
+                50,
+                true,
+                Vec3::ZERO,
+                Vec3::new(10.0, 0.0, 10.0),
+                seed,
+                (0.5, 1.0),
+                true,
+            )
+        };
+        let (a, b, c) = (scatter(3), scatter(3), scatter(4));
         assert_eq!(a, b);
         assert_ne!(a, c);
         for m in &a {
