@@ -30,11 +30,7 @@ fn main() -> Result<(), image::ImageError> {
         let h = height(x as f32 + 0.5, y as f32 + 0.5);
         // Two glazes in a checker, each tile a little lighter or darker.
         let shade = 0.9 + 0.1 * (((tx * 7 + ty * 13) % 5) as f32 / 4.0);
-        let glaze = if (tx + ty) % 2 == 0 {
-            [196.0, 98.0, 60.0]
-        } else {
-            [232.0, 220.0, 196.0]
-        };
+        let glaze = if (tx + ty) % 2 == 0 { [196.0, 98.0, 60.0] } else { [232.0, 220.0, 196.0] };
         let grout = [90.0, 86.0, 80.0];
         let c = |i: usize| (grout[i] + (glaze[i] * shade - grout[i]) * h) as u8;
         Rgba([c(0), c(1), c(2), 255])
@@ -55,10 +51,7 @@ fn main() -> Result<(), image::ImageError> {
     let leaf = RgbaImage::from_fn(128, 128, |x, y| {
         // A leaf along the diagonal: inside a lens of two circles, with a vein.
         let (u, v) = (x as f32 / 127.0 - 0.5, y as f32 / 127.0 - 0.5);
-        let (a, b) = (
-            (u + v) * std::f32::consts::FRAC_1_SQRT_2,
-            (u - v) * std::f32::consts::FRAC_1_SQRT_2,
-        );
+        let (a, b) = ((u + v) * std::f32::consts::FRAC_1_SQRT_2, (u - v) * std::f32::consts::FRAC_1_SQRT_2);
         let inside = (b.abs() + 0.62).powi(2) + a * a < 0.9f32.powi(2) && a.abs() < 0.62;
         let vein = b.abs() < 0.012;
         let g = (140.0 + 60.0 * (0.5 - a)) as u8;
@@ -69,9 +62,6 @@ fn main() -> Result<(), image::ImageError> {
         }
     });
     leaf.save(dir.join("leaf.png"))?;
-    println!(
-        "wrote tiles.png, tiles_normal.png, leaf.png to {}",
-        dir.display()
-    );
+    println!("wrote tiles.png, tiles_normal.png, leaf.png to {}", dir.display());
     Ok(())
 }

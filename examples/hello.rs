@@ -10,8 +10,7 @@ fn main() -> Result<(), glint::Error> {
     // Init: GPU, renderer, camera, lights, materials, shapes, entities.
     let gpu = Gpu::headless()?;
     let mut renderer = Renderer::new(&gpu);
-    let camera = Camera::perspective(45.0, 0.1, 100.0)
-        .looking_at(Vec3::new(0.0, 4.0, 9.0), Vec3::new(0.0, 0.5, 0.0));
+    let camera = Camera::perspective(45.0, 0.1, 100.0).looking_at(Vec3::new(0.0, 4.0, 9.0), Vec3::new(0.0, 0.5, 0.0));
     let lights = [
         Light::directional(Vec3::new(-1.0, -2.0, -1.5), Vec3::ONE, 1.2),
         Light::point(Vec3::new(0.0, 2.5, 0.0), Vec3::new(1.0, 0.6, 0.3), 6.0, 6.0),
@@ -30,11 +29,11 @@ fn main() -> Result<(), glint::Error> {
     // Per frame: update entities, submit them, flush with camera and lights.
     for frame in 0..3 {
         let t = frame as f32 * 0.4;
-        ring.transforms = (0..12)
+        *ring.transforms_mut() = (0..12)
             .map(|i| Quat::from_rotation_y(i as f32 / 12.0 * TAU + t))
             .map(|r| Mat4::from_rotation_translation(r, r * Vec3::new(3.0, 0.5, 0.0)))
             .collect();
-        bouncer.transforms[0] = Mat4::from_translation(Vec3::new(0.0, 0.8 + t.sin(), 0.0));
+        bouncer.set_transform(0, Mat4::from_translation(Vec3::new(0.0, 0.8 + t.sin(), 0.0)));
         renderer.submit(&ground);
         renderer.submit(&ring);
         renderer.submit(&bouncer);

@@ -6,7 +6,8 @@ use glint::{Error, Gpu, OffscreenTarget, Renderer};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
-const EXIT_CODES: &str = "Exit codes: 0 ok, 1 bad input (file:line: message on stderr), 2 no GPU adapter, 3 other GPU or render failure.";
+const EXIT_CODES: &str =
+    "Exit codes: 0 ok, 1 bad input (file:line: message on stderr), 2 no GPU adapter, 3 other GPU or render failure.";
 
 /// glint: a real-time 3D renderer on wgpu.
 #[derive(Parser)]
@@ -38,6 +39,9 @@ enum Command {
         /// Print the frame's statistics as one JSON object on stdout.
         #[arg(long)]
         stats: bool,
+        /// Draw everything, skipping frustum culling (to compare costs).
+        #[arg(long)]
+        no_cull: bool,
     },
     /// Parse and validate a .scn scene without a GPU, and summarise it.
     #[command(after_help = EXIT_CODES)]
@@ -48,20 +52,11 @@ enum Command {
 }
 
 fn parse_size(s: &str) -> Result<(u32, u32), String> {
-    let (w, h) = s
-        .split_once(['x', 'X'])
-        .ok_or_else(|| format!("'{s}' is not WIDTHxHEIGHT"))?;
-    let side = |v: &str| {
-        v.trim()
-            .parse::<u32>()
-            .ok()
-            .filter(|&n| (1..=16384).contains(&n))
-    };
+    let (w, h) = s.split_once(['x', 'X']).ok_or_else(|| format!("'{s}' is not WIDTHxHEIGHT"))?;
+    let side = |v: &str| v.trim().parse::<u32>().ok().filter(|&n| (1..=16384).contains(&n));
     match (side(w), side(h)) {
         (Some(w), Some(h)) => Ok((w, h)),
-        _ => Err(format!(
-            "'{s}': each side must be a whole number in 1..=16384"
-        )),
+        _ => Err(format!("'{s}': each side must be a whole number in 1..=16384")),
     }
 }
 
@@ -81,22 +76,24 @@ fn load(scene: &Path) -> Result<SceneDesc, Error> {
     Ok(desc)
 }
 
-fn render(
-    scene: &Path,
-    output: &Path,
-    (width, height): (u32, u32),
+/// What `glint render` was asked for.
+struct RenderArgs<'a> {
+    scene: &'a Path,
+    output: &'a Path,
+    size: (u32, u32),
     msaa: u32,
     camera: usize,
     stats: bool,
-) -> Result<(), Error> {
+    no_cull: bool,
+}
+
+fn render(args: RenderArgs) -> Result<(), Error> {
+    let RenderArgs { scene, output, size: (width, height), msaa, camera, stats, no_cull } = args;
     let desc = load(scene)?;
     let Some(cam) = desc.cameras.get(camera) else {
         return Err(glint::Diagnostic::file(
             scene,
-            format!(
-                "camera {camera} requested, but the scene has {}",
-                desc.cameras.len()
-            ),
+            format!("camera {camera} requested, but the scene has {}", desc.cameras.len()),
         )
         .into());
     };
@@ -104,14 +101,12 @@ fn render(
     let msaa = if gpu.supports_msaa(msaa) {
         msaa
     } else {
-        eprintln!(
-            "warning: {} cannot do {msaa}x MSAA; rendering without it",
-            gpu.info().name
-        );
+        eprintln!("warning: {} cannot do {msaa}x MSAA; rendering without it", gpu.info().name);
         1
     };
     let mut target = OffscreenTarget::new(&gpu, width, height, msaa)?;
     let mut renderer = Renderer::new(&gpu);
+    renderer.set_culling(!no_cull);
     let entities = desc.instantiate(&mut renderer);
     for entity in &entities {
         renderer.submit(entity);
@@ -142,11 +137,7 @@ fn check(scene: &Path) -> Result<(), Error> {
     if desc.lights.len() > glint::scene::MAX_LIGHTS {
         return Err(glint::Diagnostic::file(
             scene,
-            format!(
-                "{} lights, but a frame can use at most {}",
-                desc.lights.len(),
-                glint::scene::MAX_LIGHTS
-            ),
+            format!("{} lights, but a frame can use at most {}", desc.lights.len(), glint::scene::MAX_LIGHTS),
         )
         .into());
     }
@@ -170,14 +161,15 @@ fn main() -> ExitCode {
         }
     };
     let result = match &cli.command {
-        Command::Render {
+        Command::Render { scene, output, size, msaa, camera, stats, no_cull } => render(RenderArgs {
             scene,
             output,
-            size,
-            msaa,
-            camera,
-            stats,
-        } => render(scene, output, *size, *msaa, *camera, *stats),
+            size: *size,
+            msaa: *msaa,
+            camera: *camera,
+            stats: *stats,
+            no_cull: *no_cull,
+        }),
         Command::Check { scene } => check(scene),
     };
     match result {

@@ -6,17 +6,11 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 fn glint(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_glint"))
-        .args(args)
-        .env("NODEVICE_SELECT", "1")
-        .output()
-        .expect("run glint")
+    Command::new(env!("CARGO_BIN_EXE_glint")).args(args).env("NODEVICE_SELECT", "1").output().expect("run glint")
 }
 
 fn repo(path: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../..")
-        .join(path)
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..").join(path)
 }
 
 fn stderr(o: &Output) -> String {
@@ -25,11 +19,7 @@ fn stderr(o: &Output) -> String {
 
 /// Lines glint itself printed (Mesa and wgpu log lines filtered out).
 fn error_lines(o: &Output) -> Vec<String> {
-    stderr(o)
-        .lines()
-        .filter(|l| l.starts_with("error:"))
-        .map(str::to_owned)
-        .collect()
+    stderr(o).lines().filter(|l| l.starts_with("error:")).map(str::to_owned).collect()
 }
 
 #[test]
@@ -38,10 +28,7 @@ fn help_lists_every_subcommand_and_the_exit_codes() {
         let out = glint(args);
         assert_eq!(out.status.code(), Some(0), "{args:?}");
         let text = String::from_utf8_lossy(&out.stdout);
-        assert!(
-            text.contains("Exit codes: 0 ok, 1 bad input"),
-            "{args:?}: {text}"
-        );
+        assert!(text.contains("Exit codes: 0 ok, 1 bad input"), "{args:?}: {text}");
     }
     let top = String::from_utf8_lossy(&glint(&["--help"]).stdout).into_owned();
     assert!(top.contains("render") && top.contains("check"));
@@ -73,12 +60,7 @@ fn check_summarises_the_showcase_without_a_gpu() {
 
 /// Every class of malformed scene: (file text, line the error must name, words it must say).
 const MALFORMED: &[(&str, &str, usize, &str)] = &[
-    (
-        "unknown_classname",
-        "{\n\"classname\" \"spaceship\"\n}\n",
-        2,
-        "unknown classname 'spaceship'",
-    ),
+    ("unknown_classname", "{\n\"classname\" \"spaceship\"\n}\n", 2, "unknown classname 'spaceship'"),
     (
         "bad_number",
         "{\n\"classname\" \"entity\"\n\"mesh\" \"cube\"\n\"origin\" \"1 two 3\"\n}\n",
@@ -91,18 +73,8 @@ const MALFORMED: &[(&str, &str, usize, &str)] = &[
         1,
         "missing the required key \"origin\"",
     ),
-    (
-        "unterminated_quote",
-        "{\n\"classname\" \"entity\n}\n",
-        2,
-        "unterminated quote",
-    ),
-    (
-        "unterminated_brace",
-        "{\n\"classname\" \"world\"\n",
-        1,
-        "unterminated block",
-    ),
+    ("unterminated_quote", "{\n\"classname\" \"entity\n}\n", 2, "unterminated quote"),
+    ("unterminated_brace", "{\n\"classname\" \"world\"\n", 1, "unterminated block"),
     ("stray_brace", "}\n", 1, "no block open"),
     (
         "unknown_material",
@@ -145,32 +117,15 @@ fn every_malformed_scene_is_one_error_line_with_file_and_line() {
         std::fs::write(dir.path().join("self.scn"), "not an image").expect("write");
         for command in ["check", "render"] {
             let out = glint(
-                &[
-                    command,
-                    path.to_str().expect("path"),
-                    "-o",
-                    dir.path().join("x.png").to_str().expect("path"),
-                ][..if command == "check" { 2 } else { 4 }],
+                &[command, path.to_str().expect("path"), "-o", dir.path().join("x.png").to_str().expect("path")]
+                    [..if command == "check" { 2 } else { 4 }],
             );
-            assert_eq!(
-                out.status.code(),
-                Some(1),
-                "{name} {command}: {}",
-                stderr(&out)
-            );
+            assert_eq!(out.status.code(), Some(1), "{name} {command}: {}", stderr(&out));
             let errors = error_lines(&out);
             assert_eq!(errors.len(), 1, "{name} {command}: {}", stderr(&out));
             let want = format!("error: {}:{line}: ", path.display());
-            assert!(
-                errors[0].starts_with(&want),
-                "{name}: '{}' should start with '{want}'",
-                errors[0]
-            );
-            assert!(
-                errors[0].contains(words),
-                "{name}: '{}' should say '{words}'",
-                errors[0]
-            );
+            assert!(errors[0].starts_with(&want), "{name}: '{}' should start with '{want}'", errors[0]);
+            assert!(errors[0].contains(words), "{name}: '{}' should say '{words}'", errors[0]);
             assert!(!stderr(&out).contains("panicked"), "{name}");
         }
     }
@@ -180,29 +135,18 @@ fn every_malformed_scene_is_one_error_line_with_file_and_line() {
 fn a_missing_scene_file_names_the_file() {
     let out = glint(&["check", "/no/such/scene.scn"]);
     assert_eq!(out.status.code(), Some(1));
-    assert!(
-        error_lines(&out)[0].starts_with("error: /no/such/scene.scn: cannot read scene"),
-        "{}",
-        stderr(&out)
-    );
+    assert!(error_lines(&out)[0].starts_with("error: /no/such/scene.scn: cannot read scene"), "{}", stderr(&out));
 }
 
 #[test]
 fn unknown_keys_warn_with_file_and_line_but_succeed() {
     let dir = tempfile::tempdir().expect("tempdir");
     let path = dir.path().join("warn.scn");
-    std::fs::write(
-        &path,
-        "{\n\"classname\" \"entity\"\n\"mesh\" \"cube\"\n\"colour\" \"red\"\n}\n",
-    )
-    .expect("write");
+    std::fs::write(&path, "{\n\"classname\" \"entity\"\n\"mesh\" \"cube\"\n\"colour\" \"red\"\n}\n").expect("write");
     let out = glint(&["check", path.to_str().expect("path")]);
     assert_eq!(out.status.code(), Some(0));
     assert!(
-        stderr(&out).contains(&format!(
-            "warning: {}:4: unknown key \"colour\"",
-            path.display()
-        )),
+        stderr(&out).contains(&format!("warning: {}:4: unknown key \"colour\"", path.display())),
         "{}",
         stderr(&out)
     );
@@ -212,12 +156,7 @@ fn unknown_keys_warn_with_file_and_line_but_succeed() {
 fn no_adapter_is_exit_code_2_with_the_fix() {
     // DX12 is never compiled in on Linux, so asking for it finds no adapter.
     let out = Command::new(env!("CARGO_BIN_EXE_glint"))
-        .args([
-            "render",
-            repo("tests/scenes/ortho.scn").to_str().expect("path"),
-            "-o",
-            "/tmp/glint-never-written.png",
-        ])
+        .args(["render", repo("tests/scenes/ortho.scn").to_str().expect("path"), "-o", "/tmp/glint-never-written.png"])
         .env("WGPU_BACKEND", if cfg!(windows) { "metal" } else { "dx12" })
         .output()
         .expect("run glint");
@@ -226,11 +165,7 @@ fn no_adapter_is_exit_code_2_with_the_fix() {
     assert_eq!(errors.len(), 1, "{}", stderr(&out));
     assert!(errors[0].contains("no GPU adapter found"), "{}", errors[0]);
     if cfg!(target_os = "linux") {
-        assert!(
-            errors[0].contains("apt-get install mesa-vulkan-drivers"),
-            "{}",
-            errors[0]
-        );
+        assert!(errors[0].contains("apt-get install mesa-vulkan-drivers"), "{}", errors[0]);
     }
 }
 
@@ -247,14 +182,12 @@ fn render_writes_the_png_and_prints_stats_json() {
         "320x180",
         "--stats",
     ]);
-    if out.status.code() == Some(2) && std::env::var("GLINT_REQUIRE_ADAPTER").as_deref() != Ok("1")
-    {
+    if out.status.code() == Some(2) && std::env::var("GLINT_REQUIRE_ADAPTER").as_deref() != Ok("1") {
         eprintln!("skipping: no GPU adapter ({})", stderr(&out));
         return;
     }
     assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
-    let stats: serde_json::Value =
-        serde_json::from_slice(&out.stdout).expect("one JSON object on stdout");
+    let stats: serde_json::Value = serde_json::from_slice(&out.stdout).expect("one JSON object on stdout");
     for key in [
         "draw_calls",
         "pipelines_bound",
@@ -267,16 +200,20 @@ fn render_writes_the_png_and_prints_stats_json() {
         assert!(stats.get(key).is_some(), "missing {key}: {stats}");
     }
     assert_eq!(stats["instances_submitted"], 12040);
-    assert_eq!(stats["instances_drawn"], 12040);
+    let (drawn, culled) =
+        (stats["instances_drawn"].as_u64().expect("n"), stats["instances_culled"].as_u64().expect("n"));
+    assert!(culled > 1000, "the camera sees part of the gravel field: {culled} culled");
+    assert_eq!(drawn + culled, 12040);
     // 11 render tasks (mesh × material pairs) plus the sky.
     assert_eq!(stats["draw_calls"], 12);
     assert!(stats["cpu_ms"]["total"].as_f64().expect("number") > 0.0);
-    assert!(
-        stats["bytes_uploaded"]["textures"]
-            .as_u64()
-            .expect("number")
-            > 0
-    );
+    assert!(stats["bytes_uploaded"]["textures"].as_u64().expect("number") > 0);
     let image = std::fs::read(&png).expect("png written");
     assert_eq!(&image[1..4], b"PNG");
+
+    let scene = repo("scenes/showcase.scn");
+    let args = ["render", scene.to_str().expect("path"), "-o", png.to_str().expect("path"), "--size", "64x36"];
+    let out = glint(&[&args[..], &["--stats", "--no-cull"]].concat());
+    let all: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    assert_eq!((all["instances_drawn"].as_u64(), all["instances_culled"].as_u64()), (Some(12040), Some(0)));
 }

@@ -42,8 +42,7 @@ pub use asset::{Diagnostic, Texture};
 pub use gpu::{Gpu, GpuError, OffscreenTarget};
 pub use render::{FrameStats, RenderError, Renderer};
 pub use scene::{
-    AlphaMode, Background, Camera, Entity, Environment, Light, Material, MaterialId, Mesh, ShapeId,
-    TextureId,
+    AlphaMode, Background, Camera, Entity, Environment, Light, Material, MaterialId, Mesh, ShapeId, TextureId,
 };
 
 /// Any glint error, with the process exit code the CLI uses for it.

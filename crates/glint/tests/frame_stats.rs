@@ -7,8 +7,7 @@ use glam::{Mat4, Vec3};
 use glint::asset::ShapeKind;
 use glint::scene::MAX_LIGHTS;
 use glint::{
-    AlphaMode, Camera, Entity, FrameStats, Gpu, Light, Material, OffscreenTarget, RenderError,
-    Renderer, Texture,
+    AlphaMode, Camera, Entity, FrameStats, Gpu, Light, Material, OffscreenTarget, RenderError, Renderer, Texture,
 };
 
 fn camera() -> Camera {
@@ -16,11 +15,7 @@ fn camera() -> Camera {
 }
 
 fn sun() -> Vec<Light> {
-    vec![Light::directional(
-        Vec3::new(-1.0, -1.0, -1.0),
-        Vec3::ONE,
-        1.0,
-    )]
+    vec![Light::directional(Vec3::new(-1.0, -1.0, -1.0), Vec3::ONE, 1.0)]
 }
 
 fn frame(renderer: &mut Renderer, gpu: &Gpu, entities: &[&Entity], lights: &[Light]) -> FrameStats {
@@ -28,20 +23,12 @@ fn frame(renderer: &mut Renderer, gpu: &Gpu, entities: &[&Entity], lights: &[Lig
     for e in entities {
         renderer.submit(e);
     }
-    renderer
-        .flush(&camera(), lights, &mut target)
-        .expect("frame")
+    renderer.flush(&camera(), lights, &mut target).expect("frame")
 }
 
 fn grid(n: usize) -> Vec<Mat4> {
     (0..n)
-        .map(|i| {
-            Mat4::from_translation(Vec3::new(
-                (i % 100) as f32 * 0.1 - 5.0,
-                0.0,
-                (i / 100) as f32 * 0.1 - 5.0,
-            ))
-        })
+        .map(|i| Mat4::from_translation(Vec3::new((i % 100) as f32 * 0.1 - 5.0, 0.0, (i / 100) as f32 * 0.1 - 5.0)))
         .collect()
 }
 
@@ -55,12 +42,13 @@ fn ten_thousand_instances_of_one_entity_are_one_draw() {
     let stats = frame(&mut r, gpu, &[&e], &sun());
     assert_eq!(stats.draw_calls, 1);
     assert_eq!(stats.instances_submitted, 10_000);
-    assert_eq!(stats.instances_drawn, 10_000);
-    assert_eq!(
-        stats.bytes_uploaded.instances,
-        10_000 * 64,
-        "one matrix per instance, one upload"
-    );
+    assert!(stats.instances_culled < 100, "the grid is almost all in view: {}", stats.instances_culled);
+    assert_eq!(stats.instances_drawn + stats.instances_culled, 10_000);
+    assert_eq!(stats.bytes_uploaded.transforms, 10_000 * 64, "every matrix once, on first sight");
+    assert_eq!(stats.bytes_uploaded.draw_indices, 4 * stats.instances_drawn, "one u32 per drawn instance");
+    r.set_culling(false);
+    let unculled = frame(&mut r, gpu, &[&e], &sun());
+    assert_eq!((unculled.draw_calls, unculled.instances_drawn, unculled.instances_culled), (1, 10_000, 0));
 }
 
 #[test]
@@ -69,10 +57,7 @@ fn hundred_entities_sharing_shape_and_material_merge_into_one_draw() {
     let mut r = Renderer::new(gpu);
     let sphere = r.add_shape(ShapeKind::Sphere.mesh());
     let m = r.add_material(Material::color("m", 0.5, 0.5, 0.5));
-    let entities: Vec<Entity> = grid(100)
-        .into_iter()
-        .map(|t| Entity::new(sphere, m, t))
-        .collect();
+    let entities: Vec<Entity> = grid(100).into_iter().map(|t| Entity::new(sphere, m, t)).collect();
     let refs: Vec<&Entity> = entities.iter().collect();
     let stats = frame(&mut r, gpu, &refs, &sun());
     assert_eq!(stats.entities_submitted, 100);
@@ -85,30 +70,17 @@ fn hundred_entities_sharing_shape_and_material_merge_into_one_draw() {
 fn three_materials_by_two_shapes_are_six_draws_with_minimal_state_changes() {
     let Some(gpu) = common::gpu() else { return };
     let mut r = Renderer::new(gpu);
-    let shapes = [
-        r.add_shape(ShapeKind::Cube.mesh()),
-        r.add_shape(ShapeKind::Torus.mesh()),
-    ];
+    let shapes = [r.add_shape(ShapeKind::Cube.mesh()), r.add_shape(ShapeKind::Torus.mesh())];
     let materials = [0.2, 0.5, 0.8].map(|g| r.add_material(Material::color("m", g, g, g)));
     // 60 entities submitted interleaved: every (material, shape) pair ten times.
-    let entities: Vec<Entity> = grid(60)
-        .into_iter()
-        .enumerate()
-        .map(|(i, t)| Entity::new(shapes[(i / 3) % 2], materials[i % 3], t))
-        .collect();
+    let entities: Vec<Entity> =
+        grid(60).into_iter().enumerate().map(|(i, t)| Entity::new(shapes[(i / 3) % 2], materials[i % 3], t)).collect();
     let refs: Vec<&Entity> = entities.iter().collect();
     let stats = frame(&mut r, gpu, &refs, &sun());
     assert_eq!(stats.draw_calls, 6);
     assert_eq!(stats.instances_drawn, 60);
-    assert_eq!(
-        stats.pipelines_bound, 1,
-        "all opaque, single-sided: one pipeline"
-    );
-    assert_eq!(
-        stats.bind_groups_set,
-        3 + 3,
-        "scene, camera, instances once; each material once"
-    );
+    assert_eq!(stats.pipelines_bound, 1, "all opaque, single-sided: one pipeline");
+    assert_eq!(stats.bind_groups_set, 3 + 3, "scene, camera, instances once; each material once");
 }
 
 #[test]
@@ -120,15 +92,61 @@ fn a_second_identical_frame_uploads_no_uniform_bytes() {
     let e = Entity::instanced(cube, m, grid(10));
     let first = frame(&mut r, gpu, &[&e], &sun());
     assert!(first.bytes_uploaded.uniforms > 0);
-    assert_eq!(
-        first.bytes_uploaded.meshes,
-        r.shape(cube).expect("shape").gpu_bytes()
-    );
+    assert_eq!(first.bytes_uploaded.meshes, r.shape(cube).expect("shape").gpu_bytes());
     let second = frame(&mut r, gpu, &[&e], &sun());
     assert_eq!(second.bytes_uploaded.uniforms, 0);
     assert_eq!(second.bytes_uploaded.meshes, 0);
-    assert_eq!(second.bytes_uploaded.instances, 10 * 64);
-    assert_eq!(second.bytes_uploaded.total, 10 * 64);
+    assert_eq!(second.bytes_uploaded.transforms, 0, "unchanged transforms stay on the GPU");
+    assert_eq!(second.bytes_uploaded.total, 10 * 4, "only the draw indices");
+}
+
+#[test]
+fn moving_one_entity_reuploads_only_its_transforms() {
+    let Some(gpu) = common::gpu() else { return };
+    let mut r = Renderer::new(gpu);
+    let cube = r.add_shape(ShapeKind::Cube.mesh());
+    let m = r.add_material(Material::default());
+    let still = Entity::instanced(cube, m, grid(100));
+    let mut moving = Entity::instanced(cube, m, grid(5));
+    assert_eq!(frame(&mut r, gpu, &[&still, &moving], &sun()).bytes_uploaded.transforms, 105 * 64);
+    moving.set_transform(2, Mat4::from_translation(Vec3::Y));
+    let stats = frame(&mut r, gpu, &[&still, &moving], &sun());
+    assert_eq!(stats.bytes_uploaded.transforms, 5 * 64, "the moved entity's range, nothing else");
+    assert_eq!(stats.draw_calls, 1, "still one batch: same shape and material");
+}
+
+#[test]
+fn culled_and_invalid_instances_are_counted_and_not_drawn() {
+    let Some(gpu) = common::gpu() else { return };
+    let mut r = Renderer::new(gpu);
+    let cube = r.add_shape(ShapeKind::Cube.mesh());
+    let m = r.add_material(Material::default());
+    // The camera is at (0, 5, 10) looking at the origin: z = 50 is behind it.
+    let behind = Entity::instanced(cube, m, vec![Mat4::from_translation(Vec3::Z * 50.0); 7]);
+    let mut mixed =
+        Entity::instanced(cube, m, vec![Mat4::IDENTITY, Mat4::from_translation(Vec3::Z * 50.0), Mat4::IDENTITY]);
+    mixed.set_transform(2, Mat4::from_translation(Vec3::new(f32::NAN, 0.0, 0.0)));
+    let stats = frame(&mut r, gpu, &[&behind, &mixed], &sun());
+    assert_eq!(stats.instances_submitted, 10);
+    assert_eq!(stats.instances_invalid, 1);
+    assert_eq!(stats.instances_culled, 8);
+    assert_eq!(stats.instances_drawn, 1);
+    assert_eq!(stats.draw_calls, 1);
+}
+
+#[test]
+fn pipelines_compile_once_and_a_changed_flag_compiles_exactly_one() {
+    let Some(gpu) = common::gpu() else { return };
+    let mut r = Renderer::new(gpu);
+    let cube = r.add_shape(ShapeKind::Cube.mesh());
+    let m = r.add_material(Material::default());
+    let e = Entity::new(cube, m, Mat4::IDENTITY);
+    assert_eq!(frame(&mut r, gpu, &[&e], &sun()).pipelines_compiled, 1);
+    assert_eq!(frame(&mut r, gpu, &[&e], &sun()).pipelines_compiled, 0, "steady state");
+    r.material_mut(m).expect("material").double_sided = true;
+    assert_eq!(frame(&mut r, gpu, &[&e], &sun()).pipelines_compiled, 1);
+    r.material_mut(m).expect("material").double_sided = false;
+    assert_eq!(frame(&mut r, gpu, &[&e], &sun()).pipelines_compiled, 0, "back to a cached variant");
 }
 
 #[test]
@@ -141,17 +159,11 @@ fn only_the_changed_block_is_uploaded() {
     frame(&mut r, gpu, &[&e], &sun());
     // A material edit rewrites that material's 48-byte block, nothing else.
     r.material_mut(m).expect("material").base_color.x = 0.1;
-    assert_eq!(
-        frame(&mut r, gpu, &[&e], &sun()).bytes_uploaded.uniforms,
-        48
-    );
+    assert_eq!(frame(&mut r, gpu, &[&e], &sun()).bytes_uploaded.uniforms, 48);
     // A new light rewrites the scene block (64 + 64 × 32 bytes).
     let mut lights = sun();
     lights.push(Light::point(Vec3::Y, Vec3::ONE, 1.0, 5.0));
-    assert_eq!(
-        frame(&mut r, gpu, &[&e], &lights).bytes_uploaded.uniforms,
-        64 + 32 * MAX_LIGHTS as u64
-    );
+    assert_eq!(frame(&mut r, gpu, &[&e], &lights).bytes_uploaded.uniforms, 64 + 32 * MAX_LIGHTS as u64);
 }
 
 #[test]
@@ -161,20 +173,12 @@ fn textures_upload_once_on_first_use() {
     let plane = r.add_shape(ShapeKind::Plane.mesh());
     let texture = r.add_texture(Texture::new(
         "checker",
-        image::RgbaImage::from_fn(8, 4, |x, y| {
-            image::Rgba([(x * 30) as u8, (y * 60) as u8, 0, 255])
-        }),
+        image::RgbaImage::from_fn(8, 4, |x, y| image::Rgba([(x * 30) as u8, (y * 60) as u8, 0, 255])),
         true,
     ));
-    let m = r.add_material(Material {
-        diffuse_map: Some(texture),
-        ..Material::default()
-    });
+    let m = r.add_material(Material { diffuse_map: Some(texture), ..Material::default() });
     let e = Entity::new(plane, m, Mat4::IDENTITY);
-    assert_eq!(
-        frame(&mut r, gpu, &[&e], &sun()).bytes_uploaded.textures,
-        8 * 4 * 4
-    );
+    assert_eq!(frame(&mut r, gpu, &[&e], &sun()).bytes_uploaded.textures, 8 * 4 * 4);
     assert_eq!(frame(&mut r, gpu, &[&e], &sun()).bytes_uploaded.textures, 0);
 }
 
@@ -184,18 +188,12 @@ fn queues_draw_opaque_then_blended_with_their_own_pipelines() {
     let mut r = Renderer::new(gpu);
     let cube = r.add_shape(ShapeKind::Cube.mesh());
     let solid = r.add_material(Material::default());
-    let glass = r.add_material(Material {
-        alpha_mode: AlphaMode::Blend,
-        ..Material::default()
-    });
+    let glass = r.add_material(Material { alpha_mode: AlphaMode::Blend, ..Material::default() });
     let a = Entity::new(cube, glass, Mat4::IDENTITY);
     let b = Entity::new(cube, solid, Mat4::from_translation(Vec3::X * 2.0));
     let empty = Entity::instanced(cube, solid, Vec::new());
     let stats = frame(&mut r, gpu, &[&a, &b, &empty], &sun());
-    assert_eq!(
-        stats.draw_calls, 2,
-        "an entity with no instances draws nothing"
-    );
+    assert_eq!(stats.draw_calls, 2, "an entity with no instances draws nothing");
     assert_eq!(stats.pipelines_bound, 2);
 }
 
@@ -209,39 +207,21 @@ fn too_many_lights_and_foreign_ids_are_errors_not_panics() {
     let mut target = OffscreenTarget::new(gpu, 32, 32, 1).expect("target");
     let lights = vec![sun()[0]; MAX_LIGHTS + 1];
     r.submit(&e);
-    assert!(matches!(
-        r.flush(&camera(), &lights, &mut target),
-        Err(RenderError::TooManyLights(65))
-    ));
+    assert!(matches!(r.flush(&camera(), &lights, &mut target), Err(RenderError::TooManyLights(65))));
     r.submit(&e);
-    assert!(
-        r.flush(&camera(), &lights[..MAX_LIGHTS], &mut target)
-            .is_ok(),
-        "exactly the limit is fine"
-    );
+    assert!(r.flush(&camera(), &lights[..MAX_LIGHTS], &mut target).is_ok(), "exactly the limit is fine");
 
     let mut other = Renderer::new(gpu);
     other.submit(&e); // ids from `r`: `other` has no shapes
-    assert!(matches!(
-        other.flush(&camera(), &sun(), &mut target),
-        Err(RenderError::UnknownShape(_))
-    ));
+    assert!(matches!(other.flush(&camera(), &sun(), &mut target), Err(RenderError::UnknownShape(_))));
     // The failed frame's entities are dropped: the next frame is empty.
-    let stats = other
-        .flush(&camera(), &sun(), &mut target)
-        .expect("empty frame");
+    let stats = other.flush(&camera(), &sun(), &mut target).expect("empty frame");
     assert_eq!(stats.draw_calls, 0);
 }
 
 #[test]
 fn targets_reject_bad_sizes_and_sample_counts() {
     let Some(gpu) = common::gpu() else { return };
-    assert!(matches!(
-        OffscreenTarget::new(gpu, 0, 10, 1),
-        Err(glint::GpuError::TargetSize { .. })
-    ));
-    assert!(matches!(
-        OffscreenTarget::new(gpu, 10, 10, 3),
-        Err(glint::GpuError::SampleCount(3))
-    ));
+    assert!(matches!(OffscreenTarget::new(gpu, 0, 10, 1), Err(glint::GpuError::TargetSize { .. })));
+    assert!(matches!(OffscreenTarget::new(gpu, 10, 10, 3), Err(glint::GpuError::SampleCount(3))));
 }

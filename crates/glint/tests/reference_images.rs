@@ -46,6 +46,18 @@ fn orthographic_camera() {
 }
 
 #[test]
+fn culling_never_changes_the_picture() {
+    let Some(gpu) = common::gpu() else { return };
+    let showcase = common::repo_root().join("scenes/showcase.scn");
+    let (culled, stats) = common::render_file(gpu, &showcase, 192, true);
+    let (unculled, all) = common::render_file(gpu, &showcase, 192, false);
+    assert!(stats.instances_culled > 1000, "the showcase has plenty out of view: {}", stats.instances_culled);
+    assert_eq!(all.instances_culled, 0);
+    assert_eq!(stats.instances_drawn + stats.instances_culled, all.instances_drawn);
+    assert!(culled == unculled, "culled and unculled renders must be identical");
+}
+
+#[test]
 fn a_reference_test_fails_on_a_visibly_different_image() {
     // The comparison itself must be able to fail: a frame missing one light
     // (lights.scn without its red lamp) is rejected against the reference.
@@ -61,22 +73,12 @@ fn a_reference_test_fails_on_a_visibly_different_image() {
     for e in &entities {
         renderer.submit(e);
     }
-    let without_red: Vec<_> = desc
-        .lights
-        .iter()
-        .copied()
-        .filter(|l| l.color.x < 0.99 || l.color.y > 0.5)
-        .collect();
+    let without_red: Vec<_> = desc.lights.iter().copied().filter(|l| l.color.x < 0.99 || l.color.y > 0.5).collect();
     assert_eq!(without_red.len(), desc.lights.len() - 1);
-    renderer
-        .flush(&desc.cameras[0], &without_red, &mut target)
-        .expect("frame");
+    renderer.flush(&desc.cameras[0], &without_red, &mut target).expect("frame");
     let image = target.read_rgba8(gpu).expect("readback");
     let result = std::panic::catch_unwind(|| common::assert_matches_reference("lights", &image));
-    assert!(
-        result.is_err(),
-        "a frame without the red light must not match the reference"
-    );
+    assert!(result.is_err(), "a frame without the red light must not match the reference");
     let _ = std::fs::remove_file(common::repo_root().join("tests/output/lights.actual.png"));
     let _ = std::fs::remove_file(common::repo_root().join("tests/output/lights.diff.png"));
 }

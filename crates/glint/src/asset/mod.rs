@@ -9,9 +9,7 @@ mod scn_syntax;
 mod texture;
 
 pub use procedural::ShapeKind;
-pub use scn::{
-    load_scene, parse_scene, EntityDesc, MaterialDesc, SceneDesc, TextureRef, MAX_INSTANCES,
-};
+pub use scn::{load_scene, parse_scene, EntityDesc, MaterialDesc, SceneDesc, TextureRef, MAX_INSTANCES};
 pub use texture::{load_texture, Texture, MAX_TEXTURE_SIDE};
 
 use std::fmt;
@@ -32,20 +30,12 @@ pub struct Diagnostic {
 impl Diagnostic {
     /// A diagnostic at `path:line`.
     pub fn at(path: &Path, line: usize, message: impl Into<String>) -> Self {
-        Self {
-            path: path.to_path_buf(),
-            line: Some(line),
-            message: message.into(),
-        }
+        Self { path: path.to_path_buf(), line: Some(line), message: message.into() }
     }
 
     /// A diagnostic for the whole file `path`.
     pub fn file(path: &Path, message: impl Into<String>) -> Self {
-        Self {
-            path: path.to_path_buf(),
-            line: None,
-            message: message.into(),
-        }
+        Self { path: path.to_path_buf(), line: None, message: message.into() }
     }
 }
 

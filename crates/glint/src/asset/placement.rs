@@ -22,10 +22,8 @@ pub(crate) fn place_instances(
     // count up keeps at least `count` cells.
     let volume: f64 = axes.iter().map(|&a| f64::from(extent[a])).product();
     let side = (volume / count.max(1) as f64).powf(1.0 / axes.len().max(1) as f64);
-    let cells: Vec<usize> = axes
-        .iter()
-        .map(|&a| ((f64::from(extent[a]) / side - 1e-9).ceil() as usize).max(1))
-        .collect();
+    let cells: Vec<usize> =
+        axes.iter().map(|&a| ((f64::from(extent[a]) / side - 1e-9).ceil() as usize).max(1)).collect();
     let corner = origin - extent * 0.5;
     (0..count)
         .map(|i| {
@@ -40,11 +38,7 @@ pub(crate) fn place_instances(
                 }
             }
             let s = scale.0 + (scale.1 - scale.0) * rng.random::<f32>();
-            let yaw = if random_yaw {
-                rng.random::<f32>() * std::f32::consts::TAU
-            } else {
-                0.0
-            };
+            let yaw = if random_yaw { rng.random::<f32>() * std::f32::consts::TAU } else { 0.0 };
             Mat4::from_scale_rotation_translation(Vec3::splat(s), Quat::from_rotation_y(yaw), p)
         })
         .collect()
@@ -56,17 +50,7 @@ mod tests {
 
     #[test]
     fn same_seed_same_placement_and_grid_is_even() {
-        let scatter = |seed| {
-            place_instances(
-                50,
-                true,
-                Vec3::ZERO,
-                Vec3::new(10.0, 0.0, 10.0),
-                seed,
-                (0.5, 1.0),
-                true,
-            )
-        };
+        let scatter = |seed| place_instances(50, true, Vec3::ZERO, Vec3::new(10.0, 0.0, 10.0), seed, (0.5, 1.0), true);
         let (a, b, c) = (scatter(3), scatter(3), scatter(4));
         assert_eq!(a, b);
         assert_ne!(a, c);
@@ -74,15 +58,7 @@ mod tests {
             let p = m.w_axis.truncate();
             assert!(p.x.abs() <= 5.0 && p.z.abs() <= 5.0 && p.y == 0.0);
         }
-        let grid = place_instances(
-            4,
-            false,
-            Vec3::ZERO,
-            Vec3::new(2.0, 0.0, 2.0),
-            1,
-            (1.0, 1.0),
-            false,
-        );
+        let grid = place_instances(4, false, Vec3::ZERO, Vec3::new(2.0, 0.0, 2.0), 1, (1.0, 1.0), false);
         let points: Vec<Vec3> = grid.iter().map(|m| m.w_axis.truncate()).collect();
         assert_eq!(
             points,
@@ -94,19 +70,9 @@ mod tests {
             ]
         );
         // A long box gets more cells along its long side: 16 in 8×2 is 8×2 cells of 1.
-        let long = place_instances(
-            16,
-            false,
-            Vec3::ZERO,
-            Vec3::new(8.0, 0.0, 2.0),
-            1,
-            (1.0, 1.0),
-            false,
-        );
-        let xs: std::collections::BTreeSet<i32> =
-            long.iter().map(|m| (m.w_axis.x * 2.0) as i32).collect();
-        let zs: std::collections::BTreeSet<i32> =
-            long.iter().map(|m| (m.w_axis.z * 2.0) as i32).collect();
+        let long = place_instances(16, false, Vec3::ZERO, Vec3::new(8.0, 0.0, 2.0), 1, (1.0, 1.0), false);
+        let xs: std::collections::BTreeSet<i32> = long.iter().map(|m| (m.w_axis.x * 2.0) as i32).collect();
+        let zs: std::collections::BTreeSet<i32> = long.iter().map(|m| (m.w_axis.z * 2.0) as i32).collect();
         assert_eq!((xs.len(), zs.len()), (8, 2));
     }
 }

@@ -25,14 +25,8 @@ pub enum ShapeKind {
 
 impl ShapeKind {
     /// Every kind, in a stable order.
-    pub const ALL: [ShapeKind; 6] = [
-        ShapeKind::Cube,
-        ShapeKind::Sphere,
-        ShapeKind::Plane,
-        ShapeKind::Cylinder,
-        ShapeKind::Cone,
-        ShapeKind::Torus,
-    ];
+    pub const ALL: [ShapeKind; 6] =
+        [ShapeKind::Cube, ShapeKind::Sphere, ShapeKind::Plane, ShapeKind::Cylinder, ShapeKind::Cone, ShapeKind::Torus];
 
     /// The `.scn` name of this kind.
     pub fn name(self) -> &'static str {
@@ -121,14 +115,7 @@ impl Builder {
 /// Unit cube with one flat patch per face; each face's image reads upright from outside.
 pub fn cube() -> Mesh {
     let mut b = Builder::default();
-    for n in [
-        Vec3::X,
-        Vec3::NEG_X,
-        Vec3::Y,
-        Vec3::NEG_Y,
-        Vec3::Z,
-        Vec3::NEG_Z,
-    ] {
+    for n in [Vec3::X, Vec3::NEG_X, Vec3::Y, Vec3::NEG_Y, Vec3::Z, Vec3::NEG_Z] {
         // Image "up" on the face: +Y on the sides, −Z on top, +Z underneath.
         let up = if n.y > 0.5 {
             Vec3::NEG_Z
@@ -138,9 +125,7 @@ pub fn cube() -> Mesh {
             Vec3::Y
         };
         let (s, t) = (up.cross(n), -up); // s: image right, t: image down
-        b.grid(1, 1, |u, v| {
-            (n * 0.5 + s * (u - 0.5) + t * (v - 0.5), n, Vec2::new(u, v))
-        });
+        b.grid(1, 1, |u, v| (n * 0.5 + s * (u - 0.5) + t * (v - 0.5), n, Vec2::new(u, v)));
     }
     b.finish()
 }
@@ -148,9 +133,7 @@ pub fn cube() -> Mesh {
 /// 1×1 plane in XZ facing +Y, `divisions` quads per side.
 pub fn plane(divisions: u32) -> Mesh {
     let mut b = Builder::default();
-    b.grid(divisions, divisions, |u, v| {
-        (Vec3::new(u - 0.5, 0.0, v - 0.5), Vec3::Y, Vec2::new(u, v))
-    });
+    b.grid(divisions, divisions, |u, v| (Vec3::new(u - 0.5, 0.0, v - 0.5), Vec3::Y, Vec2::new(u, v)));
     b.finish()
 }
 
@@ -165,11 +148,7 @@ pub fn sphere(segments: u32, rings: u32) -> Mesh {
     b.grid(segments, rings, |u, v| {
         let theta = v * std::f32::consts::PI;
         // sin(π) is −8.7e-8 in f32, not 0: snap the poles so each is one exact point.
-        let (ring, height) = if v == 0.0 || v == 1.0 {
-            (0.0, theta.cos().round())
-        } else {
-            (theta.sin(), theta.cos())
-        };
+        let (ring, height) = if v == 0.0 || v == 1.0 { (0.0, theta.cos().round()) } else { (theta.sin(), theta.cos()) };
         let d = around_y(u * TAU) * ring + Vec3::Y * height;
         (d * 0.5, d, Vec2::new(u, v))
     });
@@ -239,25 +218,12 @@ mod tests {
         for kind in ShapeKind::ALL {
             let mesh = kind.mesh();
             let aabb = mesh.aabb();
-            assert!(
-                aabb.min.cmpge(Vec3::splat(-0.5 - 1e-5)).all(),
-                "{kind:?} {aabb:?}"
-            );
-            assert!(
-                aabb.max.cmple(Vec3::splat(0.5 + 1e-5)).all(),
-                "{kind:?} {aabb:?}"
-            );
+            assert!(aabb.min.cmpge(Vec3::splat(-0.5 - 1e-5)).all(), "{kind:?} {aabb:?}");
+            assert!(aabb.max.cmple(Vec3::splat(0.5 + 1e-5)).all(), "{kind:?} {aabb:?}");
             assert!(mesh.bounding_sphere().radius <= 0.8661, "{kind:?}");
             for v in mesh.vertices() {
-                assert!(
-                    (Vec3::from(v.normal).length() - 1.0).abs() < 1e-4,
-                    "{kind:?}"
-                );
-                assert!(
-                    v.uv.iter().all(|c| (-1e-5..=1.0 + 1e-5).contains(c)),
-                    "{kind:?} {:?}",
-                    v.uv
-                );
+                assert!((Vec3::from(v.normal).length() - 1.0).abs() < 1e-4, "{kind:?}");
+                assert!(v.uv.iter().all(|c| (-1e-5..=1.0 + 1e-5).contains(c)), "{kind:?} {:?}", v.uv);
             }
         }
     }
@@ -270,19 +236,10 @@ mod tests {
                 let [a, b, c] = tri(&mesh, t).map(|v| Vec3::from(v.position));
                 let face = (b - a).cross(c - a);
                 let n: Vec3 = tri(&mesh, t).iter().map(|v| Vec3::from(v.normal)).sum();
-                assert!(
-                    face.dot(n) > 0.0,
-                    "{kind:?} triangle {t} winds against its normals"
-                );
+                assert!(face.dot(n) > 0.0, "{kind:?} triangle {t} winds against its normals");
                 // Closed convex shapes: the face also points away from the centre.
-                if matches!(
-                    kind,
-                    ShapeKind::Cube | ShapeKind::Sphere | ShapeKind::Cylinder | ShapeKind::Cone
-                ) {
-                    assert!(
-                        face.dot((a + b + c) / 3.0) > 0.0,
-                        "{kind:?} triangle {t} faces inwards"
-                    );
+                if matches!(kind, ShapeKind::Cube | ShapeKind::Sphere | ShapeKind::Cylinder | ShapeKind::Cone) {
+                    assert!(face.dot((a + b + c) / 3.0) > 0.0, "{kind:?} triangle {t} faces inwards");
                 }
             }
         }
@@ -321,10 +278,7 @@ mod tests {
             // dP/du of each non-degenerate triangle points along its vertices' tangents.
             for t in 0..mesh.indices().len() / 3 {
                 let vs = tri(&mesh, t);
-                let (p, uv) = (
-                    vs.map(|v| Vec3::from(v.position)),
-                    vs.map(|v| Vec2::from(v.uv)),
-                );
+                let (p, uv) = (vs.map(|v| Vec3::from(v.position)), vs.map(|v| Vec2::from(v.uv)));
                 let (e1, e2, d1, d2) = (p[1] - p[0], p[2] - p[0], uv[1] - uv[0], uv[2] - uv[0]);
                 let det = d1.x * d2.y - d2.x * d1.y;
                 if det.abs() < 1e-6 {
@@ -333,10 +287,7 @@ mod tests {
                 let dpdu = (e1 * d2.y - e2 * d1.y) / det;
                 for v in vs {
                     let tangent = Vec3::new(v.tangent[0], v.tangent[1], v.tangent[2]);
-                    assert!(
-                        tangent.dot(dpdu) > 0.0,
-                        "{kind:?} triangle {t}: tangent against dP/du"
-                    );
+                    assert!(tangent.dot(dpdu) > 0.0, "{kind:?} triangle {t}: tangent against dP/du");
                 }
             }
         }
@@ -346,11 +297,7 @@ mod tests {
     fn cube_faces_read_upright_from_outside() {
         // On the +Z face u grows towards +X and v grows towards −Y.
         let mesh = cube();
-        let front: Vec<_> = mesh
-            .vertices()
-            .iter()
-            .filter(|v| v.normal == [0.0, 0.0, 1.0])
-            .collect();
+        let front: Vec<_> = mesh.vertices().iter().filter(|v| v.normal == [0.0, 0.0, 1.0]).collect();
         assert_eq!(front.len(), 4);
         for v in front {
             assert!((v.uv[0] - (v.position[0] + 0.5)).abs() < 1e-6);

@@ -5,9 +5,7 @@
 use super::placement::place_instances;
 use super::scn_syntax::{parse_blocks, Block, Pair};
 use super::{load_texture, Diagnostic, ShapeKind, Texture};
-use crate::scene::{
-    AlphaMode, Background, Camera, Entity, Environment, Light, Material, MaterialId, MAX_LIGHTS,
-};
+use crate::scene::{AlphaMode, Background, Camera, Entity, Environment, Light, Material, MaterialId, MAX_LIGHTS};
 use crate::Renderer;
 use glam::{EulerRot, Mat4, Quat, Vec3, Vec4};
 use std::collections::HashMap;
@@ -41,6 +39,8 @@ pub struct EntityDesc {
     pub mesh: ShapeKind,
     /// Index into [`SceneDesc::materials`]; `None` for the default material.
     pub material: Option<usize>,
+    /// Draw-order override (see [`Entity::render_order`]).
+    pub render_order: Option<u8>,
     /// One transform per instance.
     pub transforms: Vec<Mat4>,
 }
@@ -60,7 +60,7 @@ pub struct SceneDesc {
     pub materials: Vec<MaterialDesc>,
     /// Decoded textures, each file once.
     pub textures: Vec<Texture>,
-    /// Render tasks, one per (mesh, material) pair, in first-use order.
+    /// Render tasks, one per (mesh, material, render order), in first-use order.
     pub entities: Vec<EntityDesc>,
     /// Non-fatal problems (unknown keys, repeated keys), `path:line: message`.
     pub warnings: Vec<Diagnostic>,
@@ -76,11 +76,7 @@ impl SceneDesc {
     /// environment, and return one entity per render task, ready to submit.
     pub fn instantiate(&self, renderer: &mut Renderer) -> Vec<Entity> {
         renderer.set_environment(self.environment);
-        let textures: Vec<_> = self
-            .textures
-            .iter()
-            .map(|t| renderer.add_texture(t.clone()))
-            .collect();
+        let textures: Vec<_> = self.textures.iter().map(|t| renderer.add_texture(t.clone())).collect();
         let materials: Vec<MaterialId> = self
             .materials
             .iter()
@@ -93,22 +89,15 @@ impl SceneDesc {
                 })
             })
             .collect();
-        let default_material = self
-            .entities
-            .iter()
-            .any(|e| e.material.is_none())
-            .then(|| renderer.add_material(Material::default()));
+        let default_material =
+            self.entities.iter().any(|e| e.material.is_none()).then(|| renderer.add_material(Material::default()));
         let mut shapes = HashMap::new();
         self.entities
             .iter()
             .map(|e| {
-                let shape = *shapes
-                    .entry(e.mesh)
-                    .or_insert_with(|| renderer.add_shape(e.mesh.mesh()));
-                let material = e
-                    .material
-                    .map_or_else(|| default_material.expect("added above"), |i| materials[i]);
-                Entity::instanced(shape, material, e.transforms.clone())
+                let shape = *shapes.entry(e.mesh).or_insert_with(|| renderer.add_shape(e.mesh.mesh()));
+                let material = e.material.map_or_else(|| default_material.expect("added above"), |i| materials[i]);
+                Entity::instanced(shape, material, e.transforms.clone()).with_render_order(e.render_order)
             })
             .collect()
     }
@@ -116,8 +105,7 @@ impl SceneDesc {
 
 /// Read, parse and validate a `.scn` file, decoding the textures it names.
 pub fn load_scene(path: &Path) -> Result<SceneDesc, Diagnostic> {
-    let text = std::fs::read_to_string(path)
-        .map_err(|e| Diagnostic::file(path, format!("cannot read scene: {e}")))?;
+    let text = std::fs::read_to_string(path).map_err(|e| Diagnostic::file(path, format!("cannot read scene: {e}")))?;
     parse_scene(path, &text)
 }
 
@@ -152,6 +140,7 @@ pub fn parse_scene(path: &Path, text: &str) -> Result<SceneDesc, Diagnostic> {
 struct Placement {
     mesh: ShapeKind,
     material: Option<(String, usize)>,
+    render_order: Option<u8>,
     transforms: Vec<Mat4>,
 }
 
@@ -189,14 +178,8 @@ impl<'b> Fields<'b> {
         })
     }
 
-    fn numbers<const N: usize>(
-        &mut self,
-        key: &str,
-        what: &str,
-    ) -> Result<Option<[f32; N]>, Diagnostic> {
-        self.get(key)
-            .map(|p| numbers::<N>(self.path, p, what))
-            .transpose()
+    fn numbers<const N: usize>(&mut self, key: &str, what: &str) -> Result<Option<[f32; N]>, Diagnostic> {
+        self.get(key).map(|p| numbers::<N>(self.path, p, what)).transpose()
     }
 
     fn vec3(&mut self, key: &str) -> Result<Option<Vec3>, Diagnostic> {
@@ -209,20 +192,12 @@ impl<'b> Fields<'b> {
         };
         let c = Vec3::from(numbers::<3>(self.path, pair, "3 numbers (r g b)")?);
         if c.min_element() < 0.0 {
-            return Err(Diagnostic::at(
-                self.path,
-                pair.line,
-                format!("\"{key}\" must not be negative"),
-            ));
+            return Err(Diagnostic::at(self.path, pair.line, format!("\"{key}\" must not be negative")));
         }
         Ok(Some(c))
     }
 
-    fn number(
-        &mut self,
-        key: &str,
-        range: std::ops::RangeInclusive<f32>,
-    ) -> Result<Option<f32>, Diagnostic> {
+    fn number(&mut self, key: &str, range: std::ops::RangeInclusive<f32>) -> Result<Option<f32>, Diagnostic> {
         let Some(pair) = self.get(key) else {
             return Ok(None);
         };
@@ -231,11 +206,7 @@ impl<'b> Fields<'b> {
             return Err(Diagnostic::at(
                 self.path,
                 pair.line,
-                format!(
-                    "\"{key}\" is {v}, expected a value in {}..={}",
-                    range.start(),
-                    range.end()
-                ),
+                format!("\"{key}\" is {v}, expected a value in {}..={}", range.start(), range.end()),
             ));
         }
         Ok(Some(v))
@@ -248,19 +219,11 @@ impl<'b> Fields<'b> {
         match pair.value.trim() {
             "0" => Ok(Some(false)),
             "1" => Ok(Some(true)),
-            v => Err(Diagnostic::at(
-                self.path,
-                pair.line,
-                format!("\"{key}\" is '{v}', expected 0 or 1"),
-            )),
+            v => Err(Diagnostic::at(self.path, pair.line, format!("\"{key}\" is '{v}', expected 0 or 1"))),
         }
     }
 
-    fn choice(
-        &mut self,
-        key: &str,
-        options: &[&str],
-    ) -> Result<Option<(usize, &'b Pair)>, Diagnostic> {
+    fn choice(&mut self, key: &str, options: &[&str]) -> Result<Option<(usize, &'b Pair)>, Diagnostic> {
         let Some(pair) = self.get(key) else {
             return Ok(None);
         };
@@ -269,11 +232,7 @@ impl<'b> Fields<'b> {
             None => Err(Diagnostic::at(
                 self.path,
                 pair.line,
-                format!(
-                    "\"{key}\" is '{}', expected one of: {}",
-                    pair.value,
-                    options.join(", ")
-                ),
+                format!("\"{key}\" is '{}', expected one of: {}", pair.value, options.join(", ")),
             )),
         }
     }
@@ -285,11 +244,7 @@ impl<'b> Fields<'b> {
             Diagnostic::at(
                 self.path,
                 pair.line,
-                format!(
-                    "unknown mesh '{}', expected one of: {}",
-                    pair.value,
-                    names.join(", ")
-                ),
+                format!("unknown mesh '{}', expected one of: {}", pair.value, names.join(", ")),
             )
         })
     }
@@ -302,19 +257,13 @@ impl<'b> Fields<'b> {
                 out.push(Diagnostic::at(
                     self.path,
                     pair.line,
-                    format!(
-                        "\"{}\" is given again later in this block; the last one is used",
-                        pair.key
-                    ),
+                    format!("\"{}\" is given again later in this block; the last one is used", pair.key),
                 ));
             } else if !self.used[i] && pair.key != "classname" {
                 out.push(Diagnostic::at(
                     self.path,
                     pair.line,
-                    format!(
-                        "unknown key \"{}\" in {} block (ignored)",
-                        pair.key, self.class
-                    ),
+                    format!("unknown key \"{}\" in {} block (ignored)", pair.key, self.class),
                 ));
             }
         }
@@ -324,19 +273,11 @@ impl<'b> Fields<'b> {
 
 /// Parse exactly `N` finite numbers from a pair's value.
 fn numbers<const N: usize>(path: &Path, pair: &Pair, what: &str) -> Result<[f32; N], Diagnostic> {
-    let bad = |detail: String| {
-        Diagnostic::at(
-            path,
-            pair.line,
-            format!("\"{}\": {detail}, expected {what}", pair.key),
-        )
-    };
+    let bad = |detail: String| Diagnostic::at(path, pair.line, format!("\"{}\": {detail}, expected {what}", pair.key));
     let mut out = [0.0; N];
     let mut count = 0;
     for word in pair.value.split_whitespace() {
-        let v: f32 = word
-            .parse()
-            .map_err(|_| bad(format!("bad number '{word}'")))?;
+        let v: f32 = word.parse().map_err(|_| bad(format!("bad number '{word}'")))?;
         if !v.is_finite() {
             return Err(bad(format!("'{word}' is not a finite number")));
         }
@@ -365,12 +306,7 @@ impl Loader<'_> {
             .find(|p| p.key == "classname")
             .ok_or_else(|| Diagnostic::at(self.path, block.line, "block has no \"classname\""))?;
         let class = class_pair.value.trim();
-        let mut f = Fields {
-            path: self.path,
-            class,
-            block,
-            used: vec![false; block.pairs.len()],
-        };
+        let mut f = Fields { path: self.path, class, block, used: vec![false; block.pairs.len()] };
         match class {
             "world" => self.world(&mut f)?,
             "camera" => self.camera(&mut f)?,
@@ -426,9 +362,7 @@ impl Loader<'_> {
         }
         let fov = f.number("fov", 1.0..=179.0)?.unwrap_or(60.0);
         let mut camera = match f.choice("projection", &["perspective", "orthographic"])? {
-            Some((1, _)) => {
-                Camera::orthographic(f.number("size", 1e-4..=1e9)?.unwrap_or(10.0), near, far)
-            }
+            Some((1, _)) => Camera::orthographic(f.number("size", 1e-4..=1e9)?.unwrap_or(10.0), near, far),
             _ => Camera::perspective(fov, near, far),
         };
         let target = match (f.vec3("target")?, f.vec3("angles")?) {
@@ -461,21 +395,14 @@ impl Loader<'_> {
     }
 
     fn light_common(f: &mut Fields) -> Result<(Vec3, f32), Diagnostic> {
-        Ok((
-            f.color("color")?.unwrap_or(Vec3::ONE),
-            f.number("intensity", 0.0..=1e9)?.unwrap_or(1.0),
-        ))
+        Ok((f.color("color")?.unwrap_or(Vec3::ONE), f.number("intensity", 0.0..=1e9)?.unwrap_or(1.0)))
     }
 
     fn light_directional(&mut self, f: &mut Fields) -> Result<(), Diagnostic> {
         let pair = f.require("direction")?;
         let direction = Vec3::from(numbers::<3>(self.path, pair, "3 numbers (x y z)")?);
         if direction.length_squared() < 1e-12 {
-            return Err(Diagnostic::at(
-                self.path,
-                pair.line,
-                "\"direction\" must not be zero",
-            ));
+            return Err(Diagnostic::at(self.path, pair.line, "\"direction\" must not be zero"));
         }
         let (color, intensity) = Self::light_common(f)?;
         self.add_light(f, Light::directional(direction, color, intensity))
@@ -489,12 +416,7 @@ impl Loader<'_> {
         self.add_light(f, Light::point(origin, color, intensity, range))
     }
 
-    fn texture(
-        &mut self,
-        f: &mut Fields,
-        key: &str,
-        srgb: bool,
-    ) -> Result<Option<TextureRef>, Diagnostic> {
+    fn texture(&mut self, f: &mut Fields, key: &str, srgb: bool) -> Result<Option<TextureRef>, Diagnostic> {
         let Some(pair) = f.get(key) else {
             return Ok(None);
         };
@@ -502,8 +424,8 @@ impl Loader<'_> {
         if let Some(&i) = self.texture_index.get(&(file.clone(), srgb)) {
             return Ok(Some(i));
         }
-        let texture = load_texture(&file, srgb)
-            .map_err(|e| Diagnostic::at(self.path, pair.line, format!("\"{key}\": {e}")))?;
+        let texture =
+            load_texture(&file, srgb).map_err(|e| Diagnostic::at(self.path, pair.line, format!("\"{key}\": {e}")))?;
         self.scene.textures.push(texture);
         let i = self.scene.textures.len() - 1;
         self.texture_index.insert((file, srgb), i);
@@ -514,11 +436,7 @@ impl Loader<'_> {
         let name_pair = f.require("name")?;
         let name = name_pair.value.trim().to_string();
         if self.scene.materials.iter().any(|m| m.material.name == name) {
-            return Err(Diagnostic::at(
-                self.path,
-                name_pair.line,
-                format!("material '{name}' is defined twice"),
-            ));
+            return Err(Diagnostic::at(self.path, name_pair.line, format!("material '{name}' is defined twice")));
         }
         let defaults = Material::default();
         let base_color = match f.get("base_color") {
@@ -526,8 +444,7 @@ impl Loader<'_> {
             Some(pair) => {
                 let words = pair.value.split_whitespace().count();
                 let c = if words == 3 {
-                    Vec3::from(numbers::<3>(self.path, pair, "3 or 4 numbers (r g b [a])")?)
-                        .extend(1.0)
+                    Vec3::from(numbers::<3>(self.path, pair, "3 or 4 numbers (r g b [a])")?).extend(1.0)
                 } else {
                     Vec4::from(numbers::<4>(self.path, pair, "3 or 4 numbers (r g b [a])")?)
                 };
@@ -550,23 +467,13 @@ impl Loader<'_> {
         let material = Material {
             name,
             base_color,
-            ambient: f
-                .number("ambient", 0.0..=100.0)?
-                .unwrap_or(defaults.ambient),
-            diffuse: f
-                .number("diffuse", 0.0..=100.0)?
-                .unwrap_or(defaults.diffuse),
-            specular: f
-                .number("specular", 0.0..=100.0)?
-                .unwrap_or(defaults.specular),
-            smoothness: f
-                .number("smoothness", 0.0..=1.0)?
-                .unwrap_or(defaults.smoothness),
+            ambient: f.number("ambient", 0.0..=100.0)?.unwrap_or(defaults.ambient),
+            diffuse: f.number("diffuse", 0.0..=100.0)?.unwrap_or(defaults.diffuse),
+            specular: f.number("specular", 0.0..=100.0)?.unwrap_or(defaults.specular),
+            smoothness: f.number("smoothness", 0.0..=1.0)?.unwrap_or(defaults.smoothness),
             alpha_mode,
             double_sided: f.flag("double_sided")?.unwrap_or(false),
-            uv_scale: f
-                .numbers::<2>("uv_scale", "2 numbers (u v)")?
-                .map_or(defaults.uv_scale, glam::Vec2::from),
+            uv_scale: f.numbers::<2>("uv_scale", "2 numbers (u v)")?.map_or(defaults.uv_scale, glam::Vec2::from),
             ..defaults
         };
         let desc = MaterialDesc {
@@ -579,15 +486,32 @@ impl Loader<'_> {
         Ok(())
     }
 
+    fn render_order(f: &mut Fields) -> Result<Option<u8>, Diagnostic> {
+        let Some(pair) = f.get("render_order") else { return Ok(None) };
+        pair.value.trim().parse::<u8>().map(Some).map_err(|_| {
+            Diagnostic::at(
+                f.path,
+                pair.line,
+                format!("\"render_order\" is '{}', expected a whole number 0..=255", pair.value),
+            )
+        })
+    }
+
     fn material_ref(f: &mut Fields) -> Option<(String, usize)> {
-        f.get("material")
-            .map(|p| (p.value.trim().to_string(), p.line))
+        f.get("material").map(|p| (p.value.trim().to_string(), p.line))
     }
 
     fn count_instances(&mut self, n: u64, line: usize) -> Result<(), Diagnostic> {
         self.instances += n;
         if self.instances > MAX_INSTANCES {
-            return Err(Diagnostic::at(self.path, line, format!("the scene places {} instances, more than glint allows in one file ({MAX_INSTANCES})", self.instances)));
+            return Err(Diagnostic::at(
+                self.path,
+                line,
+                format!(
+                    "the scene places {} instances, more than glint allows in one file ({MAX_INSTANCES})",
+                    self.instances
+                ),
+            ));
         }
         Ok(())
     }
@@ -602,11 +526,7 @@ impl Loader<'_> {
             Vec3::from(numbers::<3>(f.path, pair, "1 or 3 numbers")?)
         };
         if s.min_element() <= 0.0 {
-            return Err(Diagnostic::at(
-                f.path,
-                pair.line,
-                "\"scale\" must be positive",
-            ));
+            return Err(Diagnostic::at(f.path, pair.line, "\"scale\" must be positive"));
         }
         Ok(s)
     }
@@ -619,11 +539,8 @@ impl Loader<'_> {
         let scale = Self::scale(f)?;
         self.count_instances(1, f.block.line)?;
         let transform = Mat4::from_scale_rotation_translation(scale, rotation(angles), origin);
-        self.placements.push(Placement {
-            mesh,
-            material,
-            transforms: vec![transform],
-        });
+        let render_order = Self::render_order(f)?;
+        self.placements.push(Placement { mesh, material, render_order, transforms: vec![transform] });
         Ok(())
     }
 
@@ -635,10 +552,7 @@ impl Loader<'_> {
             Diagnostic::at(
                 self.path,
                 count_pair.line,
-                format!(
-                    "\"count\" is '{}', expected a whole number",
-                    count_pair.value
-                ),
+                format!("\"count\" is '{}', expected a whole number", count_pair.value),
             )
         })?;
         if count < 0 {
@@ -653,9 +567,7 @@ impl Loader<'_> {
             return Err(Diagnostic::at(
                 self.path,
                 count_pair.line,
-                format!(
-                    "\"count\" is {count}, more than glint allows in one file ({MAX_INSTANCES})"
-                ),
+                format!("\"count\" is {count}, more than glint allows in one file ({MAX_INSTANCES})"),
             ));
         }
         self.count_instances(count, count_pair.line)?;
@@ -663,11 +575,7 @@ impl Loader<'_> {
         let origin = f.vec3("origin")?.unwrap_or(Vec3::ZERO);
         let extent = f.vec3("extent")?.unwrap_or(Vec3::new(10.0, 0.0, 10.0));
         if extent.min_element() < 0.0 {
-            return Err(Diagnostic::at(
-                self.path,
-                f.block.line,
-                "\"extent\" must not be negative",
-            ));
+            return Err(Diagnostic::at(self.path, f.block.line, "\"extent\" must not be negative"));
         }
         let seed = match f.get("seed") {
             None => 1,
@@ -675,80 +583,52 @@ impl Loader<'_> {
                 Diagnostic::at(
                     self.path,
                     p.line,
-                    format!(
-                        "\"seed\" is '{}', expected a whole number 0 or more",
-                        p.value
-                    ),
+                    format!("\"seed\" is '{}', expected a whole number 0 or more", p.value),
                 )
             })?,
         };
-        let [lo, hi] = f
-            .numbers::<2>("scale", "2 numbers (min max)")?
-            .unwrap_or([1.0, 1.0]);
+        let [lo, hi] = f.numbers::<2>("scale", "2 numbers (min max)")?.unwrap_or([1.0, 1.0]);
         if lo <= 0.0 || hi < lo {
-            return Err(Diagnostic::at(
-                self.path,
-                f.block.line,
-                "\"scale\" must be min max with 0 < min <= max",
-            ));
+            return Err(Diagnostic::at(self.path, f.block.line, "\"scale\" must be min max with 0 < min <= max"));
         }
         let random_yaw = f.flag("random_yaw")?.unwrap_or(false);
-        let transforms = place_instances(
-            count as usize,
-            random,
-            origin,
-            extent,
-            seed,
-            (lo, hi),
-            random_yaw,
-        );
-        self.placements.push(Placement {
-            mesh,
-            material,
-            transforms,
-        });
+        let transforms = place_instances(count as usize, random, origin, extent, seed, (lo, hi), random_yaw);
+        let render_order = Self::render_order(f)?;
+        self.placements.push(Placement { mesh, material, render_order, transforms });
         Ok(())
     }
 
-    /// Resolve material names and gather placements into one task per (mesh, material).
+    /// Resolve material names and gather placements into one task per (mesh, material, render order).
     fn finish(mut self) -> Result<SceneDesc, Diagnostic> {
-        let mut tasks: HashMap<(ShapeKind, Option<usize>), usize> = HashMap::new();
+        let mut tasks: HashMap<(ShapeKind, Option<usize>, Option<u8>), usize> = HashMap::new();
         for placement in std::mem::take(&mut self.placements) {
             let material = match placement.material {
                 None => None,
-                Some((name, line)) => Some(
-                    self.scene
-                        .materials
-                        .iter()
-                        .position(|m| m.material.name == name)
-                        .ok_or_else(|| {
-                            Diagnostic::at(
-                                self.path,
-                                line,
-                                format!(
-                                    "unknown material '{name}' (define it in a material block)"
-                                ),
-                            )
-                        })?,
-                ),
+                Some((name, line)) => {
+                    Some(self.scene.materials.iter().position(|m| m.material.name == name).ok_or_else(|| {
+                        Diagnostic::at(
+                            self.path,
+                            line,
+                            format!("unknown material '{name}' (define it in a material block)"),
+                        )
+                    })?)
+                }
             };
-            let task = *tasks.entry((placement.mesh, material)).or_insert_with(|| {
+            let task = *tasks.entry((placement.mesh, material, placement.render_order)).or_insert_with(|| {
                 self.scene.entities.push(EntityDesc {
                     mesh: placement.mesh,
                     material,
+                    render_order: placement.render_order,
                     transforms: Vec::new(),
                 });
                 self.scene.entities.len() - 1
             });
-            self.scene.entities[task]
-                .transforms
-                .extend(placement.transforms);
+            self.scene.entities[task].transforms.extend(placement.transforms);
         }
         if self.scene.cameras.is_empty() {
-            self.scene.cameras.push(
-                Camera::perspective(60.0, 0.1, 200.0)
-                    .looking_at(Vec3::new(0.0, 2.0, 6.0), Vec3::ZERO),
-            );
+            self.scene
+                .cameras
+                .push(Camera::perspective(60.0, 0.1, 200.0).looking_at(Vec3::new(0.0, 2.0, 6.0), Vec3::ZERO));
         }
         Ok(self.scene)
     }
@@ -801,10 +681,7 @@ mod tests {
         )
         .unwrap();
         assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
-        assert!(matches!(
-            scene.environment.background,
-            Background::Gradient { .. }
-        ));
+        assert!(matches!(scene.environment.background, Background::Gradient { .. }));
         assert_eq!(scene.cameras.len(), 1);
         assert_eq!(scene.lights.len(), 2);
         assert_eq!(scene.materials[0].material.alpha_mode, AlphaMode::Blend);
@@ -812,10 +689,7 @@ mod tests {
         // Two cube entities with one material gather into one task.
         assert_eq!(scene.entities.len(), 2);
         assert_eq!(scene.entities[0].transforms.len(), 2);
-        assert_eq!(
-            scene.entities[0].transforms[0].w_axis.truncate(),
-            Vec3::new(1.0, 2.0, 3.0)
-        );
+        assert_eq!(scene.entities[0].transforms[0].w_axis.truncate(), Vec3::new(1.0, 2.0, 3.0));
         assert_eq!(scene.entities[1].transforms.len(), 100);
         assert_eq!(scene.instance_count(), 102);
     }
@@ -829,9 +703,7 @@ mod tests {
 
     #[test]
     fn unknown_keys_warn_with_their_line() {
-        let scene =
-            parse("{\n\"classname\" \"entity\"\n\"mesh\" \"cube\"\n\"colour\" \"1 0 0\"\n}\n")
-                .unwrap();
+        let scene = parse("{\n\"classname\" \"entity\"\n\"mesh\" \"cube\"\n\"colour\" \"1 0 0\"\n}\n").unwrap();
         assert_eq!(scene.warnings.len(), 1);
         assert_eq!(scene.warnings[0].line, Some(4));
         assert!(scene.warnings[0].message.contains("unknown key \"colour\""));
@@ -842,46 +714,18 @@ mod tests {
         let cases = [
             ("{\n\"classname\" \"spaceship\"\n}", 2, "unknown classname"),
             ("{\n\"mesh\" \"cube\"\n}", 1, "no \"classname\""),
-            (
-                "{\n\"classname\" \"entity\"\n}",
-                1,
-                "missing the required key \"mesh\"",
-            ),
-            (
-                "{\n\"classname\" \"entity\"\n\"mesh\" \"cube\"\n\"origin\" \"1 x 3\"\n}",
-                4,
-                "bad number 'x'",
-            ),
-            (
-                "{\n\"classname\" \"entity\"\n\"mesh\" \"cube\"\n\"origin\" \"1 2\"\n}",
-                4,
-                "found 2 numbers",
-            ),
-            (
-                "{\n\"classname\" \"entity\"\n\"mesh\" \"blob\"\n}",
-                3,
-                "unknown mesh 'blob'",
-            ),
-            (
-                "{\n\"classname\" \"entity\"\n\"mesh\" \"cube\"\n\"material\" \"gold\"\n}",
-                4,
-                "unknown material 'gold'",
-            ),
-            (
-                "{\n\"classname\" \"instances\"\n\"mesh\" \"cube\"\n\"count\" \"-5\"\n}",
-                4,
-                "expected 0 or more",
-            ),
+            ("{\n\"classname\" \"entity\"\n}", 1, "missing the required key \"mesh\""),
+            ("{\n\"classname\" \"entity\"\n\"mesh\" \"cube\"\n\"origin\" \"1 x 3\"\n}", 4, "bad number 'x'"),
+            ("{\n\"classname\" \"entity\"\n\"mesh\" \"cube\"\n\"origin\" \"1 2\"\n}", 4, "found 2 numbers"),
+            ("{\n\"classname\" \"entity\"\n\"mesh\" \"blob\"\n}", 3, "unknown mesh 'blob'"),
+            ("{\n\"classname\" \"entity\"\n\"mesh\" \"cube\"\n\"material\" \"gold\"\n}", 4, "unknown material 'gold'"),
+            ("{\n\"classname\" \"instances\"\n\"mesh\" \"cube\"\n\"count\" \"-5\"\n}", 4, "expected 0 or more"),
             (
                 "{\n\"classname\" \"instances\"\n\"mesh\" \"cube\"\n\"count\" \"99999999999\"\n}",
                 4,
                 "more than glint allows",
             ),
-            (
-                "{\n\"classname\" \"instances\"\n\"mesh\" \"cube\"\n\"count\" \"lots\"\n}",
-                4,
-                "expected a whole number",
-            ),
+            ("{\n\"classname\" \"instances\"\n\"mesh\" \"cube\"\n\"count\" \"lots\"\n}", 4, "expected a whole number"),
             (
                 "{\n\"classname\" \"material\"\n\"name\" \"m\"\n\"diffuse_map\" \"nope.png\"\n}",
                 4,
@@ -892,40 +736,22 @@ mod tests {
                 4,
                 "expected one of: opaque, mask, blend",
             ),
-            (
-                "{\n\"classname\" \"material\"\n\"name\" \"m\"\n\"smoothness\" \"2\"\n}",
-                4,
-                "expected a value in 0..=1",
-            ),
-            (
-                "{\n\"classname\" \"camera\"\n\"near\" \"10\"\n\"far\" \"1\"\n}",
-                1,
-                "must be greater than",
-            ),
-            (
-                "{\n\"classname\" \"light_point\"\n\"origin\" \"0 0 inf\"\n}",
-                3,
-                "not a finite number",
-            ),
+            ("{\n\"classname\" \"material\"\n\"name\" \"m\"\n\"smoothness\" \"2\"\n}", 4, "expected a value in 0..=1"),
+            ("{\n\"classname\" \"camera\"\n\"near\" \"10\"\n\"far\" \"1\"\n}", 1, "must be greater than"),
+            ("{\n\"classname\" \"light_point\"\n\"origin\" \"0 0 inf\"\n}", 3, "not a finite number"),
         ];
         for (text, line, want) in cases {
             let err = parse(text).unwrap_err();
             assert_eq!(err.line, Some(line), "{text:?}: {err}");
             assert!(err.message.contains(want), "{text:?}: {err}");
-            assert!(
-                err.to_string().starts_with(&format!("dir/t.scn:{line}: ")),
-                "{err}"
-            );
+            assert!(err.to_string().starts_with(&format!("dir/t.scn:{line}: ")), "{err}");
         }
     }
 
     #[test]
     fn more_lights_than_a_frame_holds_is_an_error_at_the_extra_light() {
         let light = "{\n\"classname\" \"light_point\"\n\"origin\" \"0 1 0\"\n}\n";
-        assert_eq!(
-            parse(&light.repeat(MAX_LIGHTS)).unwrap().lights.len(),
-            MAX_LIGHTS
-        );
+        assert_eq!(parse(&light.repeat(MAX_LIGHTS)).unwrap().lights.len(), MAX_LIGHTS);
         let err = parse(&light.repeat(MAX_LIGHTS + 1)).unwrap_err();
         assert_eq!(err.line, Some(4 * MAX_LIGHTS + 1));
         assert!(err.message.contains("more than 64 lights"), "{err}");
@@ -933,7 +759,8 @@ mod tests {
 
     #[test]
     fn total_instances_are_capped_across_blocks() {
-        let block = "{\n\"classname\" \"instances\"\n\"mesh\" \"cube\"\n\"count\" \"6000000\"\n\"extent\" \"0 0 0\"\n}\n";
+        let block =
+            "{\n\"classname\" \"instances\"\n\"mesh\" \"cube\"\n\"count\" \"6000000\"\n\"extent\" \"0 0 0\"\n}\n";
         let err = parse(&format!("{block}{block}")).unwrap_err();
         assert_eq!(err.line, Some(10));
         assert!(err.message.contains("12000000 instances"), "{err}");

@@ -57,9 +57,7 @@ fn tokenize(path: &Path, line_no: usize, line: &str) -> Result<Vec<Token>, Diagn
                 return Err(Diagnostic::at(
                     path,
                     line_no,
-                    format!(
-                    "unexpected '{other}': expected '{{', '}}' or a quoted \"key\" \"value\" pair"
-                ),
+                    format!("unexpected '{other}': expected '{{', '}}' or a quoted \"key\" \"value\" pair"),
                 ))
             }
         }
@@ -77,19 +75,11 @@ fn flush_pair(
 ) -> Result<(), Diagnostic> {
     match (strings.len(), open) {
         (0, _) => Ok(()),
-        (_, None) => Err(Diagnostic::at(
-            path,
-            line_no,
-            "\"key\" \"value\" pair outside a block: open one with '{'",
-        )),
+        (_, None) => Err(Diagnostic::at(path, line_no, "\"key\" \"value\" pair outside a block: open one with '{'")),
         (2, Some(block)) => {
             let value = strings.pop().unwrap_or_default();
             let key = strings.pop().unwrap_or_default();
-            block.pairs.push(Pair {
-                key,
-                value,
-                line: line_no,
-            });
+            block.pairs.push(Pair { key, value, line: line_no });
             Ok(())
         }
         (n, Some(_)) => Err(Diagnostic::at(
@@ -122,29 +112,18 @@ pub(crate) fn parse_blocks(path: &Path, text: &str) -> Result<Vec<Block>, Diagno
                             "'{' inside a block: close the previous block with '}' first",
                         ));
                     }
-                    open = Some(Block {
-                        line: line_no,
-                        pairs: Vec::new(),
-                    });
+                    open = Some(Block { line: line_no, pairs: Vec::new() });
                 }
                 Token::Close => {
                     flush_pair(path, line_no, &mut strings, open.as_mut())?;
-                    blocks.push(
-                        open.take().ok_or_else(|| {
-                            Diagnostic::at(path, line_no, "'}' with no block open")
-                        })?,
-                    );
+                    blocks.push(open.take().ok_or_else(|| Diagnostic::at(path, line_no, "'}' with no block open"))?);
                 }
             }
         }
         flush_pair(path, line_no, &mut strings, open.as_mut())?;
     }
     if let Some(block) = open {
-        return Err(Diagnostic::at(
-            path,
-            block.line,
-            "unterminated block: '{' is never closed with '}'",
-        ));
+        return Err(Diagnostic::at(path, block.line, "unterminated block: '{' is never closed with '}'"));
     }
     Ok(blocks)
 }
@@ -159,21 +138,14 @@ mod tests {
 
     #[test]
     fn blocks_pairs_lines_and_comments() {
-        let blocks = parse("// scene\n{\n\"classname\" \"world\" // trailing\n\"url\" \"a//b\"\n}\n{ \"classname\" \"camera\" }\n").unwrap();
+        let blocks = parse(
+            "// scene\n{\n\"classname\" \"world\" // trailing\n\"url\" \"a//b\"\n}\n{ \"classname\" \"camera\" }\n",
+        )
+        .unwrap();
         assert_eq!(blocks.len(), 2);
         assert_eq!(blocks[0].line, 2);
-        assert_eq!(
-            blocks[0].pairs[0],
-            Pair {
-                key: "classname".into(),
-                value: "world".into(),
-                line: 3
-            }
-        );
-        assert_eq!(
-            blocks[0].pairs[1].value, "a//b",
-            "// inside quotes is not a comment"
-        );
+        assert_eq!(blocks[0].pairs[0], Pair { key: "classname".into(), value: "world".into(), line: 3 });
+        assert_eq!(blocks[0].pairs[1].value, "a//b", "// inside quotes is not a comment");
         assert_eq!(blocks[1].pairs[0].value, "camera");
     }
 

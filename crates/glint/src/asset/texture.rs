@@ -21,21 +21,12 @@ pub struct Texture {
 impl Texture {
     /// Wrap decoded pixels.
     pub fn new(name: impl Into<String>, image: image::RgbaImage, srgb: bool) -> Self {
-        Self {
-            name: name.into(),
-            image,
-            srgb,
-        }
+        Self { name: name.into(), image, srgb }
     }
 
     /// Number of mip levels down to 1×1.
     pub fn mip_levels(&self) -> u32 {
-        32 - self
-            .image
-            .width()
-            .max(self.image.height())
-            .max(1)
-            .leading_zeros()
+        32 - self.image.width().max(self.image.height()).max(1).leading_zeros()
     }
 }
 
@@ -51,23 +42,14 @@ pub fn load_texture(path: &Path, srgb: bool) -> Result<Texture, Diagnostic> {
         .map_err(|e| fail(format!("cannot read texture: {e}")))?;
     match reader.format() {
         Some(image::ImageFormat::Png | image::ImageFormat::Jpeg) => {}
-        other => {
-            return Err(fail(format!(
-                "expected a PNG or JPEG image, found {other:?}"
-            )))
-        }
+        other => return Err(fail(format!("expected a PNG or JPEG image, found {other:?}"))),
     }
     let mut limits = image::Limits::default();
     limits.max_image_width = Some(MAX_TEXTURE_SIDE);
     limits.max_image_height = Some(MAX_TEXTURE_SIDE);
     limits.max_alloc = Some(4 * u64::from(MAX_TEXTURE_SIDE) * u64::from(MAX_TEXTURE_SIDE));
     reader.limits(limits);
-    let image = reader
-        .decode()
-        .map_err(|e| fail(format!("cannot decode texture: {e}")))?
-        .into_rgba8();
-    let name = path
-        .file_name()
-        .map_or_else(|| "texture".into(), |n| n.to_string_lossy().into_owned());
+    let image = reader.decode().map_err(|e| fail(format!("cannot decode texture: {e}")))?.into_rgba8();
+    let name = path.file_name().map_or_else(|| "texture".into(), |n| n.to_string_lossy().into_owned());
     Ok(Texture::new(name, image, srgb))
 }

@@ -104,22 +104,14 @@ impl Gpu {
             required_limits: wgpu::Limits::downlevel_defaults().using_resolution(adapter.limits()),
             ..Default::default()
         };
-        let (device, queue) =
-            pollster::block_on(adapter.request_device(&desc)).map_err(|source| {
-                GpuError::Device {
-                    adapter: info.name.clone(),
-                    source,
-                }
-            })?;
-        let anisotropy = if adapter
-            .get_downlevel_capabilities()
-            .flags
-            .contains(wgpu::DownlevelFlags::ANISOTROPIC_FILTERING)
-        {
-            16
-        } else {
-            1
-        };
+        let (device, queue) = pollster::block_on(adapter.request_device(&desc))
+            .map_err(|source| GpuError::Device { adapter: info.name.clone(), source })?;
+        let anisotropy =
+            if adapter.get_downlevel_capabilities().flags.contains(wgpu::DownlevelFlags::ANISOTROPIC_FILTERING) {
+                16
+            } else {
+                1
+            };
         log::info!(
             "glint: adapter '{}' ({:?}, {:?}); features {:?}",
             info.name,
@@ -127,13 +119,7 @@ impl Gpu {
             info.device_type,
             features
         );
-        Ok(Self {
-            adapter,
-            device,
-            queue,
-            info,
-            anisotropy,
-        })
+        Ok(Self { adapter, device, queue, info, anisotropy })
     }
 
     /// Adapter name, backend and driver, for logs and benchmark reports.
@@ -144,11 +130,7 @@ impl Gpu {
     /// Whether a colour target can be multisampled with `samples` samples.
     pub fn supports_msaa(&self, samples: u32) -> bool {
         samples == 1
-            || self
-                .adapter
-                .get_texture_format_features(super::COLOR_FORMAT)
-                .flags
-                .sample_count_supported(samples)
+            || self.adapter.get_texture_format_features(super::COLOR_FORMAT).flags.sample_count_supported(samples)
     }
 
     /// Largest anisotropy the samplers use (1 when unsupported).
@@ -159,10 +141,7 @@ impl Gpu {
 
 /// Pick the adapter: the first whose name contains `WGPU_ADAPTER_NAME` when set,
 /// else the high-performance default.
-async fn choose_adapter(
-    instance: &wgpu::Instance,
-    backends: wgpu::Backends,
-) -> Result<wgpu::Adapter, GpuError> {
+async fn choose_adapter(instance: &wgpu::Instance, backends: wgpu::Backends) -> Result<wgpu::Adapter, GpuError> {
     if let Ok(wanted) = std::env::var("WGPU_ADAPTER_NAME") {
         let wanted = wanted.to_lowercase();
         let adapters = instance.enumerate_adapters(backends).await;
@@ -170,15 +149,10 @@ async fn choose_adapter(
         return adapters
             .into_iter()
             .find(|a| a.get_info().name.to_lowercase().contains(&wanted))
-            .ok_or_else(|| {
-                GpuError::NoAdapter(format!(
-                    " named like WGPU_ADAPTER_NAME='{wanted}' (have: {names:?})"
-                ))
-            });
+            .ok_or_else(|| GpuError::NoAdapter(format!(" named like WGPU_ADAPTER_NAME='{wanted}' (have: {names:?})")));
     }
     let options = wgpu::RequestAdapterOptions {
-        power_preference: wgpu::PowerPreference::from_env()
-            .unwrap_or(wgpu::PowerPreference::HighPerformance),
+        power_preference: wgpu::PowerPreference::from_env().unwrap_or(wgpu::PowerPreference::HighPerformance),
         ..Default::default()
     };
     instance

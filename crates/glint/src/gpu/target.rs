@@ -30,11 +30,7 @@ impl OffscreenTarget {
         if !(samples == 1 || samples == 4) || !gpu.supports_msaa(samples) {
             return Err(GpuError::SampleCount(samples));
         }
-        let size = wgpu::Extent3d {
-            width,
-            height,
-            depth_or_array_layers: 1,
-        };
+        let size = wgpu::Extent3d { width, height, depth_or_array_layers: 1 };
         let texture = |label: &str, format, samples, usage| {
             gpu.device.create_texture(&wgpu::TextureDescriptor {
                 label: Some(label),
@@ -54,20 +50,10 @@ impl OffscreenTarget {
             wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
         );
         let msaa_view = (samples > 1).then(|| {
-            texture(
-                "offscreen target: msaa colour",
-                COLOR_FORMAT,
-                samples,
-                wgpu::TextureUsages::RENDER_ATTACHMENT,
-            )
-            .create_view(&Default::default())
+            texture("offscreen target: msaa colour", COLOR_FORMAT, samples, wgpu::TextureUsages::RENDER_ATTACHMENT)
+                .create_view(&Default::default())
         });
-        let depth = texture(
-            "offscreen target: depth",
-            DEPTH_FORMAT,
-            samples,
-            wgpu::TextureUsages::RENDER_ATTACHMENT,
-        );
+        let depth = texture("offscreen target: depth", DEPTH_FORMAT, samples, wgpu::TextureUsages::RENDER_ATTACHMENT);
         Ok(Self {
             width,
             height,
@@ -96,18 +82,11 @@ impl OffscreenTarget {
 
     /// The colour attachment for a pass that clears with `clear`: renders into the
     /// MSAA texture and resolves into the readable one, or renders straight into it.
-    pub(crate) fn color_attachment(
-        &self,
-        clear: wgpu::Color,
-    ) -> wgpu::RenderPassColorAttachment<'_> {
+    pub(crate) fn color_attachment(&self, clear: wgpu::Color) -> wgpu::RenderPassColorAttachment<'_> {
         let ops = wgpu::Operations {
             load: wgpu::LoadOp::Clear(clear),
             // The multisampled texture is only an intermediate: resolving is enough.
-            store: if self.msaa_view.is_some() {
-                wgpu::StoreOp::Discard
-            } else {
-                wgpu::StoreOp::Store
-            },
+            store: if self.msaa_view.is_some() { wgpu::StoreOp::Discard } else { wgpu::StoreOp::Store },
         };
         match &self.msaa_view {
             Some(msaa) => wgpu::RenderPassColorAttachment {
@@ -129,10 +108,7 @@ impl OffscreenTarget {
     pub(crate) fn depth_attachment(&self) -> wgpu::RenderPassDepthStencilAttachment<'_> {
         wgpu::RenderPassDepthStencilAttachment {
             view: &self.depth_view,
-            depth_ops: Some(wgpu::Operations {
-                load: wgpu::LoadOp::Clear(1.0),
-                store: wgpu::StoreOp::Discard,
-            }),
+            depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(1.0), store: wgpu::StoreOp::Discard }),
             stencil_ops: None,
         }
     }
@@ -143,8 +119,7 @@ impl OffscreenTarget {
     pub fn read_rgba8(&self, gpu: &Gpu) -> Result<image::RgbaImage, GpuError> {
         // Rows of a texture-to-buffer copy must be 256-byte aligned: pad, then strip.
         let unpadded = self.width * BYTES_PER_PIXEL;
-        let padded = unpadded.div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT)
-            * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
+        let padded = unpadded.div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
         let buffer = gpu.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("offscreen target: readback"),
             size: u64::from(padded) * u64::from(self.height),
@@ -153,9 +128,7 @@ impl OffscreenTarget {
         });
         let mut encoder = gpu
             .device
-            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-                label: Some("offscreen target: readback"),
-            });
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("offscreen target: readback") });
         encoder.copy_texture_to_buffer(
             self.resolved.as_image_copy(),
             wgpu::TexelCopyBufferInfo {
@@ -173,15 +146,9 @@ impl OffscreenTarget {
         buffer.map_async(wgpu::MapMode::Read, .., move |r| {
             let _ = tx.send(r);
         });
-        gpu.device
-            .poll(wgpu::PollType::wait_indefinitely())
-            .map_err(|e| GpuError::Readback(e.to_string()))?;
-        rx.recv()
-            .map_err(|e| GpuError::Readback(e.to_string()))?
-            .map_err(|e| GpuError::Readback(e.to_string()))?;
-        let view = buffer
-            .get_mapped_range(..)
-            .map_err(|e| GpuError::Readback(e.to_string()))?;
+        gpu.device.poll(wgpu::PollType::wait_indefinitely()).map_err(|e| GpuError::Readback(e.to_string()))?;
+        rx.recv().map_err(|e| GpuError::Readback(e.to_string()))?.map_err(|e| GpuError::Readback(e.to_string()))?;
+        let view = buffer.get_mapped_range(..).map_err(|e| GpuError::Readback(e.to_string()))?;
         let mut pixels = Vec::with_capacity((unpadded * self.height) as usize);
         for row in view.chunks_exact(padded as usize) {
             pixels.extend_from_slice(&row[..unpadded as usize]);
@@ -197,9 +164,6 @@ impl OffscreenTarget {
         let path = path.as_ref();
         self.read_rgba8(gpu)?
             .save_with_format(path, image::ImageFormat::Png)
-            .map_err(|source| GpuError::Png {
-                path: path.display().to_string(),
-                source,
-            })
+            .map_err(|source| GpuError::Png { path: path.display().to_string(), source })
     }
 }

@@ -1,9 +1,7 @@
 //! Core layer: GPU twins of the shader data blocks (layouts match `shader/*.wgsl`)
 //! and [`UniformBlock`], which writes a block only when its bytes change.
 
-use crate::scene::{
-    AlphaMode, Background, Camera, Environment, Light, LightKind, Material, MAX_LIGHTS,
-};
+use crate::scene::{AlphaMode, Background, Camera, Environment, Light, LightKind, Material, MAX_LIGHTS};
 use glam::{Mat4, Vec4};
 
 /// One light as the shader reads it (32 bytes).
@@ -21,15 +19,10 @@ impl Light {
     /// The shader's view of this light.
     pub(crate) fn to_gpu(self) -> LightGpu {
         let (position, range) = match self.kind {
-            LightKind::Directional { direction } => {
-                (direction.normalize_or(glam::Vec3::NEG_Y).extend(0.0), 0.0)
-            }
+            LightKind::Directional { direction } => (direction.normalize_or(glam::Vec3::NEG_Y).extend(0.0), 0.0),
             LightKind::Point { position, range } => (position.extend(1.0), range.max(1e-3)),
         };
-        LightGpu {
-            position: position.to_array(),
-            color: (self.color * self.intensity).extend(range).to_array(),
-        }
+        LightGpu { position: position.to_array(), color: (self.color * self.intensity).extend(range).to_array() }
     }
 }
 
@@ -120,11 +113,7 @@ impl Material {
             AlphaMode::Mask { cutoff } => (cutoff, FLAG_ALPHA_MASK),
             AlphaMode::Blend => (0.0, FLAG_ALPHA_BLEND),
         };
-        let normal_flag = if self.normal_map.is_some() {
-            FLAG_NORMAL_MAP
-        } else {
-            0
-        };
+        let normal_flag = if self.normal_map.is_some() { FLAG_NORMAL_MAP } else { 0 };
         let exponent = (1.0 + 11.0 * self.smoothness.clamp(0.0, 1.0)).exp2();
         MaterialGpu {
             base_color: self.base_color.to_array(),

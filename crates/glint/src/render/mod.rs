@@ -7,13 +7,15 @@
 //! | 0 | Scene | lights or environment change | ambient, sky colours, light count, `lights[64]` |
 //! | 1 | Camera | the camera or target aspect changes | view, view-projection, its inverse, eye position |
 //! | 2 | Material | the material is added or edited | uniform block, diffuse / normal / specular maps, sampler |
-//! | 3 | Instances | every frame, one write | `array<mat4x4<f32>>` in draw order (storage buffer) |
+//! | 3 | Renderer | transforms: where entities changed; draw indices: every frame, one write | `transforms: array<mat4x4<f32>>` (persistent), `draw_indices: array<u32>` (visible instances in draw order) |
 //!
 //! Every pipeline shares one layout with these four groups, so groups 0, 1 and 3
 //! are bound once per pass and only group 2 changes between draws.
 
 mod batch;
 mod blocks;
+pub mod cull;
+mod instances;
 mod pipelines;
 pub mod queue;
 mod resources;
@@ -24,14 +26,16 @@ pub use stats::{FrameStats, StageTimes, UploadStats};
 use crate::asset::Texture;
 use crate::gpu::{Gpu, OffscreenTarget};
 use crate::scene::{
-    Background, Camera, Entity, Environment, Light, Material, MaterialId, Mesh, ShapeId, TextureId,
-    MAX_LIGHTS,
+    Background, Camera, Entity, Environment, Light, Material, MaterialId, Mesh, ShapeId, TextureId, MAX_LIGHTS,
 };
 use batch::Batch;
-use blocks::{CameraGpu, InstanceGpu, SceneGpu, UniformBlock};
+use blocks::{CameraGpu, SceneGpu, UniformBlock};
+use cull::{Containment, Frustum};
+use glam::{Mat4, Vec3A};
+use instances::InstanceStore;
 use pipelines::{PipelineKey, Pipelines};
-use queue::{DrawItem, Queue};
-use resources::{GpuMesh, InstanceBuffer, TextureUploader};
+use queue::{DrawItem, Queue, SKY_STAGE};
+use resources::{GpuMesh, InstanceBuffers, TextureUploader};
 use std::time::Instant;
 
 /// Errors from [`Renderer::flush`].
@@ -84,12 +88,26 @@ struct TextureSlot {
     view: Option<wgpu::TextureView>,
 }
 
-/// An entity as submitted: its ids and where its transforms sit this frame.
+/// An entity as submitted this frame: its store slot and what it draws with.
 struct Submitted {
+    slot: usize,
     shape: ShapeId,
     material: MaterialId,
-    first: u32,
-    count: u32,
+    render_order: Option<u8>,
+}
+
+/// A submitted entity's visible instances: a range of the frame's visible list.
+struct VisibleRun {
+    entry: usize,
+    start: u32,
+    len: u32,
+}
+
+/// The view a frame is seen from, kept to rebuild the frustum only when it changes.
+#[derive(Clone, Copy, PartialEq)]
+struct ViewKey {
+    camera: Camera,
+    aspect: f32,
 }
 
 /// 1×1 textures bound where a material has no map.
@@ -120,13 +138,21 @@ pub struct Renderer {
     camera_block: UniformBlock<CameraGpu>,
     scene_group: wgpu::BindGroup,
     camera_group: wgpu::BindGroup,
-    instances: InstanceBuffer,
+    instance_buffers: InstanceBuffers,
+    store: InstanceStore,
+    culling: bool,
+    frame_index: u64,
+    /// The first bad id submitted this frame, reported by `flush`.
+    submit_error: Option<RenderError>,
+    view: Option<(ViewKey, Frustum, Mat4)>,
     // Per-frame lists, kept to reuse their allocations.
     submitted: Vec<Submitted>,
-    transforms: Vec<glam::Mat4>,
+    instances_submitted: u64,
+    visible: Vec<u32>,
+    runs: Vec<VisibleRun>,
     items: Vec<DrawItem>,
     batches: Vec<Batch>,
-    packed: Vec<InstanceGpu>,
+    draw_indices: Vec<u32>,
 }
 
 fn ms_since(t: Instant) -> f64 {
@@ -145,29 +171,14 @@ impl Renderer {
             device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some(label),
                 layout,
-                entries: &[wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: buffer.as_entire_binding(),
-                }],
+                entries: &[wgpu::BindGroupEntry { binding: 0, resource: buffer.as_entire_binding() }],
             })
         };
-        let scene_group = group(
-            "renderer: scene block (group 0)",
-            &pipelines.scene_layout,
-            &scene_block.buffer,
-        );
-        let camera_group = group(
-            "renderer: camera block (group 1)",
-            &pipelines.camera_layout,
-            &camera_block.buffer,
-        );
+        let scene_group = group("renderer: scene block (group 0)", &pipelines.scene_layout, &scene_block.buffer);
+        let camera_group = group("renderer: camera block (group 1)", &pipelines.camera_layout, &camera_block.buffer);
         let uploader = TextureUploader::new(&device);
         let pixel = |name: &str, rgba: [u8; 4], srgb| {
-            let texture = Texture::new(
-                name,
-                image::RgbaImage::from_pixel(1, 1, image::Rgba(rgba)),
-                srgb,
-            );
+            let texture = Texture::new(name, image::RgbaImage::from_pixel(1, 1, image::Rgba(rgba)), srgb);
             uploader.upload(&device, &queue, &texture).0
         };
         let defaults = DefaultMaps {
@@ -186,7 +197,7 @@ impl Renderer {
             anisotropy_clamp: gpu.max_anisotropy(),
             ..Default::default()
         });
-        let instances = InstanceBuffer::new(&device, &pipelines.instance_layout);
+        let instance_buffers = InstanceBuffers::new(&device, &pipelines.instance_layout);
         Self {
             device,
             queue,
@@ -202,12 +213,19 @@ impl Renderer {
             camera_block,
             scene_group,
             camera_group,
-            instances,
+            instance_buffers,
+            store: InstanceStore::default(),
+            culling: true,
+            frame_index: 0,
+            submit_error: None,
+            view: None,
             submitted: Vec::new(),
-            transforms: Vec::new(),
+            instances_submitted: 0,
+            visible: Vec::new(),
+            runs: Vec::new(),
             items: Vec::new(),
             batches: Vec::new(),
-            packed: Vec::new(),
+            draw_indices: Vec::new(),
         }
     }
 
@@ -229,20 +247,13 @@ impl Renderer {
             log::warn!("texture '{}' is empty; using one white pixel", texture.name);
             texture.image = image::RgbaImage::from_pixel(1, 1, image::Rgba([255; 4]));
         }
-        self.textures.push(TextureSlot {
-            pending: Some(texture),
-            view: None,
-        });
+        self.textures.push(TextureSlot { pending: Some(texture), view: None });
         TextureId(self.textures.len() as u32 - 1)
     }
 
     /// Add a material; its uniform block is written on first use.
     pub fn add_material(&mut self, material: Material) -> MaterialId {
-        self.materials.push(MaterialSlot {
-            material,
-            dirty: true,
-            gpu: None,
-        });
+        self.materials.push(MaterialSlot { material, dirty: true, gpu: None });
         MaterialId(self.materials.len() as u32 - 1)
     }
 
@@ -269,16 +280,28 @@ impl Renderer {
         &self.environment
     }
 
-    /// Queue `entity` for the next [`flush`](Self::flush): its transforms are copied,
-    /// so the entity may change right after. Ids are checked at flush.
+    /// Turn frustum culling on (the default) or off, e.g. to compare costs.
+    pub fn set_culling(&mut self, enabled: bool) {
+        self.culling = enabled;
+    }
+
+    /// Queue `entity` for the next [`flush`](Self::flush). Its transforms are kept
+    /// on the GPU between frames and copied again only when its version changed
+    /// (see [`Entity::transforms_mut`]). A shape id that is not this renderer's is
+    /// reported by the next flush.
     pub fn submit(&mut self, entity: &Entity) {
+        let Some(shape) = self.shapes.get(entity.shape.0 as usize) else {
+            self.submit_error.get_or_insert(RenderError::UnknownShape(entity.shape));
+            return;
+        };
+        let slot = self.store.submit(entity, shape.mesh.aabb(), self.frame_index);
+        self.instances_submitted += entity.transforms().len() as u64;
         self.submitted.push(Submitted {
+            slot,
             shape: entity.shape,
             material: entity.material,
-            first: self.transforms.len() as u32,
-            count: entity.transforms.len() as u32,
+            render_order: entity.render_order,
         });
-        self.transforms.extend_from_slice(&entity.transforms);
     }
 
     /// Draw everything submitted since the last flush into `target`, seen by
@@ -286,12 +309,13 @@ impl Renderer {
     ///
     /// The frame, one stage per line:
     /// 1. prepare — GPU twins for new shapes, textures, materials and pipelines; edited materials rewritten
-    /// 2. queue — one draw item with a 64-bit sort key per submitted entity
-    /// 3. sort — radix sort by key
-    /// 4. batch — equal (pipeline, material, shape) runs merged into instanced draws
-    /// 5. upload — Scene and Camera blocks if changed, all instance data in one write
-    /// 6. encode — one pass: opaque → alpha-test → sky → transparent
-    /// 7. submit
+    /// 2. cull — each entity's world box, then its instances', against the camera frustum
+    /// 3. queue — one draw item with a 64-bit sort key per visible run (per instance when blended)
+    /// 4. sort — radix sort by key
+    /// 5. batch — equal (stage, pipeline, material, shape) runs merged into instanced draws
+    /// 6. upload — Scene and Camera blocks if changed, changed transforms, the draw indices in one write
+    /// 7. encode — one pass: opaque → alpha-test → sky → transparent (or as `render_order` says)
+    /// 8. submit
     ///
     /// Errors (the submitted entities are dropped): more than [`MAX_LIGHTS`] lights,
     /// or an id that is not this renderer's.
@@ -302,9 +326,13 @@ impl Renderer {
         target: &mut OffscreenTarget,
     ) -> Result<FrameStats, RenderError> {
         let start = Instant::now();
-        let result = self.run_frame(camera, lights, target);
+        let result = match self.submit_error.take() {
+            Some(e) => Err(e),
+            None => self.run_frame(camera, lights, target),
+        };
         self.submitted.clear();
-        self.transforms.clear();
+        self.instances_submitted = 0;
+        self.frame_index += 1;
         result.map(|mut stats| {
             stats.cpu_ms.total = ms_since(start);
             stats
@@ -322,12 +350,17 @@ impl Renderer {
         }
         let mut stats = FrameStats {
             entities_submitted: self.submitted.len() as u32,
-            instances_submitted: self.transforms.len() as u64,
+            instances_submitted: self.instances_submitted,
             ..Default::default()
         };
         let t = Instant::now();
         self.prepare(target.samples(), &mut stats)?;
         stats.cpu_ms.prepare = ms_since(t);
+
+        let t = Instant::now();
+        let aspect = target.width() as f32 / target.height() as f32;
+        self.cull(camera, aspect, &mut stats);
+        stats.cpu_ms.cull = ms_since(t);
 
         let t = Instant::now();
         self.build_queue(camera);
@@ -338,16 +371,11 @@ impl Renderer {
         stats.cpu_ms.sort = ms_since(t);
 
         let t = Instant::now();
-        batch::merge(
-            &self.items,
-            &self.transforms,
-            &mut self.packed,
-            &mut self.batches,
-        );
+        batch::merge(&self.items, &self.visible, &mut self.draw_indices, &mut self.batches);
         stats.cpu_ms.batch = ms_since(t);
 
         let t = Instant::now();
-        self.upload(camera, lights, target, &mut stats);
+        self.upload(camera, lights, aspect, &mut stats);
         stats.cpu_ms.upload = ms_since(t);
 
         let t = Instant::now();
@@ -357,68 +385,56 @@ impl Renderer {
         let t = Instant::now();
         self.queue.submit([commands]);
         stats.cpu_ms.submit = ms_since(t);
-        stats.bytes_uploaded.total = stats.bytes_uploaded.uniforms
-            + stats.bytes_uploaded.instances
-            + stats.bytes_uploaded.textures
-            + stats.bytes_uploaded.meshes;
+        stats.bytes_uploaded.finish();
         Ok(stats)
     }
 
-    /// Stage 1: make sure everything the submitted entities use exists on the GPU.
+    /// Stage 1: make sure everything the submitted entities use exists on the GPU,
+    /// and compact the instance store when it holds more garbage than data.
     fn prepare(&mut self, samples: u32, stats: &mut FrameStats) -> Result<(), RenderError> {
+        if let Some(remap) = self.store.compact_if_wasteful(self.frame_index) {
+            for s in &mut self.submitted {
+                s.slot = remap[s.slot];
+            }
+        }
         for i in 0..self.submitted.len() {
             let (shape, material) = (self.submitted[i].shape, self.submitted[i].material);
-            let slot = self
-                .shapes
-                .get_mut(shape.0 as usize)
-                .ok_or(RenderError::UnknownShape(shape))?;
+            let slot = &mut self.shapes[shape.0 as usize];
             if slot.gpu.is_none() {
                 slot.gpu = Some(GpuMesh::new(&self.device, &slot.mesh, shape.0));
                 stats.bytes_uploaded.meshes += slot.mesh.gpu_bytes();
             }
             self.prepare_material(material, samples, stats)?;
         }
-        if matches!(self.environment.background, Background::Gradient { .. }) {
+        if matches!(self.environment.background, Background::Gradient { .. })
+            && self.pipelines.sky_built(samples).is_none()
+        {
             self.pipelines.sky(&self.device, samples);
+            stats.pipelines_compiled += 1;
         }
         Ok(())
     }
 
-    fn prepare_material(
-        &mut self,
-        id: MaterialId,
-        samples: u32,
-        stats: &mut FrameStats,
-    ) -> Result<(), RenderError> {
-        let slot = self
-            .materials
-            .get(id.0 as usize)
-            .ok_or(RenderError::UnknownMaterial(id))?;
+    fn prepare_material(&mut self, id: MaterialId, samples: u32, stats: &mut FrameStats) -> Result<(), RenderError> {
+        let slot = self.materials.get(id.0 as usize).ok_or(RenderError::UnknownMaterial(id))?;
         if !slot.dirty && slot.gpu.as_ref().is_some_and(|g| g.samples == samples) {
             return Ok(());
         }
         let material = slot.material.clone();
-        let maps = [
-            material.diffuse_map,
-            material.normal_map,
-            material.specular_map,
-        ];
+        let maps = [material.diffuse_map, material.normal_map, material.specular_map];
         for texture in maps.into_iter().flatten() {
-            let tex = self.textures.get_mut(texture.0 as usize).ok_or_else(|| {
-                RenderError::UnknownTexture {
-                    material: material.name.clone(),
-                    texture,
-                }
-            })?;
+            let tex = self
+                .textures
+                .get_mut(texture.0 as usize)
+                .ok_or_else(|| RenderError::UnknownTexture { material: material.name.clone(), texture })?;
             if let Some(pending) = tex.pending.take() {
                 let (view, bytes) = self.uploader.upload(&self.device, &self.queue, &pending);
                 tex.view = Some(view);
                 stats.bytes_uploaded.textures += bytes;
             }
         }
-        let (pipeline, _built) = self
-            .pipelines
-            .forward_id(&self.device, PipelineKey::for_material(&material, samples));
+        let (pipeline, built) = self.pipelines.forward_id(&self.device, PipelineKey::for_material(&material, samples));
+        stats.pipelines_compiled += u32::from(built);
         let slot = &mut self.materials[id.0 as usize];
         let stale_group = slot.gpu.as_ref().is_none_or(|g| g.maps != maps);
         if stale_group {
@@ -436,127 +452,152 @@ impl Renderer {
                 label: Some(&format!("material '{}' (group 2)", material.name)),
                 layout: &self.pipelines.material_layout,
                 entries: &[
-                    wgpu::BindGroupEntry {
-                        binding: 0,
-                        resource: uniform.as_entire_binding(),
-                    },
+                    wgpu::BindGroupEntry { binding: 0, resource: uniform.as_entire_binding() },
                     wgpu::BindGroupEntry {
                         binding: 1,
-                        resource: wgpu::BindingResource::TextureView(view(
-                            maps[0],
-                            &self.defaults.white_srgb,
-                        )),
+                        resource: wgpu::BindingResource::TextureView(view(maps[0], &self.defaults.white_srgb)),
                     },
                     wgpu::BindGroupEntry {
                         binding: 2,
-                        resource: wgpu::BindingResource::TextureView(view(
-                            maps[1],
-                            &self.defaults.flat_normal,
-                        )),
+                        resource: wgpu::BindingResource::TextureView(view(maps[1], &self.defaults.flat_normal)),
                     },
                     wgpu::BindGroupEntry {
                         binding: 3,
-                        resource: wgpu::BindingResource::TextureView(view(
-                            maps[2],
-                            &self.defaults.white_linear,
-                        )),
+                        resource: wgpu::BindingResource::TextureView(view(maps[2], &self.defaults.white_linear)),
                     },
-                    wgpu::BindGroupEntry {
-                        binding: 4,
-                        resource: wgpu::BindingResource::Sampler(&self.sampler),
-                    },
+                    wgpu::BindGroupEntry { binding: 4, resource: wgpu::BindingResource::Sampler(&self.sampler) },
                 ],
             });
-            slot.gpu = Some(MaterialGpuTwin {
-                uniform,
-                bind_group,
-                maps,
-                pipeline,
-                samples,
-            });
+            slot.gpu = Some(MaterialGpuTwin { uniform, bind_group, maps, pipeline, samples });
         }
         let twin = slot.gpu.as_mut().expect("created above");
         twin.pipeline = pipeline;
         twin.samples = samples;
         if slot.dirty {
             let block = material.to_gpu();
-            self.queue
-                .write_buffer(&twin.uniform, 0, bytemuck::bytes_of(&block));
-            stats.bytes_uploaded.uniforms += std::mem::size_of_val(&block) as u64;
+            self.queue.write_buffer(&twin.uniform, 0, bytemuck::bytes_of(&block));
+            stats.bytes_uploaded.material += std::mem::size_of_val(&block) as u64;
             slot.dirty = false;
         }
         Ok(())
     }
 
-    /// Stage 2: one draw item per submitted entity. Its depth is the view distance
-    /// of its first instance's bounding-sphere centre over the far plane.
+    /// Stage 2: find each submitted entity's visible instances. An entity whose
+    /// world box is wholly inside or outside the frustum is decided at once; only
+    /// boxes crossing a plane have their instances tested one by one.
+    fn cull(&mut self, camera: &Camera, aspect: f32, stats: &mut FrameStats) {
+        let key = ViewKey { camera: *camera, aspect };
+        if self.view.as_ref().is_none_or(|(k, _, _)| *k != key) {
+            let view = camera.view();
+            let frustum = Frustum::from_view_proj(camera.projection(aspect) * view);
+            self.view = Some((key, frustum, view));
+        }
+        let frustum = self.view.as_ref().expect("set above").1;
+        self.visible.clear();
+        self.runs.clear();
+        for (entry, s) in self.submitted.iter().enumerate() {
+            let slot = self.store.slot(s.slot);
+            stats.instances_invalid += u64::from(slot.invalid);
+            let start = self.visible.len() as u32;
+            let range = slot.first as usize..(slot.first + slot.count) as usize;
+            let containment = match slot.bounds {
+                None => Containment::Outside,
+                Some(_) if !self.culling => Containment::Inside,
+                Some((c, e)) => frustum.classify(c, e),
+            };
+            match containment {
+                Containment::Outside => {}
+                Containment::Inside if slot.invalid == 0 => self.visible.extend(slot.first..slot.first + slot.count),
+                Containment::Inside => {
+                    let extents = &self.store.extents[range.clone()];
+                    self.visible.extend(
+                        range.clone().zip(extents).filter(|(_, e)| e.x != f32::NEG_INFINITY).map(|(i, _)| i as u32),
+                    );
+                }
+                Containment::Intersecting => {
+                    cull::cull_boxes(
+                        &frustum,
+                        &self.store.centers[range.clone()],
+                        &self.store.extents[range],
+                        slot.first,
+                        &mut self.visible,
+                    );
+                }
+            }
+            let len = self.visible.len() as u32 - start;
+            if len > 0 {
+                self.runs.push(VisibleRun { entry, start, len });
+            }
+        }
+        stats.instances_culled = stats.instances_submitted - stats.instances_invalid - self.visible.len() as u64;
+    }
+
+    /// Stage 3: one draw item per visible run, or per visible instance for blended
+    /// materials so that they can be sorted far to near one by one. Depth is the
+    /// view distance of the run's (or instance's) box centre over the far plane.
     fn build_queue(&mut self, camera: &Camera) {
-        let view = camera.view();
+        let view = self.view.as_ref().expect("culled first").2;
         let far = camera.far();
+        let depth = |center: Vec3A| -view.transform_point3a(center).z / far;
         self.items.clear();
-        for s in self.submitted.iter().filter(|s| s.count > 0) {
-            let slot = &self.materials[s.material.0 as usize];
-            let twin = slot.gpu.as_ref().expect("prepared");
-            let queue = match slot.material.alpha_mode {
+        for run in &self.runs {
+            let s = &self.submitted[run.entry];
+            let material = &self.materials[s.material.0 as usize];
+            let pipeline = material.gpu.as_ref().expect("prepared").pipeline;
+            let queue = match material.material.alpha_mode {
                 crate::scene::AlphaMode::Opaque => Queue::Opaque,
                 crate::scene::AlphaMode::Mask { .. } => Queue::AlphaTest,
                 crate::scene::AlphaMode::Blend => Queue::Transparent,
             };
-            let center = self.shapes[s.shape.0 as usize]
-                .mesh
-                .bounding_sphere()
-                .center;
-            let world = self.transforms[s.first as usize].transform_point3(center);
-            let depth = -view.transform_point3(world).z / far;
-            self.items.push(DrawItem {
-                key: queue::sort_key(queue, twin.pipeline, s.material, s.shape, depth),
-                pipeline: twin.pipeline,
+            let stage = s.render_order.unwrap_or(queue.stage());
+            let blended = queue == Queue::Transparent;
+            let item = |first, count, depth| DrawItem {
+                key: queue::sort_key(stage, blended, pipeline, s.material, s.shape, depth),
+                pipeline,
                 material: s.material,
                 shape: s.shape,
-                first: s.first,
-                count: s.count,
-            });
+                first,
+                count,
+            };
+            if blended {
+                for k in run.start..run.start + run.len {
+                    let instance = self.visible[k as usize] as usize;
+                    self.items.push(item(k, 1, depth(self.store.centers[instance])));
+                }
+            } else {
+                let center = self.store.slot(s.slot).bounds.map_or(Vec3A::ZERO, |(c, _)| c);
+                self.items.push(item(run.start, run.len, depth(center)));
+            }
         }
     }
 
-    /// Stage 5: write the blocks that changed and this frame's instances.
-    fn upload(
-        &mut self,
-        camera: &Camera,
-        lights: &[Light],
-        target: &OffscreenTarget,
-        stats: &mut FrameStats,
-    ) {
-        let aspect = target.width() as f32 / target.height() as f32;
-        stats.bytes_uploaded.uniforms += self
-            .scene_block
-            .update(&self.queue, SceneGpu::new(&self.environment, lights));
-        stats.bytes_uploaded.uniforms +=
-            self.camera_block.update(&self.queue, camera.to_gpu(aspect));
-        stats.bytes_uploaded.instances += self.instances.write(
-            &self.device,
-            &self.queue,
-            &self.pipelines.instance_layout,
-            &self.packed,
-        );
-        stats.instances_drawn = self.packed.len() as u64;
+    /// Stage 6: write the blocks that changed, the transforms that changed, and this
+    /// frame's draw indices.
+    fn upload(&mut self, camera: &Camera, lights: &[Light], aspect: f32, stats: &mut FrameStats) {
+        let bytes = &mut stats.bytes_uploaded;
+        bytes.scene += self.scene_block.update(&self.queue, SceneGpu::new(&self.environment, lights));
+        bytes.camera += self.camera_block.update(&self.queue, camera.to_gpu(aspect));
+        let layout = &self.pipelines.instance_layout;
+        if self.instance_buffers.reserve(&self.device, layout, self.store.len(), self.draw_indices.len()) {
+            self.store.mark_all_dirty();
+        }
+        for range in self.store.take_dirty() {
+            let data = &self.store.transforms[range.start as usize..range.end as usize];
+            bytes.transforms += self.instance_buffers.write_transforms(&self.queue, range.start, data);
+        }
+        bytes.draw_indices += self.instance_buffers.write_draw_indices(&self.queue, &self.draw_indices);
+        stats.instances_drawn = self.draw_indices.len() as u64;
     }
 
     /// Stage 6: record the forward pass.
     fn encode(&self, target: &OffscreenTarget, stats: &mut FrameStats) -> wgpu::CommandBuffer {
         let clear = match self.environment.background {
-            Background::Color(c) | Background::Gradient { bottom: c, .. } => wgpu::Color {
-                r: c.x.into(),
-                g: c.y.into(),
-                b: c.z.into(),
-                a: 1.0,
-            },
+            Background::Color(c) | Background::Gradient { bottom: c, .. } => {
+                wgpu::Color { r: c.x.into(), g: c.y.into(), b: c.z.into(), a: 1.0 }
+            }
         };
-        let mut encoder = self
-            .device
-            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-                label: Some("renderer: frame"),
-            });
+        let mut encoder =
+            self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("renderer: frame") });
         {
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("forward pass"),
@@ -566,31 +607,14 @@ impl Renderer {
             });
             pass.set_bind_group(0, &self.scene_group, &[]);
             pass.set_bind_group(1, &self.camera_group, &[]);
-            pass.set_bind_group(3, &self.instances.bind_group, &[]);
+            pass.set_bind_group(3, &self.instance_buffers.bind_group, &[]);
             stats.bind_groups_set += 3;
-            let opaque_end = self.batches.partition_point(|b| b.queue == Queue::Opaque);
-            let alpha_end = self
-                .batches
-                .partition_point(|b| b.queue != Queue::Transparent);
+            let sky_at = self.batches.partition_point(|b| b.stage < SKY_STAGE);
             let mut bound = Bound::default();
-            self.draw_batches(
-                &mut pass,
-                "opaque",
-                &self.batches[..opaque_end],
-                &mut bound,
-                stats,
-            );
-            self.draw_batches(
-                &mut pass,
-                "alpha-test",
-                &self.batches[opaque_end..alpha_end],
-                &mut bound,
-                stats,
-            );
-            if let (Background::Gradient { .. }, Some(sky)) = (
-                self.environment.background,
-                self.pipelines.sky_built(target.samples()),
-            ) {
+            self.draw_batches(&mut pass, &self.batches[..sky_at], &mut bound, stats);
+            if let (Background::Gradient { .. }, Some(sky)) =
+                (self.environment.background, self.pipelines.sky_built(target.samples()))
+            {
                 pass.push_debug_group("sky");
                 pass.set_pipeline(sky);
                 pass.draw(0..3, 0..1);
@@ -599,62 +623,55 @@ impl Renderer {
                 stats.pipelines_bound += 1;
                 stats.draw_calls += 1;
             }
-            self.draw_batches(
-                &mut pass,
-                "transparent",
-                &self.batches[alpha_end..],
-                &mut bound,
-                stats,
-            );
+            self.draw_batches(&mut pass, &self.batches[sky_at..], &mut bound, stats);
         }
         encoder.finish()
     }
 
-    /// Draw one queue's batches, setting only the state that changes.
+    /// Draw batches in order, one debug group per stage, setting only the state
+    /// that changes.
     fn draw_batches(
         &self,
         pass: &mut wgpu::RenderPass<'_>,
-        name: &str,
         batches: &[Batch],
         bound: &mut Bound,
         stats: &mut FrameStats,
     ) {
-        if batches.is_empty() {
-            return;
+        for run in batches.chunk_by(|a, b| a.stage == b.stage) {
+            pass.push_debug_group(&stage_name(run[0].stage));
+            for b in run {
+                if bound.pipeline != Some(b.pipeline) {
+                    pass.set_pipeline(self.pipelines.forward(b.pipeline));
+                    bound.pipeline = Some(b.pipeline);
+                    stats.pipelines_bound += 1;
+                }
+                if bound.material != Some(b.material) {
+                    let twin = self.materials[b.material.0 as usize].gpu.as_ref().expect("prepared");
+                    pass.set_bind_group(2, &twin.bind_group, &[]);
+                    bound.material = Some(b.material);
+                    stats.bind_groups_set += 1;
+                }
+                let mesh = self.shapes[b.shape.0 as usize].gpu.as_ref().expect("prepared");
+                if bound.shape != Some(b.shape) {
+                    pass.set_vertex_buffer(0, mesh.vertices.slice(..));
+                    pass.set_index_buffer(mesh.indices.slice(..), wgpu::IndexFormat::Uint32);
+                    bound.shape = Some(b.shape);
+                }
+                pass.draw_indexed(0..mesh.index_count, 0, b.first_instance..b.first_instance + b.instance_count);
+                stats.draw_calls += 1;
+            }
+            pass.pop_debug_group();
         }
-        pass.push_debug_group(name);
-        for b in batches {
-            if bound.pipeline != Some(b.pipeline) {
-                pass.set_pipeline(self.pipelines.forward(b.pipeline));
-                bound.pipeline = Some(b.pipeline);
-                stats.pipelines_bound += 1;
-            }
-            if bound.material != Some(b.material) {
-                let twin = self.materials[b.material.0 as usize]
-                    .gpu
-                    .as_ref()
-                    .expect("prepared");
-                pass.set_bind_group(2, &twin.bind_group, &[]);
-                bound.material = Some(b.material);
-                stats.bind_groups_set += 1;
-            }
-            let mesh = self.shapes[b.shape.0 as usize]
-                .gpu
-                .as_ref()
-                .expect("prepared");
-            if bound.shape != Some(b.shape) {
-                pass.set_vertex_buffer(0, mesh.vertices.slice(..));
-                pass.set_index_buffer(mesh.indices.slice(..), wgpu::IndexFormat::Uint32);
-                bound.shape = Some(b.shape);
-            }
-            pass.draw_indexed(
-                0..mesh.index_count,
-                0,
-                b.first_instance..b.first_instance + b.instance_count,
-            );
-            stats.draw_calls += 1;
-        }
-        pass.pop_debug_group();
+    }
+}
+
+/// Debug-group name of a stage: its queue, or the render order that put it there.
+fn stage_name(stage: u8) -> String {
+    match stage {
+        s if s == Queue::Opaque.stage() => "opaque".into(),
+        s if s == Queue::AlphaTest.stage() => "alpha-test".into(),
+        s if s == Queue::Transparent.stage() => "transparent".into(),
+        s => format!("render_order {s}"),
     }
 }
 
@@ -664,4 +681,58 @@ struct Bound {
     pipeline: Option<u16>,
     material: Option<MaterialId>,
     shape: Option<ShapeId>,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::asset::ShapeKind;
+    use glam::Vec3;
+
+    fn gpu() -> Option<Gpu> {
+        match Gpu::headless() {
+            Ok(gpu) => Some(gpu),
+            Err(e) if std::env::var("GLINT_REQUIRE_ADAPTER").as_deref() == Ok("1") => panic!("{e}"),
+            Err(e) => {
+                eprintln!("skipping GPU test: {e}");
+                None
+            }
+        }
+    }
+
+    #[test]
+    fn blended_instances_are_drawn_far_to_near_and_render_order_overrides_queues() {
+        let Some(gpu) = gpu() else { return };
+        let mut r = Renderer::new(&gpu);
+        r.set_environment(Environment {
+            background: Background::Gradient { top: Vec3::Z, bottom: Vec3::ONE },
+            ..Environment::default()
+        });
+        let sphere = r.add_shape(ShapeKind::Sphere.mesh());
+        let glass = r.add_material(Material { alpha_mode: crate::AlphaMode::Blend, ..Material::default() });
+        let solid = r.add_material(Material::default());
+        // Instances at view distances 4, 10, 7, 12, 5 (camera at z = 10 looking down −z), scrambled.
+        let zs = [6.0, 0.0, 3.0, -2.0, 5.0];
+        let glass_entity =
+            Entity::instanced(sphere, glass, zs.iter().map(|&z| Mat4::from_translation(Vec3::Z * z)).collect());
+        let ground = Entity::new(sphere, solid, Mat4::from_translation(Vec3::Y * -2.0)).with_render_order(Some(200));
+        let front = Entity::new(sphere, solid, Mat4::from_translation(Vec3::X * 2.0));
+        let camera = Camera::perspective(60.0, 0.1, 100.0).looking_at(Vec3::Z * 10.0, Vec3::ZERO);
+        let mut target = OffscreenTarget::new(&gpu, 32, 32, 1).expect("target");
+        r.submit(&ground);
+        r.submit(&glass_entity);
+        r.submit(&front);
+        let stats = r.flush(&camera, &[], &mut target).expect("frame");
+        // Drawn order: `front` (opaque), sky, the five glass instances far to near, then the ground (200).
+        let stages: Vec<u8> = r.batches.iter().map(|b| b.stage).collect();
+        assert_eq!(stages, vec![64, 192, 200]);
+        let glass_batch = r.batches[1];
+        assert_eq!(glass_batch.instance_count, 5, "one entity's instances merge into one draw once sorted");
+        let order: Vec<f32> = r.draw_indices[glass_batch.first_instance as usize..][..5]
+            .iter()
+            .map(|&i| r.store.transforms[i as usize].w_axis.z)
+            .collect();
+        assert_eq!(order, vec![-2.0, 0.0, 3.0, 5.0, 6.0], "far (low z) to near");
+        assert_eq!(stats.draw_calls, 4, "front, sky, glass, ground");
+    }
 }

@@ -18,11 +18,7 @@ pub(crate) struct PipelineKey {
 
 impl PipelineKey {
     pub(crate) fn for_material(material: &Material, samples: u32) -> Self {
-        Self {
-            blend: material.alpha_mode == AlphaMode::Blend,
-            double_sided: material.double_sided,
-            samples,
-        }
+        Self { blend: material.alpha_mode == AlphaMode::Blend, double_sided: material.double_sided, samples }
     }
 }
 
@@ -83,42 +79,25 @@ impl Pipelines {
     pub(crate) fn new(device: &wgpu::Device) -> Self {
         let all = wgpu::ShaderStages::VERTEX_FRAGMENT;
         let layout = |label, entries: &[wgpu::BindGroupLayoutEntry]| {
-            device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-                label: Some(label),
-                entries,
-            })
+            device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some(label), entries })
         };
-        let scene_layout = layout(
-            "renderer: scene block layout (group 0)",
-            &[uniform_entry(0, all)],
-        );
-        let camera_layout = layout(
-            "renderer: camera block layout (group 1)",
-            &[uniform_entry(0, all)],
-        );
+        let scene_layout = layout("renderer: scene block layout (group 0)", &[uniform_entry(0, all)]);
+        let camera_layout = layout("renderer: camera block layout (group 1)", &[uniform_entry(0, all)]);
         let material_layout = layout(
             "renderer: material block layout (group 2)",
-            &[
-                uniform_entry(0, all),
-                texture_entry(1),
-                texture_entry(2),
-                texture_entry(3),
-                sampler_entry(4),
-            ],
+            &[uniform_entry(0, all), texture_entry(1), texture_entry(2), texture_entry(3), sampler_entry(4)],
         );
-        let instance_layout = layout(
-            "renderer: instance block layout (group 3)",
-            &[wgpu::BindGroupLayoutEntry {
-                binding: 0,
-                visibility: wgpu::ShaderStages::VERTEX,
-                ty: wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Storage { read_only: true },
-                    has_dynamic_offset: false,
-                    min_binding_size: None,
-                },
-                count: None,
-            }],
-        );
+        let storage = |binding| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: wgpu::ShaderStages::VERTEX,
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Storage { read_only: true },
+                has_dynamic_offset: false,
+                min_binding_size: None,
+            },
+            count: None,
+        };
+        let instance_layout = layout("renderer: renderer block layout (group 3)", &[storage(0), storage(1)]);
         // One layout for every pass: the sky uses groups 0–1 of it, so switching
         // between sky and forward pipelines never disturbs bound groups.
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -188,10 +167,7 @@ impl Pipelines {
                 },
                 primitive: wgpu::PrimitiveState::default(),
                 depth_stencil: Some(depth_state(false, wgpu::CompareFunction::LessEqual)),
-                multisample: wgpu::MultisampleState {
-                    count: samples,
-                    ..Default::default()
-                },
+                multisample: wgpu::MultisampleState { count: samples, ..Default::default() },
                 fragment: Some(wgpu::FragmentState {
                     module,
                     entry_point: Some("fs_sky"),
@@ -205,15 +181,12 @@ impl Pipelines {
     }
 
     fn build_forward(&self, device: &wgpu::Device, key: PipelineKey) -> wgpu::RenderPipeline {
-        const ATTRIBUTES: [wgpu::VertexAttribute; 4] = wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x2, 3 => Float32x4];
+        const ATTRIBUTES: [wgpu::VertexAttribute; 4] =
+            wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x2, 3 => Float32x4];
         let label = format!(
             "renderer: forward pipeline ({}, {}, {}x)",
             if key.blend { "blend" } else { "opaque" },
-            if key.double_sided {
-                "double-sided"
-            } else {
-                "back-face culled"
-            },
+            if key.double_sided { "double-sided" } else { "back-face culled" },
             key.samples
         );
         device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
@@ -231,18 +204,11 @@ impl Pipelines {
             },
             primitive: wgpu::PrimitiveState {
                 front_face: wgpu::FrontFace::Ccw,
-                cull_mode: if key.double_sided {
-                    None
-                } else {
-                    Some(wgpu::Face::Back)
-                },
+                cull_mode: if key.double_sided { None } else { Some(wgpu::Face::Back) },
                 ..Default::default()
             },
             depth_stencil: Some(depth_state(!key.blend, wgpu::CompareFunction::Less)),
-            multisample: wgpu::MultisampleState {
-                count: key.samples,
-                ..Default::default()
-            },
+            multisample: wgpu::MultisampleState { count: key.samples, ..Default::default() },
             fragment: Some(wgpu::FragmentState {
                 module: &self.forward,
                 entry_point: Some("fs_main"),

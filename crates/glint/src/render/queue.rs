@@ -1,57 +1,77 @@
 //! Core layer: render queues and the 64-bit sort key.
 //!
-//! Every submitted entity becomes one [`DrawItem`] whose key orders the frame.
-//! Opaque and alpha-test items are *binned*: grouped by the state that is costly
-//! to rebind (pipeline, then material, then mesh), near to far only within equal
-//! state. Transparent items are *sorted* far to near, because blending is only
-//! right back to front.
+//! Every visible run of an entity becomes one [`DrawItem`] (every visible
+//! *instance*, for blended entities) whose key orders the frame. Opaque and
+//! alpha-test items are *binned*: grouped by the state that is costly to rebind
+//! (pipeline, then material, then mesh), near to far only within equal state.
+//! Blended items are *sorted* far to near, because blending is only right back
+//! to front.
 //!
 //! ```text
-//! opaque / alpha-test
-//!  63 62 | 61 ........ 50 | 49 ....... 34 | 33 ....... 18 | 17 ........ 0
-//!  queue |  pipeline (12) | material (16) |   shape (16)  | depth (18) near→far
+//! binned (opaque, alpha-test)
+//!  63 ...... 56 | 55 ...... 44 | 43 ...... 28 | 27 ...... 12 | 11 ...... 0
+//!   stage (8)   | pipeline (12)| material (16)|  shape (16)  | depth (12) near→far
 //!
-//! transparent
-//!  63 62 | 61 ........................ 32 | 31 ....... 16 | 15 ........ 0
-//!  queue |      inverted depth (30) far→near    | material (16) |   shape (16)
+//! sorted (blended)
+//!  63 ...... 56 | 55 .......................... 32 | 31 ...... 16 | 15 ...... 0
+//!   stage (8)   |   inverted depth (24) far→near   | material (16)|  shape (16)
 //! ```
 //!
-//! Which bits are for correctness and which for speed: the queue bits decide pass
-//! order and the transparent depth decides blending order; both are correctness.
-//! Pipeline, material, shape and opaque depth only make equal state adjacent
-//! (so runs merge into one draw) and let early depth testing reject hidden
-//! fragments: ids larger than their field are masked, which costs merging, never
-//! correctness, because batching compares the real ids.
+//! The *stage* is the queue's ([`Queue::stage`]: opaque 64, alpha-test 96,
+//! transparent 192), or an entity's `render_order` when it has one, which is how a
+//! scene forces a deliberate draw order (the vegetation demo draws near, large
+//! objects first and the ground after the sky). The sky is drawn before the first
+//! item whose stage is [`SKY_STAGE`] (128) or more.
 //!
-//! Worked example, two red cubes (near and far) and a glass sphere in front:
-//! the cubes share pipeline, material and shape, so their keys differ only in the
-//! depth bits, they sort next to each other and merge into one instanced draw;
-//! the sphere's queue bits (transparent) put it after both, whatever its depth.
+//! Correctness bits: the stage (pass order) and, for blended items, the depth.
+//! Speed bits: pipeline, material, shape and the binned depth only make equal
+//! state adjacent (so runs merge into one draw) and let early depth testing reject
+//! hidden fragments. Ids wider than their field are masked, which can cost merging
+//! but never correctness, because batching compares the real ids.
+//!
+//! Worked example, two red cubes (near and far) and a glass sphere in front: the
+//! cubes share pipeline, material and shape, so their keys differ only in the
+//! depth bits, they sort next to each other and merge into one instanced draw; the
+//! sphere's stage (192, transparent) puts it after both, whatever its depth.
 
 use crate::scene::{MaterialId, ShapeId};
 
-/// Render queue, in drawing order (the sky is drawn between alpha-test and transparent).
+/// Render queue of a material, in drawing order.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
 pub enum Queue {
     /// Opaque surfaces, binned by state, near to far.
-    Opaque = 0,
+    Opaque,
     /// Alpha-masked surfaces (discard), binned by state, near to far.
-    AlphaTest = 1,
+    AlphaTest,
     /// Blended surfaces, far to near.
-    Transparent = 2,
+    Transparent,
 }
 
-const QUEUE_SHIFT: u32 = 62;
-const PIPELINE_SHIFT: u32 = 50;
+impl Queue {
+    /// The queue's stage, the top byte of its keys.
+    pub const fn stage(self) -> u8 {
+        match self {
+            Queue::Opaque => 64,
+            Queue::AlphaTest => 96,
+            Queue::Transparent => 192,
+        }
+    }
+}
+
+/// Items at this stage or later are drawn after the sky.
+pub const SKY_STAGE: u8 = 128;
+
+const STAGE_SHIFT: u32 = 56;
+const PIPELINE_SHIFT: u32 = 44;
 const PIPELINE_BITS: u32 = 12;
 const MATERIAL_BITS: u32 = 16;
 const SHAPE_BITS: u32 = 16;
-const OPAQUE_MATERIAL_SHIFT: u32 = 34;
-const OPAQUE_SHAPE_SHIFT: u32 = 18;
-const OPAQUE_DEPTH_BITS: u32 = 18;
-const TRANSPARENT_DEPTH_SHIFT: u32 = 32;
-const TRANSPARENT_DEPTH_BITS: u32 = 30;
-const TRANSPARENT_MATERIAL_SHIFT: u32 = 16;
+const BINNED_MATERIAL_SHIFT: u32 = 28;
+const BINNED_SHAPE_SHIFT: u32 = 12;
+const BINNED_DEPTH_BITS: u32 = 12;
+const SORTED_DEPTH_SHIFT: u32 = 32;
+const SORTED_DEPTH_BITS: u32 = 24;
+const SORTED_MATERIAL_SHIFT: u32 = 16;
 
 const fn mask(bits: u32) -> u64 {
     (1 << bits) - 1
@@ -59,53 +79,43 @@ const fn mask(bits: u32) -> u64 {
 
 /// Build the sort key of one draw item.
 ///
-/// `depth` is the view distance divided by the far plane, clamped to 0..1.
-pub fn sort_key(
-    queue: Queue,
-    pipeline: u16,
-    material: MaterialId,
-    shape: ShapeId,
-    depth: f32,
-) -> u64 {
-    // f64: 2^30 − 1 is not representable in f32 and would round past the field.
+/// `blended` picks the far-to-near layout; `depth` is the view distance over the
+/// far plane, clamped to 0..1.
+pub fn sort_key(stage: u8, blended: bool, pipeline: u16, material: MaterialId, shape: ShapeId, depth: f32) -> u64 {
+    // f64: 2^24 − 1 steps are not all representable in f32.
     let depth = f64::from(depth.clamp(0.0, 1.0));
-    let q = (queue as u64) << QUEUE_SHIFT;
-    debug_assert!((queue as u64) < 4, "queue field is 2 bits");
+    let stage = u64::from(stage) << STAGE_SHIFT;
     let material = u64::from(material.0) & mask(MATERIAL_BITS);
     let shape = u64::from(shape.0) & mask(SHAPE_BITS);
-    match queue {
-        Queue::Opaque | Queue::AlphaTest => {
-            let d = (depth * mask(OPAQUE_DEPTH_BITS) as f64) as u64;
-            q | (u64::from(pipeline) & mask(PIPELINE_BITS)) << PIPELINE_SHIFT
-                | material << OPAQUE_MATERIAL_SHIFT
-                | shape << OPAQUE_SHAPE_SHIFT
-                | d
-        }
-        Queue::Transparent => {
-            let d = ((1.0 - depth) * mask(TRANSPARENT_DEPTH_BITS) as f64) as u64;
-            debug_assert!(d <= mask(TRANSPARENT_DEPTH_BITS));
-            q | d << TRANSPARENT_DEPTH_SHIFT | material << TRANSPARENT_MATERIAL_SHIFT | shape
-        }
+    if blended {
+        let d = ((1.0 - depth) * mask(SORTED_DEPTH_BITS) as f64) as u64;
+        debug_assert!(d <= mask(SORTED_DEPTH_BITS));
+        stage | d << SORTED_DEPTH_SHIFT | material << SORTED_MATERIAL_SHIFT | shape
+    } else {
+        let d = (depth * mask(BINNED_DEPTH_BITS) as f64) as u64;
+        debug_assert!(d <= mask(BINNED_DEPTH_BITS));
+        stage
+            | (u64::from(pipeline) & mask(PIPELINE_BITS)) << PIPELINE_SHIFT
+            | material << BINNED_MATERIAL_SHIFT
+            | shape << BINNED_SHAPE_SHIFT
+            | d
     }
 }
 
-/// The queue a key belongs to.
-pub fn queue_of(key: u64) -> Queue {
-    match key >> QUEUE_SHIFT {
-        0 => Queue::Opaque,
-        1 => Queue::AlphaTest,
-        _ => Queue::Transparent,
-    }
+/// The stage of a key.
+pub fn stage_of(key: u64) -> u8 {
+    (key >> STAGE_SHIFT) as u8
 }
 
-/// One submitted entity, ready to sort: its key and what it draws.
+/// One draw request, ready to sort: its key, what it draws, and which of the
+/// frame's visible instance indices it covers.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct DrawItem {
     pub key: u64,
     pub pipeline: u16,
     pub material: MaterialId,
     pub shape: ShapeId,
-    /// Range of the entity's transforms in the frame's submitted transforms.
+    /// Range in the frame's visible-instance list.
     pub first: u32,
     pub count: u32,
 }
@@ -123,81 +133,61 @@ mod tests {
     const M1: MaterialId = MaterialId(1);
     const S0: ShapeId = ShapeId(0);
     const S1: ShapeId = ShapeId(1);
+    const OPAQUE: u8 = Queue::Opaque.stage();
 
     #[test]
-    fn queues_come_in_pass_order_whatever_the_depth() {
-        let opaque_far = sort_key(Queue::Opaque, 4095, MaterialId(u32::MAX), S1, 1.0);
-        let mask_near = sort_key(Queue::AlphaTest, 0, M0, S0, 0.0);
-        let glass_near = sort_key(Queue::Transparent, 0, M0, S0, 0.0);
+    fn queues_come_in_pass_order_whatever_the_depth_and_state() {
+        let opaque_far = sort_key(OPAQUE, false, 4095, MaterialId(u32::MAX), S1, 1.0);
+        let mask_near = sort_key(Queue::AlphaTest.stage(), false, 0, M0, S0, 0.0);
+        let glass_near = sort_key(Queue::Transparent.stage(), true, 0, M0, S0, 0.0);
         assert!(opaque_far < mask_near && mask_near < glass_near);
-        assert_eq!(queue_of(opaque_far), Queue::Opaque);
-        assert_eq!(queue_of(mask_near), Queue::AlphaTest);
-        assert_eq!(queue_of(glass_near), Queue::Transparent);
+        assert!(stage_of(mask_near) < SKY_STAGE && stage_of(glass_near) >= SKY_STAGE);
+        assert_eq!(stage_of(glass_near), 192);
     }
 
     #[test]
-    fn opaque_bins_by_pipeline_then_material_then_shape_then_near_to_far() {
-        let k = |p, m, s, d| sort_key(Queue::Opaque, p, m, s, d);
-        assert!(
-            k(0, M1, S1, 1.0) < k(1, M0, S0, 0.0),
-            "pipeline dominates material"
-        );
-        assert!(
-            k(0, M0, S1, 1.0) < k(0, M1, S0, 0.0),
-            "material dominates shape"
-        );
-        assert!(
-            k(0, M0, S0, 1.0) < k(0, M0, S1, 0.0),
-            "shape dominates depth"
-        );
+    fn render_order_overrides_the_queue() {
+        // Ground forced after the sky, a near bush forced before everything.
+        let ground = sort_key(200, false, 0, M0, S0, 0.0);
+        let glass = sort_key(Queue::Transparent.stage(), true, 0, M1, S1, 0.0);
+        let bush = sort_key(1, false, 4095, M1, S1, 1.0);
+        let opaque = sort_key(OPAQUE, false, 0, M0, S0, 0.0);
+        assert!(bush < opaque && glass < ground);
+        assert!(stage_of(ground) >= SKY_STAGE);
+    }
+
+    #[test]
+    fn binned_order_is_pipeline_then_material_then_shape_then_near_to_far() {
+        let k = |p, m, s, d| sort_key(OPAQUE, false, p, m, s, d);
+        assert!(k(0, M1, S1, 1.0) < k(1, M0, S0, 0.0), "pipeline dominates material");
+        assert!(k(0, M0, S1, 1.0) < k(0, M1, S0, 0.0), "material dominates shape");
+        assert!(k(0, M0, S0, 1.0) < k(0, M0, S1, 0.0), "shape dominates depth");
         assert!(k(0, M0, S0, 0.1) < k(0, M0, S0, 0.9), "near before far");
     }
 
     #[test]
-    fn transparent_sorts_far_to_near_before_state() {
-        let k = |m, s, d| sort_key(Queue::Transparent, 0, m, s, d);
-        assert!(
-            k(M1, S1, 0.9) < k(M0, S0, 0.1),
-            "far first, whatever the state"
-        );
-        assert!(
-            k(M0, S0, 0.5) < k(M1, S0, 0.5),
-            "equal depth: grouped by material"
-        );
+    fn blended_sorts_far_to_near_before_state() {
+        let k = |m, s, d| sort_key(Queue::Transparent.stage(), true, 0, m, s, d);
+        assert!(k(M1, S1, 0.9) < k(M0, S0, 0.1), "far first, whatever the state");
+        assert!(k(M0, S0, 0.5) < k(M1, S0, 0.5), "equal depth: grouped by material");
+        assert!(k(M0, S0, 0.500_001) < k(M0, S0, 0.5), "24 bits tell close depths apart");
     }
 
     #[test]
     fn depth_is_clamped_and_ids_are_masked_into_their_fields() {
-        assert_eq!(
-            sort_key(Queue::Opaque, 0, M0, S0, -3.0),
-            sort_key(Queue::Opaque, 0, M0, S0, 0.0)
-        );
-        assert_eq!(
-            sort_key(Queue::Opaque, 0, M0, S0, 7.0),
-            sort_key(Queue::Opaque, 0, M0, S0, 1.0)
-        );
-        // Material 65536 wraps to 0 in the key: same bin, still the opaque queue.
-        let wrapped = sort_key(Queue::Opaque, 0, MaterialId(1 << 16), S0, 0.5);
-        assert_eq!(wrapped, sort_key(Queue::Opaque, 0, M0, S0, 0.5));
+        let k = |m, d| sort_key(OPAQUE, false, 0, m, S0, d);
+        assert_eq!(k(M0, -3.0), k(M0, 0.0));
+        assert_eq!(k(M0, 7.0), k(M0, 1.0));
+        assert_eq!(k(M0, f32::NAN), k(M0, 0.0), "NaN depth clamps, never spills into other fields");
+        // Material 65536 wraps to 0 in the key: same bin, still the same stage.
+        assert_eq!(k(MaterialId(1 << 16), 0.5), k(M0, 0.5));
+        assert_eq!(stage_of(sort_key(255, true, u16::MAX, MaterialId(u32::MAX), ShapeId(u32::MAX), 0.0)), 255);
     }
 
     #[test]
     fn radix_sort_orders_by_key_and_is_stable() {
-        let item = |key, first| DrawItem {
-            key,
-            pipeline: 0,
-            material: M0,
-            shape: S0,
-            first,
-            count: 1,
-        };
-        let mut items = vec![
-            item(5, 0),
-            item(1, 1),
-            item(5, 2),
-            item(u64::MAX, 3),
-            item(0, 4),
-        ];
+        let item = |key, first| DrawItem { key, pipeline: 0, material: M0, shape: S0, first, count: 1 };
+        let mut items = vec![item(5, 0), item(1, 1), item(5, 2), item(u64::MAX, 3), item(0, 4)];
         sort(&mut items);
         let firsts: Vec<u32> = items.iter().map(|i| i.first).collect();
         assert_eq!(firsts, vec![4, 1, 0, 2, 3]);

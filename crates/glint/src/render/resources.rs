@@ -26,11 +26,7 @@ impl GpuMesh {
             contents: bytemuck::cast_slice(mesh.indices()),
             usage: wgpu::BufferUsages::INDEX,
         });
-        Self {
-            vertices,
-            indices,
-            index_count: mesh.indices().len() as u32,
-        }
+        Self { vertices, indices, index_count: mesh.indices().len() as u32 }
     }
 }
 
@@ -102,17 +98,9 @@ impl TextureUploader {
         texture: &Texture,
     ) -> (wgpu::TextureView, u64) {
         let (width, height) = texture.image.dimensions();
-        let format = if texture.srgb {
-            wgpu::TextureFormat::Rgba8UnormSrgb
-        } else {
-            wgpu::TextureFormat::Rgba8Unorm
-        };
+        let format = if texture.srgb { wgpu::TextureFormat::Rgba8UnormSrgb } else { wgpu::TextureFormat::Rgba8Unorm };
         let levels = texture.mip_levels();
-        let size = wgpu::Extent3d {
-            width,
-            height,
-            depth_or_array_layers: 1,
-        };
+        let size = wgpu::Extent3d { width, height, depth_or_array_layers: 1 };
         let gpu_texture = device.create_texture(&wgpu::TextureDescriptor {
             label: Some(&format!("texture '{}'", texture.name)),
             size,
@@ -129,21 +117,12 @@ impl TextureUploader {
         queue.write_texture(
             gpu_texture.as_image_copy(),
             texture.image.as_raw(),
-            wgpu::TexelCopyBufferLayout {
-                offset: 0,
-                bytes_per_row: Some(4 * width),
-                rows_per_image: Some(height),
-            },
+            wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(4 * width), rows_per_image: Some(height) },
             size,
         );
-        let pipeline = if texture.srgb {
-            &self.srgb
-        } else {
-            &self.linear
-        };
-        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
-            label: Some("texture uploader: mips"),
-        });
+        let pipeline = if texture.srgb { &self.srgb } else { &self.linear };
+        let mut encoder =
+            device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("texture uploader: mips") });
         let level_view = |level| {
             gpu_texture.create_view(&wgpu::TextureViewDescriptor {
                 base_mip_level: level,
@@ -160,10 +139,7 @@ impl TextureUploader {
                         binding: 0,
                         resource: wgpu::BindingResource::TextureView(&level_view(level - 1)),
                     },
-                    wgpu::BindGroupEntry {
-                        binding: 1,
-                        resource: wgpu::BindingResource::Sampler(&self.sampler),
-                    },
+                    wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::Sampler(&self.sampler) },
                 ],
             });
             let target = level_view(level);
@@ -185,68 +161,104 @@ impl TextureUploader {
             pass.draw(0..3, 0..1);
         }
         queue.submit([encoder.finish()]);
-        (
-            gpu_texture.create_view(&Default::default()),
-            texture.image.as_raw().len() as u64,
-        )
+        (gpu_texture.create_view(&Default::default()), texture.image.as_raw().len() as u64)
     }
 }
 
-/// The per-frame instance storage buffer (`@group(3)`), grown by doubling.
-pub(crate) struct InstanceBuffer {
+/// A storage buffer that grows by doubling (its contents are lost when it grows).
+struct GrowBuffer {
     buffer: wgpu::Buffer,
-    pub bind_group: wgpu::BindGroup,
-    capacity: usize,
+    label: &'static str,
 }
 
-impl InstanceBuffer {
-    const INITIAL_CAPACITY: usize = 1024;
-
-    pub(crate) fn new(device: &wgpu::Device, layout: &wgpu::BindGroupLayout) -> Self {
-        Self::with_capacity(device, layout, Self::INITIAL_CAPACITY)
-    }
-
-    fn with_capacity(
-        device: &wgpu::Device,
-        layout: &wgpu::BindGroupLayout,
-        capacity: usize,
-    ) -> Self {
+impl GrowBuffer {
+    fn new(device: &wgpu::Device, label: &'static str, bytes: u64) -> Self {
         let buffer = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("renderer: instance transforms"),
-            size: (capacity * std::mem::size_of::<InstanceGpu>()) as u64,
+            label: Some(label),
+            size: bytes.max(256).next_power_of_two(),
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("renderer: instance block (group 3)"),
-            layout,
-            entries: &[wgpu::BindGroupEntry {
-                binding: 0,
-                resource: buffer.as_entire_binding(),
-            }],
-        });
-        Self {
-            buffer,
-            bind_group,
-            capacity,
-        }
+        Self { buffer, label }
     }
 
-    /// Write this frame's instances in one upload, growing the buffer first if
-    /// needed. Returns bytes written.
-    pub(crate) fn write(
+    /// Make room for `bytes`; returns whether the buffer was replaced.
+    fn reserve(&mut self, device: &wgpu::Device, bytes: u64) -> bool {
+        if bytes <= self.buffer.size() {
+            return false;
+        }
+        *self = Self::new(device, self.label, bytes);
+        true
+    }
+}
+
+/// The Renderer block (`@group(3)`): persistent instance transforms (binding 0) and
+/// this frame's instance indices in draw order (binding 1).
+pub(crate) struct InstanceBuffers {
+    transforms: GrowBuffer,
+    draw_indices: GrowBuffer,
+    pub bind_group: wgpu::BindGroup,
+}
+
+impl InstanceBuffers {
+    pub(crate) fn new(device: &wgpu::Device, layout: &wgpu::BindGroupLayout) -> Self {
+        let transforms = GrowBuffer::new(device, "renderer block: instance transforms", 1024 * 64);
+        let draw_indices = GrowBuffer::new(device, "renderer block: draw indices", 1024 * 4);
+        let bind_group = Self::bind(device, layout, &transforms, &draw_indices);
+        Self { transforms, draw_indices, bind_group }
+    }
+
+    fn bind(
+        device: &wgpu::Device,
+        layout: &wgpu::BindGroupLayout,
+        transforms: &GrowBuffer,
+        indices: &GrowBuffer,
+    ) -> wgpu::BindGroup {
+        device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("renderer block (group 3)"),
+            layout,
+            entries: &[
+                wgpu::BindGroupEntry { binding: 0, resource: transforms.buffer.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 1, resource: indices.buffer.as_entire_binding() },
+            ],
+        })
+    }
+
+    /// Make room for `transforms` instances and `indices` draw indices. Returns
+    /// whether the transform buffer was replaced (its contents must be written again).
+    pub(crate) fn reserve(
         &mut self,
         device: &wgpu::Device,
-        queue: &wgpu::Queue,
         layout: &wgpu::BindGroupLayout,
-        instances: &[InstanceGpu],
-    ) -> u64 {
-        if instances.len() > self.capacity {
-            *self = Self::with_capacity(device, layout, instances.len().next_power_of_two());
+        transforms: usize,
+        indices: usize,
+    ) -> bool {
+        let grew_transforms = self.transforms.reserve(device, (transforms * std::mem::size_of::<InstanceGpu>()) as u64);
+        let grew_indices = self.draw_indices.reserve(device, (indices * 4) as u64);
+        if grew_transforms || grew_indices {
+            self.bind_group = Self::bind(device, layout, &self.transforms, &self.draw_indices);
         }
-        let bytes: &[u8] = bytemuck::cast_slice(instances);
+        grew_transforms
+    }
+
+    /// Write `data` at instance `first` of the transform buffer; returns bytes written.
+    pub(crate) fn write_transforms(&self, queue: &wgpu::Queue, first: u32, data: &[InstanceGpu]) -> u64 {
+        let bytes: &[u8] = bytemuck::cast_slice(data);
         if !bytes.is_empty() {
-            queue.write_buffer(&self.buffer, 0, bytes);
+            queue.write_buffer(
+                &self.transforms.buffer,
+                u64::from(first) * std::mem::size_of::<InstanceGpu>() as u64,
+                bytes,
+            );
+        }
+        bytes.len() as u64
+    }
+
+    /// Write this frame's draw indices in one upload; returns bytes written.
+    pub(crate) fn write_draw_indices(&self, queue: &wgpu::Queue, indices: &[u32]) -> u64 {
+        let bytes: &[u8] = bytemuck::cast_slice(indices);
+        if !bytes.is_empty() {
+            queue.write_buffer(&self.draw_indices.buffer, 0, bytes);
         }
         bytes.len() as u64
     }

@@ -2,33 +2,54 @@
 
 use serde::Serialize;
 
-/// Bytes written to the GPU during a frame, by kind.
+/// Bytes written to the GPU during a frame, per shader data block and kind.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
 pub struct UploadStats {
-    /// Scene, camera and material uniform blocks.
-    pub uniforms: u64,
-    /// Per-instance data (transforms).
-    pub instances: u64,
-    /// Texture pixels (all mip levels come from the GPU, so only level 0 counts).
+    /// Scene block (`@group(0)`): environment and lights.
+    pub scene: u64,
+    /// Camera block (`@group(1)`).
+    pub camera: u64,
+    /// Material blocks (`@group(2)`).
+    pub material: u64,
+    /// Renderer block (`@group(3)`): instance transforms that changed.
+    pub transforms: u64,
+    /// Renderer block (`@group(3)`): this frame's visible instance indices, in draw order.
+    pub draw_indices: u64,
+    /// Texture pixels (mip levels are made on the GPU, so only level 0 counts).
     pub textures: u64,
     /// Vertex and index buffers of shapes used for the first time.
     pub meshes: u64,
-    /// Sum of the above.
+    /// Scene + camera + material blocks.
+    pub uniforms: u64,
+    /// Transforms + draw indices.
+    pub instances: u64,
+    /// Everything.
     pub total: u64,
+}
+
+impl UploadStats {
+    /// Fill in the sums from the per-block counts.
+    pub(crate) fn finish(&mut self) {
+        self.uniforms = self.scene + self.camera + self.material;
+        self.instances = self.transforms + self.draw_indices;
+        self.total = self.uniforms + self.instances + self.textures + self.meshes;
+    }
 }
 
 /// CPU time of each frame stage, in milliseconds.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
 pub struct StageTimes {
-    /// Creating GPU twins of new shapes, textures and materials; writing edited materials.
+    /// GPU twins of new shapes, textures, materials and pipelines; edited materials.
     pub prepare: f64,
-    /// Building one draw item with a sort key per submitted entity.
+    /// Frustum culling of entities and instances.
+    pub cull: f64,
+    /// Building draw items with sort keys.
     pub queue: f64,
     /// Radix-sorting the draw items.
     pub sort: f64,
-    /// Merging runs into instanced draws and packing instance data.
+    /// Merging runs into instanced draws and packing draw indices.
     pub batch: f64,
-    /// Writing changed blocks and the frame's instance data.
+    /// Writing changed blocks, changed transforms and the draw indices.
     pub upload: f64,
     /// Recording the render pass.
     pub encode: f64,
@@ -45,14 +66,20 @@ pub struct FrameStats {
     pub draw_calls: u32,
     /// `set_pipeline` calls.
     pub pipelines_bound: u32,
+    /// Pipelines compiled during this frame (0 in steady state).
+    pub pipelines_compiled: u32,
     /// `set_bind_group` calls.
     pub bind_groups_set: u32,
-    /// Bytes written to the GPU, by kind.
+    /// Bytes written to the GPU, per block and kind.
     pub bytes_uploaded: UploadStats,
     /// Entities submitted since the last flush.
     pub entities_submitted: u32,
     /// Instances submitted since the last flush.
     pub instances_submitted: u64,
+    /// Instances outside the view frustum.
+    pub instances_culled: u64,
+    /// Instances skipped because their transform has NaN or infinity.
+    pub instances_invalid: u64,
     /// Instances drawn.
     pub instances_drawn: u64,
     /// CPU time per stage.

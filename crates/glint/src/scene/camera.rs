@@ -45,32 +45,20 @@ impl Camera {
             eye: Vec3::ZERO,
             target: Vec3::NEG_Z,
             up: Vec3::Y,
-            projection: Projection::Perspective {
-                fov_y: fov_y_degrees.to_radians(),
-                near,
-                far,
-            },
+            projection: Projection::Perspective { fov_y: fov_y_degrees.to_radians(), near, far },
         }
     }
 
     /// An orthographic camera showing `height` world units vertically.
     pub fn orthographic(height: f32, near: f32, far: f32) -> Self {
-        Self {
-            projection: Projection::Orthographic { height, near, far },
-            ..Self::perspective(60.0, near, far)
-        }
+        Self { projection: Projection::Orthographic { height, near, far }, ..Self::perspective(60.0, near, far) }
     }
 
     /// The same camera moved to `eye`, looking at `target`, Y up.
     pub fn looking_at(mut self, eye: Vec3, target: Vec3) -> Self {
         self.eye = eye;
         self.target = target;
-        self.up = if (target - eye)
-            .normalize_or_zero()
-            .cross(Vec3::Y)
-            .length_squared()
-            < 1e-8
-        {
+        self.up = if (target - eye).normalize_or_zero().cross(Vec3::Y).length_squared() < 1e-8 {
             Vec3::Z // looking straight up or down: any horizontal up works
         } else {
             Vec3::Y
@@ -87,9 +75,7 @@ impl Camera {
     pub fn projection(&self, aspect: f32) -> Mat4 {
         use glam::camera::rh::proj::directx;
         match self.projection {
-            Projection::Perspective { fov_y, near, far } => {
-                directx::perspective(fov_y, aspect, near, far)
-            }
+            Projection::Perspective { fov_y, near, far } => directx::perspective(fov_y, aspect, near, far),
             Projection::Orthographic { height, near, far } => {
                 let (h, w) = (height * 0.5, height * 0.5 * aspect);
                 directx::orthographic(-w, w, -h, h, near, far)

@@ -1,18 +1,45 @@
 use super::{MaterialId, ShapeId};
 use glam::Mat4;
+use std::sync::atomic::{AtomicU64, Ordering};
 
 /// A thing to draw: a shape, a material and one transform per instance.
 ///
 /// All instances of an entity go in one instanced draw, and entities that share
 /// shape and material are merged into that same draw.
-#[derive(Clone, Debug, PartialEq)]
+///
+/// The renderer keeps each entity's transforms on the GPU between frames: it
+/// re-uploads them only when they were changed through [`Entity::transforms_mut`]
+/// or [`Entity::set_transform`], which bump the entity's version (its dirty flag).
+#[derive(Debug, PartialEq)]
 pub struct Entity {
+    key: u64,
+    version: u64,
     /// The mesh.
     pub shape: ShapeId,
     /// The material.
     pub material: MaterialId,
-    /// Object-to-world transform of each instance.
-    pub transforms: Vec<Mat4>,
+    transforms: Vec<Mat4>,
+    /// Draw-order override: entities with a `render_order` are drawn in increasing
+    /// order of it, before (values below 128) or after (128 and above) the sky,
+    /// instead of in their material's queue. `None`: the material's queue decides.
+    pub render_order: Option<u8>,
+}
+
+/// Source of entity identities: each entity (clones included) gets its own.
+static NEXT_KEY: AtomicU64 = AtomicU64::new(1);
+
+impl Clone for Entity {
+    /// A copy with its own identity, so the renderer keeps it apart from the original.
+    fn clone(&self) -> Self {
+        Self {
+            key: NEXT_KEY.fetch_add(1, Ordering::Relaxed),
+            version: 0,
+            shape: self.shape,
+            material: self.material,
+            transforms: self.transforms.clone(),
+            render_order: self.render_order,
+        }
+    }
 }
 
 impl Entity {
@@ -24,9 +51,46 @@ impl Entity {
     /// An entity with one instance per transform.
     pub fn instanced(shape: ShapeId, material: MaterialId, transforms: Vec<Mat4>) -> Self {
         Self {
+            key: NEXT_KEY.fetch_add(1, Ordering::Relaxed),
+            version: 0,
             shape,
             material,
             transforms,
+            render_order: None,
         }
+    }
+
+    /// The same entity with its draw-order override set (see [`Entity::render_order`]).
+    pub fn with_render_order(mut self, order: Option<u8>) -> Self {
+        self.render_order = order;
+        self
+    }
+
+    /// Object-to-world transform of each instance.
+    pub fn transforms(&self) -> &[Mat4] {
+        &self.transforms
+    }
+
+    /// Change the transforms; marks them for re-upload.
+    pub fn transforms_mut(&mut self) -> &mut Vec<Mat4> {
+        self.version += 1;
+        &mut self.transforms
+    }
+
+    /// Replace instance `index`'s transform; marks the transforms for re-upload.
+    ///
+    /// Precondition: `index < self.transforms().len()` (panics otherwise, like slice indexing).
+    pub fn set_transform(&mut self, index: usize, transform: Mat4) {
+        self.transforms_mut()[index] = transform;
+    }
+
+    /// Identity that stays the same across frames (clones get their own).
+    pub(crate) fn key(&self) -> u64 {
+        self.key
+    }
+
+    /// Bumped on every change to the transforms.
+    pub(crate) fn version(&self) -> u64 {
+        self.version
     }
 }

@@ -25,9 +25,6 @@ pub struct Environment {
 
 impl Default for Environment {
     fn default() -> Self {
-        Self {
-            background: Background::Color(Vec3::new(0.05, 0.05, 0.06)),
-            ambient: Vec3::splat(0.1),
-        }
+        Self { background: Background::Color(Vec3::new(0.05, 0.05, 0.06)), ambient: Vec3::splat(0.1) }
     }
 }

@@ -38,19 +38,11 @@ pub struct Light {
 impl Light {
     /// A white-ish directional light travelling along `direction`.
     pub fn directional(direction: Vec3, color: Vec3, intensity: f32) -> Self {
-        Self {
-            kind: LightKind::Directional { direction },
-            color,
-            intensity,
-        }
+        Self { kind: LightKind::Directional { direction }, color, intensity }
     }
 
     /// A point light at `position` reaching zero at `range`.
     pub fn point(position: Vec3, color: Vec3, intensity: f32, range: f32) -> Self {
-        Self {
-            kind: LightKind::Point { position, range },
-            color,
-            intensity,
-        }
+        Self { kind: LightKind::Point { position, range }, color, intensity }
     }
 }

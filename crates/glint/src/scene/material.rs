@@ -73,10 +73,6 @@ impl Default for Material {
 impl Material {
     /// A plain opaque material of one linear RGB colour.
     pub fn color(name: &str, r: f32, g: f32, b: f32) -> Self {
-        Self {
-            name: name.into(),
-            base_color: Vec4::new(r, g, b, 1.0),
-            ..Self::default()
-        }
+        Self { name: name.into(), base_color: Vec4::new(r, g, b, 1.0), ..Self::default() }
     }
 }

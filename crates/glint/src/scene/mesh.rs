@@ -34,16 +34,7 @@ impl Aabb {
     pub fn from_points(points: impl IntoIterator<Item = Vec3>) -> Option<Self> {
         let mut it = points.into_iter();
         let first = it.next()?;
-        Some(it.fold(
-            Self {
-                min: first,
-                max: first,
-            },
-            |b, p| Self {
-                min: b.min.min(p),
-                max: b.max.max(p),
-            },
-        ))
+        Some(it.fold(Self { min: first, max: first }, |b, p| Self { min: b.min.min(p), max: b.max.max(p) }))
     }
 
     /// Centre of the box.
@@ -141,30 +132,17 @@ impl Mesh {
             return Err(MeshError::NotTriangles(indices.len()));
         }
         if let Some(&index) = indices.iter().find(|&&i| i as usize >= vertices.len()) {
-            return Err(MeshError::IndexOutOfRange {
-                index,
-                vertices: vertices.len(),
-            });
+            return Err(MeshError::IndexOutOfRange { index, vertices: vertices.len() });
         }
-        if let Some(i) = vertices
-            .iter()
-            .position(|v| !(v.position.iter().chain(&v.normal).chain(&v.uv)).all(|c| c.is_finite()))
+        if let Some(i) =
+            vertices.iter().position(|v| !(v.position.iter().chain(&v.normal).chain(&v.uv)).all(|c| c.is_finite()))
         {
             return Err(MeshError::NonFinite(i));
         }
-        let aabb = Aabb::from_points(vertices.iter().map(|v| Vec3::from(v.position)))
-            .ok_or(MeshError::Empty)?;
+        let aabb = Aabb::from_points(vertices.iter().map(|v| Vec3::from(v.position))).ok_or(MeshError::Empty)?;
         let center = aabb.center();
-        let radius = vertices
-            .iter()
-            .map(|v| Vec3::from(v.position).distance(center))
-            .fold(0.0, f32::max);
-        Ok(Self {
-            vertices,
-            indices,
-            aabb,
-            sphere: BoundingSphere { center, radius },
-        })
+        let radius = vertices.iter().map(|v| Vec3::from(v.position).distance(center)).fold(0.0, f32::max);
+        Ok(Self { vertices, indices, aabb, sphere: BoundingSphere { center, radius } })
     }
 
     /// The interleaved vertices.
@@ -189,8 +167,7 @@ impl Mesh {
 
     /// Bytes this mesh takes on the GPU (vertices + indices).
     pub fn gpu_bytes(&self) -> u64 {
-        (std::mem::size_of_val(self.vertices.as_slice())
-            + std::mem::size_of_val(self.indices.as_slice())) as u64
+        (std::mem::size_of_val(self.vertices.as_slice()) + std::mem::size_of_val(self.indices.as_slice())) as u64
     }
 
     fn generate_tangents(&mut self) {

@@ -19,9 +19,11 @@ const FLAG_ALPHA_BLEND: u32 = 4u;
 @group(2) @binding(3) var specular_map: texture_2d<f32>;
 @group(2) @binding(4) var material_sampler: sampler;
 
-// One object-to-world matrix per instance, in draw order; a draw's first_instance
-// points at its run.
-@group(3) @binding(0) var<storage, read> instances: array<mat4x4<f32>>;
+// Renderer block: every stored instance's object-to-world matrix (persistent, rewritten
+// only where entities changed), and this frame's visible instances in draw order;
+// a draw's first_instance points at its run of indices.
+@group(3) @binding(0) var<storage, read> transforms: array<mat4x4<f32>>;
+@group(3) @binding(1) var<storage, read> draw_indices: array<u32>;
 
 struct VertexIn {
     @location(0) position: vec3<f32>,
@@ -40,7 +42,7 @@ struct VertexOut {
 
 @vertex
 fn vs_main(v: VertexIn, @builtin(instance_index) instance: u32) -> VertexOut {
-    let model = instances[instance];
+    let model = transforms[draw_indices[instance]];
     let world = model * vec4<f32>(v.position, 1.0);
     // Normals transform by the inverse transpose, which is the cofactor matrix over
     // the determinant: only the determinant's sign matters once normalised. This is

@@ -29,18 +29,21 @@ pub fn gpu() -> Option<&'static Gpu> {
 
 /// Render one frame of a scene under `tests/scenes/` at `size`×`size` with 4× MSAA.
 pub fn render_scene(gpu: &Gpu, name: &str, size: u32) -> (image::RgbaImage, FrameStats) {
-    let path = repo_root().join("tests/scenes").join(format!("{name}.scn"));
-    let desc = glint::asset::load_scene(&path).unwrap_or_else(|e| panic!("{e}"));
+    render_file(gpu, &repo_root().join("tests/scenes").join(format!("{name}.scn")), size, true)
+}
+
+/// Render one frame of the scene file at `path`, culling on or off.
+pub fn render_file(gpu: &Gpu, path: &Path, size: u32, culling: bool) -> (image::RgbaImage, FrameStats) {
+    let desc = glint::asset::load_scene(path).unwrap_or_else(|e| panic!("{e}"));
     assert!(desc.warnings.is_empty(), "{:?}", desc.warnings);
     let mut renderer = Renderer::new(gpu);
+    renderer.set_culling(culling);
     let entities = desc.instantiate(&mut renderer);
     let mut target = OffscreenTarget::new(gpu, size, size, 4).expect("target");
     for e in &entities {
         renderer.submit(e);
     }
-    let stats = renderer
-        .flush(&desc.cameras[0], &desc.lights, &mut target)
-        .expect("frame");
+    let stats = renderer.flush(&desc.cameras[0], &desc.lights, &mut target).expect("frame");
     (target.read_rgba8(gpu).expect("readback"), stats)
 }
 
@@ -67,28 +70,15 @@ pub fn assert_matches_reference(name: &str, actual: &image::RgbaImage) {
         return;
     }
     let expected = image::open(&reference_path)
-        .unwrap_or_else(|e| {
-            panic!(
-                "{}: {e} (run with GLINT_BLESS=1 to create it)",
-                reference_path.display()
-            )
-        })
+        .unwrap_or_else(|e| panic!("{}: {e} (run with GLINT_BLESS=1 to create it)", reference_path.display()))
         .into_rgb8();
     let actual_rgb = image::DynamicImage::ImageRgba8(actual.clone()).into_rgb8();
-    assert_eq!(
-        expected.dimensions(),
-        actual_rgb.dimensions(),
-        "{name}: size differs from the reference"
-    );
+    assert_eq!(expected.dimensions(), actual_rgb.dimensions(), "{name}: size differs from the reference");
     let similarity = image_compare::rgb_hybrid_compare(&expected, &actual_rgb).expect("same size");
     let bad = expected
         .pixels()
         .zip(actual_rgb.pixels())
-        .filter(|(a, b)| {
-            a.0.iter()
-                .zip(b.0.iter())
-                .any(|(x, y)| x.abs_diff(*y) > BAD_PIXEL_DELTA)
-        })
+        .filter(|(a, b)| a.0.iter().zip(b.0.iter()).any(|(x, y)| x.abs_diff(*y) > BAD_PIXEL_DELTA))
         .count() as f64
         / f64::from(expected.width() * expected.height());
     if similarity.score < MIN_SIMILARITY || bad > MAX_BAD_PIXELS {
@@ -97,11 +87,7 @@ pub fn assert_matches_reference(name: &str, actual: &image::RgbaImage) {
         let actual_path = out.join(format!("{name}.actual.png"));
         let diff_path = out.join(format!("{name}.diff.png"));
         actual.save(&actual_path).expect("write actual");
-        similarity
-            .image
-            .to_color_map()
-            .save(&diff_path)
-            .expect("write diff");
+        similarity.image.to_color_map().save(&diff_path).expect("write diff");
         panic!(
             "{name}: differs from {} (similarity {:.4} < {MIN_SIMILARITY} or {:.3}% pixels off by >{BAD_PIXEL_DELTA} > {:.3}%)\n  actual: {}\n  diff:   {}",
             reference_path.display(),

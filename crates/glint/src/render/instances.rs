@@ -1,0 +1,279 @@
+//! Core layer: the persistent instance store. Every submitted entity owns a range
+//! of one transform array that lives on the GPU between frames; a range is written
+//! again only when its entity's version (dirty flag) changes. Beside it, the world
+//! bounds of every instance as structure-of-arrays (centres, half extents) for culling.
+
+use super::cull::{transform_aabb, NEVER_VISIBLE_EXTENT};
+use crate::scene::{Aabb, Entity, ShapeId};
+use glam::{Mat4, Vec3A};
+use std::collections::HashMap;
+use std::ops::Range;
+
+/// One entity's place in the store.
+#[derive(Clone, Debug)]
+pub(crate) struct Slot {
+    key: u64,
+    version: u64,
+    shape: ShapeId,
+    /// First instance in the store.
+    pub first: u32,
+    /// Instance count.
+    pub count: u32,
+    /// Union of the valid instances' world boxes (centre, half extent); `None` when
+    /// no instance is valid.
+    pub bounds: Option<(Vec3A, Vec3A)>,
+    /// Instances whose transform has NaN or infinity: stored as zero matrices, never drawn.
+    pub invalid: u32,
+    /// Frame in which the entity was last submitted.
+    last_frame: u64,
+}
+
+/// All instances of all entities submitted recently.
+#[derive(Default)]
+pub(crate) struct InstanceStore {
+    slots: Vec<Slot>,
+    by_key: HashMap<u64, usize>,
+    /// Transforms as uploaded (invalid ones zeroed).
+    pub transforms: Vec<Mat4>,
+    /// World box centres, one per instance.
+    pub centers: Vec<Vec3A>,
+    /// World box half extents, one per instance ([`NEVER_VISIBLE_EXTENT`] for invalid ones).
+    pub extents: Vec<Vec3A>,
+    /// Instances left behind by entities that moved or shrank.
+    garbage: usize,
+    /// Ranges written since the last upload.
+    dirty: Vec<Range<u32>>,
+    /// The whole store must be uploaded (after compaction or growth).
+    all_dirty: bool,
+}
+
+impl InstanceStore {
+    /// The slot for `index`.
+    pub(crate) fn slot(&self, index: usize) -> &Slot {
+        &self.slots[index]
+    }
+
+    /// Number of instances stored, garbage included.
+    pub(crate) fn len(&self) -> usize {
+        self.transforms.len()
+    }
+
+    /// Record `entity` as submitted in `frame`, writing its transforms and bounds if
+    /// they changed (or it is new, or its shape changed). Returns its slot index.
+    pub(crate) fn submit(&mut self, entity: &Entity, local: Aabb, frame: u64) -> usize {
+        let count = entity.transforms().len() as u32;
+        let index = match self.by_key.get(&entity.key()) {
+            Some(&i) => i,
+            None => {
+                self.slots.push(Slot {
+                    key: entity.key(),
+                    version: entity.version().wrapping_sub(1),
+                    shape: entity.shape,
+                    first: self.transforms.len() as u32,
+                    count: 0,
+                    bounds: None,
+                    invalid: 0,
+                    last_frame: frame,
+                });
+                self.by_key.insert(entity.key(), self.slots.len() - 1);
+                self.slots.len() - 1
+            }
+        };
+        let slot = &mut self.slots[index];
+        slot.last_frame = frame;
+        if slot.count != count {
+            // A new size needs a new range at the end; the old one becomes garbage.
+            self.garbage += slot.count as usize;
+            slot.first = self.transforms.len() as u32;
+            slot.count = count;
+            let new_len = self.transforms.len() + count as usize;
+            self.transforms.resize(new_len, Mat4::ZERO);
+            self.centers.resize(new_len, Vec3A::ZERO);
+            self.extents.resize(new_len, Vec3A::ZERO);
+            slot.version = entity.version().wrapping_sub(1);
+        }
+        if slot.version != entity.version() || slot.shape != entity.shape {
+            slot.version = entity.version();
+            slot.shape = entity.shape;
+            let range = slot.first as usize..(slot.first + slot.count) as usize;
+            let (bounds, invalid) = write_range(
+                entity.transforms(),
+                local,
+                &mut self.transforms[range.clone()],
+                &mut self.centers[range.clone()],
+                &mut self.extents[range],
+            );
+            slot.bounds = bounds;
+            slot.invalid = invalid;
+            self.dirty.push(slot.first..slot.first + slot.count);
+        }
+        index
+    }
+
+    /// When waste (ranges left behind, plus entities not submitted in `frame`)
+    /// outweighs live data, rebuild the store from the entities submitted in
+    /// `frame` and mark everything for upload. Returns the slot indices remapped:
+    /// `remap[old] = new` (`usize::MAX` if dropped).
+    pub(crate) fn compact_if_wasteful(&mut self, frame: u64) -> Option<Vec<usize>> {
+        let stale: usize = self.slots.iter().filter(|s| s.last_frame != frame).map(|s| s.count as usize).sum();
+        let waste = self.garbage + stale;
+        if waste < 4096 || waste < self.transforms.len() / 2 {
+            return None;
+        }
+        let mut remap = vec![usize::MAX; self.slots.len()];
+        let (mut transforms, mut centers, mut extents) = (Vec::new(), Vec::new(), Vec::new());
+        let mut slots = Vec::new();
+        for (old, slot) in self.slots.iter().enumerate().filter(|(_, s)| s.last_frame == frame) {
+            let range = slot.first as usize..(slot.first + slot.count) as usize;
+            let mut moved = slot.clone();
+            moved.first = transforms.len() as u32;
+            transforms.extend_from_slice(&self.transforms[range.clone()]);
+            centers.extend_from_slice(&self.centers[range.clone()]);
+            extents.extend_from_slice(&self.extents[range]);
+            remap[old] = slots.len();
+            slots.push(moved);
+        }
+        self.by_key = slots.iter().enumerate().map(|(i, s)| (s.key, i)).collect();
+        self.slots = slots;
+        self.transforms = transforms;
+        self.centers = centers;
+        self.extents = extents;
+        self.garbage = 0;
+        self.all_dirty = true;
+        Some(remap)
+    }
+
+    /// Take the ranges to upload: everything after compaction, else the merged dirty ranges.
+    pub(crate) fn take_dirty(&mut self) -> Vec<Range<u32>> {
+        let mut ranges = std::mem::take(&mut self.dirty);
+        if std::mem::take(&mut self.all_dirty) {
+            let everything = 0..self.transforms.len() as u32;
+            return vec![everything];
+        }
+        ranges.sort_by_key(|r| r.start);
+        let mut merged: Vec<Range<u32>> = Vec::with_capacity(ranges.len());
+        for r in ranges.into_iter().filter(|r| !r.is_empty()) {
+            match merged.last_mut() {
+                Some(last) if r.start <= last.end => last.end = last.end.max(r.end),
+                _ => merged.push(r),
+            }
+        }
+        merged
+    }
+
+    /// Mark the whole store for upload (the GPU buffer was recreated).
+    pub(crate) fn mark_all_dirty(&mut self) {
+        self.all_dirty = true;
+    }
+}
+
+/// Copy transforms into the store and compute each instance's world box. Invalid
+/// (non-finite) transforms become zero matrices with the "never visible" box
+/// (centre 0, extent [`NEVER_VISIBLE_EXTENT`]), so NaN never reaches the GPU or the culler.
+/// Returns the union of the valid boxes and the number of invalid instances.
+fn write_range(
+    src: &[Mat4],
+    local: Aabb,
+    transforms: &mut [Mat4],
+    centers: &mut [Vec3A],
+    extents: &mut [Vec3A],
+) -> (Option<(Vec3A, Vec3A)>, u32) {
+    let (lc, le) = (Vec3A::from(local.center()), Vec3A::from(local.half_extent()));
+    let (mut lo, mut hi) = (Vec3A::splat(f32::INFINITY), Vec3A::splat(f32::NEG_INFINITY));
+    let mut invalid = 0;
+    for (i, m) in src.iter().enumerate() {
+        if m.is_finite() {
+            let (c, e) = transform_aabb(m, lc, le);
+            transforms[i] = *m;
+            centers[i] = c;
+            extents[i] = e;
+            lo = lo.min(c - e);
+            hi = hi.max(c + e);
+        } else {
+            transforms[i] = Mat4::ZERO;
+            centers[i] = Vec3A::ZERO;
+            extents[i] = Vec3A::splat(NEVER_VISIBLE_EXTENT);
+            invalid += 1;
+        }
+    }
+    let bounds = (invalid < src.len() as u32).then(|| ((lo + hi) * 0.5, (hi - lo) * 0.5));
+    (bounds, invalid)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::MaterialId;
+    use glam::Vec3;
+
+    fn unit() -> Aabb {
+        Aabb { min: Vec3::splat(-0.5), max: Vec3::splat(0.5) }
+    }
+
+    fn entity(n: usize) -> Entity {
+        Entity::instanced(
+            ShapeId(0),
+            MaterialId(0),
+            (0..n).map(|i| Mat4::from_translation(Vec3::X * i as f32)).collect(),
+        )
+    }
+
+    #[test]
+    fn unchanged_entities_are_not_rewritten_and_moved_ones_are() {
+        let mut store = InstanceStore::default();
+        let (mut a, b) = (entity(3), entity(2));
+        store.submit(&a, unit(), 0);
+        store.submit(&b, unit(), 0);
+        assert_eq!(store.take_dirty(), vec![0..5], "first frame: both, merged into one range");
+        store.submit(&a, unit(), 1);
+        store.submit(&b, unit(), 1);
+        assert!(store.take_dirty().is_empty(), "nothing changed");
+        a.set_transform(1, Mat4::from_translation(Vec3::Y * 9.0));
+        let slot = store.submit(&a, unit(), 2);
+        store.submit(&b, unit(), 2);
+        assert_eq!(store.take_dirty(), vec![0..3], "only the moved entity's range");
+        assert_eq!(store.slot(slot).bounds.unwrap().0.y, 4.5, "union of y 0..9 has centre 4.5");
+    }
+
+    #[test]
+    fn a_resized_entity_moves_and_compaction_drops_what_was_not_submitted() {
+        let mut store = InstanceStore::default();
+        let mut a = entity(3000);
+        let gone = entity(3000);
+        store.submit(&a, unit(), 0);
+        store.submit(&gone, unit(), 0);
+        a.transforms_mut().push(Mat4::IDENTITY);
+        let slot = store.submit(&a, unit(), 1);
+        assert_eq!(store.slot(slot).first, 6000, "grown entity moved to the end");
+        assert_eq!(store.len(), 9001);
+        let remap = store.compact_if_wasteful(1).expect("3000 garbage + 3000 stale ≥ half");
+        assert_eq!(remap[slot], 0);
+        assert_eq!(store.len(), 3001);
+        assert_eq!(store.slot(0).first, 0);
+        assert_eq!(store.take_dirty(), vec![0..3001]);
+        assert_eq!(store.transforms[3000], Mat4::IDENTITY);
+    }
+
+    #[test]
+    fn nan_transforms_are_zeroed_counted_and_never_visible() {
+        let mut store = InstanceStore::default();
+        let mut e = entity(3);
+        e.set_transform(1, Mat4::from_translation(Vec3::new(f32::NAN, 0.0, 0.0)));
+        let slot = store.submit(&e, unit(), 0);
+        assert_eq!(store.slot(slot).invalid, 1);
+        assert_eq!(store.transforms[1], Mat4::ZERO);
+        assert!(store.transforms.iter().all(|m| m.is_finite()));
+        assert_eq!(store.extents[1], Vec3A::splat(NEVER_VISIBLE_EXTENT));
+        let bounds = store.slot(slot).bounds.unwrap();
+        assert!(bounds.0.is_finite() && bounds.1.is_finite(), "the union skips the invalid instance");
+    }
+
+    #[test]
+    fn clones_are_separate_entities() {
+        let mut store = InstanceStore::default();
+        let a = entity(2);
+        let b = a.clone();
+        assert_ne!(store.submit(&a, unit(), 0), store.submit(&b, unit(), 0));
+        assert_eq!(store.len(), 4);
+    }
+}
