@@ -160,10 +160,41 @@ fn only_the_changed_block_is_uploaded() {
     // A material edit rewrites that material's 48-byte block, nothing else.
     r.material_mut(m).expect("material").base_color.x = 0.1;
     assert_eq!(frame(&mut r, gpu, &[&e], &sun()).bytes_uploaded.uniforms, 48);
-    // A new light rewrites the scene block (64 + 64 × 32 bytes).
+    // A new light rewrites the scene block (80 + 64 × 32 bytes), nothing else.
     let mut lights = sun();
     lights.push(Light::point(Vec3::Y, Vec3::ONE, 1.0, 5.0));
-    assert_eq!(frame(&mut r, gpu, &[&e], &lights).bytes_uploaded.uniforms, 64 + 32 * MAX_LIGHTS as u64);
+    let stats = frame(&mut r, gpu, &[&e], &lights);
+    assert_eq!(stats.bytes_uploaded.scene, 80 + 32 * MAX_LIGHTS as u64);
+    assert_eq!(stats.bytes_uploaded.uniforms, stats.bytes_uploaded.scene);
+}
+
+#[test]
+fn precompile_leaves_the_first_frame_nothing_to_compile() {
+    let Some(gpu) = common::gpu() else { return };
+    let mut r = Renderer::new(gpu);
+    let cube = r.add_shape(ShapeKind::Cube.mesh());
+    let plain = r.add_material(Material::default());
+    let glass = r.add_material(Material { alpha_mode: AlphaMode::Blend, ..Material::default() });
+    let a = Entity::new(cube, plain, Mat4::IDENTITY);
+    let b = Entity::new(cube, glass, Mat4::IDENTITY);
+    assert_eq!(r.precompile(&[&a, &b], 1).expect("precompile"), 2, "two variants");
+    assert_eq!(r.precompile(&[&a, &b], 1).expect("precompile"), 0, "already built");
+    let stats = frame(&mut r, gpu, &[&a, &b], &sun());
+    assert_eq!(stats.pipelines_compiled, 0);
+    assert_eq!(stats.draw_calls, 2);
+}
+
+#[test]
+fn adding_a_map_compiles_exactly_one_new_variant() {
+    let Some(gpu) = common::gpu() else { return };
+    let mut r = Renderer::new(gpu);
+    let cube = r.add_shape(ShapeKind::Cube.mesh());
+    let m = r.add_material(Material::default());
+    let e = Entity::new(cube, m, Mat4::IDENTITY);
+    frame(&mut r, gpu, &[&e], &sun());
+    let bumps = r.add_texture(Texture::new("flat", image::RgbaImage::from_pixel(2, 2, image::Rgba([128, 128, 255, 255])), false));
+    r.material_mut(m).expect("material").normal_map = Some(bumps);
+    assert_eq!(frame(&mut r, gpu, &[&e], &sun()).pipelines_compiled, 1);
 }
 
 #[test]

@@ -104,12 +104,12 @@ impl OffscreenTarget {
         }
     }
 
-    /// The depth attachment, cleared to the far plane (1.0).
+    /// The depth-stencil attachment, cleared to the far plane (1.0) and stencil 0.
     pub(crate) fn depth_attachment(&self) -> wgpu::RenderPassDepthStencilAttachment<'_> {
         wgpu::RenderPassDepthStencilAttachment {
             view: &self.depth_view,
             depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(1.0), store: wgpu::StoreOp::Discard }),
-            stencil_ops: None,
+            stencil_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(0), store: wgpu::StoreOp::Discard }),
         }
     }
 

@@ -26,18 +26,18 @@ impl Light {
     }
 }
 
-/// The Scene block, `@group(0) @binding(0)` (2,112 bytes).
+/// The Scene block, `@group(0) @binding(0)` (2,128 bytes).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub(crate) struct SceneGpu {
     ambient: [f32; 4],              // 16
     sky_top: [f32; 4],              // 16
     sky_bottom: [f32; 4],           // 16
-    light_count: u32,               // 4
-    _pad: [u32; 3],                 // 12: `lights` starts 16-aligned
+    fog: [f32; 4],                  // 16: rgb colour, w density
+    counts: [u32; 4],               // 16: light count, 3 reserved
     lights: [LightGpu; MAX_LIGHTS], // 64 × 32
 }
-const _: () = assert!(std::mem::size_of::<SceneGpu>() == 64 + 32 * MAX_LIGHTS);
+const _: () = assert!(std::mem::size_of::<SceneGpu>() == 80 + 32 * MAX_LIGHTS);
 
 impl SceneGpu {
     /// Pack the environment and up to [`MAX_LIGHTS`] lights (the caller checks the count).
@@ -50,8 +50,8 @@ impl SceneGpu {
             ambient: env.ambient.extend(0.0).to_array(),
             sky_top: top.extend(1.0).to_array(),
             sky_bottom: bottom.extend(1.0).to_array(),
-            light_count: lights.len().min(MAX_LIGHTS) as u32,
-            _pad: [0; 3],
+            fog: env.fog.map_or([0.0; 4], |f| f.color.extend(f.density).to_array()),
+            counts: [lights.len().min(MAX_LIGHTS) as u32, 0, 0, 0],
             lights: [LightGpu::default(); MAX_LIGHTS],
         };
         for (slot, light) in block.lights.iter_mut().zip(lights) {
@@ -86,13 +86,6 @@ impl Camera {
     }
 }
 
-/// Material flag bits, mirrored by the `FLAG_*` constants in `forward.wgsl`.
-pub(crate) const FLAG_ALPHA_MASK: u32 = 1;
-/// The material has a normal map.
-pub(crate) const FLAG_NORMAL_MAP: u32 = 2;
-/// The material blends: its alpha is written out.
-pub(crate) const FLAG_ALPHA_BLEND: u32 = 4;
-
 /// A material's uniform block, `@group(2) @binding(0)` (48 bytes).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
@@ -100,26 +93,25 @@ pub(crate) struct MaterialGpu {
     base_color: [f32; 4], // 16
     coeffs: [f32; 4],     // 16: ambient, diffuse, specular, Blinn-Phong exponent
     alpha_cutoff: f32,    // 4
-    flags: u32,           // 4
+    reserved: u32,        // 4
     uv_scale: [f32; 2],   // 8
 }
 const _: () = assert!(std::mem::size_of::<MaterialGpu>() == 48);
 
 impl Material {
-    /// The shader's view of this material.
+    /// The shader's view of this material (what it does with them is the variant's
+    /// business: see `ShaderFeatures`).
     pub(crate) fn to_gpu(&self) -> MaterialGpu {
-        let (cutoff, mode_flag) = match self.alpha_mode {
-            AlphaMode::Opaque => (0.0, 0),
-            AlphaMode::Mask { cutoff } => (cutoff, FLAG_ALPHA_MASK),
-            AlphaMode::Blend => (0.0, FLAG_ALPHA_BLEND),
+        let cutoff = match self.alpha_mode {
+            AlphaMode::Mask { cutoff } => cutoff,
+            AlphaMode::Opaque | AlphaMode::Blend => 0.0,
         };
-        let normal_flag = if self.normal_map.is_some() { FLAG_NORMAL_MAP } else { 0 };
         let exponent = (1.0 + 11.0 * self.smoothness.clamp(0.0, 1.0)).exp2();
         MaterialGpu {
             base_color: self.base_color.to_array(),
             coeffs: Vec4::new(self.ambient, self.diffuse, self.specular, exponent).to_array(),
             alpha_cutoff: cutoff,
-            flags: mode_flag | normal_flag,
+            reserved: 0,
             uv_scale: self.uv_scale.to_array(),
         }
     }

@@ -28,12 +28,13 @@ use crate::gpu::{Gpu, OffscreenTarget};
 use crate::scene::{
     Background, Camera, Entity, Environment, Light, Material, MaterialId, Mesh, ShapeId, TextureId, MAX_LIGHTS,
 };
+use crate::shader::ShaderFeatures;
 use batch::Batch;
 use blocks::{CameraGpu, SceneGpu, UniformBlock};
 use cull::{Containment, Frustum};
 use glam::{Mat4, Vec3A};
 use instances::InstanceStore;
-use pipelines::{PipelineKey, Pipelines};
+use pipelines::Pipelines;
 use queue::{DrawItem, Queue, SKY_STAGE};
 use resources::{GpuMesh, InstanceBuffers, TextureUploader};
 use std::time::Instant;
@@ -50,6 +51,9 @@ pub enum RenderError {
     /// An entity names a material this renderer never created.
     #[error("unknown material id {0:?}: materials come from this renderer's add_material")]
     UnknownMaterial(MaterialId),
+    /// One of glint's own shaders failed to compose (a bug in glint).
+    #[error(transparent)]
+    Shader(#[from] crate::shader::ShaderError),
     /// A material names a texture this renderer never created.
     #[error("material '{material}' uses unknown texture id {texture:?}")]
     UnknownTexture {
@@ -77,9 +81,11 @@ struct MaterialGpuTwin {
     uniform: wgpu::Buffer,
     bind_group: wgpu::BindGroup,
     maps: [Option<TextureId>; 3],
-    /// Forward pipeline id for (this material's states, `samples`).
+    /// Forward pipeline id for this material's variant and states at `samples`.
     pipeline: u16,
     samples: u32,
+    /// Whether the environment had fog when the pipeline was chosen.
+    fog: bool,
 }
 
 struct TextureSlot {
@@ -389,6 +395,17 @@ impl Renderer {
         Ok(stats)
     }
 
+    /// Build, before the first frame, everything drawing `entities` into a target of
+    /// `samples` samples needs: mesh buffers, textures, material blocks and every
+    /// pipeline variant, so that the first frame compiles nothing. Returns the number
+    /// of pipelines compiled.
+    pub fn precompile(&mut self, entities: &[&Entity], samples: u32) -> Result<u32, RenderError> {
+        let mut stats = FrameStats::default();
+        let uses: Vec<_> = entities.iter().map(|e| (e.shape, e.material)).collect();
+        self.prepare_uses(&uses, samples, &mut stats)?;
+        Ok(stats.pipelines_compiled)
+    }
+
     /// Stage 1: make sure everything the submitted entities use exists on the GPU,
     /// and compact the instance store when it holds more garbage than data.
     fn prepare(&mut self, samples: u32, stats: &mut FrameStats) -> Result<(), RenderError> {
@@ -397,27 +414,34 @@ impl Renderer {
                 s.slot = remap[s.slot];
             }
         }
-        for i in 0..self.submitted.len() {
-            let (shape, material) = (self.submitted[i].shape, self.submitted[i].material);
-            let slot = &mut self.shapes[shape.0 as usize];
+        let uses: Vec<_> = self.submitted.iter().map(|s| (s.shape, s.material)).collect();
+        self.prepare_uses(&uses, samples, stats)
+    }
+
+    fn prepare_uses(
+        &mut self,
+        uses: &[(ShapeId, MaterialId)],
+        samples: u32,
+        stats: &mut FrameStats,
+    ) -> Result<(), RenderError> {
+        for &(shape, material) in uses {
+            let slot = self.shapes.get_mut(shape.0 as usize).ok_or(RenderError::UnknownShape(shape))?;
             if slot.gpu.is_none() {
                 slot.gpu = Some(GpuMesh::new(&self.device, &slot.mesh, shape.0));
                 stats.bytes_uploaded.meshes += slot.mesh.gpu_bytes();
             }
             self.prepare_material(material, samples, stats)?;
         }
-        if matches!(self.environment.background, Background::Gradient { .. })
-            && self.pipelines.sky_built(samples).is_none()
-        {
-            self.pipelines.sky(&self.device, samples);
-            stats.pipelines_compiled += 1;
+        if matches!(self.environment.background, Background::Gradient { .. }) {
+            stats.pipelines_compiled += u32::from(self.pipelines.build_sky(&self.device, samples)?);
         }
         Ok(())
     }
 
     fn prepare_material(&mut self, id: MaterialId, samples: u32, stats: &mut FrameStats) -> Result<(), RenderError> {
         let slot = self.materials.get(id.0 as usize).ok_or(RenderError::UnknownMaterial(id))?;
-        if !slot.dirty && slot.gpu.as_ref().is_some_and(|g| g.samples == samples) {
+        let fog = self.environment.fog.is_some();
+        if !slot.dirty && slot.gpu.as_ref().is_some_and(|g| g.samples == samples && g.fog == fog) {
             return Ok(());
         }
         let material = slot.material.clone();
@@ -433,7 +457,9 @@ impl Renderer {
                 stats.bytes_uploaded.textures += bytes;
             }
         }
-        let (pipeline, built) = self.pipelines.forward_id(&self.device, PipelineKey::for_material(&material, samples));
+        let features = ShaderFeatures::for_material(&material, &self.environment);
+        let key = Pipelines::key(features, material.render_states(), samples);
+        let (pipeline, built) = self.pipelines.forward_id(&self.device, key)?;
         stats.pipelines_compiled += u32::from(built);
         let slot = &mut self.materials[id.0 as usize];
         let stale_group = slot.gpu.as_ref().is_none_or(|g| g.maps != maps);
@@ -468,11 +494,12 @@ impl Renderer {
                     wgpu::BindGroupEntry { binding: 4, resource: wgpu::BindingResource::Sampler(&self.sampler) },
                 ],
             });
-            slot.gpu = Some(MaterialGpuTwin { uniform, bind_group, maps, pipeline, samples });
+            slot.gpu = Some(MaterialGpuTwin { uniform, bind_group, maps, pipeline, samples, fog });
         }
         let twin = slot.gpu.as_mut().expect("created above");
         twin.pipeline = pipeline;
         twin.samples = samples;
+        twin.fog = fog;
         if slot.dirty {
             let block = material.to_gpu();
             self.queue.write_buffer(&twin.uniform, 0, bytemuck::bytes_of(&block));
@@ -644,6 +671,11 @@ impl Renderer {
                     pass.set_pipeline(self.pipelines.forward(b.pipeline));
                     bound.pipeline = Some(b.pipeline);
                     stats.pipelines_bound += 1;
+                    let reference = self.pipelines.stencil_reference(b.pipeline);
+                    if bound.stencil_reference != reference {
+                        pass.set_stencil_reference(reference);
+                        bound.stencil_reference = reference;
+                    }
                 }
                 if bound.material != Some(b.material) {
                     let twin = self.materials[b.material.0 as usize].gpu.as_ref().expect("prepared");
@@ -681,6 +713,7 @@ struct Bound {
     pipeline: Option<u16>,
     material: Option<MaterialId>,
     shape: Option<ShapeId>,
+    stencil_reference: u32,
 }
 
 #[cfg(test)]

@@ -1,25 +1,33 @@
 //! Core layer: bind-group layouts (one per block of the convention in
 //! `render/mod.rs`), the shared pipeline layout, and the pipeline cache.
+//!
+//! A forward pipeline is identified by its [`PipelineKey`]: the shader variant
+//! (macro set), the vertex layout, the four render-state objects and the target
+//! formats. Shader modules are cached per macro set, pipelines per key; a key's
+//! index in the cache is its id in sort keys.
 
 use crate::gpu::{COLOR_FORMAT, DEPTH_FORMAT};
-use crate::scene::{AlphaMode, Material, Vertex};
+use crate::scene::{BlendState, Compare, Cull, RenderStates, StencilOp, Vertex};
+use crate::shader::{ShaderError, ShaderFeatures, ShaderLibrary};
+use std::borrow::Cow;
 use std::collections::HashMap;
 
-/// What makes one forward pipeline differ from another.
+/// Vertex buffer layouts a pipeline can read.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub(crate) struct PipelineKey {
-    /// Alpha blending on, depth writes off.
-    pub blend: bool,
-    /// Back faces drawn (no culling).
-    pub double_sided: bool,
-    /// MSAA samples of the target.
-    pub samples: u32,
+pub(crate) enum VertexLayout {
+    /// [`Vertex`]: position, normal, uv, tangent in one interleaved buffer.
+    Standard,
 }
 
-impl PipelineKey {
-    pub(crate) fn for_material(material: &Material, samples: u32) -> Self {
-        Self { blend: material.alpha_mode == AlphaMode::Blend, double_sided: material.double_sided, samples }
-    }
+/// Everything that makes one forward pipeline differ from another.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub(crate) struct PipelineKey {
+    pub features: ShaderFeatures,
+    pub vertex_layout: VertexLayout,
+    pub states: RenderStates,
+    pub color_format: wgpu::TextureFormat,
+    pub depth_format: wgpu::TextureFormat,
+    pub samples: u32,
 }
 
 /// Layouts, shader modules and every pipeline built so far.
@@ -29,8 +37,9 @@ pub(crate) struct Pipelines {
     pub material_layout: wgpu::BindGroupLayout,
     pub instance_layout: wgpu::BindGroupLayout,
     layout: wgpu::PipelineLayout,
-    forward: wgpu::ShaderModule,
-    sky: wgpu::ShaderModule,
+    library: ShaderLibrary,
+    modules: HashMap<ShaderFeatures, wgpu::ShaderModule>,
+    sky_module: Option<wgpu::ShaderModule>,
     /// Forward pipelines; a key's index is its id in sort keys.
     forward_cache: Vec<(PipelineKey, wgpu::RenderPipeline)>,
     forward_index: HashMap<PipelineKey, u16>,
@@ -75,6 +84,67 @@ pub(crate) fn sampler_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
     }
 }
 
+fn compare(c: Compare) -> wgpu::CompareFunction {
+    match c {
+        Compare::Never => wgpu::CompareFunction::Never,
+        Compare::Less => wgpu::CompareFunction::Less,
+        Compare::LessEqual => wgpu::CompareFunction::LessEqual,
+        Compare::Equal => wgpu::CompareFunction::Equal,
+        Compare::GreaterEqual => wgpu::CompareFunction::GreaterEqual,
+        Compare::Greater => wgpu::CompareFunction::Greater,
+        Compare::NotEqual => wgpu::CompareFunction::NotEqual,
+        Compare::Always => wgpu::CompareFunction::Always,
+    }
+}
+
+fn stencil_op(op: StencilOp) -> wgpu::StencilOperation {
+    match op {
+        StencilOp::Keep => wgpu::StencilOperation::Keep,
+        StencilOp::Zero => wgpu::StencilOperation::Zero,
+        StencilOp::Replace => wgpu::StencilOperation::Replace,
+        StencilOp::IncrementClamp => wgpu::StencilOperation::IncrementClamp,
+        StencilOp::DecrementClamp => wgpu::StencilOperation::DecrementClamp,
+        StencilOp::Invert => wgpu::StencilOperation::Invert,
+    }
+}
+
+fn blend(b: BlendState) -> Option<wgpu::BlendState> {
+    let c = |src, dst| wgpu::BlendComponent { src_factor: src, dst_factor: dst, operation: wgpu::BlendOperation::Add };
+    use wgpu::BlendFactor as F;
+    match b {
+        BlendState::Replace => None,
+        BlendState::Alpha => Some(wgpu::BlendState::ALPHA_BLENDING),
+        BlendState::Additive => Some(wgpu::BlendState { color: c(F::SrcAlpha, F::One), alpha: c(F::Zero, F::One) }),
+        BlendState::Multiply => Some(wgpu::BlendState { color: c(F::Dst, F::Zero), alpha: c(F::Zero, F::One) }),
+    }
+}
+
+fn depth_stencil(states: &RenderStates) -> wgpu::DepthStencilState {
+    let s = &states.stencil;
+    let face = wgpu::StencilFaceState {
+        compare: compare(s.compare),
+        fail_op: stencil_op(s.fail),
+        depth_fail_op: stencil_op(s.depth_fail),
+        pass_op: stencil_op(s.pass),
+    };
+    wgpu::DepthStencilState {
+        format: DEPTH_FORMAT,
+        depth_write_enabled: Some(states.depth.write),
+        depth_compare: Some(compare(states.depth.compare)),
+        stencil: wgpu::StencilState {
+            front: face,
+            back: face,
+            read_mask: s.read_mask.into(),
+            write_mask: s.write_mask.into(),
+        },
+        bias: wgpu::DepthBiasState {
+            constant: states.raster.depth_bias,
+            slope_scale: f32::from_bits(states.raster.slope_bias_bits),
+            clamp: 0.0,
+        },
+    }
+}
+
 impl Pipelines {
     pub(crate) fn new(device: &wgpu::Device) -> Self {
         let all = wgpu::ShaderStages::VERTEX_FRAGMENT;
@@ -110,90 +180,114 @@ impl Pipelines {
             ],
             immediate_size: 0,
         });
-        let module = |label, source: String| {
-            device.create_shader_module(wgpu::ShaderModuleDescriptor {
-                label: Some(label),
-                source: wgpu::ShaderSource::Wgsl(source.into()),
-            })
-        };
         Self {
-            forward: module("renderer: forward shader", crate::shader::forward()),
-            sky: module("renderer: sky shader", crate::shader::sky()),
             scene_layout,
             camera_layout,
             material_layout,
             instance_layout,
             layout: pipeline_layout,
+            library: ShaderLibrary::new(),
+            modules: HashMap::new(),
+            sky_module: None,
             forward_cache: Vec::new(),
             forward_index: HashMap::new(),
             sky_cache: HashMap::new(),
         }
     }
 
-    /// The id of the forward pipeline for `key`, building it on first use.
-    /// Returns whether it was built now.
-    pub(crate) fn forward_id(&mut self, device: &wgpu::Device, key: PipelineKey) -> (u16, bool) {
+    /// The key of the forward pipeline for these features and states on a glint target.
+    pub(crate) fn key(features: ShaderFeatures, states: RenderStates, samples: u32) -> PipelineKey {
+        PipelineKey {
+            features,
+            vertex_layout: VertexLayout::Standard,
+            states,
+            color_format: COLOR_FORMAT,
+            depth_format: DEPTH_FORMAT,
+            samples,
+        }
+    }
+
+    /// The id of the forward pipeline for `key`, building it (and its shader variant)
+    /// on first use. Returns whether it was built now.
+    pub(crate) fn forward_id(&mut self, device: &wgpu::Device, key: PipelineKey) -> Result<(u16, bool), ShaderError> {
         if let Some(&id) = self.forward_index.get(&key) {
-            return (id, false);
+            return Ok((id, false));
+        }
+        if !self.modules.contains_key(&key.features) {
+            let module = self.library.forward(key.features)?;
+            let label = format!("renderer: forward shader {:?}", key.features);
+            self.modules.insert(key.features, shader_module(device, &label, module));
         }
         let pipeline = self.build_forward(device, key);
         let id = self.forward_cache.len() as u16;
         self.forward_cache.push((key, pipeline));
         self.forward_index.insert(key, id);
-        (id, true)
+        Ok((id, true))
     }
 
     pub(crate) fn forward(&self, id: u16) -> &wgpu::RenderPipeline {
         &self.forward_cache[id as usize].1
     }
 
-    /// The sky pipeline for `samples`, if [`Self::sky`] built it.
+    /// The stencil reference a pipeline's draws use.
+    pub(crate) fn stencil_reference(&self, id: u16) -> u32 {
+        self.forward_cache[id as usize].0.states.stencil.reference.into()
+    }
+
+    /// The sky pipeline for `samples`, if [`Self::build_sky`] built it.
     pub(crate) fn sky_built(&self, samples: u32) -> Option<&wgpu::RenderPipeline> {
         self.sky_cache.get(&samples)
     }
 
-    /// The sky pipeline for `samples`, building it on first use.
-    pub(crate) fn sky(&mut self, device: &wgpu::Device, samples: u32) -> &wgpu::RenderPipeline {
-        let (layout, module) = (&self.layout, &self.sky);
-        self.sky_cache.entry(samples).or_insert_with(|| {
-            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some("renderer: sky pipeline"),
-                layout: Some(layout),
-                vertex: wgpu::VertexState {
-                    module,
-                    entry_point: Some("vs_sky"),
-                    compilation_options: Default::default(),
-                    buffers: &[],
-                },
-                primitive: wgpu::PrimitiveState::default(),
-                depth_stencil: Some(depth_state(false, wgpu::CompareFunction::LessEqual)),
-                multisample: wgpu::MultisampleState { count: samples, ..Default::default() },
-                fragment: Some(wgpu::FragmentState {
-                    module,
-                    entry_point: Some("fs_sky"),
-                    compilation_options: Default::default(),
-                    targets: &[Some(COLOR_FORMAT.into())],
-                }),
-                multiview_mask: None,
-                cache: None,
-            })
-        })
+    /// Build the sky pipeline for `samples` unless it exists; returns whether it was built now.
+    pub(crate) fn build_sky(&mut self, device: &wgpu::Device, samples: u32) -> Result<bool, ShaderError> {
+        if self.sky_cache.contains_key(&samples) {
+            return Ok(false);
+        }
+        if self.sky_module.is_none() {
+            let module = self.library.sky()?;
+            self.sky_module = Some(shader_module(device, "renderer: sky shader", module));
+        }
+        let module = self.sky_module.as_ref().expect("built above");
+        let states = RenderStates {
+            depth: crate::scene::DepthState { compare: Compare::LessEqual, write: false },
+            ..Default::default()
+        };
+        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("renderer: sky pipeline"),
+            layout: Some(&self.layout),
+            vertex: wgpu::VertexState {
+                module,
+                entry_point: Some("vs_sky"),
+                compilation_options: Default::default(),
+                buffers: &[],
+            },
+            primitive: wgpu::PrimitiveState::default(),
+            depth_stencil: Some(depth_stencil(&states)),
+            multisample: wgpu::MultisampleState { count: samples, ..Default::default() },
+            fragment: Some(wgpu::FragmentState {
+                module,
+                entry_point: Some("fs_sky"),
+                compilation_options: Default::default(),
+                targets: &[Some(COLOR_FORMAT.into())],
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
+        self.sky_cache.insert(samples, pipeline);
+        Ok(true)
     }
 
     fn build_forward(&self, device: &wgpu::Device, key: PipelineKey) -> wgpu::RenderPipeline {
         const ATTRIBUTES: [wgpu::VertexAttribute; 4] =
             wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x2, 3 => Float32x4];
-        let label = format!(
-            "renderer: forward pipeline ({}, {}, {}x)",
-            if key.blend { "blend" } else { "opaque" },
-            if key.double_sided { "double-sided" } else { "back-face culled" },
-            key.samples
-        );
+        let module = &self.modules[&key.features];
+        let label = format!("renderer: forward pipeline {:?} {:?} {}x", key.features, key.states.blend, key.samples);
         device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
             label: Some(&label),
             layout: Some(&self.layout),
             vertex: wgpu::VertexState {
-                module: &self.forward,
+                module,
                 entry_point: Some("vs_main"),
                 compilation_options: Default::default(),
                 buffers: &[Some(wgpu::VertexBufferLayout {
@@ -204,18 +298,22 @@ impl Pipelines {
             },
             primitive: wgpu::PrimitiveState {
                 front_face: wgpu::FrontFace::Ccw,
-                cull_mode: if key.double_sided { None } else { Some(wgpu::Face::Back) },
+                cull_mode: match key.states.raster.cull {
+                    Cull::Back => Some(wgpu::Face::Back),
+                    Cull::Front => Some(wgpu::Face::Front),
+                    Cull::None => None,
+                },
                 ..Default::default()
             },
-            depth_stencil: Some(depth_state(!key.blend, wgpu::CompareFunction::Less)),
+            depth_stencil: Some(depth_stencil(&key.states)),
             multisample: wgpu::MultisampleState { count: key.samples, ..Default::default() },
             fragment: Some(wgpu::FragmentState {
-                module: &self.forward,
+                module,
                 entry_point: Some("fs_main"),
                 compilation_options: Default::default(),
                 targets: &[Some(wgpu::ColorTargetState {
-                    format: COLOR_FORMAT,
-                    blend: key.blend.then_some(wgpu::BlendState::ALPHA_BLENDING),
+                    format: key.color_format,
+                    blend: blend(key.states.blend),
                     write_mask: wgpu::ColorWrites::ALL,
                 })],
             }),
@@ -225,12 +323,9 @@ impl Pipelines {
     }
 }
 
-fn depth_state(write: bool, compare: wgpu::CompareFunction) -> wgpu::DepthStencilState {
-    wgpu::DepthStencilState {
-        format: DEPTH_FORMAT,
-        depth_write_enabled: Some(write),
-        depth_compare: Some(compare),
-        stencil: Default::default(),
-        bias: Default::default(),
-    }
+fn shader_module(device: &wgpu::Device, label: &str, module: wgpu::naga::Module) -> wgpu::ShaderModule {
+    device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some(label),
+        source: wgpu::ShaderSource::Naga(Cow::Owned(module)),
+    })
 }

@@ -14,6 +14,15 @@ pub enum Background {
     },
 }
 
+/// Exponential-squared distance fog: `visibility = exp(−(density · distance)²)`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Fog {
+    /// Linear colour far things fade to.
+    pub color: Vec3,
+    /// Per world unit; 0.02 hides things about 100 units away.
+    pub density: f32,
+}
+
 /// Scene-wide lighting settings (the Scene block, `@group(0)`, with the lights).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Environment {
@@ -21,10 +30,12 @@ pub struct Environment {
     pub background: Background,
     /// Ambient light colour, multiplied by each material's `ambient`.
     pub ambient: Vec3,
+    /// Distance fog over materials that accept it.
+    pub fog: Option<Fog>,
 }
 
 impl Default for Environment {
     fn default() -> Self {
-        Self { background: Background::Color(Vec3::new(0.05, 0.05, 0.06)), ambient: Vec3::splat(0.1) }
+        Self { background: Background::Color(Vec3::new(0.05, 0.05, 0.06)), ambient: Vec3::splat(0.1), fog: None }
     }
 }

@@ -1,3 +1,4 @@
+use super::states::{BlendState, Compare, Cull, DepthState, RenderStates};
 use super::TextureId;
 use glam::{Vec2, Vec4};
 
@@ -13,6 +14,16 @@ pub enum AlphaMode {
     },
     /// Alpha-blended over what is behind; transparent queue, far to near.
     Blend,
+}
+
+/// How a material turns light into colour (a shader variant each).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum ShadingModel {
+    /// Ambient + Lambert diffuse + Blinn-Phong specular from every light.
+    #[default]
+    BlinnPhong,
+    /// Base colour (and maps) only, ignoring lights: skies, UI, debug views.
+    Unlit,
 }
 
 /// A Blinn-Phong material: everything that decides a surface's colour.
@@ -49,6 +60,13 @@ pub struct Material {
     pub double_sided: bool,
     /// Texture repeats across the shape's 0..1 UV range (u, v).
     pub uv_scale: Vec2,
+    /// Lighting model.
+    pub shading: ShadingModel,
+    /// Whether the environment's fog (if any) covers this material.
+    pub fog: bool,
+    /// Explicit render states; `None` derives them from `alpha_mode` and
+    /// `double_sided` (see [`Material::render_states`]).
+    pub states: Option<RenderStates>,
 }
 
 impl Default for Material {
@@ -66,6 +84,9 @@ impl Default for Material {
             alpha_mode: AlphaMode::Opaque,
             double_sided: false,
             uv_scale: Vec2::ONE,
+            shading: ShadingModel::BlinnPhong,
+            fog: true,
+            states: None,
         }
     }
 }
@@ -74,5 +95,22 @@ impl Material {
     /// A plain opaque material of one linear RGB colour.
     pub fn color(name: &str, r: f32, g: f32, b: f32) -> Self {
         Self { name: name.into(), base_color: Vec4::new(r, g, b, 1.0), ..Self::default() }
+    }
+
+    /// The render states this material draws with: `states` if set, else blending
+    /// and no depth writes for [`AlphaMode::Blend`], and no culling when double-sided.
+    pub fn render_states(&self) -> RenderStates {
+        self.states.unwrap_or_else(|| {
+            let blend = self.alpha_mode == AlphaMode::Blend;
+            RenderStates {
+                blend: if blend { BlendState::Alpha } else { BlendState::Replace },
+                depth: DepthState { compare: Compare::Less, write: !blend },
+                raster: super::RasterState {
+                    cull: if self.double_sided { Cull::None } else { Cull::Back },
+                    ..Default::default()
+                },
+                ..Default::default()
+            }
+        })
     }
 }

@@ -11,13 +11,15 @@ mod environment;
 mod light;
 mod material;
 mod mesh;
+mod states;
 
 pub use camera::{Camera, Projection};
 pub use entity::Entity;
-pub use environment::{Background, Environment};
+pub use environment::{Background, Environment, Fog};
 pub use light::{Light, LightKind, MAX_LIGHTS};
-pub use material::{AlphaMode, Material};
+pub use material::{AlphaMode, Material, ShadingModel};
 pub use mesh::{Aabb, BoundingSphere, Mesh, MeshError, Vertex};
+pub use states::{BlendState, Compare, Cull, DepthState, RasterState, RenderStates, StencilOp, StencilState};
 
 /// Handle to a shape (a mesh uploaded by the renderer), returned by
 /// [`Renderer::add_shape`](crate::Renderer::add_shape).

@@ -1,5 +1,6 @@
 // Shader data blocks shared by every glint shader (bind-group convention in
 // src/render/mod.rs). Field layouts match the #[repr(C)] twins in render/blocks.rs.
+#define_import_path glint::blocks
 
 struct Light {
     // xyz: direction the light travels (w = 0) or world position (w = 1).
@@ -12,11 +13,10 @@ struct SceneBlock {
     ambient: vec4<f32>,
     sky_top: vec4<f32>,
     sky_bottom: vec4<f32>,
-    light_count: u32,
-    // Scalars, not a vec3: a vec3<u32> would be 16-aligned and move `lights`.
-    _pad0: u32,
-    _pad1: u32,
-    _pad2: u32,
+    // rgb: fog colour; w: density (0: no fog).
+    fog: vec4<f32>,
+    // x: number of lights; y, z, w: reserved.
+    counts: vec4<u32>,
     lights: array<Light, 64>,
 }
 

@@ -1,17 +1,16 @@
-// Forward Blinn-Phong pass: lit, textured, instanced meshes.
+// Forward pass: lit, textured, instanced meshes. Composed per feature set: each
+// `#ifdef` below is one bit of ShaderFeatures (src/shader/mod.rs).
+
+#import glint::blocks::{scene, camera}
 
 struct MaterialBlock {
     base_color: vec4<f32>,
     // x: ambient, y: diffuse, z: specular, w: Blinn-Phong exponent.
     coeffs: vec4<f32>,
     alpha_cutoff: f32,
-    flags: u32,
+    reserved: u32,
     uv_scale: vec2<f32>,
 }
-
-const FLAG_ALPHA_MASK: u32 = 1u;
-const FLAG_NORMAL_MAP: u32 = 2u;
-const FLAG_ALPHA_BLEND: u32 = 4u;
 
 @group(2) @binding(0) var<uniform> material: MaterialBlock;
 @group(2) @binding(1) var diffuse_map: texture_2d<f32>;
@@ -62,7 +61,7 @@ fn vs_main(v: VertexIn, @builtin(instance_index) instance: u32) -> VertexOut {
 fn shade(n: vec3<f32>, world_position: vec3<f32>, base: vec3<f32>, specular: f32) -> vec3<f32> {
     let view_dir = normalize(camera.position.xyz - world_position);
     var color = scene.ambient.rgb * material.coeffs.x * base;
-    for (var i = 0u; i < scene.light_count; i++) {
+    for (var i = 0u; i < scene.counts.x; i++) {
         let light = scene.lights[i];
         var l: vec3<f32>;
         var radiance = light.color.rgb;
@@ -87,22 +86,40 @@ fn shade(n: vec3<f32>, world_position: vec3<f32>, base: vec3<f32>, specular: f32
 
 @fragment
 fn fs_main(in: VertexOut, @builtin(front_facing) front: bool) -> @location(0) vec4<f32> {
-    // Sample everything first: texture sampling needs uniform control flow.
-    let base = material.base_color * textureSample(diffuse_map, material_sampler, in.uv);
-    let normal_texel = textureSample(normal_map, material_sampler, in.uv).xyz;
-    let specular = textureSample(specular_map, material_sampler, in.uv).r;
-    if (material.flags & FLAG_ALPHA_MASK) != 0u && base.a < material.alpha_cutoff {
+    var base = material.base_color;
+#ifdef DIFFUSE_MAP
+    base *= textureSample(diffuse_map, material_sampler, in.uv);
+#endif
+#ifdef ALPHA_MASK
+    if base.a < material.alpha_cutoff {
         discard;
     }
+#endif
     // Double-sided materials light back faces with the flipped normal.
     let side = select(-1.0, 1.0, front);
     var n = normalize(in.normal) * side;
-    if (material.flags & FLAG_NORMAL_MAP) != 0u {
-        let t = normalize(in.tangent.xyz - n * dot(n, in.tangent.xyz));
-        let b = cross(n, t) * in.tangent.w * side;
-        let s = normal_texel * 2.0 - 1.0;
-        n = normalize(t * s.x + b * s.y + n * s.z);
-    }
-    let alpha = select(1.0, base.a, (material.flags & FLAG_ALPHA_BLEND) != 0u);
-    return vec4<f32>(shade(n, in.world_position, base.rgb, specular), alpha);
+#ifdef NORMAL_MAP
+    let t = normalize(in.tangent.xyz - n * dot(n, in.tangent.xyz));
+    let b = cross(n, t) * in.tangent.w * side;
+    let s = textureSample(normal_map, material_sampler, in.uv).xyz * 2.0 - 1.0;
+    n = normalize(t * s.x + b * s.y + n * s.z);
+#endif
+    var specular = 1.0;
+#ifdef SPECULAR_MAP
+    specular = textureSample(specular_map, material_sampler, in.uv).r;
+#endif
+#ifdef UNLIT
+    var color = base.rgb;
+#else
+    var color = shade(n, in.world_position, base.rgb, specular);
+#endif
+#ifdef FOG
+    let distance = length(camera.position.xyz - in.world_position) * scene.fog.w;
+    color = mix(scene.fog.rgb, color, exp(-distance * distance));
+#endif
+#ifdef ALPHA_BLEND
+    return vec4<f32>(color, base.a);
+#else
+    return vec4<f32>(color, 1.0);
+#endif
 }

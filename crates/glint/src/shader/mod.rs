@@ -1,17 +1,158 @@
-//! Core layer: WGSL sources. Every shader that reads scene data is the shared
-//! `blocks.wgsl` (groups 0 and 1) followed by its own body.
+//! Core layer: WGSL sources and shader variants.
+//!
+//! Every shader imports the shared blocks (`glint::blocks`: groups 0 and 1) through
+//! naga_oil. The forward shader is composed per [`ShaderFeatures`] set: each bit is a
+//! naga_oil shader def that `forward.wgsl` tests with `#ifdef`, so a material pays
+//! only for what it uses, and each set is compiled once.
 
-const BLOCKS: &str = include_str!("blocks.wgsl");
+use crate::scene::{AlphaMode, Environment, Material, ShadingModel};
+use naga_oil::compose::{ComposableModuleDescriptor, Composer, NagaModuleDescriptor, ShaderDefValue};
+use std::collections::HashMap;
 
-/// Forward Blinn-Phong shader: `vs_main` / `fs_main`, groups 0–3.
-pub(crate) fn forward() -> String {
-    format!("{BLOCKS}\n{}", include_str!("forward.wgsl"))
+bitflags::bitflags! {
+    /// The macro set of a forward-shader variant. The bits, and the shader def each sets:
+    ///
+    /// | bit | def | effect |
+    /// | --- | --- | --- |
+    /// | 0 | `DIFFUSE_MAP` | multiply the base colour by the diffuse map |
+    /// | 1 | `NORMAL_MAP` | perturb the normal with the tangent-space normal map |
+    /// | 2 | `SPECULAR_MAP` | scale specular by the specular map's red channel |
+    /// | 3 | `ALPHA_MASK` | discard fragments below the alpha cutoff |
+    /// | 4 | `ALPHA_BLEND` | write alpha out (blended materials) |
+    /// | 5 | `UNLIT` | skip lighting: the shading model is the base colour |
+    /// | 6 | `FOG` | fade to the environment's fog colour with distance |
+    ///
+    /// Bits 7–31 are free for more (vertex colours and shadow receiving come with
+    /// the glTF and shadow work).
+    #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, PartialOrd, Ord)]
+    pub struct ShaderFeatures: u32 {
+        /// `DIFFUSE_MAP`.
+        const DIFFUSE_MAP = 1 << 0;
+        /// `NORMAL_MAP`.
+        const NORMAL_MAP = 1 << 1;
+        /// `SPECULAR_MAP`.
+        const SPECULAR_MAP = 1 << 2;
+        /// `ALPHA_MASK`.
+        const ALPHA_MASK = 1 << 3;
+        /// `ALPHA_BLEND`.
+        const ALPHA_BLEND = 1 << 4;
+        /// `UNLIT`.
+        const UNLIT = 1 << 5;
+        /// `FOG`.
+        const FOG = 1 << 6;
+    }
 }
 
-/// Gradient sky shader: `vs_sky` / `fs_sky`, groups 0–1.
-pub(crate) fn sky() -> String {
-    format!("{BLOCKS}\n{}", include_str!("sky.wgsl"))
+impl ShaderFeatures {
+    /// The variant `material` needs in `environment`.
+    pub fn for_material(material: &Material, environment: &Environment) -> Self {
+        let mut f = Self::empty();
+        f.set(Self::DIFFUSE_MAP, material.diffuse_map.is_some());
+        f.set(Self::NORMAL_MAP, material.normal_map.is_some());
+        f.set(Self::SPECULAR_MAP, material.specular_map.is_some());
+        f.set(Self::ALPHA_MASK, matches!(material.alpha_mode, AlphaMode::Mask { .. }));
+        f.set(Self::ALPHA_BLEND, material.alpha_mode == AlphaMode::Blend);
+        f.set(Self::UNLIT, material.shading == ShadingModel::Unlit);
+        f.set(Self::FOG, material.fog && environment.fog.is_some());
+        f
+    }
+
+    /// The naga_oil shader defs of this set: one boolean def per bit that is set.
+    fn shader_defs(self) -> HashMap<String, ShaderDefValue> {
+        self.iter_names().map(|(name, _)| (name.to_string(), ShaderDefValue::Bool(true))).collect()
+    }
+}
+
+/// A shader that failed to compose: always a bug in glint's own WGSL.
+#[derive(Debug, thiserror::Error)]
+#[error("shader '{name}' did not compose: {message}")]
+pub struct ShaderError {
+    name: String,
+    message: String,
+}
+
+/// Composes glint's shaders with naga_oil.
+#[derive(Default)]
+pub(crate) struct ShaderLibrary {
+    composer: Composer,
+    blocks_added: bool,
+}
+
+impl ShaderLibrary {
+    pub(crate) fn new() -> Self {
+        Self::default()
+    }
+
+    fn compose(
+        &mut self,
+        name: &str,
+        source: &str,
+        defs: HashMap<String, ShaderDefValue>,
+    ) -> Result<wgpu::naga::Module, ShaderError> {
+        let fail = |name: &str, e: naga_oil::compose::ComposerError, composer: &Composer| ShaderError {
+            name: name.into(),
+            message: e.emit_to_string(composer),
+        };
+        if !self.blocks_added {
+            let blocks = ComposableModuleDescriptor {
+                source: include_str!("blocks.wgsl"),
+                file_path: "glint/shader/blocks.wgsl",
+                ..Default::default()
+            };
+            if let Err(e) = self.composer.add_composable_module(blocks) {
+                return Err(fail("blocks.wgsl", e, &self.composer));
+            }
+            self.blocks_added = true;
+        }
+        let desc = NagaModuleDescriptor { source, file_path: name, shader_defs: defs, ..Default::default() };
+        self.composer.make_naga_module(desc).map_err(|e| fail(name, e, &self.composer))
+    }
+
+    /// The forward shader for one feature set: `vs_main` / `fs_main`, groups 0–3.
+    pub(crate) fn forward(&mut self, features: ShaderFeatures) -> Result<wgpu::naga::Module, ShaderError> {
+        self.compose("glint/shader/forward.wgsl", include_str!("forward.wgsl"), features.shader_defs())
+    }
+
+    /// The gradient sky: `vs_sky` / `fs_sky`, groups 0–1.
+    pub(crate) fn sky(&mut self) -> Result<wgpu::naga::Module, ShaderError> {
+        self.compose("glint/shader/sky.wgsl", include_str!("sky.wgsl"), HashMap::new())
+    }
 }
 
 /// Mip blit shader: `vs_blit` / `fs_blit`, its own group 0.
 pub(crate) const MIPMAP: &str = include_str!("mipmap.wgsl");
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_feature_combination_composes_and_validates() {
+        let mut library = ShaderLibrary::new();
+        for bits in 0..(1u32 << ShaderFeatures::all().bits().count_ones()) {
+            let features = ShaderFeatures::from_bits_truncate(bits);
+            let module = library.forward(features).unwrap_or_else(|e| panic!("{features:?}: {e}"));
+            let mut validator =
+                wgpu::naga::valid::Validator::new(Default::default(), wgpu::naga::valid::Capabilities::all());
+            validator.validate(&module).unwrap_or_else(|e| panic!("{features:?}: {e:?}"));
+        }
+        library.sky().expect("sky composes");
+    }
+
+    #[test]
+    fn features_follow_the_material_and_environment() {
+        let mut m = Material::default();
+        assert_eq!(ShaderFeatures::for_material(&m, &Environment::default()), ShaderFeatures::empty());
+        m.alpha_mode = AlphaMode::Mask { cutoff: 0.5 };
+        m.shading = ShadingModel::Unlit;
+        let foggy =
+            Environment { fog: Some(crate::scene::Fog { color: glam::Vec3::ONE, density: 0.1 }), ..Default::default() };
+        assert_eq!(
+            ShaderFeatures::for_material(&m, &foggy),
+            ShaderFeatures::ALPHA_MASK | ShaderFeatures::UNLIT | ShaderFeatures::FOG
+        );
+        m.fog = false;
+        assert!(!ShaderFeatures::for_material(&m, &foggy).contains(ShaderFeatures::FOG));
+        assert_eq!(ShaderFeatures::FOG.shader_defs().keys().collect::<Vec<_>>(), vec!["FOG"]);
+    }
+}

@@ -1,6 +1,8 @@
 // Two-colour gradient sky: one full-screen triangle on the far plane, drawn after
 // the opaque queues so the depth test skips every covered pixel.
 
+#import glint::blocks::{scene, camera}
+
 struct SkyOut {
     @builtin(position) clip: vec4<f32>,
     @location(0) ndc: vec2<f32>,
