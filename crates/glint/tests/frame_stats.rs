@@ -192,7 +192,11 @@ fn adding_a_map_compiles_exactly_one_new_variant() {
     let m = r.add_material(Material::default());
     let e = Entity::new(cube, m, Mat4::IDENTITY);
     frame(&mut r, gpu, &[&e], &sun());
-    let bumps = r.add_texture(Texture::new("flat", image::RgbaImage::from_pixel(2, 2, image::Rgba([128, 128, 255, 255])), false));
+    let bumps = r.add_texture(Texture::new(
+        "flat",
+        image::RgbaImage::from_pixel(2, 2, image::Rgba([128, 128, 255, 255])),
+        false,
+    ));
     r.material_mut(m).expect("material").normal_map = Some(bumps);
     assert_eq!(frame(&mut r, gpu, &[&e], &sun()).pipelines_compiled, 1);
 }

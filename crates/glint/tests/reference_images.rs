@@ -46,6 +46,13 @@ fn orthographic_camera() {
 }
 
 #[test]
+fn render_states_fog_and_unlit_variants() {
+    // Floor, pillars, marker, inside-out sphere, sky colour only (no gradient),
+    // glow, tint: six draws.
+    check("states", 6);
+}
+
+#[test]
 fn culling_never_changes_the_picture() {
     let Some(gpu) = common::gpu() else { return };
     let showcase = common::repo_root().join("scenes/showcase.scn");

@@ -5,6 +5,7 @@
 mod placement;
 pub mod procedural;
 mod scn;
+mod scn_fields;
 mod scn_syntax;
 mod texture;
 

@@ -3,9 +3,13 @@
 //! a [`Renderer`] with [`SceneDesc::instantiate`].
 
 use super::placement::place_instances;
-use super::scn_syntax::{parse_blocks, Block, Pair};
+use super::scn_fields::{numbers, Fields};
+use super::scn_syntax::{parse_blocks, Block};
 use super::{load_texture, Diagnostic, ShapeKind, Texture};
-use crate::scene::{AlphaMode, Background, Camera, Entity, Environment, Light, Material, MaterialId, MAX_LIGHTS};
+use crate::scene::{
+    AlphaMode, Background, BlendState, Camera, Compare, Cull, Entity, Environment, Fog, Light, Material, MaterialId,
+    RenderStates, ShadingModel, StencilOp, MAX_LIGHTS,
+};
 use crate::Renderer;
 use glam::{EulerRot, Mat4, Quat, Vec3, Vec4};
 use std::collections::HashMap;
@@ -153,143 +157,82 @@ struct Loader<'a> {
     instances: u64,
 }
 
-/// The pairs of one block, looked up by key; reports keys never asked for.
-struct Fields<'b> {
-    path: &'b Path,
-    class: &'b str,
-    block: &'b Block,
-    used: Vec<bool>,
-}
+const COMPARES: [&str; 8] = ["never", "less", "less_equal", "equal", "greater_equal", "greater", "not_equal", "always"];
+const COMPARE_VALUES: [Compare; 8] = [
+    Compare::Never,
+    Compare::Less,
+    Compare::LessEqual,
+    Compare::Equal,
+    Compare::GreaterEqual,
+    Compare::Greater,
+    Compare::NotEqual,
+    Compare::Always,
+];
+const STENCIL_OPS: [&str; 6] = ["keep", "zero", "replace", "increment", "decrement", "invert"];
+const STENCIL_OP_VALUES: [StencilOp; 6] = [
+    StencilOp::Keep,
+    StencilOp::Zero,
+    StencilOp::Replace,
+    StencilOp::IncrementClamp,
+    StencilOp::DecrementClamp,
+    StencilOp::Invert,
+];
 
-impl<'b> Fields<'b> {
-    fn get(&mut self, key: &str) -> Option<&'b Pair> {
-        let i = self.block.pairs.iter().rposition(|p| p.key == key)?;
-        self.used[i] = true;
-        Some(&self.block.pairs[i])
-    }
-
-    fn require(&mut self, key: &str) -> Result<&'b Pair, Diagnostic> {
-        self.get(key).ok_or_else(|| {
-            Diagnostic::at(
-                self.path,
-                self.block.line,
-                format!("{} block is missing the required key \"{key}\"", self.class),
-            )
+/// A material's explicit render states: `None` when no state key is given, else
+/// `derived` (what its alpha mode and sidedness imply) with the given keys applied.
+fn render_states(f: &mut Fields, derived: RenderStates) -> Result<Option<RenderStates>, Diagnostic> {
+    let mut s = derived;
+    let mut any = false;
+    let mut pick = |v: Option<(usize, &_)>| {
+        v.map(|(i, _)| {
+            any = true;
+            i
         })
+    };
+    if let Some(i) = pick(f.choice("blend", &["replace", "alpha", "additive", "multiply"])?) {
+        s.blend = [BlendState::Replace, BlendState::Alpha, BlendState::Additive, BlendState::Multiply][i];
     }
-
-    fn numbers<const N: usize>(&mut self, key: &str, what: &str) -> Result<Option<[f32; N]>, Diagnostic> {
-        self.get(key).map(|p| numbers::<N>(self.path, p, what)).transpose()
+    if let Some(i) = pick(f.choice("depth_compare", &COMPARES)?) {
+        s.depth.compare = COMPARE_VALUES[i];
     }
-
-    fn vec3(&mut self, key: &str) -> Result<Option<Vec3>, Diagnostic> {
-        Ok(self.numbers::<3>(key, "3 numbers (x y z)")?.map(Vec3::from))
+    if let Some(i) = pick(f.choice("cull", &["back", "front", "none"])?) {
+        s.raster.cull = [Cull::Back, Cull::Front, Cull::None][i];
     }
-
-    fn color(&mut self, key: &str) -> Result<Option<Vec3>, Diagnostic> {
-        let Some(pair) = self.get(key) else {
-            return Ok(None);
-        };
-        let c = Vec3::from(numbers::<3>(self.path, pair, "3 numbers (r g b)")?);
-        if c.min_element() < 0.0 {
-            return Err(Diagnostic::at(self.path, pair.line, format!("\"{key}\" must not be negative")));
-        }
-        Ok(Some(c))
+    if let Some(i) = pick(f.choice("stencil_compare", &COMPARES)?) {
+        s.stencil.compare = COMPARE_VALUES[i];
     }
-
-    fn number(&mut self, key: &str, range: std::ops::RangeInclusive<f32>) -> Result<Option<f32>, Diagnostic> {
-        let Some(pair) = self.get(key) else {
-            return Ok(None);
-        };
-        let [v] = numbers::<1>(self.path, pair, "a number")?;
-        if !range.contains(&v) {
-            return Err(Diagnostic::at(
-                self.path,
-                pair.line,
-                format!("\"{key}\" is {v}, expected a value in {}..={}", range.start(), range.end()),
-            ));
-        }
-        Ok(Some(v))
-    }
-
-    fn flag(&mut self, key: &str) -> Result<Option<bool>, Diagnostic> {
-        let Some(pair) = self.get(key) else {
-            return Ok(None);
-        };
-        match pair.value.trim() {
-            "0" => Ok(Some(false)),
-            "1" => Ok(Some(true)),
-            v => Err(Diagnostic::at(self.path, pair.line, format!("\"{key}\" is '{v}', expected 0 or 1"))),
+    for (key, op) in [
+        ("stencil_pass", &mut s.stencil.pass),
+        ("stencil_fail", &mut s.stencil.fail),
+        ("stencil_depth_fail", &mut s.stencil.depth_fail),
+    ] {
+        if let Some(i) = pick(f.choice(key, &STENCIL_OPS)?) {
+            *op = STENCIL_OP_VALUES[i];
         }
     }
-
-    fn choice(&mut self, key: &str, options: &[&str]) -> Result<Option<(usize, &'b Pair)>, Diagnostic> {
-        let Some(pair) = self.get(key) else {
-            return Ok(None);
-        };
-        match options.iter().position(|o| *o == pair.value.trim()) {
-            Some(i) => Ok(Some((i, pair))),
-            None => Err(Diagnostic::at(
-                self.path,
-                pair.line,
-                format!("\"{key}\" is '{}', expected one of: {}", pair.value, options.join(", ")),
-            )),
+    if let Some(write) = f.flag("depth_write")? {
+        s.depth.write = write;
+        any = true;
+    }
+    for (key, field) in [
+        ("stencil_ref", &mut s.stencil.reference),
+        ("stencil_read_mask", &mut s.stencil.read_mask),
+        ("stencil_write_mask", &mut s.stencil.write_mask),
+    ] {
+        if let Some(v) = f.integer(key, 0..=255)? {
+            *field = v as u8;
+            any = true;
         }
     }
-
-    fn mesh(&mut self) -> Result<ShapeKind, Diagnostic> {
-        let pair = self.require("mesh")?;
-        ShapeKind::from_name(pair.value.trim()).ok_or_else(|| {
-            let names: Vec<_> = ShapeKind::ALL.iter().map(|k| k.name()).collect();
-            Diagnostic::at(
-                self.path,
-                pair.line,
-                format!("unknown mesh '{}', expected one of: {}", pair.value, names.join(", ")),
-            )
-        })
+    if let Some(bias) = f.integer("depth_bias", -65536..=65536)? {
+        s.raster.depth_bias = bias as i32;
+        any = true;
     }
-
-    /// Warnings for keys this class does not know, and for keys given twice.
-    fn leftovers(&self) -> Vec<Diagnostic> {
-        let mut out = Vec::new();
-        for (i, pair) in self.block.pairs.iter().enumerate() {
-            if self.block.pairs[i + 1..].iter().any(|p| p.key == pair.key) {
-                out.push(Diagnostic::at(
-                    self.path,
-                    pair.line,
-                    format!("\"{}\" is given again later in this block; the last one is used", pair.key),
-                ));
-            } else if !self.used[i] && pair.key != "classname" {
-                out.push(Diagnostic::at(
-                    self.path,
-                    pair.line,
-                    format!("unknown key \"{}\" in {} block (ignored)", pair.key, self.class),
-                ));
-            }
-        }
-        out
+    if let Some(slope) = f.number("slope_bias", -100.0..=100.0)? {
+        s.raster.slope_bias_bits = slope.to_bits();
+        any = true;
     }
-}
-
-/// Parse exactly `N` finite numbers from a pair's value.
-fn numbers<const N: usize>(path: &Path, pair: &Pair, what: &str) -> Result<[f32; N], Diagnostic> {
-    let bad = |detail: String| Diagnostic::at(path, pair.line, format!("\"{}\": {detail}, expected {what}", pair.key));
-    let mut out = [0.0; N];
-    let mut count = 0;
-    for word in pair.value.split_whitespace() {
-        let v: f32 = word.parse().map_err(|_| bad(format!("bad number '{word}'")))?;
-        if !v.is_finite() {
-            return Err(bad(format!("'{word}' is not a finite number")));
-        }
-        if count < N {
-            out[count] = v;
-        }
-        count += 1;
-    }
-    if count != N {
-        return Err(bad(format!("found {count} numbers")));
-    }
-    Ok(out)
+    Ok(any.then_some(s))
 }
 
 /// Rotation from Quake-style angles in degrees: pitch about X, yaw about Y, roll about Z.
@@ -345,6 +288,14 @@ impl Loader<'_> {
         }
         if let Some(c) = f.color("ambient")? {
             env.ambient = c;
+        }
+        let density = f.number("fog_density", 0.0..=100.0)?;
+        let color = f.color("fog_color")?;
+        if density.is_some() || color.is_some() {
+            let color = color.unwrap_or(match env.background {
+                Background::Color(c) | Background::Gradient { bottom: c, .. } => c,
+            });
+            env.fog = Some(Fog { color, density: density.unwrap_or(0.02) });
         }
         Ok(())
     }
@@ -474,8 +425,14 @@ impl Loader<'_> {
             alpha_mode,
             double_sided: f.flag("double_sided")?.unwrap_or(false),
             uv_scale: f.numbers::<2>("uv_scale", "2 numbers (u v)")?.map_or(defaults.uv_scale, glam::Vec2::from),
+            shading: match f.choice("shading", &["blinn_phong", "unlit"])? {
+                Some((1, _)) => ShadingModel::Unlit,
+                _ => ShadingModel::BlinnPhong,
+            },
+            fog: f.flag("fog")?.unwrap_or(true),
             ..defaults
         };
+        let material = Material { states: render_states(f, material.render_states())?, ..material };
         let desc = MaterialDesc {
             diffuse_map: self.texture(f, "diffuse_map", true)?,
             normal_map: self.texture(f, "normal_map", false)?,
@@ -699,6 +656,29 @@ mod tests {
         // Yaw 90° turns −Z (forward) to −X; pitch 90° turns it up to +Y.
         assert!((rotation(Vec3::new(0.0, 90.0, 0.0)) * Vec3::NEG_Z).abs_diff_eq(Vec3::NEG_X, 1e-6));
         assert!((rotation(Vec3::new(90.0, 0.0, 0.0)) * Vec3::NEG_Z).abs_diff_eq(Vec3::Y, 1e-6));
+    }
+
+    #[test]
+    fn material_states_shading_and_fog() {
+        let scene = parse(
+            "{ \"classname\" \"world\"\n\"fog_density\" \"0.1\" }\n{\n\"classname\" \"material\"\n\"name\" \"glow\"\n\"alpha_mode\" \"blend\"\n\"blend\" \"additive\"\n\"cull\" \"none\"\n\"stencil_compare\" \"equal\"\n\"stencil_ref\" \"3\"\n\"shading\" \"unlit\"\n\"fog\" \"0\"\n}\n{ \"classname\" \"material\"\n\"name\" \"plain\" }\n",
+        )
+        .unwrap();
+        assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+        assert_eq!(scene.environment.fog.map(|f| f.density), Some(0.1));
+        let glow = &scene.materials[0].material;
+        let states = glow.states.expect("explicit states");
+        assert_eq!(states.blend, BlendState::Additive);
+        assert!(!states.depth.write, "derived from alpha_mode blend, not overridden");
+        assert_eq!(
+            (states.raster.cull, states.stencil.compare, states.stencil.reference),
+            (Cull::None, Compare::Equal, 3)
+        );
+        assert_eq!((glow.shading, glow.fog), (ShadingModel::Unlit, false));
+        assert_eq!(scene.materials[1].material.states, None, "no state keys: derived at draw time");
+        let err = parse("{\n\"classname\" \"material\"\n\"name\" \"m\"\n\"stencil_ref\" \"300\"\n}\n").unwrap_err();
+        assert_eq!(err.line, Some(4));
+        assert!(err.message.contains("0..=255"), "{err}");
     }
 
     #[test]
