@@ -1,6 +1,8 @@
 //! The `glint` command-line tool.
 
-use clap::{Parser, Subcommand};
+mod bench;
+
+use clap::{Parser, Subcommand, ValueEnum};
 use glint::asset::{load_scene, SceneDesc};
 use glint::{Error, Gpu, OffscreenTarget, Renderer};
 use std::path::{Path, PathBuf};
@@ -43,12 +45,99 @@ enum Command {
         #[arg(long)]
         no_cull: bool,
     },
+    /// Measure a scene's steady-state frame cost, optimized and/or the naive baseline.
+    #[command(after_help = EXIT_CODES)]
+    Bench {
+        /// The scene file.
+        scene: PathBuf,
+        /// Measured frames per mode.
+        #[arg(long, default_value_t = 100)]
+        frames: usize,
+        /// Unmeasured frames before them.
+        #[arg(long, default_value_t = 5)]
+        warmup: usize,
+        /// Which way to build frames.
+        #[arg(long, value_enum, default_value_t = BenchMode::Both)]
+        mode: BenchMode,
+        /// Image size, WIDTHxHEIGHT.
+        #[arg(long, default_value = "1280x720", value_parser = parse_size)]
+        size: (u32, u32),
+        /// Samples per pixel: 1 or 4.
+        #[arg(long, default_value_t = 1, value_parser = parse_msaa)]
+        msaa: u32,
+        /// Print one JSON object instead of text.
+        #[arg(long)]
+        json: bool,
+    },
     /// Parse and validate a .scn scene without a GPU, and summarise it.
     #[command(after_help = EXIT_CODES)]
     Check {
         /// The scene file.
         scene: PathBuf,
     },
+}
+
+/// `glint bench --mode`.
+#[derive(Clone, Copy, ValueEnum)]
+enum BenchMode {
+    Optimized,
+    Naive,
+    Both,
+}
+
+fn run_bench(
+    scene: &Path,
+    frames: usize,
+    warmup: usize,
+    mode: BenchMode,
+    size: (u32, u32),
+    msaa: u32,
+    json: bool,
+) -> Result<(), Error> {
+    if frames == 0 {
+        return Err(glint::Diagnostic::file(scene, "--frames must be at least 1").into());
+    }
+    let desc = load(scene)?;
+    let gpu = Gpu::headless()?;
+    let config = bench::BenchConfig { frames, warmup, size, msaa };
+    let modes = match mode {
+        BenchMode::Optimized => vec![glint::FrameMode::Optimized],
+        BenchMode::Naive => vec![glint::FrameMode::Naive],
+        BenchMode::Both => vec![glint::FrameMode::Optimized, glint::FrameMode::Naive],
+    };
+    let reports = modes.into_iter().map(|m| bench::run_mode(&gpu, &desc, m, &config)).collect::<Result<Vec<_>, _>>()?;
+    let speedup = (reports.len() == 2).then(|| reports[1].cpu_ms_median / reports[0].cpu_ms_median);
+    if json {
+        let modes: serde_json::Map<String, serde_json::Value> =
+            reports.iter().map(|r| (r.mode.to_string(), serde_json::to_value(r).expect("report serialises"))).collect();
+        let out = serde_json::json!({
+            "scene": scene.display().to_string(),
+            "frames": frames,
+            "size": format!("{}x{}", size.0, size.1),
+            "msaa": msaa,
+            "adapter": format!("{} ({:?})", gpu.info().name, gpu.info().backend),
+            "modes": modes,
+            "speedup": speedup,
+        });
+        println!("{out}");
+    } else {
+        println!(
+            "{} on {} ({:?}), {}x{} {}x MSAA, {frames} frames after {warmup} warm-up",
+            scene.display(),
+            gpu.info().name,
+            gpu.info().backend,
+            size.0,
+            size.1,
+            msaa
+        );
+        for r in &reports {
+            bench::print_mode(r);
+        }
+        if let Some(x) = speedup {
+            println!("speedup (naive CPU median / optimized CPU median): {x:.1}x");
+        }
+    }
+    Ok(())
 }
 
 fn parse_size(s: &str) -> Result<(u32, u32), String> {
@@ -171,6 +260,9 @@ fn main() -> ExitCode {
             no_cull: *no_cull,
         }),
         Command::Check { scene } => check(scene),
+        Command::Bench { scene, frames, warmup, mode, size, msaa, json } => {
+            run_bench(scene, *frames, *warmup, *mode, *size, *msaa, *json)
+        }
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -40,7 +40,7 @@ mod shader;
 
 pub use asset::{Diagnostic, Texture};
 pub use gpu::{Gpu, GpuError, OffscreenTarget};
-pub use render::{FrameStats, RenderError, Renderer};
+pub use render::{FrameMode, FrameStats, RenderError, Renderer};
 pub use scene::{
     AlphaMode, Background, Camera, Entity, Environment, Light, Material, MaterialId, Mesh, ShapeId, TextureId,
 };

@@ -202,6 +202,27 @@ fn adding_a_map_compiles_exactly_one_new_variant() {
 }
 
 #[test]
+fn a_sky_with_only_blended_entities_and_the_naive_mode_draw() {
+    let Some(gpu) = common::gpu() else { return };
+    let mut r = Renderer::new(gpu);
+    r.set_environment(glint::Environment {
+        background: glint::Background::Gradient { top: Vec3::Z, bottom: Vec3::ONE },
+        ..Default::default()
+    });
+    let cube = r.add_shape(ShapeKind::Cube.mesh());
+    let glass = r.add_material(Material { alpha_mode: AlphaMode::Blend, ..Material::default() });
+    let e = Entity::instanced(cube, glass, grid(3));
+    assert_eq!(frame(&mut r, gpu, &[&e], &sun()).draw_calls, 2, "sky first (no opaque before it), then the glass");
+    // Naive: one draw per instance, the sky first, everything bound per draw.
+    r.set_mode(glint::FrameMode::Naive);
+    let naive = frame(&mut r, gpu, &[&e], &sun());
+    assert_eq!(naive.draw_calls, 1 + 3);
+    assert_eq!(naive.instances_culled, 0);
+    assert_eq!(naive.bytes_uploaded.material, 3 * 48, "the material block before every draw");
+    assert_eq!(naive.bytes_uploaded.draw_indices, 3 * 4);
+}
+
+#[test]
 fn textures_upload_once_on_first_use() {
     let Some(gpu) = common::gpu() else { return };
     let mut r = Renderer::new(gpu);

@@ -21,10 +21,19 @@ pub enum ShapeKind {
     Cone,
     /// Torus around Y, ring radius 0.35, tube radius 0.15.
     Torus,
+    /// A lumpy sphere: `detail` rings × `detail` segments (2·detail² − 2·detail
+    /// triangles), displaced by smooth noise chosen by `seed`, so every seed is a
+    /// different mesh. For benchmarks and organic props.
+    Blob {
+        /// Rings and segments, 3..=1024.
+        detail: u32,
+        /// Picks the lumps.
+        seed: u32,
+    },
 }
 
 impl ShapeKind {
-    /// Every kind, in a stable order.
+    /// Every fixed kind, in a stable order (blobs are parameterised; see [`ShapeKind::Blob`]).
     pub const ALL: [ShapeKind; 6] =
         [ShapeKind::Cube, ShapeKind::Sphere, ShapeKind::Plane, ShapeKind::Cylinder, ShapeKind::Cone, ShapeKind::Torus];
 
@@ -37,10 +46,12 @@ impl ShapeKind {
             ShapeKind::Cylinder => "cylinder",
             ShapeKind::Cone => "cone",
             ShapeKind::Torus => "torus",
+            ShapeKind::Blob { .. } => "blob",
         }
     }
 
-    /// The kind named `name` in a `.scn` file.
+    /// The fixed kind named `name` in a `.scn` file (`blob` needs its parameters:
+    /// see [`ShapeKind::Blob`]).
     pub fn from_name(name: &str) -> Option<Self> {
         Self::ALL.into_iter().find(|k| k.name() == name)
     }
@@ -54,6 +65,7 @@ impl ShapeKind {
             ShapeKind::Cylinder => cylinder(32),
             ShapeKind::Cone => cone(32),
             ShapeKind::Torus => torus(32, 16),
+            ShapeKind::Blob { detail, seed } => blob(detail, seed),
         }
     }
 }
@@ -204,6 +216,39 @@ pub fn torus(segments: u32, sides: u32) -> Mesh {
     b.finish()
 }
 
+/// A sphere of radius ≤ 0.5 whose radius varies smoothly with direction: four
+/// random plane waves picked by `seed` (PCG32), `detail` rings and segments.
+pub fn blob(detail: u32, seed: u32) -> Mesh {
+    use rand::{Rng, SeedableRng};
+    const AMPLITUDE: f32 = 0.18;
+    let detail = detail.clamp(3, 1024);
+    let mut rng = rand_pcg::Pcg32::seed_from_u64(u64::from(seed));
+    let waves: Vec<(Vec3, f32, f32)> = (0..4)
+        .map(|i| {
+            let dir = Vec3::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0));
+            (dir.normalize_or(Vec3::Y) * (2.0 + i as f32 * 1.5), rng.random_range(0.0..TAU), 0.5 / (1.0 + i as f32))
+        })
+        .collect();
+    let total: f32 = waves.iter().map(|w| w.2).sum();
+    let surface = |u: f32, v: f32| {
+        let theta = v.clamp(0.0, 1.0) * std::f32::consts::PI;
+        let d = around_y(u * TAU) * theta.sin() + Vec3::Y * theta.cos();
+        let lumps: f32 = waves.iter().map(|(k, phase, amp)| amp * (k.dot(d) + phase).sin()).sum::<f32>() / total;
+        d * (0.5 * (1.0 + AMPLITUDE * lumps) / (1.0 + AMPLITUDE))
+    };
+    let mut b = Builder::default();
+    let e = 0.25 / detail as f32;
+    b.grid(detail, detail, |u, v| {
+        let p = surface(u, v);
+        // Normal from central differences; radial at the poles, where dP/du vanishes.
+        let n = (surface(u + e, v) - surface(u - e, v)).cross(surface(u, v + e) - surface(u, v - e));
+        let radial = p.normalize_or(Vec3::Y);
+        let n = if n.length_squared() > 1e-12 { n.normalize() } else { radial };
+        (p, if n.dot(radial) < 0.0 { -n } else { n }, Vec2::new(u, v))
+    });
+    b.finish()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -302,6 +347,26 @@ mod tests {
         for v in front {
             assert!((v.uv[0] - (v.position[0] + 0.5)).abs() < 1e-6);
             assert!((v.uv[1] - (0.5 - v.position[1])).abs() < 1e-6);
+        }
+    }
+
+    #[test]
+    fn blobs_are_distinct_sized_and_wound_outwards() {
+        let a = ShapeKind::Blob { detail: 86, seed: 1 }.mesh();
+        let b = ShapeKind::Blob { detail: 86, seed: 2 }.mesh();
+        assert_eq!(a.indices().len() / 3, 2 * 86 * 86 - 2 * 86, "about 14,600 triangles at detail 86");
+        assert_ne!(a.vertices(), b.vertices(), "seeds give different meshes");
+        assert_eq!(
+            a.vertices(),
+            ShapeKind::Blob { detail: 86, seed: 1 }.mesh().vertices(),
+            "and the same seed the same one"
+        );
+        for mesh in [&a, &b] {
+            assert!(mesh.vertices().iter().all(|v| Vec3::from(v.position).length() <= 0.5 + 1e-5));
+            for t in 0..mesh.indices().len() / 3 {
+                let [p0, p1, p2] = tri(mesh, t).map(|v| Vec3::from(v.position));
+                assert!((p1 - p0).cross(p2 - p0).dot(p0 + p1 + p2) > 0.0, "triangle {t} faces inwards");
+            }
         }
     }
 

@@ -697,7 +697,7 @@ mod tests {
             ("{\n\"classname\" \"entity\"\n}", 1, "missing the required key \"mesh\""),
             ("{\n\"classname\" \"entity\"\n\"mesh\" \"cube\"\n\"origin\" \"1 x 3\"\n}", 4, "bad number 'x'"),
             ("{\n\"classname\" \"entity\"\n\"mesh\" \"cube\"\n\"origin\" \"1 2\"\n}", 4, "found 2 numbers"),
-            ("{\n\"classname\" \"entity\"\n\"mesh\" \"blob\"\n}", 3, "unknown mesh 'blob'"),
+            ("{\n\"classname\" \"entity\"\n\"mesh\" \"blobby\"\n}", 3, "unknown mesh 'blobby'"),
             ("{\n\"classname\" \"entity\"\n\"mesh\" \"cube\"\n\"material\" \"gold\"\n}", 4, "unknown material 'gold'"),
             ("{\n\"classname\" \"instances\"\n\"mesh\" \"cube\"\n\"count\" \"-5\"\n}", 4, "expected 0 or more"),
             (

@@ -118,12 +118,17 @@ impl<'b> Fields<'b> {
 
     pub(crate) fn mesh(&mut self) -> Result<ShapeKind, Diagnostic> {
         let pair = self.require("mesh")?;
+        if pair.value.trim() == "blob" {
+            let detail = self.integer("detail", 3..=1024)?.unwrap_or(32) as u32;
+            let seed = self.integer("mesh_seed", 0..=i64::from(u32::MAX))?.unwrap_or(0) as u32;
+            return Ok(ShapeKind::Blob { detail, seed });
+        }
         ShapeKind::from_name(pair.value.trim()).ok_or_else(|| {
             let names: Vec<_> = ShapeKind::ALL.iter().map(|k| k.name()).collect();
             Diagnostic::at(
                 self.path,
                 pair.line,
-                format!("unknown mesh '{}', expected one of: {}", pair.value, names.join(", ")),
+                format!("unknown mesh '{}', expected one of: {}, blob", pair.value, names.join(", ")),
             )
         })
     }

@@ -109,6 +109,19 @@ struct VisibleRun {
     len: u32,
 }
 
+/// How a frame is built.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum FrameMode {
+    /// Culled, sorted, batched, uploading only what changed.
+    #[default]
+    Optimized,
+    /// The pre-upgrade way, kept as a baseline for `glint bench`: one draw per
+    /// instance in submission order, no culling and no sorting, the material block
+    /// and the draw's instance index written before every draw, and every state
+    /// bound again for every draw.
+    Naive,
+}
+
 /// The view a frame is seen from, kept to rebuild the frustum only when it changes.
 #[derive(Clone, Copy, PartialEq)]
 struct ViewKey {
@@ -147,6 +160,7 @@ pub struct Renderer {
     instance_buffers: InstanceBuffers,
     store: InstanceStore,
     culling: bool,
+    mode: FrameMode,
     frame_index: u64,
     /// The first bad id submitted this frame, reported by `flush`.
     submit_error: Option<RenderError>,
@@ -222,6 +236,7 @@ impl Renderer {
             instance_buffers,
             store: InstanceStore::default(),
             culling: true,
+            mode: FrameMode::Optimized,
             frame_index: 0,
             submit_error: None,
             view: None,
@@ -289,6 +304,11 @@ impl Renderer {
     /// Turn frustum culling on (the default) or off, e.g. to compare costs.
     pub fn set_culling(&mut self, enabled: bool) {
         self.culling = enabled;
+    }
+
+    /// Build frames the optimized way (the default) or the naive way, for comparison.
+    pub fn set_mode(&mut self, mode: FrameMode) {
+        self.mode = mode;
     }
 
     /// Queue `entity` for the next [`flush`](Self::flush). Its transforms are kept
@@ -363,22 +383,28 @@ impl Renderer {
         self.prepare(target.samples(), &mut stats)?;
         stats.cpu_ms.prepare = ms_since(t);
 
-        let t = Instant::now();
         let aspect = target.width() as f32 / target.height() as f32;
-        self.cull(camera, aspect, &mut stats);
-        stats.cpu_ms.cull = ms_since(t);
+        if self.mode == FrameMode::Naive {
+            let t = Instant::now();
+            self.naive_batches(&mut stats);
+            stats.cpu_ms.batch = ms_since(t);
+        } else {
+            let t = Instant::now();
+            self.cull(camera, aspect, &mut stats);
+            stats.cpu_ms.cull = ms_since(t);
 
-        let t = Instant::now();
-        self.build_queue(camera);
-        stats.cpu_ms.queue = ms_since(t);
+            let t = Instant::now();
+            self.build_queue(camera);
+            stats.cpu_ms.queue = ms_since(t);
 
-        let t = Instant::now();
-        queue::sort(&mut self.items);
-        stats.cpu_ms.sort = ms_since(t);
+            let t = Instant::now();
+            queue::sort(&mut self.items);
+            stats.cpu_ms.sort = ms_since(t);
 
-        let t = Instant::now();
-        batch::merge(&self.items, &self.visible, &mut self.draw_indices, &mut self.batches);
-        stats.cpu_ms.batch = ms_since(t);
+            let t = Instant::now();
+            batch::merge(&self.items, &self.visible, &mut self.draw_indices, &mut self.batches);
+            stats.cpu_ms.batch = ms_since(t);
+        }
 
         let t = Instant::now();
         self.upload(camera, lights, aspect, &mut stats);
@@ -598,6 +624,32 @@ impl Renderer {
         }
     }
 
+    /// The naive baseline's batches: every valid instance of every submitted entity,
+    /// in submission order, one draw each, nothing culled or sorted.
+    fn naive_batches(&mut self, stats: &mut FrameStats) {
+        self.draw_indices.clear();
+        self.batches.clear();
+        for s in &self.submitted {
+            let slot = self.store.slot(s.slot);
+            stats.instances_invalid += u64::from(slot.invalid);
+            let pipeline = self.materials[s.material.0 as usize].gpu.as_ref().expect("prepared").pipeline;
+            let range = slot.first as usize..(slot.first + slot.count) as usize;
+            for (i, e) in range.clone().zip(&self.store.extents[range]) {
+                if e.x >= 0.0 {
+                    self.batches.push(Batch {
+                        stage: Queue::Opaque.stage(),
+                        pipeline,
+                        material: s.material,
+                        shape: s.shape,
+                        first_instance: self.draw_indices.len() as u32,
+                        instance_count: 1,
+                    });
+                    self.draw_indices.push(i as u32);
+                }
+            }
+        }
+    }
+
     /// Stage 6: write the blocks that changed, the transforms that changed, and this
     /// frame's draw indices.
     fn upload(&mut self, camera: &Camera, lights: &[Light], aspect: f32, stats: &mut FrameStats) {
@@ -612,7 +664,19 @@ impl Renderer {
             let data = &self.store.transforms[range.start as usize..range.end as usize];
             bytes.transforms += self.instance_buffers.write_transforms(&self.queue, range.start, data);
         }
-        bytes.draw_indices += self.instance_buffers.write_draw_indices(&self.queue, &self.draw_indices);
+        if self.mode == FrameMode::Naive {
+            // Every draw's uniforms written before it, one small write each.
+            for (k, b) in self.batches.iter().enumerate() {
+                let slot = &self.materials[b.material.0 as usize];
+                let block = slot.material.to_gpu();
+                self.queue.write_buffer(&slot.gpu.as_ref().expect("prepared").uniform, 0, bytemuck::bytes_of(&block));
+                bytes.material += std::mem::size_of_val(&block) as u64;
+                bytes.draw_indices +=
+                    self.instance_buffers.write_draw_index(&self.queue, k as u32, self.draw_indices[k]);
+            }
+        } else {
+            bytes.draw_indices += self.instance_buffers.write_draw_indices(&self.queue, &self.draw_indices);
+        }
         stats.instances_drawn = self.draw_indices.len() as u64;
     }
 
@@ -636,7 +700,11 @@ impl Renderer {
             pass.set_bind_group(1, &self.camera_group, &[]);
             pass.set_bind_group(3, &self.instance_buffers.bind_group, &[]);
             stats.bind_groups_set += 3;
-            let sky_at = self.batches.partition_point(|b| b.stage < SKY_STAGE);
+            // Naive frames are in submission order: the sky goes first, under everything.
+            let sky_at = match self.mode {
+                FrameMode::Naive => 0,
+                FrameMode::Optimized => self.batches.partition_point(|b| b.stage < SKY_STAGE),
+            };
             let mut bound = Bound::default();
             self.draw_batches(&mut pass, &self.batches[..sky_at], &mut bound, stats);
             if let (Background::Gradient { .. }, Some(sky)) =
@@ -646,8 +714,11 @@ impl Renderer {
                 pass.set_pipeline(sky);
                 pass.draw(0..3, 0..1);
                 pass.pop_debug_group();
-                bound.pipeline = None;
+                // The sky's layout has groups 0–1 only: bind the forward groups again.
+                pass.set_bind_group(3, &self.instance_buffers.bind_group, &[]);
+                bound = Bound::default();
                 stats.pipelines_bound += 1;
+                stats.bind_groups_set += 1;
                 stats.draw_calls += 1;
             }
             self.draw_batches(&mut pass, &self.batches[sky_at..], &mut bound, stats);
@@ -667,6 +738,9 @@ impl Renderer {
         for run in batches.chunk_by(|a, b| a.stage == b.stage) {
             pass.push_debug_group(&stage_name(run[0].stage));
             for b in run {
+                if self.mode == FrameMode::Naive {
+                    *bound = Bound::default(); // no state tracking: bind everything, every draw
+                }
                 if bound.pipeline != Some(b.pipeline) {
                     pass.set_pipeline(self.pipelines.forward(b.pipeline));
                     bound.pipeline = Some(b.pipeline);

@@ -37,6 +37,7 @@ pub(crate) struct Pipelines {
     pub material_layout: wgpu::BindGroupLayout,
     pub instance_layout: wgpu::BindGroupLayout,
     layout: wgpu::PipelineLayout,
+    sky_layout: wgpu::PipelineLayout,
     library: ShaderLibrary,
     modules: HashMap<ShaderFeatures, wgpu::ShaderModule>,
     sky_module: Option<wgpu::ShaderModule>,
@@ -168,8 +169,13 @@ impl Pipelines {
             count: None,
         };
         let instance_layout = layout("renderer: renderer block layout (group 3)", &[storage(0), storage(1)]);
-        // One layout for every pass: the sky uses groups 0–1 of it, so switching
-        // between sky and forward pipelines never disturbs bound groups.
+        // The sky reads groups 0–1 only and gets a layout of just those, so it can be
+        // drawn before any material is bound; the forward groups 2–3 are set again after it.
+        let sky_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("renderer: sky pipeline layout"),
+            bind_group_layouts: &[Some(&scene_layout), Some(&camera_layout)],
+            immediate_size: 0,
+        });
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("renderer: forward pipeline layout"),
             bind_group_layouts: &[
@@ -186,6 +192,7 @@ impl Pipelines {
             material_layout,
             instance_layout,
             layout: pipeline_layout,
+            sky_layout,
             library: ShaderLibrary::new(),
             modules: HashMap::new(),
             sky_module: None,
@@ -255,7 +262,7 @@ impl Pipelines {
         };
         let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
             label: Some("renderer: sky pipeline"),
-            layout: Some(&self.layout),
+            layout: Some(&self.sky_layout),
             vertex: wgpu::VertexState {
                 module,
                 entry_point: Some("vs_sky"),

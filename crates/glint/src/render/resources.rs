@@ -254,6 +254,12 @@ impl InstanceBuffers {
         bytes.len() as u64
     }
 
+    /// Write one draw index at position `at` (the naive baseline's per-draw upload).
+    pub(crate) fn write_draw_index(&self, queue: &wgpu::Queue, at: u32, index: u32) -> u64 {
+        queue.write_buffer(&self.draw_indices.buffer, u64::from(at) * 4, bytemuck::bytes_of(&index));
+        4
+    }
+
     /// Write this frame's draw indices in one upload; returns bytes written.
     pub(crate) fn write_draw_indices(&self, queue: &wgpu::Queue, indices: &[u32]) -> u64 {
         let bytes: &[u8] = bytemuck::cast_slice(indices);

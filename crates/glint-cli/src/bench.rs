@@ -1,0 +1,131 @@
+//! `glint bench`: steady-state frame cost of a scene, optimized and naive.
+
+use glint::asset::SceneDesc;
+use glint::{Error, FrameMode, FrameStats, Gpu, OffscreenTarget, Renderer};
+use serde::Serialize;
+
+/// One mode's measurements.
+#[derive(Serialize)]
+pub struct ModeReport {
+    /// `optimized` or `naive`.
+    pub mode: &'static str,
+    /// Median CPU time of `flush`, ms.
+    pub cpu_ms_median: f64,
+    /// 95th percentile CPU time of `flush`, ms.
+    pub cpu_ms_p95: f64,
+    /// GPU time from timestamp queries (not measured yet: null).
+    pub gpu_ms_median: Option<f64>,
+    /// Median CPU time per submitted instance, ns.
+    pub ns_per_instance: f64,
+    /// Median of cull + queue + sort + batch + upload per submitted instance, ns.
+    pub ns_per_instance_cull_sort_batch_upload: f64,
+    /// Median CPU time of each stage, ms.
+    pub stage_ms_median: glint::render::StageTimes,
+    /// The last frame's statistics (steady state).
+    pub stats: FrameStats,
+}
+
+/// Settings of one bench run.
+pub struct BenchConfig {
+    /// Measured frames per mode.
+    pub frames: usize,
+    /// Unmeasured frames first (caches, allocations).
+    pub warmup: usize,
+    /// Target size.
+    pub size: (u32, u32),
+    /// MSAA samples.
+    pub msaa: u32,
+}
+
+fn percentile(sorted: &[f64], p: f64) -> f64 {
+    if sorted.is_empty() {
+        return 0.0;
+    }
+    let rank = (p * (sorted.len() - 1) as f64).round() as usize;
+    sorted[rank.min(sorted.len() - 1)]
+}
+
+fn median_of(frames: &[FrameStats], f: impl Fn(&FrameStats) -> f64) -> f64 {
+    let mut v: Vec<f64> = frames.iter().map(f).collect();
+    v.sort_by(f64::total_cmp);
+    percentile(&v, 0.5)
+}
+
+/// Run `config.frames` frames of `desc` in `mode` and summarise them.
+pub fn run_mode(gpu: &Gpu, desc: &SceneDesc, mode: FrameMode, config: &BenchConfig) -> Result<ModeReport, Error> {
+    let (width, height) = config.size;
+    let mut target = OffscreenTarget::new(gpu, width, height, config.msaa)?;
+    let mut renderer = Renderer::new(gpu);
+    renderer.set_mode(mode);
+    let entities = desc.instantiate(&mut renderer);
+    let refs: Vec<_> = entities.iter().collect();
+    renderer.precompile(&refs, config.msaa)?;
+    let camera = desc.cameras[0];
+    let mut frames = Vec::with_capacity(config.frames);
+    for i in 0..config.warmup + config.frames {
+        for e in &entities {
+            renderer.submit(e);
+        }
+        let stats = renderer.flush(&camera, &desc.lights, &mut target)?;
+        // Let the GPU finish outside the measured CPU time, so a CPU rasterizer's
+        // threads do not share the cores with the next frame's CPU work.
+        let _ = gpu.device.poll(wgpu::PollType::wait_indefinitely());
+        if i >= config.warmup {
+            frames.push(stats);
+        }
+    }
+    let mut totals: Vec<f64> = frames.iter().map(|f| f.cpu_ms.total).collect();
+    totals.sort_by(f64::total_cmp);
+    let last = *frames.last().expect("at least one frame");
+    let instances = last.instances_submitted.max(1) as f64;
+    let per_instance_stages =
+        |f: &FrameStats| f.cpu_ms.cull + f.cpu_ms.queue + f.cpu_ms.sort + f.cpu_ms.batch + f.cpu_ms.upload;
+    let stage_ms_median = glint::render::StageTimes {
+        prepare: median_of(&frames, |f| f.cpu_ms.prepare),
+        cull: median_of(&frames, |f| f.cpu_ms.cull),
+        queue: median_of(&frames, |f| f.cpu_ms.queue),
+        sort: median_of(&frames, |f| f.cpu_ms.sort),
+        batch: median_of(&frames, |f| f.cpu_ms.batch),
+        upload: median_of(&frames, |f| f.cpu_ms.upload),
+        encode: median_of(&frames, |f| f.cpu_ms.encode),
+        submit: median_of(&frames, |f| f.cpu_ms.submit),
+        total: percentile(&totals, 0.5),
+    };
+    Ok(ModeReport {
+        mode: match mode {
+            FrameMode::Optimized => "optimized",
+            FrameMode::Naive => "naive",
+        },
+        cpu_ms_median: percentile(&totals, 0.5),
+        cpu_ms_p95: percentile(&totals, 0.95),
+        gpu_ms_median: None,
+        ns_per_instance: percentile(&totals, 0.5) * 1e6 / instances,
+        ns_per_instance_cull_sort_batch_upload: median_of(&frames, per_instance_stages) * 1e6 / instances,
+        stage_ms_median,
+        stats: last,
+    })
+}
+
+/// Print one mode's report for people.
+pub fn print_mode(r: &ModeReport) {
+    let s = &r.stage_ms_median;
+    println!(
+        "{:>9}: cpu {:.4} ms median, {:.4} ms p95 | {:.2} ns/instance ({:.2} ns cull+sort+batch+upload)",
+        r.mode, r.cpu_ms_median, r.cpu_ms_p95, r.ns_per_instance, r.ns_per_instance_cull_sort_batch_upload
+    );
+    println!(
+        "           stages (median ms): prepare {:.4}  cull {:.4}  queue {:.4}  sort {:.4}  batch {:.4}  upload {:.4}  encode {:.4}  submit {:.4}",
+        s.prepare, s.cull, s.queue, s.sort, s.batch, s.upload, s.encode, s.submit
+    );
+    let st = &r.stats;
+    println!(
+        "           frame: {} draws, {} pipelines bound, {} bind groups, {} instances submitted, {} culled, {} drawn, {} bytes uploaded",
+        st.draw_calls,
+        st.pipelines_bound,
+        st.bind_groups_set,
+        st.instances_submitted,
+        st.instances_culled,
+        st.instances_drawn,
+        st.bytes_uploaded.total
+    );
+}
