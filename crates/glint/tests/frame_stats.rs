@@ -98,6 +98,8 @@ fn a_second_identical_frame_uploads_no_uniform_bytes() {
     assert_eq!(second.bytes_uploaded.meshes, 0);
     assert_eq!(second.bytes_uploaded.transforms, 0, "unchanged transforms stay on the GPU");
     assert_eq!(second.bytes_uploaded.total, 10 * 4, "only the draw indices");
+    assert_eq!((first.draws_encoded, second.draws_encoded), (1, 0), "an unchanged frame replays its render bundle");
+    assert_eq!(second.draw_calls, 1);
 }
 
 #[test]

@@ -120,9 +120,16 @@ pub(crate) struct DrawItem {
     pub count: u32,
 }
 
-/// Sort draw items by key (LSD radix sort, stable).
+/// Below this many items a comparison sort beats the radix sort's eight fixed passes.
+const RADIX_THRESHOLD: usize = 256;
+
+/// Sort draw items by key, stably: LSD radix sort, or merge sort for short lists.
 pub(crate) fn sort(items: &mut [DrawItem]) {
-    radsort::sort_by_key(items, |item| item.key);
+    if items.len() < RADIX_THRESHOLD {
+        items.sort_by_key(|item| item.key);
+    } else {
+        radsort::sort_by_key(items, |item| item.key);
+    }
 }
 
 #[cfg(test)]
@@ -185,11 +192,18 @@ mod tests {
     }
 
     #[test]
-    fn radix_sort_orders_by_key_and_is_stable() {
+    fn sort_orders_by_key_and_is_stable_on_both_paths() {
         let item = |key, first| DrawItem { key, pipeline: 0, material: M0, shape: S0, first, count: 1 };
         let mut items = vec![item(5, 0), item(1, 1), item(5, 2), item(u64::MAX, 3), item(0, 4)];
         sort(&mut items);
         let firsts: Vec<u32> = items.iter().map(|i| i.first).collect();
         assert_eq!(firsts, vec![4, 1, 0, 2, 3]);
+        // The radix path: many items, keys with ties, against a stable comparison sort.
+        let mut many: Vec<DrawItem> =
+            (0..5000u32).map(|i| item(u64::from(i.wrapping_mul(2_654_435_761) % 97) << 40, i)).collect();
+        let mut expected = many.clone();
+        expected.sort_by_key(|i| i.key);
+        sort(&mut many);
+        assert_eq!(many, expected);
     }
 }

@@ -232,13 +232,13 @@ impl InstanceBuffers {
         layout: &wgpu::BindGroupLayout,
         transforms: usize,
         indices: usize,
-    ) -> bool {
+    ) -> (bool, bool) {
         let grew_transforms = self.transforms.reserve(device, (transforms * std::mem::size_of::<InstanceGpu>()) as u64);
         let grew_indices = self.draw_indices.reserve(device, (indices * 4) as u64);
         if grew_transforms || grew_indices {
             self.bind_group = Self::bind(device, layout, &self.transforms, &self.draw_indices);
         }
-        grew_transforms
+        (grew_transforms, grew_transforms || grew_indices)
     }
 
     /// Write `data` at instance `first` of the transform buffer; returns bytes written.

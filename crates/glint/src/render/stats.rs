@@ -64,6 +64,9 @@ pub struct StageTimes {
 pub struct FrameStats {
     /// Draw calls recorded (the sky counts as one).
     pub draw_calls: u32,
+    /// Draw commands recorded this frame: equal to `draw_calls` when encoded draw by
+    /// draw, only the sky when an unchanged frame replays its render bundles.
+    pub draws_encoded: u32,
     /// `set_pipeline` calls.
     pub pipelines_bound: u32,
     /// Pipelines compiled during this frame (0 in steady state).
@@ -84,4 +87,13 @@ pub struct FrameStats {
     pub instances_drawn: u64,
     /// CPU time per stage.
     pub cpu_ms: StageTimes,
+}
+
+impl FrameStats {
+    /// Add the state-change and draw counts of `recorded` (draws replayed from a bundle).
+    pub(crate) fn add(&mut self, recorded: FrameStats) {
+        self.draw_calls += recorded.draw_calls;
+        self.pipelines_bound += recorded.pipelines_bound;
+        self.bind_groups_set += recorded.bind_groups_set;
+    }
 }
