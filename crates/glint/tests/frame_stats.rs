@@ -134,6 +134,11 @@ fn culled_and_invalid_instances_are_counted_and_not_drawn() {
     assert_eq!(stats.instances_culled, 8);
     assert_eq!(stats.instances_drawn, 1);
     assert_eq!(stats.draw_calls, 1);
+    // An entity wholly in view skips per-instance tests, but never its invalid instances.
+    let mut inside = Entity::instanced(cube, m, vec![Mat4::IDENTITY; 4]);
+    inside.set_transform(3, Mat4::from_scale(Vec3::splat(f32::INFINITY)));
+    let stats = frame(&mut r, gpu, &[&inside], &sun());
+    assert_eq!((stats.instances_invalid, stats.instances_drawn, stats.instances_culled), (1, 3, 0));
 }
 
 #[test]

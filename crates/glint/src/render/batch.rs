@@ -6,20 +6,25 @@ use crate::scene::{MaterialId, ShapeId};
 /// One instanced draw: a run of adjacent items with equal stage, pipeline,
 /// material and shape.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) struct Batch {
+pub struct Batch {
+    /// Draw stage (top byte of the sort key).
     pub stage: u8,
+    /// Forward pipeline id.
     pub pipeline: u16,
+    /// Material.
     pub material: MaterialId,
+    /// Shape.
     pub shape: ShapeId,
     /// First instance of the run in the frame's draw-index buffer.
     pub first_instance: u32,
+    /// Instances drawn.
     pub instance_count: u32,
 }
 
 /// Merge adjacent equal items of a sorted list into batches, and write their
 /// instance indices (from `visible`) into `draw_indices` in draw order, so each
 /// batch is one contiguous range.
-pub(crate) fn merge(items: &[DrawItem], visible: &[u32], draw_indices: &mut Vec<u32>, batches: &mut Vec<Batch>) {
+pub fn merge(items: &[DrawItem], visible: &[u32], draw_indices: &mut Vec<u32>, batches: &mut Vec<Batch>) {
     draw_indices.clear();
     batches.clear();
     for item in items {

@@ -3,6 +3,7 @@
 
 use glam::{Mat4, Vec3A, Vec4};
 use rayon::prelude::*;
+use std::ops::Range;
 
 /// Half extent that marks a box as never visible (instances with invalid
 /// transforms). Finite on purpose: a −∞ extent times a plane normal's zero
@@ -101,31 +102,140 @@ pub fn transform_aabb(m: &Mat4, center: Vec3A, extent: Vec3A) -> (Vec3A, Vec3A) 
     (c, e)
 }
 
-/// Append `base + i` for every box `i` of `centers`/`extents` the frustum may see,
-/// in order. Runs chunks in parallel above [`PARALLEL_CULL_THRESHOLD`].
-pub fn cull_boxes(frustum: &Frustum, centers: &[Vec3A], extents: &[Vec3A], base: u32, out: &mut Vec<u32>) {
-    debug_assert_eq!(centers.len(), extents.len());
-    if centers.len() < PARALLEL_CULL_THRESHOLD {
-        for (i, (c, e)) in centers.iter().zip(extents).enumerate() {
-            if frustum.intersects(*c, *e) {
-                out.push(base + i as u32);
-            }
-        }
-        return;
+/// World boxes as structure of arrays, one array per component, so that the
+/// culler loads four boxes' centre x (then y, z, extents) into one SIMD register.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Boxes {
+    cx: Vec<f32>,
+    cy: Vec<f32>,
+    cz: Vec<f32>,
+    ex: Vec<f32>,
+    ey: Vec<f32>,
+    ez: Vec<f32>,
+}
+
+impl Boxes {
+    /// Number of boxes.
+    pub fn len(&self) -> usize {
+        self.cx.len()
     }
-    let chunks: Vec<Vec<u32>> = centers
-        .par_chunks(CHUNK)
-        .zip(extents.par_chunks(CHUNK))
-        .enumerate()
-        .map(|(k, (cs, es))| {
-            let start = base + (k * CHUNK) as u32;
-            let mut visible = Vec::with_capacity(cs.len());
-            cull_boxes(frustum, cs, es, start, &mut visible);
-            visible
+
+    /// Whether there are none.
+    pub fn is_empty(&self) -> bool {
+        self.cx.is_empty()
+    }
+
+    /// Grow or shrink to `n` boxes (new ones are points at the origin).
+    pub fn resize(&mut self, n: usize) {
+        for v in [&mut self.cx, &mut self.cy, &mut self.cz, &mut self.ex, &mut self.ey, &mut self.ez] {
+            v.resize(n, 0.0);
+        }
+    }
+
+    /// Set box `i` to `center ± extent`.
+    pub fn set(&mut self, i: usize, center: Vec3A, extent: Vec3A) {
+        (self.cx[i], self.cy[i], self.cz[i]) = (center.x, center.y, center.z);
+        (self.ex[i], self.ey[i], self.ez[i]) = (extent.x, extent.y, extent.z);
+    }
+
+    /// Mark box `i` as never visible (see [`NEVER_VISIBLE_EXTENT`]).
+    pub fn set_never_visible(&mut self, i: usize) {
+        self.set(i, Vec3A::ZERO, Vec3A::splat(NEVER_VISIBLE_EXTENT));
+    }
+
+    /// Whether box `i` is a real box (not marked never visible).
+    pub fn is_valid(&self, i: usize) -> bool {
+        self.ex[i] >= 0.0
+    }
+
+    /// Centre of box `i`.
+    pub fn center(&self, i: usize) -> Vec3A {
+        Vec3A::new(self.cx[i], self.cy[i], self.cz[i])
+    }
+
+    /// Half extent of box `i`.
+    pub fn extent(&self, i: usize) -> Vec3A {
+        Vec3A::new(self.ex[i], self.ey[i], self.ez[i])
+    }
+
+    /// Append boxes `range` of `other`.
+    pub fn extend_from(&mut self, other: &Boxes, range: Range<usize>) {
+        let pairs = [
+            (&mut self.cx, &other.cx),
+            (&mut self.cy, &other.cy),
+            (&mut self.cz, &other.cz),
+            (&mut self.ex, &other.ex),
+            (&mut self.ey, &other.ey),
+            (&mut self.ez, &other.ez),
+        ];
+        for (dst, src) in pairs {
+            dst.extend_from_slice(&src[range.clone()]);
+        }
+    }
+}
+
+/// One plane as six SIMD splats: normal, its absolute value, and d.
+struct PlaneLanes {
+    n: [Vec4; 3],
+    abs_n: [Vec4; 3],
+    d: Vec4,
+}
+
+/// Append every index in `range` whose box the frustum may see, in order. Tests
+/// four boxes per SIMD operation; runs chunks on rayon's threads above
+/// [`PARALLEL_CULL_THRESHOLD`].
+pub fn cull_boxes(frustum: &Frustum, boxes: &Boxes, range: Range<usize>, out: &mut Vec<u32>) {
+    if range.len() >= PARALLEL_CULL_THRESHOLD {
+        let starts: Vec<usize> = range.clone().step_by(CHUNK).collect();
+        let chunks: Vec<Vec<u32>> = starts
+            .par_iter()
+            .map(|&start| {
+                let mut visible = Vec::with_capacity(CHUNK);
+                cull_serial(frustum, boxes, start..(start + CHUNK).min(range.end), &mut visible);
+                visible
+            })
+            .collect();
+        for chunk in chunks {
+            out.extend_from_slice(&chunk);
+        }
+    } else {
+        cull_serial(frustum, boxes, range, out);
+    }
+}
+
+fn cull_serial(frustum: &Frustum, boxes: &Boxes, range: Range<usize>, out: &mut Vec<u32>) {
+    let lanes: Vec<PlaneLanes> = frustum
+        .planes
+        .iter()
+        .map(|p| PlaneLanes {
+            n: [Vec4::splat(p.x), Vec4::splat(p.y), Vec4::splat(p.z)],
+            abs_n: [Vec4::splat(p.x.abs()), Vec4::splat(p.y.abs()), Vec4::splat(p.z.abs())],
+            d: Vec4::splat(p.w),
         })
         .collect();
-    for chunk in chunks {
-        out.extend_from_slice(&chunk);
+    let mut i = range.start;
+    while i + 4 <= range.end {
+        let load = |v: &[f32]| Vec4::from_slice(&v[i..i + 4]);
+        let (cx, cy, cz) = (load(&boxes.cx), load(&boxes.cy), load(&boxes.cz));
+        let (ex, ey, ez) = (load(&boxes.ex), load(&boxes.ey), load(&boxes.ez));
+        let mut outside = 0u32;
+        for p in &lanes {
+            let reach =
+                cx * p.n[0] + cy * p.n[1] + cz * p.n[2] + p.d + ex * p.abs_n[0] + ey * p.abs_n[1] + ez * p.abs_n[2];
+            // NaN compares false, so a NaN box is never outside (conservative).
+            outside |= reach.cmplt(Vec4::ZERO).bitmask();
+        }
+        for lane in 0..4 {
+            if outside & (1 << lane) == 0 {
+                out.push((i + lane) as u32);
+            }
+        }
+        i += 4;
+    }
+    for j in i..range.end {
+        if frustum.intersects(boxes.center(j), boxes.extent(j)) {
+            out.push(j as u32);
+        }
     }
 }
 
@@ -259,21 +369,30 @@ mod tests {
     }
 
     #[test]
-    fn parallel_culling_equals_serial() {
+    fn simd_and_parallel_culling_equal_the_scalar_test() {
         let (frustum, _) = camera_frustum();
         let mut rng = rand_pcg::Pcg32::seed_from_u64(1);
         let n = PARALLEL_CULL_THRESHOLD * 3 + 17;
-        let centers: Vec<Vec3A> = (0..n)
-            .map(|_| {
-                Vec3A::new(rng.random_range(-40.0..40.0), rng.random_range(-40.0..40.0), rng.random_range(-60.0..20.0))
-            })
-            .collect();
-        let extents = vec![Vec3A::splat(0.5); n];
-        let mut parallel = Vec::new();
-        cull_boxes(&frustum, &centers, &extents, 100, &mut parallel);
-        let serial: Vec<u32> =
-            (0..n).filter(|&i| frustum.intersects(centers[i], extents[i])).map(|i| 100 + i as u32).collect();
-        assert_eq!(parallel, serial);
-        assert!(!serial.is_empty() && serial.len() < n);
+        let mut boxes = Boxes::default();
+        boxes.resize(n);
+        for i in 0..n {
+            let c =
+                Vec3A::new(rng.random_range(-40.0..40.0), rng.random_range(-40.0..40.0), rng.random_range(-60.0..20.0));
+            boxes.set(i, c, Vec3A::splat(rng.random_range(0.0..2.0)));
+        }
+        boxes.set_never_visible(5);
+        boxes.set(6, Vec3A::splat(f32::NAN), Vec3A::ONE);
+        let scalar = |r: Range<usize>| -> Vec<u32> {
+            r.filter(|&i| frustum.intersects(boxes.center(i), boxes.extent(i))).map(|i| i as u32).collect()
+        };
+        for range in [0..n, 3..1000, 0..3, 100..PARALLEL_CULL_THRESHOLD + 101] {
+            let mut fast = Vec::new();
+            cull_boxes(&frustum, &boxes, range.clone(), &mut fast);
+            assert_eq!(fast, scalar(range.clone()), "{range:?}");
+        }
+        let mut all = Vec::new();
+        cull_boxes(&frustum, &boxes, 0..n, &mut all);
+        assert!(!all.contains(&5) && all.contains(&6), "never-visible dropped, NaN kept");
+        assert!(all.len() > 1000 && all.len() < n);
     }
 }

@@ -3,7 +3,7 @@
 //! again only when its entity's version (dirty flag) changes. Beside it, the world
 //! bounds of every instance as structure-of-arrays (centres, half extents) for culling.
 
-use super::cull::{transform_aabb, NEVER_VISIBLE_EXTENT};
+use super::cull::{transform_aabb, Boxes};
 use crate::scene::{Aabb, Entity, ShapeId};
 use glam::{Mat4, Vec3A};
 use std::collections::HashMap;
@@ -35,10 +35,8 @@ pub(crate) struct InstanceStore {
     by_key: HashMap<u64, usize>,
     /// Transforms as uploaded (invalid ones zeroed).
     pub transforms: Vec<Mat4>,
-    /// World box centres, one per instance.
-    pub centers: Vec<Vec3A>,
-    /// World box half extents, one per instance ([`NEVER_VISIBLE_EXTENT`] for invalid ones).
-    pub extents: Vec<Vec3A>,
+    /// World boxes, one per instance (never visible for invalid instances).
+    pub bounds: Boxes,
     /// Instances left behind by entities that moved or shrank.
     garbage: usize,
     /// Ranges written since the last upload.
@@ -88,8 +86,7 @@ impl InstanceStore {
             slot.count = count;
             let new_len = self.transforms.len() + count as usize;
             self.transforms.resize(new_len, Mat4::ZERO);
-            self.centers.resize(new_len, Vec3A::ZERO);
-            self.extents.resize(new_len, Vec3A::ZERO);
+            self.bounds.resize(new_len);
             slot.version = entity.version().wrapping_sub(1);
         }
         if slot.version != entity.version() || slot.shape != entity.shape {
@@ -100,8 +97,8 @@ impl InstanceStore {
                 entity.transforms(),
                 local,
                 &mut self.transforms[range.clone()],
-                &mut self.centers[range.clone()],
-                &mut self.extents[range],
+                &mut self.bounds,
+                range.start,
             );
             slot.bounds = bounds;
             slot.invalid = invalid;
@@ -121,23 +118,21 @@ impl InstanceStore {
             return None;
         }
         let mut remap = vec![usize::MAX; self.slots.len()];
-        let (mut transforms, mut centers, mut extents) = (Vec::new(), Vec::new(), Vec::new());
+        let (mut transforms, mut bounds) = (Vec::new(), Boxes::default());
         let mut slots = Vec::new();
         for (old, slot) in self.slots.iter().enumerate().filter(|(_, s)| s.last_frame == frame) {
             let range = slot.first as usize..(slot.first + slot.count) as usize;
             let mut moved = slot.clone();
             moved.first = transforms.len() as u32;
             transforms.extend_from_slice(&self.transforms[range.clone()]);
-            centers.extend_from_slice(&self.centers[range.clone()]);
-            extents.extend_from_slice(&self.extents[range]);
+            bounds.extend_from(&self.bounds, range);
             remap[old] = slots.len();
             slots.push(moved);
         }
         self.by_key = slots.iter().enumerate().map(|(i, s)| (s.key, i)).collect();
         self.slots = slots;
         self.transforms = transforms;
-        self.centers = centers;
-        self.extents = extents;
+        self.bounds = bounds;
         self.garbage = 0;
         self.all_dirty = true;
         Some(remap)
@@ -167,16 +162,16 @@ impl InstanceStore {
     }
 }
 
-/// Copy transforms into the store and compute each instance's world box. Invalid
-/// (non-finite) transforms become zero matrices with the "never visible" box
-/// (centre 0, extent [`NEVER_VISIBLE_EXTENT`]), so NaN never reaches the GPU or the culler.
+/// Copy transforms into the store and compute each instance's world box (boxes
+/// from `first` on). Invalid (non-finite) transforms become zero matrices with a
+/// never-visible box, so NaN never reaches the GPU or the culler.
 /// Returns the union of the valid boxes and the number of invalid instances.
 fn write_range(
     src: &[Mat4],
     local: Aabb,
     transforms: &mut [Mat4],
-    centers: &mut [Vec3A],
-    extents: &mut [Vec3A],
+    boxes: &mut Boxes,
+    first: usize,
 ) -> (Option<(Vec3A, Vec3A)>, u32) {
     let (lc, le) = (Vec3A::from(local.center()), Vec3A::from(local.half_extent()));
     let (mut lo, mut hi) = (Vec3A::splat(f32::INFINITY), Vec3A::splat(f32::NEG_INFINITY));
@@ -185,14 +180,12 @@ fn write_range(
         if m.is_finite() {
             let (c, e) = transform_aabb(m, lc, le);
             transforms[i] = *m;
-            centers[i] = c;
-            extents[i] = e;
+            boxes.set(first + i, c, e);
             lo = lo.min(c - e);
             hi = hi.max(c + e);
         } else {
             transforms[i] = Mat4::ZERO;
-            centers[i] = Vec3A::ZERO;
-            extents[i] = Vec3A::splat(NEVER_VISIBLE_EXTENT);
+            boxes.set_never_visible(first + i);
             invalid += 1;
         }
     }
@@ -263,7 +256,7 @@ mod tests {
         assert_eq!(store.slot(slot).invalid, 1);
         assert_eq!(store.transforms[1], Mat4::ZERO);
         assert!(store.transforms.iter().all(|m| m.is_finite()));
-        assert_eq!(store.extents[1], Vec3A::splat(NEVER_VISIBLE_EXTENT));
+        assert!(!store.bounds.is_valid(1) && store.bounds.is_valid(0));
         let bounds = store.slot(slot).bounds.unwrap();
         assert!(bounds.0.is_finite() && bounds.1.is_finite(), "the union skips the invalid instance");
     }

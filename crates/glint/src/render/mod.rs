@@ -12,7 +12,7 @@
 //! Every pipeline shares one layout with these four groups, so groups 0, 1 and 3
 //! are bound once per pass and only group 2 changes between draws.
 
-mod batch;
+pub mod batch;
 mod blocks;
 pub mod cull;
 mod instances;
@@ -36,6 +36,7 @@ use glam::{Mat4, Vec3A};
 use instances::InstanceStore;
 use pipelines::Pipelines;
 use queue::{DrawItem, Queue, SKY_STAGE};
+use rayon::prelude::*;
 use resources::{GpuMesh, InstanceBuffers, TextureUploader};
 use std::time::Instant;
 
@@ -555,40 +556,37 @@ impl Renderer {
         let frustum = self.view.as_ref().expect("set above").1;
         self.visible.clear();
         self.runs.clear();
-        for (entry, s) in self.submitted.iter().enumerate() {
-            let slot = self.store.slot(s.slot);
-            stats.instances_invalid += u64::from(slot.invalid);
-            let start = self.visible.len() as u32;
-            let range = slot.first as usize..(slot.first + slot.count) as usize;
-            let containment = match slot.bounds {
-                None => Containment::Outside,
-                Some(_) if !self.culling => Containment::Inside,
-                Some((c, e)) => frustum.classify(c, e),
-            };
-            match containment {
-                Containment::Outside => {}
-                Containment::Inside if slot.invalid == 0 => self.visible.extend(slot.first..slot.first + slot.count),
-                Containment::Inside => {
-                    let extents = &self.store.extents[range.clone()];
-                    self.visible.extend(
-                        range.clone().zip(extents).filter(|(_, e)| e.x != f32::NEG_INFINITY).map(|(i, _)| i as u32),
-                    );
-                }
-                Containment::Intersecting => {
-                    cull::cull_boxes(
-                        &frustum,
-                        &self.store.centers[range.clone()],
-                        &self.store.extents[range],
-                        slot.first,
-                        &mut self.visible,
-                    );
-                }
-            }
-            let len = self.visible.len() as u32 - start;
+        let (store, culling) = (&self.store, self.culling);
+        let mut push_run = |entry: usize, visible: &mut Vec<u32>, start: usize| {
+            let len = (visible.len() - start) as u32;
             if len > 0 {
-                self.runs.push(VisibleRun { entry, start, len });
+                self.runs.push(VisibleRun { entry, start: start as u32, len });
+            }
+        };
+        if self.submitted.len() > 1 && self.instances_submitted as usize >= cull::PARALLEL_CULL_THRESHOLD {
+            // Many instances: entities culled on all cores, results kept in submission order.
+            let lists: Vec<Vec<u32>> = self
+                .submitted
+                .par_iter()
+                .map(|s| {
+                    let mut list = Vec::new();
+                    visible_instances(&frustum, culling, store, s.slot, &mut list);
+                    list
+                })
+                .collect();
+            for (entry, list) in lists.into_iter().enumerate() {
+                let start = self.visible.len();
+                self.visible.extend_from_slice(&list);
+                push_run(entry, &mut self.visible, start);
+            }
+        } else {
+            for (entry, s) in self.submitted.iter().enumerate() {
+                let start = self.visible.len();
+                visible_instances(&frustum, culling, store, s.slot, &mut self.visible);
+                push_run(entry, &mut self.visible, start);
             }
         }
+        stats.instances_invalid = self.submitted.iter().map(|s| u64::from(store.slot(s.slot).invalid)).sum();
         stats.instances_culled = stats.instances_submitted - stats.instances_invalid - self.visible.len() as u64;
     }
 
@@ -622,7 +620,7 @@ impl Renderer {
             if blended {
                 for k in run.start..run.start + run.len {
                     let instance = self.visible[k as usize] as usize;
-                    self.items.push(item(k, 1, depth(self.store.centers[instance])));
+                    self.items.push(item(k, 1, depth(self.store.bounds.center(instance))));
                 }
             } else {
                 let center = self.store.slot(s.slot).bounds.map_or(Vec3A::ZERO, |(c, _)| c);
@@ -641,8 +639,8 @@ impl Renderer {
             stats.instances_invalid += u64::from(slot.invalid);
             let pipeline = self.materials[s.material.0 as usize].gpu.as_ref().expect("prepared").pipeline;
             let range = slot.first as usize..(slot.first + slot.count) as usize;
-            for (i, e) in range.clone().zip(&self.store.extents[range]) {
-                if e.x >= 0.0 {
+            for i in range {
+                if self.store.bounds.is_valid(i) {
                     self.batches.push(Batch {
                         stage: Queue::Opaque.stage(),
                         pipeline,
@@ -892,6 +890,25 @@ impl RecordedDraws {
     /// Whether replaying these draws gives what recording `batches` now would.
     fn matches(&self, batches: &[Batch], generation: u64, samples: u32) -> bool {
         self.generation == generation && self.samples == samples && self.batches == batches
+    }
+}
+
+/// Append the visible instances of the entity in `slot`. Its world box decides
+/// at once when wholly inside or outside; only a box crossing a plane has its
+/// instances tested one by one.
+fn visible_instances(frustum: &Frustum, culling: bool, store: &InstanceStore, slot: usize, out: &mut Vec<u32>) {
+    let slot = store.slot(slot);
+    let range = slot.first as usize..(slot.first + slot.count) as usize;
+    let containment = match slot.bounds {
+        None => Containment::Outside,
+        Some(_) if !culling => Containment::Inside,
+        Some((c, e)) => frustum.classify(c, e),
+    };
+    match containment {
+        Containment::Outside => {}
+        Containment::Inside if slot.invalid == 0 => out.extend(slot.first..slot.first + slot.count),
+        Containment::Inside => out.extend(range.filter(|&i| store.bounds.is_valid(i)).map(|i| i as u32)),
+        Containment::Intersecting => cull::cull_boxes(frustum, &store.bounds, range, out),
     }
 }
 

@@ -110,13 +110,18 @@ pub fn stage_of(key: u64) -> u8 {
 /// One draw request, ready to sort: its key, what it draws, and which of the
 /// frame's visible instance indices it covers.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub(crate) struct DrawItem {
+pub struct DrawItem {
+    /// The sort key ([`sort_key`]).
     pub key: u64,
+    /// Forward pipeline id.
     pub pipeline: u16,
+    /// Material.
     pub material: MaterialId,
+    /// Shape.
     pub shape: ShapeId,
-    /// Range in the frame's visible-instance list.
+    /// First entry in the frame's visible-instance list.
     pub first: u32,
+    /// Number of entries.
     pub count: u32,
 }
 
@@ -124,7 +129,7 @@ pub(crate) struct DrawItem {
 const RADIX_THRESHOLD: usize = 256;
 
 /// Sort draw items by key, stably: LSD radix sort, or merge sort for short lists.
-pub(crate) fn sort(items: &mut [DrawItem]) {
+pub fn sort(items: &mut [DrawItem]) {
     if items.len() < RADIX_THRESHOLD {
         items.sort_by_key(|item| item.key);
     } else {

@@ -22,13 +22,15 @@ pub use mesh::{Aabb, BoundingSphere, Mesh, MeshError, Vertex};
 pub use states::{BlendState, Compare, Cull, DepthState, RasterState, RenderStates, StencilOp, StencilState};
 
 /// Handle to a shape (a mesh uploaded by the renderer), returned by
-/// [`Renderer::add_shape`](crate::Renderer::add_shape).
+/// [`Renderer::add_shape`](crate::Renderer::add_shape). The number is its index
+/// in the renderer (public for tools and benchmarks that build draw lists).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
-pub struct ShapeId(pub(crate) u32);
+pub struct ShapeId(pub u32);
 
 /// Handle to a material, returned by [`Renderer::add_material`](crate::Renderer::add_material).
+/// The number is its index in the renderer.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
-pub struct MaterialId(pub(crate) u32);
+pub struct MaterialId(pub u32);
 
 /// Handle to a texture, returned by [`Renderer::add_texture`](crate::Renderer::add_texture).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
