@@ -217,3 +217,32 @@ fn render_writes_the_png_and_prints_stats_json() {
     let all: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
     assert_eq!((all["instances_drawn"].as_u64(), all["instances_culled"].as_u64()), (Some(12040), Some(0)));
 }
+
+#[test]
+fn bench_reports_both_modes_as_json() {
+    let scene = repo("tests/scenes/ortho.scn");
+    let args = ["bench", scene.to_str().expect("path"), "--frames", "3", "--warmup", "1", "--size", "64x64", "--json"];
+    let out = glint(&args);
+    if out.status.code() == Some(2) && std::env::var("GLINT_REQUIRE_ADAPTER").as_deref() != Ok("1") {
+        eprintln!("skipping: no GPU adapter");
+        return;
+    }
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let report: serde_json::Value = serde_json::from_slice(&out.stdout).expect("one JSON object");
+    assert_eq!(report["frames"], 3);
+    assert!(report["scene"].as_str().expect("scene").ends_with("ortho.scn"));
+    for mode in ["optimized", "naive"] {
+        let m = &report["modes"][mode];
+        for key in ["cpu_ms_median", "cpu_ms_p95", "ns_per_instance"] {
+            assert!(m[key].as_f64().expect(key) > 0.0, "{mode}.{key}: {m}");
+        }
+        assert!(m.get("gpu_ms_median").is_some(), "present, null where not measured");
+        assert!(m["stats"].get("instances_culled").is_some() && m["stats"].get("pipelines_compiled").is_some());
+    }
+    // Ortho scene: plane + 9 cubes. Optimized: 2 draws; naive: one per instance.
+    assert_eq!(report["modes"]["optimized"]["stats"]["draw_calls"], 2);
+    assert_eq!(report["modes"]["naive"]["stats"]["draw_calls"], 10);
+    assert_eq!(report["modes"]["optimized"]["stats"]["pipelines_compiled"], 0, "precompiled before the first frame");
+    assert!(report["speedup"].as_f64().expect("speedup") > 0.0);
+    assert_eq!(glint(&["bench", scene.to_str().expect("path"), "--frames", "0"]).status.code(), Some(1));
+}
