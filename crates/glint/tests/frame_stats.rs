@@ -26,6 +26,14 @@ fn frame(renderer: &mut Renderer, gpu: &Gpu, entities: &[&Entity], lights: &[Lig
     renderer.flush(&camera(), lights, &mut target).expect("frame")
 }
 
+/// A renderer holding a cube shape and a default material.
+fn renderer_with_cube(gpu: &Gpu) -> (Renderer, glint::ShapeId, glint::MaterialId) {
+    let mut r = Renderer::new(gpu);
+    let cube = r.add_shape(ShapeKind::Cube.mesh());
+    let m = r.add_material(Material::default());
+    (r, cube, m)
+}
+
 fn grid(n: usize) -> Vec<Mat4> {
     (0..n)
         .map(|i| Mat4::from_translation(Vec3::new((i % 100) as f32 * 0.1 - 5.0, 0.0, (i / 100) as f32 * 0.1 - 5.0)))
@@ -35,9 +43,7 @@ fn grid(n: usize) -> Vec<Mat4> {
 #[test]
 fn ten_thousand_instances_of_one_entity_are_one_draw() {
     let Some(gpu) = common::gpu() else { return };
-    let mut r = Renderer::new(gpu);
-    let cube = r.add_shape(ShapeKind::Cube.mesh());
-    let m = r.add_material(Material::default());
+    let (mut r, cube, m) = renderer_with_cube(gpu);
     let e = Entity::instanced(cube, m, grid(10_000));
     let stats = frame(&mut r, gpu, &[&e], &sun());
     assert_eq!(stats.draw_calls, 1);
@@ -86,9 +92,7 @@ fn three_materials_by_two_shapes_are_six_draws_with_minimal_state_changes() {
 #[test]
 fn a_second_identical_frame_uploads_no_uniform_bytes() {
     let Some(gpu) = common::gpu() else { return };
-    let mut r = Renderer::new(gpu);
-    let cube = r.add_shape(ShapeKind::Cube.mesh());
-    let m = r.add_material(Material::default());
+    let (mut r, cube, m) = renderer_with_cube(gpu);
     let e = Entity::instanced(cube, m, grid(10));
     let first = frame(&mut r, gpu, &[&e], &sun());
     assert!(first.bytes_uploaded.uniforms > 0);
@@ -105,9 +109,7 @@ fn a_second_identical_frame_uploads_no_uniform_bytes() {
 #[test]
 fn moving_one_entity_reuploads_only_its_transforms() {
     let Some(gpu) = common::gpu() else { return };
-    let mut r = Renderer::new(gpu);
-    let cube = r.add_shape(ShapeKind::Cube.mesh());
-    let m = r.add_material(Material::default());
+    let (mut r, cube, m) = renderer_with_cube(gpu);
     let still = Entity::instanced(cube, m, grid(100));
     let mut moving = Entity::instanced(cube, m, grid(5));
     assert_eq!(frame(&mut r, gpu, &[&still, &moving], &sun()).bytes_uploaded.transforms, 105 * 64);
@@ -120,9 +122,7 @@ fn moving_one_entity_reuploads_only_its_transforms() {
 #[test]
 fn culled_and_invalid_instances_are_counted_and_not_drawn() {
     let Some(gpu) = common::gpu() else { return };
-    let mut r = Renderer::new(gpu);
-    let cube = r.add_shape(ShapeKind::Cube.mesh());
-    let m = r.add_material(Material::default());
+    let (mut r, cube, m) = renderer_with_cube(gpu);
     // The camera is at (0, 5, 10) looking at the origin: z = 50 is behind it.
     let behind = Entity::instanced(cube, m, vec![Mat4::from_translation(Vec3::Z * 50.0); 7]);
     let mut mixed =
@@ -144,9 +144,7 @@ fn culled_and_invalid_instances_are_counted_and_not_drawn() {
 #[test]
 fn pipelines_compile_once_and_a_changed_flag_compiles_exactly_one() {
     let Some(gpu) = common::gpu() else { return };
-    let mut r = Renderer::new(gpu);
-    let cube = r.add_shape(ShapeKind::Cube.mesh());
-    let m = r.add_material(Material::default());
+    let (mut r, cube, m) = renderer_with_cube(gpu);
     let e = Entity::new(cube, m, Mat4::IDENTITY);
     assert_eq!(frame(&mut r, gpu, &[&e], &sun()).pipelines_compiled, 1);
     assert_eq!(frame(&mut r, gpu, &[&e], &sun()).pipelines_compiled, 0, "steady state");
@@ -159,9 +157,7 @@ fn pipelines_compile_once_and_a_changed_flag_compiles_exactly_one() {
 #[test]
 fn only_the_changed_block_is_uploaded() {
     let Some(gpu) = common::gpu() else { return };
-    let mut r = Renderer::new(gpu);
-    let cube = r.add_shape(ShapeKind::Cube.mesh());
-    let m = r.add_material(Material::default());
+    let (mut r, cube, m) = renderer_with_cube(gpu);
     let e = Entity::new(cube, m, Mat4::IDENTITY);
     frame(&mut r, gpu, &[&e], &sun());
     // A material edit rewrites that material's 48-byte block, nothing else.
@@ -194,9 +190,7 @@ fn precompile_leaves_the_first_frame_nothing_to_compile() {
 #[test]
 fn adding_a_map_compiles_exactly_one_new_variant() {
     let Some(gpu) = common::gpu() else { return };
-    let mut r = Renderer::new(gpu);
-    let cube = r.add_shape(ShapeKind::Cube.mesh());
-    let m = r.add_material(Material::default());
+    let (mut r, cube, m) = renderer_with_cube(gpu);
     let e = Entity::new(cube, m, Mat4::IDENTITY);
     frame(&mut r, gpu, &[&e], &sun());
     let bumps = r.add_texture(Texture::new(
@@ -263,9 +257,7 @@ fn queues_draw_opaque_then_blended_with_their_own_pipelines() {
 #[test]
 fn too_many_lights_and_foreign_ids_are_errors_not_panics() {
     let Some(gpu) = common::gpu() else { return };
-    let mut r = Renderer::new(gpu);
-    let cube = r.add_shape(ShapeKind::Cube.mesh());
-    let m = r.add_material(Material::default());
+    let (mut r, cube, m) = renderer_with_cube(gpu);
     let e = Entity::new(cube, m, Mat4::IDENTITY);
     let mut target = OffscreenTarget::new(gpu, 32, 32, 1).expect("target");
     let lights = vec![sun()[0]; MAX_LIGHTS + 1];
