@@ -13,7 +13,7 @@ pub struct ModeReport {
     pub cpu_ms_median: f64,
     /// 95th percentile CPU time of `flush`, ms.
     pub cpu_ms_p95: f64,
-    /// GPU time from timestamp queries (not measured yet: null).
+    /// Median GPU time of the forward pass from timestamp queries; null where unsupported.
     pub gpu_ms_median: Option<f64>,
     /// Median CPU time per submitted instance, ns.
     pub ns_per_instance: f64,
@@ -57,6 +57,8 @@ pub fn run_mode(gpu: &Gpu, desc: &SceneDesc, mode: FrameMode, config: &BenchConf
     let mut target = OffscreenTarget::new(gpu, width, height, config.msaa)?;
     let mut renderer = Renderer::new(gpu);
     renderer.set_mode(mode);
+    let timed = renderer.enable_gpu_timing();
+    let mut gpu_ms = Vec::new();
     let entities = desc.instantiate(&mut renderer);
     let refs: Vec<_> = entities.iter().collect();
     renderer.precompile(&refs, config.msaa)?;
@@ -70,8 +72,10 @@ pub fn run_mode(gpu: &Gpu, desc: &SceneDesc, mode: FrameMode, config: &BenchConf
         // Let the GPU finish outside the measured CPU time, so a CPU rasterizer's
         // threads do not share the cores with the next frame's CPU work.
         let _ = gpu.device.poll(wgpu::PollType::wait_indefinitely());
+        let frame_gpu_ms = renderer.read_gpu_time_ms();
         if i >= config.warmup {
             frames.push(stats);
+            gpu_ms.extend(frame_gpu_ms);
         }
     }
     let mut totals: Vec<f64> = frames.iter().map(|f| f.cpu_ms.total).collect();
@@ -98,7 +102,10 @@ pub fn run_mode(gpu: &Gpu, desc: &SceneDesc, mode: FrameMode, config: &BenchConf
         },
         cpu_ms_median: percentile(&totals, 0.5),
         cpu_ms_p95: percentile(&totals, 0.95),
-        gpu_ms_median: None,
+        gpu_ms_median: (timed && !gpu_ms.is_empty()).then(|| {
+            gpu_ms.sort_by(f64::total_cmp);
+            percentile(&gpu_ms, 0.5)
+        }),
         ns_per_instance: percentile(&totals, 0.5) * 1e6 / instances,
         ns_per_instance_cull_sort_batch_upload: median_of(&frames, per_instance_stages) * 1e6 / instances,
         stage_ms_median,
@@ -109,8 +116,9 @@ pub fn run_mode(gpu: &Gpu, desc: &SceneDesc, mode: FrameMode, config: &BenchConf
 /// Print one mode's report for people.
 pub fn print_mode(r: &ModeReport) {
     let s = &r.stage_ms_median;
+    let gpu = r.gpu_ms_median.map_or_else(|| "n/a".to_string(), |ms| format!("{ms:.3} ms"));
     println!(
-        "{:>9}: cpu {:.4} ms median, {:.4} ms p95 | {:.2} ns/instance ({:.2} ns cull+sort+batch+upload)",
+        "{:>9}: cpu {:.4} ms median, {:.4} ms p95 | gpu {gpu} median | {:.2} ns/instance ({:.2} ns cull+sort+batch+upload)",
         r.mode, r.cpu_ms_median, r.cpu_ms_p95, r.ns_per_instance, r.ns_per_instance_cull_sort_batch_upload
     );
     println!(

@@ -224,6 +224,22 @@ fn a_sky_with_only_blended_entities_and_the_naive_mode_draw() {
 }
 
 #[test]
+fn gpu_timing_reads_the_last_frames_pass_time() {
+    let Some(gpu) = common::gpu() else { return };
+    let (mut r, cube, m) = renderer_with_cube(gpu);
+    if !r.enable_gpu_timing() {
+        eprintln!("skipping: {} has no timestamp queries", gpu.info().name);
+        return;
+    }
+    assert_eq!(r.read_gpu_time_ms(), None, "no frame yet");
+    let e = Entity::instanced(cube, m, grid(1000));
+    frame(&mut r, gpu, &[&e], &sun());
+    let ms = r.read_gpu_time_ms().expect("timed frame");
+    assert!(ms > 0.0 && ms < 60_000.0, "{ms} ms");
+    assert_eq!(r.read_gpu_time_ms(), None, "each frame is read once");
+}
+
+#[test]
 fn textures_upload_once_on_first_use() {
     let Some(gpu) = common::gpu() else { return };
     let mut r = Renderer::new(gpu);

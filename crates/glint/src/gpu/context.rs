@@ -100,7 +100,8 @@ impl Gpu {
         let features = adapter.features();
         let desc = wgpu::DeviceDescriptor {
             label: Some("glint device"),
-            required_features: wgpu::Features::empty(),
+            // Timestamps let benchmarks report GPU time; everything else is core.
+            required_features: features & wgpu::Features::TIMESTAMP_QUERY,
             required_limits: wgpu::Limits::downlevel_defaults().using_resolution(adapter.limits()),
             ..Default::default()
         };

@@ -41,6 +41,7 @@ impl Renderer {
                 label: Some("forward pass"),
                 color_attachments: &[Some(target.color_attachment(clear))],
                 depth_stencil_attachment: Some(target.depth_attachment()),
+                timestamp_writes: self.gpu_timer.as_ref().map(|t| t.pass_writes()),
                 ..Default::default()
             });
             let sky = match self.environment.background {
@@ -80,6 +81,9 @@ impl Renderer {
                     stats.draws_encoded += stats.draw_calls - draws_before;
                 }
             }
+        }
+        if let Some(timer) = &mut self.gpu_timer {
+            timer.resolve(&mut encoder);
         }
         encoder.finish()
     }

@@ -21,6 +21,7 @@ mod pipelines;
 pub mod queue;
 mod resources;
 mod stats;
+mod timer;
 
 pub use stats::{FrameStats, StageTimes, UploadStats};
 
@@ -170,6 +171,7 @@ pub struct Renderer {
     /// Bumped whenever a bind group or buffer that recorded draws refer to is replaced.
     resources_generation: u64,
     bundles: Option<encode::RecordedDraws>,
+    gpu_timer: Option<timer::GpuTimer>,
     // Per-frame lists, kept to reuse their allocations.
     submitted: Vec<Submitted>,
     instances_submitted: u64,
@@ -247,6 +249,7 @@ impl Renderer {
             view: None,
             resources_generation: 0,
             bundles: None,
+            gpu_timer: None,
             submitted: Vec::new(),
             instances_submitted: 0,
             visible: Vec::new(),
@@ -311,6 +314,22 @@ impl Renderer {
     /// Turn frustum culling on (the default) or off, e.g. to compare costs.
     pub fn set_culling(&mut self, enabled: bool) {
         self.culling = enabled;
+    }
+
+    /// Time the forward pass on the GPU with timestamp queries, when the device has
+    /// them; returns whether timing is on. Read each frame's time with
+    /// [`Renderer::read_gpu_time_ms`].
+    pub fn enable_gpu_timing(&mut self) -> bool {
+        if self.gpu_timer.is_none() {
+            self.gpu_timer = timer::GpuTimer::new(&self.device, &self.queue);
+        }
+        self.gpu_timer.is_some()
+    }
+
+    /// GPU time of the last frame's forward pass in milliseconds, waiting for the
+    /// GPU to finish it; `None` when timing is off or unsupported.
+    pub fn read_gpu_time_ms(&mut self) -> Option<f64> {
+        self.gpu_timer.as_mut()?.read_ms(&self.device)
     }
 
     /// Build frames the optimized way (the default) or the naive way, for comparison.
