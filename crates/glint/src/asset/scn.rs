@@ -93,14 +93,17 @@ impl SceneDesc {
                 })
             })
             .collect();
-        let default_material =
-            self.entities.iter().any(|e| e.material.is_none()).then(|| renderer.add_material(Material::default()));
+        // Added on first use, so scenes that name every material do not get one.
+        let mut default_material = None;
         let mut shapes = HashMap::new();
         self.entities
             .iter()
             .map(|e| {
                 let shape = *shapes.entry(e.mesh).or_insert_with(|| renderer.add_shape(e.mesh.mesh()));
-                let material = e.material.map_or_else(|| default_material.expect("added above"), |i| materials[i]);
+                let material = match e.material {
+                    Some(i) => materials[i],
+                    None => *default_material.get_or_insert_with(|| renderer.add_material(Material::default())),
+                };
                 Entity::instanced(shape, material, e.transforms.clone()).with_render_order(e.render_order)
             })
             .collect()
