@@ -127,7 +127,8 @@ pub fn print_mode(r: &ModeReport) {
     );
     let st = &r.stats;
     println!(
-        "           frame: {} draws, {} pipelines bound, {} bind groups, {} instances submitted, {} culled, {} drawn, {} bytes uploaded",
+        "           frame: {} draws in {} draw calls, {} pipelines bound, {} bind groups, {} instances submitted, {} culled, {} drawn, {} bytes uploaded",
+        st.draws,
         st.draw_calls,
         st.pipelines_bound,
         st.bind_groups_set,

@@ -50,7 +50,7 @@ fn ten_thousand_instances_of_one_entity_are_one_draw() {
     assert_eq!(stats.instances_submitted, 10_000);
     assert!(stats.instances_culled < 100, "the grid is almost all in view: {}", stats.instances_culled);
     assert_eq!(stats.instances_drawn + stats.instances_culled, 10_000);
-    assert_eq!(stats.bytes_uploaded.transforms, 10_000 * 64, "every matrix once, on first sight");
+    assert_eq!(stats.bytes_uploaded.instances, 10_000 * 64, "every instance once, on first sight");
     assert_eq!(stats.bytes_uploaded.draw_indices, 4 * stats.instances_drawn, "one u32 per drawn instance");
     r.set_culling(false);
     let unculled = frame(&mut r, gpu, &[&e], &sun());
@@ -67,13 +67,13 @@ fn hundred_entities_sharing_shape_and_material_merge_into_one_draw() {
     let refs: Vec<&Entity> = entities.iter().collect();
     let stats = frame(&mut r, gpu, &refs, &sun());
     assert_eq!(stats.entities_submitted, 100);
-    assert_eq!(stats.draw_calls, 1);
+    assert_eq!((stats.draw_calls, stats.draws), (1, 1));
     assert_eq!(stats.instances_drawn, 100);
     assert_eq!(stats.pipelines_bound, 1);
 }
 
 #[test]
-fn three_materials_by_two_shapes_are_six_draws_with_minimal_state_changes() {
+fn three_materials_by_two_shapes_are_six_draws_in_one_indirect_call() {
     let Some(gpu) = common::gpu() else { return };
     let mut r = Renderer::new(gpu);
     let shapes = [r.add_shape(ShapeKind::Cube.mesh()), r.add_shape(ShapeKind::Torus.mesh())];
@@ -83,10 +83,32 @@ fn three_materials_by_two_shapes_are_six_draws_with_minimal_state_changes() {
         grid(60).into_iter().enumerate().map(|(i, t)| Entity::new(shapes[(i / 3) % 2], materials[i % 3], t)).collect();
     let refs: Vec<&Entity> = entities.iter().collect();
     let stats = frame(&mut r, gpu, &refs, &sun());
-    assert_eq!(stats.draw_calls, 6);
+    assert_eq!(stats.draws, 6);
+    // One pipeline, one texture set (none), one mesh-pool page: one multi-draw-indirect call.
+    assert_eq!(stats.draw_calls, if gpu.draws_indirect() { 1 } else { 6 });
     assert_eq!(stats.instances_drawn, 60);
     assert_eq!(stats.pipelines_bound, 1, "all opaque, single-sided: one pipeline");
-    assert_eq!(stats.bind_groups_set, 3 + 3, "scene, camera, instances once; each material once");
+    assert_eq!(stats.bind_groups_set, 3 + 1, "scene, camera, instances once; the untextured set once");
+    assert_eq!(stats.bytes_uploaded.indirect, if gpu.draws_indirect() { 6 * 20 } else { 0 });
+}
+
+#[test]
+fn materials_with_different_maps_split_the_indirect_call() {
+    let Some(gpu) = common::gpu() else { return };
+    let mut r = Renderer::new(gpu);
+    let cube = r.add_shape(ShapeKind::Cube.mesh());
+    let pixel = |r: &mut Renderer, v| {
+        r.add_texture(Texture::new("t", image::RgbaImage::from_pixel(1, 1, image::Rgba([v, v, v, 255])), true))
+    };
+    let (t1, t2) = (pixel(&mut r, 100), pixel(&mut r, 200));
+    let textured = |map| Material { diffuse_map: Some(map), ..Material::default() };
+    let materials = [textured(t1), textured(t2), textured(t1)].map(|m| r.add_material(m));
+    let entities: Vec<Entity> = grid(3).into_iter().zip(materials).map(|(t, m)| Entity::new(cube, m, t)).collect();
+    let refs: Vec<&Entity> = entities.iter().collect();
+    let stats = frame(&mut r, gpu, &refs, &sun());
+    assert_eq!(stats.draws, 3);
+    assert_eq!(stats.draw_calls, if gpu.draws_indirect() { 2 } else { 3 }, "t1's two materials share a call");
+    assert_eq!(stats.bind_groups_set, 3 + 2, "two texture sets");
 }
 
 #[test]
@@ -96,13 +118,14 @@ fn a_second_identical_frame_uploads_no_uniform_bytes() {
     let e = Entity::instanced(cube, m, grid(10));
     let first = frame(&mut r, gpu, &[&e], &sun());
     assert!(first.bytes_uploaded.uniforms > 0);
-    assert_eq!(first.bytes_uploaded.meshes, r.shape(cube).expect("shape").gpu_bytes());
+    let mesh = r.shape(cube).expect("shape");
+    assert_eq!(first.bytes_uploaded.meshes, (mesh.vertices().len() * 48 + mesh.indices().len() * 4) as u64);
+    assert_eq!(first.bytes_uploaded.draw_indices, 10 * 4);
     let second = frame(&mut r, gpu, &[&e], &sun());
     assert_eq!(second.bytes_uploaded.uniforms, 0);
     assert_eq!(second.bytes_uploaded.meshes, 0);
-    assert_eq!(second.bytes_uploaded.transforms, 0, "unchanged transforms stay on the GPU");
-    assert_eq!(second.bytes_uploaded.total, 10 * 4, "only the draw indices");
-    assert_eq!((first.draws_encoded, second.draws_encoded), (1, 0), "an unchanged frame replays its render bundle");
+    assert_eq!(second.bytes_uploaded.instances, 0, "unchanged instances stay on the GPU");
+    assert_eq!(second.bytes_uploaded.total, 0, "the same visible set: not even the draw indices");
     assert_eq!(second.draw_calls, 1);
 }
 
@@ -112,11 +135,18 @@ fn moving_one_entity_reuploads_only_its_transforms() {
     let (mut r, cube, m) = renderer_with_cube(gpu);
     let still = Entity::instanced(cube, m, grid(100));
     let mut moving = Entity::instanced(cube, m, grid(5));
-    assert_eq!(frame(&mut r, gpu, &[&still, &moving], &sun()).bytes_uploaded.transforms, 105 * 64);
+    assert_eq!(frame(&mut r, gpu, &[&still, &moving], &sun()).bytes_uploaded.instances, 105 * 64);
     moving.set_transform(2, Mat4::from_translation(Vec3::Y));
     let stats = frame(&mut r, gpu, &[&still, &moving], &sun());
-    assert_eq!(stats.bytes_uploaded.transforms, 5 * 64, "the moved entity's range, nothing else");
-    assert_eq!(stats.draw_calls, 1, "still one batch: same shape and material");
+    assert_eq!(stats.bytes_uploaded.instances, 5 * 64, "the moved entity's range, nothing else");
+    assert_eq!(stats.draws, 1, "still one batch: same shape and material");
+    // A new material for the entity rewrites its range (the material index is per instance).
+    let other = r.add_material(Material::color("other", 1.0, 0.0, 0.0));
+    moving.material = other;
+    let stats = frame(&mut r, gpu, &[&still, &moving], &sun());
+    assert_eq!(stats.bytes_uploaded.instances, 5 * 64);
+    assert_eq!(stats.bytes_uploaded.material, 48, "the new material's table entry");
+    assert_eq!(stats.draws, 2);
 }
 
 #[test]
@@ -184,7 +214,7 @@ fn precompile_leaves_the_first_frame_nothing_to_compile() {
     assert_eq!(r.precompile(&[&a, &b], 1).expect("precompile"), 0, "already built");
     let stats = frame(&mut r, gpu, &[&a, &b], &sun());
     assert_eq!(stats.pipelines_compiled, 0);
-    assert_eq!(stats.draw_calls, 2);
+    assert_eq!((stats.draws, stats.draw_calls), (2, 2), "two pipelines: two calls");
 }
 
 #[test]
@@ -217,7 +247,7 @@ fn a_sky_with_only_blended_entities_and_the_naive_mode_draw() {
     // Naive: one draw per instance, the sky first, everything bound per draw.
     r.set_mode(glint::FrameMode::Naive);
     let naive = frame(&mut r, gpu, &[&e], &sun());
-    assert_eq!(naive.draw_calls, 1 + 3);
+    assert_eq!((naive.draw_calls, naive.draws), (1 + 3, 1 + 3));
     assert_eq!(naive.instances_culled, 0);
     assert_eq!(naive.bytes_uploaded.material, 3 * 48, "the material block before every draw");
     assert_eq!(naive.bytes_uploaded.draw_indices, 3 * 4);
@@ -266,7 +296,7 @@ fn queues_draw_opaque_then_blended_with_their_own_pipelines() {
     let b = Entity::new(cube, solid, Mat4::from_translation(Vec3::X * 2.0));
     let empty = Entity::instanced(cube, solid, Vec::new());
     let stats = frame(&mut r, gpu, &[&a, &b, &empty], &sun());
-    assert_eq!(stats.draw_calls, 2, "an entity with no instances draws nothing");
+    assert_eq!((stats.draws, stats.draw_calls), (2, 2), "an entity with no instances draws nothing");
     assert_eq!(stats.pipelines_bound, 2);
 }
 
@@ -287,7 +317,7 @@ fn too_many_lights_and_foreign_ids_are_errors_not_panics() {
     assert!(matches!(other.flush(&camera(), &sun(), &mut target), Err(RenderError::UnknownShape(_))));
     // The failed frame's entities are dropped: the next frame is empty.
     let stats = other.flush(&camera(), &sun(), &mut target).expect("empty frame");
-    assert_eq!(stats.draw_calls, 0);
+    assert_eq!((stats.draws, stats.draw_calls), (0, 0));
 }
 
 #[test]

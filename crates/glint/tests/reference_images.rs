@@ -7,7 +7,7 @@ mod common;
 fn check(name: &str, expected_draws: u32) {
     let Some(gpu) = common::gpu() else { return };
     let (image, stats) = common::render_scene(gpu, name, 256);
-    assert_eq!(stats.draw_calls, expected_draws, "{name}: draw calls");
+    assert_eq!(stats.draws, expected_draws, "{name}: draws");
     common::assert_matches_reference(name, &image);
 }
 

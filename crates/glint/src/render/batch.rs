@@ -60,7 +60,7 @@ mod tests {
     fn item(material: u32, shape: u32, first: u32, count: u32, depth: f32) -> DrawItem {
         let (m, s) = (MaterialId(material), ShapeId(shape));
         DrawItem {
-            key: sort_key(Queue::Opaque.stage(), false, 0, m, s, depth),
+            key: sort_key(Queue::Opaque.stage(), false, 0, 0, m, s, depth),
             pipeline: 0,
             material: m,
             shape: s,

@@ -1,7 +1,7 @@
 //! Core layer: GPU twins of the shader data blocks (layouts match `shader/*.wgsl`)
 //! and [`UniformBlock`], which writes a block only when its bytes change.
 
-use crate::scene::{AlphaMode, Background, Camera, Environment, Light, LightKind, Material, MAX_LIGHTS};
+use crate::scene::{AlphaMode, Background, Camera, Environment, Light, LightKind, Material, MaterialId, MAX_LIGHTS};
 use glam::{Mat4, Vec4};
 
 /// One light as the shader reads it (32 bytes).
@@ -86,7 +86,8 @@ impl Camera {
     }
 }
 
-/// A material's uniform block, `@group(2) @binding(0)` (48 bytes).
+/// One material as the shader reads it: an element of the material table,
+/// `@group(2) @binding(0)`, indexed by material id (48 bytes).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub(crate) struct MaterialGpu {
@@ -117,9 +118,36 @@ impl Material {
     }
 }
 
-/// One instance as the shader reads it: the object-to-world matrix (64 bytes).
-pub(crate) type InstanceGpu = Mat4;
+/// One instance as the shader reads it, `@group(3) @binding(0)` (64 bytes): the
+/// top three rows of its object-to-world matrix (the bottom row of an object
+/// transform is 0 0 0 1, and is taken to be) and its material's index in the
+/// material table, so draws of different materials can share one indirect call.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub(crate) struct InstanceGpu {
+    rows: [[f32; 4]; 3], // 48
+    material: u32,       // 4
+    reserved: [u32; 3],  // 12
+}
 const _: () = assert!(std::mem::size_of::<InstanceGpu>() == 64);
+
+impl InstanceGpu {
+    /// An instance drawn with `transform` and material `material`.
+    pub(crate) fn new(transform: &Mat4, material: MaterialId) -> Self {
+        let t = transform.transpose();
+        Self {
+            rows: [t.x_axis.to_array(), t.y_axis.to_array(), t.z_axis.to_array()],
+            material: material.0,
+            reserved: [0; 3],
+        }
+    }
+
+    /// The instance's transform, bottom row 0 0 0 1.
+    #[cfg(test)]
+    pub(crate) fn transform(&self) -> Mat4 {
+        Mat4::from_cols_array_2d(&[self.rows[0], self.rows[1], self.rows[2], [0.0, 0.0, 0.0, 1.0]]).transpose()
+    }
+}
 
 /// A uniform buffer holding one block, rewritten only when its bytes change.
 pub(crate) struct UniformBlock<T: bytemuck::Pod + PartialEq> {

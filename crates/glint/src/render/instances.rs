@@ -1,10 +1,12 @@
 //! Core layer: the persistent instance store. Every submitted entity owns a range
-//! of one transform array that lives on the GPU between frames; a range is written
-//! again only when its entity's version (dirty flag) changes. Beside it, the world
+//! of one instance array (transform + material index) that lives on the GPU between
+//! frames; a range is written again only when its entity's version (dirty flag),
+//! shape or material changes. Beside it, the world
 //! bounds of every instance as structure-of-arrays (centres, half extents) for culling.
 
+use super::blocks::InstanceGpu;
 use super::cull::{transform_aabb, Boxes};
-use crate::scene::{Aabb, Entity, ShapeId};
+use crate::scene::{Aabb, Entity, MaterialId, ShapeId};
 use glam::{Mat4, Vec3A};
 use std::collections::HashMap;
 use std::ops::Range;
@@ -15,6 +17,7 @@ pub(crate) struct Slot {
     key: u64,
     version: u64,
     shape: ShapeId,
+    material: MaterialId,
     /// First instance in the store.
     pub first: u32,
     /// Instance count.
@@ -33,8 +36,8 @@ pub(crate) struct Slot {
 pub(crate) struct InstanceStore {
     slots: Vec<Slot>,
     by_key: HashMap<u64, usize>,
-    /// Transforms as uploaded (invalid ones zeroed).
-    pub transforms: Vec<Mat4>,
+    /// Instances as uploaded: transform and material (invalid transforms zeroed).
+    pub instances: Vec<InstanceGpu>,
     /// World boxes, one per instance (never visible for invalid instances).
     pub bounds: Boxes,
     /// Instances left behind by entities that moved or shrank.
@@ -53,11 +56,11 @@ impl InstanceStore {
 
     /// Number of instances stored, garbage included.
     pub(crate) fn len(&self) -> usize {
-        self.transforms.len()
+        self.instances.len()
     }
 
     /// Record `entity` as submitted in `frame`, writing its transforms and bounds if
-    /// they changed (or it is new, or its shape changed). Returns its slot index.
+    /// they changed (or it is new, or its shape or material changed). Returns its slot index.
     pub(crate) fn submit(&mut self, entity: &Entity, local: Aabb, frame: u64) -> usize {
         let count = entity.transforms().len() as u32;
         let index = match self.by_key.get(&entity.key()) {
@@ -67,7 +70,8 @@ impl InstanceStore {
                     key: entity.key(),
                     version: entity.version().wrapping_sub(1),
                     shape: entity.shape,
-                    first: self.transforms.len() as u32,
+                    material: entity.material,
+                    first: self.instances.len() as u32,
                     count: 0,
                     bounds: None,
                     invalid: 0,
@@ -82,21 +86,23 @@ impl InstanceStore {
         if slot.count != count {
             // A new size needs a new range at the end; the old one becomes garbage.
             self.garbage += slot.count as usize;
-            slot.first = self.transforms.len() as u32;
+            slot.first = self.instances.len() as u32;
             slot.count = count;
-            let new_len = self.transforms.len() + count as usize;
-            self.transforms.resize(new_len, Mat4::ZERO);
+            let new_len = self.instances.len() + count as usize;
+            self.instances.resize(new_len, InstanceGpu::default());
             self.bounds.resize(new_len);
             slot.version = entity.version().wrapping_sub(1);
         }
-        if slot.version != entity.version() || slot.shape != entity.shape {
+        if slot.version != entity.version() || slot.shape != entity.shape || slot.material != entity.material {
             slot.version = entity.version();
             slot.shape = entity.shape;
+            slot.material = entity.material;
             let range = slot.first as usize..(slot.first + slot.count) as usize;
             let (bounds, invalid) = write_range(
                 entity.transforms(),
                 local,
-                &mut self.transforms[range.clone()],
+                entity.material,
+                &mut self.instances[range.clone()],
                 &mut self.bounds,
                 range.start,
             );
@@ -114,24 +120,24 @@ impl InstanceStore {
     pub(crate) fn compact_if_wasteful(&mut self, frame: u64) -> Option<Vec<usize>> {
         let stale: usize = self.slots.iter().filter(|s| s.last_frame != frame).map(|s| s.count as usize).sum();
         let waste = self.garbage + stale;
-        if waste < 4096 || waste < self.transforms.len() / 2 {
+        if waste < 4096 || waste < self.instances.len() / 2 {
             return None;
         }
         let mut remap = vec![usize::MAX; self.slots.len()];
-        let (mut transforms, mut bounds) = (Vec::new(), Boxes::default());
+        let (mut instances, mut bounds) = (Vec::new(), Boxes::default());
         let mut slots = Vec::new();
         for (old, slot) in self.slots.iter().enumerate().filter(|(_, s)| s.last_frame == frame) {
             let range = slot.first as usize..(slot.first + slot.count) as usize;
             let mut moved = slot.clone();
-            moved.first = transforms.len() as u32;
-            transforms.extend_from_slice(&self.transforms[range.clone()]);
+            moved.first = instances.len() as u32;
+            instances.extend_from_slice(&self.instances[range.clone()]);
             bounds.extend_from(&self.bounds, range);
             remap[old] = slots.len();
             slots.push(moved);
         }
         self.by_key = slots.iter().enumerate().map(|(i, s)| (s.key, i)).collect();
         self.slots = slots;
-        self.transforms = transforms;
+        self.instances = instances;
         self.bounds = bounds;
         self.garbage = 0;
         self.all_dirty = true;
@@ -142,7 +148,7 @@ impl InstanceStore {
     pub(crate) fn take_dirty(&mut self) -> Vec<Range<u32>> {
         let mut ranges = std::mem::take(&mut self.dirty);
         if std::mem::take(&mut self.all_dirty) {
-            let everything = 0..self.transforms.len() as u32;
+            let everything = 0..self.instances.len() as u32;
             return vec![everything];
         }
         ranges.sort_by_key(|r| r.start);
@@ -162,14 +168,15 @@ impl InstanceStore {
     }
 }
 
-/// Copy transforms into the store and compute each instance's world box (boxes
-/// from `first` on). Invalid (non-finite) transforms become zero matrices with a
-/// never-visible box, so NaN never reaches the GPU or the culler.
+/// Copy transforms into the store with their material and compute each instance's
+/// world box (boxes from `first` on). Invalid (non-finite) transforms become zero
+/// matrices with a never-visible box, so NaN never reaches the GPU or the culler.
 /// Returns the union of the valid boxes and the number of invalid instances.
 fn write_range(
     src: &[Mat4],
     local: Aabb,
-    transforms: &mut [Mat4],
+    material: MaterialId,
+    instances: &mut [InstanceGpu],
     boxes: &mut Boxes,
     first: usize,
 ) -> (Option<(Vec3A, Vec3A)>, u32) {
@@ -179,12 +186,12 @@ fn write_range(
     for (i, m) in src.iter().enumerate() {
         if m.is_finite() {
             let (c, e) = transform_aabb(m, lc, le);
-            transforms[i] = *m;
+            instances[i] = InstanceGpu::new(m, material);
             boxes.set(first + i, c, e);
             lo = lo.min(c - e);
             hi = hi.max(c + e);
         } else {
-            transforms[i] = Mat4::ZERO;
+            instances[i] = InstanceGpu::new(&Mat4::ZERO, material);
             boxes.set_never_visible(first + i);
             invalid += 1;
         }
@@ -244,7 +251,7 @@ mod tests {
         assert_eq!(store.len(), 3001);
         assert_eq!(store.slot(0).first, 0);
         assert_eq!(store.take_dirty(), vec![0..3001]);
-        assert_eq!(store.transforms[3000], Mat4::IDENTITY);
+        assert_eq!(store.instances[3000].transform(), Mat4::IDENTITY);
     }
 
     #[test]
@@ -254,8 +261,8 @@ mod tests {
         e.set_transform(1, Mat4::from_translation(Vec3::new(f32::NAN, 0.0, 0.0)));
         let slot = store.submit(&e, unit(), 0);
         assert_eq!(store.slot(slot).invalid, 1);
-        assert_eq!(store.transforms[1], Mat4::ZERO);
-        assert!(store.transforms.iter().all(|m| m.is_finite()));
+        assert_eq!(store.instances[1], InstanceGpu::new(&Mat4::ZERO, MaterialId(0)));
+        assert!(store.instances.iter().all(|i| i.transform().is_finite()));
         assert!(!store.bounds.is_valid(1) && store.bounds.is_valid(0));
         let bounds = store.slot(slot).bounds.unwrap();
         assert!(bounds.0.is_finite() && bounds.1.is_finite(), "the union skips the invalid instance");

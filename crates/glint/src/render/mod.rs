@@ -6,23 +6,29 @@
 //! | --- | --- | --- | --- |
 //! | 0 | Scene | lights or environment change | ambient, sky colours, light count, `lights[64]` |
 //! | 1 | Camera | the camera or target aspect changes | view, view-projection, its inverse, eye position |
-//! | 2 | Material | the material is added or edited | uniform block, diffuse / normal / specular maps, sampler |
-//! | 3 | Renderer | transforms: where entities changed; draw indices: every frame, one write | `transforms: array<mat4x4<f32>>` (persistent), `draw_indices: array<u32>` (visible instances in draw order) |
+//! | 2 | Material | a material is added or edited | `materials: array<MaterialBlock>` (the table, indexed by material id), one texture set: diffuse / normal / specular maps and sampler |
+//! | 3 | Renderer | instances: where entities changed; draw indices: when the visible set changed, one write | `instances: array<Instance>` (transform rows + material index, persistent), `draw_indices: array<u32>` (visible instances in draw order) |
 //!
 //! Every pipeline shares one layout with these four groups, so groups 0, 1 and 3
-//! are bound once per pass and only group 2 changes between draws.
+//! are bound once per pass and group 2 changes only between texture sets (materials
+//! with the same maps share a bind group; untextured materials all share one).
+//! Each instance names its material, and shapes share the buffers of the mesh pool,
+//! so a run of batches with one pipeline, texture set and pool page is a single
+//! `multi_draw_indexed_indirect` call: one indirect command per batch.
 
 pub mod batch;
 mod blocks;
 pub mod cull;
 mod encode;
 mod instances;
+mod mesh_pool;
 mod pipelines;
 pub mod queue;
 mod resources;
 mod stats;
 mod timer;
 
+pub use mesh_pool::MeshTooLarge;
 pub use stats::{FrameStats, StageTimes, UploadStats};
 
 use crate::asset::Texture;
@@ -36,10 +42,11 @@ use blocks::{CameraGpu, SceneGpu, UniformBlock};
 use cull::{Containment, Frustum};
 use glam::{Mat4, Vec3A};
 use instances::InstanceStore;
-use pipelines::Pipelines;
+use mesh_pool::{MeshPool, MeshRange};
+use pipelines::{Pipelines, VertexLayout};
 use queue::{DrawItem, Queue};
 use rayon::prelude::*;
-use resources::{GpuMesh, InstanceBuffers, TextureUploader};
+use resources::{GrowBuffer, InstanceBuffers, MaterialTable, TextureUploader};
 use std::time::Instant;
 
 /// Errors from [`Renderer::flush`].
@@ -57,6 +64,14 @@ pub enum RenderError {
     /// One of glint's own shaders failed to compose (a bug in glint).
     #[error(transparent)]
     Shader(#[from] crate::shader::ShaderError),
+    /// A shape too large for one GPU buffer.
+    #[error("shape {shape:?}: {source}")]
+    MeshTooLarge {
+        /// The shape.
+        shape: ShapeId,
+        /// Its size and the limit.
+        source: MeshTooLarge,
+    },
     /// A material names a texture this renderer never created.
     #[error("material '{material}' uses unknown texture id {texture:?}")]
     UnknownTexture {
@@ -69,7 +84,9 @@ pub enum RenderError {
 
 struct ShapeSlot {
     mesh: Mesh,
-    gpu: Option<GpuMesh>,
+    layout: VertexLayout,
+    /// Where the mesh lives in the pool, once uploaded.
+    gpu: Option<MeshRange>,
 }
 
 struct MaterialSlot {
@@ -79,16 +96,22 @@ struct MaterialSlot {
     gpu: Option<MaterialGpuTwin>,
 }
 
-/// A material's uniform buffer and bind group, and what they were built from.
+/// What a material uses on the GPU, and what that was chosen for.
 struct MaterialGpuTwin {
-    uniform: wgpu::Buffer,
-    bind_group: wgpu::BindGroup,
-    maps: [Option<TextureId>; 3],
-    /// Forward pipeline id for this material's variant and states at `samples`.
-    pipeline: u16,
+    /// Index of its texture set (`Renderer::texture_sets`).
+    texture_set: u16,
+    /// Forward pipeline id per vertex layout (by `VertexLayout as usize`), built on
+    /// first use with a mesh of that layout.
+    pipelines: [Option<u16>; 2],
     samples: u32,
-    /// Whether the environment had fog when the pipeline was chosen.
+    /// Whether the environment had fog when the pipelines were chosen.
     fog: bool,
+}
+
+/// A bind group of the Material block for one combination of maps.
+struct TextureSet {
+    maps: [Option<TextureId>; 3],
+    bind_group: wgpu::BindGroup,
 }
 
 struct TextureSlot {
@@ -153,7 +176,10 @@ pub struct Renderer {
     sampler: wgpu::Sampler,
     defaults: DefaultMaps,
     shapes: Vec<ShapeSlot>,
+    mesh_pool: MeshPool,
     materials: Vec<MaterialSlot>,
+    material_table: MaterialTable,
+    texture_sets: Vec<TextureSet>,
     textures: Vec<TextureSlot>,
     environment: Environment,
     scene_block: UniformBlock<SceneGpu>,
@@ -161,6 +187,9 @@ pub struct Renderer {
     scene_group: wgpu::BindGroup,
     camera_group: wgpu::BindGroup,
     instance_buffers: InstanceBuffers,
+    /// One `DrawIndexedIndirectArgs` per batch; `None` where the device cannot draw
+    /// indirect with a first instance (then batches are drawn one call each).
+    indirect: Option<GrowBuffer>,
     store: InstanceStore,
     culling: bool,
     mode: FrameMode,
@@ -168,9 +197,6 @@ pub struct Renderer {
     /// The first bad id submitted this frame, reported by `flush`.
     submit_error: Option<RenderError>,
     view: Option<(ViewKey, Frustum, Mat4)>,
-    /// Bumped whenever a bind group or buffer that recorded draws refer to is replaced.
-    resources_generation: u64,
-    bundles: Option<encode::RecordedDraws>,
     gpu_timer: Option<timer::GpuTimer>,
     // Per-frame lists, kept to reuse their allocations.
     submitted: Vec<Submitted>,
@@ -180,6 +206,11 @@ pub struct Renderer {
     items: Vec<DrawItem>,
     batches: Vec<Batch>,
     draw_indices: Vec<u32>,
+    indirect_args: Vec<wgpu::util::DrawIndexedIndirectArgs>,
+    /// What the GPU holds of the draw indices and indirect commands, to skip
+    /// writing them again when a frame's are the same.
+    uploaded_draw_indices: Vec<u32>,
+    uploaded_indirect_args: Vec<wgpu::util::DrawIndexedIndirectArgs>,
 }
 
 fn ms_since(t: Instant) -> f64 {
@@ -225,6 +256,12 @@ impl Renderer {
             ..Default::default()
         });
         let instance_buffers = InstanceBuffers::new(&device, &pipelines.instance_layout);
+        let indirect = gpu.draws_indirect().then(|| {
+            let usage = wgpu::BufferUsages::INDIRECT;
+            GrowBuffer::new(&device, "renderer: indirect draw commands", usage, 1024 * 20)
+        });
+        let mesh_pool = MeshPool::new(&device);
+        let material_table = MaterialTable::new(&device);
         Self {
             device,
             queue,
@@ -233,7 +270,10 @@ impl Renderer {
             sampler,
             defaults,
             shapes: Vec::new(),
+            mesh_pool,
             materials: Vec::new(),
+            material_table,
+            texture_sets: Vec::new(),
             textures: Vec::new(),
             environment: Environment::default(),
             scene_block,
@@ -241,14 +281,13 @@ impl Renderer {
             scene_group,
             camera_group,
             instance_buffers,
+            indirect,
             store: InstanceStore::default(),
             culling: true,
             mode: FrameMode::Optimized,
             frame_index: 0,
             submit_error: None,
             view: None,
-            resources_generation: 0,
-            bundles: None,
             gpu_timer: None,
             submitted: Vec::new(),
             instances_submitted: 0,
@@ -257,12 +296,15 @@ impl Renderer {
             items: Vec::new(),
             batches: Vec::new(),
             draw_indices: Vec::new(),
+            indirect_args: Vec::new(),
+            uploaded_draw_indices: Vec::new(),
+            uploaded_indirect_args: Vec::new(),
         }
     }
 
     /// Add a shape; its buffers are created the first time an entity using it is drawn.
     pub fn add_shape(&mut self, mesh: Mesh) -> ShapeId {
-        self.shapes.push(ShapeSlot { mesh, gpu: None });
+        self.shapes.push(ShapeSlot { layout: VertexLayout::of(&mesh), mesh, gpu: None });
         ShapeId(self.shapes.len() as u32 - 1)
     }
 
@@ -364,9 +406,10 @@ impl Renderer {
     /// 2. cull — each entity's world box, then its instances', against the camera frustum
     /// 3. queue — one draw item with a 64-bit sort key per visible run (per instance when blended)
     /// 4. sort — radix sort by key
-    /// 5. batch — equal (stage, pipeline, material, shape) runs merged into instanced draws
-    /// 6. upload — Scene and Camera blocks if changed, changed transforms, the draw indices in one write
-    /// 7. encode — one pass: opaque → alpha-test → sky → transparent (or as `render_order` says)
+    /// 5. batch — equal (stage, pipeline, material, shape) runs merged into instanced draws, one indirect command each
+    /// 6. upload — Scene and Camera blocks if changed, changed instances, draw indices and indirect commands if changed
+    /// 7. encode — one pass: opaque → alpha-test → sky → transparent (or as `render_order` says);
+    ///    batches sharing pipeline, texture set and mesh page go in one multi-draw-indirect call
     /// 8. submit
     ///
     /// Errors (the submitted entities are dropped): more than [`MAX_LIGHTS`] lights,
@@ -429,6 +472,7 @@ impl Renderer {
 
             let t = Instant::now();
             batch::merge(&self.items, &self.visible, &mut self.draw_indices, &mut self.batches);
+            self.indirect_commands();
             stats.cpu_ms.batch = ms_since(t);
         }
 
@@ -476,14 +520,27 @@ impl Renderer {
         samples: u32,
         stats: &mut FrameStats,
     ) -> Result<(), RenderError> {
+        if self.material_table.reserve(&self.device, self.materials.len()) {
+            // A new table: every entry is written again, every texture set rebound to it.
+            for slot in &mut self.materials {
+                slot.dirty = true;
+            }
+            for k in 0..self.texture_sets.len() {
+                self.texture_sets[k].bind_group = self.texture_set_group(self.texture_sets[k].maps);
+            }
+        }
         for &(shape, material) in uses {
             let slot = self.shapes.get_mut(shape.0 as usize).ok_or(RenderError::UnknownShape(shape))?;
             if slot.gpu.is_none() {
-                slot.gpu = Some(GpuMesh::new(&self.device, &slot.mesh, shape.0));
-                stats.bytes_uploaded.meshes += slot.mesh.gpu_bytes();
-                self.resources_generation += 1;
+                let (range, bytes) = self
+                    .mesh_pool
+                    .add(&self.device, &self.queue, &slot.mesh)
+                    .map_err(|source| RenderError::MeshTooLarge { shape, source })?;
+                slot.gpu = Some(range);
+                stats.bytes_uploaded.meshes += bytes;
             }
-            self.prepare_material(material, samples, stats)?;
+            let layout = slot.layout;
+            self.prepare_material(material, layout, samples, stats)?;
         }
         if matches!(self.environment.background, Background::Gradient { .. }) {
             stats.pipelines_compiled += u32::from(self.pipelines.build_sky(&self.device, samples)?);
@@ -491,76 +548,79 @@ impl Renderer {
         Ok(())
     }
 
-    fn prepare_material(&mut self, id: MaterialId, samples: u32, stats: &mut FrameStats) -> Result<(), RenderError> {
+    /// Make material `id` ready to draw meshes of `layout`: its textures uploaded,
+    /// its texture set, its table entry written if edited, its pipeline built.
+    fn prepare_material(
+        &mut self,
+        id: MaterialId,
+        layout: VertexLayout,
+        samples: u32,
+        stats: &mut FrameStats,
+    ) -> Result<(), RenderError> {
         let slot = self.materials.get(id.0 as usize).ok_or(RenderError::UnknownMaterial(id))?;
         let fog = self.environment.fog.is_some();
-        if !slot.dirty && slot.gpu.as_ref().is_some_and(|g| g.samples == samples && g.fog == fog) {
+        let current = slot.gpu.as_ref().filter(|g| !slot.dirty && g.samples == samples && g.fog == fog);
+        if current.is_some_and(|g| g.pipelines[layout as usize].is_some()) {
             return Ok(());
         }
         let material = slot.material.clone();
-        let maps = [material.diffuse_map, material.normal_map, material.specular_map];
-        for texture in maps.into_iter().flatten() {
-            let tex = self
-                .textures
-                .get_mut(texture.0 as usize)
-                .ok_or_else(|| RenderError::UnknownTexture { material: material.name.clone(), texture })?;
-            if let Some(pending) = tex.pending.take() {
-                let (view, bytes) = self.uploader.upload(&self.device, &self.queue, &pending);
-                tex.view = Some(view);
-                stats.bytes_uploaded.textures += bytes;
+        if current.is_none() {
+            let maps = [material.diffuse_map, material.normal_map, material.specular_map];
+            for texture in maps.into_iter().flatten() {
+                let tex = self
+                    .textures
+                    .get_mut(texture.0 as usize)
+                    .ok_or_else(|| RenderError::UnknownTexture { material: material.name.clone(), texture })?;
+                if let Some(pending) = tex.pending.take() {
+                    let (view, bytes) = self.uploader.upload(&self.device, &self.queue, &pending);
+                    tex.view = Some(view);
+                    stats.bytes_uploaded.textures += bytes;
+                }
             }
+            let texture_set = match self.texture_sets.iter().position(|s| s.maps == maps) {
+                Some(k) => k as u16,
+                None => {
+                    let bind_group = self.texture_set_group(maps);
+                    self.texture_sets.push(TextureSet { maps, bind_group });
+                    (self.texture_sets.len() - 1) as u16
+                }
+            };
+            let slot = &mut self.materials[id.0 as usize];
+            if slot.dirty {
+                stats.bytes_uploaded.material += self.material_table.write(&self.queue, id.0, &material.to_gpu());
+                slot.dirty = false;
+            }
+            slot.gpu = Some(MaterialGpuTwin { texture_set, pipelines: [None; 2], samples, fog });
         }
         let features = ShaderFeatures::for_material(&material, &self.environment);
-        let key = Pipelines::key(features, material.render_states(), samples);
+        let key = Pipelines::key(features, layout, material.render_states(), samples);
         let (pipeline, built) = self.pipelines.forward_id(&self.device, key)?;
         stats.pipelines_compiled += u32::from(built);
-        let slot = &mut self.materials[id.0 as usize];
-        let stale_group = slot.gpu.as_ref().is_none_or(|g| g.maps != maps);
-        if stale_group {
-            let uniform = self.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some(&format!("material '{}': block", material.name)),
-                size: std::mem::size_of::<blocks::MaterialGpu>() as u64,
-                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-                mapped_at_creation: false,
-            });
-            let view = |map: Option<TextureId>, default| match map {
-                Some(t) => self.textures[t.0 as usize].view.as_ref().unwrap_or(default),
-                None => default,
-            };
-            let bind_group = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some(&format!("material '{}' (group 2)", material.name)),
-                layout: &self.pipelines.material_layout,
-                entries: &[
-                    wgpu::BindGroupEntry { binding: 0, resource: uniform.as_entire_binding() },
-                    wgpu::BindGroupEntry {
-                        binding: 1,
-                        resource: wgpu::BindingResource::TextureView(view(maps[0], &self.defaults.white_srgb)),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 2,
-                        resource: wgpu::BindingResource::TextureView(view(maps[1], &self.defaults.flat_normal)),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 3,
-                        resource: wgpu::BindingResource::TextureView(view(maps[2], &self.defaults.white_linear)),
-                    },
-                    wgpu::BindGroupEntry { binding: 4, resource: wgpu::BindingResource::Sampler(&self.sampler) },
-                ],
-            });
-            slot.gpu = Some(MaterialGpuTwin { uniform, bind_group, maps, pipeline, samples, fog });
-            self.resources_generation += 1;
-        }
-        let twin = slot.gpu.as_mut().expect("created above");
-        twin.pipeline = pipeline;
-        twin.samples = samples;
-        twin.fog = fog;
-        if slot.dirty {
-            let block = material.to_gpu();
-            self.queue.write_buffer(&twin.uniform, 0, bytemuck::bytes_of(&block));
-            stats.bytes_uploaded.material += std::mem::size_of_val(&block) as u64;
-            slot.dirty = false;
-        }
+        let twin = self.materials[id.0 as usize].gpu.as_mut().expect("made above");
+        twin.pipelines[layout as usize] = Some(pipeline);
         Ok(())
+    }
+
+    /// The Material block's bind group for a texture set: the table and the maps
+    /// (1×1 defaults where a map is absent).
+    fn texture_set_group(&self, maps: [Option<TextureId>; 3]) -> wgpu::BindGroup {
+        let defaults = [&self.defaults.white_srgb, &self.defaults.flat_normal, &self.defaults.white_linear];
+        let views: Vec<&wgpu::TextureView> = maps
+            .iter()
+            .zip(defaults)
+            .map(|(map, default)| map.and_then(|t| self.textures[t.0 as usize].view.as_ref()).unwrap_or(default))
+            .collect();
+        self.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some(&format!("material block: texture set {maps:?} (group 2)")),
+            layout: &self.pipelines.material_layout,
+            entries: &[
+                wgpu::BindGroupEntry { binding: 0, resource: self.material_table.binding() },
+                wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::TextureView(views[0]) },
+                wgpu::BindGroupEntry { binding: 2, resource: wgpu::BindingResource::TextureView(views[1]) },
+                wgpu::BindGroupEntry { binding: 3, resource: wgpu::BindingResource::TextureView(views[2]) },
+                wgpu::BindGroupEntry { binding: 4, resource: wgpu::BindingResource::Sampler(&self.sampler) },
+            ],
+        })
     }
 
     /// Stage 2: find each submitted entity's visible instances. An entity whose
@@ -621,7 +681,8 @@ impl Renderer {
         for run in &self.runs {
             let s = &self.submitted[run.entry];
             let material = &self.materials[s.material.0 as usize];
-            let pipeline = material.gpu.as_ref().expect("prepared").pipeline;
+            let pipeline = self.pipeline_of(s);
+            let texture_set = material.gpu.as_ref().expect("prepared").texture_set;
             let queue = match material.material.alpha_mode {
                 crate::scene::AlphaMode::Opaque => Queue::Opaque,
                 crate::scene::AlphaMode::Mask { .. } => Queue::AlphaTest,
@@ -630,7 +691,7 @@ impl Renderer {
             let stage = s.render_order.unwrap_or(queue.stage());
             let blended = queue == Queue::Transparent;
             let item = |first, count, depth| DrawItem {
-                key: queue::sort_key(stage, blended, pipeline, s.material, s.shape, depth),
+                key: queue::sort_key(stage, blended, pipeline, texture_set, s.material, s.shape, depth),
                 pipeline,
                 material: s.material,
                 shape: s.shape,
@@ -657,7 +718,7 @@ impl Renderer {
         for s in &self.submitted {
             let slot = self.store.slot(s.slot);
             stats.instances_invalid += u64::from(slot.invalid);
-            let pipeline = self.materials[s.material.0 as usize].gpu.as_ref().expect("prepared").pipeline;
+            let pipeline = self.pipeline_of(s);
             let range = slot.first as usize..(slot.first + slot.count) as usize;
             for i in range {
                 if self.store.bounds.is_valid(i) {
@@ -675,37 +736,70 @@ impl Renderer {
         }
     }
 
-    /// Stage 6: write the blocks that changed, the transforms that changed, and this
-    /// frame's draw indices.
+    /// The forward pipeline a submitted entity draws with (prepared).
+    fn pipeline_of(&self, s: &Submitted) -> u16 {
+        let layout = self.shapes[s.shape.0 as usize].layout;
+        let twin = self.materials[s.material.0 as usize].gpu.as_ref().expect("prepared");
+        twin.pipelines[layout as usize].expect("prepared")
+    }
+
+    /// Stage 5 (continued): one indirect draw command per batch, when drawing indirect.
+    fn indirect_commands(&mut self) {
+        self.indirect_args.clear();
+        if self.indirect.is_none() {
+            return;
+        }
+        self.indirect_args.extend(self.batches.iter().map(|b| {
+            let mesh = self.shapes[b.shape.0 as usize].gpu.expect("prepared");
+            wgpu::util::DrawIndexedIndirectArgs {
+                index_count: mesh.index_count,
+                instance_count: b.instance_count,
+                first_index: mesh.first_index,
+                base_vertex: mesh.base_vertex,
+                first_instance: b.first_instance,
+            }
+        }));
+    }
+
+    /// Stage 6: write the blocks that changed, the instances that changed, and this
+    /// frame's draw indices and indirect commands where they differ from the last frame's.
     fn upload(&mut self, camera: &Camera, lights: &[Light], aspect: f32, stats: &mut FrameStats) {
         let bytes = &mut stats.bytes_uploaded;
         bytes.scene += self.scene_block.update(&self.queue, SceneGpu::new(&self.environment, lights));
         bytes.camera += self.camera_block.update(&self.queue, camera.to_gpu(aspect));
         let layout = &self.pipelines.instance_layout;
-        let (grew_transforms, new_bind_group) =
-            self.instance_buffers.reserve(&self.device, layout, self.store.len(), self.draw_indices.len());
-        if grew_transforms {
+        if self.instance_buffers.reserve(&self.device, layout, self.store.len(), self.draw_indices.len()) {
             self.store.mark_all_dirty();
-        }
-        if new_bind_group {
-            self.resources_generation += 1;
+            self.uploaded_draw_indices.clear();
         }
         for range in self.store.take_dirty() {
-            let data = &self.store.transforms[range.start as usize..range.end as usize];
-            bytes.transforms += self.instance_buffers.write_transforms(&self.queue, range.start, data);
+            let data = &self.store.instances[range.start as usize..range.end as usize];
+            bytes.instances += self.instance_buffers.write_instances(&self.queue, range.start, data);
         }
         if self.mode == FrameMode::Naive {
-            // Every draw's uniforms written before it, one small write each.
+            // Every draw's material entry and instance index written before it, one small write each.
             for (k, b) in self.batches.iter().enumerate() {
-                let slot = &self.materials[b.material.0 as usize];
-                let block = slot.material.to_gpu();
-                self.queue.write_buffer(&slot.gpu.as_ref().expect("prepared").uniform, 0, bytemuck::bytes_of(&block));
-                bytes.material += std::mem::size_of_val(&block) as u64;
+                let block = self.materials[b.material.0 as usize].material.to_gpu();
+                bytes.material += self.material_table.write(&self.queue, b.material.0, &block);
                 bytes.draw_indices +=
-                    self.instance_buffers.write_draw_index(&self.queue, k as u32, self.draw_indices[k]);
+                    self.instance_buffers.write_draw_indices(&self.queue, k as u32, &self.draw_indices[k..=k]);
             }
-        } else {
-            bytes.draw_indices += self.instance_buffers.write_draw_indices(&self.queue, &self.draw_indices);
+            self.uploaded_draw_indices.clear();
+        } else if self.draw_indices != self.uploaded_draw_indices {
+            bytes.draw_indices += self.instance_buffers.write_draw_indices(&self.queue, 0, &self.draw_indices);
+            self.uploaded_draw_indices.clone_from(&self.draw_indices);
+        }
+        if let Some(indirect) = &mut self.indirect {
+            let size = std::mem::size_of_val(self.indirect_args.as_slice()) as u64;
+            if indirect.reserve(&self.device, size) {
+                self.uploaded_indirect_args.clear();
+            }
+            if bytemuck::cast_slice::<_, u8>(&self.indirect_args)
+                != bytemuck::cast_slice::<_, u8>(&self.uploaded_indirect_args)
+            {
+                bytes.indirect += indirect.write(&self.queue, 0, &self.indirect_args);
+                self.uploaded_indirect_args.clone_from(&self.indirect_args);
+            }
         }
         stats.instances_drawn = self.draw_indices.len() as u64;
     }
@@ -777,9 +871,9 @@ mod tests {
         assert_eq!(glass_batch.instance_count, 5, "one entity's instances merge into one draw once sorted");
         let order: Vec<f32> = r.draw_indices[glass_batch.first_instance as usize..][..5]
             .iter()
-            .map(|&i| r.store.transforms[i as usize].w_axis.z)
+            .map(|&i| r.store.instances[i as usize].transform().w_axis.z)
             .collect();
         assert_eq!(order, vec![-2.0, 0.0, 3.0, 5.0, 6.0], "far (low z) to near");
-        assert_eq!(stats.draw_calls, 4, "front, sky, glass, ground");
+        assert_eq!(stats.draws, 4, "front, sky, glass, ground");
     }
 }

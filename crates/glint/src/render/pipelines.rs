@@ -7,7 +7,7 @@
 //! index in the cache is its id in sort keys.
 
 use crate::gpu::{COLOR_FORMAT, DEPTH_FORMAT};
-use crate::scene::{BlendState, Compare, Cull, RenderStates, StencilOp, Vertex};
+use crate::scene::{BlendState, Compare, Cull, Mesh, RenderStates, StencilOp, Vertex};
 use crate::shader::{ShaderError, ShaderFeatures, ShaderLibrary};
 use std::borrow::Cow;
 use std::collections::HashMap;
@@ -17,6 +17,28 @@ use std::collections::HashMap;
 pub(crate) enum VertexLayout {
     /// [`Vertex`]: position, normal, uv, tangent in one interleaved buffer.
     Standard,
+    /// [`Vertex`] in buffer 0 and a linear RGBA colour (`@location(4)`) in buffer 1.
+    Colored,
+}
+
+impl VertexLayout {
+    /// The layout a mesh's streams need.
+    pub(crate) fn of(mesh: &Mesh) -> Self {
+        if mesh.colors().is_some() {
+            Self::Colored
+        } else {
+            Self::Standard
+        }
+    }
+
+    /// Bytes per vertex of each stream (vertex buffer slot).
+    pub(crate) fn strides(self) -> &'static [u32] {
+        const VERTEX: u32 = std::mem::size_of::<Vertex>() as u32;
+        match self {
+            Self::Standard => &[VERTEX],
+            Self::Colored => &[VERTEX, 16],
+        }
+    }
 }
 
 /// Everything that makes one forward pipeline differ from another.
@@ -154,13 +176,9 @@ impl Pipelines {
         };
         let scene_layout = layout("renderer: scene block layout (group 0)", &[uniform_entry(0, all)]);
         let camera_layout = layout("renderer: camera block layout (group 1)", &[uniform_entry(0, all)]);
-        let material_layout = layout(
-            "renderer: material block layout (group 2)",
-            &[uniform_entry(0, all), texture_entry(1), texture_entry(2), texture_entry(3), sampler_entry(4)],
-        );
-        let storage = |binding| wgpu::BindGroupLayoutEntry {
+        let storage = |binding, visibility| wgpu::BindGroupLayoutEntry {
             binding,
-            visibility: wgpu::ShaderStages::VERTEX,
+            visibility,
             ty: wgpu::BindingType::Buffer {
                 ty: wgpu::BufferBindingType::Storage { read_only: true },
                 has_dynamic_offset: false,
@@ -168,7 +186,13 @@ impl Pipelines {
             },
             count: None,
         };
-        let instance_layout = layout("renderer: renderer block layout (group 3)", &[storage(0), storage(1)]);
+        let material_layout = layout(
+            "renderer: material block layout (group 2)",
+            &[storage(0, all), texture_entry(1), texture_entry(2), texture_entry(3), sampler_entry(4)],
+        );
+        let vertex = wgpu::ShaderStages::VERTEX;
+        let instance_layout =
+            layout("renderer: renderer block layout (group 3)", &[storage(0, vertex), storage(1, vertex)]);
         // The sky reads groups 0–1 only and gets a layout of just those, so it can be
         // drawn before any material is bound; the forward groups 2–3 are set again after it.
         let sky_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -202,16 +226,17 @@ impl Pipelines {
         }
     }
 
-    /// The key of the forward pipeline for these features and states on a glint target.
-    pub(crate) fn key(features: ShaderFeatures, states: RenderStates, samples: u32) -> PipelineKey {
-        PipelineKey {
-            features,
-            vertex_layout: VertexLayout::Standard,
-            states,
-            color_format: COLOR_FORMAT,
-            depth_format: DEPTH_FORMAT,
-            samples,
-        }
+    /// The key of the forward pipeline drawing meshes of `vertex_layout` with a
+    /// material of these features and states on a glint target. The layout adds its
+    /// own feature bits (vertex colours).
+    pub(crate) fn key(
+        mut features: ShaderFeatures,
+        vertex_layout: VertexLayout,
+        states: RenderStates,
+        samples: u32,
+    ) -> PipelineKey {
+        features.set(ShaderFeatures::VERTEX_COLOR, vertex_layout == VertexLayout::Colored);
+        PipelineKey { features, vertex_layout, states, color_format: COLOR_FORMAT, depth_format: DEPTH_FORMAT, samples }
     }
 
     /// The id of the forward pipeline for `key`, building it (and its shader variant)
@@ -288,6 +313,19 @@ impl Pipelines {
     fn build_forward(&self, device: &wgpu::Device, key: PipelineKey) -> wgpu::RenderPipeline {
         const ATTRIBUTES: [wgpu::VertexAttribute; 4] =
             wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x2, 3 => Float32x4];
+        const COLOR: [wgpu::VertexAttribute; 1] = wgpu::vertex_attr_array![4 => Float32x4];
+        let stream = |stride: u32, attributes| {
+            Some(wgpu::VertexBufferLayout {
+                array_stride: stride.into(),
+                step_mode: wgpu::VertexStepMode::Vertex,
+                attributes,
+            })
+        };
+        let strides = key.vertex_layout.strides();
+        let buffers = match key.vertex_layout {
+            VertexLayout::Standard => vec![stream(strides[0], &ATTRIBUTES[..])],
+            VertexLayout::Colored => vec![stream(strides[0], &ATTRIBUTES[..]), stream(strides[1], &COLOR[..])],
+        };
         let module = &self.modules[&key.features];
         let label = format!("renderer: forward pipeline {:?} {:?} {}x", key.features, key.states.blend, key.samples);
         device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
@@ -297,11 +335,7 @@ impl Pipelines {
                 module,
                 entry_point: Some("vs_main"),
                 compilation_options: Default::default(),
-                buffers: &[Some(wgpu::VertexBufferLayout {
-                    array_stride: std::mem::size_of::<Vertex>() as u64,
-                    step_mode: wgpu::VertexStepMode::Vertex,
-                    attributes: &ATTRIBUTES,
-                })],
+                buffers: &buffers,
             },
             primitive: wgpu::PrimitiveState {
                 front_face: wgpu::FrontFace::Ccw,

@@ -3,14 +3,16 @@
 //! Every visible run of an entity becomes one [`DrawItem`] (every visible
 //! *instance*, for blended entities) whose key orders the frame. Opaque and
 //! alpha-test items are *binned*: grouped by the state that is costly to rebind
-//! (pipeline, then material, then mesh), near to far only within equal state.
+//! (pipeline, then texture set, then material, then mesh), near to far only within
+//! equal state. Adjacent items with one pipeline and texture set become one
+//! multi-draw-indirect call; equal material and mesh merge into one instanced draw.
 //! Blended items are *sorted* far to near, because blending is only right back
 //! to front.
 //!
 //! ```text
 //! binned (opaque, alpha-test)
-//!  63 ...... 56 | 55 ...... 44 | 43 ...... 28 | 27 ...... 12 | 11 ...... 0
-//!   stage (8)   | pipeline (12)| material (16)|  shape (16)  | depth (12) near→far
+//!  63 .... 56 | 55 ..... 44 | 43 ....... 34 | 33 ..... 22 | 21 .... 12 | 11 ...... 0
+//!  stage (8)  | pipeline(12)| texture set(10)| material(12)| shape (10) | depth (12) near→far
 //!
 //! sorted (blended)
 //!  63 ...... 56 | 55 .......................... 32 | 31 ...... 16 | 15 ...... 0
@@ -24,7 +26,7 @@
 //! item whose stage is [`SKY_STAGE`] (128) or more.
 //!
 //! Correctness bits: the stage (pass order) and, for blended items, the depth.
-//! Speed bits: pipeline, material, shape and the binned depth only make equal
+//! Speed bits: pipeline, texture set, material, shape and the binned depth only make equal
 //! state adjacent (so runs merge into one draw) and let early depth testing reject
 //! hidden fragments. Ids wider than their field are masked, which can cost merging
 //! but never correctness, because batching compares the real ids.
@@ -64,10 +66,14 @@ pub const SKY_STAGE: u8 = 128;
 const STAGE_SHIFT: u32 = 56;
 const PIPELINE_SHIFT: u32 = 44;
 const PIPELINE_BITS: u32 = 12;
+const TEXTURE_SET_SHIFT: u32 = 34;
+const TEXTURE_SET_BITS: u32 = 10;
 const MATERIAL_BITS: u32 = 16;
 const SHAPE_BITS: u32 = 16;
-const BINNED_MATERIAL_SHIFT: u32 = 28;
+const BINNED_MATERIAL_SHIFT: u32 = 22;
+const BINNED_MATERIAL_BITS: u32 = 12;
 const BINNED_SHAPE_SHIFT: u32 = 12;
+const BINNED_SHAPE_BITS: u32 = 10;
 const BINNED_DEPTH_BITS: u32 = 12;
 const SORTED_DEPTH_SHIFT: u32 = 32;
 const SORTED_DEPTH_BITS: u32 = 24;
@@ -81,13 +87,21 @@ const fn mask(bits: u32) -> u64 {
 ///
 /// `blended` picks the far-to-near layout; `depth` is the view distance over the
 /// far plane, clamped to 0..1.
-pub fn sort_key(stage: u8, blended: bool, pipeline: u16, material: MaterialId, shape: ShapeId, depth: f32) -> u64 {
+pub fn sort_key(
+    stage: u8,
+    blended: bool,
+    pipeline: u16,
+    texture_set: u16,
+    material: MaterialId,
+    shape: ShapeId,
+    depth: f32,
+) -> u64 {
     // f64: 2^24 − 1 steps are not all representable in f32.
     let depth = f64::from(depth.clamp(0.0, 1.0));
     let stage = u64::from(stage) << STAGE_SHIFT;
-    let material = u64::from(material.0) & mask(MATERIAL_BITS);
-    let shape = u64::from(shape.0) & mask(SHAPE_BITS);
+    let (material, shape) = (u64::from(material.0), u64::from(shape.0));
     if blended {
+        let (material, shape) = (material & mask(MATERIAL_BITS), shape & mask(SHAPE_BITS));
         let d = ((1.0 - depth) * mask(SORTED_DEPTH_BITS) as f64) as u64;
         debug_assert!(d <= mask(SORTED_DEPTH_BITS));
         stage | d << SORTED_DEPTH_SHIFT | material << SORTED_MATERIAL_SHIFT | shape
@@ -96,8 +110,9 @@ pub fn sort_key(stage: u8, blended: bool, pipeline: u16, material: MaterialId, s
         debug_assert!(d <= mask(BINNED_DEPTH_BITS));
         stage
             | (u64::from(pipeline) & mask(PIPELINE_BITS)) << PIPELINE_SHIFT
-            | material << BINNED_MATERIAL_SHIFT
-            | shape << BINNED_SHAPE_SHIFT
+            | (u64::from(texture_set) & mask(TEXTURE_SET_BITS)) << TEXTURE_SET_SHIFT
+            | (material & mask(BINNED_MATERIAL_BITS)) << BINNED_MATERIAL_SHIFT
+            | (shape & mask(BINNED_SHAPE_BITS)) << BINNED_SHAPE_SHIFT
             | d
     }
 }
@@ -149,9 +164,9 @@ mod tests {
 
     #[test]
     fn queues_come_in_pass_order_whatever_the_depth_and_state() {
-        let opaque_far = sort_key(OPAQUE, false, 4095, MaterialId(u32::MAX), S1, 1.0);
-        let mask_near = sort_key(Queue::AlphaTest.stage(), false, 0, M0, S0, 0.0);
-        let glass_near = sort_key(Queue::Transparent.stage(), true, 0, M0, S0, 0.0);
+        let opaque_far = sort_key(OPAQUE, false, 4095, 0, MaterialId(u32::MAX), S1, 1.0);
+        let mask_near = sort_key(Queue::AlphaTest.stage(), false, 0, 0, M0, S0, 0.0);
+        let glass_near = sort_key(Queue::Transparent.stage(), true, 0, 0, M0, S0, 0.0);
         assert!(opaque_far < mask_near && mask_near < glass_near);
         assert!(stage_of(mask_near) < SKY_STAGE && stage_of(glass_near) >= SKY_STAGE);
         assert_eq!(stage_of(glass_near), 192);
@@ -160,18 +175,21 @@ mod tests {
     #[test]
     fn render_order_overrides_the_queue() {
         // Ground forced after the sky, a near bush forced before everything.
-        let ground = sort_key(200, false, 0, M0, S0, 0.0);
-        let glass = sort_key(Queue::Transparent.stage(), true, 0, M1, S1, 0.0);
-        let bush = sort_key(1, false, 4095, M1, S1, 1.0);
-        let opaque = sort_key(OPAQUE, false, 0, M0, S0, 0.0);
+        let ground = sort_key(200, false, 0, 0, M0, S0, 0.0);
+        let glass = sort_key(Queue::Transparent.stage(), true, 0, 0, M1, S1, 0.0);
+        let bush = sort_key(1, false, 4095, 0, M1, S1, 1.0);
+        let opaque = sort_key(OPAQUE, false, 0, 0, M0, S0, 0.0);
         assert!(bush < opaque && glass < ground);
         assert!(stage_of(ground) >= SKY_STAGE);
     }
 
     #[test]
-    fn binned_order_is_pipeline_then_material_then_shape_then_near_to_far() {
-        let k = |p, m, s, d| sort_key(OPAQUE, false, p, m, s, d);
+    fn binned_order_is_pipeline_then_texture_set_then_material_then_shape_then_near_to_far() {
+        let k = |p, m, s, d| sort_key(OPAQUE, false, p, 0, m, s, d);
         assert!(k(0, M1, S1, 1.0) < k(1, M0, S0, 0.0), "pipeline dominates material");
+        let t = |p, set, m| sort_key(OPAQUE, false, p, set, m, S0, 0.0);
+        assert!(t(0, 9, M0) < t(1, 0, M0), "pipeline dominates texture set");
+        assert!(t(0, 0, M1) < t(0, 1, M0), "texture set dominates material");
         assert!(k(0, M0, S1, 1.0) < k(0, M1, S0, 0.0), "material dominates shape");
         assert!(k(0, M0, S0, 1.0) < k(0, M0, S1, 0.0), "shape dominates depth");
         assert!(k(0, M0, S0, 0.1) < k(0, M0, S0, 0.9), "near before far");
@@ -179,7 +197,7 @@ mod tests {
 
     #[test]
     fn blended_sorts_far_to_near_before_state() {
-        let k = |m, s, d| sort_key(Queue::Transparent.stage(), true, 0, m, s, d);
+        let k = |m, s, d| sort_key(Queue::Transparent.stage(), true, 0, 0, m, s, d);
         assert!(k(M1, S1, 0.9) < k(M0, S0, 0.1), "far first, whatever the state");
         assert!(k(M0, S0, 0.5) < k(M1, S0, 0.5), "equal depth: grouped by material");
         assert!(k(M0, S0, 0.500_001) < k(M0, S0, 0.5), "24 bits tell close depths apart");
@@ -187,13 +205,13 @@ mod tests {
 
     #[test]
     fn depth_is_clamped_and_ids_are_masked_into_their_fields() {
-        let k = |m, d| sort_key(OPAQUE, false, 0, m, S0, d);
+        let k = |m, d| sort_key(OPAQUE, false, 0, 0, m, S0, d);
         assert_eq!(k(M0, -3.0), k(M0, 0.0));
         assert_eq!(k(M0, 7.0), k(M0, 1.0));
         assert_eq!(k(M0, f32::NAN), k(M0, 0.0), "NaN depth clamps, never spills into other fields");
-        // Material 65536 wraps to 0 in the key: same bin, still the same stage.
-        assert_eq!(k(MaterialId(1 << 16), 0.5), k(M0, 0.5));
-        assert_eq!(stage_of(sort_key(255, true, u16::MAX, MaterialId(u32::MAX), ShapeId(u32::MAX), 0.0)), 255);
+        // Material 4096 wraps to 0 in the binned key: same bin, still the same stage.
+        assert_eq!(k(MaterialId(1 << 12), 0.5), k(M0, 0.5));
+        assert_eq!(stage_of(sort_key(255, true, u16::MAX, 0, MaterialId(u32::MAX), ShapeId(u32::MAX), 0.0)), 255);
     }
 
     #[test]

@@ -1,34 +1,9 @@
-//! Core layer: GPU twins of scene data — meshes, textures (with mipmaps made on
-//! the GPU), material bind groups — and the per-frame instance buffer.
+//! Core layer: GPU twins of scene data — textures (with mipmaps made on the GPU),
+//! the material table — and the Renderer block's instance buffers.
 
-use super::blocks::InstanceGpu;
+use super::blocks::{InstanceGpu, MaterialGpu};
 use super::pipelines::{sampler_entry, texture_entry};
 use crate::asset::Texture;
-use crate::scene::Mesh;
-use wgpu::util::DeviceExt;
-
-/// A shape's vertex and index buffers.
-pub(crate) struct GpuMesh {
-    pub vertices: wgpu::Buffer,
-    pub indices: wgpu::Buffer,
-    pub index_count: u32,
-}
-
-impl GpuMesh {
-    pub(crate) fn new(device: &wgpu::Device, mesh: &Mesh, id: u32) -> Self {
-        let vertices = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some(&format!("shape {id}: vertices")),
-            contents: bytemuck::cast_slice(mesh.vertices()),
-            usage: wgpu::BufferUsages::VERTEX,
-        });
-        let indices = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some(&format!("shape {id}: indices")),
-            contents: bytemuck::cast_slice(mesh.indices()),
-            usage: wgpu::BufferUsages::INDEX,
-        });
-        Self { vertices, indices, index_count: mesh.indices().len() as u32 }
-    }
-}
 
 /// Builds textures and fills their mip chains by repeated half-size blits.
 pub(crate) struct TextureUploader {
@@ -165,107 +140,126 @@ impl TextureUploader {
     }
 }
 
-/// A storage buffer that grows by doubling (its contents are lost when it grows).
-struct GrowBuffer {
-    buffer: wgpu::Buffer,
+/// A buffer that grows by doubling (its contents are lost when it grows).
+pub(crate) struct GrowBuffer {
+    pub buffer: wgpu::Buffer,
     label: &'static str,
+    usage: wgpu::BufferUsages,
 }
 
 impl GrowBuffer {
-    fn new(device: &wgpu::Device, label: &'static str, bytes: u64) -> Self {
+    pub(crate) fn new(device: &wgpu::Device, label: &'static str, usage: wgpu::BufferUsages, bytes: u64) -> Self {
         let buffer = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some(label),
             size: bytes.max(256).next_power_of_two(),
-            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+            usage: usage | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        Self { buffer, label }
+        Self { buffer, label, usage }
     }
 
     /// Make room for `bytes`; returns whether the buffer was replaced.
-    fn reserve(&mut self, device: &wgpu::Device, bytes: u64) -> bool {
+    pub(crate) fn reserve(&mut self, device: &wgpu::Device, bytes: u64) -> bool {
         if bytes <= self.buffer.size() {
             return false;
         }
-        *self = Self::new(device, self.label, bytes);
+        *self = Self::new(device, self.label, self.usage, bytes);
         true
+    }
+
+    /// Write `data` at element `first` (elements of `T`); returns bytes written.
+    pub(crate) fn write<T: bytemuck::Pod>(&self, queue: &wgpu::Queue, first: u64, data: &[T]) -> u64 {
+        let bytes: &[u8] = bytemuck::cast_slice(data);
+        if !bytes.is_empty() {
+            queue.write_buffer(&self.buffer, first * std::mem::size_of::<T>() as u64, bytes);
+        }
+        bytes.len() as u64
     }
 }
 
-/// The Renderer block (`@group(3)`): persistent instance transforms (binding 0) and
-/// this frame's instance indices in draw order (binding 1).
+/// The material table of the Material block (`@group(2) @binding(0)`): one
+/// [`MaterialGpu`] per material id.
+pub(crate) struct MaterialTable(GrowBuffer);
+
+impl MaterialTable {
+    pub(crate) fn new(device: &wgpu::Device) -> Self {
+        let bytes = 64 * std::mem::size_of::<MaterialGpu>() as u64;
+        Self(GrowBuffer::new(device, "material block: material table", wgpu::BufferUsages::STORAGE, bytes))
+    }
+
+    /// Make room for `materials`; returns whether the table was replaced (every
+    /// material must be written again and every material bind group rebuilt).
+    pub(crate) fn reserve(&mut self, device: &wgpu::Device, materials: usize) -> bool {
+        self.0.reserve(device, (materials * std::mem::size_of::<MaterialGpu>()) as u64)
+    }
+
+    /// Write material `id`'s entry; returns bytes written.
+    pub(crate) fn write(&self, queue: &wgpu::Queue, id: u32, block: &MaterialGpu) -> u64 {
+        self.0.write(queue, id.into(), std::slice::from_ref(block))
+    }
+
+    pub(crate) fn binding(&self) -> wgpu::BindingResource<'_> {
+        self.0.buffer.as_entire_binding()
+    }
+}
+
+/// The Renderer block (`@group(3)`): persistent instances, transform and material
+/// (binding 0), and this frame's instance indices in draw order (binding 1).
 pub(crate) struct InstanceBuffers {
-    transforms: GrowBuffer,
+    instances: GrowBuffer,
     draw_indices: GrowBuffer,
     pub bind_group: wgpu::BindGroup,
 }
 
 impl InstanceBuffers {
     pub(crate) fn new(device: &wgpu::Device, layout: &wgpu::BindGroupLayout) -> Self {
-        let transforms = GrowBuffer::new(device, "renderer block: instance transforms", 1024 * 64);
-        let draw_indices = GrowBuffer::new(device, "renderer block: draw indices", 1024 * 4);
-        let bind_group = Self::bind(device, layout, &transforms, &draw_indices);
-        Self { transforms, draw_indices, bind_group }
+        let storage = wgpu::BufferUsages::STORAGE;
+        let instances = GrowBuffer::new(device, "renderer block: instances", storage, 1024 * 64);
+        let draw_indices = GrowBuffer::new(device, "renderer block: draw indices", storage, 1024 * 4);
+        let bind_group = Self::bind(device, layout, &instances, &draw_indices);
+        Self { instances, draw_indices, bind_group }
     }
 
     fn bind(
         device: &wgpu::Device,
         layout: &wgpu::BindGroupLayout,
-        transforms: &GrowBuffer,
+        instances: &GrowBuffer,
         indices: &GrowBuffer,
     ) -> wgpu::BindGroup {
         device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("renderer block (group 3)"),
             layout,
             entries: &[
-                wgpu::BindGroupEntry { binding: 0, resource: transforms.buffer.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 0, resource: instances.buffer.as_entire_binding() },
                 wgpu::BindGroupEntry { binding: 1, resource: indices.buffer.as_entire_binding() },
             ],
         })
     }
 
-    /// Make room for `transforms` instances and `indices` draw indices. Returns
-    /// whether the transform buffer was replaced (its contents must be written again).
+    /// Make room for `instances` instances and `indices` draw indices. Returns
+    /// whether the instance buffer was replaced (its contents must be written again).
     pub(crate) fn reserve(
         &mut self,
         device: &wgpu::Device,
         layout: &wgpu::BindGroupLayout,
-        transforms: usize,
+        instances: usize,
         indices: usize,
-    ) -> (bool, bool) {
-        let grew_transforms = self.transforms.reserve(device, (transforms * std::mem::size_of::<InstanceGpu>()) as u64);
+    ) -> bool {
+        let grew_instances = self.instances.reserve(device, (instances * std::mem::size_of::<InstanceGpu>()) as u64);
         let grew_indices = self.draw_indices.reserve(device, (indices * 4) as u64);
-        if grew_transforms || grew_indices {
-            self.bind_group = Self::bind(device, layout, &self.transforms, &self.draw_indices);
+        if grew_instances || grew_indices {
+            self.bind_group = Self::bind(device, layout, &self.instances, &self.draw_indices);
         }
-        (grew_transforms, grew_transforms || grew_indices)
+        grew_instances
     }
 
-    /// Write `data` at instance `first` of the transform buffer; returns bytes written.
-    pub(crate) fn write_transforms(&self, queue: &wgpu::Queue, first: u32, data: &[InstanceGpu]) -> u64 {
-        let bytes: &[u8] = bytemuck::cast_slice(data);
-        if !bytes.is_empty() {
-            queue.write_buffer(
-                &self.transforms.buffer,
-                u64::from(first) * std::mem::size_of::<InstanceGpu>() as u64,
-                bytes,
-            );
-        }
-        bytes.len() as u64
+    /// Write `data` at instance `first`; returns bytes written.
+    pub(crate) fn write_instances(&self, queue: &wgpu::Queue, first: u32, data: &[InstanceGpu]) -> u64 {
+        self.instances.write(queue, first.into(), data)
     }
 
-    /// Write one draw index at position `at` (the naive baseline's per-draw upload).
-    pub(crate) fn write_draw_index(&self, queue: &wgpu::Queue, at: u32, index: u32) -> u64 {
-        queue.write_buffer(&self.draw_indices.buffer, u64::from(at) * 4, bytemuck::bytes_of(&index));
-        4
-    }
-
-    /// Write this frame's draw indices in one upload; returns bytes written.
-    pub(crate) fn write_draw_indices(&self, queue: &wgpu::Queue, indices: &[u32]) -> u64 {
-        let bytes: &[u8] = bytemuck::cast_slice(indices);
-        if !bytes.is_empty() {
-            queue.write_buffer(&self.draw_indices.buffer, 0, bytes);
-        }
-        bytes.len() as u64
+    /// Write draw indices from position `first`; returns bytes written.
+    pub(crate) fn write_draw_indices(&self, queue: &wgpu::Queue, first: u32, indices: &[u32]) -> u64 {
+        self.draw_indices.write(queue, first.into(), indices)
     }
 }

@@ -9,20 +9,21 @@ pub struct UploadStats {
     pub scene: u64,
     /// Camera block (`@group(1)`).
     pub camera: u64,
-    /// Material blocks (`@group(2)`).
+    /// Material block (`@group(2)`): entries of the material table.
     pub material: u64,
-    /// Renderer block (`@group(3)`): instance transforms that changed.
-    pub transforms: u64,
-    /// Renderer block (`@group(3)`): this frame's visible instance indices, in draw order.
+    /// Renderer block (`@group(3)`): instances (transform and material) that changed.
+    pub instances: u64,
+    /// Renderer block (`@group(3)`): the visible instance indices in draw order,
+    /// when they differ from the last frame's.
     pub draw_indices: u64,
+    /// Indirect draw commands, when they differ from the last frame's.
+    pub indirect: u64,
     /// Texture pixels (mip levels are made on the GPU, so only level 0 counts).
     pub textures: u64,
     /// Vertex and index buffers of shapes used for the first time.
     pub meshes: u64,
     /// Scene + camera + material blocks.
     pub uniforms: u64,
-    /// Transforms + draw indices.
-    pub instances: u64,
     /// Everything.
     pub total: u64,
 }
@@ -31,8 +32,7 @@ impl UploadStats {
     /// Fill in the sums from the per-block counts.
     pub(crate) fn finish(&mut self) {
         self.uniforms = self.scene + self.camera + self.material;
-        self.instances = self.transforms + self.draw_indices;
-        self.total = self.uniforms + self.instances + self.textures + self.meshes;
+        self.total = self.uniforms + self.instances + self.draw_indices + self.indirect + self.textures + self.meshes;
     }
 }
 
@@ -47,9 +47,9 @@ pub struct StageTimes {
     pub queue: f64,
     /// Radix-sorting the draw items.
     pub sort: f64,
-    /// Merging runs into instanced draws and packing draw indices.
+    /// Merging runs into instanced draws, packing draw indices, making indirect commands.
     pub batch: f64,
-    /// Writing changed blocks, changed transforms and the draw indices.
+    /// Writing changed blocks, changed instances, draw indices and indirect commands.
     pub upload: f64,
     /// Recording the render pass.
     pub encode: f64,
@@ -62,11 +62,12 @@ pub struct StageTimes {
 /// What one frame cost: returned by [`Renderer::flush`](crate::Renderer::flush).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
 pub struct FrameStats {
-    /// Draw calls recorded (the sky counts as one).
+    /// Draw commands recorded into the pass: a multi-draw-indirect call counts
+    /// one however many draws it holds; the sky counts one.
     pub draw_calls: u32,
-    /// Draw commands recorded this frame: equal to `draw_calls` when encoded draw by
-    /// draw, only the sky when an unchanged frame replays its render bundles.
-    pub draws_encoded: u32,
+    /// Instanced draws the GPU runs: one per batch (each command of a
+    /// multi-draw-indirect call), plus the sky.
+    pub draws: u32,
     /// `set_pipeline` calls.
     pub pipelines_bound: u32,
     /// Pipelines compiled during this frame (0 in steady state).
@@ -87,13 +88,4 @@ pub struct FrameStats {
     pub instances_drawn: u64,
     /// CPU time per stage.
     pub cpu_ms: StageTimes,
-}
-
-impl FrameStats {
-    /// Add the state-change and draw counts of `recorded` (draws replayed from a bundle).
-    pub(crate) fn add(&mut self, recorded: FrameStats) {
-        self.draw_calls += recorded.draw_calls;
-        self.pipelines_bound += recorded.pipelines_bound;
-        self.bind_groups_set += recorded.bind_groups_set;
-    }
 }

@@ -88,6 +88,8 @@ pub enum MeshError {
 #[derive(Clone, Debug)]
 pub struct Mesh {
     vertices: Vec<Vertex>,
+    /// Linear RGBA per vertex, multiplied into the material's base colour.
+    colors: Option<Vec<[f32; 4]>>,
     indices: Vec<u32>,
     aabb: Aabb,
     sphere: BoundingSphere,
@@ -142,12 +144,30 @@ impl Mesh {
         let aabb = Aabb::from_points(vertices.iter().map(|v| Vec3::from(v.position))).ok_or(MeshError::Empty)?;
         let center = aabb.center();
         let radius = vertices.iter().map(|v| Vec3::from(v.position).distance(center)).fold(0.0, f32::max);
-        Ok(Self { vertices, indices, aabb, sphere: BoundingSphere { center, radius } })
+        Ok(Self { vertices, colors: None, indices, aabb, sphere: BoundingSphere { center, radius } })
+    }
+
+    /// Give every vertex a linear RGBA colour, multiplied into the material's base
+    /// colour (a second vertex stream, and the `VERTEX_COLOR` shader variant).
+    pub fn with_colors(mut self, colors: Vec<[f32; 4]>) -> Result<Self, MeshError> {
+        if colors.len() != self.vertices.len() {
+            return Err(MeshError::AttributeLengths);
+        }
+        if let Some(i) = colors.iter().position(|c| !c.iter().all(|x| x.is_finite())) {
+            return Err(MeshError::NonFinite(i));
+        }
+        self.colors = Some(colors);
+        Ok(self)
     }
 
     /// The interleaved vertices.
     pub fn vertices(&self) -> &[Vertex] {
         &self.vertices
+    }
+
+    /// Per-vertex colours, if the mesh has them.
+    pub fn colors(&self) -> Option<&[[f32; 4]]> {
+        self.colors.as_deref()
     }
 
     /// Triangle-list indices, counter-clockwise front faces.
@@ -163,11 +183,6 @@ impl Mesh {
     /// Local-space bounding sphere.
     pub fn bounding_sphere(&self) -> BoundingSphere {
         self.sphere
-    }
-
-    /// Bytes this mesh takes on the GPU (vertices + indices).
-    pub fn gpu_bytes(&self) -> u64 {
-        (std::mem::size_of_val(self.vertices.as_slice()) + std::mem::size_of_val(self.indices.as_slice())) as u64
     }
 
     fn generate_tangents(&mut self) {

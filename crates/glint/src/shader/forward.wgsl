@@ -12,16 +12,30 @@ struct MaterialBlock {
     uv_scale: vec2<f32>,
 }
 
-@group(2) @binding(0) var<uniform> material: MaterialBlock;
+// Material block: the table of every material, indexed by the instance's material,
+// and this draw's texture set (materials with the same maps share one).
+@group(2) @binding(0) var<storage, read> materials: array<MaterialBlock>;
 @group(2) @binding(1) var diffuse_map: texture_2d<f32>;
 @group(2) @binding(2) var normal_map: texture_2d<f32>;
 @group(2) @binding(3) var specular_map: texture_2d<f32>;
 @group(2) @binding(4) var material_sampler: sampler;
 
-// Renderer block: every stored instance's object-to-world matrix (persistent, rewritten
-// only where entities changed), and this frame's visible instances in draw order;
-// a draw's first_instance points at its run of indices.
-@group(3) @binding(0) var<storage, read> transforms: array<mat4x4<f32>>;
+// One stored instance: the top three rows of its object-to-world matrix (the
+// bottom row is 0 0 0 1) and its material's index in `materials`.
+struct Instance {
+    row_x: vec4<f32>,
+    row_y: vec4<f32>,
+    row_z: vec4<f32>,
+    material: u32,
+    reserved_x: u32,
+    reserved_y: u32,
+    reserved_z: u32,
+}
+
+// Renderer block: every stored instance (persistent, rewritten only where entities
+// changed), and this frame's visible instances in draw order; a draw's
+// first_instance points at its run of indices.
+@group(3) @binding(0) var<storage, read> instances: array<Instance>;
 @group(3) @binding(1) var<storage, read> draw_indices: array<u32>;
 
 struct VertexIn {
@@ -29,6 +43,9 @@ struct VertexIn {
     @location(1) normal: vec3<f32>,
     @location(2) uv: vec2<f32>,
     @location(3) tangent: vec4<f32>,
+#ifdef VERTEX_COLOR
+    @location(4) color: vec4<f32>,
+#endif
 }
 
 struct VertexOut {
@@ -37,11 +54,16 @@ struct VertexOut {
     @location(1) normal: vec3<f32>,
     @location(2) uv: vec2<f32>,
     @location(3) tangent: vec4<f32>,
+    @location(4) @interpolate(flat) material: u32,
+#ifdef VERTEX_COLOR
+    @location(5) color: vec4<f32>,
+#endif
 }
 
 @vertex
-fn vs_main(v: VertexIn, @builtin(instance_index) instance: u32) -> VertexOut {
-    let model = transforms[draw_indices[instance]];
+fn vs_main(v: VertexIn, @builtin(instance_index) draw_instance: u32) -> VertexOut {
+    let instance = instances[draw_indices[draw_instance]];
+    let model = transpose(mat4x4<f32>(instance.row_x, instance.row_y, instance.row_z, vec4<f32>(0.0, 0.0, 0.0, 1.0)));
     let world = model * vec4<f32>(v.position, 1.0);
     // Normals transform by the inverse transpose, which is the cofactor matrix over
     // the determinant: only the determinant's sign matters once normalised. This is
@@ -53,12 +75,16 @@ fn vs_main(v: VertexIn, @builtin(instance_index) instance: u32) -> VertexOut {
     out.clip = camera.view_proj * world;
     out.world_position = world.xyz;
     out.normal = cofactor * v.normal * det_sign;
-    out.uv = v.uv * material.uv_scale;
+    out.uv = v.uv * materials[instance.material].uv_scale;
     out.tangent = vec4<f32>(m * v.tangent.xyz, v.tangent.w * det_sign);
+    out.material = instance.material;
+#ifdef VERTEX_COLOR
+    out.color = v.color;
+#endif
     return out;
 }
 
-fn shade(n: vec3<f32>, world_position: vec3<f32>, base: vec3<f32>, specular: f32) -> vec3<f32> {
+fn shade(material: MaterialBlock, n: vec3<f32>, world_position: vec3<f32>, base: vec3<f32>, specular: f32) -> vec3<f32> {
     let view_dir = normalize(camera.position.xyz - world_position);
     var color = scene.ambient.rgb * material.coeffs.x * base;
     for (var i = 0u; i < scene.counts.x; i++) {
@@ -86,7 +112,11 @@ fn shade(n: vec3<f32>, world_position: vec3<f32>, base: vec3<f32>, specular: f32
 
 @fragment
 fn fs_main(in: VertexOut, @builtin(front_facing) front: bool) -> @location(0) vec4<f32> {
+    let material = materials[in.material];
     var base = material.base_color;
+#ifdef VERTEX_COLOR
+    base *= in.color;
+#endif
 #ifdef DIFFUSE_MAP
     base *= textureSample(diffuse_map, material_sampler, in.uv);
 #endif
@@ -111,7 +141,7 @@ fn fs_main(in: VertexOut, @builtin(front_facing) front: bool) -> @location(0) ve
 #ifdef UNLIT
     var color = base.rgb;
 #else
-    var color = shade(n, in.world_position, base.rgb, specular);
+    var color = shade(material, n, in.world_position, base.rgb, specular);
 #endif
 #ifdef FOG
     let distance = length(camera.position.xyz - in.world_position) * scene.fog.w;

@@ -21,9 +21,9 @@ bitflags::bitflags! {
     /// | 4 | `ALPHA_BLEND` | write alpha out (blended materials) |
     /// | 5 | `UNLIT` | skip lighting: the shading model is the base colour |
     /// | 6 | `FOG` | fade to the environment's fog colour with distance |
+    /// | 7 | `VERTEX_COLOR` | multiply the base colour by the mesh's vertex colour (set by the mesh, not the material) |
     ///
-    /// Bits 7–31 are free for more (vertex colours and shadow receiving come with
-    /// the glTF and shadow work).
+    /// Bits 8–31 are free for more (shadow receiving comes with shadow maps).
     #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, PartialOrd, Ord)]
     pub struct ShaderFeatures: u32 {
         /// `DIFFUSE_MAP`.
@@ -40,6 +40,8 @@ bitflags::bitflags! {
         const UNLIT = 1 << 5;
         /// `FOG`.
         const FOG = 1 << 6;
+        /// `VERTEX_COLOR`.
+        const VERTEX_COLOR = 1 << 7;
     }
 }
 
