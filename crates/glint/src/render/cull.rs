@@ -204,15 +204,11 @@ pub fn cull_boxes(frustum: &Frustum, boxes: &Boxes, range: Range<usize>, out: &m
 }
 
 fn cull_serial(frustum: &Frustum, boxes: &Boxes, range: Range<usize>, out: &mut Vec<u32>) {
-    let lanes: Vec<PlaneLanes> = frustum
-        .planes
-        .iter()
-        .map(|p| PlaneLanes {
-            n: [Vec4::splat(p.x), Vec4::splat(p.y), Vec4::splat(p.z)],
-            abs_n: [Vec4::splat(p.x.abs()), Vec4::splat(p.y.abs()), Vec4::splat(p.z.abs())],
-            d: Vec4::splat(p.w),
-        })
-        .collect();
+    let lanes: [PlaneLanes; 6] = frustum.planes.map(|p| PlaneLanes {
+        n: [Vec4::splat(p.x), Vec4::splat(p.y), Vec4::splat(p.z)],
+        abs_n: [Vec4::splat(p.x.abs()), Vec4::splat(p.y.abs()), Vec4::splat(p.z.abs())],
+        d: Vec4::splat(p.w),
+    });
     let mut i = range.start;
     while i + 4 <= range.end {
         let load = |v: &[f32]| Vec4::from_slice(&v[i..i + 4]);

@@ -3,6 +3,13 @@
 //! frames; a range is written again only when its entity's version (dirty flag),
 //! shape or material changes. Beside it, the world
 //! bounds of every instance as structure-of-arrays (centres, half extents) for culling.
+//!
+//! Tiles: an entity's instances are stored in Morton (Z-curve) order of their world
+//! positions, so every run of [`CLUSTER`] consecutive instances is a compact patch
+//! of space with one bounding box. The culler tests those boxes first and tests
+//! instances one by one only in patches that cross a frustum plane (the vegetation
+//! demo's tiled instancing). The order inside an entity's range is the store's
+//! business: nothing outside it names instances by position.
 
 use super::blocks::InstanceGpu;
 use super::cull::{transform_aabb, Boxes};
@@ -25,8 +32,12 @@ pub(crate) struct Slot {
     /// Union of the valid instances' world boxes (centre, half extent); `None` when
     /// no instance is valid.
     pub bounds: Option<(Vec3A, Vec3A)>,
-    /// Instances whose transform has NaN or infinity: stored as zero matrices, never drawn.
+    /// Instances whose transform has NaN or infinity: stored as zero matrices (after
+    /// the valid ones), never drawn.
     pub invalid: u32,
+    /// Bounds of each run of [`CLUSTER`] instances of the range (empty when the
+    /// entity has no more than one run); a run with no valid instance never visible.
+    pub clusters: Vec<(Vec3A, Vec3A)>,
     /// Frame in which the entity was last submitted.
     last_frame: u64,
 }
@@ -75,6 +86,7 @@ impl InstanceStore {
                     count: 0,
                     bounds: None,
                     invalid: 0,
+                    clusters: Vec::new(),
                     last_frame: frame,
                 });
                 self.by_key.insert(entity.key(), self.slots.len() - 1);
@@ -98,7 +110,7 @@ impl InstanceStore {
             slot.shape = entity.shape;
             slot.material = entity.material;
             let range = slot.first as usize..(slot.first + slot.count) as usize;
-            let (bounds, invalid) = write_range(
+            let written = write_range(
                 entity.transforms(),
                 local,
                 entity.material,
@@ -106,8 +118,9 @@ impl InstanceStore {
                 &mut self.bounds,
                 range.start,
             );
-            slot.bounds = bounds;
-            slot.invalid = invalid;
+            slot.bounds = written.bounds;
+            slot.invalid = written.invalid;
+            slot.clusters = written.clusters;
             self.dirty.push(slot.first..slot.first + slot.count);
         }
         index
@@ -168,10 +181,20 @@ impl InstanceStore {
     }
 }
 
-/// Copy transforms into the store with their material and compute each instance's
-/// world box (boxes from `first` on). Invalid (non-finite) transforms become zero
-/// matrices with a never-visible box, so NaN never reaches the GPU or the culler.
-/// Returns the union of the valid boxes and the number of invalid instances.
+/// Instances per tile: the culler's unit above single instances.
+pub(crate) const CLUSTER: usize = 64;
+
+/// What [`write_range`] found.
+struct Written {
+    bounds: Option<(Vec3A, Vec3A)>,
+    invalid: u32,
+    clusters: Vec<(Vec3A, Vec3A)>,
+}
+
+/// Copy transforms into the store with their material, in Morton order of their
+/// world positions with the invalid ones last, and compute each instance's world box
+/// (boxes from `first` on) and each tile's. Invalid (non-finite) transforms become
+/// zero matrices with a never-visible box, so NaN never reaches the GPU or the culler.
 fn write_range(
     src: &[Mat4],
     local: Aabb,
@@ -179,25 +202,68 @@ fn write_range(
     instances: &mut [InstanceGpu],
     boxes: &mut Boxes,
     first: usize,
-) -> (Option<(Vec3A, Vec3A)>, u32) {
+) -> Written {
     let (lc, le) = (Vec3A::from(local.center()), Vec3A::from(local.half_extent()));
-    let (mut lo, mut hi) = (Vec3A::splat(f32::INFINITY), Vec3A::splat(f32::NEG_INFINITY));
-    let mut invalid = 0;
-    for (i, m) in src.iter().enumerate() {
-        if m.is_finite() {
-            let (c, e) = transform_aabb(m, lc, le);
-            instances[i] = InstanceGpu::new(m, material);
-            boxes.set(first + i, c, e);
-            lo = lo.min(c - e);
-            hi = hi.max(c + e);
-        } else {
-            instances[i] = InstanceGpu::new(&Mat4::ZERO, material);
-            boxes.set_never_visible(first + i);
-            invalid += 1;
-        }
-    }
+    let world: Vec<Option<(Vec3A, Vec3A)>> =
+        src.iter().map(|m| m.is_finite().then(|| transform_aabb(m, lc, le))).collect();
+    let (lo, hi) = world
+        .iter()
+        .flatten()
+        .fold((Vec3A::splat(f32::INFINITY), Vec3A::splat(f32::NEG_INFINITY)), |(lo, hi), &(c, e)| {
+            (lo.min(c - e), hi.max(c + e))
+        });
+    let invalid = world.iter().filter(|w| w.is_none()).count() as u32;
     let bounds = (invalid < src.len() as u32).then(|| ((lo + hi) * 0.5, (hi - lo) * 0.5));
-    (bounds, invalid)
+    let mut order: Vec<u32> = (0..src.len() as u32).collect();
+    // Sorted when there are tiles to make or invalid instances to move last.
+    if src.len() > CLUSTER || invalid > 0 {
+        let scale = 1023.0 / (hi - lo).max(Vec3A::splat(1e-6));
+        let key = |i: &u32| match world[*i as usize] {
+            Some((c, _)) => morton3(((c - lo) * scale).as_uvec3().min(glam::UVec3::splat(1023))),
+            None => u32::MAX,
+        };
+        radsort::sort_by_key(&mut order, key);
+    }
+    let mut clusters = Vec::new();
+    for (tile, run) in order.chunks(CLUSTER).enumerate() {
+        let (mut lo, mut hi) = (Vec3A::splat(f32::INFINITY), Vec3A::splat(f32::NEG_INFINITY));
+        for (k, &i) in run.iter().enumerate() {
+            let at = tile * CLUSTER + k;
+            match world[i as usize] {
+                Some((c, e)) => {
+                    instances[at] = InstanceGpu::new(&src[i as usize], material);
+                    boxes.set(first + at, c, e);
+                    lo = lo.min(c - e);
+                    hi = hi.max(c + e);
+                }
+                None => {
+                    instances[at] = InstanceGpu::new(&Mat4::ZERO, material);
+                    boxes.set_never_visible(first + at);
+                }
+            }
+        }
+        clusters.push(if lo.x <= hi.x {
+            ((lo + hi) * 0.5, (hi - lo) * 0.5)
+        } else {
+            (Vec3A::ZERO, Vec3A::splat(super::cull::NEVER_VISIBLE_EXTENT))
+        });
+    }
+    if clusters.len() < 2 {
+        clusters.clear();
+    }
+    Written { bounds, invalid, clusters }
+}
+
+/// Interleave the low 10 bits of x, y and z into a 30-bit Morton code.
+fn morton3(v: glam::UVec3) -> u32 {
+    fn spread(mut x: u32) -> u32 {
+        x &= 0x3ff;
+        x = (x | (x << 16)) & 0x0300_00ff;
+        x = (x | (x << 8)) & 0x0300_f00f;
+        x = (x | (x << 4)) & 0x030c_30c3;
+        (x | (x << 2)) & 0x0924_9249
+    }
+    spread(v.x) | spread(v.y) << 1 | spread(v.z) << 2
 }
 
 #[cfg(test)]
@@ -251,7 +317,8 @@ mod tests {
         assert_eq!(store.len(), 3001);
         assert_eq!(store.slot(0).first, 0);
         assert_eq!(store.take_dirty(), vec![0..3001]);
-        assert_eq!(store.instances[3000].transform(), Mat4::IDENTITY);
+        // Instance 0 (at the origin) and the pushed identity, wherever the tiles put them.
+        assert_eq!(store.instances.iter().filter(|i| i.transform() == Mat4::IDENTITY).count(), 2);
     }
 
     #[test]
@@ -261,11 +328,45 @@ mod tests {
         e.set_transform(1, Mat4::from_translation(Vec3::new(f32::NAN, 0.0, 0.0)));
         let slot = store.submit(&e, unit(), 0);
         assert_eq!(store.slot(slot).invalid, 1);
-        assert_eq!(store.instances[1], InstanceGpu::new(&Mat4::ZERO, MaterialId(0)));
+        assert_eq!(store.instances[2], InstanceGpu::new(&Mat4::ZERO, MaterialId(0)), "invalid ones go last");
         assert!(store.instances.iter().all(|i| i.transform().is_finite()));
-        assert!(!store.bounds.is_valid(1) && store.bounds.is_valid(0));
+        assert!(!store.bounds.is_valid(2) && store.bounds.is_valid(0) && store.bounds.is_valid(1));
         let bounds = store.slot(slot).bounds.unwrap();
         assert!(bounds.0.is_finite() && bounds.1.is_finite(), "the union skips the invalid instance");
+    }
+
+    #[test]
+    fn tiles_are_compact_and_hold_every_instance_once() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_pcg::Pcg32::seed_from_u64(7);
+        let transforms: Vec<Mat4> = (0..1000)
+            .map(|_| {
+                Mat4::from_translation(Vec3::new(rng.random_range(-100.0..100.0), 0.0, rng.random_range(-100.0..100.0)))
+            })
+            .collect();
+        let e = Entity::instanced(ShapeId(0), MaterialId(0), transforms.clone());
+        let mut store = InstanceStore::default();
+        let slot = store.submit(&e, unit(), 0);
+        let clusters = &store.slot(slot).clusters;
+        assert_eq!(clusters.len(), 1000usize.div_ceil(CLUSTER));
+        // A permutation: every submitted translation stored exactly once.
+        let key = |m: Mat4| (m.w_axis.x.to_bits(), m.w_axis.z.to_bits());
+        let mut stored: Vec<_> = store.instances.iter().map(|i| key(i.transform())).collect();
+        let mut submitted: Vec<_> = transforms.iter().map(|&m| key(m)).collect();
+        stored.sort_unstable();
+        submitted.sort_unstable();
+        assert_eq!(stored, submitted);
+        // Each tile's box holds its instances, and Morton order keeps tiles small:
+        // 16 tiles over a 200 × 200 field average far less than the whole field.
+        let mut area = 0.0;
+        for (k, &(c, e)) in clusters.iter().enumerate() {
+            for i in k * CLUSTER..((k + 1) * CLUSTER).min(1000) {
+                let (bc, be) = (store.bounds.center(i), store.bounds.extent(i));
+                assert!((bc - be).cmpge(c - e - 1e-3).all() && (bc + be).cmple(c + e + 1e-3).all());
+            }
+            area += 4.0 * e.x * e.z;
+        }
+        assert!(area / (clusters.len() as f32) < 0.2 * 200.0 * 200.0, "mean tile area {area}");
     }
 
     #[test]

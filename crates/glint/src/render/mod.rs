@@ -213,6 +213,11 @@ pub struct Renderer {
     uploaded_indirect_args: Vec<wgpu::util::DrawIndexedIndirectArgs>,
 }
 
+/// Submitted instances above which entities are culled on all cores. Tiles make
+/// culling cheap enough that threads rarely pay: on many.scn (100,000 instances in
+/// 100 entities, 2 cores) tiled culling took 0.32 ms serial and 0.45 ms on rayon.
+const PARALLEL_ENTITY_CULL_THRESHOLD: u64 = 1 << 20;
+
 fn ms_since(t: Instant) -> f64 {
     t.elapsed().as_secs_f64() * 1e3
 }
@@ -643,7 +648,7 @@ impl Renderer {
                 self.runs.push(VisibleRun { entry, start: start as u32, len });
             }
         };
-        if self.submitted.len() > 1 && self.instances_submitted as usize >= cull::PARALLEL_CULL_THRESHOLD {
+        if self.submitted.len() > 1 && self.instances_submitted >= PARALLEL_ENTITY_CULL_THRESHOLD {
             // Many instances: entities culled on all cores, results kept in submission order.
             let lists: Vec<Vec<u32>> = self
                 .submitted
@@ -806,21 +811,38 @@ impl Renderer {
 }
 
 /// Append the visible instances of the entity in `slot`. Its world box decides
-/// at once when wholly inside or outside; only a box crossing a plane has its
-/// instances tested one by one.
+/// at once when wholly inside or outside; a box crossing a plane has its tiles
+/// decided the same way, and only tiles crossing a plane have their instances
+/// tested one by one. Invalid instances are stored last and never appended.
 fn visible_instances(frustum: &Frustum, culling: bool, store: &InstanceStore, slot: usize, out: &mut Vec<u32>) {
     let slot = store.slot(slot);
-    let range = slot.first as usize..(slot.first + slot.count) as usize;
+    let valid = slot.first..slot.first + slot.count - slot.invalid;
     let containment = match slot.bounds {
         None => Containment::Outside,
         Some(_) if !culling => Containment::Inside,
         Some((c, e)) => frustum.classify(c, e),
     };
+    let test = |range: std::ops::Range<u32>, out: &mut Vec<u32>| {
+        cull::cull_boxes(frustum, &store.bounds, range.start as usize..range.end as usize, out);
+    };
     match containment {
         Containment::Outside => {}
-        Containment::Inside if slot.invalid == 0 => out.extend(slot.first..slot.first + slot.count),
-        Containment::Inside => out.extend(range.filter(|&i| store.bounds.is_valid(i)).map(|i| i as u32)),
-        Containment::Intersecting => cull::cull_boxes(frustum, &store.bounds, range, out),
+        Containment::Inside => out.extend(valid),
+        Containment::Intersecting if slot.clusters.is_empty() => test(valid, out),
+        Containment::Intersecting => {
+            for (k, &(c, e)) in slot.clusters.iter().enumerate() {
+                let start = slot.first + (k * instances::CLUSTER) as u32;
+                let tile = start..(start + instances::CLUSTER as u32).min(valid.end);
+                if tile.is_empty() {
+                    break;
+                }
+                match frustum.classify(c, e) {
+                    Containment::Outside => {}
+                    Containment::Inside => out.extend(tile),
+                    Containment::Intersecting => test(tile, out),
+                }
+            }
+        }
     }
 }
 
@@ -829,6 +851,45 @@ mod tests {
     use super::*;
     use crate::asset::ShapeKind;
     use glam::Vec3;
+
+    #[test]
+    fn tiled_culling_keeps_exactly_the_instances_a_per_instance_test_keeps() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_pcg::Pcg32::seed_from_u64(3);
+        let mut transforms: Vec<Mat4> = (0..5000)
+            .map(|_| {
+                let p = Vec3::new(
+                    rng.random_range(-60.0..60.0),
+                    rng.random_range(-5.0..5.0),
+                    rng.random_range(-60.0..60.0),
+                );
+                Mat4::from_scale_rotation_translation(Vec3::splat(rng.random_range(0.1..3.0)), glam::Quat::IDENTITY, p)
+            })
+            .collect();
+        for k in (0..5000).step_by(97) {
+            transforms[k] = Mat4::from_translation(Vec3::new(f32::NAN, 0.0, 0.0));
+        }
+        let e = Entity::instanced(ShapeId(0), MaterialId(0), transforms);
+        let cube = crate::scene::Aabb { min: Vec3::splat(-0.5), max: Vec3::splat(0.5) };
+        let mut store = InstanceStore::default();
+        let slot = store.submit(&e, cube, 0);
+        assert!(!store.slot(slot).clusters.is_empty());
+        for (eye, target) in
+            [(Vec3::new(0.0, 3.0, -70.0), Vec3::ZERO), (Vec3::new(10.0, 2.0, 5.0), Vec3::new(40.0, 0.0, 30.0))]
+        {
+            let camera = Camera::perspective(60.0, 0.5, 80.0).looking_at(eye, target);
+            let frustum = Frustum::from_view_proj(camera.projection(1.5) * camera.view());
+            let mut tiled = Vec::new();
+            visible_instances(&frustum, true, &store, slot, &mut tiled);
+            tiled.sort_unstable();
+            let each: Vec<u32> = (0..5000u32)
+                .filter(|&i| store.bounds.is_valid(i as usize))
+                .filter(|&i| frustum.intersects(store.bounds.center(i as usize), store.bounds.extent(i as usize)))
+                .collect();
+            assert!(!each.is_empty() && each.len() < 4900, "a partial view: {}", each.len());
+            assert_eq!(tiled, each);
+        }
+    }
 
     fn gpu() -> Option<Gpu> {
         match Gpu::headless() {
