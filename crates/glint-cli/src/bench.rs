@@ -26,6 +26,7 @@ pub struct ModeReport {
 }
 
 /// Settings of one bench run.
+#[derive(Clone, Copy)]
 pub struct BenchConfig {
     /// Measured frames per mode.
     pub frames: usize,

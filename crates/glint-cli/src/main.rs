@@ -1,6 +1,7 @@
 //! The `glint` command-line tool.
 
 mod bench;
+mod plot;
 
 use clap::{Parser, Subcommand, ValueEnum};
 use glint::asset::{load_scene, SceneDesc};
@@ -68,6 +69,9 @@ enum Command {
         /// Print one JSON object instead of text.
         #[arg(long)]
         json: bool,
+        /// Also draw the per-stage CPU breakdown into this PNG.
+        #[arg(long, value_name = "CHART.png")]
+        plot: Option<PathBuf>,
     },
     /// Parse and validate a .scn scene without a GPU, and summarise it.
     #[command(after_help = EXIT_CODES)]
@@ -87,25 +91,23 @@ enum BenchMode {
 
 fn run_bench(
     scene: &Path,
-    frames: usize,
-    warmup: usize,
+    config: &bench::BenchConfig,
     mode: BenchMode,
-    size: (u32, u32),
-    msaa: u32,
     json: bool,
+    plot: Option<&Path>,
 ) -> Result<(), Error> {
+    let bench::BenchConfig { frames, warmup, size, msaa } = *config;
     if frames == 0 {
         return Err(glint::Diagnostic::file(scene, "--frames must be at least 1").into());
     }
     let desc = load(scene)?;
     let gpu = Gpu::headless()?;
-    let config = bench::BenchConfig { frames, warmup, size, msaa };
     let modes = match mode {
         BenchMode::Optimized => vec![glint::FrameMode::Optimized],
         BenchMode::Naive => vec![glint::FrameMode::Naive],
         BenchMode::Both => vec![glint::FrameMode::Optimized, glint::FrameMode::Naive],
     };
-    let reports = modes.into_iter().map(|m| bench::run_mode(&gpu, &desc, m, &config)).collect::<Result<Vec<_>, _>>()?;
+    let reports = modes.into_iter().map(|m| bench::run_mode(&gpu, &desc, m, config)).collect::<Result<Vec<_>, _>>()?;
     let speedup = (reports.len() == 2).then(|| reports[1].cpu_ms_median / reports[0].cpu_ms_median);
     if json {
         let modes: serde_json::Map<String, serde_json::Value> =
@@ -136,6 +138,11 @@ fn run_bench(
         if let Some(x) = speedup {
             println!("speedup (naive CPU median / optimized CPU median): {x:.1}x");
         }
+    }
+    if let Some(path) = plot {
+        let name = scene.file_name().map_or_else(|| scene.display().to_string(), |n| n.to_string_lossy().into());
+        let title = format!("{name}: CPU per stage, {}x{} on {}", size.0, size.1, gpu.info().name);
+        plot::stage_chart(path, &title, &reports)?;
     }
     Ok(())
 }
@@ -260,8 +267,9 @@ fn main() -> ExitCode {
             no_cull: *no_cull,
         }),
         Command::Check { scene } => check(scene),
-        Command::Bench { scene, frames, warmup, mode, size, msaa, json } => {
-            run_bench(scene, *frames, *warmup, *mode, *size, *msaa, *json)
+        Command::Bench { scene, frames, warmup, mode, size, msaa, json, plot } => {
+            let config = bench::BenchConfig { frames: *frames, warmup: *warmup, size: *size, msaa: *msaa };
+            run_bench(scene, &config, *mode, *json, plot.as_deref())
         }
     };
     match result {

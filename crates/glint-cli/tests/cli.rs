@@ -251,3 +251,31 @@ fn bench_reports_both_modes_as_json() {
     assert!(report["speedup"].as_f64().expect("speedup") > 0.0);
     assert_eq!(glint(&["bench", scene.to_str().expect("path"), "--frames", "0"]).status.code(), Some(1));
 }
+
+#[test]
+fn bench_plots_the_stage_breakdown() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let chart = dir.path().join("chart.png");
+    let scene = repo("tests/scenes/ortho.scn");
+    let scene = scene.to_str().expect("path");
+    let plot = |path: &str, mode: &str| {
+        glint(&["bench", scene, "--frames", "2", "--size", "32x32", "--mode", mode, "--plot", path])
+    };
+    let out = plot(chart.to_str().expect("path"), "both");
+    if out.status.code() == Some(2) && std::env::var("GLINT_REQUIRE_ADAPTER").as_deref() != Ok("1") {
+        eprintln!("skipping: no GPU adapter");
+        return;
+    }
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let image = image::open(&chart).expect("a PNG").to_rgb8();
+    assert_eq!(image.dimensions(), (2 * 560, 380), "one panel per mode");
+    let dark = image.pixels().filter(|p| p.0.iter().all(|&c| c < 100)).count();
+    assert!(dark > 500, "axes and labels are drawn: {dark} dark pixels");
+    let one = plot(chart.to_str().expect("path"), "optimized");
+    assert_eq!(one.status.code(), Some(0));
+    assert_eq!(image::image_dimensions(&chart).expect("png"), (560, 380));
+    let nowhere = dir.path().join("missing/chart.png");
+    let out = plot(nowhere.to_str().expect("path"), "optimized");
+    assert_eq!(out.status.code(), Some(1), "an unwritable chart path is bad input");
+    assert!(stderr(&out).contains("chart"), "{}", stderr(&out));
+}
