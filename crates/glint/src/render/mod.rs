@@ -329,7 +329,7 @@ impl Renderer {
         TextureId(self.textures.len() as u32 - 1)
     }
 
-    /// Add a material; its uniform block is written on first use.
+    /// Add a material; its material-table entry is written on first use.
     pub fn add_material(&mut self, material: Material) -> MaterialId {
         self.materials.push(MaterialSlot { material, dirty: true, gpu: None });
         MaterialId(self.materials.len() as u32 - 1)
@@ -340,7 +340,7 @@ impl Renderer {
         self.materials.get(id.0 as usize).map(|s| &s.material)
     }
 
-    /// Edit a material: marks it dirty, so its block is rewritten before the next frame.
+    /// Edit a material: marks it dirty, so its table entry is rewritten before the next frame.
     pub fn material_mut(&mut self, id: MaterialId) -> Option<&mut Material> {
         self.materials.get_mut(id.0 as usize).map(|s| {
             s.dirty = true;

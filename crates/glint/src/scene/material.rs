@@ -29,11 +29,12 @@ pub enum ShadingModel {
 /// A Blinn-Phong material: everything that decides a surface's colour.
 ///
 /// Colours are linear RGB(A). The fragment shader computes
-/// `colour = base * diffuse_map`, then
+/// `colour = base * vertex_colour * diffuse_map`, then
 /// `ambient·env_ambient·colour + Σ lights (diffuse·N·L·colour + specular·spec_map·(N·H)^shininess)`
-/// with `shininess = 2^(1 + 11·smoothness)`. Bound at `@group(2)`:
-/// binding 0 the uniform block, 1 diffuse map, 2 normal map, 3 specular map, 4 sampler;
-/// a missing map is bound as a neutral 1×1 texture.
+/// with `shininess = 2^(1 + 11·smoothness)`. Bound at `@group(2)`: binding 0 the
+/// material table (this material's entry is indexed by its id), 1 diffuse map,
+/// 2 normal map, 3 specular map, 4 sampler; a missing map is bound as a neutral
+/// 1×1 texture.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Material {
     /// Name, for scene files and diagnostics.
