@@ -126,12 +126,22 @@ impl Mesh {
     }
 
     /// Build a mesh from finished vertices (tangents included) and indices.
-    pub fn from_vertices(vertices: Vec<Vertex>, indices: Vec<u32>) -> Result<Self, MeshError> {
-        if indices.is_empty() || vertices.is_empty() {
-            return Err(MeshError::Empty);
-        }
+    /// Triangles that name one vertex twice cover nothing and are dropped (they
+    /// also crash tangent generation).
+    pub fn from_vertices(vertices: Vec<Vertex>, mut indices: Vec<u32>) -> Result<Self, MeshError> {
         if indices.len() % 3 != 0 {
             return Err(MeshError::NotTriangles(indices.len()));
+        }
+        if indices.chunks_exact(3).any(|t| t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) {
+            indices = indices
+                .chunks_exact(3)
+                .filter(|t| t[0] != t[1] && t[1] != t[2] && t[0] != t[2])
+                .flatten()
+                .copied()
+                .collect();
+        }
+        if indices.is_empty() || vertices.is_empty() {
+            return Err(MeshError::Empty);
         }
         if let Some(&index) = indices.iter().find(|&&i| i as usize >= vertices.len()) {
             return Err(MeshError::IndexOutOfRange { index, vertices: vertices.len() });
@@ -223,5 +233,54 @@ impl Mesh {
                 v.tangent = [any.x, any.y, any.z, 1.0];
             }
         }
+    }
+}
+
+/// Smooth vertex normals for a triangle list without them: each triangle adds its
+/// face normal weighted by its corner angle to every vertex at that corner's
+/// position, so vertices split by texture seams share one normal. Degenerate
+/// triangles add nothing; a vertex no triangle lights gets +Y.
+pub fn smooth_normals(positions: &[Vec3], indices: &[u32]) -> Vec<Vec3> {
+    let key = |p: Vec3| (p.x.to_bits(), p.y.to_bits(), p.z.to_bits());
+    let mut sums: std::collections::HashMap<(u32, u32, u32), Vec3> = std::collections::HashMap::new();
+    for tri in indices.chunks_exact(3) {
+        let Some(&[a, b, c]) = tri
+            .iter()
+            .map(|&i| positions.get(i as usize).copied())
+            .collect::<Option<Vec<Vec3>>>()
+            .as_deref()
+            .and_then(|v| <&[Vec3; 3]>::try_from(v).ok())
+        else {
+            continue;
+        };
+        let face = (b - a).cross(c - a).normalize_or_zero();
+        for (p, u, v) in [(a, b, c), (b, c, a), (c, a, b)] {
+            let angle = (u - p).normalize_or_zero().dot((v - p).normalize_or_zero()).clamp(-1.0, 1.0).acos();
+            *sums.entry(key(p)).or_insert(Vec3::ZERO) += face * angle;
+        }
+    }
+    positions.iter().map(|&p| sums.get(&key(p)).map_or(Vec3::Y, |n| n.normalize_or(Vec3::Y))).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn triangles_naming_a_vertex_twice_are_dropped() {
+        let v = |x: f32, y: f32| Vertex { position: [x, y, 0.0], normal: [0.0, 0.0, 1.0], ..Vertex::default() };
+        let vertices = vec![v(0.0, 0.0), v(1.0, 0.0), v(0.0, 1.0)];
+        let mesh = Mesh::from_vertices(vertices.clone(), vec![0, 1, 2, 2, 2, 2, 0, 0, 1]).expect("one good triangle");
+        assert_eq!(mesh.indices(), &[0, 1, 2]);
+        assert_eq!(Mesh::from_vertices(vertices, vec![1, 1, 1]).unwrap_err(), MeshError::Empty);
+    }
+
+    #[test]
+    fn smooth_normals_are_shared_by_vertices_at_one_position() {
+        // Two triangles of a flat square, the diagonal's ends duplicated (a UV seam).
+        let p = [Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::X, Vec3::new(1.0, 1.0, 0.0), Vec3::Y];
+        let normals = smooth_normals(&p, &[0, 1, 2, 3, 4, 5]);
+        assert!(normals.iter().all(|n| (*n - Vec3::Z).length() < 1e-6), "{normals:?}");
+        assert_eq!(smooth_normals(&[Vec3::ZERO], &[]), vec![Vec3::Y], "an unused vertex gets +Y");
     }
 }

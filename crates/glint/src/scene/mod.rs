@@ -18,7 +18,7 @@ pub use entity::Entity;
 pub use environment::{Background, Environment, Fog};
 pub use light::{Light, LightKind, MAX_LIGHTS};
 pub use material::{AlphaMode, Material, ShadingModel};
-pub use mesh::{Aabb, BoundingSphere, Mesh, MeshError, Vertex};
+pub use mesh::{smooth_normals, Aabb, BoundingSphere, Mesh, MeshError, Vertex};
 pub use states::{BlendState, Compare, Cull, DepthState, RasterState, RenderStates, StencilOp, StencilState};
 
 /// Handle to a shape (a mesh uploaded by the renderer), returned by
