@@ -4,7 +4,7 @@ mod bench;
 mod plot;
 
 use clap::{Parser, Subcommand, ValueEnum};
-use glint::asset::{load_scene, SceneDesc};
+use glint::asset::{load_scene, Model, SceneDesc};
 use glint::{Error, Gpu, OffscreenTarget, Renderer};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -164,8 +164,10 @@ fn parse_msaa(s: &str) -> Result<u32, String> {
     }
 }
 
+/// A scene file, or a model file shown alone with a framing camera and lights.
 fn load(scene: &Path) -> Result<SceneDesc, Error> {
-    let desc = load_scene(scene)?;
+    let is_model = scene.extension().is_some_and(|e| e.eq_ignore_ascii_case("obj"));
+    let desc = if is_model { Model::load(scene)?.into_scene() } else { load_scene(scene)? };
     for warning in &desc.warnings {
         eprintln!("warning: {warning}");
     }
@@ -228,6 +230,16 @@ fn check(scene: &Path) -> Result<(), Error> {
     println!("  materials:  {}", desc.materials.len());
     println!("  textures:   {}", desc.textures.len());
     println!("  render tasks (mesh x material): {}", desc.entities.len());
+    for model in &desc.models {
+        let triangles: usize = model.parts.iter().map(|p| p.mesh.indices().len() / 3).sum();
+        println!(
+            "  model {}: {} parts, {} materials, {} textures, {triangles} triangles",
+            model.path.display(),
+            model.parts.len(),
+            model.materials.len(),
+            model.textures.len()
+        );
+    }
     println!("  instances:  {}", desc.instance_count());
     println!("  warnings:   {}", desc.warnings.len());
     if desc.lights.len() > glint::scene::MAX_LIGHTS {

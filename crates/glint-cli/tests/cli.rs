@@ -279,3 +279,32 @@ fn bench_plots_the_stage_breakdown() {
     assert_eq!(out.status.code(), Some(1), "an unwritable chart path is bad input");
     assert!(stderr(&out).contains("chart"), "{}", stderr(&out));
 }
+
+#[test]
+fn models_render_and_check_directly() {
+    let model = repo("tests/models/two_materials.obj");
+    let model = model.to_str().expect("path");
+    let out = glint(&["check", model]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let summary = String::from_utf8_lossy(&out.stdout);
+    assert!(summary.contains("3 parts, 3 materials, 1 textures, 6 triangles"), "{summary}");
+    assert_eq!(stderr(&out).lines().filter(|l| l.starts_with("warning:")).count(), 2, "{}", stderr(&out));
+
+    let dir = tempfile::tempdir().expect("temp dir");
+    let png = dir.path().join("model.png");
+    let out = glint(&["render", model, "-o", png.to_str().expect("path"), "--size", "48x48", "--stats"]);
+    if out.status.code() == Some(2) && std::env::var("GLINT_REQUIRE_ADAPTER").as_deref() != Ok("1") {
+        eprintln!("skipping: no GPU adapter");
+        return;
+    }
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let stats: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    assert_eq!(stats["draws"], 4, "three parts and the sky");
+    assert_eq!(image::image_dimensions(&png).expect("png"), (48, 48));
+
+    let bad = dir.path().join("bad.obj");
+    std::fs::write(&bad, "v 0 0 0\nv 1 0\n").expect("write");
+    let out = glint(&["check", bad.to_str().expect("path")]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(error_lines(&out).iter().any(|l| l.contains("bad.obj:2:")), "{}", stderr(&out));
+}

@@ -2,6 +2,8 @@
 //! sizes, counts, indices and paths are checked, and every problem comes back as a
 //! [`Diagnostic`] naming the file, the line where there is one, and what was expected.
 
+mod model;
+mod obj;
 mod placement;
 pub mod procedural;
 mod scn;
@@ -9,8 +11,10 @@ mod scn_fields;
 mod scn_syntax;
 mod texture;
 
+pub use model::{AddedModel, Model, ModelPart};
+pub use obj::MAX_OBJ_BYTES;
 pub use procedural::ShapeKind;
-pub use scn::{load_scene, parse_scene, EntityDesc, MaterialDesc, SceneDesc, TextureRef, MAX_INSTANCES};
+pub use scn::{load_scene, parse_scene, EntityDesc, MaterialDesc, MeshRef, SceneDesc, TextureRef, MAX_INSTANCES};
 pub use texture::{load_texture, Texture, MAX_TEXTURE_SIDE};
 
 use std::fmt;

@@ -2,10 +2,13 @@
 //! reference) turned into a [`SceneDesc`], checked without a GPU, and placed into
 //! a [`Renderer`] with [`SceneDesc::instantiate`].
 
+use super::model::AddedModel;
 use super::placement::place_instances;
 use super::scn_fields::{numbers, Fields};
+use super::scn_syntax::Pair;
 use super::scn_syntax::{parse_blocks, Block};
-use super::{load_texture, Diagnostic, ShapeKind, Texture};
+use super::{load_texture, Diagnostic, Model, ShapeKind, Texture};
+use crate::scene::TextureId;
 use crate::scene::{
     AlphaMode, Background, BlendState, Camera, Compare, Cull, Entity, Environment, Fog, Light, Material, MaterialId,
     RenderStates, ShadingModel, StencilOp, MAX_LIGHTS,
@@ -35,18 +38,40 @@ pub struct MaterialDesc {
     pub specular_map: Option<TextureRef>,
 }
 
+impl MaterialDesc {
+    /// The material with its texture references turned into `textures`' ids
+    /// (`textures[i]` is the renderer's id of texture `i`).
+    pub fn resolve(&self, textures: &[TextureId]) -> Material {
+        Material {
+            diffuse_map: self.diffuse_map.map(|i| textures[i]),
+            normal_map: self.normal_map.map(|i| textures[i]),
+            specular_map: self.specular_map.map(|i| textures[i]),
+            ..self.material.clone()
+        }
+    }
+}
+
 /// One render task: every instance of one mesh with one material, gathered from
 /// all `entity` and `instances` blocks that use that pair.
 #[derive(Clone, Debug)]
 pub struct EntityDesc {
-    /// The shape.
-    pub mesh: ShapeKind,
+    /// The shape or model.
+    pub mesh: MeshRef,
     /// Index into [`SceneDesc::materials`]; `None` for the default material.
     pub material: Option<usize>,
     /// Draw-order override (see [`Entity::render_order`]).
     pub render_order: Option<u8>,
     /// One transform per instance.
     pub transforms: Vec<Mat4>,
+}
+
+/// What an entity draws: a procedural shape, or a model file (every part of it).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum MeshRef {
+    /// A procedural shape.
+    Shape(ShapeKind),
+    /// Index into [`SceneDesc::models`].
+    Model(usize),
 }
 
 /// A parsed and validated scene file, ready to instantiate.
@@ -64,6 +89,9 @@ pub struct SceneDesc {
     pub materials: Vec<MaterialDesc>,
     /// Decoded textures, each file once.
     pub textures: Vec<Texture>,
+    /// Models named by `mesh` keys, each file once, plus a copy per entity that
+    /// overrides its materials (`mtl.NAME.key`).
+    pub models: Vec<Model>,
     /// Render tasks, one per (mesh, material, render order), in first-use order.
     pub entities: Vec<EntityDesc>,
     /// Non-fatal problems (unknown keys, repeated keys), `path:line: message`.
@@ -81,32 +109,35 @@ impl SceneDesc {
     pub fn instantiate(&self, renderer: &mut Renderer) -> Vec<Entity> {
         renderer.set_environment(self.environment);
         let textures: Vec<_> = self.textures.iter().map(|t| renderer.add_texture(t.clone())).collect();
-        let materials: Vec<MaterialId> = self
-            .materials
-            .iter()
-            .map(|m| {
-                renderer.add_material(Material {
-                    diffuse_map: m.diffuse_map.map(|i| textures[i]),
-                    normal_map: m.normal_map.map(|i| textures[i]),
-                    specular_map: m.specular_map.map(|i| textures[i]),
-                    ..m.material.clone()
-                })
-            })
-            .collect();
+        let materials: Vec<MaterialId> =
+            self.materials.iter().map(|m| renderer.add_material(m.resolve(&textures))).collect();
         // Added on first use, so scenes that name every material do not get one.
         let mut default_material = None;
         let mut shapes = HashMap::new();
-        self.entities
-            .iter()
-            .map(|e| {
-                let shape = *shapes.entry(e.mesh).or_insert_with(|| renderer.add_shape(e.mesh.mesh()));
-                let material = match e.material {
-                    Some(i) => materials[i],
-                    None => *default_material.get_or_insert_with(|| renderer.add_material(Material::default())),
-                };
-                Entity::instanced(shape, material, e.transforms.clone()).with_render_order(e.render_order)
-            })
-            .collect()
+        let mut models = vec![None; self.models.len()];
+        let mut entities = Vec::new();
+        for e in &self.entities {
+            let first = entities.len();
+            match e.mesh {
+                MeshRef::Shape(kind) => {
+                    let shape = *shapes.entry(kind).or_insert_with(|| renderer.add_shape(kind.mesh()));
+                    let material = match e.material {
+                        Some(i) => materials[i],
+                        None => *default_material.get_or_insert_with(|| renderer.add_material(Material::default())),
+                    };
+                    entities.push(Entity::instanced(shape, material, e.transforms.clone()));
+                }
+                MeshRef::Model(i) => {
+                    let model = &self.models[i];
+                    let added: &AddedModel = models[i].get_or_insert_with(|| model.add_to(renderer));
+                    entities.extend(model.entities(added, &e.transforms));
+                }
+            }
+            for entity in &mut entities[first..] {
+                entity.render_order = e.render_order;
+            }
+        }
+        entities
     }
 }
 
@@ -130,10 +161,12 @@ pub fn parse_scene(path: &Path, text: &str) -> Result<SceneDesc, Diagnostic> {
             lights: Vec::new(),
             materials: Vec::new(),
             textures: Vec::new(),
+            models: Vec::new(),
             entities: Vec::new(),
             warnings: Vec::new(),
         },
         texture_index: HashMap::new(),
+        model_index: HashMap::new(),
         placements: Vec::new(),
         instances: 0,
     };
@@ -145,7 +178,7 @@ pub fn parse_scene(path: &Path, text: &str) -> Result<SceneDesc, Diagnostic> {
 
 /// An `entity` or `instances` block before material names are resolved.
 struct Placement {
-    mesh: ShapeKind,
+    mesh: MeshRef,
     material: Option<(String, usize)>,
     render_order: Option<u8>,
     transforms: Vec<Mat4>,
@@ -156,6 +189,7 @@ struct Loader<'a> {
     dir: PathBuf,
     scene: SceneDesc,
     texture_index: HashMap<(PathBuf, bool), usize>,
+    model_index: HashMap<PathBuf, usize>,
     placements: Vec<Placement>,
     instances: u64,
 }
@@ -180,6 +214,62 @@ const STENCIL_OP_VALUES: [StencilOp; 6] = [
     StencilOp::DecrementClamp,
     StencilOp::Invert,
 ];
+
+/// The material keys of a `material` block (or of `mtl.NAME.` overrides) applied
+/// over `base`: keys that are absent keep `base`'s values. Texture keys are the
+/// caller's.
+fn material_fields(f: &mut Fields, base: Material) -> Result<Material, Diagnostic> {
+    let base_color = match f.get("base_color") {
+        None => base.base_color,
+        Some(pair) => {
+            let words = pair.value.split_whitespace().count();
+            let c = if words == 3 {
+                Vec3::from(numbers::<3>(f.path, pair, "3 or 4 numbers (r g b [a])")?).extend(1.0)
+            } else {
+                Vec4::from(numbers::<4>(f.path, pair, "3 or 4 numbers (r g b [a])")?)
+            };
+            if c.min_element() < 0.0 || c.w > 1.0 {
+                return Err(Diagnostic::at(
+                    f.path,
+                    pair.line,
+                    "\"base_color\" must be non-negative with alpha at most 1",
+                ));
+            }
+            c
+        }
+    };
+    let base_cutoff = match base.alpha_mode {
+        AlphaMode::Mask { cutoff } => cutoff,
+        _ => 0.5,
+    };
+    let cutoff = f.number("alpha_cutoff", 0.0..=1.0)?.unwrap_or(base_cutoff);
+    let alpha_mode = match f.choice("alpha_mode", &["opaque", "mask", "blend"])? {
+        None if matches!(base.alpha_mode, AlphaMode::Mask { .. }) => AlphaMode::Mask { cutoff },
+        None => base.alpha_mode,
+        Some((0, _)) => AlphaMode::Opaque,
+        Some((1, _)) => AlphaMode::Mask { cutoff },
+        Some(_) => AlphaMode::Blend,
+    };
+    let material = Material {
+        base_color,
+        ambient: f.number("ambient", 0.0..=100.0)?.unwrap_or(base.ambient),
+        diffuse: f.number("diffuse", 0.0..=100.0)?.unwrap_or(base.diffuse),
+        specular: f.number("specular", 0.0..=100.0)?.unwrap_or(base.specular),
+        smoothness: f.number("smoothness", 0.0..=1.0)?.unwrap_or(base.smoothness),
+        alpha_mode,
+        double_sided: f.flag("double_sided")?.unwrap_or(base.double_sided),
+        uv_scale: f.numbers::<2>("uv_scale", "2 numbers (u v)")?.map_or(base.uv_scale, glam::Vec2::from),
+        shading: match f.choice("shading", &["blinn_phong", "unlit"])? {
+            None => base.shading,
+            Some((1, _)) => ShadingModel::Unlit,
+            Some(_) => ShadingModel::BlinnPhong,
+        },
+        fog: f.flag("fog")?.unwrap_or(base.fog),
+        ..base.clone()
+    };
+    let states = render_states(f, material.render_states())?.or(base.states);
+    Ok(Material { states, ..material })
+}
 
 /// A material's explicit render states: `None` when no state key is given, else
 /// `derived` (what its alpha mode and sidedness imply) with the given keys applied.
@@ -392,50 +482,7 @@ impl Loader<'_> {
         if self.scene.materials.iter().any(|m| m.material.name == name) {
             return Err(Diagnostic::at(self.path, name_pair.line, format!("material '{name}' is defined twice")));
         }
-        let defaults = Material::default();
-        let base_color = match f.get("base_color") {
-            None => defaults.base_color,
-            Some(pair) => {
-                let words = pair.value.split_whitespace().count();
-                let c = if words == 3 {
-                    Vec3::from(numbers::<3>(self.path, pair, "3 or 4 numbers (r g b [a])")?).extend(1.0)
-                } else {
-                    Vec4::from(numbers::<4>(self.path, pair, "3 or 4 numbers (r g b [a])")?)
-                };
-                if c.min_element() < 0.0 || c.w > 1.0 {
-                    return Err(Diagnostic::at(
-                        self.path,
-                        pair.line,
-                        "\"base_color\" must be non-negative with alpha at most 1",
-                    ));
-                }
-                c
-            }
-        };
-        let cutoff = f.number("alpha_cutoff", 0.0..=1.0)?.unwrap_or(0.5);
-        let alpha_mode = match f.choice("alpha_mode", &["opaque", "mask", "blend"])? {
-            None | Some((0, _)) => AlphaMode::Opaque,
-            Some((1, _)) => AlphaMode::Mask { cutoff },
-            Some(_) => AlphaMode::Blend,
-        };
-        let material = Material {
-            name,
-            base_color,
-            ambient: f.number("ambient", 0.0..=100.0)?.unwrap_or(defaults.ambient),
-            diffuse: f.number("diffuse", 0.0..=100.0)?.unwrap_or(defaults.diffuse),
-            specular: f.number("specular", 0.0..=100.0)?.unwrap_or(defaults.specular),
-            smoothness: f.number("smoothness", 0.0..=1.0)?.unwrap_or(defaults.smoothness),
-            alpha_mode,
-            double_sided: f.flag("double_sided")?.unwrap_or(false),
-            uv_scale: f.numbers::<2>("uv_scale", "2 numbers (u v)")?.map_or(defaults.uv_scale, glam::Vec2::from),
-            shading: match f.choice("shading", &["blinn_phong", "unlit"])? {
-                Some((1, _)) => ShadingModel::Unlit,
-                _ => ShadingModel::BlinnPhong,
-            },
-            fog: f.flag("fog")?.unwrap_or(true),
-            ..defaults
-        };
-        let material = Material { states: render_states(f, material.render_states())?, ..material };
+        let material = material_fields(f, Material { name, ..Material::default() })?;
         let desc = MaterialDesc {
             diffuse_map: self.texture(f, "diffuse_map", true)?,
             normal_map: self.texture(f, "normal_map", false)?,
@@ -444,6 +491,66 @@ impl Loader<'_> {
         };
         self.scene.materials.push(desc);
         Ok(())
+    }
+
+    /// The `mesh` key: a procedural shape, or a model file (`.obj`, relative to the
+    /// scene) whose materials `mtl.NAME.key` pairs may override for this block.
+    fn mesh(&mut self, f: &mut Fields) -> Result<MeshRef, Diagnostic> {
+        let pair = f.require("mesh")?;
+        let value = pair.value.trim();
+        if !value.to_ascii_lowercase().ends_with(".obj") {
+            return f.mesh().map(MeshRef::Shape);
+        }
+        let file = self.dir.join(value);
+        let index = match self.model_index.get(&file) {
+            Some(&i) => i,
+            None => {
+                let model =
+                    Model::load(&file).map_err(|e| Diagnostic::at(self.path, pair.line, format!("\"mesh\": {e}")))?;
+                self.scene.warnings.extend(model.warnings.iter().cloned());
+                self.scene.models.push(model);
+                self.model_index.insert(file, self.scene.models.len() - 1);
+                self.scene.models.len() - 1
+            }
+        };
+        self.model_overrides(f, index).map(MeshRef::Model)
+    }
+
+    /// Apply this block's `mtl.NAME.key` pairs to a copy of model `index`; returns
+    /// the copy's index, or `index` when there are none.
+    fn model_overrides(&mut self, f: &mut Fields, index: usize) -> Result<usize, Diagnostic> {
+        let mut by_material: Vec<(String, Vec<Pair>)> = Vec::new();
+        for (i, pair) in f.block.pairs.iter().enumerate() {
+            let Some(rest) = pair.key.strip_prefix("mtl.") else { continue };
+            f.used[i] = true;
+            let (name, key) = rest.rsplit_once('.').ok_or_else(|| {
+                Diagnostic::at(self.path, pair.line, format!("\"{}\": expected mtl.MATERIAL.key", pair.key))
+            })?;
+            let stripped = Pair { key: key.to_string(), value: pair.value.clone(), line: pair.line };
+            match by_material.iter_mut().find(|(n, _)| n == name) {
+                Some((_, pairs)) => pairs.push(stripped),
+                None => by_material.push((name.to_string(), vec![stripped])),
+            }
+        }
+        if by_material.is_empty() {
+            return Ok(index);
+        }
+        let mut model = self.scene.models[index].clone();
+        for (name, pairs) in by_material {
+            let line = pairs[0].line;
+            let Some(desc) = model.materials.iter_mut().find(|m| m.material.name == name) else {
+                let names: Vec<&str> = model.materials.iter().map(|m| m.material.name.as_str()).collect();
+                let message = format!("the model has no material '{name}' (it has: {})", names.join(", "));
+                return Err(Diagnostic::at(self.path, line, message));
+            };
+            let block = Block { line, pairs };
+            let mut fields =
+                Fields { path: self.path, class: "mtl override", block: &block, used: vec![false; block.pairs.len()] };
+            desc.material = material_fields(&mut fields, desc.material.clone())?;
+            self.scene.warnings.extend(fields.leftovers());
+        }
+        self.scene.models.push(model);
+        Ok(self.scene.models.len() - 1)
     }
 
     fn render_order(f: &mut Fields) -> Result<Option<u8>, Diagnostic> {
@@ -492,7 +599,7 @@ impl Loader<'_> {
     }
 
     fn entity(&mut self, f: &mut Fields) -> Result<(), Diagnostic> {
-        let mesh = f.mesh()?;
+        let mesh = self.mesh(f)?;
         let material = Self::material_ref(f);
         let origin = f.vec3("origin")?.unwrap_or(Vec3::ZERO);
         let angles = f.vec3("angles")?.unwrap_or(Vec3::ZERO);
@@ -505,7 +612,7 @@ impl Loader<'_> {
     }
 
     fn instances(&mut self, f: &mut Fields) -> Result<(), Diagnostic> {
-        let mesh = f.mesh()?;
+        let mesh = self.mesh(f)?;
         let material = Self::material_ref(f);
         let count_pair = f.require("count")?;
         let count: i64 = count_pair.value.trim().parse().map_err(|_| {
@@ -560,7 +667,7 @@ impl Loader<'_> {
 
     /// Resolve material names and gather placements into one task per (mesh, material, render order).
     fn finish(mut self) -> Result<SceneDesc, Diagnostic> {
-        let mut tasks: HashMap<(ShapeKind, Option<usize>, Option<u8>), usize> = HashMap::new();
+        let mut tasks: HashMap<(MeshRef, Option<usize>, Option<u8>), usize> = HashMap::new();
         for placement in std::mem::take(&mut self.placements) {
             let material = match placement.material {
                 None => None,

@@ -36,6 +36,16 @@ pub fn render_scene(gpu: &Gpu, name: &str, size: u32) -> (image::RgbaImage, Fram
 pub fn render_file(gpu: &Gpu, path: &Path, size: u32, culling: bool) -> (image::RgbaImage, FrameStats) {
     let desc = glint::asset::load_scene(path).unwrap_or_else(|e| panic!("{e}"));
     assert!(desc.warnings.is_empty(), "{:?}", desc.warnings);
+    render_desc(gpu, &desc, size, culling)
+}
+
+/// Render one frame of a loaded scene from its first camera, `size`×`size`, 4× MSAA.
+pub fn render_desc(
+    gpu: &Gpu,
+    desc: &glint::asset::SceneDesc,
+    size: u32,
+    culling: bool,
+) -> (image::RgbaImage, FrameStats) {
     let mut renderer = Renderer::new(gpu);
     renderer.set_culling(culling);
     let entities = desc.instantiate(&mut renderer);

@@ -1,0 +1,155 @@
+//! Beginner layer: [`Model`], a mesh file loaded as parts (a mesh drawn with one
+//! of the model's materials), ready to place in a renderer, and its materials
+//! overridable by name without editing the file.
+
+use super::{Diagnostic, EntityDesc, MaterialDesc, MeshRef, SceneDesc, Texture};
+use crate::scene::{Aabb, Background, Camera, Entity, Environment, Light, Material, MaterialId, Mesh, ShapeId};
+use crate::Renderer;
+use glam::{Mat4, Vec3};
+use std::path::{Path, PathBuf};
+
+/// One drawable piece of a model: a mesh, its material and its place in the model.
+#[derive(Clone, Debug)]
+pub struct ModelPart {
+    /// Object or group name from the file (for diagnostics).
+    pub name: String,
+    /// The triangles.
+    pub mesh: Mesh,
+    /// Index into [`Model::materials`]; `None` for the renderer's default material.
+    pub material: Option<usize>,
+    /// Part-to-model transform.
+    pub transform: Mat4,
+}
+
+/// A model loaded from a file.
+#[derive(Clone, Debug)]
+pub struct Model {
+    /// The file it came from.
+    pub path: PathBuf,
+    /// Its drawable parts.
+    pub parts: Vec<ModelPart>,
+    /// Its materials, in file order.
+    pub materials: Vec<MaterialDesc>,
+    /// Decoded textures the materials use, each file once.
+    pub textures: Vec<Texture>,
+    /// What was wrong but not fatal (a missing `.mtl` or texture, an option
+    /// ignored), each with a visible default in place.
+    pub warnings: Vec<Diagnostic>,
+}
+
+impl Model {
+    /// Load a model file: Wavefront `.obj` (with its `.mtl` libraries).
+    pub fn load(path: &Path) -> Result<Self, Diagnostic> {
+        match path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() {
+            Some("obj") => super::obj::load_obj(path),
+            _ => Err(Diagnostic::file(path, "not a model file: expected the extension .obj")),
+        }
+    }
+
+    /// Change the material called `name` (as the file names it) before the model
+    /// is placed, e.g. `model.override_material("Wood", |m| m.base_color.x = 1.0)`.
+    /// Returns whether the model has such a material.
+    pub fn override_material(&mut self, name: &str, edit: impl FnOnce(&mut Material)) -> bool {
+        match self.materials.iter_mut().find(|m| m.material.name == name) {
+            Some(m) => {
+                edit(&mut m.material);
+                true
+            }
+            None => false,
+        }
+    }
+
+    /// The model-space box around every part; `None` for a model without parts.
+    pub fn bounds(&self) -> Option<Aabb> {
+        let corners = self.parts.iter().flat_map(|p| {
+            let b = p.mesh.aabb();
+            (0..8).map(move |i| {
+                let pick = |bit: u32, lo: f32, hi: f32| if i & bit == 0 { lo } else { hi };
+                let corner = Vec3::new(pick(1, b.min.x, b.max.x), pick(2, b.min.y, b.max.y), pick(4, b.min.z, b.max.z));
+                p.transform.transform_point3(corner)
+            })
+        });
+        Aabb::from_points(corners)
+    }
+
+    /// Add the model's shapes, textures and materials to `renderer` and return one
+    /// entity per part, instanced at every transform of `placements` (model to world).
+    pub fn instantiate(&self, renderer: &mut Renderer, placements: &[Mat4]) -> Vec<Entity> {
+        let added = self.add_to(renderer);
+        self.entities(&added, placements)
+    }
+
+    /// Add the model's shapes, textures and materials to `renderer`, once; place it
+    /// any number of times with [`Model::entities`].
+    pub fn add_to(&self, renderer: &mut Renderer) -> AddedModel {
+        let textures: Vec<_> = self.textures.iter().map(|t| renderer.add_texture(t.clone())).collect();
+        let materials: Vec<MaterialId> =
+            self.materials.iter().map(|m| renderer.add_material(m.resolve(&textures))).collect();
+        let default_material =
+            self.parts.iter().any(|p| p.material.is_none()).then(|| renderer.add_material(Material::default()));
+        let parts = self
+            .parts
+            .iter()
+            .map(|part| {
+                let material = part.material.map_or_else(|| default_material.expect("added above"), |i| materials[i]);
+                (renderer.add_shape(part.mesh.clone()), material)
+            })
+            .collect();
+        AddedModel { parts }
+    }
+
+    /// One entity per part of a model added with [`Model::add_to`], instanced at
+    /// every transform of `placements`.
+    pub fn entities(&self, added: &AddedModel, placements: &[Mat4]) -> Vec<Entity> {
+        self.parts
+            .iter()
+            .zip(&added.parts)
+            .map(|(part, &(shape, material))| {
+                Entity::instanced(shape, material, placements.iter().map(|p| *p * part.transform).collect())
+            })
+            .collect()
+    }
+}
+
+impl Model {
+    /// A scene showing this model alone: one placement at the origin, a camera
+    /// framing its bounds from above and to the side, a sun, ambient light and a sky.
+    pub fn into_scene(self) -> SceneDesc {
+        let bounds = self.bounds().unwrap_or(Aabb { min: Vec3::splat(-1.0), max: Vec3::splat(1.0) });
+        let (center, radius) = (bounds.center(), (bounds.half_extent().length()).max(1e-3));
+        let fov = 45.0_f32;
+        // Far enough that the bounding sphere fits the vertical field of view.
+        let distance = radius / (fov.to_radians() * 0.5).sin() * 1.05;
+        let eye = center + Vec3::new(0.8, 0.6, 1.2).normalize() * distance;
+        let camera = Camera::perspective(fov, distance * 0.01, distance + radius * 4.0).looking_at(eye, center);
+        let environment = Environment {
+            background: Background::Gradient { top: Vec3::new(0.25, 0.35, 0.55), bottom: Vec3::new(0.75, 0.78, 0.8) },
+            ambient: Vec3::splat(0.3),
+            fog: None,
+        };
+        let sun = Light::directional(Vec3::new(-0.4, -1.0, -0.6), Vec3::ONE, 1.0);
+        let fill = Light::directional(Vec3::new(0.6, -0.3, 0.8), Vec3::ONE, 0.35);
+        SceneDesc {
+            path: self.path.clone(),
+            environment,
+            cameras: vec![camera],
+            lights: vec![sun, fill],
+            materials: Vec::new(),
+            textures: Vec::new(),
+            warnings: self.warnings.clone(),
+            entities: vec![EntityDesc {
+                mesh: MeshRef::Model(0),
+                material: None,
+                render_order: None,
+                transforms: vec![Mat4::IDENTITY],
+            }],
+            models: vec![self],
+        }
+    }
+}
+
+/// A model's ids in one renderer: shape and material per part.
+#[derive(Clone, Debug)]
+pub struct AddedModel {
+    parts: Vec<(ShapeId, MaterialId)>,
+}

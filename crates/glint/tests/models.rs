@@ -1,0 +1,188 @@
+//! Model files: OBJ + MTL loading (parts, materials, options, warnings, safe
+//! paths, errors with lines), models placed from `.scn` with material overrides,
+//! and rendered models.
+
+mod common;
+
+use glam::{Vec2, Vec3, Vec4};
+use glint::asset::{parse_scene, MeshRef, Model};
+use glint::{AlphaMode, Camera};
+use std::path::{Path, PathBuf};
+
+fn models_dir() -> PathBuf {
+    common::repo_root().join("tests/models")
+}
+
+/// `../shared/assets/obj/NAME` beside the project, or `None` (with a message).
+fn shared_obj(name: &str) -> Option<PathBuf> {
+    let path = common::repo_root().join("../shared/assets/obj").join(name);
+    if path.exists() {
+        Some(path)
+    } else {
+        eprintln!("skipping: {} is absent", path.display());
+        None
+    }
+}
+
+#[test]
+fn obj_parts_get_their_own_mtl_materials_textures_and_warnings() {
+    let model = Model::load(&models_dir().join("two_materials.obj")).expect("loads");
+    let names: Vec<(&str, Option<usize>)> = model.parts.iter().map(|p| (p.name.as_str(), p.material)).collect();
+    assert_eq!(names, vec![("slab", Some(0)), ("roof", Some(1)), ("roof", Some(2))]);
+    let triangles: Vec<usize> = model.parts.iter().map(|p| p.mesh.indices().len() / 3).collect();
+    assert_eq!(triangles, vec![2, 3, 1], "quad and pentagon triangulated");
+    // The roof had no normals: computed, unit length, facing ±Z (it lies in z = 0).
+    for v in model.parts[1].mesh.vertices() {
+        let n = Vec3::from(v.normal);
+        assert!((n.length() - 1.0).abs() < 1e-4 && n.z.abs() > 0.99, "{n}");
+    }
+    let [tiled, red, painted] = &model.materials[..] else { panic!("three materials") };
+    assert_eq!(tiled.material.name, "tiled");
+    assert_eq!(tiled.material.uv_scale, Vec2::splat(4.0), "-s 4 4 1 is an option, not a file name");
+    assert_eq!(tiled.diffuse_map, Some(0));
+    assert_eq!(model.textures[0].image.dimensions(), (4, 4), "'checker tile.png', space and all");
+    assert_eq!(red.material.base_color, Vec4::new(0.9, 0.1, 0.1, 0.5));
+    assert_eq!(red.material.alpha_mode, AlphaMode::Blend, "d 0.5");
+    assert_eq!(painted.diffuse_map, None, "missing texture: drawn without it");
+    let warnings: Vec<String> = model.warnings.iter().map(|w| w.to_string()).collect();
+    assert_eq!(warnings.len(), 2, "{warnings:?}");
+    assert!(warnings[0].contains("missing library.mtl"), "{warnings:?}");
+    assert!(warnings[1].contains("not here.png") && warnings[1].contains("painted"), "{warnings:?}");
+}
+
+#[test]
+fn materials_are_overridden_by_name() {
+    let mut model = Model::load(&models_dir().join("two_materials.obj")).expect("loads");
+    assert!(model.override_material("red", |m| m.base_color = Vec4::new(0.0, 0.0, 1.0, 1.0)));
+    assert_eq!(model.materials[1].material.base_color, Vec4::new(0.0, 0.0, 1.0, 1.0));
+    assert!(!model.override_material("Wood", |_| {}), "no such material");
+}
+
+#[test]
+fn scenes_place_models_and_override_their_materials_per_entity() {
+    let scn = common::repo_root().join("tests/scenes/inline.scn");
+    let text = r#"
+{
+"classname" "entity"
+"mesh" "../models/two_materials.obj"
+}
+{
+"classname" "entity"
+"mesh" "../models/two_materials.obj"
+"origin" "3 0 0"
+"mtl.red.base_color" "0 0 1"
+"mtl.red.alpha_mode" "opaque"
+"mtl.tiled.smoothness" "0.9"
+}
+{
+"classname" "instances"
+"mesh" "../models/two_materials.obj"
+"count" "4"
+}
+"#;
+    let desc = parse_scene(&scn, text).expect("valid");
+    assert_eq!(desc.models.len(), 2, "the file once, plus one overridden copy");
+    let red = |m: &Model| m.materials[1].material.clone();
+    assert_eq!(red(&desc.models[0]).base_color, Vec4::new(0.9, 0.1, 0.1, 0.5), "the original is untouched");
+    assert_eq!(red(&desc.models[1]).base_color, Vec4::new(0.0, 0.0, 1.0, 1.0));
+    assert_eq!(red(&desc.models[1]).alpha_mode, AlphaMode::Opaque);
+    assert_eq!(desc.models[1].materials[0].material.smoothness, 0.9);
+    let meshes: Vec<(MeshRef, usize)> = desc.entities.iter().map(|e| (e.mesh, e.transforms.len())).collect();
+    assert_eq!(meshes, vec![(MeshRef::Model(0), 1 + 4), (MeshRef::Model(1), 1)]);
+    // 2 warnings from the model file itself, none from the scene.
+    assert_eq!(desc.warnings.len(), 2, "{:?}", desc.warnings);
+
+    let bad = |extra: &str| {
+        let text = format!("{{\n\"classname\" \"entity\"\n\"mesh\" \"../models/two_materials.obj\"\n{extra}\n}}");
+        parse_scene(&scn, &text).expect_err("invalid").to_string()
+    };
+    let e = bad("\"mtl.Wood.base_color\" \"1 0 0\"");
+    assert!(
+        e.contains("inline.scn:4:") && e.contains("no material 'Wood'") && e.contains("tiled, red, painted"),
+        "{e}"
+    );
+    assert!(bad("\"mtl.red.smoothness\" \"2\"").contains("smoothness"));
+    assert!(bad("\"mtl.red\" \"1\"").contains("expected mtl.MATERIAL.key"));
+    let missing = parse_scene(&scn, "{\n\"classname\" \"entity\"\n\"mesh\" \"nowhere.obj\"\n}").expect_err("missing");
+    assert!(missing.to_string().contains("inline.scn:3:") && missing.to_string().contains("nowhere.obj"), "{missing}");
+}
+
+/// Write `text` as an OBJ in a fresh folder and load it.
+fn load_text(name: &str, text: &str) -> Result<Model, glint::Diagnostic> {
+    let dir = std::env::temp_dir().join(format!("glint-obj-{}-{name}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let path = dir.join(format!("{name}.obj"));
+    std::fs::write(&path, text).expect("write");
+    Model::load(&path)
+}
+
+#[test]
+fn bad_obj_files_are_errors_with_file_and_line() {
+    let cases = [
+        ("short_vertex", "v 0 0 0\nv 1 0\nf 1 2 3\n", 2),
+        ("index_out_of_range", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n", 4),
+        ("bad_number", "v 0 0 0\nv 1 zero 0\n", 2),
+    ];
+    for (name, text, line) in cases {
+        let e = load_text(name, text).expect_err(name);
+        assert!(e.path.ends_with(format!("{name}.obj")), "{e}");
+        assert_eq!(e.line, Some(line), "{name}: {e}");
+    }
+    let e = load_text("no_faces", "v 0 0 0\n# nothing else\n").expect_err("no faces");
+    assert!(e.to_string().contains("no faces"), "{e}");
+    let e = Model::load(Path::new("model.fbx")).expect_err("not a model");
+    assert!(e.to_string().contains("expected the extension .obj"), "{e}");
+    let e = Model::load(&models_dir().join("absent.obj")).expect_err("absent");
+    assert!(e.to_string().contains("cannot read"), "{e}");
+}
+
+#[test]
+fn hostile_paths_are_refused_and_truncation_never_panics() {
+    let text = "mtllib ../../../../etc/passwd\nmtllib /etc/hostname\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+    let model = load_text("hostile", text).expect("the geometry still loads");
+    assert_eq!(model.warnings.len(), 2, "{:?}", model.warnings);
+    assert!(model.warnings.iter().all(|w| w.message.contains("outside the model's folder")), "{:?}", model.warnings);
+    // Every prefix of a real file: a model or an error, never a panic.
+    let full = std::fs::read_to_string(models_dir().join("two_materials.obj")).expect("read");
+    for cut in (0..full.len()).filter(|&i| full.is_char_boundary(i)) {
+        let _ = load_text("cut", &full[..cut]);
+    }
+}
+
+#[test]
+fn models_render_from_their_own_framing_camera() {
+    let Some(gpu) = common::gpu() else { return };
+    let model = Model::load(&models_dir().join("two_materials.obj")).expect("loads");
+    let desc = model.into_scene();
+    let (image, stats) = common::render_desc(gpu, &desc, 128, true);
+    assert_eq!(stats.draws, 4, "three parts and the sky");
+    common::assert_matches_reference("obj_two_materials", &image);
+}
+
+#[test]
+fn the_cornell_box_shows_its_red_and_green_walls() {
+    let (Some(gpu), Some(path)) = (common::gpu(), shared_obj("cornell_box.obj")) else { return };
+    let mut desc = Model::load(&path).expect("loads").into_scene();
+    // The classic view: from the open side, looking in.
+    desc.cameras[0] = Camera::perspective(40.0, 1.0, 3000.0)
+        .looking_at(Vec3::new(278.0, 273.0, -800.0), Vec3::new(278.0, 273.0, 0.0));
+    let (image, _) = common::render_desc(gpu, &desc, 128, true);
+    let count = |f: &dyn Fn([u8; 4]) -> bool| image.pixels().filter(|p| f(p.0)).count();
+    let red = count(&|[r, g, b, _]| r > 120 && g < 60 && b < 60);
+    let green = count(&|[r, g, b, _]| g > 120 && r < 60 && b < 60);
+    assert!(red > 500 && green > 500, "red {red} and green {green} pixels");
+    common::assert_matches_reference("obj_cornell_box", &image);
+}
+
+#[test]
+fn the_teapot_renders_with_computed_normals() {
+    let (Some(gpu), Some(path)) = (common::gpu(), shared_obj("teapot.obj")) else { return };
+    let model = Model::load(&path).expect("loads");
+    assert!(model.parts.iter().all(|p| p
+        .mesh
+        .vertices()
+        .iter()
+        .all(|v| (Vec3::from(v.normal).length() - 1.0).abs() < 1e-3)));
+    let (image, _) = common::render_desc(gpu, &model.into_scene(), 128, true);
+    common::assert_matches_reference("obj_teapot", &image);
+}
