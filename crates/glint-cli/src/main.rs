@@ -166,8 +166,7 @@ fn parse_msaa(s: &str) -> Result<u32, String> {
 
 /// A scene file, or a model file shown alone with a framing camera and lights.
 fn load(scene: &Path) -> Result<SceneDesc, Error> {
-    let is_model = scene.extension().is_some_and(|e| e.eq_ignore_ascii_case("obj"));
-    let desc = if is_model { Model::load(scene)?.into_scene() } else { load_scene(scene)? };
+    let desc = if Model::is_model_path(scene) { Model::load(scene)?.into_scene() } else { load_scene(scene)? };
     for warning in &desc.warnings {
         eprintln!("warning: {warning}");
     }

@@ -131,7 +131,7 @@ fn bad_obj_files_are_errors_with_file_and_line() {
     let e = load_text("no_faces", "v 0 0 0\n# nothing else\n").expect_err("no faces");
     assert!(e.to_string().contains("no faces"), "{e}");
     let e = Model::load(Path::new("model.fbx")).expect_err("not a model");
-    assert!(e.to_string().contains("expected the extension .obj"), "{e}");
+    assert!(e.to_string().contains("expected the extension .obj, .gltf or .glb"), "{e}");
     let e = Model::load(&models_dir().join("absent.obj")).expect_err("absent");
     assert!(e.to_string().contains("cannot read"), "{e}");
 }
@@ -185,4 +185,96 @@ fn the_teapot_renders_with_computed_normals() {
         .all(|v| (Vec3::from(v.normal).length() - 1.0).abs() < 1e-3)));
     let (image, _) = common::render_desc(gpu, &model.into_scene(), 128, true);
     common::assert_matches_reference("obj_teapot", &image);
+}
+
+/// `../shared/assets/gltf/NAME` beside the project, or `None` (with a message).
+fn shared_gltf(name: &str) -> Option<PathBuf> {
+    let path = common::repo_root().join("../shared/assets/gltf").join(name);
+    path.exists().then_some(path).or_else(|| {
+        eprintln!("skipping: ../shared/assets/gltf/{name} is absent");
+        None
+    })
+}
+
+#[test]
+fn gltf_samples_load_with_hierarchy_instancing_cameras_and_flat_normals() {
+    let Some(dir) = shared_gltf("Box.gltf").and_then(|p| p.parent().map(Path::to_path_buf)) else { return };
+    let load = |name: &str| Model::load(&dir.join(name)).unwrap_or_else(|e| panic!("{e}"));
+    let boxed = load("Box.gltf");
+    assert_eq!((boxed.parts.len(), boxed.materials.len(), boxed.textures.len()), (1, 1, 0));
+    // Box.gltf's node rotates the mesh a quarter turn about X: the part carries it.
+    let t = boxed.parts[0].transforms[0];
+    assert!(
+        (t.transform_vector3(Vec3::Y) - Vec3::Z).length() < 1e-5
+            || (t.transform_vector3(Vec3::Y) + Vec3::Z).length() < 1e-5
+    );
+    let textured = load("BoxTextured.gltf");
+    assert_eq!(textured.textures.len(), 1);
+    assert_eq!(textured.materials[0].diffuse_map, Some(0));
+    assert!(textured.textures[0].srgb, "base colour maps are sRGB");
+    let simple = load("SimpleMeshes.gltf");
+    assert_eq!(simple.parts.len(), 1, "one mesh used by two nodes is one part");
+    assert_eq!(simple.parts[0].transforms.len(), 2, "... drawn at both nodes");
+    let cameras = load("Cameras.gltf");
+    assert_eq!(cameras.cameras.len(), 2);
+    let triangle = load("Triangle.gltf");
+    let normals: Vec<Vec3> = triangle.parts[0].mesh.vertices().iter().map(|v| Vec3::from(v.normal)).collect();
+    assert!(normals.iter().all(|n| (*n - Vec3::Z).length() < 1e-5), "flat normals, facing +Z: {normals:?}");
+    assert!(triangle.warnings.is_empty() && boxed.warnings.is_empty());
+}
+
+#[test]
+fn gltf_samples_render() {
+    let Some(gpu) = common::gpu() else { return };
+    for (name, reference, draws) in
+        [("BoxTextured.gltf", "gltf_box_textured", 2), ("SimpleMeshes.gltf", "gltf_simple_meshes", 2)]
+    {
+        let Some(path) = shared_gltf(name) else { return };
+        let desc = Model::load(&path).expect("loads").into_scene();
+        let (image, stats) = common::render_desc(gpu, &desc, 128, true);
+        assert_eq!(stats.draws, draws, "{name}: the model (instanced) and the sky");
+        common::assert_matches_reference(reference, &image);
+    }
+}
+
+/// A one-triangle glTF with its buffer in a separate file, in a fresh folder.
+fn write_gltf(name: &str, indices: [u16; 3], uri: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("glint-gltf-{}-{name}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let mut bin: Vec<u8> =
+        [[0.0f32, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]].iter().flatten().flat_map(|v| v.to_le_bytes()).collect();
+    bin.extend(indices.iter().flat_map(|i| i.to_le_bytes()));
+    bin.extend([0, 0]);
+    std::fs::write(dir.join("tri.bin"), &bin).expect("write bin");
+    let json = format!(
+        r#"{{"asset":{{"version":"2.0"}},"scene":0,"scenes":[{{"nodes":[0]}}],"nodes":[{{"mesh":0}}],
+"meshes":[{{"primitives":[{{"attributes":{{"POSITION":0}},"indices":1}}]}}],
+"buffers":[{{"uri":"{uri}","byteLength":44}}],
+"bufferViews":[{{"buffer":0,"byteOffset":0,"byteLength":36}},{{"buffer":0,"byteOffset":36,"byteLength":6}}],
+"accessors":[{{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[1,1,0]}},
+{{"bufferView":1,"componentType":5123,"count":3,"type":"SCALAR"}}]}}"#
+    );
+    let path = dir.join(format!("{name}.gltf"));
+    std::fs::write(&path, json).expect("write gltf");
+    path
+}
+
+#[test]
+fn bad_and_hostile_gltf_files_are_errors() {
+    let good = write_gltf("good", [0, 1, 2], "tri.bin");
+    let model = Model::load(&good).expect("a valid triangle");
+    assert_eq!(model.parts[0].mesh.indices().len(), 3);
+    let e = Model::load(&write_gltf("bad_index", [0, 1, 5], "tri.bin")).expect_err("index past the vertices");
+    assert!(e.to_string().contains("index 5 is past the 3 vertices"), "{e}");
+    let e = Model::load(&write_gltf("escape", [0, 1, 2], "../../etc/passwd")).expect_err("escaping URI");
+    assert!(e.to_string().contains("outside the model's folder"), "{e}");
+    let e = Model::load(&write_gltf("absolute", [0, 1, 2], "/etc/passwd")).expect_err("absolute URI");
+    assert!(e.to_string().contains("outside the model's folder"), "{e}");
+    // Every prefix of a valid file: an error or a model, never a panic.
+    let text = std::fs::read_to_string(&good).expect("read");
+    for cut in 0..text.len() {
+        let path = good.with_file_name("cut.gltf");
+        std::fs::write(&path, &text[..cut]).expect("write");
+        assert!(Model::load(&path).is_err(), "a cut file is not a whole model ({cut} bytes)");
+    }
 }

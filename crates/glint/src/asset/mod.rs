@@ -2,6 +2,7 @@
 //! sizes, counts, indices and paths are checked, and every problem comes back as a
 //! [`Diagnostic`] naming the file, the line where there is one, and what was expected.
 
+mod gltf;
 mod model;
 mod obj;
 mod placement;
@@ -11,6 +12,7 @@ mod scn_fields;
 mod scn_syntax;
 mod texture;
 
+pub use gltf::MAX_GLTF_BYTES;
 pub use model::{AddedModel, Model, ModelPart};
 pub use obj::MAX_OBJ_BYTES;
 pub use procedural::ShapeKind;

@@ -17,8 +17,9 @@ pub struct ModelPart {
     pub mesh: Mesh,
     /// Index into [`Model::materials`]; `None` for the renderer's default material.
     pub material: Option<usize>,
-    /// Part-to-model transform.
-    pub transform: Mat4,
+    /// Part-to-model transforms: one per place the part appears (a glTF mesh used
+    /// by several nodes is one part drawn as one instanced draw).
+    pub transforms: Vec<Mat4>,
 }
 
 /// A model loaded from a file.
@@ -32,18 +33,31 @@ pub struct Model {
     pub materials: Vec<MaterialDesc>,
     /// Decoded textures the materials use, each file once.
     pub textures: Vec<Texture>,
+    /// Cameras the file defines, placed in the model.
+    pub cameras: Vec<Camera>,
+    /// Lights the file defines, placed in the model.
+    pub lights: Vec<Light>,
     /// What was wrong but not fatal (a missing `.mtl` or texture, an option
     /// ignored), each with a visible default in place.
     pub warnings: Vec<Diagnostic>,
 }
 
 impl Model {
-    /// Load a model file: Wavefront `.obj` (with its `.mtl` libraries).
+    /// Load a model file: Wavefront `.obj` (with its `.mtl` libraries), or glTF
+    /// 2.0 `.gltf` / `.glb`.
     pub fn load(path: &Path) -> Result<Self, Diagnostic> {
         match path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() {
             Some("obj") => super::obj::load_obj(path),
-            _ => Err(Diagnostic::file(path, "not a model file: expected the extension .obj")),
+            Some("gltf" | "glb") => super::gltf::load_gltf(path),
+            _ => Err(Diagnostic::file(path, "not a model file: expected the extension .obj, .gltf or .glb")),
         }
+    }
+
+    /// Whether `path` names a model file (by extension).
+    pub fn is_model_path(path: &Path) -> bool {
+        path.extension()
+            .and_then(|e| e.to_str())
+            .is_some_and(|e| ["obj", "gltf", "glb"].contains(&e.to_ascii_lowercase().as_str()))
     }
 
     /// Change the material called `name` (as the file names it) before the model
@@ -63,10 +77,13 @@ impl Model {
     pub fn bounds(&self) -> Option<Aabb> {
         let corners = self.parts.iter().flat_map(|p| {
             let b = p.mesh.aabb();
-            (0..8).map(move |i| {
-                let pick = |bit: u32, lo: f32, hi: f32| if i & bit == 0 { lo } else { hi };
-                let corner = Vec3::new(pick(1, b.min.x, b.max.x), pick(2, b.min.y, b.max.y), pick(4, b.min.z, b.max.z));
-                p.transform.transform_point3(corner)
+            p.transforms.iter().flat_map(move |t| {
+                (0..8).map(move |i| {
+                    let pick = |bit: u32, lo: f32, hi: f32| if i & bit == 0 { lo } else { hi };
+                    let corner =
+                        Vec3::new(pick(1, b.min.x, b.max.x), pick(2, b.min.y, b.max.y), pick(4, b.min.z, b.max.z));
+                    t.transform_point3(corner)
+                })
             })
         });
         Aabb::from_points(corners)
@@ -105,15 +122,18 @@ impl Model {
             .iter()
             .zip(&added.parts)
             .map(|(part, &(shape, material))| {
-                Entity::instanced(shape, material, placements.iter().map(|p| *p * part.transform).collect())
+                let transforms = placements.iter().flat_map(|p| part.transforms.iter().map(move |t| *p * *t));
+                Entity::instanced(shape, material, transforms.collect())
             })
             .collect()
     }
 }
 
 impl Model {
-    /// A scene showing this model alone: one placement at the origin, a camera
-    /// framing its bounds from above and to the side, a sun, ambient light and a sky.
+    /// A scene showing this model alone: one placement at the origin; camera 0
+    /// frames its bounds from above and to the side, the file's own cameras follow;
+    /// the file's lights, or a sun and a fill light when it has none; ambient light
+    /// and a sky.
     pub fn into_scene(self) -> SceneDesc {
         let bounds = self.bounds().unwrap_or(Aabb { min: Vec3::splat(-1.0), max: Vec3::splat(1.0) });
         let (center, radius) = (bounds.center(), (bounds.half_extent().length()).max(1e-3));
@@ -132,8 +152,8 @@ impl Model {
         SceneDesc {
             path: self.path.clone(),
             environment,
-            cameras: vec![camera],
-            lights: vec![sun, fill],
+            cameras: std::iter::once(camera).chain(self.cameras.iter().copied()).collect(),
+            lights: if self.lights.is_empty() { vec![sun, fill] } else { self.lights.clone() },
             materials: Vec::new(),
             textures: Vec::new(),
             warnings: self.warnings.clone(),

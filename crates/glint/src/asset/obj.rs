@@ -50,7 +50,7 @@ pub(crate) fn load_obj(path: &Path) -> Result<Model, Diagnostic> {
                         format!("object '{part_name}' uses a material no library defines; drawn with the default");
                     warnings.push(Diagnostic::file(path, message));
                 }
-                parts.push(ModelPart { name: part_name, mesh, material, transform: Mat4::IDENTITY });
+                parts.push(ModelPart { name: part_name, mesh, material, transforms: vec![Mat4::IDENTITY] });
             }
             Ok(None) => {}
             Err(e) => return Err(Diagnostic::file(path, format!("object '{part_name}': {e}"))),
@@ -59,7 +59,16 @@ pub(crate) fn load_obj(path: &Path) -> Result<Model, Diagnostic> {
     if parts.is_empty() {
         return Err(Diagnostic::file(path, "no faces: expected at least one triangle or polygon"));
     }
-    Ok(Model { path: path.to_path_buf(), parts, materials, textures: textures.textures, warnings })
+    let textures = textures.textures;
+    Ok(Model {
+        path: path.to_path_buf(),
+        parts,
+        materials,
+        textures,
+        cameras: Vec::new(),
+        lights: Vec::new(),
+        warnings,
+    })
 }
 
 /// Read a whole file, refusing ones larger than [`MAX_OBJ_BYTES`].

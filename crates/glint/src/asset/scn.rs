@@ -493,12 +493,12 @@ impl Loader<'_> {
         Ok(())
     }
 
-    /// The `mesh` key: a procedural shape, or a model file (`.obj`, relative to the
+    /// The `mesh` key: a procedural shape, or a model file (`.obj`, `.gltf`, `.glb`, relative to the
     /// scene) whose materials `mtl.NAME.key` pairs may override for this block.
     fn mesh(&mut self, f: &mut Fields) -> Result<MeshRef, Diagnostic> {
         let pair = f.require("mesh")?;
         let value = pair.value.trim();
-        if !value.to_ascii_lowercase().ends_with(".obj") {
+        if !Model::is_model_path(Path::new(value)) {
             return f.mesh().map(MeshRef::Shape);
         }
         let file = self.dir.join(value);
