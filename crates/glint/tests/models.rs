@@ -6,6 +6,7 @@ mod common;
 
 use glam::{Vec2, Vec3, Vec4};
 use glint::asset::{parse_scene, MeshRef, Model};
+use glint::scene::ShadingModel;
 use glint::{AlphaMode, Camera};
 use std::path::{Path, PathBuf};
 
@@ -73,6 +74,10 @@ fn scenes_place_models_and_override_their_materials_per_entity() {
 "mtl.red.base_color" "0 0 1"
 "mtl.red.alpha_mode" "opaque"
 "mtl.tiled.smoothness" "0.9"
+"mtl.painted.shading" "metallic_roughness"
+"mtl.painted.metallic" "1"
+"mtl.painted.roughness" "0.2"
+"mtl.painted.emissive" "0.5 0 0"
 }
 {
 "classname" "instances"
@@ -87,6 +92,9 @@ fn scenes_place_models_and_override_their_materials_per_entity() {
     assert_eq!(red(&desc.models[1]).base_color, Vec4::new(0.0, 0.0, 1.0, 1.0));
     assert_eq!(red(&desc.models[1]).alpha_mode, AlphaMode::Opaque);
     assert_eq!(desc.models[1].materials[0].material.smoothness, 0.9);
+    let painted = &desc.models[1].materials[2].material;
+    assert_eq!(painted.shading, ShadingModel::MetallicRoughness);
+    assert_eq!((painted.metallic, painted.roughness, painted.emissive), (1.0, 0.2, Vec3::new(0.5, 0.0, 0.0)));
     let meshes: Vec<(MeshRef, usize)> = desc.entities.iter().map(|e| (e.mesh, e.transforms.len())).collect();
     assert_eq!(meshes, vec![(MeshRef::Model(0), 1 + 4), (MeshRef::Model(1), 1)]);
     // 2 warnings from the model file itself, none from the scene.
@@ -211,6 +219,7 @@ fn gltf_samples_load_with_hierarchy_instancing_cameras_and_flat_normals() {
     let textured = load("BoxTextured.gltf");
     assert_eq!(textured.textures.len(), 1);
     assert_eq!(textured.materials[0].diffuse_map, Some(0));
+    assert_eq!(textured.materials[0].material.shading, ShadingModel::MetallicRoughness, "glTF's own BRDF");
     assert!(textured.textures[0].srgb, "base colour maps are sRGB");
     let simple = load("SimpleMeshes.gltf");
     assert_eq!(simple.parts.len(), 1, "one mesh used by two nodes is one part");

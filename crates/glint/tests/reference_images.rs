@@ -89,3 +89,9 @@ fn a_reference_test_fails_on_a_visibly_different_image() {
     let _ = std::fs::remove_file(common::repo_root().join("tests/output/lights.actual.png"));
     let _ = std::fs::remove_file(common::repo_root().join("tests/output/lights.diff.png"));
 }
+
+#[test]
+fn metallic_roughness_grid() {
+    // 25 spheres, each its own material: 25 draws, one indirect call.
+    check("pbr", 25);
+}

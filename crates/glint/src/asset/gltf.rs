@@ -4,15 +4,16 @@
 //! used by several nodes becomes one part with a transform per node (one instanced
 //! draw). Missing normals are made flat; tangents come from MikkTSpace.
 //!
-//! Materials are read into glint's Blinn-Phong material for now (base colour and
-//! its map, normal map, alpha mode, double-sidedness, `KHR_texture_transform`
-//! scale; roughness sets smoothness); the metallic-roughness BRDF is to come.
+//! Materials use the metallic-roughness shading model: base colour, metallic,
+//! roughness, emissive (and `KHR_materials_emissive_strength`), their maps, the
+//! normal and occlusion maps, alpha modes, double-sidedness and the
+//! `KHR_texture_transform` scale of the base colour map.
 //! URIs resolve only inside the model's folder (`data:` URIs always work).
 
 use super::model::{Model, ModelPart};
 use super::obj::resolve_inside;
 use super::{Diagnostic, MaterialDesc, Texture, TextureRef, MAX_TEXTURE_SIDE};
-use crate::scene::{AlphaMode, Camera, Light, Material, Mesh};
+use crate::scene::{AlphaMode, Camera, Light, Material, Mesh, ShadingModel};
 use glam::{Mat4, Vec2, Vec3, Vec4};
 use std::collections::HashMap;
 use std::path::Path;
@@ -77,8 +78,10 @@ pub(crate) fn load_gltf(path: &Path) -> Result<Model, Diagnostic> {
         let mut material = Material {
             name: m.name().map_or_else(|| format!("material {}", materials.len()), str::to_string),
             base_color: Vec4::new(r, g, b, a),
-            smoothness: (1.0 - pbr.roughness_factor()).clamp(0.0, 1.0),
-            specular: 0.2 + 0.6 * (1.0 - pbr.roughness_factor()).clamp(0.0, 1.0),
+            shading: ShadingModel::MetallicRoughness,
+            metallic: pbr.metallic_factor(),
+            roughness: pbr.roughness_factor(),
+            emissive: Vec3::from(m.emissive_factor()) * m.emissive_strength().unwrap_or(1.0),
             double_sided: m.double_sided(),
             alpha_mode: match m.alpha_mode() {
                 gltf::material::AlphaMode::Opaque => AlphaMode::Opaque,
@@ -98,7 +101,19 @@ pub(crate) fn load_gltf(path: &Path) -> Result<Model, Diagnostic> {
         }
         let diffuse_map = texture(base.map(|i| image_of(i.texture())), true, &mut warnings);
         let normal_map = texture(m.normal_texture().map(|n| image_of(n.texture())), false, &mut warnings);
-        materials.push(MaterialDesc { material, diffuse_map, normal_map, specular_map: None });
+        let mr = pbr.metallic_roughness_texture().map(|i| image_of(i.texture()));
+        let metallic_roughness_map = texture(mr, false, &mut warnings);
+        let occlusion_map = texture(m.occlusion_texture().map(|i| image_of(i.texture())), false, &mut warnings);
+        let emissive_map = texture(m.emissive_texture().map(|i| image_of(i.texture())), true, &mut warnings);
+        materials.push(MaterialDesc {
+            material,
+            diffuse_map,
+            normal_map,
+            metallic_roughness_map,
+            occlusion_map,
+            emissive_map,
+            ..MaterialDesc::default()
+        });
     }
     let mut model = Model {
         path: path.to_path_buf(),

@@ -260,7 +260,7 @@ fn convert_material(
     if m.dissolve_texture.is_some() {
         warnings.push(Diagnostic::file(obj, format!("material '{}': map_d is not supported yet; ignored", m.name)));
     }
-    MaterialDesc { material, diffuse_map, normal_map, specular_map }
+    MaterialDesc { material, diffuse_map, normal_map, specular_map, ..MaterialDesc::default() }
 }
 
 /// Build a glint mesh from a tobj mesh: `Ok(None)` for a mesh without faces.

@@ -26,7 +26,7 @@ pub const MAX_INSTANCES: u64 = 10_000_000;
 pub type TextureRef = usize;
 
 /// A material from a `material` block, its maps as indices into [`SceneDesc::textures`].
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, Default)]
 pub struct MaterialDesc {
     /// Everything but the texture ids.
     pub material: Material,
@@ -36,6 +36,12 @@ pub struct MaterialDesc {
     pub normal_map: Option<TextureRef>,
     /// `specular_map` (linear).
     pub specular_map: Option<TextureRef>,
+    /// Metallic-roughness map (linear).
+    pub metallic_roughness_map: Option<TextureRef>,
+    /// Occlusion map (linear).
+    pub occlusion_map: Option<TextureRef>,
+    /// Emissive map (sRGB).
+    pub emissive_map: Option<TextureRef>,
 }
 
 impl MaterialDesc {
@@ -46,6 +52,9 @@ impl MaterialDesc {
             diffuse_map: self.diffuse_map.map(|i| textures[i]),
             normal_map: self.normal_map.map(|i| textures[i]),
             specular_map: self.specular_map.map(|i| textures[i]),
+            metallic_roughness_map: self.metallic_roughness_map.map(|i| textures[i]),
+            occlusion_map: self.occlusion_map.map(|i| textures[i]),
+            emissive_map: self.emissive_map.map(|i| textures[i]),
             ..self.material.clone()
         }
     }
@@ -259,11 +268,15 @@ fn material_fields(f: &mut Fields, base: Material) -> Result<Material, Diagnosti
         alpha_mode,
         double_sided: f.flag("double_sided")?.unwrap_or(base.double_sided),
         uv_scale: f.numbers::<2>("uv_scale", "2 numbers (u v)")?.map_or(base.uv_scale, glam::Vec2::from),
-        shading: match f.choice("shading", &["blinn_phong", "unlit"])? {
+        shading: match f.choice("shading", &["blinn_phong", "unlit", "metallic_roughness"])? {
             None => base.shading,
+            Some((0, _)) => ShadingModel::BlinnPhong,
             Some((1, _)) => ShadingModel::Unlit,
-            Some(_) => ShadingModel::BlinnPhong,
+            Some(_) => ShadingModel::MetallicRoughness,
         },
+        metallic: f.number("metallic", 0.0..=1.0)?.unwrap_or(base.metallic),
+        roughness: f.number("roughness", 0.0..=1.0)?.unwrap_or(base.roughness),
+        emissive: f.color("emissive")?.unwrap_or(base.emissive),
         fog: f.flag("fog")?.unwrap_or(base.fog),
         ..base.clone()
     };
@@ -487,6 +500,9 @@ impl Loader<'_> {
             diffuse_map: self.texture(f, "diffuse_map", true)?,
             normal_map: self.texture(f, "normal_map", false)?,
             specular_map: self.texture(f, "specular_map", false)?,
+            metallic_roughness_map: self.texture(f, "metallic_roughness_map", false)?,
+            occlusion_map: self.texture(f, "occlusion_map", false)?,
+            emissive_map: self.texture(f, "emissive_map", true)?,
             material,
         };
         self.scene.materials.push(desc);

@@ -87,17 +87,19 @@ impl Camera {
 }
 
 /// One material as the shader reads it: an element of the material table,
-/// `@group(2) @binding(0)`, indexed by material id (48 bytes).
+/// `@group(2) @binding(0)`, indexed by material id (80 bytes).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub(crate) struct MaterialGpu {
     base_color: [f32; 4], // 16
     coeffs: [f32; 4],     // 16: ambient, diffuse, specular, Blinn-Phong exponent
+    pbr: [f32; 4],        // 16: metallic, roughness, 2 reserved
+    emissive: [f32; 4],   // 16: rgb, reserved
     alpha_cutoff: f32,    // 4
     reserved: u32,        // 4
     uv_scale: [f32; 2],   // 8
 }
-const _: () = assert!(std::mem::size_of::<MaterialGpu>() == 48);
+const _: () = assert!(std::mem::size_of::<MaterialGpu>() == 80);
 
 impl Material {
     /// The shader's view of this material (what it does with them is the variant's
@@ -111,6 +113,8 @@ impl Material {
         MaterialGpu {
             base_color: self.base_color.to_array(),
             coeffs: Vec4::new(self.ambient, self.diffuse, self.specular, exponent).to_array(),
+            pbr: [self.metallic.clamp(0.0, 1.0), self.roughness.clamp(0.0, 1.0), 0.0, 0.0],
+            emissive: self.emissive.extend(0.0).to_array(),
             alpha_cutoff: cutoff,
             reserved: 0,
             uv_scale: self.uv_scale.to_array(),

@@ -6,7 +6,7 @@
 //! | --- | --- | --- | --- |
 //! | 0 | Scene | lights or environment change | ambient, sky colours, light count, `lights[64]` |
 //! | 1 | Camera | the camera or target aspect changes | view, view-projection, its inverse, eye position |
-//! | 2 | Material | a material is added or edited | `materials: array<MaterialBlock>` (the table, indexed by material id), one texture set: diffuse / normal / specular maps and sampler |
+//! | 2 | Material | a material is added or edited | `materials: array<MaterialBlock>` (the table, indexed by material id), one texture set: diffuse / normal / specular maps, sampler, metallic-roughness / occlusion / emissive maps |
 //! | 3 | Renderer | instances: where entities changed; draw indices: when the visible set changed, one write | `instances: array<Instance>` (transform rows + material index, persistent), `draw_indices: array<u32>` (visible instances in draw order) |
 //!
 //! Every pipeline shares one layout with these four groups, so groups 0, 1 and 3
@@ -108,9 +108,13 @@ struct MaterialGpuTwin {
     fog: bool,
 }
 
+/// The maps of a material in texture-set binding order: diffuse, normal,
+/// specular, metallic-roughness, occlusion, emissive.
+type Maps = [Option<TextureId>; 6];
+
 /// A bind group of the Material block for one combination of maps.
 struct TextureSet {
-    maps: [Option<TextureId>; 3],
+    maps: Maps,
     bind_group: wgpu::BindGroup,
 }
 
@@ -570,7 +574,14 @@ impl Renderer {
         }
         let material = slot.material.clone();
         if current.is_none() {
-            let maps = [material.diffuse_map, material.normal_map, material.specular_map];
+            let maps: Maps = [
+                material.diffuse_map,
+                material.normal_map,
+                material.specular_map,
+                material.metallic_roughness_map,
+                material.occlusion_map,
+                material.emissive_map,
+            ];
             for texture in maps.into_iter().flatten() {
                 let tex = self
                     .textures
@@ -608,8 +619,10 @@ impl Renderer {
 
     /// The Material block's bind group for a texture set: the table and the maps
     /// (1×1 defaults where a map is absent).
-    fn texture_set_group(&self, maps: [Option<TextureId>; 3]) -> wgpu::BindGroup {
-        let defaults = [&self.defaults.white_srgb, &self.defaults.flat_normal, &self.defaults.white_linear];
+    fn texture_set_group(&self, maps: Maps) -> wgpu::BindGroup {
+        let d = &self.defaults;
+        let defaults =
+            [&d.white_srgb, &d.flat_normal, &d.white_linear, &d.white_linear, &d.white_linear, &d.white_srgb];
         let views: Vec<&wgpu::TextureView> = maps
             .iter()
             .zip(defaults)
@@ -624,6 +637,9 @@ impl Renderer {
                 wgpu::BindGroupEntry { binding: 2, resource: wgpu::BindingResource::TextureView(views[1]) },
                 wgpu::BindGroupEntry { binding: 3, resource: wgpu::BindingResource::TextureView(views[2]) },
                 wgpu::BindGroupEntry { binding: 4, resource: wgpu::BindingResource::Sampler(&self.sampler) },
+                wgpu::BindGroupEntry { binding: 5, resource: wgpu::BindingResource::TextureView(views[3]) },
+                wgpu::BindGroupEntry { binding: 6, resource: wgpu::BindingResource::TextureView(views[4]) },
+                wgpu::BindGroupEntry { binding: 7, resource: wgpu::BindingResource::TextureView(views[5]) },
             ],
         })
     }

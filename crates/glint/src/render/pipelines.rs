@@ -188,7 +188,16 @@ impl Pipelines {
         };
         let material_layout = layout(
             "renderer: material block layout (group 2)",
-            &[storage(0, all), texture_entry(1), texture_entry(2), texture_entry(3), sampler_entry(4)],
+            &[
+                storage(0, all),
+                texture_entry(1),
+                texture_entry(2),
+                texture_entry(3),
+                sampler_entry(4),
+                texture_entry(5),
+                texture_entry(6),
+                texture_entry(7),
+            ],
         );
         let vertex = wgpu::ShaderStages::VERTEX;
         let instance_layout =

@@ -24,6 +24,11 @@ pub enum ShadingModel {
     BlinnPhong,
     /// Base colour (and maps) only, ignoring lights: skies, UI, debug views.
     Unlit,
+    /// glTF's metallic-roughness BRDF: GGX distribution, height-correlated Smith
+    /// visibility, Schlick Fresnel; Lambert diffuse for the non-metal part. Uses
+    /// `metallic`, `roughness` and their map; `ambient`, `diffuse`, `specular` and
+    /// `smoothness` are Blinn-Phong's and unused.
+    MetallicRoughness,
 }
 
 /// A Blinn-Phong material: everything that decides a surface's colour.
@@ -55,6 +60,18 @@ pub struct Material {
     pub normal_map: Option<TextureId>,
     /// Specular intensity map (linear; red channel scales `specular`).
     pub specular_map: Option<TextureId>,
+    /// Metalness, 0 (dielectric) to 1 (metal): metallic-roughness shading.
+    pub metallic: f32,
+    /// Perceptual roughness, 0 (mirror) to 1: metallic-roughness shading.
+    pub roughness: f32,
+    /// Metallic-roughness map (linear; glTF layout: green = roughness, blue = metalness).
+    pub metallic_roughness_map: Option<TextureId>,
+    /// Ambient-occlusion map (linear; red channel darkens ambient light).
+    pub occlusion_map: Option<TextureId>,
+    /// Light the surface gives off, linear RGB, added after lighting (any shading model).
+    pub emissive: glam::Vec3,
+    /// Emissive map (sRGB), multiplied into `emissive`.
+    pub emissive_map: Option<TextureId>,
     /// Alpha handling and render queue.
     pub alpha_mode: AlphaMode,
     /// Draw back faces too (lit with the flipped normal).
@@ -82,6 +99,12 @@ impl Default for Material {
             diffuse_map: None,
             normal_map: None,
             specular_map: None,
+            metallic: 0.0,
+            roughness: 0.5,
+            metallic_roughness_map: None,
+            occlusion_map: None,
+            emissive: glam::Vec3::ZERO,
+            emissive_map: None,
             alpha_mode: AlphaMode::Opaque,
             double_sided: false,
             uv_scale: Vec2::ONE,

@@ -7,6 +7,10 @@ struct MaterialBlock {
     base_color: vec4<f32>,
     // x: ambient, y: diffuse, z: specular, w: Blinn-Phong exponent.
     coeffs: vec4<f32>,
+    // x: metallic, y: roughness (metallic-roughness shading).
+    pbr: vec4<f32>,
+    // rgb: emissive colour.
+    emissive: vec4<f32>,
     alpha_cutoff: f32,
     reserved: u32,
     uv_scale: vec2<f32>,
@@ -19,6 +23,11 @@ struct MaterialBlock {
 @group(2) @binding(2) var normal_map: texture_2d<f32>;
 @group(2) @binding(3) var specular_map: texture_2d<f32>;
 @group(2) @binding(4) var material_sampler: sampler;
+@group(2) @binding(5) var metallic_roughness_map: texture_2d<f32>;
+@group(2) @binding(6) var occlusion_map: texture_2d<f32>;
+@group(2) @binding(7) var emissive_map: texture_2d<f32>;
+
+const PI: f32 = 3.14159265;
 
 // One stored instance: the top three rows of its object-to-world matrix (the
 // bottom row is 0 0 0 1) and its material's index in `materials`.
@@ -84,28 +93,76 @@ fn vs_main(v: VertexIn, @builtin(instance_index) draw_instance: u32) -> VertexOu
     return out;
 }
 
-fn shade(material: MaterialBlock, n: vec3<f32>, world_position: vec3<f32>, base: vec3<f32>, specular: f32) -> vec3<f32> {
+// Direction to light `i` from `p`, and the light arriving there.
+struct Incoming {
+    l: vec3<f32>,
+    radiance: vec3<f32>,
+}
+
+fn incoming(i: u32, p: vec3<f32>) -> Incoming {
+    let light = scene.lights[i];
+    if light.position.w == 0.0 {
+        return Incoming(-normalize(light.position.xyz), light.color.rgb);
+    }
+    let to_light = light.position.xyz - p;
+    let dist = length(to_light);
+    // Inverse square, windowed to reach exactly zero at the range.
+    let x = dist / light.color.w;
+    let window = saturate(1.0 - x * x * x * x);
+    return Incoming(to_light / max(dist, 1e-4), light.color.rgb * window * window / max(dist * dist, 1e-4));
+}
+
+fn shade(
+    material: MaterialBlock,
+    n: vec3<f32>,
+    world_position: vec3<f32>,
+    base: vec3<f32>,
+    specular: f32,
+    occlusion: f32,
+) -> vec3<f32> {
     let view_dir = normalize(camera.position.xyz - world_position);
-    var color = scene.ambient.rgb * material.coeffs.x * base;
+    var color = scene.ambient.rgb * material.coeffs.x * occlusion * base;
     for (var i = 0u; i < scene.counts.x; i++) {
-        let light = scene.lights[i];
-        var l: vec3<f32>;
-        var radiance = light.color.rgb;
-        if light.position.w == 0.0 {
-            l = -normalize(light.position.xyz);
-        } else {
-            let to_light = light.position.xyz - world_position;
-            let dist = length(to_light);
-            l = to_light / max(dist, 1e-4);
-            // Inverse square, windowed to reach exactly zero at the range.
-            let x = dist / light.color.w;
-            let window = saturate(1.0 - x * x * x * x);
-            radiance *= window * window / max(dist * dist, 1e-4);
-        }
-        let n_dot_l = max(dot(n, l), 0.0);
-        let h = normalize(l + view_dir);
+        let light = incoming(i, world_position);
+        let n_dot_l = max(dot(n, light.l), 0.0);
+        let h = normalize(light.l + view_dir);
         let highlight = pow(max(dot(n, h), 0.0), material.coeffs.w) * n_dot_l;
-        color += radiance * (material.coeffs.y * n_dot_l * base + material.coeffs.z * specular * highlight);
+        color += light.radiance * (material.coeffs.y * n_dot_l * base + material.coeffs.z * specular * highlight);
+    }
+    return color;
+}
+
+// glTF 2.0 metallic-roughness (spec appendix B): GGX normal distribution,
+// height-correlated Smith visibility, Schlick Fresnel, Lambert diffuse for the
+// dielectric part. Light radiance is scaled by π so that a white Lambert surface
+// facing a light of intensity 1 is as bright as under Blinn-Phong.
+fn shade_metallic_roughness(
+    n: vec3<f32>,
+    world_position: vec3<f32>,
+    base: vec3<f32>,
+    metallic: f32,
+    roughness: f32,
+    occlusion: f32,
+) -> vec3<f32> {
+    let v = normalize(camera.position.xyz - world_position);
+    let alpha = max(roughness * roughness, 1e-3);
+    let a2 = alpha * alpha;
+    let f0 = mix(vec3<f32>(0.04), base, metallic);
+    let c_diff = base * (1.0 - metallic);
+    let n_v = max(dot(n, v), 1e-4);
+    var color = scene.ambient.rgb * occlusion * (c_diff + f0);
+    for (var i = 0u; i < scene.counts.x; i++) {
+        let light = incoming(i, world_position);
+        let n_l = max(dot(n, light.l), 0.0);
+        let h = normalize(light.l + v);
+        let n_h = max(dot(n, h), 0.0);
+        let v_h = max(dot(v, h), 0.0);
+        let f = f0 + (1.0 - f0) * pow(1.0 - v_h, 5.0);
+        let k = n_h * n_h * (a2 - 1.0) + 1.0;
+        let d = a2 / (PI * k * k);
+        let vis = 0.5 / max(n_l * sqrt(n_v * n_v * (1.0 - a2) + a2) + n_v * sqrt(n_l * n_l * (1.0 - a2) + a2), 1e-6);
+        let brdf = (1.0 - f) * c_diff / PI + f * d * vis;
+        color += PI * light.radiance * brdf * n_l;
     }
     return color;
 }
@@ -138,11 +195,31 @@ fn fs_main(in: VertexOut, @builtin(front_facing) front: bool) -> @location(0) ve
 #ifdef SPECULAR_MAP
     specular = textureSample(specular_map, material_sampler, in.uv).r;
 #endif
+    var occlusion = 1.0;
+#ifdef OCCLUSION_MAP
+    occlusion = textureSample(occlusion_map, material_sampler, in.uv).r;
+#endif
 #ifdef UNLIT
     var color = base.rgb;
 #else
-    var color = shade(material, n, in.world_position, base.rgb, specular);
+#ifdef METALLIC_ROUGHNESS
+    var metallic = material.pbr.x;
+    var roughness = material.pbr.y;
+#ifdef METALLIC_ROUGHNESS_MAP
+    let mr = textureSample(metallic_roughness_map, material_sampler, in.uv);
+    roughness *= mr.g;
+    metallic *= mr.b;
 #endif
+    var color = shade_metallic_roughness(n, in.world_position, base.rgb, metallic, roughness, occlusion);
+#else
+    var color = shade(material, n, in.world_position, base.rgb, specular, occlusion);
+#endif
+#endif
+    var emissive = material.emissive.rgb;
+#ifdef EMISSIVE_MAP
+    emissive *= textureSample(emissive_map, material_sampler, in.uv).rgb;
+#endif
+    color += emissive;
 #ifdef FOG
     let distance = length(camera.position.xyz - in.world_position) * scene.fog.w;
     color = mix(scene.fog.rgb, color, exp(-distance * distance));

@@ -22,8 +22,12 @@ bitflags::bitflags! {
     /// | 5 | `UNLIT` | skip lighting: the shading model is the base colour |
     /// | 6 | `FOG` | fade to the environment's fog colour with distance |
     /// | 7 | `VERTEX_COLOR` | multiply the base colour by the mesh's vertex colour (set by the mesh, not the material) |
+    /// | 8 | `METALLIC_ROUGHNESS` | glTF's metallic-roughness BRDF instead of Blinn-Phong |
+    /// | 9 | `METALLIC_ROUGHNESS_MAP` | scale roughness (green) and metalness (blue) by the map |
+    /// | 10 | `OCCLUSION_MAP` | darken ambient light by the map's red channel |
+    /// | 11 | `EMISSIVE_MAP` | multiply the emissive colour by the map |
     ///
-    /// Bits 8–31 are free for more (shadow receiving comes with shadow maps).
+    /// Bits 12–31 are free for more (shadow receiving comes with shadow maps).
     #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, PartialOrd, Ord)]
     pub struct ShaderFeatures: u32 {
         /// `DIFFUSE_MAP`.
@@ -42,6 +46,14 @@ bitflags::bitflags! {
         const FOG = 1 << 6;
         /// `VERTEX_COLOR`.
         const VERTEX_COLOR = 1 << 7;
+        /// `METALLIC_ROUGHNESS`.
+        const METALLIC_ROUGHNESS = 1 << 8;
+        /// `METALLIC_ROUGHNESS_MAP`.
+        const METALLIC_ROUGHNESS_MAP = 1 << 9;
+        /// `OCCLUSION_MAP`.
+        const OCCLUSION_MAP = 1 << 10;
+        /// `EMISSIVE_MAP`.
+        const EMISSIVE_MAP = 1 << 11;
     }
 }
 
@@ -55,6 +67,11 @@ impl ShaderFeatures {
         f.set(Self::ALPHA_MASK, matches!(material.alpha_mode, AlphaMode::Mask { .. }));
         f.set(Self::ALPHA_BLEND, material.alpha_mode == AlphaMode::Blend);
         f.set(Self::UNLIT, material.shading == ShadingModel::Unlit);
+        let pbr = material.shading == ShadingModel::MetallicRoughness;
+        f.set(Self::METALLIC_ROUGHNESS, pbr);
+        f.set(Self::METALLIC_ROUGHNESS_MAP, pbr && material.metallic_roughness_map.is_some());
+        f.set(Self::OCCLUSION_MAP, material.occlusion_map.is_some());
+        f.set(Self::EMISSIVE_MAP, material.emissive_map.is_some());
         f.set(Self::FOG, material.fog && environment.fog.is_some());
         f
     }
