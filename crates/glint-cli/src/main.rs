@@ -45,6 +45,9 @@ enum Command {
         /// Draw everything, skipping frustum culling (to compare costs).
         #[arg(long)]
         no_cull: bool,
+        /// Pose animated models at this time, in seconds (their first animation).
+        #[arg(long, default_value_t = 0.0, value_parser = parse_time)]
+        time: f32,
     },
     /// Measure a scene's steady-state frame cost, optimized and/or the naive baseline.
     #[command(after_help = EXIT_CODES)]
@@ -156,6 +159,13 @@ fn parse_size(s: &str) -> Result<(u32, u32), String> {
     }
 }
 
+fn parse_time(s: &str) -> Result<f32, String> {
+    match s.trim().parse::<f32>() {
+        Ok(t) if t.is_finite() && t >= 0.0 => Ok(t),
+        _ => Err(format!("'{s}' is not a time: expected seconds, 0 or more")),
+    }
+}
+
 fn parse_msaa(s: &str) -> Result<u32, String> {
     match s {
         "1" => Ok(1),
@@ -182,11 +192,15 @@ struct RenderArgs<'a> {
     camera: usize,
     stats: bool,
     no_cull: bool,
+    time: f32,
 }
 
 fn render(args: RenderArgs) -> Result<(), Error> {
-    let RenderArgs { scene, output, size: (width, height), msaa, camera, stats, no_cull } = args;
-    let desc = load(scene)?;
+    let RenderArgs { scene, output, size: (width, height), msaa, camera, stats, no_cull, time } = args;
+    let mut desc = load(scene)?;
+    for model in &mut desc.models {
+        model.pose(time);
+    }
     let Some(cam) = desc.cameras.get(camera) else {
         return Err(glint::Diagnostic::file(
             scene,
@@ -268,7 +282,7 @@ fn main() -> ExitCode {
         }
     };
     let result = match &cli.command {
-        Command::Render { scene, output, size, msaa, camera, stats, no_cull } => render(RenderArgs {
+        Command::Render { scene, output, size, msaa, camera, stats, no_cull, time } => render(RenderArgs {
             scene,
             output,
             size: *size,
@@ -276,6 +290,7 @@ fn main() -> ExitCode {
             camera: *camera,
             stats: *stats,
             no_cull: *no_cull,
+            time: *time,
         }),
         Command::Check { scene } => check(scene),
         Command::Bench { scene, frames, warmup, mode, size, msaa, json, plot } => {

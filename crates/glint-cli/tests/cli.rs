@@ -302,6 +302,15 @@ fn models_render_and_check_directly() {
     assert_eq!(stats["draws"], 4, "three parts and the sky");
     assert_eq!(image::image_dimensions(&png).expect("png"), (48, 48));
 
+    let at = |time: &str| {
+        let time = format!("--time={time}");
+        glint(&["render", model, "-o", png.to_str().expect("path"), "--size", "16x16", &time])
+    };
+    assert_eq!(at("0.5").status.code(), Some(0), "a still model renders at any time");
+    let negative = at("-1");
+    assert_eq!(negative.status.code(), Some(1));
+    assert!(stderr(&negative).contains("not a time"), "{}", stderr(&negative));
+
     let bad = dir.path().join("bad.obj");
     std::fs::write(&bad, "v 0 0 0\nv 1 0\n").expect("write");
     let out = glint(&["check", bad.to_str().expect("path")]);

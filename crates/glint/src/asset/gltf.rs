@@ -10,11 +10,12 @@
 //! `KHR_texture_transform` scale of the base colour map.
 //! URIs resolve only inside the model's folder (`data:` URIs always work).
 
+use super::animation::{Animation, Channel, Interpolation, ModelNode, Property};
 use super::model::{Model, ModelPart};
 use super::obj::resolve_inside;
 use super::{Diagnostic, MaterialDesc, Texture, TextureRef, MAX_TEXTURE_SIDE};
 use crate::scene::{AlphaMode, Camera, Light, Material, Mesh, ShadingModel};
-use glam::{Mat4, Vec2, Vec3, Vec4};
+use glam::{Mat4, Quat, Vec2, Vec3, Vec4};
 use std::collections::HashMap;
 use std::path::Path;
 
@@ -120,6 +121,8 @@ pub(crate) fn load_gltf(path: &Path) -> Result<Model, Diagnostic> {
         parts: Vec::new(),
         materials,
         textures: Vec::new(),
+        nodes: Vec::new(),
+        animations: Vec::new(),
         cameras: Vec::new(),
         lights: Vec::new(),
         warnings: Vec::new(),
@@ -128,14 +131,25 @@ pub(crate) fn load_gltf(path: &Path) -> Result<Model, Diagnostic> {
     let mut part_of: HashMap<(usize, usize), Option<usize>> = HashMap::new();
     // Depth-first over the hierarchy with world transforms; a node seen twice (a
     // cycle, which valid files do not have) is not entered again.
-    let mut seen = vec![false; document.nodes().len()];
-    let mut stack: Vec<(gltf::Node, Mat4)> =
-        scene.iter().flat_map(|s| s.nodes()).map(|n| (n, Mat4::IDENTITY)).collect();
-    while let Some((node, parent)) = stack.pop() {
-        if std::mem::replace(&mut seen[node.index()], true) {
+    // `glint_node[i]`: the model node of glTF node i, once visited.
+    let mut glint_node: Vec<Option<usize>> = vec![None; document.nodes().len()];
+    let mut stack: Vec<(gltf::Node, Option<usize>, Mat4)> =
+        scene.iter().flat_map(|s| s.nodes()).map(|n| (n, None, Mat4::IDENTITY)).collect();
+    while let Some((node, parent_node, parent)) = stack.pop() {
+        if glint_node[node.index()].is_some() {
             continue;
         }
         let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
+        let (t, r, s) = node.transform().decomposed();
+        let this = model.nodes.len();
+        glint_node[node.index()] = Some(this);
+        model.nodes.push(ModelNode {
+            parent: parent_node,
+            translation: Vec3::from(t),
+            rotation: Quat::from_array(r).normalize(),
+            scale: Vec3::from(s),
+            placements: Vec::new(),
+        });
         if let Some(mesh) = node.mesh() {
             for primitive in mesh.primitives() {
                 let key = (mesh.index(), primitive.index());
@@ -163,6 +177,7 @@ pub(crate) fn load_gltf(path: &Path) -> Result<Model, Diagnostic> {
                     }
                 };
                 if let Some(p) = part {
+                    model.nodes[this].placements.push((p, model.parts[p].transforms.len()));
                     model.parts[p].transforms.push(world);
                 }
             }
@@ -175,7 +190,20 @@ pub(crate) fn load_gltf(path: &Path) -> Result<Model, Diagnostic> {
             model.lights.push(light);
             warnings.extend(note.map(fail));
         }
-        stack.extend(node.children().map(|c| (c, world)));
+        stack.extend(node.children().map(|c| (c, Some(this), world)));
+    }
+    for animation in document.animations() {
+        let name = animation.name().map_or_else(|| format!("animation {}", animation.index()), str::to_string);
+        let mut channels = Vec::new();
+        for channel in animation.channels() {
+            let Some(node) = glint_node[channel.target().node().index()] else { continue };
+            match read_channel(&channel, node, &buffers) {
+                Ok(Some(c)) => channels.push(c),
+                Ok(None) => warnings.push(fail(format!("{name}: morph-target weights are not supported yet"))),
+                Err(e) => return Err(fail(format!("{name}, channel {}: {e}", channel.index()))),
+            }
+        }
+        model.animations.push(Animation { name, channels });
     }
     if model.parts.is_empty() {
         return Err(fail("no triangle primitives in the default scene".into()));
@@ -183,6 +211,31 @@ pub(crate) fn load_gltf(path: &Path) -> Result<Model, Diagnostic> {
     model.textures = textures;
     model.warnings = warnings;
     Ok(model)
+}
+
+/// Read one animation channel for model node `node`: `Ok(None)` for morph-target weights.
+fn read_channel(
+    channel: &gltf::animation::Channel,
+    node: usize,
+    buffers: &[gltf::buffer::Data],
+) -> Result<Option<Channel>, String> {
+    use gltf::animation::util::ReadOutputs;
+    let reader = channel.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
+    let times: Vec<f32> = reader.read_inputs().ok_or("no key times")?.collect();
+    let (property, values): (Property, Vec<Vec4>) = match reader.read_outputs().ok_or("no key values")? {
+        ReadOutputs::Translations(v) => (Property::Translation, v.map(|t| Vec3::from(t).extend(0.0)).collect()),
+        ReadOutputs::Rotations(v) => (Property::Rotation, v.into_f32().map(Vec4::from).collect()),
+        ReadOutputs::Scales(v) => (Property::Scale, v.map(|s| Vec3::from(s).extend(0.0)).collect()),
+        ReadOutputs::MorphTargetWeights(_) => return Ok(None),
+    };
+    let interpolation = match channel.sampler().interpolation() {
+        gltf::animation::Interpolation::Step => Interpolation::Step,
+        gltf::animation::Interpolation::Linear => Interpolation::Linear,
+        gltf::animation::Interpolation::CubicSpline => Interpolation::CubicSpline,
+    };
+    let channel = Channel { node, property, interpolation, times, values };
+    channel.validate()?;
+    Ok(Some(channel))
 }
 
 /// Read one primitive: `Ok(None)` for a primitive that is not a triangle list.

@@ -2,6 +2,7 @@
 //! sizes, counts, indices and paths are checked, and every problem comes back as a
 //! [`Diagnostic`] naming the file, the line where there is one, and what was expected.
 
+pub mod animation;
 mod gltf;
 mod model;
 mod obj;

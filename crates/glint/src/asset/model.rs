@@ -2,6 +2,7 @@
 //! of the model's materials), ready to place in a renderer, and its materials
 //! overridable by name without editing the file.
 
+use super::animation::{Animation, ModelNode};
 use super::{Diagnostic, EntityDesc, MaterialDesc, MeshRef, SceneDesc, Texture};
 use crate::scene::{Aabb, Background, Camera, Entity, Environment, Light, Material, MaterialId, Mesh, ShapeId};
 use crate::Renderer;
@@ -33,6 +34,10 @@ pub struct Model {
     pub materials: Vec<MaterialDesc>,
     /// Decoded textures the materials use, each file once.
     pub textures: Vec<Texture>,
+    /// The node hierarchy (glTF; empty for OBJ), parents before children.
+    pub nodes: Vec<ModelNode>,
+    /// Keyframe animations of the nodes; [`Model::pose`] plays the first.
+    pub animations: Vec<Animation>,
     /// Cameras the file defines, placed in the model.
     pub cameras: Vec<Camera>,
     /// Lights the file defines, placed in the model.
@@ -50,6 +55,20 @@ impl Model {
             Some("obj") => super::obj::load_obj(path),
             Some("gltf" | "glb") => super::gltf::load_gltf(path),
             _ => Err(Diagnostic::file(path, "not a model file: expected the extension .obj, .gltf or .glb")),
+        }
+    }
+
+    /// Move the parts to where the first animation puts them at `time` seconds
+    /// (the rest pose for a model without animations; nothing for one without nodes).
+    pub fn pose(&mut self, time: f32) {
+        if self.nodes.is_empty() {
+            return;
+        }
+        let world = super::animation::pose_nodes(&self.nodes, self.animations.first(), time);
+        for (node, transform) in self.nodes.iter().zip(world) {
+            for &(part, k) in &node.placements {
+                self.parts[part].transforms[k] = transform;
+            }
         }
     }
 

@@ -65,6 +65,8 @@ pub(crate) fn load_obj(path: &Path) -> Result<Model, Diagnostic> {
         parts,
         materials,
         textures,
+        nodes: Vec::new(),
+        animations: Vec::new(),
         cameras: Vec::new(),
         lights: Vec::new(),
         warnings,
