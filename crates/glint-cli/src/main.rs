@@ -48,6 +48,12 @@ enum Command {
         /// Pose animated models at this time, in seconds (their first animation).
         #[arg(long, default_value_t = 0.0, value_parser = parse_time)]
         time: f32,
+        /// Render this many frames from --time on, -o naming them with %04d.
+        #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=100_000))]
+        frames: u32,
+        /// Frames per second of the sequence.
+        #[arg(long, default_value_t = 30.0, value_parser = parse_fps)]
+        fps: f32,
     },
     /// Measure a scene's steady-state frame cost, optimized and/or the naive baseline.
     #[command(after_help = EXIT_CODES)]
@@ -166,6 +172,13 @@ fn parse_time(s: &str) -> Result<f32, String> {
     }
 }
 
+fn parse_fps(s: &str) -> Result<f32, String> {
+    match s.trim().parse::<f32>() {
+        Ok(f) if f.is_finite() && f > 0.0 => Ok(f),
+        _ => Err(format!("'{s}' is not a frame rate: expected a number above 0")),
+    }
+}
+
 fn parse_msaa(s: &str) -> Result<u32, String> {
     match s {
         "1" => Ok(1),
@@ -193,21 +206,24 @@ struct RenderArgs<'a> {
     stats: bool,
     no_cull: bool,
     time: f32,
+    frames: u32,
+    fps: f32,
 }
 
 fn render(args: RenderArgs) -> Result<(), Error> {
-    let RenderArgs { scene, output, size: (width, height), msaa, camera, stats, no_cull, time } = args;
+    let RenderArgs { scene, output, size: (width, height), msaa, camera, stats, no_cull, time, frames, fps } = args;
     let mut desc = load(scene)?;
-    for model in &mut desc.models {
-        model.pose(time);
-    }
-    let Some(cam) = desc.cameras.get(camera) else {
+    let Some(&cam) = desc.cameras.get(camera) else {
         return Err(glint::Diagnostic::file(
             scene,
             format!("camera {camera} requested, but the scene has {}", desc.cameras.len()),
         )
         .into());
     };
+    if frames > 1 && !output.to_string_lossy().contains('%') {
+        let message = "--frames needs a numbered output such as -o frames/%04d.png";
+        return Err(glint::Diagnostic::file(output, message).into());
+    }
     let gpu = Gpu::headless()?;
     let msaa = if gpu.supports_msaa(msaa) {
         msaa
@@ -218,21 +234,55 @@ fn render(args: RenderArgs) -> Result<(), Error> {
     let mut target = OffscreenTarget::new(&gpu, width, height, msaa)?;
     let mut renderer = Renderer::new(&gpu);
     renderer.set_culling(!no_cull);
-    let entities = desc.instantiate(&mut renderer);
-    for entity in &entities {
-        renderer.submit(entity);
+    let mut entities = desc.instantiate(&mut renderer);
+    let progress = (frames > 1).then(|| {
+        let bar = indicatif::ProgressBar::new(frames.into());
+        let style = indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} frames, {elapsed} ({eta} left)");
+        bar.set_style(style.expect("valid template"));
+        bar
+    });
+    for k in 0..frames {
+        desc.pose(time + k as f32 / fps, &mut entities);
+        for entity in &entities {
+            renderer.submit(entity);
+        }
+        let frame = renderer.flush(&cam, &desc.lights, &mut target)?;
+        let path = numbered(output, k).map_err(|m| glint::Diagnostic::file(output, m))?;
+        if let Some(dir) = path.parent().filter(|d| frames > 1 && !d.as_os_str().is_empty()) {
+            std::fs::create_dir_all(dir)
+                .map_err(|e| glint::Diagnostic::file(dir, format!("cannot create the frames folder: {e}")))?;
+        }
+        target.save_png(&gpu, &path)?;
+        if let Some(bar) = &progress {
+            bar.inc(1);
+        }
+        if stats {
+            let info = gpu.info();
+            let mut json = serde_json::to_value(frame).expect("FrameStats serialises");
+            json["adapter"] = format!("{} ({:?})", info.name, info.backend).into();
+            json["size"] = format!("{width}x{height}").into();
+            json["msaa"] = msaa.into();
+            println!("{json}");
+        }
     }
-    let frame = renderer.flush(cam, &desc.lights, &mut target)?;
-    target.save_png(&gpu, output)?;
-    if stats {
-        let info = gpu.info();
-        let mut json = serde_json::to_value(frame).expect("FrameStats serialises");
-        json["adapter"] = format!("{} ({:?})", info.name, info.backend).into();
-        json["size"] = format!("{width}x{height}").into();
-        json["msaa"] = msaa.into();
-        println!("{json}");
+    if let Some(bar) = progress {
+        bar.finish();
     }
     Ok(())
+}
+
+/// `pattern` with its `%d` or `%0Nd` replaced by `k` (the pattern itself when it has none).
+fn numbered(pattern: &Path, k: u32) -> Result<PathBuf, String> {
+    let text = pattern.to_string_lossy();
+    let Some(at) = text.find('%') else { return Ok(pattern.to_path_buf()) };
+    let rest = &text[at + 1..];
+    let Some(end) = rest.find('d') else { return Err("expected %d or %0Nd in the output name".into()) };
+    let width = match &rest[..end] {
+        "" => 0,
+        w if w.starts_with('0') => w[1..].parse::<usize>().map_err(|_| format!("bad frame-number width '%{w}d'"))?,
+        w => return Err(format!("bad frame-number format '%{w}d': expected %d or %0Nd")),
+    };
+    Ok(PathBuf::from(format!("{}{k:0width$}{}", &text[..at], &rest[end + 1..])))
 }
 
 fn check(scene: &Path) -> Result<(), Error> {
@@ -282,16 +332,20 @@ fn main() -> ExitCode {
         }
     };
     let result = match &cli.command {
-        Command::Render { scene, output, size, msaa, camera, stats, no_cull, time } => render(RenderArgs {
-            scene,
-            output,
-            size: *size,
-            msaa: *msaa,
-            camera: *camera,
-            stats: *stats,
-            no_cull: *no_cull,
-            time: *time,
-        }),
+        Command::Render { scene, output, size, msaa, camera, stats, no_cull, time, frames, fps } => {
+            render(RenderArgs {
+                scene,
+                output,
+                size: *size,
+                msaa: *msaa,
+                camera: *camera,
+                stats: *stats,
+                no_cull: *no_cull,
+                time: *time,
+                frames: *frames,
+                fps: *fps,
+            })
+        }
         Command::Check { scene } => check(scene),
         Command::Bench { scene, frames, warmup, mode, size, msaa, json, plot } => {
             let config = bench::BenchConfig { frames: *frames, warmup: *warmup, size: *size, msaa: *msaa };

@@ -317,3 +317,26 @@ fn models_render_and_check_directly() {
     assert_eq!(out.status.code(), Some(1));
     assert!(error_lines(&out).iter().any(|l| l.contains("bad.obj:2:")), "{}", stderr(&out));
 }
+
+#[test]
+fn render_writes_numbered_frame_sequences_of_animations() {
+    let model = repo("tests/models/animated.gltf");
+    let model = model.to_str().expect("path");
+    let dir = tempfile::tempdir().expect("temp dir");
+    let pattern = dir.path().join("frames/%03d.png");
+    let pattern = pattern.to_str().expect("path");
+    let args = ["render", model, "-o", pattern, "--size", "32x32", "--frames", "3", "--fps", "2"];
+    let out = glint(&args);
+    if out.status.code() == Some(2) && std::env::var("GLINT_REQUIRE_ADAPTER").as_deref() != Ok("1") {
+        eprintln!("skipping: no GPU adapter");
+        return;
+    }
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let frame = |k: u32| image::open(dir.path().join(format!("frames/{k:03}.png"))).expect("frame written").to_rgb8();
+    let (first, last) = (frame(0), frame(2));
+    assert_ne!(first, last, "t = 0 and t = 1 differ: the quad slid");
+    assert!(!dir.path().join("frames/003.png").exists(), "exactly three frames");
+    let single = glint(&["render", model, "-o", dir.path().join("one.png").to_str().expect("path"), "--frames", "2"]);
+    assert_eq!(single.status.code(), Some(1), "several frames need a numbered name");
+    assert!(stderr(&single).contains("%04d"), "{}", stderr(&single));
+}

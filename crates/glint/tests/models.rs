@@ -288,43 +288,12 @@ fn bad_and_hostile_gltf_files_are_errors() {
     }
 }
 
-/// A glTF quad whose node slides +2 in x over one second (linear) and turns a
-/// quarter about z at t = 0.5 (step), buffers in a separate file.
-fn write_animated_gltf() -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("glint-gltf-{}-animated", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("temp dir");
-    let f32s = |v: &[f32]| v.iter().flat_map(|x| x.to_le_bytes()).collect::<Vec<u8>>();
-    let (s, c) = (std::f32::consts::FRAC_1_SQRT_2, std::f32::consts::FRAC_1_SQRT_2);
-    let mut bin = f32s(&[-0.5, -0.25, 0.0, 0.5, -0.25, 0.0, 0.5, 0.25, 0.0, -0.5, 0.25, 0.0]); // 0..48 positions
-    bin.extend([0u16, 1, 2, 0, 2, 3].iter().flat_map(|i| i.to_le_bytes())); // 48..60 indices
-    bin.extend(f32s(&[0.0, 1.0])); // 60..68 times
-    bin.extend(f32s(&[0.0, 0.0, 0.0, 2.0, 0.0, 0.0])); // 68..92 translations
-    bin.extend(f32s(&[0.0, 0.5])); // 92..100 step times
-    bin.extend(f32s(&[0.0, 0.0, 0.0, 1.0, 0.0, 0.0, s, c])); // 100..132 rotations
-    std::fs::write(dir.join("anim.bin"), &bin).expect("write bin");
-    let json = r#"{"asset":{"version":"2.0"},"scene":0,"scenes":[{"nodes":[0]}],
-"nodes":[{"children":[1],"translation":[0,0,0]},{"mesh":0,"translation":[0,0.5,0]}],
-"meshes":[{"primitives":[{"attributes":{"POSITION":0},"indices":1}]}],
-"buffers":[{"uri":"anim.bin","byteLength":132}],
-"bufferViews":[{"buffer":0,"byteOffset":0,"byteLength":48},{"buffer":0,"byteOffset":48,"byteLength":12},
-{"buffer":0,"byteOffset":60,"byteLength":8},{"buffer":0,"byteOffset":68,"byteLength":24},
-{"buffer":0,"byteOffset":92,"byteLength":8},{"buffer":0,"byteOffset":100,"byteLength":32}],
-"accessors":[{"bufferView":0,"componentType":5126,"count":4,"type":"VEC3","min":[-0.5,-0.25,0],"max":[0.5,0.25,0]},
-{"bufferView":1,"componentType":5123,"count":6,"type":"SCALAR"},
-{"bufferView":2,"componentType":5126,"count":2,"type":"SCALAR","min":[0],"max":[1]},
-{"bufferView":3,"componentType":5126,"count":2,"type":"VEC3"},
-{"bufferView":4,"componentType":5126,"count":2,"type":"SCALAR","min":[0],"max":[0.5]},
-{"bufferView":5,"componentType":5126,"count":2,"type":"VEC4"}],
-"animations":[{"name":"slide","samplers":[{"input":2,"output":3,"interpolation":"LINEAR"},{"input":4,"output":5,"interpolation":"STEP"}],
-"channels":[{"sampler":0,"target":{"node":0,"path":"translation"}},{"sampler":1,"target":{"node":1,"path":"rotation"}}]}]}"#;
-    let path = dir.join("animated.gltf");
-    std::fs::write(&path, json).expect("write gltf");
-    path
-}
-
 #[test]
 fn node_animations_pose_the_hierarchy_at_a_time() {
-    let path = write_animated_gltf();
+    // tests/models/animated.gltf: a quad on a child node 0.5 up; the root slides +2
+    // in x over one second (linear) and the child turns a quarter about z at
+    // t = 0.5 (step). Buffers in anim.bin.
+    let path = models_dir().join("animated.gltf");
     let mut model = Model::load(&path).expect("loads");
     assert_eq!((model.nodes.len(), model.animations.len()), (2, 1));
     assert_eq!(model.animations[0].duration(), 1.0);

@@ -23,6 +23,13 @@ pub struct ModelPart {
     pub transforms: Vec<Mat4>,
 }
 
+impl ModelPart {
+    /// The part's world transforms when its model is placed at each of `placements`.
+    pub fn placed(&self, placements: &[Mat4]) -> Vec<Mat4> {
+        placements.iter().flat_map(|p| self.transforms.iter().map(move |t| *p * *t)).collect()
+    }
+}
+
 /// A model loaded from a file.
 #[derive(Clone, Debug)]
 pub struct Model {
@@ -140,10 +147,7 @@ impl Model {
         self.parts
             .iter()
             .zip(&added.parts)
-            .map(|(part, &(shape, material))| {
-                let transforms = placements.iter().flat_map(|p| part.transforms.iter().map(move |t| *p * *t));
-                Entity::instanced(shape, material, transforms.collect())
-            })
+            .map(|(part, &(shape, material))| Entity::instanced(shape, material, part.placed(placements)))
             .collect()
     }
 }

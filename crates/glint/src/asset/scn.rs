@@ -113,8 +113,35 @@ impl SceneDesc {
         self.entities.iter().map(|e| e.transforms.len()).sum()
     }
 
+    /// Pose every model at `time` seconds (see [`Model::pose`]) and move the
+    /// matching `entities` (as [`SceneDesc::instantiate`] returned them) along:
+    /// only entities of animated models change, so only they are uploaded again.
+    pub fn pose(&mut self, time: f32, entities: &mut [Entity]) {
+        let mut moved = vec![false; self.models.len()];
+        for (model, moved) in self.models.iter_mut().zip(&mut moved) {
+            *moved = !model.animations.is_empty();
+            model.pose(time);
+        }
+        let mut next = 0;
+        for e in &self.entities {
+            match e.mesh {
+                MeshRef::Shape(_) => next += 1,
+                MeshRef::Model(i) => {
+                    let model = &self.models[i];
+                    for (part, entity) in model.parts.iter().zip(entities[next..].iter_mut()) {
+                        if moved[i] {
+                            *entity.transforms_mut() = part.placed(&e.transforms);
+                        }
+                    }
+                    next += model.parts.len();
+                }
+            }
+        }
+    }
+
     /// Add this scene's shapes, textures and materials to `renderer`, set its
-    /// environment, and return one entity per render task, ready to submit.
+    /// environment, and return one entity per render task (per model part for
+    /// model meshes), ready to submit.
     pub fn instantiate(&self, renderer: &mut Renderer) -> Vec<Entity> {
         renderer.set_environment(self.environment);
         let textures: Vec<_> = self.textures.iter().map(|t| renderer.add_texture(t.clone())).collect();
