@@ -4,7 +4,7 @@ mod bench;
 mod plot;
 
 use clap::{Parser, Subcommand, ValueEnum};
-use glint::asset::{load_scene, Model, SceneDesc};
+use glint::asset::{load_scene_with, LoadOptions, Model, SceneDesc};
 use glint::{Error, Gpu, OffscreenTarget, Renderer};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -18,6 +18,10 @@ const EXIT_CODES: &str =
 struct Cli {
     #[command(subcommand)]
     command: Command,
+    /// Let model files name assets outside their own folder (absolute paths,
+    /// `..`, file: URIs). Off by default, so a model cannot make glint read any file.
+    #[arg(long, global = true)]
+    allow_outside_assets: bool,
 }
 
 #[derive(Subcommand)]
@@ -104,12 +108,13 @@ fn run_bench(
     mode: BenchMode,
     json: bool,
     plot: Option<&Path>,
+    options: LoadOptions,
 ) -> Result<(), Error> {
     let bench::BenchConfig { frames, warmup, size, msaa } = *config;
     if frames == 0 {
         return Err(glint::Diagnostic::file(scene, "--frames must be at least 1").into());
     }
-    let desc = load(scene)?;
+    let desc = load(scene, options)?;
     let gpu = Gpu::headless()?;
     let modes = match mode {
         BenchMode::Optimized => vec![glint::FrameMode::Optimized],
@@ -188,8 +193,12 @@ fn parse_msaa(s: &str) -> Result<u32, String> {
 }
 
 /// A scene file, or a model file shown alone with a framing camera and lights.
-fn load(scene: &Path) -> Result<SceneDesc, Error> {
-    let desc = if Model::is_model_path(scene) { Model::load(scene)?.into_scene() } else { load_scene(scene)? };
+fn load(scene: &Path, options: LoadOptions) -> Result<SceneDesc, Error> {
+    let desc = if Model::is_model_path(scene) {
+        Model::load_with(scene, options)?.into_scene()
+    } else {
+        load_scene_with(scene, options)?
+    };
     for warning in &desc.warnings {
         eprintln!("warning: {warning}");
     }
@@ -208,11 +217,13 @@ struct RenderArgs<'a> {
     time: f32,
     frames: u32,
     fps: f32,
+    options: LoadOptions,
 }
 
 fn render(args: RenderArgs) -> Result<(), Error> {
-    let RenderArgs { scene, output, size: (width, height), msaa, camera, stats, no_cull, time, frames, fps } = args;
-    let mut desc = load(scene)?;
+    let RenderArgs { scene, output, size: (width, height), msaa, camera, stats, no_cull, time, frames, fps, options } =
+        args;
+    let mut desc = load(scene, options)?;
     let Some(&cam) = desc.cameras.get(camera) else {
         return Err(glint::Diagnostic::file(
             scene,
@@ -285,8 +296,8 @@ fn numbered(pattern: &Path, k: u32) -> Result<PathBuf, String> {
     Ok(PathBuf::from(format!("{}{k:0width$}{}", &text[..at], &rest[end + 1..])))
 }
 
-fn check(scene: &Path) -> Result<(), Error> {
-    let desc = load(scene)?;
+fn check(scene: &Path, options: LoadOptions) -> Result<(), Error> {
+    let desc = load(scene, options)?;
     println!("{}: ok", scene.display());
     println!("  cameras:    {}", desc.cameras.len());
     println!("  lights:     {}", desc.lights.len());
@@ -331,6 +342,7 @@ fn main() -> ExitCode {
             return ExitCode::from(if e.use_stderr() { 1 } else { 0 });
         }
     };
+    let options = LoadOptions { allow_outside_assets: cli.allow_outside_assets };
     let result = match &cli.command {
         Command::Render { scene, output, size, msaa, camera, stats, no_cull, time, frames, fps } => {
             render(RenderArgs {
@@ -344,12 +356,13 @@ fn main() -> ExitCode {
                 time: *time,
                 frames: *frames,
                 fps: *fps,
+                options,
             })
         }
-        Command::Check { scene } => check(scene),
+        Command::Check { scene } => check(scene, options),
         Command::Bench { scene, frames, warmup, mode, size, msaa, json, plot } => {
             let config = bench::BenchConfig { frames: *frames, warmup: *warmup, size: *size, msaa: *msaa };
-            run_bench(scene, &config, *mode, *json, plot.as_deref())
+            run_bench(scene, &config, *mode, *json, plot.as_deref(), options)
         }
     };
     match result {

@@ -340,3 +340,20 @@ fn render_writes_numbered_frame_sequences_of_animations() {
     assert_eq!(single.status.code(), Some(1), "several frames need a numbered name");
     assert!(stderr(&single).contains("%04d"), "{}", stderr(&single));
 }
+
+#[test]
+fn outside_assets_are_read_only_when_allowed() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    std::fs::create_dir(dir.path().join("model")).expect("mkdir");
+    std::fs::write(dir.path().join("shared.mtl"), "newmtl red\nKd 1 0 0\n").expect("write mtl");
+    let obj = dir.path().join("model/tri.obj");
+    std::fs::write(&obj, "mtllib ../shared.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl red\nf 1 2 3\n").expect("write obj");
+    let obj = obj.to_str().expect("path");
+    let refused = glint(&["check", obj]);
+    assert_eq!(refused.status.code(), Some(0), "a warning, not a failure");
+    assert!(String::from_utf8_lossy(&refused.stdout).contains("0 materials"));
+    assert!(stderr(&refused).contains("outside the model's folder"), "{}", stderr(&refused));
+    let allowed = glint(&["check", obj, "--allow-outside-assets"]);
+    assert_eq!(allowed.status.code(), Some(0), "{}", stderr(&allowed));
+    assert!(String::from_utf8_lossy(&allowed.stdout).contains("1 materials"), "{}", stderr(&allowed));
+}

@@ -8,12 +8,12 @@
 //! roughness, emissive (and `KHR_materials_emissive_strength`), their maps, the
 //! normal and occlusion maps, alpha modes, double-sidedness and the
 //! `KHR_texture_transform` scale of the base colour map.
-//! URIs resolve only inside the model's folder (`data:` URIs always work).
+//! URIs resolve only inside the model's folder (`data:` URIs always work; see
+//! [`LoadOptions`]).
 
 use super::animation::{Animation, Channel, Interpolation, ModelNode, Property};
 use super::model::{Model, ModelPart};
-use super::obj::resolve_inside;
-use super::{Diagnostic, MaterialDesc, Texture, TextureRef, MAX_TEXTURE_SIDE};
+use super::{AssetFolder, Diagnostic, LoadOptions, MaterialDesc, Texture, TextureRef, MAX_TEXTURE_SIDE};
 use crate::scene::{AlphaMode, Camera, Light, Material, Mesh, ShadingModel};
 use glam::{Mat4, Quat, Vec2, Vec3, Vec4};
 use std::collections::HashMap;
@@ -23,7 +23,7 @@ use std::path::Path;
 pub const MAX_GLTF_BYTES: u64 = 1 << 31;
 
 /// Load a `.gltf` or `.glb` file and the buffers and images it names.
-pub(crate) fn load_gltf(path: &Path) -> Result<Model, Diagnostic> {
+pub(crate) fn load_gltf(path: &Path, options: LoadOptions) -> Result<Model, Diagnostic> {
     let fail = |m: String| Diagnostic::file(path, m);
     let size = std::fs::metadata(path).map_err(|e| fail(format!("cannot read: {e}")))?.len();
     if size > MAX_GLTF_BYTES {
@@ -32,6 +32,7 @@ pub(crate) fn load_gltf(path: &Path) -> Result<Model, Diagnostic> {
     let bytes = std::fs::read(path).map_err(|e| fail(format!("cannot read: {e}")))?;
     let gltf::Gltf { document, blob } =
         gltf::Gltf::from_slice(&bytes).map_err(|e| fail(format!("invalid glTF: {e}")))?;
+    let assets = AssetFolder::of(path, options);
     let folder = path.parent().unwrap_or(Path::new("")).to_path_buf();
     // Check every URI before anything reads it.
     let uris = document
@@ -46,7 +47,7 @@ pub(crate) fn load_gltf(path: &Path) -> Result<Model, Diagnostic> {
         }));
     for uri in uris {
         if !uri.starts_with("data:") {
-            resolve_inside(&folder, uri, path)?;
+            assets.resolve(uri, path)?;
         }
     }
     let buffers = gltf::import_buffers(&document, Some(&folder), blob).map_err(|e| fail(format!("buffer: {e}")))?;

@@ -17,11 +17,68 @@ pub use gltf::MAX_GLTF_BYTES;
 pub use model::{AddedModel, Model, ModelPart};
 pub use obj::MAX_OBJ_BYTES;
 pub use procedural::ShapeKind;
-pub use scn::{load_scene, parse_scene, EntityDesc, MaterialDesc, MeshRef, SceneDesc, TextureRef, MAX_INSTANCES};
+pub use scn::{
+    load_scene, load_scene_with, parse_scene, parse_scene_with, EntityDesc, MaterialDesc, MeshRef, SceneDesc,
+    TextureRef, MAX_INSTANCES,
+};
 pub use texture::{load_texture, Texture, MAX_TEXTURE_SIDE};
 
 use std::fmt;
-use std::path::{Path, PathBuf};
+use std::path::{Component, Path, PathBuf};
+
+/// How model files are read.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct LoadOptions {
+    /// Let a model name files outside its own folder (absolute paths, `..` that
+    /// leaves it, `file:` URIs). Off by default: a model from elsewhere cannot
+    /// make glint read arbitrary files.
+    pub allow_outside_assets: bool,
+}
+
+/// The folder a model's relative paths resolve in, and whether they may leave it.
+pub(crate) struct AssetFolder {
+    folder: PathBuf,
+    allow_outside: bool,
+}
+
+impl AssetFolder {
+    /// The folder of the model file `path`.
+    pub(crate) fn of(path: &Path, options: LoadOptions) -> Self {
+        Self {
+            folder: path.parent().unwrap_or(Path::new("")).to_path_buf(),
+            allow_outside: options.allow_outside_assets,
+        }
+    }
+
+    /// Resolve `relative` (as written in `file`): inside the folder only, unless
+    /// outside assets are allowed. URIs with a scheme (`file:`, `http:`) are
+    /// outside by definition.
+    pub(crate) fn resolve(&self, relative: &str, file: &Path) -> Result<PathBuf, Diagnostic> {
+        if self.allow_outside {
+            return Ok(self.folder.join(relative));
+        }
+        let outside = || {
+            let message = format!(
+                "'{relative}' points outside the model's folder; only relative paths inside it are read (--allow-outside-assets reads it)"
+            );
+            Diagnostic::file(file, message)
+        };
+        let scheme = relative.split_once(':').is_some_and(|(s, _)| s.len() > 1 && !s.contains(['/', '\\']));
+        if scheme {
+            return Err(outside());
+        }
+        let mut depth = 0usize;
+        for c in Path::new(relative).components() {
+            match c {
+                Component::Normal(_) => depth += 1,
+                Component::CurDir => {}
+                Component::ParentDir if depth > 0 => depth -= 1,
+                _ => return Err(outside()),
+            }
+        }
+        Ok(self.folder.join(relative))
+    }
+}
 
 /// A problem in an input file: `path:line: message`, or `path: message` when no
 /// line applies. Used for errors and for warnings.

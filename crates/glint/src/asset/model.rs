@@ -3,7 +3,7 @@
 //! overridable by name without editing the file.
 
 use super::animation::{Animation, ModelNode};
-use super::{Diagnostic, EntityDesc, MaterialDesc, MeshRef, SceneDesc, Texture};
+use super::{Diagnostic, EntityDesc, LoadOptions, MaterialDesc, MeshRef, SceneDesc, Texture};
 use crate::scene::{Aabb, Background, Camera, Entity, Environment, Light, Material, MaterialId, Mesh, ShapeId};
 use crate::Renderer;
 use glam::{Mat4, Vec3};
@@ -58,9 +58,15 @@ impl Model {
     /// Load a model file: Wavefront `.obj` (with its `.mtl` libraries), or glTF
     /// 2.0 `.gltf` / `.glb`.
     pub fn load(path: &Path) -> Result<Self, Diagnostic> {
+        Self::load_with(path, LoadOptions::default())
+    }
+
+    /// [`Model::load`] with explicit options (e.g. letting files name assets
+    /// outside their folder).
+    pub fn load_with(path: &Path, options: LoadOptions) -> Result<Self, Diagnostic> {
         match path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() {
-            Some("obj") => super::obj::load_obj(path),
-            Some("gltf" | "glb") => super::gltf::load_gltf(path),
+            Some("obj") => super::obj::load_obj(path, options),
+            Some("gltf" | "glb") => super::gltf::load_gltf(path, options),
             _ => Err(Diagnostic::file(path, "not a model file: expected the extension .obj, .gltf or .glb")),
         }
     }

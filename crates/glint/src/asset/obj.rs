@@ -4,24 +4,24 @@
 //! position); missing texture coordinates are allowed. MTL texture statements are
 //! split into options (`-s`, `-o`, `-bm` ...) and a file name that may hold spaces.
 //! A missing `.mtl` or texture is a warning and a visible default, not a failure.
-//! Paths in the files resolve inside the model's folder only.
+//! Paths in the files resolve inside the model's folder only (see [`LoadOptions`]).
 
 use super::model::{Model, ModelPart};
-use super::{load_texture, Diagnostic, MaterialDesc, Texture, TextureRef};
+use super::{load_texture, AssetFolder, Diagnostic, LoadOptions, MaterialDesc, Texture, TextureRef};
 use crate::scene::{AlphaMode, Material, Mesh};
 use glam::{Mat4, Vec2, Vec3};
 use std::cell::{Cell, RefCell};
 use std::collections::HashMap;
 use std::io::BufRead;
-use std::path::{Component, Path, PathBuf};
+use std::path::{Path, PathBuf};
 
 /// Largest OBJ or MTL file read, in bytes.
 pub const MAX_OBJ_BYTES: u64 = 1 << 30;
 
 /// Load `path` and the MTL libraries and textures it names.
-pub(crate) fn load_obj(path: &Path) -> Result<Model, Diagnostic> {
+pub(crate) fn load_obj(path: &Path, options: LoadOptions) -> Result<Model, Diagnostic> {
     let bytes = read_capped(path)?;
-    let folder = path.parent().unwrap_or(Path::new("")).to_path_buf();
+    let folder = AssetFolder::of(path, options);
     let warnings = RefCell::new(Vec::new());
     let line = Cell::new(0);
     let options = tobj::LoadOptions { triangulate: true, single_index: true, ..Default::default() };
@@ -108,34 +108,14 @@ impl<R: BufRead> BufRead for LineCounter<'_, R> {
     }
 }
 
-/// Resolve `relative` (as written in `file`) inside `folder`: absolute paths and
-/// `..` steps that leave the folder are refused.
-pub(crate) fn resolve_inside(folder: &Path, relative: &str, file: &Path) -> Result<PathBuf, Diagnostic> {
-    let rel = Path::new(relative);
-    let mut depth = 0usize;
-    for c in rel.components() {
-        match c {
-            Component::Normal(_) => depth += 1,
-            Component::CurDir => {}
-            Component::ParentDir if depth > 0 => depth -= 1,
-            _ => {
-                let message =
-                    format!("'{relative}' points outside the model's folder; only relative paths inside it are read");
-                return Err(Diagnostic::file(file, message));
-            }
-        }
-    }
-    Ok(folder.join(rel))
-}
-
 /// Load one MTL library named in the OBJ; a problem comes back as a warning.
 fn load_mtl(
-    folder: &Path,
+    folder: &AssetFolder,
     mtl: &Path,
     obj: &Path,
 ) -> Result<(Vec<tobj::Material>, HashMap<String, usize>), Diagnostic> {
     let name = mtl.to_string_lossy();
-    let path = resolve_inside(folder, &name, obj)?;
+    let path = folder.resolve(&name, obj)?;
     let bytes = read_capped(&path).map_err(|d| Diagnostic::file(obj, format!("material library {d}")))?;
     let line = Cell::new(0);
     let mut reader = LineCounter { inner: bytes.as_slice(), line: &line };
@@ -204,7 +184,7 @@ fn parse_texture_statement(text: &str) -> Result<TextureStatement, String> {
 /// that fail: the material then draws without that map).
 fn convert_material(
     m: &tobj::Material,
-    folder: &Path,
+    folder: &AssetFolder,
     obj: &Path,
     cache: &mut TextureCache,
     warnings: &mut Vec<Diagnostic>,
@@ -234,7 +214,7 @@ fn convert_material(
         if let Some(scale) = parsed.scale {
             material.uv_scale = scale;
         }
-        let path = match resolve_inside(folder, &parsed.file, obj) {
+        let path = match folder.resolve(&parsed.file, obj) {
             Ok(p) => p,
             Err(d) => {
                 warnings.push(d);
@@ -304,10 +284,14 @@ mod tests {
     #[test]
     fn paths_stay_inside_the_model_folder() {
         let obj = Path::new("m/model.obj");
-        assert_eq!(resolve_inside(Path::new("m"), "tex/a.png", obj).expect("inside"), Path::new("m/tex/a.png"));
-        assert!(resolve_inside(Path::new("m"), "tex/../a.png", obj).is_ok());
-        assert!(resolve_inside(Path::new("m"), "../secret.png", obj).is_err());
-        assert!(resolve_inside(Path::new("m"), "tex/../../secret.png", obj).is_err());
-        assert!(resolve_inside(Path::new("m"), "/etc/passwd", obj).is_err());
+        let inside = AssetFolder::of(obj, LoadOptions::default());
+        assert_eq!(inside.resolve("tex/a.png", obj).expect("inside"), Path::new("m/tex/a.png"));
+        assert!(inside.resolve("tex/../a.png", obj).is_ok());
+        for outside in ["../secret.png", "tex/../../secret.png", "/etc/passwd", "file:///etc/passwd", "http://x/y.png"]
+        {
+            assert!(inside.resolve(outside, obj).is_err(), "{outside}");
+        }
+        let anywhere = AssetFolder::of(obj, LoadOptions { allow_outside_assets: true });
+        assert_eq!(anywhere.resolve("../shared/a.png", obj).expect("allowed"), Path::new("m/../shared/a.png"));
     }
 }

@@ -7,7 +7,7 @@ use super::placement::place_instances;
 use super::scn_fields::{numbers, Fields};
 use super::scn_syntax::Pair;
 use super::scn_syntax::{parse_blocks, Block};
-use super::{load_texture, Diagnostic, Model, ShapeKind, Texture};
+use super::{load_texture, Diagnostic, LoadOptions, Model, ShapeKind, Texture};
 use crate::scene::TextureId;
 use crate::scene::{
     AlphaMode, Background, BlendState, Camera, Compare, Cull, Entity, Environment, Fog, Light, Material, MaterialId,
@@ -179,13 +179,23 @@ impl SceneDesc {
 
 /// Read, parse and validate a `.scn` file, decoding the textures it names.
 pub fn load_scene(path: &Path) -> Result<SceneDesc, Diagnostic> {
+    load_scene_with(path, LoadOptions::default())
+}
+
+/// [`load_scene`] with options for the models it names.
+pub fn load_scene_with(path: &Path, options: LoadOptions) -> Result<SceneDesc, Diagnostic> {
     let text = std::fs::read_to_string(path).map_err(|e| Diagnostic::file(path, format!("cannot read scene: {e}")))?;
-    parse_scene(path, &text)
+    parse_scene_with(path, &text, options)
 }
 
 /// Parse and validate `.scn` text; `path` names it in messages and anchors
 /// relative texture paths.
 pub fn parse_scene(path: &Path, text: &str) -> Result<SceneDesc, Diagnostic> {
+    parse_scene_with(path, text, LoadOptions::default())
+}
+
+/// [`parse_scene`] with options for the models it names.
+pub fn parse_scene_with(path: &Path, text: &str, options: LoadOptions) -> Result<SceneDesc, Diagnostic> {
     let blocks = parse_blocks(path, text)?;
     let mut loader = Loader {
         path,
@@ -203,6 +213,7 @@ pub fn parse_scene(path: &Path, text: &str) -> Result<SceneDesc, Diagnostic> {
         },
         texture_index: HashMap::new(),
         model_index: HashMap::new(),
+        options,
         placements: Vec::new(),
         instances: 0,
     };
@@ -226,6 +237,7 @@ struct Loader<'a> {
     scene: SceneDesc,
     texture_index: HashMap<(PathBuf, bool), usize>,
     model_index: HashMap<PathBuf, usize>,
+    options: LoadOptions,
     placements: Vec<Placement>,
     instances: u64,
 }
@@ -548,8 +560,8 @@ impl Loader<'_> {
         let index = match self.model_index.get(&file) {
             Some(&i) => i,
             None => {
-                let model =
-                    Model::load(&file).map_err(|e| Diagnostic::at(self.path, pair.line, format!("\"mesh\": {e}")))?;
+                let model = Model::load_with(&file, self.options)
+                    .map_err(|e| Diagnostic::at(self.path, pair.line, format!("\"mesh\": {e}")))?;
                 self.scene.warnings.extend(model.warnings.iter().cloned());
                 self.scene.models.push(model);
                 self.model_index.insert(file, self.scene.models.len() - 1);
