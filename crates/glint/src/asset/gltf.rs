@@ -19,19 +19,12 @@ use glam::{Mat4, Quat, Vec2, Vec3, Vec4};
 use std::collections::HashMap;
 use std::path::Path;
 
-/// Largest `.gltf` / `.glb` file read, in bytes.
-pub const MAX_GLTF_BYTES: u64 = 1 << 31;
-
-/// Load a `.gltf` or `.glb` file and the buffers and images it names.
-pub(crate) fn load_gltf(path: &Path, options: LoadOptions) -> Result<Model, Diagnostic> {
+/// Parse glTF JSON or GLB bytes read from `path` (which names it in messages
+/// and anchors the files it names).
+pub(crate) fn parse_gltf(path: &Path, bytes: &[u8], options: LoadOptions) -> Result<Model, Diagnostic> {
     let fail = |m: String| Diagnostic::file(path, m);
-    let size = std::fs::metadata(path).map_err(|e| fail(format!("cannot read: {e}")))?.len();
-    if size > MAX_GLTF_BYTES {
-        return Err(fail(format!("{size} bytes is larger than the {MAX_GLTF_BYTES}-byte limit")));
-    }
-    let bytes = std::fs::read(path).map_err(|e| fail(format!("cannot read: {e}")))?;
     let gltf::Gltf { document, blob } =
-        gltf::Gltf::from_slice(&bytes).map_err(|e| fail(format!("invalid glTF: {e}")))?;
+        gltf::Gltf::from_slice(bytes).map_err(|e| fail(format!("invalid glTF: {e}")))?;
     let assets = AssetFolder::of(path, options);
     let folder = path.parent().unwrap_or(Path::new("")).to_path_buf();
     // Check every URI before anything reads it.

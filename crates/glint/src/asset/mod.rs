@@ -13,9 +13,7 @@ mod scn_fields;
 mod scn_syntax;
 mod texture;
 
-pub use gltf::MAX_GLTF_BYTES;
 pub use model::{AddedModel, Model, ModelPart};
-pub use obj::MAX_OBJ_BYTES;
 pub use procedural::ShapeKind;
 pub use scn::{
     load_scene, load_scene_with, parse_scene, parse_scene_with, EntityDesc, MaterialDesc, MeshRef, SceneDesc,
@@ -25,6 +23,18 @@ pub use texture::{load_texture, Texture, MAX_TEXTURE_SIDE};
 
 use std::fmt;
 use std::path::{Component, Path, PathBuf};
+
+/// Largest model file (OBJ, MTL, glTF, GLB) read, in bytes.
+pub const MAX_MODEL_BYTES: u64 = 1 << 31;
+
+/// Read a whole model file, refusing ones larger than [`MAX_MODEL_BYTES`].
+pub(crate) fn read_capped(path: &Path) -> Result<Vec<u8>, Diagnostic> {
+    let size = std::fs::metadata(path).map_err(|e| Diagnostic::file(path, format!("cannot read: {e}")))?.len();
+    if size > MAX_MODEL_BYTES {
+        return Err(Diagnostic::file(path, format!("{size} bytes is larger than the {MAX_MODEL_BYTES}-byte limit")));
+    }
+    std::fs::read(path).map_err(|e| Diagnostic::file(path, format!("cannot read: {e}")))
+}
 
 /// How model files are read.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]

@@ -64,11 +64,10 @@ impl Model {
     /// [`Model::load`] with explicit options (e.g. letting files name assets
     /// outside their folder).
     pub fn load_with(path: &Path, options: LoadOptions) -> Result<Self, Diagnostic> {
-        match path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() {
-            Some("obj") => super::obj::load_obj(path, options),
-            Some("gltf" | "glb") => super::gltf::load_gltf(path, options),
-            _ => Err(Diagnostic::file(path, "not a model file: expected the extension .obj, .gltf or .glb")),
+        if !Self::is_model_path(path) {
+            return Err(Diagnostic::file(path, "not a model file: expected the extension .obj, .gltf or .glb"));
         }
+        Self::parse(path, &super::read_capped(path)?, options)
     }
 
     /// Move the parts to where the first animation puts them at `time` seconds
@@ -82,6 +81,17 @@ impl Model {
             for &(part, k) in &node.placements {
                 self.parts[part].transforms[k] = transform;
             }
+        }
+    }
+
+    /// Parse a model from `bytes` as if read from `path`: its extension picks the
+    /// format, its folder anchors the files it names. For files already in memory
+    /// (and fuzzing).
+    pub fn parse(path: &Path, bytes: &[u8], options: LoadOptions) -> Result<Self, Diagnostic> {
+        match path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() {
+            Some("obj") => super::obj::parse_obj(path, bytes, options),
+            Some("gltf" | "glb") => super::gltf::parse_gltf(path, bytes, options),
+            _ => Err(Diagnostic::file(path, "not a model file: expected the extension .obj, .gltf or .glb")),
         }
     }
 

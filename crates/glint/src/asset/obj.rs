@@ -7,7 +7,7 @@
 //! Paths in the files resolve inside the model's folder only (see [`LoadOptions`]).
 
 use super::model::{Model, ModelPart};
-use super::{load_texture, AssetFolder, Diagnostic, LoadOptions, MaterialDesc, Texture, TextureRef};
+use super::{load_texture, read_capped, AssetFolder, Diagnostic, LoadOptions, MaterialDesc, Texture, TextureRef};
 use crate::scene::{AlphaMode, Material, Mesh};
 use glam::{Mat4, Vec2, Vec3};
 use std::cell::{Cell, RefCell};
@@ -15,17 +15,14 @@ use std::collections::HashMap;
 use std::io::BufRead;
 use std::path::{Path, PathBuf};
 
-/// Largest OBJ or MTL file read, in bytes.
-pub const MAX_OBJ_BYTES: u64 = 1 << 30;
-
-/// Load `path` and the MTL libraries and textures it names.
-pub(crate) fn load_obj(path: &Path, options: LoadOptions) -> Result<Model, Diagnostic> {
-    let bytes = read_capped(path)?;
+/// Parse OBJ text read from `path` (which names it in messages and anchors the
+/// MTL libraries and textures it names).
+pub(crate) fn parse_obj(path: &Path, bytes: &[u8], options: LoadOptions) -> Result<Model, Diagnostic> {
     let folder = AssetFolder::of(path, options);
     let warnings = RefCell::new(Vec::new());
     let line = Cell::new(0);
     let options = tobj::LoadOptions { triangulate: true, single_index: true, ..Default::default() };
-    let mut reader = LineCounter { inner: bytes.as_slice(), line: &line };
+    let mut reader = LineCounter { inner: bytes, line: &line };
     let loaded = tobj::load_obj_buf(&mut reader, &options, |mtl: &Path| {
         load_mtl(&folder, mtl, path).map_err(|warning| {
             warnings.borrow_mut().push(warning);
@@ -71,15 +68,6 @@ pub(crate) fn load_obj(path: &Path, options: LoadOptions) -> Result<Model, Diagn
         lights: Vec::new(),
         warnings,
     })
-}
-
-/// Read a whole file, refusing ones larger than [`MAX_OBJ_BYTES`].
-fn read_capped(path: &Path) -> Result<Vec<u8>, Diagnostic> {
-    let size = std::fs::metadata(path).map_err(|e| Diagnostic::file(path, format!("cannot read: {e}")))?.len();
-    if size > MAX_OBJ_BYTES {
-        return Err(Diagnostic::file(path, format!("{size} bytes is larger than the {MAX_OBJ_BYTES}-byte limit")));
-    }
-    std::fs::read(path).map_err(|e| Diagnostic::file(path, format!("cannot read: {e}")))
 }
 
 /// Counts the lines tobj has read, so a parse error can name its line.
