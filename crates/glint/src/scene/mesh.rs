@@ -196,32 +196,50 @@ impl Mesh {
     }
 
     fn generate_tangents(&mut self) {
-        struct Geometry<'a>(&'a mut Mesh);
+        /// The mesh's vertices and only its triangles with area: mikktspace 0.3
+        /// reads out of bounds on some zero-area triangles (found by fuzzing:
+        /// an OBJ quad naming one position three times), and they shade nothing.
+        struct Geometry<'a> {
+            vertices: &'a mut [Vertex],
+            faces: Vec<[u32; 3]>,
+        }
+        impl Geometry<'_> {
+            fn vertex(&self, face: usize, vert: usize) -> &Vertex {
+                &self.vertices[self.faces[face][vert] as usize]
+            }
+        }
         impl mikktspace::Geometry for Geometry<'_> {
             fn num_faces(&self) -> usize {
-                self.0.indices.len() / 3
+                self.faces.len()
             }
             fn num_vertices_of_face(&self, _face: usize) -> usize {
                 3
             }
             fn position(&self, face: usize, vert: usize) -> [f32; 3] {
-                self.0.vertices[self.0.indices[face * 3 + vert] as usize].position
+                self.vertex(face, vert).position
             }
             fn normal(&self, face: usize, vert: usize) -> [f32; 3] {
-                self.0.vertices[self.0.indices[face * 3 + vert] as usize].normal
+                self.vertex(face, vert).normal
             }
             fn tex_coord(&self, face: usize, vert: usize) -> [f32; 2] {
-                self.0.vertices[self.0.indices[face * 3 + vert] as usize].uv
+                self.vertex(face, vert).uv
             }
             fn set_tangent_encoded(&mut self, tangent: [f32; 4], face: usize, vert: usize) {
                 // Shared vertices get one tangent; smooth shapes agree across faces.
                 // MikkTSpace's bitangent follows +v, which runs down the image here;
                 // glint (like glTF) wants it up the image, so the sign flips.
-                let i = self.0.indices[face * 3 + vert] as usize;
-                self.0.vertices[i].tangent = [tangent[0], tangent[1], tangent[2], -tangent[3]];
+                let i = self.faces[face][vert] as usize;
+                self.vertices[i].tangent = [tangent[0], tangent[1], tangent[2], -tangent[3]];
             }
         }
-        if !mikktspace::generate_tangents(&mut Geometry(self)) {
+        let position = |i: u32| Vec3::from(self.vertices[i as usize].position);
+        let faces: Vec<[u32; 3]> = self
+            .indices
+            .chunks_exact(3)
+            .map(|t| [t[0], t[1], t[2]])
+            .filter(|&[a, b, c]| (position(b) - position(a)).cross(position(c) - position(a)).length_squared() > 0.0)
+            .collect();
+        if !faces.is_empty() && !mikktspace::generate_tangents(&mut Geometry { vertices: &mut self.vertices, faces }) {
             log::warn!("tangent generation failed; normal maps on this mesh will be flat");
         }
         // Degenerate UVs leave tangents unusable: fall back to any vector ⟂ normal.
@@ -265,6 +283,22 @@ pub fn smooth_normals(positions: &[Vec3], indices: &[u32]) -> Vec<Vec3> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn zero_area_triangles_do_not_reach_tangent_generation() {
+        // The fuzz find: a quad naming one position three times (split by UVs).
+        let v = |x: f32, u: f32| Vertex {
+            position: [x, 0.0, 0.0],
+            normal: [0.0, 1.0, 0.0],
+            uv: [u, 0.0],
+            ..Vertex::default()
+        };
+        let vertices = vec![v(0.0, 0.0), v(1.0, 0.1), v(0.0, 0.2), v(0.0, 0.3)];
+        let mesh = Mesh::from_vertices(vertices, vec![0, 1, 2, 0, 2, 3]).expect("kept: drawing them is harmless");
+        let mut mesh = mesh;
+        mesh.generate_tangents();
+        assert!(mesh.vertices().iter().all(|v| v.tangent.iter().all(|c| c.is_finite())));
+    }
 
     #[test]
     fn triangles_naming_a_vertex_twice_are_dropped() {
