@@ -144,13 +144,16 @@ impl Model {
         let textures: Vec<_> = self.textures.iter().map(|t| renderer.add_texture(t.clone())).collect();
         let materials: Vec<MaterialId> =
             self.materials.iter().map(|m| renderer.add_material(m.resolve(&textures))).collect();
-        let default_material =
-            self.parts.iter().any(|p| p.material.is_none()).then(|| renderer.add_material(Material::default()));
+        // Added on first use; also stands in for a material index the model lacks.
+        let mut default_material = None;
         let parts = self
             .parts
             .iter()
             .map(|part| {
-                let material = part.material.map_or_else(|| default_material.expect("added above"), |i| materials[i]);
+                let material = match part.material.and_then(|i| materials.get(i)) {
+                    Some(&m) => m,
+                    None => *default_material.get_or_insert_with(|| renderer.add_material(Material::default())),
+                };
                 (renderer.add_shape(part.mesh.clone()), material)
             })
             .collect();
