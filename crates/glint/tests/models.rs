@@ -279,6 +279,11 @@ fn bad_and_hostile_gltf_files_are_errors() {
     assert!(e.to_string().contains("outside the model's folder"), "{e}");
     let e = Model::load(&write_gltf("absolute", [0, 1, 2], "/etc/passwd")).expect_err("absolute URI");
     assert!(e.to_string().contains("outside the model's folder"), "{e}");
+    // A fuzz find: gltf-json's own validation panicked on a missing POSITION accessor.
+    let missing = r#"{"asset":{"version":"2.0"},"meshes":[{"primitives":[{"attributes":{"POSITION":7}}]}]}"#;
+    let e =
+        Model::parse(Path::new("m/missing.gltf"), missing.as_bytes(), Default::default()).expect_err("no accessor 7");
+    assert!(e.to_string().contains("accessor 7 does not exist"), "{e}");
     // Every prefix of a valid file: an error or a model, never a panic.
     let text = std::fs::read_to_string(&good).expect("read");
     for cut in 0..text.len() {

@@ -23,8 +23,20 @@ use std::path::Path;
 /// and anchors the files it names).
 pub(crate) fn parse_gltf(path: &Path, bytes: &[u8], options: LoadOptions) -> Result<Model, Diagnostic> {
     let fail = |m: String| Diagnostic::file(path, m);
-    let gltf::Gltf { document, blob } =
-        gltf::Gltf::from_slice(bytes).map_err(|e| fail(format!("invalid glTF: {e}")))?;
+    let invalid = |e: gltf::Error| fail(format!("invalid glTF: {e}"));
+    let gltf::Gltf { document, blob } = gltf::Gltf::from_slice_without_validation(bytes).map_err(invalid)?;
+    // gltf-json 1.4's validation indexes a primitive's POSITION accessor before
+    // checking it exists (a panic, found by fuzzing): check attribute indices first.
+    let json = document.into_json();
+    for (m, mesh) in json.meshes.iter().enumerate() {
+        for (p, primitive) in mesh.primitives.iter().enumerate() {
+            if let Some(bad) = primitive.attributes.values().find(|a| a.value() >= json.accessors.len()) {
+                let message = format!("mesh {m} primitive {p}: accessor {} does not exist", bad.value());
+                return Err(fail(message));
+            }
+        }
+    }
+    let document = gltf::Document::from_json(json).map_err(invalid)?;
     let assets = AssetFolder::of(path, options);
     let folder = path.parent().unwrap_or(Path::new("")).to_path_buf();
     // Check every URI before anything reads it.
