@@ -284,6 +284,9 @@ fn bad_and_hostile_gltf_files_are_errors() {
     let e =
         Model::parse(Path::new("m/missing.gltf"), missing.as_bytes(), Default::default()).expect_err("no accessor 7");
     assert!(e.to_string().contains("accessor 7 does not exist"), "{e}");
+    let sourceless = r#"{"asset":{"version":"2.0"},"images":[{"name":"nothing"}]}"#;
+    let e = Model::parse(Path::new("m/image.gltf"), sourceless.as_bytes(), Default::default()).expect_err("no source");
+    assert!(e.to_string().contains("image 0: expected a uri"), "{e}");
     // Every prefix of a valid file: an error or a model, never a panic.
     let text = std::fs::read_to_string(&good).expect("read");
     for cut in 0..text.len() {

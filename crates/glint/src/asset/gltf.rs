@@ -25,9 +25,21 @@ pub(crate) fn parse_gltf(path: &Path, bytes: &[u8], options: LoadOptions) -> Res
     let fail = |m: String| Diagnostic::file(path, m);
     let invalid = |e: gltf::Error| fail(format!("invalid glTF: {e}"));
     let gltf::Gltf { document, blob } = gltf::Gltf::from_slice_without_validation(bytes).map_err(invalid)?;
-    // gltf-json 1.4's validation indexes a primitive's POSITION accessor before
-    // checking it exists (a panic, found by fuzzing): check attribute indices first.
+    // Checks the gltf crate (1.4) panics on instead of reporting (found by fuzzing):
+    // its validation indexes a primitive's POSITION accessor before checking it
+    // exists, and reading an image unwraps its URI, or its MIME type when it
+    // lives in a buffer view.
     let json = document.into_json();
+    for (i, image) in json.images.iter().enumerate() {
+        let ok = match (&image.uri, &image.buffer_view) {
+            (Some(_), None) => true,
+            (None, Some(_)) => image.mime_type.is_some(),
+            _ => false,
+        };
+        if !ok {
+            return Err(fail(format!("image {i}: expected a uri, or a bufferView with a mimeType")));
+        }
+    }
     for (m, mesh) in json.meshes.iter().enumerate() {
         for (p, primitive) in mesh.primitives.iter().enumerate() {
             if let Some(bad) = primitive.attributes.values().find(|a| a.value() >= json.accessors.len()) {
