@@ -21,6 +21,7 @@ mod blocks;
 pub mod cull;
 mod encode;
 mod instances;
+mod materials;
 mod mesh_pool;
 mod pipelines;
 pub mod queue;
@@ -36,7 +37,6 @@ use crate::gpu::{Gpu, OffscreenTarget};
 use crate::scene::{
     Background, Camera, Entity, Environment, Light, Material, MaterialId, Mesh, ShapeId, TextureId, MAX_LIGHTS,
 };
-use crate::shader::ShaderFeatures;
 use batch::Batch;
 use blocks::{CameraGpu, SceneGpu, UniformBlock};
 use cull::{Containment, Frustum};
@@ -555,93 +555,6 @@ impl Renderer {
             stats.pipelines_compiled += u32::from(self.pipelines.build_sky(&self.device, samples)?);
         }
         Ok(())
-    }
-
-    /// Make material `id` ready to draw meshes of `layout`: its textures uploaded,
-    /// its texture set, its table entry written if edited, its pipeline built.
-    fn prepare_material(
-        &mut self,
-        id: MaterialId,
-        layout: VertexLayout,
-        samples: u32,
-        stats: &mut FrameStats,
-    ) -> Result<(), RenderError> {
-        let slot = self.materials.get(id.0 as usize).ok_or(RenderError::UnknownMaterial(id))?;
-        let fog = self.environment.fog.is_some();
-        let current = slot.gpu.as_ref().filter(|g| !slot.dirty && g.samples == samples && g.fog == fog);
-        if current.is_some_and(|g| g.pipelines[layout as usize].is_some()) {
-            return Ok(());
-        }
-        let material = slot.material.clone();
-        if current.is_none() {
-            let maps: Maps = [
-                material.diffuse_map,
-                material.normal_map,
-                material.specular_map,
-                material.metallic_roughness_map,
-                material.occlusion_map,
-                material.emissive_map,
-            ];
-            for texture in maps.into_iter().flatten() {
-                let tex = self
-                    .textures
-                    .get_mut(texture.0 as usize)
-                    .ok_or_else(|| RenderError::UnknownTexture { material: material.name.clone(), texture })?;
-                if let Some(pending) = tex.pending.take() {
-                    let (view, bytes) = self.uploader.upload(&self.device, &self.queue, &pending);
-                    tex.view = Some(view);
-                    stats.bytes_uploaded.textures += bytes;
-                }
-            }
-            let texture_set = match self.texture_sets.iter().position(|s| s.maps == maps) {
-                Some(k) => k as u16,
-                None => {
-                    let bind_group = self.texture_set_group(maps);
-                    self.texture_sets.push(TextureSet { maps, bind_group });
-                    (self.texture_sets.len() - 1) as u16
-                }
-            };
-            let slot = &mut self.materials[id.0 as usize];
-            if slot.dirty {
-                stats.bytes_uploaded.material += self.material_table.write(&self.queue, id.0, &material.to_gpu());
-                slot.dirty = false;
-            }
-            slot.gpu = Some(MaterialGpuTwin { texture_set, pipelines: [None; 2], samples, fog });
-        }
-        let features = ShaderFeatures::for_material(&material, &self.environment);
-        let key = Pipelines::key(features, layout, material.render_states(), samples);
-        let (pipeline, built) = self.pipelines.forward_id(&self.device, key)?;
-        stats.pipelines_compiled += u32::from(built);
-        let twin = self.materials[id.0 as usize].gpu.as_mut().expect("made above");
-        twin.pipelines[layout as usize] = Some(pipeline);
-        Ok(())
-    }
-
-    /// The Material block's bind group for a texture set: the table and the maps
-    /// (1×1 defaults where a map is absent).
-    fn texture_set_group(&self, maps: Maps) -> wgpu::BindGroup {
-        let d = &self.defaults;
-        let defaults =
-            [&d.white_srgb, &d.flat_normal, &d.white_linear, &d.white_linear, &d.white_linear, &d.white_srgb];
-        let views: Vec<&wgpu::TextureView> = maps
-            .iter()
-            .zip(defaults)
-            .map(|(map, default)| map.and_then(|t| self.textures[t.0 as usize].view.as_ref()).unwrap_or(default))
-            .collect();
-        self.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some(&format!("material block: texture set {maps:?} (group 2)")),
-            layout: &self.pipelines.material_layout,
-            entries: &[
-                wgpu::BindGroupEntry { binding: 0, resource: self.material_table.binding() },
-                wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::TextureView(views[0]) },
-                wgpu::BindGroupEntry { binding: 2, resource: wgpu::BindingResource::TextureView(views[1]) },
-                wgpu::BindGroupEntry { binding: 3, resource: wgpu::BindingResource::TextureView(views[2]) },
-                wgpu::BindGroupEntry { binding: 4, resource: wgpu::BindingResource::Sampler(&self.sampler) },
-                wgpu::BindGroupEntry { binding: 5, resource: wgpu::BindingResource::TextureView(views[3]) },
-                wgpu::BindGroupEntry { binding: 6, resource: wgpu::BindingResource::TextureView(views[4]) },
-                wgpu::BindGroupEntry { binding: 7, resource: wgpu::BindingResource::TextureView(views[5]) },
-            ],
-        })
     }
 
     /// Stage 2: find each submitted entity's visible instances. An entity whose
