@@ -13,7 +13,8 @@
 
 use super::animation::{Animation, Channel, Interpolation, ModelNode, Property};
 use super::model::{Model, ModelPart};
-use super::{AssetFolder, Diagnostic, LoadOptions, MaterialDesc, Texture, TextureRef, MAX_TEXTURE_SIDE};
+use super::texture::TextureCache;
+use super::{AssetFolder, Diagnostic, LoadOptions, MaterialDesc, Texture, MAX_TEXTURE_SIDE};
 use crate::scene::{AlphaMode, Camera, Light, Material, Mesh, ShadingModel};
 use glam::{Mat4, Quat, Vec2, Vec3, Vec4};
 use std::collections::HashMap;
@@ -70,24 +71,12 @@ pub(crate) fn parse_gltf(path: &Path, bytes: &[u8], options: LoadOptions) -> Res
     let buffers = gltf::import_buffers(&document, Some(&folder), blob).map_err(|e| fail(format!("buffer: {e}")))?;
     let images = gltf::import_images(&document, Some(&folder), &buffers).map_err(|e| fail(format!("image: {e}")))?;
     let mut warnings = Vec::new();
-    let mut textures = Vec::new();
-    let mut texture_index: HashMap<(usize, bool), TextureRef> = HashMap::new();
+    let mut textures = TextureCache::default();
     let mut texture = |info: Option<(usize, Option<String>)>, srgb: bool, warnings: &mut Vec<Diagnostic>| {
         let (image, name) = info?;
-        if let Some(&i) = texture_index.get(&(image, srgb)) {
-            return Some(i);
-        }
-        match to_texture(&images[image], name.unwrap_or_else(|| format!("image {image}")), srgb) {
-            Ok(t) => {
-                textures.push(t);
-                texture_index.insert((image, srgb), textures.len() - 1);
-                Some(textures.len() - 1)
-            }
-            Err(e) => {
-                warnings.push(fail(format!("image {image}: {e}; drawn without it")));
-                None
-            }
-        }
+        let name = name.unwrap_or_else(|| format!("image {image}"));
+        let decoded = textures.get_or_decode(image, srgb, || to_texture(&images[image], name, srgb));
+        decoded.map_err(|e| warnings.push(fail(format!("image {image}: {e}; drawn without it")))).ok()
     };
     let image_of = |t: gltf::texture::Texture| (t.source().index(), t.source().name().map(str::to_string));
     let mut materials = Vec::new();
@@ -226,7 +215,7 @@ pub(crate) fn parse_gltf(path: &Path, bytes: &[u8], options: LoadOptions) -> Res
     if model.parts.is_empty() {
         return Err(fail("no triangle primitives in the default scene".into()));
     }
-    model.textures = textures;
+    model.textures = textures.into_textures();
     model.warnings = warnings;
     Ok(model)
 }

@@ -65,7 +65,7 @@ impl Model {
     /// outside their folder).
     pub fn load_with(path: &Path, options: LoadOptions) -> Result<Self, Diagnostic> {
         if !Self::is_model_path(path) {
-            return Err(Diagnostic::file(path, "not a model file: expected the extension .obj, .gltf or .glb"));
+            return Self::parse(path, &[], options); // the "not a model file" error, without reading it
         }
         Self::parse(path, &super::read_capped(path)?, options)
     }

@@ -7,7 +7,8 @@
 //! Paths in the files resolve inside the model's folder only (see [`LoadOptions`]).
 
 use super::model::{Model, ModelPart};
-use super::{load_texture, read_capped, AssetFolder, Diagnostic, LoadOptions, MaterialDesc, Texture, TextureRef};
+use super::texture::TextureCache;
+use super::{load_texture, read_capped, AssetFolder, Diagnostic, LoadOptions, MaterialDesc};
 use crate::scene::{AlphaMode, Material, Mesh};
 use glam::{Mat4, Vec2, Vec3};
 use std::cell::{Cell, RefCell};
@@ -56,7 +57,7 @@ pub(crate) fn parse_obj(path: &Path, bytes: &[u8], options: LoadOptions) -> Resu
     if parts.is_empty() {
         return Err(Diagnostic::file(path, "no faces: expected at least one triangle or polygon"));
     }
-    let textures = textures.textures;
+    let textures = textures.into_textures();
     Ok(Model {
         path: path.to_path_buf(),
         parts,
@@ -108,13 +109,6 @@ fn load_mtl(
     let line = Cell::new(0);
     let mut reader = LineCounter { inner: bytes.as_slice(), line: &line };
     tobj::load_mtl_buf(&mut reader).map_err(|e| Diagnostic::at(&path, line.get().max(1), format!("{e}")))
-}
-
-/// Each texture file decoded once.
-#[derive(Default)]
-struct TextureCache {
-    textures: Vec<Texture>,
-    by_path: HashMap<(PathBuf, bool), TextureRef>,
 }
 
 /// An MTL texture statement: the file name and the options glint uses.
@@ -174,7 +168,7 @@ fn convert_material(
     m: &tobj::Material,
     folder: &AssetFolder,
     obj: &Path,
-    cache: &mut TextureCache,
+    cache: &mut TextureCache<PathBuf>,
     warnings: &mut Vec<Diagnostic>,
 ) -> MaterialDesc {
     let diffuse = m.diffuse.unwrap_or([0.8; 3]);
@@ -209,20 +203,9 @@ fn convert_material(
                 return None;
             }
         };
-        if let Some(&index) = cache.by_path.get(&(path.clone(), srgb)) {
-            return Some(index);
-        }
-        match load_texture(&path, srgb) {
-            Ok(t) => {
-                cache.textures.push(t);
-                cache.by_path.insert((path, srgb), cache.textures.len() - 1);
-                Some(cache.textures.len() - 1)
-            }
-            Err(d) => {
-                warnings.push(Diagnostic::file(obj, format!("material '{}': {what}: {d}; drawn without it", m.name)));
-                None
-            }
-        }
+        let decoded = cache.get_or_decode(path.clone(), srgb, || load_texture(&path, srgb));
+        let drawn_without = |d| Diagnostic::file(obj, format!("material '{}': {what}: {d}; drawn without it", m.name));
+        decoded.map_err(|d| warnings.push(drawn_without(d))).ok()
     };
     let diffuse_map = texture(&m.diffuse_texture, true, "map_Kd", &mut material);
     let normal_map = texture(&m.normal_texture, false, "map_Bump", &mut material);

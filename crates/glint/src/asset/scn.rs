@@ -5,8 +5,8 @@
 use super::model::AddedModel;
 use super::placement::place_instances;
 use super::scn_fields::{numbers, Fields};
-use super::scn_syntax::Pair;
-use super::scn_syntax::{parse_blocks, Block};
+use super::scn_syntax::{parse_blocks, Block, Pair};
+use super::texture::TextureCache;
 use super::{load_texture, Diagnostic, LoadOptions, Model, ShapeKind, Texture};
 use crate::scene::TextureId;
 use crate::scene::{
@@ -211,7 +211,7 @@ pub fn parse_scene_with(path: &Path, text: &str, options: LoadOptions) -> Result
             entities: Vec::new(),
             warnings: Vec::new(),
         },
-        texture_index: HashMap::new(),
+        textures: TextureCache::default(),
         model_index: HashMap::new(),
         options,
         placements: Vec::new(),
@@ -235,7 +235,7 @@ struct Loader<'a> {
     path: &'a Path,
     dir: PathBuf,
     scene: SceneDesc,
-    texture_index: HashMap<(PathBuf, bool), usize>,
+    textures: TextureCache<PathBuf>,
     model_index: HashMap<PathBuf, usize>,
     options: LoadOptions,
     placements: Vec<Placement>,
@@ -517,15 +517,8 @@ impl Loader<'_> {
             return Ok(None);
         };
         let file = self.dir.join(pair.value.trim());
-        if let Some(&i) = self.texture_index.get(&(file.clone(), srgb)) {
-            return Ok(Some(i));
-        }
-        let texture =
-            load_texture(&file, srgb).map_err(|e| Diagnostic::at(self.path, pair.line, format!("\"{key}\": {e}")))?;
-        self.scene.textures.push(texture);
-        let i = self.scene.textures.len() - 1;
-        self.texture_index.insert((file, srgb), i);
-        Ok(Some(i))
+        let fail = |e| Diagnostic::at(self.path, pair.line, format!("\"{key}\": {e}"));
+        self.textures.get_or_decode(file.clone(), srgb, || load_texture(&file, srgb).map_err(fail)).map(Some)
     }
 
     fn material(&mut self, f: &mut Fields) -> Result<(), Diagnostic> {
@@ -722,6 +715,7 @@ impl Loader<'_> {
 
     /// Resolve material names and gather placements into one task per (mesh, material, render order).
     fn finish(mut self) -> Result<SceneDesc, Diagnostic> {
+        self.scene.textures = std::mem::take(&mut self.textures).into_textures();
         let mut tasks: HashMap<(MeshRef, Option<usize>, Option<u8>), usize> = HashMap::new();
         for placement in std::mem::take(&mut self.placements) {
             let material = match placement.material {

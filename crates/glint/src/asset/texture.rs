@@ -1,4 +1,6 @@
-use super::Diagnostic;
+use super::{Diagnostic, TextureRef};
+use std::collections::HashMap;
+use std::hash::Hash;
 use std::path::Path;
 
 /// Largest accepted side of a texture, in pixels.
@@ -30,6 +32,42 @@ impl Texture {
     }
 }
 
+/// Textures decoded while loading one file, each source once per colour space;
+/// a texture's index is its [`TextureRef`].
+pub(crate) struct TextureCache<K> {
+    textures: Vec<Texture>,
+    index: HashMap<(K, bool), TextureRef>,
+}
+
+impl<K: Hash + Eq> Default for TextureCache<K> {
+    fn default() -> Self {
+        Self { textures: Vec::new(), index: HashMap::new() }
+    }
+}
+
+impl<K: Hash + Eq> TextureCache<K> {
+    /// The texture from `source` read as sRGB or not, decoding it with `decode`
+    /// the first time it is asked for.
+    pub(crate) fn get_or_decode<E>(
+        &mut self,
+        source: K,
+        srgb: bool,
+        decode: impl FnOnce() -> Result<Texture, E>,
+    ) -> Result<TextureRef, E> {
+        let key = (source, srgb);
+        if let Some(&i) = self.index.get(&key) {
+            return Ok(i);
+        }
+        self.textures.push(decode()?);
+        self.index.insert(key, self.textures.len() - 1);
+        Ok(self.textures.len() - 1)
+    }
+
+    /// The decoded textures, in [`TextureRef`] order.
+    pub(crate) fn into_textures(self) -> Vec<Texture> {
+        self.textures
+    }
+}
 /// Decode a PNG or JPEG file into a [`Texture`].
 ///
 /// Rejects images wider or taller than [`MAX_TEXTURE_SIDE`] before decoding their
