@@ -253,7 +253,7 @@ fn render(args: RenderArgs) -> Result<(), Error> {
         bar
     });
     for k in 0..frames {
-        desc.pose(time + k as f32 / fps, &mut entities);
+        desc.pose(time + k as f32 / fps, &mut entities, &mut renderer);
         for entity in &entities {
             renderer.submit(entity);
         }
@@ -313,6 +313,16 @@ fn check(scene: &Path, options: LoadOptions) -> Result<(), Error> {
             model.materials.len(),
             model.textures.len()
         );
+        for a in &model.animations {
+            println!("    animation '{}': {} channels, {:.2} s", a.name, a.channels.len(), a.duration());
+        }
+        for skin in &model.skins {
+            println!("    skin '{}': {} joints", skin.name, skin.joints.len());
+        }
+        for part in model.parts.iter().filter(|p| p.morph.is_some()) {
+            let targets = part.morph.as_ref().map_or(0, |m| m.targets.len());
+            println!("    part '{}': {targets} morph targets", part.name);
+        }
     }
     println!("  instances:  {}", desc.instance_count());
     println!("  warnings:   {}", desc.warnings.len());

@@ -289,6 +289,11 @@ fn models_render_and_check_directly() {
     let summary = String::from_utf8_lossy(&out.stdout);
     assert!(summary.contains("3 parts, 3 materials, 1 textures, 6 triangles"), "{summary}");
     assert_eq!(stderr(&out).lines().filter(|l| l.starts_with("warning:")).count(), 2, "{}", stderr(&out));
+    let out = glint(&["check", repo("tests/models/skinned.glb").to_str().expect("path")]);
+    let summary = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    assert!(summary.contains("animation 'bend': 1 channels, 1.00 s"), "{summary}");
+    assert!(summary.contains("skin 'arm': 2 joints"), "{summary}");
 
     let dir = tempfile::tempdir().expect("temp dir");
     let png = dir.path().join("model.png");

@@ -18,6 +18,8 @@ pub struct ModelNode {
     pub scale: Vec3,
     /// `(part, k)`: this node's world transform is `parts[part].transforms[k]`.
     pub placements: Vec<(usize, usize)>,
+    /// Rest weights of its mesh's morph targets (empty without morph targets).
+    pub weights: Vec<f32>,
 }
 
 /// What a channel animates.
@@ -29,6 +31,8 @@ pub enum Property {
     Rotation,
     /// Scale (xyz).
     Scale,
+    /// Morph-target weights: each key holds one weight per target, four to a `Vec4`.
+    Weights,
 }
 
 /// How a channel fills the time between keys.
@@ -54,7 +58,8 @@ pub struct Channel {
     /// Key times in seconds, non-decreasing.
     pub times: Vec<f32>,
     /// One value per key (three for cubic splines: in-tangent, value, out-tangent);
-    /// xyz in `x, y, z` for translation and scale.
+    /// xyz in `x, y, z` for translation and scale. A value of [`Property::Weights`]
+    /// is several `Vec4`s (as many for every key).
     pub values: Vec<Vec4>,
 }
 
@@ -84,17 +89,49 @@ impl Channel {
         if self.times.iter().any(|t| !t.is_finite()) || self.times.windows(2).any(|w| w[1] < w[0]) {
             return Err("key times must be finite and non-decreasing".into());
         }
-        let per_key = if self.interpolation == Interpolation::CubicSpline { 3 } else { 1 };
-        if self.values.len() != self.times.len() * per_key {
-            return Err(format!("{} values for {} keys, expected {}", self.values.len(), self.times.len(), per_key));
+        let per_key = self.per_key();
+        let width = self.width();
+        let wide_ok = width >= 1 && (width == 1 || self.property == Property::Weights);
+        if !wide_ok || self.values.len() != self.times.len() * per_key * width {
+            let expected = self.times.len() * per_key;
+            return Err(format!("{} values for {} keys, expected {expected}", self.values.len(), self.times.len()));
+        }
+        if self.values.iter().any(|v| !v.is_finite()) {
+            return Err("key values must be finite".into());
         }
         Ok(())
     }
 
-    /// The channel's value at `time` (clamped to the first and last keys).
+    /// Values per key: three for cubic splines (in-tangent, value, out-tangent).
+    fn per_key(&self) -> usize {
+        if self.interpolation == Interpolation::CubicSpline {
+            3
+        } else {
+            1
+        }
+    }
+
+    /// `Vec4`s in one value (1, except for weights).
+    fn width(&self) -> usize {
+        self.values.len() / (self.times.len() * self.per_key()).max(1)
+    }
+
+    /// The channel's value at `time` (clamped to the first and last keys); the
+    /// first four weights of a [`Property::Weights`] channel.
     pub fn sample(&self, time: f32) -> Vec4 {
-        let cubic = self.interpolation == Interpolation::CubicSpline;
-        let value = |k: usize| if cubic { self.values[3 * k + 1] } else { self.values[k] };
+        self.sample_part(time, 0)
+    }
+
+    /// Every `Vec4` of the channel's value at `time` (one, except for weights).
+    pub fn sample_all(&self, time: f32) -> Vec<Vec4> {
+        (0..self.width()).map(|c| self.sample_part(time, c)).collect()
+    }
+
+    /// `Vec4` number `c` of the value at `time`.
+    fn sample_part(&self, time: f32, c: usize) -> Vec4 {
+        let (cubic, width) = (self.interpolation == Interpolation::CubicSpline, self.width());
+        let at = |k: usize| k * width + c;
+        let value = |k: usize| if cubic { self.values[at(3 * k + 1)] } else { self.values[at(k)] };
         let last = self.times.len() - 1;
         let next = self.times.partition_point(|&t| t <= time);
         if next == 0 {
@@ -115,8 +152,8 @@ impl Channel {
             }
             Interpolation::Linear => value(k).lerp(value(next), s),
             Interpolation::CubicSpline => {
-                let (p0, m0) = (self.values[3 * k + 1], self.values[3 * k + 2] * dt);
-                let (p1, m1) = (self.values[3 * next + 1], self.values[3 * next] * dt);
+                let (p0, m0) = (self.values[at(3 * k + 1)], self.values[at(3 * k + 2)] * dt);
+                let (p1, m1) = (self.values[at(3 * next + 1)], self.values[at(3 * next)] * dt);
                 let (s2, s3) = (s * s, s * s * s);
                 let v = p0 * (2.0 * s3 - 3.0 * s2 + 1.0)
                     + m0 * (s3 - 2.0 * s2 + s)
@@ -132,9 +169,18 @@ impl Channel {
     }
 }
 
-/// World transforms of `nodes` with `animation` (if any) applied at `time`.
-pub(crate) fn pose_nodes(nodes: &[ModelNode], animation: Option<&Animation>, time: f32) -> Vec<Mat4> {
+/// Nodes posed at one time.
+pub(crate) struct Pose {
+    /// World (model-space) transform of each node.
+    pub world: Vec<Mat4>,
+    /// Morph-target weights of each node.
+    pub weights: Vec<Vec<f32>>,
+}
+
+/// `nodes` with `animation` (if any) applied at `time`.
+pub(crate) fn pose_nodes(nodes: &[ModelNode], animation: Option<&Animation>, time: f32) -> Pose {
     let mut locals: Vec<(Vec3, Quat, Vec3)> = nodes.iter().map(|n| (n.translation, n.rotation, n.scale)).collect();
+    let mut weights: Vec<Vec<f32>> = nodes.iter().map(|n| n.weights.clone()).collect();
     for c in animation.iter().flat_map(|a| &a.channels) {
         let Some(local) = locals.get_mut(c.node) else { continue };
         let v = c.sample(time);
@@ -142,6 +188,12 @@ pub(crate) fn pose_nodes(nodes: &[ModelNode], animation: Option<&Animation>, tim
             Property::Translation => local.0 = v.truncate(),
             Property::Rotation => local.1 = Quat::from_vec4(v).normalize(),
             Property::Scale => local.2 = v.truncate(),
+            Property::Weights => {
+                let sampled = c.sample_all(time).into_iter().flat_map(|v| v.to_array());
+                for (w, x) in weights[c.node].iter_mut().zip(sampled) {
+                    *w = x;
+                }
+            }
         }
     }
     let mut world: Vec<Mat4> = Vec::with_capacity(nodes.len());
@@ -150,7 +202,7 @@ pub(crate) fn pose_nodes(nodes: &[ModelNode], animation: Option<&Animation>, tim
         let parent = node.parent.and_then(|p| world.get(p).copied()).unwrap_or(Mat4::IDENTITY);
         world.push(parent * local);
     }
-    world
+    Pose { world, weights }
 }
 
 #[cfg(test)]
@@ -189,6 +241,27 @@ mod tests {
     }
 
     #[test]
+    fn weight_channels_sample_every_target() {
+        // Two keys of six weights each: two Vec4s a key.
+        let (a, b) = ([Vec4::ZERO, Vec4::ZERO], [Vec4::ONE, Vec4::new(2.0, 4.0, 0.0, 0.0)]);
+        let c = channel(Property::Weights, Interpolation::Linear, &[0.0, 1.0], &[a[0], a[1], b[0], b[1]]);
+        c.validate().expect("8 Vec4s for 2 keys is 2 a key");
+        assert_eq!(c.sample_all(0.5), vec![Vec4::splat(0.5), Vec4::new(1.0, 2.0, 0.0, 0.0)]);
+        let node = ModelNode {
+            parent: None,
+            translation: Vec3::ZERO,
+            rotation: Quat::IDENTITY,
+            scale: Vec3::ONE,
+            placements: Vec::new(),
+            weights: vec![9.0; 6],
+        };
+        let animation = Animation { name: "morph".into(), channels: vec![c] };
+        assert_eq!(pose_nodes(&[node], Some(&animation), 1.0).weights[0], [1.0, 1.0, 1.0, 1.0, 2.0, 4.0]);
+        let translation = channel(Property::Translation, Interpolation::Linear, &[0.0], &[Vec4::ZERO, Vec4::ZERO]);
+        assert!(translation.validate().is_err(), "only weights have several Vec4s a key");
+    }
+
+    #[test]
     fn malformed_channels_are_rejected() {
         let v = [Vec4::ZERO; 2];
         assert!(channel(Property::Scale, Interpolation::Linear, &[1.0, 0.5], &v).validate().is_err());
@@ -206,11 +279,12 @@ mod tests {
             rotation: Quat::IDENTITY,
             scale: Vec3::ONE,
             placements: Vec::new(),
+            weights: Vec::new(),
         };
         let nodes = [node(None), node(Some(0))];
         let up = channel(Property::Translation, Interpolation::Linear, &[0.0, 1.0], &[Vec4::ZERO, Vec4::Y]);
         let animation = Animation { name: "lift".into(), channels: vec![up] };
-        let world = pose_nodes(&nodes, Some(&animation), 1.0);
+        let world = pose_nodes(&nodes, Some(&animation), 1.0).world;
         assert_eq!(world[0].w_axis.truncate(), Vec3::Y, "the root moved to its key");
         assert_eq!(world[1].w_axis.truncate(), Vec3::new(1.0, 1.0, 0.0), "the child rides along");
         assert_eq!(animation.duration(), 1.0);

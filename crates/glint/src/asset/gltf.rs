@@ -13,9 +13,10 @@
 
 use super::animation::{Animation, Channel, Interpolation, ModelNode, Property};
 use super::model::{Model, ModelPart};
+use super::model::{Morph, Skin};
 use super::texture::TextureCache;
 use super::{AssetFolder, Diagnostic, LoadOptions, MaterialDesc, Texture, MAX_TEXTURE_SIDE};
-use crate::scene::{AlphaMode, Camera, Light, Material, Mesh, ShadingModel};
+use crate::scene::{AlphaMode, Camera, Light, MapSlots, Material, Mesh, ShadingModel, SkinVertex};
 use glam::{Mat4, Quat, Vec2, Vec3, Vec4};
 use std::collections::HashMap;
 use std::path::Path;
@@ -99,12 +100,47 @@ pub(crate) fn parse_gltf(path: &Path, bytes: &[u8], options: LoadOptions) -> Res
             ..Material::default()
         };
         let base = pbr.base_color_texture();
-        if let Some(transform) = base.as_ref().and_then(|info| info.texture_transform()) {
-            material.uv_scale = Vec2::from(transform.scale());
-            if transform.offset() != [0.0, 0.0] || transform.rotation() != 0.0 {
-                let message =
-                    format!("material '{}': texture offset and rotation are not supported yet", material.name);
+        // One uv transform per material: the base colour map's (else the first
+        // map's); maps with another transform are noted.
+        let transforms: Vec<(&str, Option<[f32; 5]>)> = [
+            ("baseColorTexture", base.as_ref().map(transform_of)),
+            ("metallicRoughnessTexture", pbr.metallic_roughness_texture().as_ref().map(transform_of)),
+            ("emissiveTexture", m.emissive_texture().as_ref().map(transform_of)),
+        ]
+        .into_iter()
+        .filter(|(_, t)| t.is_some())
+        .collect();
+        if let Some(&(_, Some([ox, oy, rotation, sx, sy]))) = transforms.first() {
+            (material.uv_offset, material.uv_rotation, material.uv_scale) =
+                (Vec2::new(ox, oy), rotation, Vec2::new(sx, sy));
+            if let Some((other, _)) = transforms.iter().find(|(_, t)| *t != transforms[0].1) {
+                let message = format!(
+                    "material '{}': {other} has its own texture transform; the {} one is used for every map",
+                    material.name, transforms[0].0
+                );
                 warnings.push(fail(message));
+            }
+        }
+        let mut sets = Vec::new();
+        if let Some(i) = &base {
+            sets.push((i.tex_coord(), MapSlots::DIFFUSE));
+        }
+        if let Some(i) = &pbr.metallic_roughness_texture() {
+            sets.push((i.tex_coord(), MapSlots::METALLIC_ROUGHNESS));
+        }
+        if let Some(i) = &m.emissive_texture() {
+            sets.push((i.tex_coord(), MapSlots::EMISSIVE));
+        }
+        if let Some(n) = m.normal_texture() {
+            sets.push((n.tex_coord(), MapSlots::NORMAL));
+        }
+        if let Some(o) = m.occlusion_texture() {
+            sets.push((o.tex_coord(), MapSlots::OCCLUSION));
+        }
+        for (set, slot) in sets {
+            material.uv1_maps.set(slot, set >= 1);
+            if set > 1 {
+                warnings.push(fail(format!("material '{}': TEXCOORD_{set} is read as TEXCOORD_1", material.name)));
             }
         }
         let diffuse_map = texture(base.map(|i| image_of(i.texture())), true, &mut warnings);
@@ -130,12 +166,14 @@ pub(crate) fn parse_gltf(path: &Path, bytes: &[u8], options: LoadOptions) -> Res
         textures: Vec::new(),
         nodes: Vec::new(),
         animations: Vec::new(),
+        skins: Vec::new(),
         cameras: Vec::new(),
         lights: Vec::new(),
         warnings: Vec::new(),
     };
     let scene = document.default_scene().or_else(|| document.scenes().next());
-    let mut part_of: HashMap<(usize, usize), Option<usize>> = HashMap::new();
+    // Parts by (mesh, primitive, skin): one mesh under two skins is two parts.
+    let mut part_of: HashMap<(usize, usize, Option<usize>), Option<usize>> = HashMap::new();
     // Depth-first over the hierarchy with world transforms; a node seen twice (a
     // cycle, which valid files do not have) is not entered again.
     // `glint_node[i]`: the model node of glTF node i, once visited.
@@ -156,28 +194,31 @@ pub(crate) fn parse_gltf(path: &Path, bytes: &[u8], options: LoadOptions) -> Res
             rotation: Quat::from_array(r).normalize(),
             scale: Vec3::from(s),
             placements: Vec::new(),
+            weights: Vec::new(),
         });
         if let Some(mesh) = node.mesh() {
+            let skin = node.skin().map(|s| s.index());
+            let weights = node.weights().or(mesh.weights()).unwrap_or(&[]);
+            model.nodes[this].weights = weights.to_vec();
             for primitive in mesh.primitives() {
-                let key = (mesh.index(), primitive.index());
+                let key = (mesh.index(), primitive.index(), skin);
                 let part = match part_of.get(&key) {
                     Some(&p) => p,
                     None => {
-                        let made = read_primitive(&primitive, &buffers)
-                            .map_err(|e| fail(format!("mesh {} primitive {}: {e}", mesh.index(), primitive.index())))?;
-                        let p = made.map(|mesh_data| {
+                        let where_ = format!("mesh {} primitive {}", mesh.index(), primitive.index());
+                        let made = read_primitive(&primitive, &buffers).map_err(|e| fail(format!("{where_}: {e}")))?;
+                        let p = made.map(|(mesh_data, morph)| {
                             let name = mesh.name().map_or_else(|| format!("mesh {}", mesh.index()), str::to_string);
                             let material = primitive.material().index();
-                            model.parts.push(ModelPart { name, mesh: mesh_data, material, transforms: Vec::new() });
+                            let mut part = ModelPart::new(name, mesh_data, material, Vec::new());
+                            // A skinned mesh without skin weights is drawn rigid.
+                            part.skin = skin.filter(|_| part.mesh.skin().is_some());
+                            part.morph = morph;
+                            model.parts.push(part);
                             model.parts.len() - 1
                         });
                         if p.is_none() {
-                            let message = format!(
-                                "mesh {} primitive {}: not triangles; skipped",
-                                mesh.index(),
-                                primitive.index()
-                            );
-                            warnings.push(fail(message));
+                            warnings.push(fail(format!("{where_}: not triangles; skipped")));
                         }
                         part_of.insert(key, p);
                         p
@@ -193,9 +234,7 @@ pub(crate) fn parse_gltf(path: &Path, bytes: &[u8], options: LoadOptions) -> Res
             model.cameras.push(to_camera(&camera, world));
         }
         if let Some(light) = node.light() {
-            let (light, note) = to_light(&light, world);
-            model.lights.push(light);
-            warnings.extend(note.map(fail));
+            model.lights.push(to_light(&light, world));
         }
         stack.extend(node.children().map(|c| (c, Some(this), world)));
     }
@@ -204,28 +243,28 @@ pub(crate) fn parse_gltf(path: &Path, bytes: &[u8], options: LoadOptions) -> Res
         let mut channels = Vec::new();
         for channel in animation.channels() {
             let Some(node) = glint_node[channel.target().node().index()] else { continue };
-            match read_channel(&channel, node, &buffers) {
-                Ok(Some(c)) => channels.push(c),
-                Ok(None) => warnings.push(fail(format!("{name}: morph-target weights are not supported yet"))),
-                Err(e) => return Err(fail(format!("{name}, channel {}: {e}", channel.index()))),
-            }
+            let c = read_channel(&channel, node, &buffers)
+                .map_err(|e| fail(format!("{name}, channel {}: {e}", channel.index())))?;
+            channels.push(c);
         }
         model.animations.push(Animation { name, channels });
     }
     if model.parts.is_empty() {
         return Err(fail("no triangle primitives in the default scene".into()));
     }
+    read_skins(&document, &buffers, &glint_node, &mut model).map_err(fail)?;
+    model.rest_pose();
     model.textures = textures.into_textures();
     model.warnings = warnings;
     Ok(model)
 }
 
-/// Read one animation channel for model node `node`: `Ok(None)` for morph-target weights.
+/// Read one animation channel for model node `node`.
 fn read_channel(
     channel: &gltf::animation::Channel,
     node: usize,
     buffers: &[gltf::buffer::Data],
-) -> Result<Option<Channel>, String> {
+) -> Result<Channel, String> {
     use gltf::animation::util::ReadOutputs;
     let reader = channel.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
     let times: Vec<f32> = reader.read_inputs().ok_or("no key times")?.collect();
@@ -233,7 +272,21 @@ fn read_channel(
         ReadOutputs::Translations(v) => (Property::Translation, v.map(|t| Vec3::from(t).extend(0.0)).collect()),
         ReadOutputs::Rotations(v) => (Property::Rotation, v.into_f32().map(Vec4::from).collect()),
         ReadOutputs::Scales(v) => (Property::Scale, v.map(|s| Vec3::from(s).extend(0.0)).collect()),
-        ReadOutputs::MorphTargetWeights(_) => return Ok(None),
+        ReadOutputs::MorphTargetWeights(w) => {
+            // Keys × targets weights (× 3 for cubic splines), regrouped four to a Vec4 per value.
+            let weights: Vec<f32> = w.into_f32().collect();
+            let per_key =
+                if channel.sampler().interpolation() == gltf::animation::Interpolation::CubicSpline { 3 } else { 1 };
+            let values = times.len() * per_key;
+            if values == 0 || weights.is_empty() || weights.len() % values != 0 {
+                return Err(format!("{} weights for {} keys", weights.len(), times.len()));
+            }
+            let targets = weights.len() / values;
+            let vec4s = weights
+                .chunks(targets)
+                .flat_map(|value| value.chunks(4).map(|c| Vec4::from_slice(&[c, &[0.0; 4][c.len()..]].concat())));
+            (Property::Weights, vec4s.collect())
+        }
     };
     let interpolation = match channel.sampler().interpolation() {
         gltf::animation::Interpolation::Step => Interpolation::Step,
@@ -242,17 +295,75 @@ fn read_channel(
     };
     let channel = Channel { node, property, interpolation, times, values };
     channel.validate()?;
-    Ok(Some(channel))
+    Ok(channel)
 }
 
-/// Read one primitive: `Ok(None)` for a primitive that is not a triangle list.
-fn read_primitive(primitive: &gltf::Primitive, buffers: &[gltf::buffer::Data]) -> Result<Option<Mesh>, String> {
+/// The skins the parts use, with their joints as model nodes. A part's vertices
+/// must name joints its skin has.
+fn read_skins(
+    document: &gltf::Document,
+    buffers: &[gltf::buffer::Data],
+    glint_node: &[Option<usize>],
+    model: &mut Model,
+) -> Result<(), String> {
+    let mut skin_of: HashMap<usize, usize> = HashMap::new();
+    for part in &mut model.parts {
+        let Some(index) = part.skin else { continue };
+        let skin = document.skins().nth(index).ok_or_else(|| format!("skin {index} does not exist"))?;
+        let joint_count = skin.joints().len();
+        if usize::from(part.mesh.max_joint()) >= joint_count {
+            return Err(format!(
+                "part '{}': a vertex names joint {} but skin {index} has {joint_count}",
+                part.name,
+                part.mesh.max_joint()
+            ));
+        }
+        if let Some(&s) = skin_of.get(&index) {
+            part.skin = Some(s);
+            continue;
+        }
+        let joints = skin
+            .joints()
+            .map(|j| {
+                glint_node[j.index()]
+                    .ok_or_else(|| format!("skin {index}: joint node {} is not in the scene", j.index()))
+            })
+            .collect::<Result<Vec<usize>, String>>()?;
+        let reader = skin.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
+        let inverse_bind: Vec<Mat4> = match reader.read_inverse_bind_matrices() {
+            Some(m) => m.map(|m| Mat4::from_cols_array_2d(&m)).collect(),
+            None => vec![Mat4::IDENTITY; joint_count],
+        };
+        if inverse_bind.len() != joint_count || inverse_bind.iter().any(|m| !m.is_finite()) {
+            return Err(format!("skin {index}: expected {joint_count} finite inverse bind matrices"));
+        }
+        let name = skin.name().map_or_else(|| format!("skin {index}"), str::to_string);
+        model.skins.push(Skin { name, joints, inverse_bind });
+        skin_of.insert(index, model.skins.len() - 1);
+        part.skin = Some(model.skins.len() - 1);
+    }
+    Ok(())
+}
+
+/// Read one primitive, with its morph targets: `Ok(None)` for a primitive that is
+/// not a triangle list. Every attribute must have one value per position.
+fn read_primitive(
+    primitive: &gltf::Primitive,
+    buffers: &[gltf::buffer::Data],
+) -> Result<Option<(Mesh, Option<Morph>)>, String> {
     if primitive.mode() != gltf::mesh::Mode::Triangles {
         return Ok(None);
     }
     let reader = primitive.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
     let positions: Vec<Vec3> = reader.read_positions().ok_or("no POSITION attribute")?.map(Vec3::from).collect();
     let count = positions.len();
+    let check = |what: &str, n: usize| {
+        if n == count {
+            Ok(())
+        } else {
+            Err(format!("{what} has {n} values for {count} positions"))
+        }
+    };
     let indices: Vec<u32> = match reader.read_indices() {
         Some(i) => i.into_u32().collect(),
         None => (0..count as u32).collect(),
@@ -264,49 +375,84 @@ fn read_primitive(primitive: &gltf::Primitive, buffers: &[gltf::buffer::Data]) -
         Some(t) => t.into_f32().map(Vec2::from).collect(),
         None => vec![Vec2::ZERO; count],
     };
+    check("TEXCOORD_0", uvs.len())?;
+    let uv1: Option<Vec<[f32; 2]>> = reader.read_tex_coords(1).map(|t| t.into_f32().collect());
     let colors: Option<Vec<[f32; 4]>> = reader.read_colors(0).map(|c| c.into_rgba_f32().collect());
-    let attribute_error = |what: &str, n: usize| format!("{what} has {n} values for {count} positions");
-    if uvs.len() != count {
-        return Err(attribute_error("TEXCOORD_0", uvs.len()));
-    }
-    let mesh = match reader.read_normals() {
-        Some(n) => {
-            let normals: Vec<Vec3> = n.map(Vec3::from).collect();
-            if normals.len() != count {
-                return Err(attribute_error("NORMAL", normals.len()));
-            }
-            let mesh = Mesh::from_attributes(&positions, &normals, &uvs, indices).map_err(|e| e.to_string())?;
-            match colors {
-                Some(c) if c.len() == count => mesh.with_colors(c).map_err(|e| e.to_string())?,
-                Some(c) => return Err(attribute_error("COLOR_0", c.len())),
-                None => mesh,
-            }
+    let skin: Option<Vec<SkinVertex>> = match (reader.read_joints(0), reader.read_weights(0)) {
+        (Some(j), Some(w)) => {
+            Some(j.into_u16().zip(w.into_f32()).map(|(joints, weights)| SkinVertex { joints, weights }).collect())
         }
-        None => flat_mesh(&positions, &uvs, colors.as_deref(), &indices)?,
+        (None, None) => None,
+        _ => return Err("JOINTS_0 and WEIGHTS_0 must come together".into()),
     };
-    Ok(Some(mesh))
+    let normals: Option<Vec<Vec3>> = reader.read_normals().map(|n| n.map(Vec3::from).collect());
+    let mut targets = Vec::new();
+    for (t, (p, n, _)) in reader.read_morph_targets().enumerate() {
+        let p: Vec<Vec3> = p.map_or_else(|| vec![Vec3::ZERO; count], |p| p.map(Vec3::from).collect());
+        let n: Vec<Vec3> = n.map_or_else(|| vec![Vec3::ZERO; count], |n| n.map(Vec3::from).collect());
+        check(&format!("morph target {t} POSITION"), p.len())?;
+        check(&format!("morph target {t} NORMAL"), n.len())?;
+        targets.push((p, n));
+    }
+    for (what, n) in [
+        ("NORMAL", normals.as_ref().map(Vec::len)),
+        ("TEXCOORD_1", uv1.as_ref().map(Vec::len)),
+        ("COLOR_0", colors.as_ref().map(Vec::len)),
+        ("JOINTS_0/WEIGHTS_0", skin.as_ref().map(Vec::len)),
+    ] {
+        check(what, n.unwrap_or(count))?;
+    }
+    // Without normals the spec asks for flat shading: each triangle gets its own
+    // three vertices (every stream follows) with the face normal.
+    let (corners, normals, indices): (Option<Vec<usize>>, Vec<Vec3>, Vec<u32>) = match normals {
+        Some(n) => (None, n, indices),
+        None => {
+            let corners: Vec<usize> = indices.iter().map(|&i| i as usize).collect();
+            let mut normals = Vec::with_capacity(corners.len());
+            for tri in corners.chunks_exact(3) {
+                let [a, b, c] = [positions[tri[0]], positions[tri[1]], positions[tri[2]]];
+                normals.extend([(b - a).cross(c - a).normalize_or(Vec3::Y); 3]);
+            }
+            let n = corners.len() as u32;
+            (Some(corners), normals, (0..n).collect())
+        }
+    };
+    let positions: Vec<Vec3> = pick(positions, corners.as_deref());
+    let corners = corners.as_deref();
+    let e = |e: crate::scene::MeshError| e.to_string();
+    let mut mesh = Mesh::from_attributes(&positions, &normals, &pick(uvs, corners), indices).map_err(e)?;
+    if let Some(c) = colors {
+        mesh = mesh.with_colors(pick(c, corners)).map_err(e)?;
+    }
+    if let Some(uv) = uv1 {
+        mesh = mesh.with_uv1(pick(uv, corners)).map_err(e)?;
+    }
+    if let Some(s) = skin {
+        mesh = mesh.with_skin(pick(s, corners)).map_err(e)?;
+    }
+    let morph = (!targets.is_empty()).then(|| Morph {
+        positions: mesh.vertices().iter().map(|v| Vec3::from(v.position)).collect(),
+        normals: mesh.vertices().iter().map(|v| Vec3::from(v.normal)).collect(),
+        targets: targets.into_iter().map(|(p, n)| (pick(p, corners), pick(n, corners))).collect(),
+        weights: Vec::new(),
+    });
+    Ok(Some((mesh, morph)))
 }
 
-/// A mesh without normals, as the spec asks: flat shaded, each triangle its own
-/// three vertices with the face normal.
-fn flat_mesh(positions: &[Vec3], uvs: &[Vec2], colors: Option<&[[f32; 4]]>, indices: &[u32]) -> Result<Mesh, String> {
-    let corners: Vec<usize> = indices.iter().map(|&i| i as usize).collect();
-    let mut normals = Vec::with_capacity(corners.len());
-    for tri in corners.chunks_exact(3) {
-        let [a, b, c] = [positions[tri[0]], positions[tri[1]], positions[tri[2]]];
-        normals.extend([(b - a).cross(c - a).normalize_or(Vec3::Y); 3]);
+/// `v` in the order of `corners` (when the vertices were split), else as it is.
+fn pick<T: Copy>(v: Vec<T>, corners: Option<&[usize]>) -> Vec<T> {
+    match corners {
+        Some(c) => c.iter().map(|&i| v[i]).collect(),
+        None => v,
     }
-    let p: Vec<Vec3> = corners.iter().map(|&i| positions[i]).collect();
-    let t: Vec<Vec2> = corners.iter().map(|&i| uvs[i]).collect();
-    let mesh =
-        Mesh::from_attributes(&p, &normals, &t, (0..corners.len() as u32).collect()).map_err(|e| e.to_string())?;
-    match colors {
-        Some(c) if c.len() == positions.len() => {
-            mesh.with_colors(corners.iter().map(|&i| c[i]).collect()).map_err(|e| e.to_string())
-        }
-        Some(c) => Err(format!("COLOR_0 has {} values for {} positions", c.len(), positions.len())),
-        None => Ok(mesh),
-    }
+}
+
+/// A texture's `KHR_texture_transform` as offset x, y, rotation, scale x, y.
+fn transform_of(info: &gltf::texture::Info) -> [f32; 5] {
+    info.texture_transform().map_or([0.0, 0.0, 0.0, 1.0, 1.0], |t| {
+        let ([ox, oy], [sx, sy]) = (t.offset(), t.scale());
+        [ox, oy, t.rotation(), sx, sy]
+    })
 }
 
 /// Convert decoded pixels to RGBA8, refusing images over [`MAX_TEXTURE_SIDE`].
@@ -343,23 +489,23 @@ fn to_camera(camera: &gltf::Camera, world: Mat4) -> Camera {
     base.looking_at(eye, eye + forward)
 }
 
-/// A `KHR_lights_punctual` light at `world`, and a note when glint has to
-/// approximate it.
-fn to_light(light: &gltf::khr_lights_punctual::Light, world: Mat4) -> (Light, Option<String>) {
+/// A `KHR_lights_punctual` light at `world` (lights shine down their local −Z).
+fn to_light(light: &gltf::khr_lights_punctual::Light, world: Mat4) -> Light {
     use gltf::khr_lights_punctual::Kind;
     let color = Vec3::from(light.color());
     let position = world.transform_point3(Vec3::ZERO);
-    // glTF point intensities are candela; glint's are unitless: scaled down to a usable range.
+    // glTF intensities (candela, lux) are taken as glint's unitless intensities.
     let range = light.range().unwrap_or(100.0);
     match light.kind() {
         Kind::Directional => {
             let direction = world.transform_vector3(Vec3::NEG_Z);
-            (Light::directional(direction, color, light.intensity()), None)
+            Light::directional(direction, color, light.intensity())
         }
-        Kind::Point => (Light::point(position, color, light.intensity(), range), None),
-        Kind::Spot { .. } => (
-            Light::point(position, color, light.intensity(), range),
-            Some("spot light drawn as a point light (spot cones are not supported yet)".into()),
-        ),
+        Kind::Point => Light::point(position, color, light.intensity(), range),
+        Kind::Spot { inner_cone_angle, outer_cone_angle } => {
+            let direction = world.transform_vector3(Vec3::NEG_Z);
+            let cone = (inner_cone_angle, outer_cone_angle);
+            Light::spot(position, direction, color, light.intensity(), range, cone)
+        }
     }
 }

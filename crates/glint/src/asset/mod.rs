@@ -13,7 +13,7 @@ mod scn_fields;
 mod scn_syntax;
 mod texture;
 
-pub use model::{AddedModel, Model, ModelPart};
+pub use model::{AddedModel, Model, ModelPart, Morph, Skin};
 pub use procedural::ShapeKind;
 pub use scn::{
     load_scene, load_scene_with, parse_scene, parse_scene_with, EntityDesc, MaterialDesc, MeshRef, SceneDesc,

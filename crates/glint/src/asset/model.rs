@@ -19,11 +19,67 @@ pub struct ModelPart {
     /// Index into [`Model::materials`]; `None` for the renderer's default material.
     pub material: Option<usize>,
     /// Part-to-model transforms: one per place the part appears (a glTF mesh used
-    /// by several nodes is one part drawn as one instanced draw).
+    /// by several nodes is one part drawn as one instanced draw). Identity for a
+    /// skinned part: its joints place it.
     pub transforms: Vec<Mat4>,
+    /// The skin ([`Model::skins`] index) moving a skinned part's vertices.
+    pub skin: Option<usize>,
+    /// A skinned part's joint matrices in the current pose (model space, inverse
+    /// bind matrices applied), for [`Entity::with_joints`].
+    pub joints: Vec<Mat4>,
+    /// Morph targets, when the mesh has them; `mesh` holds them blended.
+    pub morph: Option<Morph>,
+}
+
+/// A skeleton: the nodes whose poses move a skinned mesh.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Skin {
+    /// Name from the file.
+    pub name: String,
+    /// The joint nodes ([`Model::nodes`] indices), in the order vertices name them.
+    pub joints: Vec<usize>,
+    /// Per joint, the inverse of its model-space transform in the bind pose.
+    pub inverse_bind: Vec<Mat4>,
+}
+
+/// A mesh's morph targets: position and normal offsets per vertex, blended by
+/// weights ([`Morph::apply`], on the CPU; the blended mesh is uploaded again).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Morph {
+    /// Unmorphed positions, one per mesh vertex.
+    pub positions: Vec<Vec3>,
+    /// Unmorphed normals.
+    pub normals: Vec<Vec3>,
+    /// Per target, (position offsets, normal offsets), each one per vertex.
+    pub targets: Vec<(Vec<Vec3>, Vec<Vec3>)>,
+    /// The weights `mesh` was last blended with.
+    pub weights: Vec<f32>,
+}
+
+impl Morph {
+    /// Blend the targets into `mesh` with `weights` (missing weights are 0).
+    /// Returns whether anything changed.
+    pub fn apply(&mut self, mesh: &mut Mesh, weights: &[f32]) -> bool {
+        let w: Vec<f32> = (0..self.targets.len()).map(|i| weights.get(i).copied().unwrap_or(0.0)).collect();
+        if w == self.weights {
+            return false;
+        }
+        let (mut p, mut n) = (self.positions.clone(), self.normals.clone());
+        for (&wt, (dp, dn)) in w.iter().zip(&self.targets).filter(|(w, _)| **w != 0.0) {
+            p.iter_mut().zip(dp).for_each(|(p, d)| *p += *d * wt);
+            n.iter_mut().zip(dn).for_each(|(n, d)| *n += *d * wt);
+        }
+        self.weights = w;
+        mesh.set_positions_normals(&p, &n)
+    }
 }
 
 impl ModelPart {
+    /// A rigid part (no skin, no morph targets).
+    pub fn new(name: String, mesh: Mesh, material: Option<usize>, transforms: Vec<Mat4>) -> Self {
+        Self { name, mesh, material, transforms, skin: None, joints: Vec::new(), morph: None }
+    }
+
     /// The part's world transforms when its model is placed at each of `placements`.
     pub fn placed(&self, placements: &[Mat4]) -> Vec<Mat4> {
         placements.iter().flat_map(|p| self.transforms.iter().map(move |t| *p * *t)).collect()
@@ -45,6 +101,8 @@ pub struct Model {
     pub nodes: Vec<ModelNode>,
     /// Keyframe animations of the nodes; [`Model::pose`] plays the first.
     pub animations: Vec<Animation>,
+    /// Skeletons of the skinned parts.
+    pub skins: Vec<Skin>,
     /// Cameras the file defines, placed in the model.
     pub cameras: Vec<Camera>,
     /// Lights the file defines, placed in the model.
@@ -71,17 +129,45 @@ impl Model {
     }
 
     /// Move the parts to where the first animation puts them at `time` seconds
-    /// (the rest pose for a model without animations; nothing for one without nodes).
-    pub fn pose(&mut self, time: f32) {
-        if self.nodes.is_empty() {
-            return;
-        }
-        let world = super::animation::pose_nodes(&self.nodes, self.animations.first(), time);
-        for (node, transform) in self.nodes.iter().zip(world) {
-            for &(part, k) in &node.placements {
-                self.parts[part].transforms[k] = transform;
+    /// (the rest pose for a model without animations; nothing for one without
+    /// nodes): part transforms, skinned parts' joint matrices and morphed meshes.
+    /// Returns the indices of the parts whose mesh changed (morph targets).
+    pub fn pose(&mut self, time: f32) -> Vec<usize> {
+        let pose = super::animation::pose_nodes(&self.nodes, self.animations.first(), time);
+        self.apply_pose(&pose)
+    }
+
+    /// Move the parts to the rest pose (no animation).
+    pub(crate) fn rest_pose(&mut self) {
+        let pose = super::animation::pose_nodes(&self.nodes, None, 0.0);
+        self.apply_pose(&pose);
+    }
+
+    fn apply_pose(&mut self, pose: &super::animation::Pose) -> Vec<usize> {
+        let mut morphed = Vec::new();
+        for (node, (transform, weights)) in self.nodes.iter().zip(pose.world.iter().zip(&pose.weights)) {
+            for &(p, k) in &node.placements {
+                let part = &mut self.parts[p];
+                part.transforms[k] = if part.skin.is_some() { Mat4::IDENTITY } else { *transform };
+                // A mesh placed by several nodes takes its first node's weights.
+                if let (0, Some(morph)) = (k, part.morph.as_mut()) {
+                    if morph.apply(&mut part.mesh, weights) {
+                        morphed.push(p);
+                    }
+                }
             }
         }
+        for part in &mut self.parts {
+            if let Some(skin) = part.skin.and_then(|s| self.skins.get(s)) {
+                part.joints = skin
+                    .joints
+                    .iter()
+                    .zip(&skin.inverse_bind)
+                    .map(|(&node, ibm)| pose.world.get(node).copied().unwrap_or(Mat4::IDENTITY) * *ibm)
+                    .collect();
+            }
+        }
+        morphed
     }
 
     /// Parse a model from `bytes` as if read from `path`: its extension picks the
@@ -116,10 +202,12 @@ impl Model {
     }
 
     /// The model-space box around every part; `None` for a model without parts.
+    /// Skinned parts count as posed by each of their joints.
     pub fn bounds(&self) -> Option<Aabb> {
         let corners = self.parts.iter().flat_map(|p| {
             let b = p.mesh.aabb();
-            p.transforms.iter().flat_map(move |t| {
+            let places = if p.joints.is_empty() { &p.transforms } else { &p.joints };
+            places.iter().flat_map(move |t| {
                 (0..8).map(move |i| {
                     let pick = |bit: u32, lo: f32, hi: f32| if i & bit == 0 { lo } else { hi };
                     let corner =
@@ -166,7 +254,9 @@ impl Model {
         self.parts
             .iter()
             .zip(&added.parts)
-            .map(|(part, &(shape, material))| Entity::instanced(shape, material, part.placed(placements)))
+            .map(|(part, &(shape, material))| {
+                Entity::instanced(shape, material, part.placed(placements)).with_joints(part.joints.clone())
+            })
             .collect()
     }
 }

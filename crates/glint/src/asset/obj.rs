@@ -48,7 +48,7 @@ pub(crate) fn parse_obj(path: &Path, bytes: &[u8], options: LoadOptions) -> Resu
                         format!("object '{part_name}' uses a material no library defines; drawn with the default");
                     warnings.push(Diagnostic::file(path, message));
                 }
-                parts.push(ModelPart { name: part_name, mesh, material, transforms: vec![Mat4::IDENTITY] });
+                parts.push(ModelPart::new(part_name, mesh, material, vec![Mat4::IDENTITY]));
             }
             Ok(None) => {}
             Err(e) => return Err(Diagnostic::file(path, format!("object '{part_name}': {e}"))),
@@ -65,6 +65,7 @@ pub(crate) fn parse_obj(path: &Path, bytes: &[u8], options: LoadOptions) -> Resu
         textures,
         nodes: Vec::new(),
         animations: Vec::new(),
+        skins: Vec::new(),
         cameras: Vec::new(),
         lights: Vec::new(),
         warnings,

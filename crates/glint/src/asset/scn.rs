@@ -114,13 +114,15 @@ impl SceneDesc {
     }
 
     /// Pose every model at `time` seconds (see [`Model::pose`]) and move the
-    /// matching `entities` (as [`SceneDesc::instantiate`] returned them) along:
-    /// only entities of animated models change, so only they are uploaded again.
-    pub fn pose(&mut self, time: f32, entities: &mut [Entity]) {
+    /// matching `entities` (as [`SceneDesc::instantiate`] returned them into
+    /// `renderer`) along: only entities of animated models change, so only they
+    /// are uploaded again; morphed meshes replace their shapes in `renderer`.
+    pub fn pose(&mut self, time: f32, entities: &mut [Entity], renderer: &mut Renderer) {
         let mut moved = vec![false; self.models.len()];
-        for (model, moved) in self.models.iter_mut().zip(&mut moved) {
+        let mut morphed = vec![Vec::new(); self.models.len()];
+        for ((model, moved), morphed) in self.models.iter_mut().zip(&mut moved).zip(&mut morphed) {
             *moved = !model.animations.is_empty();
-            model.pose(time);
+            *morphed = model.pose(time);
         }
         let mut next = 0;
         for e in &self.entities {
@@ -128,9 +130,13 @@ impl SceneDesc {
                 MeshRef::Shape(_) => next += 1,
                 MeshRef::Model(i) => {
                     let model = &self.models[i];
-                    for (part, entity) in model.parts.iter().zip(entities[next..].iter_mut()) {
+                    for (k, (part, entity)) in model.parts.iter().zip(entities[next..].iter_mut()).enumerate() {
                         if moved[i] {
                             *entity.transforms_mut() = part.placed(&e.transforms);
+                            entity.joints_mut().clone_from(&part.joints);
+                        }
+                        if morphed[i].contains(&k) {
+                            renderer.update_shape(entity.shape, part.mesh.clone());
                         }
                     }
                     next += model.parts.len();
@@ -307,6 +313,8 @@ fn material_fields(f: &mut Fields, base: Material) -> Result<Material, Diagnosti
         alpha_mode,
         double_sided: f.flag("double_sided")?.unwrap_or(base.double_sided),
         uv_scale: f.numbers::<2>("uv_scale", "2 numbers (u v)")?.map_or(base.uv_scale, glam::Vec2::from),
+        uv_offset: f.numbers::<2>("uv_offset", "2 numbers (u v)")?.map_or(base.uv_offset, glam::Vec2::from),
+        uv_rotation: f.number("uv_rotation", -360.0..=360.0)?.map_or(base.uv_rotation, f32::to_radians),
         shading: match f.choice("shading", &["blinn_phong", "unlit", "metallic_roughness"])? {
             None => base.shading,
             Some((0, _)) => ShadingModel::BlinnPhong,
@@ -400,6 +408,7 @@ impl Loader<'_> {
             "camera" => self.camera(&mut f)?,
             "light_directional" => self.light_directional(&mut f)?,
             "light_point" => self.light_point(&mut f)?,
+            "light_spot" => self.light_spot(&mut f)?,
             "material" => self.material(&mut f)?,
             "entity" => self.entity(&mut f)?,
             "instances" => self.instances(&mut f)?,
@@ -407,7 +416,7 @@ impl Loader<'_> {
                 return Err(Diagnostic::at(
                     self.path,
                     class_pair.line,
-                    format!("unknown classname '{other}', expected one of: world, camera, light_directional, light_point, material, entity, instances"),
+                    format!("unknown classname '{other}', expected one of: world, camera, light_directional, light_point, light_spot, material, entity, instances"),
                 ))
             }
         }
@@ -510,6 +519,21 @@ impl Loader<'_> {
         let (color, intensity) = Self::light_common(f)?;
         let range = f.number("range", 1e-3..=1e9)?.unwrap_or(10.0);
         self.add_light(f, Light::point(origin, color, intensity, range))
+    }
+
+    fn light_spot(&mut self, f: &mut Fields) -> Result<(), Diagnostic> {
+        let origin = Vec3::from(numbers::<3>(self.path, f.require("origin")?, "3 numbers (x y z)")?);
+        let pair = f.require("direction")?;
+        let direction = Vec3::from(numbers::<3>(self.path, pair, "3 numbers (x y z)")?);
+        if direction.length_squared() < 1e-12 {
+            return Err(Diagnostic::at(self.path, pair.line, "\"direction\" must not be zero"));
+        }
+        let (color, intensity) = Self::light_common(f)?;
+        let range = f.number("range", 1e-3..=1e9)?.unwrap_or(10.0);
+        let outer = f.number("outer_angle", 0.1..=90.0)?.unwrap_or(30.0);
+        let inner = f.number("inner_angle", 0.0..=outer)?.unwrap_or(outer * 0.8);
+        let cone = (inner.to_radians(), outer.to_radians());
+        self.add_light(f, Light::spot(origin, direction, color, intensity, range, cone))
     }
 
     fn texture(&mut self, f: &mut Fields, key: &str, srgb: bool) -> Result<Option<TextureRef>, Diagnostic> {

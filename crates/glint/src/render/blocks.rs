@@ -12,21 +12,41 @@ pub(crate) struct LightGpu {
     position: [f32; 4],
     /// rgb colour × intensity, w range (16 bytes).
     color: [f32; 4],
+    /// xyz the spot's axis, w the cone's scale; the cone factor is
+    /// `saturate(dot(axis, -l) · scale + offset)²` (1 for other lights) (16 bytes).
+    spot: [f32; 4],
+    /// x the cone's offset, yzw reserved (16 bytes).
+    spot_offset: [f32; 4],
 }
-const _: () = assert!(std::mem::size_of::<LightGpu>() == 32);
+const _: () = assert!(std::mem::size_of::<LightGpu>() == 64);
 
 impl Light {
     /// The shader's view of this light.
     pub(crate) fn to_gpu(self) -> LightGpu {
+        // A light without a cone: scale 0, offset 1.
+        let (mut spot, mut offset) = ([0.0; 4], 1.0);
         let (position, range) = match self.kind {
             LightKind::Directional { direction } => (direction.normalize_or(glam::Vec3::NEG_Y).extend(0.0), 0.0),
             LightKind::Point { position, range } => (position.extend(1.0), range.max(1e-3)),
+            LightKind::Spot { position, direction, range, inner_angle, outer_angle } => {
+                let outer = outer_angle.clamp(1e-3, std::f32::consts::FRAC_PI_2).cos();
+                let inner = inner_angle.clamp(0.0, outer_angle).cos();
+                let scale = 1.0 / (inner - outer).max(1e-3);
+                spot = direction.normalize_or(glam::Vec3::NEG_Y).extend(scale).to_array();
+                offset = -outer * scale;
+                (position.extend(1.0), range.max(1e-3))
+            }
         };
-        LightGpu { position: position.to_array(), color: (self.color * self.intensity).extend(range).to_array() }
+        LightGpu {
+            position: position.to_array(),
+            color: (self.color * self.intensity).extend(range).to_array(),
+            spot,
+            spot_offset: [offset, 0.0, 0.0, 0.0],
+        }
     }
 }
 
-/// The Scene block, `@group(0) @binding(0)` (2,128 bytes).
+/// The Scene block, `@group(0) @binding(0)` (4,176 bytes).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub(crate) struct SceneGpu {
@@ -35,9 +55,9 @@ pub(crate) struct SceneGpu {
     sky_bottom: [f32; 4],           // 16
     fog: [f32; 4],                  // 16: rgb colour, w density
     counts: [u32; 4],               // 16: light count, 3 reserved
-    lights: [LightGpu; MAX_LIGHTS], // 64 × 32
+    lights: [LightGpu; MAX_LIGHTS], // 64 × 64
 }
-const _: () = assert!(std::mem::size_of::<SceneGpu>() == 80 + 32 * MAX_LIGHTS);
+const _: () = assert!(std::mem::size_of::<SceneGpu>() == 80 + 64 * MAX_LIGHTS);
 
 impl SceneGpu {
     /// Pack the environment and up to [`MAX_LIGHTS`] lights (the caller checks the count).
@@ -87,7 +107,7 @@ impl Camera {
 }
 
 /// One material as the shader reads it: an element of the material table,
-/// `@group(2) @binding(0)`, indexed by material id (80 bytes).
+/// `@group(2) @binding(0)`, indexed by material id (96 bytes).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub(crate) struct MaterialGpu {
@@ -95,11 +115,12 @@ pub(crate) struct MaterialGpu {
     coeffs: [f32; 4],     // 16: ambient, diffuse, specular, Blinn-Phong exponent
     pbr: [f32; 4],        // 16: metallic, roughness, 2 reserved
     emissive: [f32; 4],   // 16: rgb, reserved
+    uv_x: [f32; 3],       // 12: first row of the 2×3 uv transform
     alpha_cutoff: f32,    // 4
-    reserved: u32,        // 4
-    uv_scale: [f32; 2],   // 8
+    uv_y: [f32; 3],       // 12: second row
+    uv1_maps: u32,        // 4: MapSlots reading the second uv set
 }
-const _: () = assert!(std::mem::size_of::<MaterialGpu>() == 80);
+const _: () = assert!(std::mem::size_of::<MaterialGpu>() == 96);
 
 impl Material {
     /// The shader's view of this material (what it does with them is the variant's
@@ -110,14 +131,16 @@ impl Material {
             AlphaMode::Opaque | AlphaMode::Blend => 0.0,
         };
         let exponent = (1.0 + 11.0 * self.smoothness.clamp(0.0, 1.0)).exp2();
+        let (s, c) = self.uv_rotation.sin_cos();
         MaterialGpu {
             base_color: self.base_color.to_array(),
             coeffs: Vec4::new(self.ambient, self.diffuse, self.specular, exponent).to_array(),
             pbr: [self.metallic.clamp(0.0, 1.0), self.roughness.clamp(0.0, 1.0), 0.0, 0.0],
             emissive: self.emissive.extend(0.0).to_array(),
+            uv_x: [c * self.uv_scale.x, -s * self.uv_scale.y, self.uv_offset.x],
             alpha_cutoff: cutoff,
-            reserved: 0,
-            uv_scale: self.uv_scale.to_array(),
+            uv_y: [s * self.uv_scale.x, c * self.uv_scale.y, self.uv_offset.y],
+            uv1_maps: self.uv1_maps.bits(),
         }
     }
 }
@@ -126,12 +149,18 @@ impl Material {
 /// top three rows of its object-to-world matrix (the bottom row of an object
 /// transform is 0 0 0 1, and is taken to be) and its material's index in the
 /// material table, so draws of different materials can share one indirect call.
+/// A skinned entity's joint matrices are stored as records of this same shape
+/// right after its instances (rows only), so they live, move and upload with them.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub(crate) struct InstanceGpu {
     rows: [[f32; 4]; 3], // 48
     material: u32,       // 4
-    reserved: [u32; 3],  // 12
+    /// Records from this one to its entity's first joint matrix (0: not skinned).
+    pub(crate) joints: u32, // 4
+    /// How many joint matrices the entity has.
+    pub(crate) joint_count: u32, // 4
+    reserved: u32,       // 4
 }
 const _: () = assert!(std::mem::size_of::<InstanceGpu>() == 64);
 
@@ -142,8 +171,13 @@ impl InstanceGpu {
         Self {
             rows: [t.x_axis.to_array(), t.y_axis.to_array(), t.z_axis.to_array()],
             material: material.0,
-            reserved: [0; 3],
+            ..Self::default()
         }
+    }
+
+    /// This instance skinned by `count` joint matrices stored `offset` records after it.
+    pub(crate) fn with_joints(self, offset: u32, count: u32) -> Self {
+        Self { joints: offset, joint_count: count, ..self }
     }
 
     /// The instance's transform, bottom row 0 0 0 1.

@@ -10,6 +10,10 @@
 //! instances one by one only in patches that cross a frustum plane (the vegetation
 //! demo's tiled instancing). The order inside an entity's range is the store's
 //! business: nothing outside it names instances by position.
+//!
+//! A skinned entity's range holds its instances, then its joint matrices in the
+//! same record format; each instance records how far ahead its joints start, so
+//! the range can move (compaction) without rewriting it.
 
 use super::blocks::InstanceGpu;
 use super::cull::{transform_aabb, Boxes};
@@ -25,10 +29,14 @@ pub(crate) struct Slot {
     version: u64,
     shape: ShapeId,
     material: MaterialId,
+    /// The shape's local box when the range was written.
+    local: Aabb,
     /// First instance in the store.
     pub first: u32,
     /// Instance count.
     pub count: u32,
+    /// Joint matrices stored after the instances.
+    joints: u32,
     /// Union of the valid instances' world boxes (centre, half extent); `None` when
     /// no instance is valid.
     pub bounds: Option<(Vec3A, Vec3A)>,
@@ -40,6 +48,13 @@ pub(crate) struct Slot {
     pub clusters: Vec<(Vec3A, Vec3A)>,
     /// Frame in which the entity was last submitted.
     last_frame: u64,
+}
+
+impl Slot {
+    /// Records the entity occupies: instances, then joints.
+    fn len(&self) -> usize {
+        (self.count + self.joints) as usize
+    }
 }
 
 /// All instances of all entities submitted recently.
@@ -71,9 +86,10 @@ impl InstanceStore {
     }
 
     /// Record `entity` as submitted in `frame`, writing its transforms and bounds if
-    /// they changed (or it is new, or its shape or material changed). Returns its slot index.
+    /// they changed (or it is new, or its shape, the shape's box or its material changed). Returns its slot index.
     pub(crate) fn submit(&mut self, entity: &Entity, local: Aabb, frame: u64) -> usize {
         let count = entity.transforms().len() as u32;
+        let joints = entity.joints().len() as u32;
         let index = match self.by_key.get(&entity.key()) {
             Some(&i) => i,
             None => {
@@ -82,8 +98,10 @@ impl InstanceStore {
                     version: entity.version().wrapping_sub(1),
                     shape: entity.shape,
                     material: entity.material,
+                    local,
                     first: self.instances.len() as u32,
                     count: 0,
+                    joints: 0,
                     bounds: None,
                     invalid: 0,
                     clusters: Vec::new(),
@@ -95,33 +113,32 @@ impl InstanceStore {
         };
         let slot = &mut self.slots[index];
         slot.last_frame = frame;
-        if slot.count != count {
+        if slot.count != count || slot.joints != joints {
             // A new size needs a new range at the end; the old one becomes garbage.
-            self.garbage += slot.count as usize;
+            self.garbage += slot.len();
             slot.first = self.instances.len() as u32;
             slot.count = count;
-            let new_len = self.instances.len() + count as usize;
+            slot.joints = joints;
+            let new_len = self.instances.len() + slot.len();
             self.instances.resize(new_len, InstanceGpu::default());
             self.bounds.resize(new_len);
             slot.version = entity.version().wrapping_sub(1);
         }
-        if slot.version != entity.version() || slot.shape != entity.shape || slot.material != entity.material {
+        if slot.version != entity.version()
+            || slot.shape != entity.shape
+            || slot.material != entity.material
+            || slot.local != local
+        {
             slot.version = entity.version();
+            slot.local = local;
             slot.shape = entity.shape;
             slot.material = entity.material;
-            let range = slot.first as usize..(slot.first + slot.count) as usize;
-            let written = write_range(
-                entity.transforms(),
-                local,
-                entity.material,
-                &mut self.instances[range.clone()],
-                &mut self.bounds,
-                range.start,
-            );
+            let range = slot.first as usize..slot.first as usize + slot.len();
+            let written = write_range(entity, local, &mut self.instances[range.clone()], &mut self.bounds, range.start);
             slot.bounds = written.bounds;
             slot.invalid = written.invalid;
             slot.clusters = written.clusters;
-            self.dirty.push(slot.first..slot.first + slot.count);
+            self.dirty.push(range.start as u32..range.end as u32);
         }
         index
     }
@@ -131,7 +148,7 @@ impl InstanceStore {
     /// `frame` and mark everything for upload. Returns the slot indices remapped:
     /// `remap[old] = new` (`usize::MAX` if dropped).
     pub(crate) fn compact_if_wasteful(&mut self, frame: u64) -> Option<Vec<usize>> {
-        let stale: usize = self.slots.iter().filter(|s| s.last_frame != frame).map(|s| s.count as usize).sum();
+        let stale: usize = self.slots.iter().filter(|s| s.last_frame != frame).map(Slot::len).sum();
         let waste = self.garbage + stale;
         if waste < 4096 || waste < self.instances.len() / 2 {
             return None;
@@ -140,7 +157,7 @@ impl InstanceStore {
         let (mut instances, mut bounds) = (Vec::new(), Boxes::default());
         let mut slots = Vec::new();
         for (old, slot) in self.slots.iter().enumerate().filter(|(_, s)| s.last_frame == frame) {
-            let range = slot.first as usize..(slot.first + slot.count) as usize;
+            let range = slot.first as usize..slot.first as usize + slot.len();
             let mut moved = slot.clone();
             moved.first = instances.len() as u32;
             instances.extend_from_slice(&self.instances[range.clone()]);
@@ -191,19 +208,18 @@ struct Written {
     clusters: Vec<(Vec3A, Vec3A)>,
 }
 
-/// Copy transforms into the store with their material, in Morton order of their
-/// world positions with the invalid ones last, and compute each instance's world box
-/// (boxes from `first` on) and each tile's. Invalid (non-finite) transforms become
-/// zero matrices with a never-visible box, so NaN never reaches the GPU or the culler.
-fn write_range(
-    src: &[Mat4],
-    local: Aabb,
-    material: MaterialId,
-    instances: &mut [InstanceGpu],
-    boxes: &mut Boxes,
-    first: usize,
-) -> Written {
-    let (lc, le) = (Vec3A::from(local.center()), Vec3A::from(local.half_extent()));
+/// Copy an entity's transforms into the store with its material, in Morton order
+/// of their world positions with the invalid ones last, and compute each
+/// instance's world box (boxes from `first` on) and each tile's; then its joint
+/// matrices. Invalid (non-finite) transforms and joints become zero matrices with
+/// a never-visible box, so NaN never reaches the GPU or the culler.
+///
+/// A skinned entity's local box is the union of the shape's box moved by each
+/// joint: every skinned vertex is a weighted average of points in those boxes.
+fn write_range(entity: &Entity, local: Aabb, records: &mut [InstanceGpu], boxes: &mut Boxes, first: usize) -> Written {
+    let (src, material) = (entity.transforms(), entity.material);
+    let (instances, joint_records) = records.split_at_mut(src.len());
+    let (lc, le) = skinned_box(entity.joints(), local);
     let world: Vec<Option<(Vec3A, Vec3A)>> =
         src.iter().map(|m| m.is_finite().then(|| transform_aabb(m, lc, le))).collect();
     let (lo, hi) = world
@@ -231,7 +247,9 @@ fn write_range(
             let at = tile * CLUSTER + k;
             match world[i as usize] {
                 Some((c, e)) => {
-                    instances[at] = InstanceGpu::new(&src[i as usize], material);
+                    let joints = joint_records.len() as u32;
+                    let offset = if joints > 0 { (src.len() - at) as u32 } else { 0 };
+                    instances[at] = InstanceGpu::new(&src[i as usize], material).with_joints(offset, joints);
                     boxes.set(first + at, c, e);
                     lo = lo.min(c - e);
                     hi = hi.max(c + e);
@@ -251,7 +269,26 @@ fn write_range(
     if clusters.len() < 2 {
         clusters.clear();
     }
+    for (k, (record, joint)) in joint_records.iter_mut().zip(entity.joints()).enumerate() {
+        let joint = if joint.is_finite() { *joint } else { Mat4::ZERO };
+        *record = InstanceGpu::new(&joint, material);
+        boxes.set_never_visible(first + src.len() + k);
+    }
     Written { bounds, invalid, clusters }
+}
+
+/// Centre and half extent of the local box `local` as skinned by `joints` (the
+/// box itself for an entity without joints).
+fn skinned_box(joints: &[Mat4], local: Aabb) -> (Vec3A, Vec3A) {
+    let (c, e) = (Vec3A::from(local.center()), Vec3A::from(local.half_extent()));
+    let moved = joints.iter().filter(|j| j.is_finite()).map(|j| transform_aabb(j, c, e));
+    let Some((lo, hi)) = moved.fold(None, |acc: Option<(Vec3A, Vec3A)>, (c, e)| {
+        let (lo, hi) = acc.unwrap_or((c - e, c + e));
+        Some((lo.min(c - e), hi.max(c + e)))
+    }) else {
+        return (c, e);
+    };
+    ((lo + hi) * 0.5, (hi - lo) * 0.5)
 }
 
 /// Interleave the low 10 bits of x, y and z into a 30-bit Morton code.
@@ -367,6 +404,26 @@ mod tests {
             area += 4.0 * e.x * e.z;
         }
         assert!(area / (clusters.len() as f32) < 0.2 * 200.0 * 200.0, "mean tile area {area}");
+    }
+
+    #[test]
+    fn joint_matrices_follow_their_instances_and_widen_the_bounds() {
+        let mut store = InstanceStore::default();
+        let lift = Mat4::from_translation(Vec3::Y * 10.0);
+        let e = entity(2).with_joints(vec![Mat4::IDENTITY, lift, Mat4::IDENTITY]);
+        let other = entity(1);
+        store.submit(&other, unit(), 0);
+        let slot = store.submit(&e, unit(), 0);
+        assert_eq!(store.len(), 1 + 2 + 3, "two instances then three joints");
+        let first = store.slot(slot).first as usize;
+        for at in first..first + 2 {
+            let record = store.instances[at];
+            assert_eq!((at as u32 + record.joints, record.joint_count), (first as u32 + 2, 3), "points at joint 0");
+        }
+        assert_eq!(store.instances[first + 3].transform(), lift, "joints stored in order");
+        assert!(!store.bounds.is_valid(first + 2), "joint records are never culled as instances");
+        let (c, e) = store.slot(slot).bounds.unwrap();
+        assert!((c.y + e.y - 10.5).abs() < 1e-5, "the lifted joint's box counts: top {}", c.y + e.y);
     }
 
     #[test]

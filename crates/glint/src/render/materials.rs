@@ -20,7 +20,7 @@ impl Renderer {
         let slot = self.materials.get(id.0 as usize).ok_or(RenderError::UnknownMaterial(id))?;
         let fog = self.environment.fog.is_some();
         let current = slot.gpu.as_ref().filter(|g| !slot.dirty && g.samples == samples && g.fog == fog);
-        if current.is_some_and(|g| g.pipelines[layout as usize].is_some()) {
+        if current.is_some_and(|g| g.pipelines[layout.index()].is_some()) {
             return Ok(());
         }
         let material = slot.material.clone();
@@ -57,14 +57,14 @@ impl Renderer {
                 stats.bytes_uploaded.material += self.material_table.write(&self.queue, id.0, &material.to_gpu());
                 slot.dirty = false;
             }
-            slot.gpu = Some(MaterialGpuTwin { texture_set, pipelines: [None; 2], samples, fog });
+            slot.gpu = Some(MaterialGpuTwin { texture_set, pipelines: [None; VertexLayout::COUNT], samples, fog });
         }
         let features = ShaderFeatures::for_material(&material, &self.environment);
         let key = Pipelines::key(features, layout, material.render_states(), samples);
         let (pipeline, built) = self.pipelines.forward_id(&self.device, key)?;
         stats.pipelines_compiled += u32::from(built);
         let twin = self.materials[id.0 as usize].gpu.as_mut().expect("made above");
-        twin.pipelines[layout as usize] = Some(pipeline);
+        twin.pipelines[layout.index()] = Some(pipeline);
         Ok(())
     }
 

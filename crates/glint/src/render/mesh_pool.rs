@@ -5,11 +5,11 @@
 //! index count.
 //!
 //! A page holds meshes of one [`VertexLayout`], one buffer per vertex stream
-//! (the interleaved [`Vertex`](crate::scene::Vertex) stream, plus colours for
-//! [`VertexLayout::Colored`]). Pages grow by doubling, copying their contents on
+//! (the interleaved [`Vertex`](crate::scene::Vertex) stream, plus those of the
+//! optional colours, second uv set and skin weights the layout has). Pages grow by doubling, copying their contents on
 //! the GPU, up to the device's largest buffer; then a new page starts.
 
-use super::pipelines::VertexLayout;
+use super::pipelines::{Stream, VertexLayout};
 use crate::scene::Mesh;
 
 /// Where a shape's geometry lives in the pool.
@@ -67,7 +67,7 @@ impl MeshPool {
         mesh: &Mesh,
     ) -> Result<(MeshRange, u64), MeshTooLarge> {
         let layout = VertexLayout::of(mesh);
-        let streams = stream_bytes(mesh);
+        let streams: Vec<&[u8]> = layout.streams().map(|s| s.bytes(mesh)).collect();
         let vertex_count = mesh.vertices().len() as u64;
         let index_bytes: u64 = (mesh.indices().len() * 4) as u64;
         let largest = streams.iter().map(|s| s.len() as u64).chain([index_bytes]).max().unwrap_or(0);
@@ -76,7 +76,7 @@ impl MeshPool {
         }
         let fits = |p: &Page| {
             p.layout == layout
-                && (p.vertices_used + vertex_count) * u64::from(layout.strides()[0]) <= self.max_bytes
+                && (p.vertices_used + vertex_count) * u64::from(Stream::Base.stride()) <= self.max_bytes
                 && p.indices_used * 4 + index_bytes <= self.max_bytes
         };
         let index_count = mesh.indices().len() as u64;
@@ -91,8 +91,8 @@ impl MeshPool {
         let page = &mut self.pages[index];
         let (vertices, indices) = (page.vertices_used + vertex_count, page.indices_used + index_count);
         page.reserve(device, queue, index, vertices, indices, self.max_bytes);
-        for ((buffer, bytes), stride) in page.streams.iter().zip(&streams).zip(layout.strides()) {
-            queue.write_buffer(buffer, page.vertices_used * u64::from(*stride), bytes);
+        for ((buffer, bytes), stream) in page.streams.iter().zip(&streams).zip(layout.streams()) {
+            queue.write_buffer(buffer, page.vertices_used * u64::from(stream.stride()), bytes);
         }
         queue.write_buffer(&page.indices, page.indices_used * 4, bytemuck::cast_slice(mesh.indices()));
         let range = MeshRange {
@@ -107,24 +107,25 @@ impl MeshPool {
         Ok((range, written))
     }
 
+    /// Write `mesh`'s base vertex stream over the shape at `range`, which holds a
+    /// mesh of the same layout and vertex count (positions and normals changed,
+    /// e.g. by morph targets). Returns the bytes written.
+    pub(crate) fn rewrite_vertices(&self, queue: &wgpu::Queue, range: MeshRange, mesh: &Mesh) -> u64 {
+        let page = &self.pages[range.page as usize];
+        let bytes = Stream::Base.bytes(mesh);
+        queue.write_buffer(&page.streams[0], range.base_vertex as u64 * u64::from(Stream::Base.stride()), bytes);
+        bytes.len() as u64
+    }
+
     /// Bind page `page`'s vertex streams and index buffer.
     pub(crate) fn bind(&self, pass: &mut wgpu::RenderPass<'_>, page: u16) {
         let page = &self.pages[page as usize];
         // Only the filled part: the rest was never written.
-        for ((slot, buffer), stride) in page.streams.iter().enumerate().zip(page.layout.strides()) {
-            pass.set_vertex_buffer(slot as u32, buffer.slice(..page.vertices_used * u64::from(*stride)));
+        for ((slot, buffer), stream) in page.streams.iter().enumerate().zip(page.layout.streams()) {
+            pass.set_vertex_buffer(slot as u32, buffer.slice(..page.vertices_used * u64::from(stream.stride())));
         }
         pass.set_index_buffer(page.indices.slice(..page.indices_used * 4), wgpu::IndexFormat::Uint32);
     }
-}
-
-/// The bytes of each vertex stream of `mesh`, in the order of its layout.
-fn stream_bytes(mesh: &Mesh) -> Vec<&[u8]> {
-    let mut streams = vec![bytemuck::cast_slice(mesh.vertices())];
-    if let Some(colors) = mesh.colors() {
-        streams.push(bytemuck::cast_slice(colors));
-    }
-    streams
 }
 
 impl Page {
@@ -139,11 +140,11 @@ impl Page {
             })
         };
         let streams = layout
-            .strides()
-            .iter()
+            .streams()
             .enumerate()
-            .map(|(s, &stride)| {
-                let bytes = (vertices * u64::from(stride)).max(FIRST_VERTEX_BYTES).next_power_of_two().min(max);
+            .map(|(s, stream)| {
+                let bytes =
+                    (vertices * u64::from(stream.stride())).max(FIRST_VERTEX_BYTES).next_power_of_two().min(max);
                 buffer(format!("mesh pool: page {index} ({layout:?}) stream {s}"), bytes, wgpu::BufferUsages::VERTEX)
             })
             .collect();
@@ -166,15 +167,15 @@ impl Page {
         indices: u64,
         max: u64,
     ) {
-        let stride = u64::from(self.layout.strides()[0]);
+        let stride = u64::from(Stream::Base.stride());
         if vertices * stride <= self.streams[0].size() && indices * 4 <= self.indices.size() {
             return;
         }
         let mut grown = Page::new(device, self.layout, index, vertices, indices, max);
         let mut encoder =
             device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("mesh pool: grow page") });
-        for ((old, new), stride) in self.streams.iter().zip(&grown.streams).zip(self.layout.strides()) {
-            encoder.copy_buffer_to_buffer(old, 0, new, 0, Some(self.vertices_used * u64::from(*stride)));
+        for ((old, new), stream) in self.streams.iter().zip(&grown.streams).zip(self.layout.streams()) {
+            encoder.copy_buffer_to_buffer(old, 0, new, 0, Some(self.vertices_used * u64::from(stream.stride())));
         }
         encoder.copy_buffer_to_buffer(&self.indices, 0, &grown.indices, 0, Some(self.indices_used * 4));
         queue.submit([encoder.finish()]);

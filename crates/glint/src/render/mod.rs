@@ -87,6 +87,8 @@ struct ShapeSlot {
     layout: VertexLayout,
     /// Where the mesh lives in the pool, once uploaded.
     gpu: Option<MeshRange>,
+    /// The vertices changed in place since they were uploaded.
+    rewrite: bool,
 }
 
 struct MaterialSlot {
@@ -102,7 +104,7 @@ struct MaterialGpuTwin {
     texture_set: u16,
     /// Forward pipeline id per vertex layout (by `VertexLayout as usize`), built on
     /// first use with a mesh of that layout.
-    pipelines: [Option<u16>; 2],
+    pipelines: [Option<u16>; VertexLayout::COUNT],
     samples: u32,
     /// Whether the environment had fog when the pipelines were chosen.
     fog: bool,
@@ -313,8 +315,27 @@ impl Renderer {
 
     /// Add a shape; its buffers are created the first time an entity using it is drawn.
     pub fn add_shape(&mut self, mesh: Mesh) -> ShapeId {
-        self.shapes.push(ShapeSlot { layout: VertexLayout::of(&mesh), mesh, gpu: None });
+        self.shapes.push(ShapeSlot { layout: VertexLayout::of(&mesh), mesh, gpu: None, rewrite: false });
         ShapeId(self.shapes.len() as u32 - 1)
+    }
+
+    /// Replace a shape's mesh (e.g. with morph targets applied). A mesh with the
+    /// same streams, vertex count and indices as the old one is written over it
+    /// (only the base vertex stream is uploaded); any other goes to a new place in
+    /// the mesh pool. Entities drawing the shape pick up its new bounds. Returns
+    /// false (and changes nothing) when `id` is not this renderer's.
+    pub fn update_shape(&mut self, id: ShapeId, mesh: Mesh) -> bool {
+        let Some(slot) = self.shapes.get_mut(id.0 as usize) else { return false };
+        let same = VertexLayout::of(&mesh) == slot.layout
+            && mesh.vertices().len() == slot.mesh.vertices().len()
+            && mesh.indices() == slot.mesh.indices();
+        if same {
+            slot.rewrite = slot.gpu.is_some();
+        } else {
+            (slot.layout, slot.gpu, slot.rewrite) = (VertexLayout::of(&mesh), None, false);
+        }
+        slot.mesh = mesh;
+        true
     }
 
     /// The mesh of a shape (for its bounds), if `id` is this renderer's.
@@ -548,6 +569,9 @@ impl Renderer {
                 slot.gpu = Some(range);
                 stats.bytes_uploaded.meshes += bytes;
             }
+            if let (true, Some(range)) = (std::mem::take(&mut slot.rewrite), slot.gpu) {
+                stats.bytes_uploaded.meshes += self.mesh_pool.rewrite_vertices(&self.queue, range, &slot.mesh);
+            }
             let layout = slot.layout;
             self.prepare_material(material, layout, samples, stats)?;
         }
@@ -674,7 +698,7 @@ impl Renderer {
     fn pipeline_of(&self, s: &Submitted) -> u16 {
         let layout = self.shapes[s.shape.0 as usize].layout;
         let twin = self.materials[s.material.0 as usize].gpu.as_ref().expect("prepared");
-        twin.pipelines[layout as usize].expect("prepared")
+        twin.pipelines[layout.index()].expect("prepared")
     }
 
     /// Stage 5 (continued): one indirect draw command per batch, when drawing indirect.

@@ -7,37 +7,92 @@
 //! index in the cache is its id in sort keys.
 
 use crate::gpu::{COLOR_FORMAT, DEPTH_FORMAT};
-use crate::scene::{BlendState, Compare, Cull, Mesh, RenderStates, StencilOp, Vertex};
+use crate::scene::{BlendState, Compare, Cull, Mesh, RenderStates, SkinVertex, StencilOp, Vertex};
 use crate::shader::{ShaderError, ShaderFeatures, ShaderLibrary};
 use std::borrow::Cow;
 use std::collections::HashMap;
 
-/// Vertex buffer layouts a pipeline can read.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub(crate) enum VertexLayout {
-    /// [`Vertex`]: position, normal, uv, tangent in one interleaved buffer.
-    Standard,
-    /// [`Vertex`] in buffer 0 and a linear RGBA colour (`@location(4)`) in buffer 1.
-    Colored,
+/// One vertex buffer of a mesh: the interleaved [`Vertex`] stream, or one of
+/// the optional ones, in this order (a layout's streams are buffer slots 0, 1, ...).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Stream {
+    /// [`Vertex`]: position, normal, uv, tangent (`@location(0..=3)`).
+    Base,
+    /// Linear RGBA colour (`@location(4)`).
+    Color,
+    /// Second texture coordinate (`@location(5)`).
+    Uv1,
+    /// Joints and weights, [`SkinVertex`] (`@location(6)`, `@location(7)`).
+    Skin,
+}
+
+impl Stream {
+    /// Bytes per vertex.
+    pub(crate) fn stride(self) -> u32 {
+        match self {
+            Self::Base => std::mem::size_of::<Vertex>() as u32,
+            Self::Color => 16,
+            Self::Uv1 => 8,
+            Self::Skin => std::mem::size_of::<SkinVertex>() as u32,
+        }
+    }
+
+    fn attributes(self) -> &'static [wgpu::VertexAttribute] {
+        const BASE: [wgpu::VertexAttribute; 4] =
+            wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x2, 3 => Float32x4];
+        const COLOR: [wgpu::VertexAttribute; 1] = wgpu::vertex_attr_array![4 => Float32x4];
+        const UV1: [wgpu::VertexAttribute; 1] = wgpu::vertex_attr_array![5 => Float32x2];
+        const SKIN: [wgpu::VertexAttribute; 2] = wgpu::vertex_attr_array![6 => Uint16x4, 7 => Float32x4];
+        match self {
+            Self::Base => &BASE,
+            Self::Color => &COLOR,
+            Self::Uv1 => &UV1,
+            Self::Skin => &SKIN,
+        }
+    }
+
+    /// This stream's bytes in `mesh` (empty when the mesh lacks it).
+    pub(crate) fn bytes(self, mesh: &Mesh) -> &[u8] {
+        match self {
+            Self::Base => bytemuck::cast_slice(mesh.vertices()),
+            Self::Color => mesh.colors().map_or(&[], bytemuck::cast_slice),
+            Self::Uv1 => mesh.uv1().map_or(&[], bytemuck::cast_slice),
+            Self::Skin => mesh.skin().map_or(&[], bytemuck::cast_slice),
+        }
+    }
+}
+
+/// Which vertex streams a mesh has (the base stream always): a pipeline reads
+/// exactly these, and each optional one sets its shader feature bit.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub(crate) struct VertexLayout {
+    /// Vertex colours ([`ShaderFeatures::VERTEX_COLOR`]).
+    pub colors: bool,
+    /// A second uv set ([`ShaderFeatures::UV1`]).
+    pub uv1: bool,
+    /// Joints and weights ([`ShaderFeatures::SKINNED`]).
+    pub skin: bool,
 }
 
 impl VertexLayout {
     /// The layout a mesh's streams need.
     pub(crate) fn of(mesh: &Mesh) -> Self {
-        if mesh.colors().is_some() {
-            Self::Colored
-        } else {
-            Self::Standard
-        }
+        Self { colors: mesh.colors().is_some(), uv1: mesh.uv1().is_some(), skin: mesh.skin().is_some() }
     }
 
-    /// Bytes per vertex of each stream (vertex buffer slot).
-    pub(crate) fn strides(self) -> &'static [u32] {
-        const VERTEX: u32 = std::mem::size_of::<Vertex>() as u32;
-        match self {
-            Self::Standard => &[VERTEX],
-            Self::Colored => &[VERTEX, 16],
-        }
+    /// How many layouts there are ([`VertexLayout::index`] is below this).
+    pub(crate) const COUNT: usize = 8;
+
+    /// A dense number for the layout, for per-layout tables.
+    pub(crate) fn index(self) -> usize {
+        usize::from(self.colors) | usize::from(self.uv1) << 1 | usize::from(self.skin) << 2
+    }
+
+    /// The streams, in buffer-slot order.
+    pub(crate) fn streams(self) -> impl Iterator<Item = Stream> {
+        [(true, Stream::Base), (self.colors, Stream::Color), (self.uv1, Stream::Uv1), (self.skin, Stream::Skin)]
+            .into_iter()
+            .filter_map(|(on, s)| on.then_some(s))
     }
 }
 
@@ -237,14 +292,16 @@ impl Pipelines {
 
     /// The key of the forward pipeline drawing meshes of `vertex_layout` with a
     /// material of these features and states on a glint target. The layout adds its
-    /// own feature bits (vertex colours).
+    /// own feature bits (vertex colours, second uv set, skinning).
     pub(crate) fn key(
         mut features: ShaderFeatures,
         vertex_layout: VertexLayout,
         states: RenderStates,
         samples: u32,
     ) -> PipelineKey {
-        features.set(ShaderFeatures::VERTEX_COLOR, vertex_layout == VertexLayout::Colored);
+        features.set(ShaderFeatures::VERTEX_COLOR, vertex_layout.colors);
+        features.set(ShaderFeatures::UV1, vertex_layout.uv1);
+        features.set(ShaderFeatures::SKINNED, vertex_layout.skin);
         PipelineKey { features, vertex_layout, states, color_format: COLOR_FORMAT, depth_format: DEPTH_FORMAT, samples }
     }
 
@@ -320,21 +377,17 @@ impl Pipelines {
     }
 
     fn build_forward(&self, device: &wgpu::Device, key: PipelineKey) -> wgpu::RenderPipeline {
-        const ATTRIBUTES: [wgpu::VertexAttribute; 4] =
-            wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x2, 3 => Float32x4];
-        const COLOR: [wgpu::VertexAttribute; 1] = wgpu::vertex_attr_array![4 => Float32x4];
-        let stream = |stride: u32, attributes| {
-            Some(wgpu::VertexBufferLayout {
-                array_stride: stride.into(),
-                step_mode: wgpu::VertexStepMode::Vertex,
-                attributes,
+        let buffers: Vec<_> = key
+            .vertex_layout
+            .streams()
+            .map(|s| {
+                Some(wgpu::VertexBufferLayout {
+                    array_stride: s.stride().into(),
+                    step_mode: wgpu::VertexStepMode::Vertex,
+                    attributes: s.attributes(),
+                })
             })
-        };
-        let strides = key.vertex_layout.strides();
-        let buffers = match key.vertex_layout {
-            VertexLayout::Standard => vec![stream(strides[0], &ATTRIBUTES[..])],
-            VertexLayout::Colored => vec![stream(strides[0], &ATTRIBUTES[..]), stream(strides[1], &COLOR[..])],
-        };
+            .collect();
         let module = &self.modules[&key.features];
         let label = format!("renderer: forward pipeline {:?} {:?} {}x", key.features, key.states.blend, key.samples);
         device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {

@@ -19,6 +19,7 @@ pub struct Entity {
     /// The material.
     pub material: MaterialId,
     transforms: Vec<Mat4>,
+    joints: Vec<Mat4>,
     /// Draw-order override: entities with a `render_order` are drawn in increasing
     /// order of it, before (values below 128) or after (128 and above) the sky,
     /// instead of in their material's queue. `None`: the material's queue decides.
@@ -37,6 +38,7 @@ impl Clone for Entity {
             shape: self.shape,
             material: self.material,
             transforms: self.transforms.clone(),
+            joints: self.joints.clone(),
             render_order: self.render_order,
         }
     }
@@ -56,6 +58,7 @@ impl Entity {
             shape,
             material,
             transforms,
+            joints: Vec::new(),
             render_order: None,
         }
     }
@@ -64,6 +67,27 @@ impl Entity {
     pub fn with_render_order(mut self, order: Option<u8>) -> Self {
         self.render_order = order;
         self
+    }
+
+    /// The same entity with joint matrices, for a skinned shape (see
+    /// [`Mesh::with_skin`](super::Mesh::with_skin)): vertex joint `j` moves by
+    /// `joints[j]` (a joint's object-space pose times its inverse bind matrix)
+    /// before the instance transform. Every instance shares the pose. Joint
+    /// indices past the end use the last matrix.
+    pub fn with_joints(mut self, joints: Vec<Mat4>) -> Self {
+        self.joints = joints;
+        self
+    }
+
+    /// The joint matrices (empty when the entity is not skinned).
+    pub fn joints(&self) -> &[Mat4] {
+        &self.joints
+    }
+
+    /// Change the joint matrices (a new pose); marks the entity for re-upload.
+    pub fn joints_mut(&mut self) -> &mut Vec<Mat4> {
+        self.version += 1;
+        &mut self.joints
     }
 
     /// Object-to-world transform of each instance.
@@ -89,7 +113,7 @@ impl Entity {
         self.key
     }
 
-    /// Bumped on every change to the transforms.
+    /// Bumped on every change to the transforms or joints.
     pub(crate) fn version(&self) -> u64 {
         self.version
     }

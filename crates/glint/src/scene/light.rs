@@ -19,6 +19,20 @@ pub enum LightKind {
         /// Distance at which the light reaches zero.
         range: f32,
     },
+    /// A point light limited to a cone: full inside `inner_angle` of `direction`,
+    /// fading smoothly to nothing at `outer_angle` (half-angles, radians).
+    Spot {
+        /// World position.
+        position: Vec3,
+        /// Direction the cone points (normalised when uploaded).
+        direction: Vec3,
+        /// Distance at which the light reaches zero.
+        range: f32,
+        /// Half-angle of the fully lit cone.
+        inner_angle: f32,
+        /// Half-angle where the light reaches zero (at most π/2).
+        outer_angle: f32,
+    },
 }
 
 /// A light: kind, linear colour and intensity.
@@ -39,6 +53,19 @@ impl Light {
     /// A white-ish directional light travelling along `direction`.
     pub fn directional(direction: Vec3, color: Vec3, intensity: f32) -> Self {
         Self { kind: LightKind::Directional { direction }, color, intensity }
+    }
+
+    /// A spot light at `position` pointing along `direction`, full within
+    /// `inner_angle` and reaching zero at `outer_angle` (half-angles, radians) and at `range`.
+    pub fn spot(
+        position: Vec3,
+        direction: Vec3,
+        color: Vec3,
+        intensity: f32,
+        range: f32,
+        (inner_angle, outer_angle): (f32, f32),
+    ) -> Self {
+        Self { kind: LightKind::Spot { position, direction, range, inner_angle, outer_angle }, color, intensity }
     }
 
     /// A point light at `position` reaching zero at `range`.

@@ -2,6 +2,25 @@ use super::states::{BlendState, Compare, Cull, DepthState, RenderStates};
 use super::TextureId;
 use glam::{Vec2, Vec4};
 
+bitflags::bitflags! {
+    /// A set of a material's texture maps (which of them read the second uv set).
+    #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+    pub struct MapSlots: u32 {
+        /// `diffuse_map`.
+        const DIFFUSE = 1 << 0;
+        /// `normal_map`.
+        const NORMAL = 1 << 1;
+        /// `specular_map`.
+        const SPECULAR = 1 << 2;
+        /// `metallic_roughness_map`.
+        const METALLIC_ROUGHNESS = 1 << 3;
+        /// `occlusion_map`.
+        const OCCLUSION = 1 << 4;
+        /// `emissive_map`.
+        const EMISSIVE = 1 << 5;
+    }
+}
+
 /// How a material's alpha is used, which also picks its render queue.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum AlphaMode {
@@ -78,6 +97,15 @@ pub struct Material {
     pub double_sided: bool,
     /// Texture repeats across the shape's 0..1 UV range (u, v).
     pub uv_scale: Vec2,
+    /// Added to texture coordinates after scale and rotation.
+    pub uv_offset: Vec2,
+    /// Counter-clockwise rotation of texture coordinates, in radians, after the
+    /// scale: `uv' = offset + rotate(rotation) · (scale · uv)`, as glTF's
+    /// `KHR_texture_transform` defines it.
+    pub uv_rotation: f32,
+    /// Maps that read the mesh's second uv set (glTF `texCoord: 1`) instead of the
+    /// first; the second falls back to the first on meshes without one.
+    pub uv1_maps: MapSlots,
     /// Lighting model.
     pub shading: ShadingModel,
     /// Whether the environment's fog (if any) covers this material.
@@ -108,6 +136,9 @@ impl Default for Material {
             alpha_mode: AlphaMode::Opaque,
             double_sided: false,
             uv_scale: Vec2::ONE,
+            uv_offset: Vec2::ZERO,
+            uv_rotation: 0.0,
+            uv1_maps: MapSlots::empty(),
             shading: ShadingModel::BlinnPhong,
             fog: true,
             states: None,

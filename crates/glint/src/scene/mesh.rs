@@ -20,6 +20,17 @@ pub struct Vertex {
 }
 const _: () = assert!(std::mem::size_of::<Vertex>() == 48);
 
+/// The joints that move one vertex of a skinned mesh, and how much each does
+/// (24 bytes; vertex shader inputs `@location(6) joints`, `@location(7) weights`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct SkinVertex {
+    /// Up to four joints: indices into the entity's joint matrices.
+    pub joints: [u16; 4],
+    /// Their weights, summing to 1.
+    pub weights: [f32; 4],
+}
+
 /// Axis-aligned bounding box.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Aabb {
@@ -90,6 +101,10 @@ pub struct Mesh {
     vertices: Vec<Vertex>,
     /// Linear RGBA per vertex, multiplied into the material's base colour.
     colors: Option<Vec<[f32; 4]>>,
+    /// A second texture coordinate set (glTF `TEXCOORD_1`).
+    uv1: Option<Vec<[f32; 2]>>,
+    /// Joints and weights per vertex (skinned meshes).
+    skin: Option<Vec<SkinVertex>>,
     indices: Vec<u32>,
     aabb: Aabb,
     sphere: BoundingSphere,
@@ -154,19 +169,42 @@ impl Mesh {
         let aabb = Aabb::from_points(vertices.iter().map(|v| Vec3::from(v.position))).ok_or(MeshError::Empty)?;
         let center = aabb.center();
         let radius = vertices.iter().map(|v| Vec3::from(v.position).distance(center)).fold(0.0, f32::max);
-        Ok(Self { vertices, colors: None, indices, aabb, sphere: BoundingSphere { center, radius } })
+        Ok(Self {
+            vertices,
+            colors: None,
+            uv1: None,
+            skin: None,
+            indices,
+            aabb,
+            sphere: BoundingSphere { center, radius },
+        })
     }
 
     /// Give every vertex a linear RGBA colour, multiplied into the material's base
     /// colour (a second vertex stream, and the `VERTEX_COLOR` shader variant).
     pub fn with_colors(mut self, colors: Vec<[f32; 4]>) -> Result<Self, MeshError> {
-        if colors.len() != self.vertices.len() {
-            return Err(MeshError::AttributeLengths);
+        self.colors = Some(checked_stream(colors, self.vertices.len(), |c| c.iter().all(|x| x.is_finite()))?);
+        Ok(self)
+    }
+
+    /// Give every vertex a second texture coordinate (a third vertex stream, and
+    /// the `UV1` shader variant); materials pick a set per map.
+    pub fn with_uv1(mut self, uv1: Vec<[f32; 2]>) -> Result<Self, MeshError> {
+        self.uv1 = Some(checked_stream(uv1, self.vertices.len(), |uv| uv.iter().all(|x| x.is_finite()))?);
+        Ok(self)
+    }
+
+    /// Make the mesh skinned: four joints and weights per vertex (a vertex stream
+    /// of its own, and the `SKINNED` shader variant). Weights are normalised to
+    /// sum to 1; a vertex with no weight follows joint 0. Draw it with an entity
+    /// that has joint matrices ([`Entity::with_joints`](super::Entity::with_joints)).
+    pub fn with_skin(mut self, mut skin: Vec<SkinVertex>) -> Result<Self, MeshError> {
+        for s in &mut skin {
+            let w = s.weights.map(|w| if w.is_finite() { w.max(0.0) } else { 0.0 });
+            let sum: f32 = w.iter().sum();
+            s.weights = if sum > 0.0 { w.map(|x| x / sum) } else { [1.0, 0.0, 0.0, 0.0] };
         }
-        if let Some(i) = colors.iter().position(|c| !c.iter().all(|x| x.is_finite())) {
-            return Err(MeshError::NonFinite(i));
-        }
-        self.colors = Some(colors);
+        self.skin = Some(checked_stream(skin, self.vertices.len(), |_| true)?);
         Ok(self)
     }
 
@@ -178,6 +216,40 @@ impl Mesh {
     /// Per-vertex colours, if the mesh has them.
     pub fn colors(&self) -> Option<&[[f32; 4]]> {
         self.colors.as_deref()
+    }
+
+    /// The second texture coordinate set, if the mesh has one.
+    pub fn uv1(&self) -> Option<&[[f32; 2]]> {
+        self.uv1.as_deref()
+    }
+
+    /// Joints and weights per vertex, if the mesh is skinned.
+    pub fn skin(&self) -> Option<&[SkinVertex]> {
+        self.skin.as_deref()
+    }
+
+    /// The largest joint index any vertex names (0 for an unskinned mesh).
+    pub fn max_joint(&self) -> u16 {
+        self.skin().into_iter().flatten().flat_map(|s| s.joints).max().unwrap_or(0)
+    }
+
+    /// Replace the positions and normals (morph targets applied on the CPU),
+    /// keeping everything else. Returns whether the lengths matched and every
+    /// value was finite (otherwise the mesh is unchanged).
+    pub fn set_positions_normals(&mut self, positions: &[Vec3], normals: &[Vec3]) -> bool {
+        let n = self.vertices.len();
+        if positions.len() != n || normals.len() != n || !positions.iter().chain(normals).all(|v| v.is_finite()) {
+            return false;
+        }
+        for ((v, p), nrm) in self.vertices.iter_mut().zip(positions).zip(normals) {
+            v.position = p.to_array();
+            v.normal = nrm.normalize_or(Vec3::Y).to_array();
+        }
+        self.aabb = Aabb::from_points(positions.iter().copied()).unwrap_or(self.aabb);
+        let center = self.aabb.center();
+        self.sphere =
+            BoundingSphere { center, radius: positions.iter().map(|p| p.distance(center)).fold(0.0, f32::max) };
+        true
     }
 
     /// Triangle-list indices, counter-clockwise front faces.
@@ -251,6 +323,17 @@ impl Mesh {
                 v.tangent = [any.x, any.y, any.z, 1.0];
             }
         }
+    }
+}
+
+/// `stream` if it has one value per vertex and each passes `finite`.
+fn checked_stream<T>(stream: Vec<T>, vertices: usize, finite: impl Fn(&T) -> bool) -> Result<Vec<T>, MeshError> {
+    if stream.len() != vertices {
+        return Err(MeshError::AttributeLengths);
+    }
+    match stream.iter().position(|x| !finite(x)) {
+        Some(i) => Err(MeshError::NonFinite(i)),
+        None => Ok(stream),
     }
 }
 

@@ -17,8 +17,8 @@ pub use camera::{Camera, Projection};
 pub use entity::Entity;
 pub use environment::{Background, Environment, Fog};
 pub use light::{Light, LightKind, MAX_LIGHTS};
-pub use material::{AlphaMode, Material, ShadingModel};
-pub use mesh::{smooth_normals, Aabb, BoundingSphere, Mesh, MeshError, Vertex};
+pub use material::{AlphaMode, MapSlots, Material, ShadingModel};
+pub use mesh::{smooth_normals, Aabb, BoundingSphere, Mesh, MeshError, SkinVertex, Vertex};
 pub use states::{BlendState, Compare, Cull, DepthState, RasterState, RenderStates, StencilOp, StencilState};
 
 /// Handle to a shape (a mesh uploaded by the renderer), returned by

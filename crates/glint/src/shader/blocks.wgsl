@@ -5,8 +5,12 @@
 struct Light {
     // xyz: direction the light travels (w = 0) or world position (w = 1).
     position: vec4<f32>,
-    // rgb: colour × intensity; w: range (point lights).
+    // rgb: colour × intensity; w: range (point and spot lights).
     color: vec4<f32>,
+    // Spot cone: xyz axis, w scale; cone factor saturate(dot(axis, -l) * scale + offset)^2.
+    spot: vec4<f32>,
+    // x: the cone's offset (1 with scale 0 for lights without a cone).
+    spot_offset: vec4<f32>,
 }
 
 struct SceneBlock {

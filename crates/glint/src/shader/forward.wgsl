@@ -11,10 +11,21 @@ struct MaterialBlock {
     pbr: vec4<f32>,
     // rgb: emissive colour.
     emissive: vec4<f32>,
+    // Texture coordinates are (dot(uv_x, (u, v, 1)), dot(uv_y, (u, v, 1))).
+    uv_x: vec3<f32>,
     alpha_cutoff: f32,
-    reserved: u32,
-    uv_scale: vec2<f32>,
+    uv_y: vec3<f32>,
+    // MapSlots bits: maps that read the second uv set.
+    uv1_maps: u32,
 }
+
+// MapSlots bits (scene/material.rs).
+const SLOT_DIFFUSE: u32 = 1u;
+const SLOT_NORMAL: u32 = 2u;
+const SLOT_SPECULAR: u32 = 4u;
+const SLOT_METALLIC_ROUGHNESS: u32 = 8u;
+const SLOT_OCCLUSION: u32 = 16u;
+const SLOT_EMISSIVE: u32 = 32u;
 
 // Material block: the table of every material, indexed by the instance's material,
 // and this draw's texture set (materials with the same maps share one).
@@ -30,15 +41,17 @@ struct MaterialBlock {
 const PI: f32 = 3.14159265;
 
 // One stored instance: the top three rows of its object-to-world matrix (the
-// bottom row is 0 0 0 1) and its material's index in `materials`.
+// bottom row is 0 0 0 1) and its material's index in `materials`. A skinned
+// entity's joint matrices are records of this shape stored after its instances:
+// `joints` records ahead of each instance, `joint_count` of them.
 struct Instance {
     row_x: vec4<f32>,
     row_y: vec4<f32>,
     row_z: vec4<f32>,
     material: u32,
-    reserved_x: u32,
-    reserved_y: u32,
-    reserved_z: u32,
+    joints: u32,
+    joint_count: u32,
+    reserved: u32,
 }
 
 // Renderer block: every stored instance (persistent, rewritten only where entities
@@ -55,6 +68,13 @@ struct VertexIn {
 #ifdef VERTEX_COLOR
     @location(4) color: vec4<f32>,
 #endif
+#ifdef UV1
+    @location(5) uv1: vec2<f32>,
+#endif
+#ifdef SKINNED
+    @location(6) joints: vec4<u32>,
+    @location(7) weights: vec4<f32>,
+#endif
 }
 
 struct VertexOut {
@@ -67,13 +87,58 @@ struct VertexOut {
 #ifdef VERTEX_COLOR
     @location(5) color: vec4<f32>,
 #endif
+#ifdef UV1
+    @location(6) uv1: vec2<f32>,
+    // The material's uv1_maps, passed down rather than read per fragment: helper
+    // invocations may not read storage buffers (lavapipe gives them zeros), and
+    // a uv choice that differs inside a 2×2 quad ruins its mip level.
+    @location(7) @interpolate(flat) uv1_maps: u32,
+#endif
 }
+
+fn record_matrix(r: Instance) -> mat4x4<f32> {
+    return transpose(mat4x4<f32>(r.row_x, r.row_y, r.row_z, vec4<f32>(0.0, 0.0, 0.0, 1.0)));
+}
+
+fn uv_transform(material: MaterialBlock, uv: vec2<f32>) -> vec2<f32> {
+    let h = vec3<f32>(uv, 1.0);
+    return vec2<f32>(dot(material.uv_x, h), dot(material.uv_y, h));
+}
+
+#ifdef SKINNED
+// The weighted sum of the vertex's joint matrices (record `at` is the instance);
+// joint indices past the end use the last joint, and no joints at all is no skinning.
+fn skin_matrix(at: u32, instance: Instance, joints: vec4<u32>, weights: vec4<f32>) -> mat4x4<f32> {
+    if instance.joint_count == 0u {
+        return mat4x4<f32>(vec4<f32>(1.0, 0.0, 0.0, 0.0), vec4<f32>(0.0, 1.0, 0.0, 0.0), vec4<f32>(0.0, 0.0, 1.0, 0.0), vec4<f32>(0.0, 0.0, 0.0, 1.0));
+    }
+    let first = at + instance.joints;
+    let last = instance.joint_count - 1u;
+    var m = record_matrix(instances[first + min(joints.x, last)]) * weights.x;
+    m += record_matrix(instances[first + min(joints.y, last)]) * weights.y;
+    m += record_matrix(instances[first + min(joints.z, last)]) * weights.z;
+    m += record_matrix(instances[first + min(joints.w, last)]) * weights.w;
+    return m;
+}
+#endif
 
 @vertex
 fn vs_main(v: VertexIn, @builtin(instance_index) draw_instance: u32) -> VertexOut {
-    let instance = instances[draw_indices[draw_instance]];
-    let model = transpose(mat4x4<f32>(instance.row_x, instance.row_y, instance.row_z, vec4<f32>(0.0, 0.0, 0.0, 1.0)));
-    let world = model * vec4<f32>(v.position, 1.0);
+    let at = draw_indices[draw_instance];
+    let instance = instances[at];
+    let model = record_matrix(instance);
+    var position = vec4<f32>(v.position, 1.0);
+    var normal = v.normal;
+    var tangent = v.tangent.xyz;
+#ifdef SKINNED
+    // Joint matrices are rigid or uniformly scaled: their 3×3 part moves normals.
+    let skin = skin_matrix(at, instance, v.joints, v.weights);
+    let skin3 = mat3x3<f32>(skin[0].xyz, skin[1].xyz, skin[2].xyz);
+    position = skin * position;
+    normal = skin3 * normal;
+    tangent = skin3 * tangent;
+#endif
+    let world = model * position;
     // Normals transform by the inverse transpose, which is the cofactor matrix over
     // the determinant: only the determinant's sign matters once normalised. This is
     // right for non-uniform scale and mirroring without a matrix inverse.
@@ -83,12 +148,16 @@ fn vs_main(v: VertexIn, @builtin(instance_index) draw_instance: u32) -> VertexOu
     var out: VertexOut;
     out.clip = camera.view_proj * world;
     out.world_position = world.xyz;
-    out.normal = cofactor * v.normal * det_sign;
-    out.uv = v.uv * materials[instance.material].uv_scale;
-    out.tangent = vec4<f32>(m * v.tangent.xyz, v.tangent.w * det_sign);
+    out.normal = cofactor * normal * det_sign;
+    out.uv = uv_transform(materials[instance.material], v.uv);
+    out.tangent = vec4<f32>(m * tangent, v.tangent.w * det_sign);
     out.material = instance.material;
 #ifdef VERTEX_COLOR
     out.color = v.color;
+#endif
+#ifdef UV1
+    out.uv1 = uv_transform(materials[instance.material], v.uv1);
+    out.uv1_maps = materials[instance.material].uv1_maps;
 #endif
     return out;
 }
@@ -109,7 +178,9 @@ fn incoming(i: u32, p: vec3<f32>) -> Incoming {
     // Inverse square, windowed to reach exactly zero at the range.
     let x = dist / light.color.w;
     let window = saturate(1.0 - x * x * x * x);
-    return Incoming(to_light / max(dist, 1e-4), light.color.rgb * window * window / max(dist * dist, 1e-4));
+    let l = to_light / max(dist, 1e-4);
+    let cone = saturate(dot(light.spot.xyz, -l) * light.spot.w + light.spot_offset.x);
+    return Incoming(l, light.color.rgb * window * window * cone * cone / max(dist * dist, 1e-4));
 }
 
 fn shade(
@@ -167,6 +238,16 @@ fn shade_metallic_roughness(
     return color;
 }
 
+// The texture coordinates of the map in `slot`: the second set where the
+// material asks for it and the mesh has one.
+fn map_uv(in: VertexOut, slot: u32) -> vec2<f32> {
+#ifdef UV1
+    return select(in.uv, in.uv1, (in.uv1_maps & slot) != 0u);
+#else
+    return in.uv;
+#endif
+}
+
 @fragment
 fn fs_main(in: VertexOut, @builtin(front_facing) front: bool) -> @location(0) vec4<f32> {
     let material = materials[in.material];
@@ -175,7 +256,7 @@ fn fs_main(in: VertexOut, @builtin(front_facing) front: bool) -> @location(0) ve
     base *= in.color;
 #endif
 #ifdef DIFFUSE_MAP
-    base *= textureSample(diffuse_map, material_sampler, in.uv);
+    base *= textureSample(diffuse_map, material_sampler, map_uv(in, SLOT_DIFFUSE));
 #endif
 #ifdef ALPHA_MASK
     if base.a < material.alpha_cutoff {
@@ -188,16 +269,16 @@ fn fs_main(in: VertexOut, @builtin(front_facing) front: bool) -> @location(0) ve
 #ifdef NORMAL_MAP
     let t = normalize(in.tangent.xyz - n * dot(n, in.tangent.xyz));
     let b = cross(n, t) * in.tangent.w * side;
-    let s = textureSample(normal_map, material_sampler, in.uv).xyz * 2.0 - 1.0;
+    let s = textureSample(normal_map, material_sampler, map_uv(in, SLOT_NORMAL)).xyz * 2.0 - 1.0;
     n = normalize(t * s.x + b * s.y + n * s.z);
 #endif
     var specular = 1.0;
 #ifdef SPECULAR_MAP
-    specular = textureSample(specular_map, material_sampler, in.uv).r;
+    specular = textureSample(specular_map, material_sampler, map_uv(in, SLOT_SPECULAR)).r;
 #endif
     var occlusion = 1.0;
 #ifdef OCCLUSION_MAP
-    occlusion = textureSample(occlusion_map, material_sampler, in.uv).r;
+    occlusion = textureSample(occlusion_map, material_sampler, map_uv(in, SLOT_OCCLUSION)).r;
 #endif
 #ifdef UNLIT
     var color = base.rgb;
@@ -206,7 +287,7 @@ fn fs_main(in: VertexOut, @builtin(front_facing) front: bool) -> @location(0) ve
     var metallic = material.pbr.x;
     var roughness = material.pbr.y;
 #ifdef METALLIC_ROUGHNESS_MAP
-    let mr = textureSample(metallic_roughness_map, material_sampler, in.uv);
+    let mr = textureSample(metallic_roughness_map, material_sampler, map_uv(in, SLOT_METALLIC_ROUGHNESS));
     roughness *= mr.g;
     metallic *= mr.b;
 #endif
@@ -217,7 +298,7 @@ fn fs_main(in: VertexOut, @builtin(front_facing) front: bool) -> @location(0) ve
 #endif
     var emissive = material.emissive.rgb;
 #ifdef EMISSIVE_MAP
-    emissive *= textureSample(emissive_map, material_sampler, in.uv).rgb;
+    emissive *= textureSample(emissive_map, material_sampler, map_uv(in, SLOT_EMISSIVE)).rgb;
 #endif
     color += emissive;
 #ifdef FOG

@@ -26,8 +26,10 @@ bitflags::bitflags! {
     /// | 9 | `METALLIC_ROUGHNESS_MAP` | scale roughness (green) and metalness (blue) by the map |
     /// | 10 | `OCCLUSION_MAP` | darken ambient light by the map's red channel |
     /// | 11 | `EMISSIVE_MAP` | multiply the emissive colour by the map |
+    /// | 12 | `UV1` | read the mesh's second uv set for the maps the material names (set by the mesh) |
+    /// | 13 | `SKINNED` | move vertices by the weighted sum of four joint matrices (set by the mesh) |
     ///
-    /// Bits 12–31 are free for more (shadow receiving comes with shadow maps).
+    /// Bits 14–31 are free for more (shadow receiving comes with shadow maps).
     #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, PartialOrd, Ord)]
     pub struct ShaderFeatures: u32 {
         /// `DIFFUSE_MAP`.
@@ -54,6 +56,10 @@ bitflags::bitflags! {
         const OCCLUSION_MAP = 1 << 10;
         /// `EMISSIVE_MAP`.
         const EMISSIVE_MAP = 1 << 11;
+        /// `UV1`.
+        const UV1 = 1 << 12;
+        /// `SKINNED`.
+        const SKINNED = 1 << 13;
     }
 }
 
