@@ -12,6 +12,8 @@
 - uv1.gltf: a quad whose base colour map reads TEXCOORD_1 (TEXCOORD_0 is the
   mirror image of it, so reading the wrong set shows) through a KHR_texture_transform of rotation 90 degrees, offset (1, 0),
   lit by a KHR_lights_punctual spot light. Buffers and image as data: URIs.
+- cutout.obj + cutout.mtl + cutout_mask.png: an OBJ quad whose material has a
+  map_d (left half opaque, right half cut away) and no map_Kd.
 """
 
 import base64
@@ -237,7 +239,20 @@ def uv1():
     write_json("uv1.gltf", doc)
 
 
+def cutout():
+    with open(os.path.join(HERE, "cutout_mask.png"), "wb") as f:
+        f.write(png(8, 8, lambda x, y: (255, 255, 255) if x < 4 else (0, 0, 0)))
+    with open(os.path.join(HERE, "cutout.mtl"), "w") as f:
+        f.write("# Written by make_models.py: map_d masks the right half away.\n")
+        f.write("newmtl leaf\nKd 0.2 0.7 0.2\nmap_d -bm 1 cutout_mask.png\n")
+    with open(os.path.join(HERE, "cutout.obj"), "w") as f:
+        f.write("# Written by make_models.py: a unit quad with uvs, one material.\nmtllib cutout.mtl\n")
+        f.write("v -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\n")
+        f.write("vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nvn 0 0 1\nusemtl leaf\nf 1/1/1 2/2/1 3/3/1 4/4/1\n")
+
+
 if __name__ == "__main__":
     skinned()
     morph()
     uv1()
+    cutout()

@@ -331,3 +331,27 @@ fn node_animations_pose_the_hierarchy_at_a_time() {
         common::assert_matches_reference(name, &image);
     }
 }
+
+#[test]
+fn obj_map_d_cuts_the_surface_away() {
+    // tests/models/cutout.obj: a quad whose material has only a map_d (left half
+    // white, right half black), written by make_models.py.
+    let model = Model::load(&models_dir().join("cutout.obj")).expect("loads");
+    assert!(model.warnings.is_empty(), "{:?}", model.warnings);
+    let leaf = &model.materials[0];
+    assert_eq!(leaf.material.alpha_mode, AlphaMode::Mask { cutoff: 0.5 });
+    let texture = &model.textures[leaf.diffuse_map.expect("map_d becomes the colour map's alpha")];
+    let (w, h) = texture.image.dimensions();
+    assert_eq!(texture.image.get_pixel(0, h / 2).0, [255, 255, 255, 255], "white, opaque on the left");
+    assert_eq!(texture.image.get_pixel(w - 1, h / 2)[3], 0, "cut away on the right");
+
+    let Some(gpu) = common::gpu() else { return };
+    let mut desc = model.into_scene();
+    desc.environment.background = glint::Background::Color(Vec3::ZERO);
+    desc.cameras[0] = Camera::perspective(60.0, 0.1, 10.0).looking_at(Vec3::new(0.0, 0.0, 2.0), Vec3::ZERO);
+    let (image, _) = common::render_desc(gpu, &desc, 48, true);
+    let (left, right) = (image.get_pixel(12, 24), image.get_pixel(36, 24));
+    assert!(left[1] > 60, "the green left half is drawn: {left:?}");
+    assert_eq!(&right.0[..3], &[0, 0, 0], "the right half shows the background");
+    common::assert_matches_reference("obj_map_d_cutout", &image);
+}

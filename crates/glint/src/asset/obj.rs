@@ -208,11 +208,17 @@ fn convert_material(
         let drawn_without = |d| Diagnostic::file(obj, format!("material '{}': {what}: {d}; drawn without it", m.name));
         decoded.map_err(|d| warnings.push(drawn_without(d))).ok()
     };
-    let diffuse_map = texture(&m.diffuse_texture, true, "map_Kd", &mut material);
+    let mut diffuse_map = texture(&m.diffuse_texture, true, "map_Kd", &mut material);
     let normal_map = texture(&m.normal_texture, false, "map_Bump", &mut material);
     let specular_map = texture(&m.specular_texture, false, "map_Ks", &mut material);
-    if m.dissolve_texture.is_some() {
-        warnings.push(Diagnostic::file(obj, format!("material '{}': map_d is not supported yet; ignored", m.name)));
+    // map_d becomes the diffuse map's alpha (a white map when there is none);
+    // alpha-tested at 0.5, as cut-outs such as leaves expect.
+    if let Some(dissolve) = texture(&m.dissolve_texture, false, "map_d", &mut material) {
+        let key = PathBuf::from(format!("{:?} with map_d {dissolve}", diffuse_map));
+        let color = diffuse_map.map(|d| cache.get(d).clone());
+        let masked = super::texture::with_dissolve(color.as_ref(), cache.get(dissolve));
+        diffuse_map = cache.get_or_decode(key, true, || Ok::<_, Diagnostic>(masked)).ok();
+        material.alpha_mode = AlphaMode::Mask { cutoff: 0.5 };
     }
     MaterialDesc { material, diffuse_map, normal_map, specular_map, ..MaterialDesc::default() }
 }

@@ -64,10 +64,30 @@ impl<K: Hash + Eq> TextureCache<K> {
     }
 
     /// The decoded textures, in [`TextureRef`] order.
+    /// A texture already decoded.
+    pub(crate) fn get(&self, texture: TextureRef) -> &Texture {
+        &self.textures[texture]
+    }
+
     pub(crate) fn into_textures(self) -> Vec<Texture> {
         self.textures
     }
 }
+/// `color` (or white, for `None`) with its alpha multiplied by `dissolve`'s red
+/// channel, resampled to the colour map's size: a colour map with an alpha mask
+/// (OBJ `map_d`).
+pub(crate) fn with_dissolve(color: Option<&Texture>, dissolve: &Texture) -> Texture {
+    let (w, h) = color.map_or(dissolve.image.dimensions(), |c| c.image.dimensions());
+    let mask = image::imageops::resize(&dissolve.image, w, h, image::imageops::FilterType::Triangle);
+    let mut image =
+        color.map_or_else(|| image::RgbaImage::from_pixel(w, h, image::Rgba([255; 4])), |c| c.image.clone());
+    for (p, m) in image.pixels_mut().zip(mask.pixels()) {
+        p[3] = ((u16::from(p[3]) * u16::from(m[0]) + 127) / 255) as u8;
+    }
+    let name = color.map_or_else(|| dissolve.name.clone(), |c| format!("{} + {}", c.name, dissolve.name));
+    Texture::new(name, image, true)
+}
+
 /// Decode a PNG or JPEG file into a [`Texture`].
 ///
 /// Rejects images wider or taller than [`MAX_TEXTURE_SIDE`] before decoding their
