@@ -63,6 +63,14 @@ fn a_vertex_naming_a_joint_its_skin_lacks_is_an_error() {
     let error = Model::parse(&path, one_joint.as_bytes(), LoadOptions::default()).expect_err("joint 1 is missing");
     let message = error.to_string();
     assert!(message.contains("skinned.gltf") && message.contains("joint 1"), "{message}");
+    // The fuzz find: component types the spec forbids made the gltf crate panic.
+    let float_indices = text.replace(r#""componentType":5123,"count":576"#, r#""componentType":5126,"count":576"#);
+    assert_ne!(float_indices, text, "the edit applies");
+    let error = Model::parse(&path, float_indices.as_bytes(), LoadOptions::default()).expect_err("float indices");
+    assert!(error.to_string().contains("indices: component type F32 is not allowed"), "{error}");
+    let u32_joints = text.replace(r#""componentType":5121"#, r#""componentType":5125"#);
+    assert_ne!(u32_joints, text, "the edit applies");
+    assert!(Model::parse(&path, u32_joints.as_bytes(), LoadOptions::default()).is_err(), "u32 JOINTS_0");
     let no_bind = text.replace(r#","inverseBindMatrices":5"#, "");
     assert_ne!(no_bind, text, "the edit applies");
     let model = Model::parse(&path, no_bind.as_bytes(), LoadOptions::default()).expect("bind matrices are optional");

@@ -268,6 +268,10 @@ fn read_channel(
     use gltf::animation::util::ReadOutputs;
     let reader = channel.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
     let times: Vec<f32> = reader.read_inputs().ok_or("no key times")?.collect();
+    // The crate's reader panics on unsigned-int rotations and weights (not allowed by the spec).
+    if channel.sampler().output().data_type() == gltf::accessor::DataType::U32 {
+        return Err("key values: component type U32 is not allowed".into());
+    }
     let (property, values): (Property, Vec<Vec4>) = match reader.read_outputs().ok_or("no key values")? {
         ReadOutputs::Translations(v) => (Property::Translation, v.map(|t| Vec3::from(t).extend(0.0)).collect()),
         ReadOutputs::Rotations(v) => (Property::Rotation, v.into_f32().map(Vec4::from).collect()),
@@ -354,6 +358,7 @@ fn read_primitive(
     if primitive.mode() != gltf::mesh::Mode::Triangles {
         return Ok(None);
     }
+    check_component_types(primitive)?;
     let reader = primitive.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
     let positions: Vec<Vec3> = reader.read_positions().ok_or("no POSITION attribute")?.map(Vec3::from).collect();
     let count = positions.len();
@@ -437,6 +442,33 @@ fn read_primitive(
         weights: Vec::new(),
     });
     Ok(Some((mesh, morph)))
+}
+
+/// The gltf crate's readers panic on component types the spec does not allow
+/// (found by fuzzing: float indices), so those are errors first.
+fn check_component_types(primitive: &gltf::Primitive) -> Result<(), String> {
+    use gltf::accessor::DataType::{F32, U16, U32, U8};
+    use gltf::Semantic;
+    let check = |accessor: &gltf::Accessor, what: String, allowed: &[gltf::accessor::DataType]| {
+        if allowed.contains(&accessor.data_type()) {
+            Ok(())
+        } else {
+            Err(format!("{what}: component type {:?} is not allowed", accessor.data_type()))
+        }
+    };
+    if let Some(indices) = primitive.indices() {
+        check(&indices, "indices".into(), &[U8, U16, U32])?;
+    }
+    for (semantic, accessor) in primitive.attributes() {
+        match semantic {
+            Semantic::TexCoords(_) | Semantic::Colors(_) | Semantic::Weights(_) => {
+                check(&accessor, semantic.to_string(), &[U8, U16, F32])?
+            }
+            Semantic::Joints(_) => check(&accessor, semantic.to_string(), &[U8, U16])?,
+            _ => {}
+        }
+    }
+    Ok(())
 }
 
 /// `v` in the order of `corners` (when the vertices were split), else as it is.
