@@ -14,6 +14,9 @@
   lit by a KHR_lights_punctual spot light. Buffers and image as data: URIs.
 - cutout.obj + cutout.mtl + cutout_mask.png: an OBJ quad whose material has a
   map_d (left half opaque, right half cut away) and no map_Kd.
+- smoothing.obj: two octagonal prisms without normals. The left one has its
+  sides in smoothing group 1 and flat caps (s off); the right one is flat all
+  over (s off); faces before any s statement would smooth with each other.
 """
 
 import base64
@@ -251,8 +254,32 @@ def cutout():
         f.write("vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nvn 0 0 1\nusemtl leaf\nf 1/1/1 2/2/1 3/3/1 4/4/1\n")
 
 
+def smoothing():
+    lines = ["# Written by make_models.py: two octagonal prisms, no normals."]
+    count = 0
+    for name, x, sides in (("rounded", -1.1, "s 1"), ("faceted", 1.1, "s off")):
+        lines.append("o " + name)
+        for y in (-0.8, 0.8):
+            for k in range(8):
+                a = 2 * math.pi * (k + 0.5) / 8
+                lines.append("v %.6f %.6f %.6f" % (x + math.cos(a), y, -math.sin(a)))
+        bottom = [count + 1 + k for k in range(8)]
+        top = [count + 9 + k for k in range(8)]
+        lines.append(sides)
+        for k in range(8):
+            j = (k + 1) % 8
+            lines.append("f %d %d %d %d" % (bottom[k], bottom[j], top[j], top[k]))
+        lines.append("s off")
+        lines.append("f " + " ".join(str(i) for i in reversed(bottom)))
+        lines.append("f " + " ".join(str(i) for i in top))
+        count += 16
+    with open(os.path.join(HERE, "smoothing.obj"), "w") as f:
+        f.write("\n".join(lines) + "\n")
+
+
 if __name__ == "__main__":
     skinned()
     morph()
     uv1()
     cutout()
+    smoothing()

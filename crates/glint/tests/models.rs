@@ -355,3 +355,33 @@ fn obj_map_d_cuts_the_surface_away() {
     assert_eq!(&right.0[..3], &[0, 0, 0], "the right half shows the background");
     common::assert_matches_reference("obj_map_d_cutout", &image);
 }
+
+#[test]
+fn obj_smoothing_groups_decide_which_edges_are_sharp() {
+    // tests/models/smoothing.obj (make_models.py): two octagonal prisms without
+    // normals; the left one's sides are smoothing group 1 with flat caps, the
+    // right one is flat all over.
+    let model = Model::load(&models_dir().join("smoothing.obj")).expect("loads");
+    assert!(model.warnings.is_empty(), "{:?}", model.warnings);
+    let normals = |part: usize| -> Vec<Vec3> {
+        model.parts[part].mesh.vertices().iter().map(|v| Vec3::from(v.normal)).collect::<Vec<_>>()
+    };
+    let (rounded, faceted) = (normals(0), normals(1));
+    let horizontal = |n: &&Vec3| n.y.abs() < 1e-5;
+    let vertical = |n: &&Vec3| (n.y.abs() - 1.0).abs() < 1e-5;
+    assert_eq!(rounded.iter().filter(horizontal).count(), 16, "smooth sides share one normal per corner");
+    assert_eq!(faceted.iter().filter(horizontal).count(), 32, "flat sides: four corners each");
+    for n in [&rounded, &faceted] {
+        assert_eq!(n.iter().filter(vertical).count(), 16, "flat caps");
+        assert_eq!(n.len(), n.iter().filter(horizontal).count() + 16, "nothing smooths across the rim");
+    }
+
+    let Some(gpu) = common::gpu() else { return };
+    let mut desc = model.into_scene();
+    desc.environment.background = glint::Background::Color(Vec3::ZERO);
+    desc.cameras[0] = Camera::perspective(50.0, 0.1, 20.0).looking_at(Vec3::new(0.0, 2.5, 4.5), Vec3::ZERO);
+    // A low sun from the left, so the sides' shading runs across them.
+    desc.lights = vec![glint::Light::directional(Vec3::new(1.0, -0.3, -0.4), Vec3::ONE, 0.8)];
+    let (image, _) = common::render_desc(gpu, &desc, 96, true);
+    common::assert_matches_reference("obj_smoothing_groups", &image);
+}

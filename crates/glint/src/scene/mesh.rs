@@ -342,25 +342,32 @@ fn checked_stream<T>(stream: Vec<T>, vertices: usize, finite: impl Fn(&T) -> boo
 /// position, so vertices split by texture seams share one normal. Degenerate
 /// triangles add nothing; a vertex no triangle lights gets +Y.
 pub fn smooth_normals(positions: &[Vec3], indices: &[u32]) -> Vec<Vec3> {
-    let key = |p: Vec3| (p.x.to_bits(), p.y.to_bits(), p.z.to_bits());
-    let mut sums: std::collections::HashMap<(u32, u32, u32), Vec3> = std::collections::HashMap::new();
+    smooth_normals_in_groups(positions, indices, &[])
+}
+
+/// [`smooth_normals`] within smoothing groups: `groups[i]` is vertex `i`'s group
+/// (an empty slice puts every vertex in one), and only vertices at one position
+/// *and* in one group share a normal. A vertex in a group of its own triangle
+/// alone gets that triangle's face normal (flat shading).
+pub fn smooth_normals_in_groups(positions: &[Vec3], indices: &[u32], groups: &[u64]) -> Vec<Vec3> {
+    let key = |i: usize| {
+        let p = positions[i];
+        (p.x.to_bits(), p.y.to_bits(), p.z.to_bits(), groups.get(i).copied().unwrap_or(0))
+    };
+    let mut sums: std::collections::HashMap<(u32, u32, u32, u64), Vec3> = std::collections::HashMap::new();
     for tri in indices.chunks_exact(3) {
-        let Some(&[a, b, c]) = tri
-            .iter()
-            .map(|&i| positions.get(i as usize).copied())
-            .collect::<Option<Vec<Vec3>>>()
-            .as_deref()
-            .and_then(|v| <&[Vec3; 3]>::try_from(v).ok())
-        else {
+        let corners = [tri[0] as usize, tri[1] as usize, tri[2] as usize];
+        if corners.iter().any(|&i| i >= positions.len()) {
             continue;
-        };
+        }
+        let [a, b, c] = corners.map(|i| positions[i]);
         let face = (b - a).cross(c - a).normalize_or_zero();
-        for (p, u, v) in [(a, b, c), (b, c, a), (c, a, b)] {
+        for (corner, (p, u, v)) in corners.into_iter().zip([(a, b, c), (b, c, a), (c, a, b)]) {
             let angle = (u - p).normalize_or_zero().dot((v - p).normalize_or_zero()).clamp(-1.0, 1.0).acos();
-            *sums.entry(key(p)).or_insert(Vec3::ZERO) += face * angle;
+            *sums.entry(key(corner)).or_insert(Vec3::ZERO) += face * angle;
         }
     }
-    positions.iter().map(|&p| sums.get(&key(p)).map_or(Vec3::Y, |n| n.normalize_or(Vec3::Y))).collect()
+    (0..positions.len()).map(|i| sums.get(&key(i)).map_or(Vec3::Y, |n| n.normalize_or(Vec3::Y))).collect()
 }
 
 #[cfg(test)]
