@@ -279,6 +279,13 @@ fn bad_and_hostile_gltf_files_are_errors() {
     assert!(e.to_string().contains("outside the model's folder"), "{e}");
     let e = Model::load(&write_gltf("absolute", [0, 1, 2], "/etc/passwd")).expect_err("absolute URI");
     assert!(e.to_string().contains("outside the model's folder"), "{e}");
+    // The gltf crate percent-decodes relative URIs before opening them.
+    let e = Model::load(&write_gltf("encoded", [0, 1, 2], "%2e%2e/%2e%2e/etc/passwd")).expect_err("encoded escape");
+    assert!(e.to_string().contains("outside the model's folder"), "{e}");
+    assert!(Model::load(&write_gltf("spaced", [0, 1, 2], "tr%69.bin")).is_ok(), "an encoded name that stays inside");
+    // A fuzz find: a relative URI decoding to bytes that are not UTF-8 panicked in the gltf crate.
+    let e = Model::load(&write_gltf("not_utf8", [0, 1, 2], "tri%ff.bin")).expect_err("not UTF-8");
+    assert!(e.to_string().contains("does not decode to UTF-8"), "{e}");
     // A fuzz find: gltf-json's own validation panicked on a missing POSITION accessor.
     let missing = r#"{"asset":{"version":"2.0"},"meshes":[{"primitives":[{"attributes":{"POSITION":7}}]}]}"#;
     let e =

@@ -65,7 +65,13 @@ pub(crate) fn parse_gltf(path: &Path, bytes: &[u8], options: LoadOptions) -> Res
             gltf::image::Source::View { .. } => None,
         }));
     for uri in uris {
-        if !uri.starts_with("data:") {
+        // The gltf crate reads a URI without ':' as a percent-encoded relative path
+        // (and panics when it does not decode to UTF-8): check what it will open.
+        if !uri.contains(':') {
+            let decoded = urlencoding::decode(uri)
+                .map_err(|_| fail(format!("uri '{uri}': percent-encoding does not decode to UTF-8")))?;
+            assets.resolve(&decoded, path)?;
+        } else if !uri.starts_with("data:") {
             assets.resolve(uri, path)?;
         }
     }
