@@ -21,17 +21,16 @@ pub struct Batch {
     pub instance_count: u32,
 }
 
-/// Merge adjacent equal items of a sorted list into batches, and write their
-/// instance indices (from `visible`) into `draw_indices` in draw order, so each
-/// batch is one contiguous range.
+/// Merge adjacent equal items of a sorted list into batches appended to
+/// `batches`, and append their instance indices (from `visible`) to
+/// `draw_indices` in draw order, so each batch is one contiguous range.
 pub fn merge(items: &[DrawItem], visible: &[u32], draw_indices: &mut Vec<u32>, batches: &mut Vec<Batch>) {
-    draw_indices.clear();
-    batches.clear();
+    let first_batch = batches.len();
     for item in items {
         let stage = stage_of(item.key);
         let first = draw_indices.len() as u32;
         draw_indices.extend_from_slice(&visible[item.first as usize..(item.first + item.count) as usize]);
-        match batches.last_mut() {
+        match batches[first_batch..].last_mut() {
             Some(b)
                 if b.stage == stage
                     && b.pipeline == item.pipeline

@@ -8,6 +8,7 @@
 
 use super::batch::Batch;
 use super::queue::{Queue, SKY_STAGE};
+use super::views::ViewBlocks;
 use super::{FrameMode, FrameStats, Renderer};
 use crate::gpu::OffscreenTarget;
 use crate::scene::Background;
@@ -39,7 +40,7 @@ impl Renderer {
         let sky_at = match self.mode {
             // Naive frames are in submission order: the sky goes first, under everything.
             FrameMode::Naive => 0,
-            FrameMode::Optimized => self.batches.partition_point(|b| b.stage < SKY_STAGE),
+            FrameMode::Optimized => self.forward.batches.partition_point(|b| b.stage < SKY_STAGE),
         };
         let clear = match self.environment.background {
             Background::Color(c) | Background::Gradient { bottom: c, .. } => {
@@ -57,8 +58,8 @@ impl Renderer {
                 ..Default::default()
             });
             pass.set_bind_group(0, &self.scene_group, &[]);
-            pass.set_bind_group(1, &self.camera_group, &[]);
-            pass.set_bind_group(3, &self.instance_buffers.bind_group, &[]);
+            pass.set_bind_group(1, &self.views.bind_group, &[ViewBlocks::offset(0)]);
+            pass.set_bind_group(3, &self.forward.bind_group, &[]);
             stats.bind_groups_set += 3;
             let mut bound = Bound::default();
             self.draw_stages(&mut pass, 0, sky_at, &mut bound, stats);
@@ -75,11 +76,11 @@ impl Renderer {
                 stats.draw_calls += 1;
                 stats.draws += 1;
                 // The sky's layout has groups 0–1 only: bind the forward groups again.
-                pass.set_bind_group(3, &self.instance_buffers.bind_group, &[]);
+                pass.set_bind_group(3, &self.forward.bind_group, &[]);
                 stats.bind_groups_set += 1;
                 bound = Bound { stencil_reference: bound.stencil_reference, ..Bound::default() };
             }
-            self.draw_stages(&mut pass, sky_at, self.batches.len(), &mut bound, stats);
+            self.draw_stages(&mut pass, sky_at, self.forward.batches.len(), &mut bound, stats);
         }
         if let Some(timer) = &mut self.gpu_timer {
             timer.resolve(&mut encoder);
@@ -97,7 +98,7 @@ impl Renderer {
         stats: &mut FrameStats,
     ) {
         let mut at = from;
-        for stage in self.batches[from..to].chunk_by(|a, b| a.stage == b.stage) {
+        for stage in self.forward.batches[from..to].chunk_by(|a, b| a.stage == b.stage) {
             pass.push_debug_group(&stage_name(stage[0].stage));
             let naive = self.mode == FrameMode::Naive;
             for run in stage.chunk_by(|a, b| !naive && self.run_key(a) == self.run_key(b)) {
@@ -142,7 +143,7 @@ impl Renderer {
             bound.page = Some(key.page);
         }
         stats.draws += run.len() as u32;
-        match &self.indirect {
+        match &self.forward.indirect {
             Some(indirect) if self.mode == FrameMode::Optimized => {
                 pass.multi_draw_indexed_indirect(&indirect.buffer, at as u64 * INDIRECT_STRIDE, run.len() as u32);
                 stats.draw_calls += 1;

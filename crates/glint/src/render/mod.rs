@@ -19,6 +19,7 @@
 pub mod batch;
 mod blocks;
 pub mod cull;
+mod draw_list;
 mod encode;
 mod instances;
 mod materials;
@@ -28,6 +29,7 @@ pub mod queue;
 mod resources;
 mod stats;
 mod timer;
+mod views;
 
 pub use mesh_pool::MeshTooLarge;
 pub use stats::{FrameStats, StageTimes, UploadStats};
@@ -38,7 +40,8 @@ use crate::scene::{
     Background, Camera, Entity, Environment, Light, Material, MaterialId, Mesh, ShapeId, TextureId, MAX_LIGHTS,
 };
 use batch::Batch;
-use blocks::{CameraGpu, SceneGpu, UniformBlock};
+use blocks::{SceneGpu, UniformBlock};
+use draw_list::DrawList;
 use cull::{Containment, Frustum};
 use glam::{Mat4, Vec3A};
 use instances::InstanceStore;
@@ -46,7 +49,8 @@ use mesh_pool::{MeshPool, MeshRange};
 use pipelines::{Pipelines, VertexLayout};
 use queue::{DrawItem, Queue};
 use rayon::prelude::*;
-use resources::{GrowBuffer, InstanceBuffers, MaterialTable, TextureUploader};
+use resources::{InstanceBuffer, MaterialTable, TextureUploader};
+use views::ViewBlocks;
 use std::time::Instant;
 
 /// Errors from [`Renderer::flush`].
@@ -189,13 +193,11 @@ pub struct Renderer {
     textures: Vec<TextureSlot>,
     environment: Environment,
     scene_block: UniformBlock<SceneGpu>,
-    camera_block: UniformBlock<CameraGpu>,
     scene_group: wgpu::BindGroup,
-    camera_group: wgpu::BindGroup,
-    instance_buffers: InstanceBuffers,
-    /// One `DrawIndexedIndirectArgs` per batch; `None` where the device cannot draw
-    /// indirect with a first instance (then batches are drawn one call each).
-    indirect: Option<GrowBuffer>,
+    views: ViewBlocks,
+    instances: InstanceBuffer,
+    /// The forward view's draws.
+    forward: DrawList,
     store: InstanceStore,
     culling: bool,
     mode: FrameMode,
@@ -209,14 +211,6 @@ pub struct Renderer {
     instances_submitted: u64,
     visible: Vec<u32>,
     runs: Vec<VisibleRun>,
-    items: Vec<DrawItem>,
-    batches: Vec<Batch>,
-    draw_indices: Vec<u32>,
-    indirect_args: Vec<wgpu::util::DrawIndexedIndirectArgs>,
-    /// What the GPU holds of the draw indices and indirect commands, to skip
-    /// writing them again when a frame's are the same.
-    uploaded_draw_indices: Vec<u32>,
-    uploaded_indirect_args: Vec<wgpu::util::DrawIndexedIndirectArgs>,
 }
 
 /// Submitted instances above which entities are culled on all cores. Tiles make
@@ -235,16 +229,12 @@ impl Renderer {
         let queue = gpu.queue.clone();
         let pipelines = Pipelines::new(&device);
         let scene_block = UniformBlock::new(&device, "renderer: scene block");
-        let camera_block = UniformBlock::new(&device, "renderer: camera block");
-        let group = |label, layout, buffer: &wgpu::Buffer| {
-            device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some(label),
-                layout,
-                entries: &[wgpu::BindGroupEntry { binding: 0, resource: buffer.as_entire_binding() }],
-            })
-        };
-        let scene_group = group("renderer: scene block (group 0)", &pipelines.scene_layout, &scene_block.buffer);
-        let camera_group = group("renderer: camera block (group 1)", &pipelines.camera_layout, &camera_block.buffer);
+        let scene_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("renderer: scene block (group 0)"),
+            layout: &pipelines.scene_layout,
+            entries: &[wgpu::BindGroupEntry { binding: 0, resource: scene_block.buffer.as_entire_binding() }],
+        });
+        let views = ViewBlocks::new(&device, &pipelines.camera_layout);
         let uploader = TextureUploader::new(&device);
         let pixel = |name: &str, rgba: [u8; 4], srgb| {
             let texture = Texture::new(name, image::RgbaImage::from_pixel(1, 1, image::Rgba(rgba)), srgb);
@@ -266,11 +256,14 @@ impl Renderer {
             anisotropy_clamp: gpu.max_anisotropy(),
             ..Default::default()
         });
-        let instance_buffers = InstanceBuffers::new(&device, &pipelines.instance_layout);
-        let indirect = gpu.draws_indirect().then(|| {
-            let usage = wgpu::BufferUsages::INDIRECT;
-            GrowBuffer::new(&device, "renderer: indirect draw commands", usage, 1024 * 20)
-        });
+        let instances = InstanceBuffer::new(&device);
+        let forward = DrawList::new(
+            &device,
+            "renderer block: forward draw indices",
+            &pipelines.instance_layout,
+            instances.buffer(),
+            gpu.draws_indirect(),
+        );
         let mesh_pool = MeshPool::new(&device);
         let material_table = MaterialTable::new(&device);
         Self {
@@ -288,11 +281,10 @@ impl Renderer {
             textures: Vec::new(),
             environment: Environment::default(),
             scene_block,
-            camera_block,
             scene_group,
-            camera_group,
-            instance_buffers,
-            indirect,
+            views,
+            instances,
+            forward,
             store: InstanceStore::default(),
             culling: true,
             mode: FrameMode::Optimized,
@@ -304,12 +296,6 @@ impl Renderer {
             instances_submitted: 0,
             visible: Vec::new(),
             runs: Vec::new(),
-            items: Vec::new(),
-            batches: Vec::new(),
-            draw_indices: Vec::new(),
-            indirect_args: Vec::new(),
-            uploaded_draw_indices: Vec::new(),
-            uploaded_indirect_args: Vec::new(),
         }
     }
 
@@ -493,16 +479,17 @@ impl Renderer {
             stats.cpu_ms.cull = ms_since(t);
 
             let t = Instant::now();
+            self.forward.clear();
             self.build_queue(camera);
             stats.cpu_ms.queue = ms_since(t);
 
             let t = Instant::now();
-            queue::sort(&mut self.items);
+            queue::sort(&mut self.forward.items);
             stats.cpu_ms.sort = ms_since(t);
 
             let t = Instant::now();
-            batch::merge(&self.items, &self.visible, &mut self.draw_indices, &mut self.batches);
-            self.indirect_commands();
+            let shapes = &self.shapes;
+            self.forward.build(0, &self.visible, |b| shapes[b.shape.0 as usize].gpu.expect("prepared"));
             stats.cpu_ms.batch = ms_since(t);
         }
 
@@ -635,7 +622,6 @@ impl Renderer {
         let view = self.view.as_ref().expect("culled first").2;
         let far = camera.far();
         let depth = |center: Vec3A| -view.transform_point3a(center).z / far;
-        self.items.clear();
         for run in &self.runs {
             let s = &self.submitted[run.entry];
             let material = &self.materials[s.material.0 as usize];
@@ -659,11 +645,11 @@ impl Renderer {
             if blended {
                 for k in run.start..run.start + run.len {
                     let instance = self.visible[k as usize] as usize;
-                    self.items.push(item(k, 1, depth(self.store.bounds.center(instance))));
+                    self.forward.items.push(item(k, 1, depth(self.store.bounds.center(instance))));
                 }
             } else {
                 let center = self.store.slot(s.slot).bounds.map_or(Vec3A::ZERO, |(c, _)| c);
-                self.items.push(item(run.start, run.len, depth(center)));
+                self.forward.items.push(item(run.start, run.len, depth(center)));
             }
         }
     }
@@ -671,8 +657,7 @@ impl Renderer {
     /// The naive baseline's batches: every valid instance of every submitted entity,
     /// in submission order, one draw each, nothing culled or sorted.
     fn naive_batches(&mut self, stats: &mut FrameStats) {
-        self.draw_indices.clear();
-        self.batches.clear();
+        self.forward.clear();
         for s in &self.submitted {
             let slot = self.store.slot(s.slot);
             stats.instances_invalid += u64::from(slot.invalid);
@@ -680,15 +665,15 @@ impl Renderer {
             let range = slot.first as usize..(slot.first + slot.count) as usize;
             for i in range {
                 if self.store.bounds.is_valid(i) {
-                    self.batches.push(Batch {
+                    self.forward.batches.push(Batch {
                         stage: Queue::Opaque.stage(),
                         pipeline,
                         material: s.material,
                         shape: s.shape,
-                        first_instance: self.draw_indices.len() as u32,
+                        first_instance: self.forward.draw_indices.len() as u32,
                         instance_count: 1,
                     });
-                    self.draw_indices.push(i as u32);
+                    self.forward.draw_indices.push(i as u32);
                 }
             }
         }
@@ -701,65 +686,39 @@ impl Renderer {
         twin.pipelines[layout.index()].expect("prepared")
     }
 
-    /// Stage 5 (continued): one indirect draw command per batch, when drawing indirect.
-    fn indirect_commands(&mut self) {
-        self.indirect_args.clear();
-        if self.indirect.is_none() {
-            return;
-        }
-        self.indirect_args.extend(self.batches.iter().map(|b| {
-            let mesh = self.shapes[b.shape.0 as usize].gpu.expect("prepared");
-            wgpu::util::DrawIndexedIndirectArgs {
-                index_count: mesh.index_count,
-                instance_count: b.instance_count,
-                first_index: mesh.first_index,
-                base_vertex: mesh.base_vertex,
-                first_instance: b.first_instance,
-            }
-        }));
-    }
-
     /// Stage 6: write the blocks that changed, the instances that changed, and this
     /// frame's draw indices and indirect commands where they differ from the last frame's.
     fn upload(&mut self, camera: &Camera, lights: &[Light], aspect: f32, stats: &mut FrameStats) {
         let bytes = &mut stats.bytes_uploaded;
         bytes.scene += self.scene_block.update(&self.queue, SceneGpu::new(&self.environment, lights));
-        bytes.camera += self.camera_block.update(&self.queue, camera.to_gpu(aspect));
+        bytes.camera += self.views.update(&self.queue, 0, camera.to_gpu(aspect));
+        self.upload_instances(bytes);
+        let naive = self.mode == FrameMode::Naive;
+        if naive {
+            // Every draw's material entry written before it, one small write each.
+            for b in &self.forward.batches {
+                let block = self.materials[b.material.0 as usize].material.to_gpu();
+                bytes.material += self.material_table.write(&self.queue, b.material.0, &block);
+            }
+        }
         let layout = &self.pipelines.instance_layout;
-        if self.instance_buffers.reserve(&self.device, layout, self.store.len(), self.draw_indices.len()) {
+        let written = self.forward.upload(&self.device, &self.queue, (layout, self.instances.buffer()), naive);
+        bytes.draw_indices += written.draw_indices;
+        bytes.indirect += written.indirect;
+        stats.instances_drawn = self.forward.draw_indices.len() as u64;
+    }
+
+    /// Write the instances that changed (all of them when the buffer grew, and
+    /// then every draw list is bound to the new buffer).
+    fn upload_instances(&mut self, bytes: &mut UploadStats) {
+        if self.instances.reserve(&self.device, self.store.len()) {
             self.store.mark_all_dirty();
-            self.uploaded_draw_indices.clear();
+            self.forward.rebind(&self.device, &self.pipelines.instance_layout, self.instances.buffer());
         }
         for range in self.store.take_dirty() {
             let data = &self.store.instances[range.start as usize..range.end as usize];
-            bytes.instances += self.instance_buffers.write_instances(&self.queue, range.start, data);
+            bytes.instances += self.instances.write(&self.queue, range.start, data);
         }
-        if self.mode == FrameMode::Naive {
-            // Every draw's material entry and instance index written before it, one small write each.
-            for (k, b) in self.batches.iter().enumerate() {
-                let block = self.materials[b.material.0 as usize].material.to_gpu();
-                bytes.material += self.material_table.write(&self.queue, b.material.0, &block);
-                bytes.draw_indices +=
-                    self.instance_buffers.write_draw_indices(&self.queue, k as u32, &self.draw_indices[k..=k]);
-            }
-            self.uploaded_draw_indices.clear();
-        } else if self.draw_indices != self.uploaded_draw_indices {
-            bytes.draw_indices += self.instance_buffers.write_draw_indices(&self.queue, 0, &self.draw_indices);
-            self.uploaded_draw_indices.clone_from(&self.draw_indices);
-        }
-        if let Some(indirect) = &mut self.indirect {
-            let size = std::mem::size_of_val(self.indirect_args.as_slice()) as u64;
-            if indirect.reserve(&self.device, size) {
-                self.uploaded_indirect_args.clear();
-            }
-            if bytemuck::cast_slice::<_, u8>(&self.indirect_args)
-                != bytemuck::cast_slice::<_, u8>(&self.uploaded_indirect_args)
-            {
-                bytes.indirect += indirect.write(&self.queue, 0, &self.indirect_args);
-                self.uploaded_indirect_args.clone_from(&self.indirect_args);
-            }
-        }
-        stats.instances_drawn = self.draw_indices.len() as u64;
     }
 }
 
@@ -879,11 +838,11 @@ mod tests {
         r.submit(&front);
         let stats = r.flush(&camera, &[], &mut target).expect("frame");
         // Drawn order: `front` (opaque), sky, the five glass instances far to near, then the ground (200).
-        let stages: Vec<u8> = r.batches.iter().map(|b| b.stage).collect();
+        let stages: Vec<u8> = r.forward.batches.iter().map(|b| b.stage).collect();
         assert_eq!(stages, vec![64, 192, 200]);
-        let glass_batch = r.batches[1];
+        let glass_batch = r.forward.batches[1];
         assert_eq!(glass_batch.instance_count, 5, "one entity's instances merge into one draw once sorted");
-        let order: Vec<f32> = r.draw_indices[glass_batch.first_instance as usize..][..5]
+        let order: Vec<f32> = r.forward.draw_indices[glass_batch.first_instance as usize..][..5]
             .iter()
             .map(|&i| r.store.instances[i as usize].transform().w_axis.z)
             .collect();

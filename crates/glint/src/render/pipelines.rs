@@ -125,13 +125,13 @@ pub(crate) struct Pipelines {
     sky_cache: HashMap<u32, wgpu::RenderPipeline>,
 }
 
-fn uniform_entry(binding: u32, visibility: wgpu::ShaderStages) -> wgpu::BindGroupLayoutEntry {
+fn uniform_entry(binding: u32, visibility: wgpu::ShaderStages, dynamic: bool) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry {
         binding,
         visibility,
         ty: wgpu::BindingType::Buffer {
             ty: wgpu::BufferBindingType::Uniform,
-            has_dynamic_offset: false,
+            has_dynamic_offset: dynamic,
             min_binding_size: None,
         },
         count: None,
@@ -229,8 +229,9 @@ impl Pipelines {
         let layout = |label, entries: &[wgpu::BindGroupLayoutEntry]| {
             device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some(label), entries })
         };
-        let scene_layout = layout("renderer: scene block layout (group 0)", &[uniform_entry(0, all)]);
-        let camera_layout = layout("renderer: camera block layout (group 1)", &[uniform_entry(0, all)]);
+        let scene_layout = layout("renderer: scene block layout (group 0)", &[uniform_entry(0, all, false)]);
+        // One record per view, picked by a dynamic offset (render/views.rs).
+        let camera_layout = layout("renderer: camera block layout (group 1)", &[uniform_entry(0, all, true)]);
         let storage = |binding, visibility| wgpu::BindGroupLayoutEntry {
             binding,
             visibility,

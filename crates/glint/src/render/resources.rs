@@ -203,63 +203,28 @@ impl MaterialTable {
     }
 }
 
-/// The Renderer block (`@group(3)`): persistent instances, transform and material
-/// (binding 0), and this frame's instance indices in draw order (binding 1).
-pub(crate) struct InstanceBuffers {
-    instances: GrowBuffer,
-    draw_indices: GrowBuffer,
-    pub bind_group: wgpu::BindGroup,
-}
+/// The instances of the Renderer block (`@group(3) @binding(0)`): every stored
+/// instance record, persistent between frames (each [`DrawList`](super::draw_list::DrawList)
+/// binds it beside its own draw indices).
+pub(crate) struct InstanceBuffer(GrowBuffer);
 
-impl InstanceBuffers {
-    pub(crate) fn new(device: &wgpu::Device, layout: &wgpu::BindGroupLayout) -> Self {
-        let storage = wgpu::BufferUsages::STORAGE;
-        let instances = GrowBuffer::new(device, "renderer block: instances", storage, 1024 * 64);
-        let draw_indices = GrowBuffer::new(device, "renderer block: draw indices", storage, 1024 * 4);
-        let bind_group = Self::bind(device, layout, &instances, &draw_indices);
-        Self { instances, draw_indices, bind_group }
+impl InstanceBuffer {
+    pub(crate) fn new(device: &wgpu::Device) -> Self {
+        Self(GrowBuffer::new(device, "renderer block: instances", wgpu::BufferUsages::STORAGE, 1024 * 64))
     }
 
-    fn bind(
-        device: &wgpu::Device,
-        layout: &wgpu::BindGroupLayout,
-        instances: &GrowBuffer,
-        indices: &GrowBuffer,
-    ) -> wgpu::BindGroup {
-        device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("renderer block (group 3)"),
-            layout,
-            entries: &[
-                wgpu::BindGroupEntry { binding: 0, resource: instances.buffer.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 1, resource: indices.buffer.as_entire_binding() },
-            ],
-        })
+    /// Make room for `instances` records. Returns whether the buffer was replaced
+    /// (its contents must be written again and its bind groups rebuilt).
+    pub(crate) fn reserve(&mut self, device: &wgpu::Device, instances: usize) -> bool {
+        self.0.reserve(device, (instances * std::mem::size_of::<InstanceGpu>()) as u64)
     }
 
-    /// Make room for `instances` instances and `indices` draw indices. Returns
-    /// whether the instance buffer was replaced (its contents must be written again).
-    pub(crate) fn reserve(
-        &mut self,
-        device: &wgpu::Device,
-        layout: &wgpu::BindGroupLayout,
-        instances: usize,
-        indices: usize,
-    ) -> bool {
-        let grew_instances = self.instances.reserve(device, (instances * std::mem::size_of::<InstanceGpu>()) as u64);
-        let grew_indices = self.draw_indices.reserve(device, (indices * 4) as u64);
-        if grew_instances || grew_indices {
-            self.bind_group = Self::bind(device, layout, &self.instances, &self.draw_indices);
-        }
-        grew_instances
+    /// Write `data` at record `first`; returns bytes written.
+    pub(crate) fn write(&self, queue: &wgpu::Queue, first: u32, data: &[InstanceGpu]) -> u64 {
+        self.0.write(queue, first.into(), data)
     }
 
-    /// Write `data` at instance `first`; returns bytes written.
-    pub(crate) fn write_instances(&self, queue: &wgpu::Queue, first: u32, data: &[InstanceGpu]) -> u64 {
-        self.instances.write(queue, first.into(), data)
-    }
-
-    /// Write draw indices from position `first`; returns bytes written.
-    pub(crate) fn write_draw_indices(&self, queue: &wgpu::Queue, first: u32, indices: &[u32]) -> u64 {
-        self.draw_indices.write(queue, first.into(), indices)
+    pub(crate) fn buffer(&self) -> &wgpu::Buffer {
+        &self.0.buffer
     }
 }
