@@ -15,14 +15,16 @@ pub(crate) struct LightGpu {
     /// xyz the spot's axis, w the cone's scale; the cone factor is
     /// `saturate(dot(axis, -l) · scale + offset)²` (1 for other lights) (16 bytes).
     spot: [f32; 4],
-    /// x the cone's offset, yzw reserved (16 bytes).
-    spot_offset: [f32; 4],
+    /// x the cone's offset; y the first shadow view (−1: no shadows); z, w depth
+    /// and normal bias in texels (16 bytes).
+    params: [f32; 4],
 }
 const _: () = assert!(std::mem::size_of::<LightGpu>() == 64);
 
 impl Light {
-    /// The shader's view of this light.
-    pub(crate) fn to_gpu(self) -> LightGpu {
+    /// The shader's view of this light; `shadow` is its first shadow view (a 2D
+    /// layer, or a cube for point lights) when its shadow maps were drawn.
+    pub(crate) fn to_gpu(self, shadow: Option<u32>) -> LightGpu {
         // A light without a cone: scale 0, offset 1.
         let (mut spot, mut offset) = ([0.0; 4], 1.0);
         let (position, range) = match self.kind {
@@ -41,7 +43,10 @@ impl Light {
             position: position.to_array(),
             color: (self.color * self.intensity).extend(range).to_array(),
             spot,
-            spot_offset: [offset, 0.0, 0.0, 0.0],
+            params: match (shadow, self.shadows) {
+                (Some(first), Some(s)) => [offset, first as f32, s.depth_bias, s.normal_bias],
+                _ => [offset, -1.0, 0.0, 0.0],
+            },
         }
     }
 }
@@ -60,8 +65,9 @@ pub(crate) struct SceneGpu {
 const _: () = assert!(std::mem::size_of::<SceneGpu>() == 80 + 64 * MAX_LIGHTS);
 
 impl SceneGpu {
-    /// Pack the environment and up to [`MAX_LIGHTS`] lights (the caller checks the count).
-    pub(crate) fn new(env: &Environment, lights: &[Light]) -> Self {
+    /// Pack the environment and up to [`MAX_LIGHTS`] lights (the caller checks the
+    /// count), with each light's first shadow view where it has shadow maps.
+    pub(crate) fn new(env: &Environment, lights: &[Light], shadows: &[Option<u32>]) -> Self {
         let (top, bottom) = match env.background {
             Background::Color(c) => (c, c),
             Background::Gradient { top, bottom } => (top, bottom),
@@ -74,8 +80,8 @@ impl SceneGpu {
             counts: [lights.len().min(MAX_LIGHTS) as u32, 0, 0, 0],
             lights: [LightGpu::default(); MAX_LIGHTS],
         };
-        for (slot, light) in block.lights.iter_mut().zip(lights) {
-            *slot = light.to_gpu();
+        for (k, (slot, light)) in block.lights.iter_mut().zip(lights).enumerate() {
+            *slot = light.to_gpu(shadows.get(k).copied().flatten());
         }
         block
     }
@@ -102,6 +108,20 @@ impl Camera {
             view: view.to_cols_array(),
             inv_view_proj: view_proj.inverse().to_cols_array(),
             position: self.eye.extend(1.0).to_array(),
+        }
+    }
+}
+
+impl CameraGpu {
+    /// A shadow view's record: its matrices, the light's position, and in `w` the
+    /// distance scale of cube faces (0 for depth views).
+    pub(crate) fn for_shadow(view: &super::shadow_views::ShadowView) -> Self {
+        let view_proj = view.view_proj();
+        Self {
+            view_proj: view_proj.to_cols_array(),
+            view: view.view.to_cols_array(),
+            inv_view_proj: view_proj.inverse().to_cols_array(),
+            position: view.eye.extend(view.distance_scale).to_array(),
         }
     }
 }
@@ -160,17 +180,20 @@ pub(crate) struct InstanceGpu {
     pub(crate) joints: u32, // 4
     /// How many joint matrices the entity has.
     pub(crate) joint_count: u32, // 4
-    reserved: u32,       // 4
+    /// Bit 0: receives shadows.
+    flags: u32, // 4
 }
 const _: () = assert!(std::mem::size_of::<InstanceGpu>() == 64);
 
 impl InstanceGpu {
-    /// An instance drawn with `transform` and material `material`.
-    pub(crate) fn new(transform: &Mat4, material: MaterialId) -> Self {
+    /// An instance drawn with `transform` and material `material`, darkened by
+    /// shadows when `receive_shadows`.
+    pub(crate) fn new(transform: &Mat4, material: MaterialId, receive_shadows: bool) -> Self {
         let t = transform.transpose();
         Self {
             rows: [t.x_axis.to_array(), t.y_axis.to_array(), t.z_axis.to_array()],
             material: material.0,
+            flags: u32::from(receive_shadows),
             ..Self::default()
         }
     }

@@ -7,6 +7,7 @@
 //! naive baseline draws batch by batch and binds everything again for each.
 
 use super::batch::Batch;
+use super::draw_list::DrawList;
 use super::queue::{Queue, SKY_STAGE};
 use super::views::ViewBlocks;
 use super::{FrameMode, FrameStats, Renderer};
@@ -18,7 +19,7 @@ const INDIRECT_STRIDE: u64 = std::mem::size_of::<wgpu::util::DrawIndexedIndirect
 
 /// What the pass has bound, to skip redundant state changes.
 #[derive(Default)]
-struct Bound {
+pub(super) struct Bound {
     pipeline: Option<u16>,
     texture_set: Option<u16>,
     page: Option<u16>,
@@ -62,7 +63,7 @@ impl Renderer {
             pass.set_bind_group(3, &self.forward.bind_group, &[]);
             stats.bind_groups_set += 3;
             let mut bound = Bound::default();
-            self.draw_stages(&mut pass, 0, sky_at, &mut bound, stats);
+            self.draw_stages(&self.forward, &mut pass, 0..sky_at, &mut bound, stats);
             let sky = match self.environment.background {
                 Background::Gradient { .. } => self.pipelines.sky_built(target.samples()),
                 Background::Color(_) => None,
@@ -80,7 +81,7 @@ impl Renderer {
                 stats.bind_groups_set += 1;
                 bound = Bound { stencil_reference: bound.stencil_reference, ..Bound::default() };
             }
-            self.draw_stages(&mut pass, sky_at, self.forward.batches.len(), &mut bound, stats);
+            self.draw_stages(&self.forward, &mut pass, sky_at..self.forward.batches.len(), &mut bound, stats);
         }
         if let Some(timer) = &mut self.gpu_timer {
             timer.resolve(&mut encoder);
@@ -88,21 +89,21 @@ impl Renderer {
         encoder.finish()
     }
 
-    /// Draw batches `from..to`, one debug group per stage.
-    fn draw_stages(
+    /// Draw `list`'s batches in `range`, one debug group per stage.
+    pub(super) fn draw_stages(
         &self,
+        list: &DrawList,
         pass: &mut wgpu::RenderPass<'_>,
-        from: usize,
-        to: usize,
+        range: std::ops::Range<usize>,
         bound: &mut Bound,
         stats: &mut FrameStats,
     ) {
-        let mut at = from;
-        for stage in self.forward.batches[from..to].chunk_by(|a, b| a.stage == b.stage) {
+        let mut at = range.start;
+        for stage in list.batches[range].chunk_by(|a, b| a.stage == b.stage) {
             pass.push_debug_group(&stage_name(stage[0].stage));
             let naive = self.mode == FrameMode::Naive;
             for run in stage.chunk_by(|a, b| !naive && self.run_key(a) == self.run_key(b)) {
-                self.draw_run(pass, at, run, bound, stats);
+                self.draw_run(list, pass, at, run, bound, stats);
                 at += run.len();
             }
             pass.pop_debug_group();
@@ -113,6 +114,7 @@ impl Renderer {
     /// only the state that changes (naive frames: all of it).
     fn draw_run(
         &self,
+        list: &DrawList,
         pass: &mut wgpu::RenderPass<'_>,
         at: usize,
         run: &[Batch],
@@ -143,7 +145,7 @@ impl Renderer {
             bound.page = Some(key.page);
         }
         stats.draws += run.len() as u32;
-        match &self.forward.indirect {
+        match &list.indirect {
             Some(indirect) if self.mode == FrameMode::Optimized => {
                 pass.multi_draw_indexed_indirect(&indirect.buffer, at as u64 * INDIRECT_STRIDE, run.len() as u32);
                 stats.draw_calls += 1;

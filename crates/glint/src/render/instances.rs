@@ -29,6 +29,8 @@ pub(crate) struct Slot {
     version: u64,
     shape: ShapeId,
     material: MaterialId,
+    /// Whether the records say the entity receives shadows.
+    receive_shadows: bool,
     /// The shape's local box when the range was written.
     local: Aabb,
     /// First instance in the store.
@@ -98,6 +100,7 @@ impl InstanceStore {
                     version: entity.version().wrapping_sub(1),
                     shape: entity.shape,
                     material: entity.material,
+                    receive_shadows: entity.receive_shadows,
                     local,
                     first: self.instances.len() as u32,
                     count: 0,
@@ -127,8 +130,10 @@ impl InstanceStore {
         if slot.version != entity.version()
             || slot.shape != entity.shape
             || slot.material != entity.material
+            || slot.receive_shadows != entity.receive_shadows
             || slot.local != local
         {
+            slot.receive_shadows = entity.receive_shadows;
             slot.version = entity.version();
             slot.local = local;
             slot.shape = entity.shape;
@@ -217,7 +222,7 @@ struct Written {
 /// A skinned entity's local box is the union of the shape's box moved by each
 /// joint: every skinned vertex is a weighted average of points in those boxes.
 fn write_range(entity: &Entity, local: Aabb, records: &mut [InstanceGpu], boxes: &mut Boxes, first: usize) -> Written {
-    let (src, material) = (entity.transforms(), entity.material);
+    let (src, material, receive) = (entity.transforms(), entity.material, entity.receive_shadows);
     let (instances, joint_records) = records.split_at_mut(src.len());
     let (lc, le) = skinned_box(entity.joints(), local);
     let world: Vec<Option<(Vec3A, Vec3A)>> =
@@ -249,13 +254,13 @@ fn write_range(entity: &Entity, local: Aabb, records: &mut [InstanceGpu], boxes:
                 Some((c, e)) => {
                     let joints = joint_records.len() as u32;
                     let offset = if joints > 0 { (src.len() - at) as u32 } else { 0 };
-                    instances[at] = InstanceGpu::new(&src[i as usize], material).with_joints(offset, joints);
+                    instances[at] = InstanceGpu::new(&src[i as usize], material, receive).with_joints(offset, joints);
                     boxes.set(first + at, c, e);
                     lo = lo.min(c - e);
                     hi = hi.max(c + e);
                 }
                 None => {
-                    instances[at] = InstanceGpu::new(&Mat4::ZERO, material);
+                    instances[at] = InstanceGpu::new(&Mat4::ZERO, material, receive);
                     boxes.set_never_visible(first + at);
                 }
             }
@@ -271,7 +276,7 @@ fn write_range(entity: &Entity, local: Aabb, records: &mut [InstanceGpu], boxes:
     }
     for (k, (record, joint)) in joint_records.iter_mut().zip(entity.joints()).enumerate() {
         let joint = if joint.is_finite() { *joint } else { Mat4::ZERO };
-        *record = InstanceGpu::new(&joint, material);
+        *record = InstanceGpu::new(&joint, material, receive);
         boxes.set_never_visible(first + src.len() + k);
     }
     Written { bounds, invalid, clusters }
@@ -365,7 +370,7 @@ mod tests {
         e.set_transform(1, Mat4::from_translation(Vec3::new(f32::NAN, 0.0, 0.0)));
         let slot = store.submit(&e, unit(), 0);
         assert_eq!(store.slot(slot).invalid, 1);
-        assert_eq!(store.instances[2], InstanceGpu::new(&Mat4::ZERO, MaterialId(0)), "invalid ones go last");
+        assert_eq!(store.instances[2], InstanceGpu::new(&Mat4::ZERO, MaterialId(0), true), "invalid ones go last");
         assert!(store.instances.iter().all(|i| i.transform().is_finite()));
         assert!(!store.bounds.is_valid(2) && store.bounds.is_valid(0) && store.bounds.is_valid(1));
         let bounds = store.slot(slot).bounds.unwrap();

@@ -27,12 +27,15 @@ mod mesh_pool;
 mod pipelines;
 pub mod queue;
 mod resources;
+mod shadow_maps;
+mod shadow_pass;
+mod shadow_views;
 mod stats;
 mod timer;
 mod views;
 
 pub use mesh_pool::MeshTooLarge;
-pub use stats::{FrameStats, StageTimes, UploadStats};
+pub use stats::{FrameStats, PassStats, Passes, StageTimes, UploadStats};
 
 use crate::asset::Texture;
 use crate::gpu::{Gpu, OffscreenTarget};
@@ -41,8 +44,8 @@ use crate::scene::{
 };
 use batch::Batch;
 use blocks::{SceneGpu, UniformBlock};
-use draw_list::DrawList;
 use cull::{Containment, Frustum};
+use draw_list::DrawList;
 use glam::{Mat4, Vec3A};
 use instances::InstanceStore;
 use mesh_pool::{MeshPool, MeshRange};
@@ -50,8 +53,9 @@ use pipelines::{Pipelines, VertexLayout};
 use queue::{DrawItem, Queue};
 use rayon::prelude::*;
 use resources::{InstanceBuffer, MaterialTable, TextureUploader};
-use views::ViewBlocks;
+use shadow_maps::{ShadowGpu, ShadowMaps};
 use std::time::Instant;
+use views::ViewBlocks;
 
 /// Errors from [`Renderer::flush`].
 #[derive(Debug, thiserror::Error)]
@@ -136,6 +140,7 @@ struct Submitted {
     shape: ShapeId,
     material: MaterialId,
     render_order: Option<u8>,
+    cast_shadows: bool,
 }
 
 /// A submitted entity's visible instances: a range of the frame's visible list.
@@ -198,6 +203,12 @@ pub struct Renderer {
     instances: InstanceBuffer,
     /// The forward view's draws.
     forward: DrawList,
+    shadow_maps: ShadowMaps,
+    shadow_block: UniformBlock<ShadowGpu>,
+    /// Every shadow view's draws.
+    shadow_list: DrawList,
+    /// What this frame's shadow pass drew (cleared by flush).
+    shadow_frame: Option<shadow_pass::ShadowFrame>,
     store: InstanceStore,
     culling: bool,
     mode: FrameMode,
@@ -229,11 +240,10 @@ impl Renderer {
         let queue = gpu.queue.clone();
         let pipelines = Pipelines::new(&device);
         let scene_block = UniformBlock::new(&device, "renderer: scene block");
-        let scene_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("renderer: scene block (group 0)"),
-            layout: &pipelines.scene_layout,
-            entries: &[wgpu::BindGroupEntry { binding: 0, resource: scene_block.buffer.as_entire_binding() }],
-        });
+        let shadow_block = UniformBlock::new(&device, "renderer: shadow block");
+        let shadow_maps = ShadowMaps::new(&device, 1, 1, 1, 1);
+        let scene_group =
+            shadow_maps.scene_group(&device, &pipelines.scene_layout, &scene_block.buffer, &shadow_block.buffer);
         let views = ViewBlocks::new(&device, &pipelines.camera_layout);
         let uploader = TextureUploader::new(&device);
         let pixel = |name: &str, rgba: [u8; 4], srgb| {
@@ -264,6 +274,13 @@ impl Renderer {
             instances.buffer(),
             gpu.draws_indirect(),
         );
+        let shadow_list = DrawList::new(
+            &device,
+            "renderer block: shadow draw indices",
+            &pipelines.instance_layout,
+            instances.buffer(),
+            gpu.draws_indirect(),
+        );
         let mesh_pool = MeshPool::new(&device);
         let material_table = MaterialTable::new(&device);
         Self {
@@ -285,6 +302,10 @@ impl Renderer {
             views,
             instances,
             forward,
+            shadow_maps,
+            shadow_block,
+            shadow_list,
+            shadow_frame: None,
             store: InstanceStore::default(),
             culling: true,
             mode: FrameMode::Optimized,
@@ -411,6 +432,7 @@ impl Renderer {
             shape: entity.shape,
             material: entity.material,
             render_order: entity.render_order,
+            cast_shadows: entity.cast_shadows,
         });
     }
 
@@ -444,8 +466,24 @@ impl Renderer {
         self.submitted.clear();
         self.instances_submitted = 0;
         self.frame_index += 1;
+        let shadow = self.shadow_frame.take();
         result.map(|mut stats| {
             stats.cpu_ms.total = ms_since(start);
+            if let Some(shadow) = shadow {
+                stats.shadow_views = shadow.views;
+                stats.passes.shadow = shadow.cost;
+                stats.pipelines_compiled += shadow.prepared.pipelines_compiled;
+                let (bytes, more) = (&mut stats.bytes_uploaded, shadow.prepared.bytes_uploaded);
+                bytes.scene += more.scene;
+                bytes.camera += more.camera;
+                bytes.material += more.material;
+                bytes.instances += more.instances;
+                bytes.draw_indices += more.draw_indices;
+                bytes.indirect += more.indirect;
+                bytes.textures += more.textures;
+                bytes.meshes += more.meshes;
+                bytes.finish();
+            }
             stats
         })
     }
@@ -579,6 +617,15 @@ impl Renderer {
             self.view = Some((key, frustum, view));
         }
         let frustum = self.view.as_ref().expect("set above").1;
+        self.collect_visible(&frustum, |_| true);
+        let store = &self.store;
+        stats.instances_invalid = self.submitted.iter().map(|s| u64::from(store.slot(s.slot).invalid)).sum();
+        stats.instances_culled = stats.instances_submitted - stats.instances_invalid - self.visible.len() as u64;
+    }
+
+    /// Fill `visible` with the instances of the submitted entities `wanted` keeps
+    /// that `frustum` sees, and `runs` with each entity's part of it.
+    fn collect_visible(&mut self, frustum: &Frustum, wanted: impl Fn(&Submitted) -> bool + Sync) {
         self.visible.clear();
         self.runs.clear();
         let (store, culling) = (&self.store, self.culling);
@@ -595,7 +642,9 @@ impl Renderer {
                 .par_iter()
                 .map(|s| {
                     let mut list = Vec::new();
-                    visible_instances(&frustum, culling, store, s.slot, &mut list);
+                    if wanted(s) {
+                        visible_instances(frustum, culling, store, s.slot, &mut list);
+                    }
                     list
                 })
                 .collect();
@@ -607,12 +656,12 @@ impl Renderer {
         } else {
             for (entry, s) in self.submitted.iter().enumerate() {
                 let start = self.visible.len();
-                visible_instances(&frustum, culling, store, s.slot, &mut self.visible);
+                if wanted(s) {
+                    visible_instances(frustum, culling, store, s.slot, &mut self.visible);
+                }
                 push_run(entry, &mut self.visible, start);
             }
         }
-        stats.instances_invalid = self.submitted.iter().map(|s| u64::from(store.slot(s.slot).invalid)).sum();
-        stats.instances_culled = stats.instances_submitted - stats.instances_invalid - self.visible.len() as u64;
     }
 
     /// Stage 3: one draw item per visible run, or per visible instance for blended
@@ -690,7 +739,10 @@ impl Renderer {
     /// frame's draw indices and indirect commands where they differ from the last frame's.
     fn upload(&mut self, camera: &Camera, lights: &[Light], aspect: f32, stats: &mut FrameStats) {
         let bytes = &mut stats.bytes_uploaded;
-        bytes.scene += self.scene_block.update(&self.queue, SceneGpu::new(&self.environment, lights));
+        // Shadows only for the lights this frame's shadow pass drew maps for.
+        let shadowed = self.shadow_frame.as_ref().filter(|f| f.lights == lights).map(|f| f.first_view.as_slice());
+        let scene = SceneGpu::new(&self.environment, lights, shadowed.unwrap_or(&[]));
+        bytes.scene += self.scene_block.update(&self.queue, scene);
         bytes.camera += self.views.update(&self.queue, 0, camera.to_gpu(aspect));
         self.upload_instances(bytes);
         let naive = self.mode == FrameMode::Naive;
@@ -714,6 +766,7 @@ impl Renderer {
         if self.instances.reserve(&self.device, self.store.len()) {
             self.store.mark_all_dirty();
             self.forward.rebind(&self.device, &self.pipelines.instance_layout, self.instances.buffer());
+            self.shadow_list.rebind(&self.device, &self.pipelines.instance_layout, self.instances.buffer());
         }
         for range in self.store.take_dirty() {
             let data = &self.store.instances[range.start as usize..range.end as usize];

@@ -96,9 +96,25 @@ impl VertexLayout {
     }
 }
 
-/// Everything that makes one forward pipeline differ from another.
+/// Slope-scaled depth bias of 2D shadow maps (the per-light biases are added
+/// where the map is read).
+const SHADOW_SLOPE_BIAS: f32 = 1.5;
+
+/// What a pipeline draws into.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub(crate) enum PassKind {
+    /// The forward pass: colour and depth of the target.
+    Forward,
+    /// A 2D shadow map: depth only, slope-scaled bias, both sides drawn.
+    ShadowDepth,
+    /// A cube-map face: the distance to the light over its range as depth.
+    ShadowDistance,
+}
+
+/// Everything that makes one pipeline differ from another.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub(crate) struct PipelineKey {
+    pub pass: PassKind,
     pub features: ShaderFeatures,
     pub vertex_layout: VertexLayout,
     pub states: RenderStates,
@@ -114,11 +130,12 @@ pub(crate) struct Pipelines {
     pub material_layout: wgpu::BindGroupLayout,
     pub instance_layout: wgpu::BindGroupLayout,
     layout: wgpu::PipelineLayout,
+    shadow_layout: wgpu::PipelineLayout,
     sky_layout: wgpu::PipelineLayout,
     library: ShaderLibrary,
     modules: HashMap<ShaderFeatures, wgpu::ShaderModule>,
     sky_module: Option<wgpu::ShaderModule>,
-    /// Forward pipelines; a key's index is its id in sort keys.
+    /// Forward and shadow pipelines; a key's index is its id in sort keys.
     forward_cache: Vec<(PipelineKey, wgpu::RenderPipeline)>,
     forward_index: HashMap<PipelineKey, u16>,
     /// Sky pipelines by sample count.
@@ -197,7 +214,7 @@ fn blend(b: BlendState) -> Option<wgpu::BlendState> {
     }
 }
 
-fn depth_stencil(states: &RenderStates) -> wgpu::DepthStencilState {
+fn depth_stencil(states: &RenderStates, format: wgpu::TextureFormat) -> wgpu::DepthStencilState {
     let s = &states.stencil;
     let face = wgpu::StencilFaceState {
         compare: compare(s.compare),
@@ -206,7 +223,7 @@ fn depth_stencil(states: &RenderStates) -> wgpu::DepthStencilState {
         pass_op: stencil_op(s.pass),
     };
     wgpu::DepthStencilState {
-        format: DEPTH_FORMAT,
+        format,
         depth_write_enabled: Some(states.depth.write),
         depth_compare: Some(compare(states.depth.compare)),
         stencil: wgpu::StencilState {
@@ -229,7 +246,32 @@ impl Pipelines {
         let layout = |label, entries: &[wgpu::BindGroupLayoutEntry]| {
             device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some(label), entries })
         };
-        let scene_layout = layout("renderer: scene block layout (group 0)", &[uniform_entry(0, all, false)]);
+        let fragment = wgpu::ShaderStages::FRAGMENT;
+        let depth_texture = |binding, view_dimension| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: fragment,
+            ty: wgpu::BindingType::Texture {
+                sample_type: wgpu::TextureSampleType::Depth,
+                view_dimension,
+                multisampled: false,
+            },
+            count: None,
+        };
+        let scene_layout = layout(
+            "renderer: scene block layout (group 0)",
+            &[
+                uniform_entry(0, all, false),
+                uniform_entry(1, fragment, false),
+                depth_texture(2, wgpu::TextureViewDimension::D2Array),
+                depth_texture(3, wgpu::TextureViewDimension::CubeArray),
+                wgpu::BindGroupLayoutEntry {
+                    binding: 4,
+                    visibility: fragment,
+                    ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Comparison),
+                    count: None,
+                },
+            ],
+        );
         // One record per view, picked by a dynamic offset (render/views.rs).
         let camera_layout = layout("renderer: camera block layout (group 1)", &[uniform_entry(0, all, true)]);
         let storage = |binding, visibility| wgpu::BindGroupLayoutEntry {
@@ -275,12 +317,19 @@ impl Pipelines {
             ],
             immediate_size: 0,
         });
+        // Shadow pipelines draw into the shadow maps group 0 samples: they go without it.
+        let shadow_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("renderer: shadow pipeline layout"),
+            bind_group_layouts: &[None, Some(&camera_layout), Some(&material_layout), Some(&instance_layout)],
+            immediate_size: 0,
+        });
         Self {
             scene_layout,
             camera_layout,
             material_layout,
             instance_layout,
             layout: pipeline_layout,
+            shadow_layout,
             sky_layout,
             library: ShaderLibrary::new(),
             modules: HashMap::new(),
@@ -303,7 +352,48 @@ impl Pipelines {
         features.set(ShaderFeatures::VERTEX_COLOR, vertex_layout.colors);
         features.set(ShaderFeatures::UV1, vertex_layout.uv1);
         features.set(ShaderFeatures::SKINNED, vertex_layout.skin);
-        PipelineKey { features, vertex_layout, states, color_format: COLOR_FORMAT, depth_format: DEPTH_FORMAT, samples }
+        PipelineKey {
+            pass: PassKind::Forward,
+            features,
+            vertex_layout,
+            states,
+            color_format: COLOR_FORMAT,
+            depth_format: DEPTH_FORMAT,
+            samples,
+        }
+    }
+
+    /// The key of the shadow pipeline drawing what `forward` draws into a shadow
+    /// map of `pass`: only the features that move vertices or discard fragments
+    /// stay; depth writes, no colour, one sample.
+    pub(crate) fn shadow_key(forward: PipelineKey, pass: PassKind) -> PipelineKey {
+        let kept = ShaderFeatures::ALPHA_MASK
+            | ShaderFeatures::DIFFUSE_MAP
+            | ShaderFeatures::VERTEX_COLOR
+            | ShaderFeatures::UV1
+            | ShaderFeatures::SKINNED;
+        let mask = forward.features.contains(ShaderFeatures::ALPHA_MASK);
+        let features =
+            if mask { forward.features & kept } else { forward.features & !ShaderFeatures::ALPHA_MASK & kept };
+        let states = RenderStates {
+            depth: crate::scene::DepthState { compare: Compare::Less, write: true },
+            raster: crate::scene::RasterState {
+                cull: Cull::None,
+                depth_bias: 0,
+                // Depth views lean on slope-scaled bias; distance views write their own depth.
+                slope_bias_bits: if pass == PassKind::ShadowDepth { SHADOW_SLOPE_BIAS.to_bits() } else { 0 },
+            },
+            ..Default::default()
+        };
+        PipelineKey {
+            pass,
+            features,
+            vertex_layout: forward.vertex_layout,
+            states,
+            color_format: COLOR_FORMAT,
+            depth_format: super::shadow_maps::SHADOW_FORMAT,
+            samples: 1,
+        }
     }
 
     /// The id of the forward pipeline for `key`, building it (and its shader variant)
@@ -322,6 +412,11 @@ impl Pipelines {
         self.forward_cache.push((key, pipeline));
         self.forward_index.insert(key, id);
         Ok((id, true))
+    }
+
+    /// The key a pipeline id was built for.
+    pub(crate) fn key_of(&self, id: u16) -> PipelineKey {
+        self.forward_cache[id as usize].0
     }
 
     pub(crate) fn forward(&self, id: u16) -> &wgpu::RenderPipeline {
@@ -362,7 +457,7 @@ impl Pipelines {
                 buffers: &[],
             },
             primitive: wgpu::PrimitiveState::default(),
-            depth_stencil: Some(depth_stencil(&states)),
+            depth_stencil: Some(depth_stencil(&states, DEPTH_FORMAT)),
             multisample: wgpu::MultisampleState { count: samples, ..Default::default() },
             fragment: Some(wgpu::FragmentState {
                 module,
@@ -390,10 +485,22 @@ impl Pipelines {
             })
             .collect();
         let module = &self.modules[&key.features];
-        let label = format!("renderer: forward pipeline {:?} {:?} {}x", key.features, key.states.blend, key.samples);
+        let label =
+            format!("renderer: {:?} pipeline {:?} {:?} {}x", key.pass, key.features, key.states.blend, key.samples);
+        let targets = [Some(wgpu::ColorTargetState {
+            format: key.color_format,
+            blend: blend(key.states.blend),
+            write_mask: wgpu::ColorWrites::ALL,
+        })];
+        let alpha_tested = key.features.contains(ShaderFeatures::ALPHA_MASK);
+        let (layout, fragment, targets): (_, _, &[_]) = match key.pass {
+            PassKind::Forward => (&self.layout, Some("fs_main"), &targets),
+            PassKind::ShadowDepth => (&self.shadow_layout, alpha_tested.then_some("fs_shadow_mask"), &[]),
+            PassKind::ShadowDistance => (&self.shadow_layout, Some("fs_shadow_distance"), &[]),
+        };
         device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
             label: Some(&label),
-            layout: Some(&self.layout),
+            layout: Some(layout),
             vertex: wgpu::VertexState {
                 module,
                 entry_point: Some("vs_main"),
@@ -409,17 +516,13 @@ impl Pipelines {
                 },
                 ..Default::default()
             },
-            depth_stencil: Some(depth_stencil(&key.states)),
+            depth_stencil: Some(depth_stencil(&key.states, key.depth_format)),
             multisample: wgpu::MultisampleState { count: key.samples, ..Default::default() },
-            fragment: Some(wgpu::FragmentState {
+            fragment: fragment.map(|entry| wgpu::FragmentState {
                 module,
-                entry_point: Some("fs_main"),
+                entry_point: Some(entry),
                 compilation_options: Default::default(),
-                targets: &[Some(wgpu::ColorTargetState {
-                    format: key.color_format,
-                    blend: blend(key.states.blend),
-                    write_mask: wgpu::ColorWrites::ALL,
-                })],
+                targets,
             }),
             multiview_mask: None,
             cache: None,

@@ -59,6 +59,35 @@ pub struct StageTimes {
     pub total: f64,
 }
 
+/// Draws and CPU time of one named pass.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct PassStats {
+    /// Draw commands recorded (a multi-draw-indirect call counts one).
+    pub draw_calls: u32,
+    /// Instanced draws the GPU runs.
+    pub draws: u32,
+    /// Instances drawn.
+    pub instances: u64,
+    /// CPU time: for the shadow pass all of [`Renderer::shadow_pass`](crate::Renderer::shadow_pass);
+    /// for the forward passes, recording their draws.
+    pub cpu_ms: f64,
+}
+
+/// The frame's passes, in the order they run.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct Passes {
+    /// Every shadow view (cascades, spot lights, cube faces), culled and batched one by one.
+    pub shadow: PassStats,
+    /// Opaque materials, near to far.
+    pub opaque: PassStats,
+    /// Alpha-tested materials.
+    pub alpha_test: PassStats,
+    /// The gradient sky.
+    pub sky: PassStats,
+    /// Blended materials, far to near.
+    pub transparent: PassStats,
+}
+
 /// What one frame cost: returned by [`Renderer::flush`](crate::Renderer::flush).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
 pub struct FrameStats {
@@ -88,4 +117,8 @@ pub struct FrameStats {
     pub instances_drawn: u64,
     /// CPU time per stage.
     pub cpu_ms: StageTimes,
+    /// Shadow views drawn by this frame's shadow pass.
+    pub shadow_views: u32,
+    /// Draws and time per pass (the totals above are the forward passes').
+    pub passes: Passes,
 }

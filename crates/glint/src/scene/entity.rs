@@ -24,6 +24,10 @@ pub struct Entity {
     /// order of it, before (values below 128) or after (128 and above) the sky,
     /// instead of in their material's queue. `None`: the material's queue decides.
     pub render_order: Option<u8>,
+    /// Drawn into the shadow maps of shadow-casting lights (default true).
+    pub cast_shadows: bool,
+    /// Darkened where shadow-casting lights are blocked (default true).
+    pub receive_shadows: bool,
 }
 
 /// Source of entity identities: each entity (clones included) gets its own.
@@ -40,6 +44,8 @@ impl Clone for Entity {
             transforms: self.transforms.clone(),
             joints: self.joints.clone(),
             render_order: self.render_order,
+            cast_shadows: self.cast_shadows,
+            receive_shadows: self.receive_shadows,
         }
     }
 }
@@ -60,12 +66,20 @@ impl Entity {
             transforms,
             joints: Vec::new(),
             render_order: None,
+            cast_shadows: true,
+            receive_shadows: true,
         }
     }
 
     /// The same entity with its draw-order override set (see [`Entity::render_order`]).
     pub fn with_render_order(mut self, order: Option<u8>) -> Self {
         self.render_order = order;
+        self
+    }
+
+    /// The same entity casting and receiving shadows as given.
+    pub fn with_shadows(mut self, cast: bool, receive: bool) -> Self {
+        (self.cast_shadows, self.receive_shadows) = (cast, receive);
         self
     }
 

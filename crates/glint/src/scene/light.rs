@@ -35,7 +35,38 @@ pub enum LightKind {
     },
 }
 
-/// A light: kind, linear colour and intensity.
+/// How a light casts shadows (see [`Light::with_shadows`]).
+///
+/// A directional light gets [`CASCADES`] cascaded maps of `map_size`² texels
+/// covering the camera's view out to `distance`; a spot light one map; a point
+/// light a cube of six faces storing distance. Biases are in shadow-map texels,
+/// so the defaults hold at any map size and scene scale: the receiving point is
+/// moved `normal_bias` texels along its normal before the lookup, and the stored
+/// depth is pushed away by `depth_bias` texels of depth slope (plus a fixed
+/// slope-scaled bias in the shadow pipelines).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ShadowSettings {
+    /// Width and height of each shadow map, in texels (16..=8192).
+    pub map_size: u32,
+    /// Depth bias, in texels (default 1).
+    pub depth_bias: f32,
+    /// Normal offset, in texels (default 1.5).
+    pub normal_bias: f32,
+    /// Directional lights: how far from the camera the cascades reach; `None`
+    /// uses the camera's far plane.
+    pub distance: Option<f32>,
+}
+
+impl Default for ShadowSettings {
+    fn default() -> Self {
+        Self { map_size: 1024, depth_bias: 1.0, normal_bias: 1.5, distance: None }
+    }
+}
+
+/// Cascades of a directional light's shadow.
+pub const CASCADES: usize = 4;
+
+/// A light: kind, linear colour and intensity, and whether it casts shadows.
 ///
 /// Point lights fall off as `intensity / d² · (1 − (d/range)⁴)²` (clamped), which
 /// reaches exactly zero at `range`.
@@ -47,12 +78,21 @@ pub struct Light {
     pub color: Vec3,
     /// Scale of the colour.
     pub intensity: f32,
+    /// Shadow maps, when the light casts shadows (drawn by
+    /// [`Renderer::shadow_pass`](crate::Renderer::shadow_pass)).
+    pub shadows: Option<ShadowSettings>,
 }
 
 impl Light {
     /// A white-ish directional light travelling along `direction`.
     pub fn directional(direction: Vec3, color: Vec3, intensity: f32) -> Self {
-        Self { kind: LightKind::Directional { direction }, color, intensity }
+        Self { kind: LightKind::Directional { direction }, color, intensity, shadows: None }
+    }
+
+    /// The same light casting shadows with `settings`.
+    pub fn with_shadows(mut self, settings: ShadowSettings) -> Self {
+        self.shadows = Some(settings);
+        self
     }
 
     /// A spot light at `position` pointing along `direction`, full within
@@ -65,11 +105,16 @@ impl Light {
         range: f32,
         (inner_angle, outer_angle): (f32, f32),
     ) -> Self {
-        Self { kind: LightKind::Spot { position, direction, range, inner_angle, outer_angle }, color, intensity }
+        Self {
+            kind: LightKind::Spot { position, direction, range, inner_angle, outer_angle },
+            color,
+            intensity,
+            shadows: None,
+        }
     }
 
     /// A point light at `position` reaching zero at `range`.
     pub fn point(position: Vec3, color: Vec3, intensity: f32, range: f32) -> Self {
-        Self { kind: LightKind::Point { position, range }, color, intensity }
+        Self { kind: LightKind::Point { position, range }, color, intensity, shadows: None }
     }
 }

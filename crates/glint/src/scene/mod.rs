@@ -16,7 +16,7 @@ mod states;
 pub use camera::{Camera, Projection};
 pub use entity::Entity;
 pub use environment::{Background, Environment, Fog};
-pub use light::{Light, LightKind, MAX_LIGHTS};
+pub use light::{Light, LightKind, ShadowSettings, CASCADES, MAX_LIGHTS};
 pub use material::{AlphaMode, MapSlots, Material, ShadingModel};
 pub use mesh::{smooth_normals, smooth_normals_in_groups, Aabb, BoundingSphere, Mesh, MeshError, SkinVertex, Vertex};
 pub use states::{BlendState, Compare, Cull, DepthState, RasterState, RenderStates, StencilOp, StencilState};

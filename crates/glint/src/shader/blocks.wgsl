@@ -9,8 +9,10 @@ struct Light {
     color: vec4<f32>,
     // Spot cone: xyz axis, w scale; cone factor saturate(dot(axis, -l) * scale + offset)^2.
     spot: vec4<f32>,
-    // x: the cone's offset (1 with scale 0 for lights without a cone).
-    spot_offset: vec4<f32>,
+    // x: the cone's offset (1 with scale 0 for lights without a cone);
+    // y: first shadow view (cascades, spot: a layer of shadow_maps; point: a cube
+    // of shadow_cubes), -1 without shadows; z: depth bias, w: normal bias (texels).
+    params: vec4<f32>,
 }
 
 struct SceneBlock {
@@ -31,5 +33,22 @@ struct CameraBlock {
     position: vec4<f32>,
 }
 
+// Directional lights' cascades (src/scene/light.rs CASCADES).
+const CASCADES: u32 = 4u;
+
+struct ShadowBlock {
+    // World to clip of each 2D shadow view (cascades and spot lights).
+    view_proj: array<mat4x4<f32>, 16>,
+    // x: texel size (world units; per unit of distance for spot views);
+    // y: the camera distance where a cascade ends (0: not a cascade).
+    info: array<vec4<f32>, 16>,
+    // x: 1 / 2D map size; y: 1 / cube map size; z: cascade blend fraction.
+    params: vec4<f32>,
+}
+
 @group(0) @binding(0) var<uniform> scene: SceneBlock;
+@group(0) @binding(1) var<uniform> shadows: ShadowBlock;
+@group(0) @binding(2) var shadow_maps: texture_depth_2d_array;
+@group(0) @binding(3) var shadow_cubes: texture_depth_cube_array;
+@group(0) @binding(4) var shadow_sampler: sampler_comparison;
 @group(1) @binding(0) var<uniform> camera: CameraBlock;

@@ -1,7 +1,7 @@
 // Forward pass: lit, textured, instanced meshes. Composed per feature set: each
 // `#ifdef` below is one bit of ShaderFeatures (src/shader/mod.rs).
 
-#import glint::blocks::{scene, camera}
+#import glint::blocks::{scene, camera, shadows, shadow_maps, shadow_cubes, shadow_sampler, Light, CASCADES}
 
 struct MaterialBlock {
     base_color: vec4<f32>,
@@ -51,7 +51,8 @@ struct Instance {
     material: u32,
     joints: u32,
     joint_count: u32,
-    reserved: u32,
+    // Bit 0: receives shadows.
+    flags: u32,
 }
 
 // Renderer block: every stored instance (persistent, rewritten only where entities
@@ -94,6 +95,7 @@ struct VertexOut {
     // a uv choice that differs inside a 2×2 quad ruins its mip level.
     @location(7) @interpolate(flat) uv1_maps: u32,
 #endif
+    @location(8) @interpolate(flat) receive_shadows: u32,
 }
 
 fn record_matrix(r: Instance) -> mat4x4<f32> {
@@ -152,6 +154,7 @@ fn vs_main(v: VertexIn, @builtin(instance_index) draw_instance: u32) -> VertexOu
     out.uv = uv_transform(materials[instance.material], v.uv);
     out.tangent = vec4<f32>(m * tangent, v.tangent.w * det_sign);
     out.material = instance.material;
+    out.receive_shadows = instance.flags & 1u;
 #ifdef VERTEX_COLOR
     out.color = v.color;
 #endif
@@ -162,16 +165,21 @@ fn vs_main(v: VertexIn, @builtin(instance_index) draw_instance: u32) -> VertexOu
     return out;
 }
 
-// Direction to light `i` from `p`, and the light arriving there.
+// Direction to light `i` from `p`, and the light arriving there; `ng` is the
+// geometric normal (facing the viewer), for the shadow lookup's normal offset.
 struct Incoming {
     l: vec3<f32>,
     radiance: vec3<f32>,
 }
 
-fn incoming(i: u32, p: vec3<f32>) -> Incoming {
+fn incoming(i: u32, p: vec3<f32>, ng: vec3<f32>, receive: bool) -> Incoming {
     let light = scene.lights[i];
+    var lit = 1.0;
+    if receive && light.params.y >= 0.0 {
+        lit = shadow(light, p, ng);
+    }
     if light.position.w == 0.0 {
-        return Incoming(-normalize(light.position.xyz), light.color.rgb);
+        return Incoming(-normalize(light.position.xyz), light.color.rgb * lit);
     }
     let to_light = light.position.xyz - p;
     let dist = length(to_light);
@@ -179,22 +187,122 @@ fn incoming(i: u32, p: vec3<f32>) -> Incoming {
     let x = dist / light.color.w;
     let window = saturate(1.0 - x * x * x * x);
     let l = to_light / max(dist, 1e-4);
-    let cone = saturate(dot(light.spot.xyz, -l) * light.spot.w + light.spot_offset.x);
-    return Incoming(l, light.color.rgb * window * window * cone * cone / max(dist * dist, 1e-4));
+    let cone = saturate(dot(light.spot.xyz, -l) * light.spot.w + light.params.x);
+    return Incoming(l, light.color.rgb * lit * window * window * cone * cone / max(dist * dist, 1e-4));
+}
+
+// How much of `light` reaches `p` past the shadow casters (0..1, filtered). The
+// lookup point moves `params.w` texels along the normal and `params.z` texels
+// towards the light first, so lit surfaces do not shadow themselves.
+fn shadow(light: Light, p: vec3<f32>, ng: vec3<f32>) -> f32 {
+    let first = u32(light.params.y);
+    if light.position.w == 0.0 {
+        return cascaded_shadow(first, light, p, ng);
+    }
+    let to_light = light.position.xyz - p;
+    let dist = length(to_light);
+    let l = to_light / max(dist, 1e-4);
+    if light.spot.w > 0.0 {
+        let texel = shadows.info[first].x * dist;
+        return map_shadow(first, p + ng * (light.params.w * texel) + l * (light.params.z * texel));
+    }
+    let texel = 2.0 * shadows.params.y * dist;
+    return cube_shadow(first, light, p + ng * (light.params.w * texel) + l * (light.params.z * texel));
+}
+
+// The cascade whose slice holds `p`, blended into the next over the last part of
+// its slice; past the last cascade, light.
+fn cascaded_shadow(first: u32, light: Light, p: vec3<f32>, ng: vec3<f32>) -> f32 {
+    let depth = -(camera.view * vec4<f32>(p, 1.0)).z;
+    var c = 0u;
+    while c < CASCADES && depth >= shadows.info[first + c].y {
+        c++;
+    }
+    if c == CASCADES {
+        return 1.0;
+    }
+    let end = shadows.info[first + c].y;
+    var start = 0.0;
+    if c > 0u {
+        start = shadows.info[first + c - 1u].y;
+    }
+    let band = (end - start) * shadows.params.z;
+    let lit = cascade_sample(first + c, light, p, ng);
+    let t = saturate((depth - (end - band)) / max(band, 1e-6));
+    if t <= 0.0 {
+        return lit;
+    }
+    var next = 1.0;
+    if c + 1u < CASCADES {
+        next = cascade_sample(first + c + 1u, light, p, ng);
+    }
+    return mix(lit, next, t);
+}
+
+fn cascade_sample(view: u32, light: Light, p: vec3<f32>, ng: vec3<f32>) -> f32 {
+    let texel = shadows.info[view].x;
+    return map_shadow(view, p + ng * (light.params.w * texel) - normalize(light.position.xyz) * (light.params.z * texel));
+}
+
+// 3×3 comparison taps a texel apart (each one bilinear): a 4×4-texel filter.
+fn map_shadow(layer: u32, q: vec3<f32>) -> f32 {
+    let clip = shadows.view_proj[layer] * vec4<f32>(q, 1.0);
+    let ndc = clip.xyz / clip.w;
+    if clip.w <= 0.0 || any(abs(ndc.xy) > vec2<f32>(1.0)) || ndc.z > 1.0 {
+        return 1.0;
+    }
+    let uv = vec2<f32>(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5);
+    let step = shadows.params.x;
+    var lit = 0.0;
+    for (var y = -1; y <= 1; y++) {
+        for (var x = -1; x <= 1; x++) {
+            let at = uv + vec2<f32>(f32(x), f32(y)) * step;
+            lit += textureSampleCompareLevel(shadow_maps, shadow_sampler, at, layer, ndc.z);
+        }
+    }
+    return lit / 9.0;
+}
+
+// 3×3 taps across the cube face around the direction, a texel apart.
+fn cube_shadow(cube: u32, light: Light, q: vec3<f32>) -> f32 {
+    let d = q - light.position.xyz;
+    let depth = length(d) / light.color.w;
+    let n = d / max(length(d), 1e-6);
+    let helper = select(vec3<f32>(0.0, 1.0, 0.0), vec3<f32>(1.0, 0.0, 0.0), abs(n.y) > 0.9);
+    let t = normalize(cross(n, helper));
+    let b = cross(n, t);
+    let step = 2.0 * shadows.params.y;
+    var lit = 0.0;
+    for (var y = -1; y <= 1; y++) {
+        for (var x = -1; x <= 1; x++) {
+            let dir = n + (t * f32(x) + b * f32(y)) * step;
+            lit += textureSampleCompareLevel(shadow_cubes, shadow_sampler, dir, cube, depth);
+        }
+    }
+    return lit / 9.0;
+}
+
+// Where a fragment is, its geometric normal (facing the viewer), and whether
+// shadows darken it.
+struct Surface {
+    position: vec3<f32>,
+    normal: vec3<f32>,
+    receive_shadows: bool,
 }
 
 fn shade(
     material: MaterialBlock,
     n: vec3<f32>,
-    world_position: vec3<f32>,
+    surface: Surface,
     base: vec3<f32>,
     specular: f32,
     occlusion: f32,
 ) -> vec3<f32> {
+    let world_position = surface.position;
     let view_dir = normalize(camera.position.xyz - world_position);
     var color = scene.ambient.rgb * material.coeffs.x * occlusion * base;
     for (var i = 0u; i < scene.counts.x; i++) {
-        let light = incoming(i, world_position);
+        let light = incoming(i, world_position, surface.normal, surface.receive_shadows);
         let n_dot_l = max(dot(n, light.l), 0.0);
         let h = normalize(light.l + view_dir);
         let highlight = pow(max(dot(n, h), 0.0), material.coeffs.w) * n_dot_l;
@@ -209,12 +317,13 @@ fn shade(
 // facing a light of intensity 1 is as bright as under Blinn-Phong.
 fn shade_metallic_roughness(
     n: vec3<f32>,
-    world_position: vec3<f32>,
+    surface: Surface,
     base: vec3<f32>,
     metallic: f32,
     roughness: f32,
     occlusion: f32,
 ) -> vec3<f32> {
+    let world_position = surface.position;
     let v = normalize(camera.position.xyz - world_position);
     let alpha = max(roughness * roughness, 1e-3);
     let a2 = alpha * alpha;
@@ -223,7 +332,7 @@ fn shade_metallic_roughness(
     let n_v = max(dot(n, v), 1e-4);
     var color = scene.ambient.rgb * occlusion * (c_diff + f0);
     for (var i = 0u; i < scene.counts.x; i++) {
-        let light = incoming(i, world_position);
+        let light = incoming(i, world_position, surface.normal, surface.receive_shadows);
         let n_l = max(dot(n, light.l), 0.0);
         let h = normalize(light.l + v);
         let n_h = max(dot(n, h), 0.0);
@@ -266,6 +375,7 @@ fn fs_main(in: VertexOut, @builtin(front_facing) front: bool) -> @location(0) ve
     // Double-sided materials light back faces with the flipped normal.
     let side = select(-1.0, 1.0, front);
     var n = normalize(in.normal) * side;
+    let surface = Surface(in.world_position, n, in.receive_shadows != 0u);
 #ifdef NORMAL_MAP
     let t = normalize(in.tangent.xyz - n * dot(n, in.tangent.xyz));
     let b = cross(n, t) * in.tangent.w * side;
@@ -291,9 +401,9 @@ fn fs_main(in: VertexOut, @builtin(front_facing) front: bool) -> @location(0) ve
     roughness *= mr.g;
     metallic *= mr.b;
 #endif
-    var color = shade_metallic_roughness(n, in.world_position, base.rgb, metallic, roughness, occlusion);
+    var color = shade_metallic_roughness(n, surface, base.rgb, metallic, roughness, occlusion);
 #else
-    var color = shade(material, n, in.world_position, base.rgb, specular, occlusion);
+    var color = shade(material, n, surface, base.rgb, specular, occlusion);
 #endif
 #endif
     var emissive = material.emissive.rgb;
@@ -310,4 +420,33 @@ fn fs_main(in: VertexOut, @builtin(front_facing) front: bool) -> @location(0) ve
 #else
     return vec4<f32>(color, 1.0);
 #endif
+}
+
+// Shadow maps: alpha-tested casters drop their cut-away fragments.
+fn shadow_alpha_test(in: VertexOut) {
+#ifdef ALPHA_MASK
+    var alpha = materials[in.material].base_color.a;
+#ifdef VERTEX_COLOR
+    alpha *= in.color.a;
+#endif
+#ifdef DIFFUSE_MAP
+    alpha *= textureSampleLevel(diffuse_map, material_sampler, map_uv(in, SLOT_DIFFUSE), 0.0).a;
+#endif
+    if alpha < materials[in.material].alpha_cutoff {
+        discard;
+    }
+#endif
+}
+
+@fragment
+fn fs_shadow_mask(in: VertexOut) {
+    shadow_alpha_test(in);
+}
+
+// Point-light cube faces: depth is the distance to the light over its range
+// (the view's position.w is 1 / range).
+@fragment
+fn fs_shadow_distance(in: VertexOut) -> @builtin(frag_depth) f32 {
+    shadow_alpha_test(in);
+    return length(in.world_position - camera.position.xyz) * camera.position.w;
 }

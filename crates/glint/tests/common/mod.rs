@@ -53,6 +53,7 @@ pub fn render_desc(
     for e in &entities {
         renderer.submit(e);
     }
+    renderer.shadow_pass(&desc.cameras[0], &desc.lights, &target).expect("shadow pass");
     let stats = renderer.flush(&desc.cameras[0], &desc.lights, &mut target).expect("frame");
     (target.read_rgba8(gpu).expect("readback"), stats)
 }

@@ -1,0 +1,148 @@
+//! Core layer: the shadow maps and what the Scene block (`@group(0)`) tells the
+//! shader about them: the 2D depth-map array (cascades and spot lights, binding
+//! 2), the cube-map array of point lights storing distance (binding 3), the
+//! comparison sampler (binding 4) and the Shadow block (binding 1) with each 2D
+//! view's matrix. Maps of one kind share the largest size any light asks for.
+
+use super::shadow_views::{ShadowView, ViewTarget};
+
+/// 2D shadow views (cascades and spot lights) the Shadow block holds.
+pub(crate) const MAX_2D_VIEWS: usize = 16;
+/// Shadow-casting point lights at once.
+pub(crate) const MAX_CUBES: usize = 4;
+/// Shadow maps are 32-bit float depth.
+pub(crate) const SHADOW_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+/// Fraction of a cascade over which it blends into the next.
+const CASCADE_BLEND: f32 = 0.1;
+
+/// The Shadow block, `@group(0) @binding(1)` (1,296 bytes).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub(crate) struct ShadowGpu {
+    /// World to clip of each 2D view.
+    view_proj: [[f32; 16]; MAX_2D_VIEWS],
+    /// Per 2D view: x texel size (world units; per unit of distance for
+    /// perspective views), y the cascade's end distance (0: not a cascade).
+    info: [[f32; 4]; MAX_2D_VIEWS],
+    /// x: 1 / 2D map size, y: 1 / cube map size, z: cascade blend fraction.
+    params: [f32; 4],
+}
+const _: () = assert!(std::mem::size_of::<ShadowGpu>() == 1296);
+
+impl ShadowGpu {
+    /// The block for a frame's views, with maps of these sizes.
+    pub(crate) fn new(views: &[ShadowView], size_2d: u32, size_cube: u32) -> Self {
+        let mut block = Self {
+            view_proj: [[0.0; 16]; MAX_2D_VIEWS],
+            info: [[0.0; 4]; MAX_2D_VIEWS],
+            params: [1.0 / size_2d as f32, 1.0 / size_cube as f32, CASCADE_BLEND, 0.0],
+        };
+        for v in views {
+            if let ViewTarget::Layer(layer) = v.target {
+                block.view_proj[layer as usize] = v.view_proj().to_cols_array();
+                block.info[layer as usize] = [v.texel, v.split, 0.0, 0.0];
+            }
+        }
+        block
+    }
+}
+
+/// The shadow-map textures, one attachment view per layer, and the sampler.
+pub(crate) struct ShadowMaps {
+    pub size_2d: u32,
+    pub layers: u32,
+    pub size_cube: u32,
+    pub cubes: u32,
+    maps: wgpu::TextureView,
+    cube_maps: wgpu::TextureView,
+    /// Render-attachment views: one per 2D layer.
+    pub layer_views: Vec<wgpu::TextureView>,
+    /// Render-attachment views: one per cube face (`6 · cube + face`).
+    pub face_views: Vec<wgpu::TextureView>,
+    pub sampler: wgpu::Sampler,
+}
+
+fn depth_texture(device: &wgpu::Device, label: &str, size: u32, layers: u32) -> wgpu::Texture {
+    device.create_texture(&wgpu::TextureDescriptor {
+        label: Some(label),
+        size: wgpu::Extent3d { width: size, height: size, depth_or_array_layers: layers },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: SHADOW_FORMAT,
+        usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
+        view_formats: &[],
+    })
+}
+
+fn layer_views(texture: &wgpu::Texture, layers: u32) -> Vec<wgpu::TextureView> {
+    (0..layers)
+        .map(|layer| {
+            texture.create_view(&wgpu::TextureViewDescriptor {
+                dimension: Some(wgpu::TextureViewDimension::D2),
+                base_array_layer: layer,
+                array_layer_count: Some(1),
+                ..Default::default()
+            })
+        })
+        .collect()
+}
+
+impl ShadowMaps {
+    /// Maps of at least `layers` 2D layers of `size_2d`² texels and `cubes` cubes
+    /// of `size_cube`² (at least one of each, so the bind group always has them).
+    pub(crate) fn new(device: &wgpu::Device, size_2d: u32, layers: u32, size_cube: u32, cubes: u32) -> Self {
+        let (layers, cubes) = (layers.max(1), cubes.max(1));
+        let maps = depth_texture(device, "shadow maps (2D array)", size_2d, layers);
+        let cube_maps = depth_texture(device, "shadow maps (cube array)", size_cube, 6 * cubes);
+        Self {
+            size_2d,
+            layers,
+            size_cube,
+            cubes,
+            maps: maps.create_view(&wgpu::TextureViewDescriptor {
+                dimension: Some(wgpu::TextureViewDimension::D2Array),
+                ..Default::default()
+            }),
+            cube_maps: cube_maps.create_view(&wgpu::TextureViewDescriptor {
+                dimension: Some(wgpu::TextureViewDimension::CubeArray),
+                ..Default::default()
+            }),
+            layer_views: layer_views(&maps, layers),
+            face_views: layer_views(&cube_maps, 6 * cubes),
+            sampler: device.create_sampler(&wgpu::SamplerDescriptor {
+                label: Some("shadow maps: comparison sampler"),
+                mag_filter: wgpu::FilterMode::Linear,
+                min_filter: wgpu::FilterMode::Linear,
+                compare: Some(wgpu::CompareFunction::LessEqual),
+                ..Default::default()
+            }),
+        }
+    }
+
+    /// Whether these maps can hold a frame with these needs (sizes exactly, layers at least).
+    pub(crate) fn fits(&self, size_2d: u32, layers: u32, size_cube: u32, cubes: u32) -> bool {
+        self.size_2d == size_2d && self.size_cube == size_cube && self.layers >= layers && self.cubes >= cubes
+    }
+
+    /// The Scene block's bind group over `scene` and `shadow` blocks and these maps.
+    pub(crate) fn scene_group(
+        &self,
+        device: &wgpu::Device,
+        layout: &wgpu::BindGroupLayout,
+        scene: &wgpu::Buffer,
+        shadow: &wgpu::Buffer,
+    ) -> wgpu::BindGroup {
+        device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("renderer: scene block (group 0)"),
+            layout,
+            entries: &[
+                wgpu::BindGroupEntry { binding: 0, resource: scene.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 1, resource: shadow.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 2, resource: wgpu::BindingResource::TextureView(&self.maps) },
+                wgpu::BindGroupEntry { binding: 3, resource: wgpu::BindingResource::TextureView(&self.cube_maps) },
+                wgpu::BindGroupEntry { binding: 4, resource: wgpu::BindingResource::Sampler(&self.sampler) },
+            ],
+        })
+    }
+}

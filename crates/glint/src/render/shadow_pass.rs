@@ -1,0 +1,259 @@
+//! Core layer: [`Renderer::shadow_pass`], the shadow maps of a frame.
+//!
+//! Each shadow view (a cascade, a spot light, a cube face) is culled on its own
+//! from the submitted entities that cast shadows — so a caster outside the
+//! camera's view still casts — and its draws are sorted and batched like the
+//! forward view's, into one [`DrawList`](super::draw_list::DrawList) for all
+//! views. Each view is one depth-only render pass into its layer of the shadow
+//! maps; the whole pass is one submission, before the forward pass.
+
+use super::blocks::CameraGpu;
+use super::cull::Frustum;
+use super::encode::Bound;
+use super::pipelines::{PassKind, Pipelines};
+use super::queue::{self, DrawItem, Queue};
+use super::shadow_maps::{ShadowGpu, ShadowMaps, MAX_2D_VIEWS, MAX_CUBES};
+use super::shadow_views::{self, ShadowView, ViewTarget};
+use super::views::{ViewBlocks, MAX_SHADOW_VIEWS};
+use super::{ms_since, FrameStats, PassStats, RenderError, Renderer};
+use crate::gpu::OffscreenTarget;
+use crate::scene::{Aabb, AlphaMode, Camera, Light, LightKind, CASCADES, MAX_LIGHTS};
+use glam::Vec3;
+use std::time::Instant;
+
+/// What a frame's shadow pass drew, kept for `flush` to shade with.
+pub(super) struct ShadowFrame {
+    /// The lights the maps were drawn for.
+    pub lights: Vec<Light>,
+    /// Per light, its first shadow view (2D layer, or cube for point lights).
+    pub first_view: Vec<Option<u32>>,
+    /// Shadow views drawn.
+    pub views: u32,
+    /// Draws and time of the pass.
+    pub cost: PassStats,
+    /// Bytes it uploaded and pipelines it compiled, added to the frame's.
+    pub prepared: FrameStats,
+}
+
+impl Renderer {
+    /// Draw the shadow maps of every light in `lights` that casts shadows (see
+    /// [`Light::with_shadows`]), from the entities submitted so far, for a frame
+    /// seen by `camera` into `target`. Call it between the frame's
+    /// [`submit`](Self::submit)s and its [`flush`](Self::flush); flush with the
+    /// same lights then darkens what they cannot reach.
+    ///
+    /// Lights past the shadow maps' room (16 two-dimensional views: four per
+    /// directional light, one per spot light; 4 point lights) are drawn without
+    /// shadows, with a warning in the log. A bad id submitted this frame is
+    /// reported by `flush`.
+    pub fn shadow_pass(
+        &mut self,
+        camera: &Camera,
+        lights: &[Light],
+        target: &OffscreenTarget,
+    ) -> Result<(), RenderError> {
+        let start = Instant::now();
+        if lights.len() > MAX_LIGHTS {
+            return Err(RenderError::TooManyLights(lights.len()));
+        }
+        self.shadow_frame = None;
+        if self.submit_error.is_some() {
+            return Ok(());
+        }
+        let mut prepared = FrameStats::default();
+        self.prepare(target.samples(), &mut prepared)?;
+        let aspect = target.width() as f32 / target.height() as f32;
+        let (views, first_view) = self.plan_shadow_views(camera, aspect, lights);
+        let mut frame = ShadowFrame {
+            lights: lights.to_vec(),
+            first_view,
+            views: views.len() as u32,
+            cost: PassStats::default(),
+            prepared,
+        };
+        if !views.is_empty() {
+            let ranges = self.batch_shadow_views(&views, &mut frame.prepared)?;
+            self.upload_shadow_views(&views, &mut frame.prepared);
+            let commands = self.encode_shadow_views(&views, &ranges, &mut frame.cost);
+            self.queue.submit([commands]);
+        }
+        frame.cost.cpu_ms = ms_since(start);
+        self.shadow_frame = Some(frame);
+        Ok(())
+    }
+
+    /// Every shadow view of `lights`, and each light's first view. Sizes the
+    /// shadow maps for them (rebuilding the Scene bind group when they change).
+    fn plan_shadow_views(
+        &mut self,
+        camera: &Camera,
+        aspect: f32,
+        lights: &[Light],
+    ) -> (Vec<ShadowView>, Vec<Option<u32>>) {
+        // Maps of one kind share the largest size asked for: find the sizes first.
+        let size_of = |l: &Light| l.shadows.map_or(0, |s| s.map_size.clamp(16, 8192));
+        let points = |l: &&Light| matches!(l.kind, LightKind::Point { .. });
+        let size_2d = lights.iter().filter(|l| !points(l)).map(size_of).max().unwrap_or(0).max(1);
+        let size_cube = lights.iter().filter(points).map(size_of).max().unwrap_or(0).max(1);
+        let casters = self.caster_bounds();
+        let (mut views, mut first) = (Vec::new(), vec![None; lights.len()]);
+        let (mut layers, mut cubes) = (0u32, 0u32);
+        for (k, light) in lights.iter().enumerate() {
+            let Some(settings) = light.shadows else { continue };
+            let shared = |size| crate::scene::ShadowSettings { map_size: size, ..settings };
+            let placed = match light.kind {
+                LightKind::Directional { direction } if layers as usize + CASCADES <= MAX_2D_VIEWS => {
+                    let settings = shared(size_2d);
+                    views.extend(shadow_views::cascades(camera, aspect, direction, &settings, casters, layers));
+                    (first[k], layers) = (Some(layers), layers + CASCADES as u32);
+                    true
+                }
+                LightKind::Spot { .. } if (layers as usize) < MAX_2D_VIEWS => {
+                    views.extend(shadow_views::spot(light, &shared(size_2d), layers));
+                    (first[k], layers) = (Some(layers), layers + 1);
+                    true
+                }
+                LightKind::Point { .. } if (cubes as usize) < MAX_CUBES => {
+                    views.extend(shadow_views::cube(light, &shared(size_cube), cubes).into_iter().flatten());
+                    (first[k], cubes) = (Some(cubes), cubes + 1);
+                    true
+                }
+                _ => false,
+            };
+            if !placed {
+                log::warn!("light {k}: no room left in the shadow maps; drawn without shadows");
+            }
+        }
+        debug_assert!(views.len() <= MAX_SHADOW_VIEWS);
+        if !views.is_empty() && !self.shadow_maps.fits(size_2d, layers, size_cube, cubes) {
+            let keep = |have: u32, need: u32| have.max(need);
+            self.shadow_maps = ShadowMaps::new(
+                &self.device,
+                size_2d,
+                keep(self.shadow_maps.layers, layers),
+                size_cube,
+                keep(self.shadow_maps.cubes, cubes),
+            );
+            self.scene_group = self.shadow_maps.scene_group(
+                &self.device,
+                &self.pipelines.scene_layout,
+                &self.scene_block.buffer,
+                &self.shadow_block.buffer,
+            );
+        }
+        (views, first)
+    }
+
+    /// The world box around every submitted entity that casts shadows.
+    fn caster_bounds(&self) -> Option<Aabb> {
+        let boxes = self.submitted.iter().filter(|s| s.cast_shadows).filter_map(|s| self.store.slot(s.slot).bounds);
+        Aabb::from_points(boxes.flat_map(|(c, e)| [Vec3::from(c - e), Vec3::from(c + e)]))
+    }
+
+    /// Cull, queue, sort and batch every view's casters into the shadow list;
+    /// returns each view's range of batches.
+    fn batch_shadow_views(
+        &mut self,
+        views: &[ShadowView],
+        stats: &mut FrameStats,
+    ) -> Result<Vec<std::ops::Range<usize>>, RenderError> {
+        self.shadow_list.clear();
+        let mut ranges = Vec::with_capacity(views.len());
+        // Blended materials cast no shadow.
+        let blended: Vec<bool> = self.materials.iter().map(|m| m.material.alpha_mode == AlphaMode::Blend).collect();
+        for view in views {
+            let frustum = Frustum::from_view_proj(view.view_proj());
+            self.collect_visible(&frustum, |s| s.cast_shadows && !blended[s.material.0 as usize]);
+            let pass = match view.target {
+                ViewTarget::Layer(_) => PassKind::ShadowDepth,
+                ViewTarget::CubeFace { .. } => PassKind::ShadowDistance,
+            };
+            let first_item = self.shadow_list.items.len();
+            for k in 0..self.runs.len() {
+                let run = &self.runs[k];
+                let s = &self.submitted[run.entry];
+                let (material, shape, slot) = (s.material, s.shape, s.slot);
+                let key = Pipelines::shadow_key(self.pipelines.key_of(self.pipeline_of(s)), pass);
+                let (pipeline, built) = self.pipelines.forward_id(&self.device, key)?;
+                stats.pipelines_compiled += u32::from(built);
+                let twin = self.materials[material.0 as usize].gpu.as_ref().expect("prepared");
+                let queue = match self.materials[material.0 as usize].material.alpha_mode {
+                    AlphaMode::Mask { .. } => Queue::AlphaTest,
+                    _ => Queue::Opaque,
+                };
+                // Near to far from the light, so nearer casters hide the rest early.
+                let center = self.store.slot(slot).bounds.map_or(Vec3::ZERO, |(c, _)| Vec3::from(c));
+                let depth = view.view_proj().project_point3(center).z.clamp(0.0, 1.0);
+                let run = &self.runs[k];
+                self.shadow_list.items.push(DrawItem {
+                    key: queue::sort_key(queue.stage(), false, pipeline, twin.texture_set, material, shape, depth),
+                    pipeline,
+                    material,
+                    shape,
+                    first: run.start,
+                    count: run.len,
+                });
+            }
+            queue::sort(&mut self.shadow_list.items[first_item..]);
+            let shapes = &self.shapes;
+            let range = self
+                .shadow_list
+                .build(first_item, &self.visible, |b| shapes[b.shape.0 as usize].gpu.expect("prepared"));
+            ranges.push(range);
+        }
+        Ok(ranges)
+    }
+
+    /// Write the instances that changed, each view's Camera record, the Shadow
+    /// block, and the shadow list's indices and commands.
+    fn upload_shadow_views(&mut self, views: &[ShadowView], stats: &mut FrameStats) {
+        let bytes = &mut stats.bytes_uploaded;
+        self.upload_instances(bytes);
+        for (k, view) in views.iter().enumerate() {
+            bytes.camera += self.views.update(&self.queue, 1 + k, CameraGpu::for_shadow(view));
+        }
+        let block = ShadowGpu::new(views, self.shadow_maps.size_2d, self.shadow_maps.size_cube);
+        bytes.scene += self.shadow_block.update(&self.queue, block);
+        let layout = &self.pipelines.instance_layout;
+        let written = self.shadow_list.upload(&self.device, &self.queue, (layout, self.instances.buffer()), false);
+        bytes.draw_indices += written.draw_indices;
+        bytes.indirect += written.indirect;
+    }
+
+    /// One depth pass per view into its layer of the shadow maps.
+    fn encode_shadow_views(
+        &self,
+        views: &[ShadowView],
+        ranges: &[std::ops::Range<usize>],
+        cost: &mut PassStats,
+    ) -> wgpu::CommandBuffer {
+        let mut encoder = self
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("renderer: shadow maps") });
+        let mut stats = FrameStats::default();
+        for (k, (view, range)) in views.iter().zip(ranges).enumerate() {
+            let attachment = match view.target {
+                ViewTarget::Layer(layer) => &self.shadow_maps.layer_views[layer as usize],
+                ViewTarget::CubeFace { cube, face } => &self.shadow_maps.face_views[(6 * cube + face) as usize],
+            };
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some(&format!("shadow view {k} ({:?})", view.target)),
+                color_attachments: &[],
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: attachment,
+                    depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(1.0), store: wgpu::StoreOp::Store }),
+                    stencil_ops: None,
+                }),
+                ..Default::default()
+            });
+            pass.set_bind_group(1, &self.views.bind_group, &[ViewBlocks::offset(1 + k)]);
+            pass.set_bind_group(3, &self.shadow_list.bind_group, &[]);
+            stats.bind_groups_set += 2;
+            self.draw_stages(&self.shadow_list, &mut pass, range.clone(), &mut Bound::default(), &mut stats);
+        }
+        cost.draw_calls = stats.draw_calls;
+        cost.draws = stats.draws;
+        cost.instances = self.shadow_list.draw_indices.len() as u64;
+        encoder.finish()
+    }
+}
