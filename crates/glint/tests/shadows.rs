@@ -44,16 +44,109 @@ fn render(
     (target.read_rgba8(gpu).expect("readback"), stats)
 }
 
+fn luma(p: &image::Rgba<u8>) -> f32 {
+    0.299 * f32::from(p[0]) + 0.587 * f32::from(p[1]) + 0.114 * f32::from(p[2])
+}
+
+/// Pixels in `xs` × `ys` at least 5% darker in `image` than in `unshadowed`
+/// (one of two lights blocked dims a surface by little more).
+fn darker(
+    image: &image::RgbaImage,
+    unshadowed: &image::RgbaImage,
+    xs: std::ops::Range<u32>,
+    ys: std::ops::Range<u32>,
+) -> usize {
+    let darker = |x, y| luma(image.get_pixel(x, y)) < 0.95 * luma(unshadowed.get_pixel(x, y));
+    ys.flat_map(|y| xs.clone().map(move |x| (x, y))).filter(|&(x, y)| darker(x, y)).count()
+}
+
+fn without_shadows(lights: &[Light]) -> Vec<Light> {
+    lights.iter().map(|l| Light { shadows: None, ..*l }).collect()
+}
+
 #[test]
-fn a_directional_light_casts_a_contact_shadow_without_acne() {
+fn a_directional_light_casts_a_contact_shadow_without_acne_at_a_grazing_angle() {
     let Some(gpu) = common::gpu() else { return };
     let mut scene = cube_on_plane(gpu);
-    // A low sun from the left and behind: the shadow falls to the front right.
-    let sun = Light::directional(Vec3::new(1.0, -0.35, 0.6), Vec3::ONE, 1.0)
+    // A sun 10 degrees above the horizon, from the left and behind: the shadow
+    // runs long to the front right, and the lit plane is grazed.
+    let sun = Light::directional(Vec3::new(1.0, -0.2, 0.5), Vec3::ONE, 1.0)
         .with_shadows(ShadowSettings { map_size: 512, ..Default::default() });
     let (image, stats) = render(&mut scene, gpu, &[sun], 128);
-    image.save("/tmp/shadow_dir.png").ok();
+    let (unshadowed, _) = render(&mut scene, gpu, &without_shadows(&[sun]), 128);
     assert_eq!(stats.shadow_views, 4, "four cascades");
-    let (unlit, _) = render(&mut scene, gpu, &[Light { shadows: None, ..sun }], 128);
-    unlit.save("/tmp/shadow_dir_unlit.png").ok();
+    assert!(stats.passes.shadow.draws >= 4, "the cube and the plane in each cascade: {:?}", stats.passes.shadow);
+    assert_eq!(stats.passes.opaque.draws, stats.draws, "every forward draw here is opaque");
+    // The shadow runs from the cube's foot to the front right.
+    assert!(darker(&image, &unshadowed, 76..128, 60..95) > 600, "a long shadow to the front right");
+    assert!(darker(&image, &unshadowed, 70..80, 60..72) > 40, "touching the cube (no peter-panning)");
+    // The plane left of the cube is lit: no pixel darker than without shadows (acne).
+    for y in 50..110 {
+        for x in 0..48 {
+            let (a, b) = (luma(image.get_pixel(x, y)), luma(unshadowed.get_pixel(x, y)));
+            assert!(a >= b - 3.0, "acne at ({x}, {y}): {a} against {b}");
+        }
+    }
+    common::assert_matches_reference("shadow_directional", &image);
+}
+
+#[test]
+fn two_point_lights_cast_cube_shadows() {
+    let Some(gpu) = common::gpu() else { return };
+    let mut scene = cube_on_plane(gpu);
+    let settings = ShadowSettings { map_size: 256, ..Default::default() };
+    let lights = [
+        Light::point(Vec3::new(-2.0, 2.0, 0.5), Vec3::new(1.0, 0.8, 0.6), 2.5, 12.0).with_shadows(settings),
+        Light::point(Vec3::new(2.0, 1.5, -1.0), Vec3::new(0.6, 0.8, 1.0), 2.5, 12.0).with_shadows(settings),
+    ];
+    let (image, stats) = render(&mut scene, gpu, &lights, 128);
+    assert_eq!(stats.shadow_views, 12, "six faces per light");
+    let (unshadowed, _) = render(&mut scene, gpu, &without_shadows(&lights), 128);
+    // Each light alone casting: the left one's shadow falls to the right, the right one's to the front left.
+    let (left_only, _) = render(&mut scene, gpu, &[lights[0], without_shadows(&lights)[1]], 128);
+    let (right_only, _) = render(&mut scene, gpu, &[without_shadows(&lights)[0], lights[1]], 128);
+    assert!(darker(&left_only, &unshadowed, 72..128, 48..74) > 150, "the left light's shadow");
+    assert_eq!(darker(&left_only, &unshadowed, 0..50, 50..110), 0, "nothing of it on the left");
+    assert!(darker(&right_only, &unshadowed, 0..60, 64..110) > 150, "the right light's shadow");
+    assert_eq!(darker(&right_only, &unshadowed, 80..128, 50..110), 0, "nothing of it on the right");
+    common::assert_matches_reference("shadow_point_cubes", &image);
+}
+
+#[test]
+fn a_spot_light_casts_through_its_cone() {
+    let Some(gpu) = common::gpu() else { return };
+    let mut scene = cube_on_plane(gpu);
+    let spot = Light::spot(Vec3::new(-1.5, 3.0, -1.5), Vec3::new(1.0, -2.0, 1.0), Vec3::ONE, 12.0, 10.0, (0.5, 0.7))
+        .with_shadows(ShadowSettings { map_size: 256, ..Default::default() });
+    let (image, stats) = render(&mut scene, gpu, &[spot], 128);
+    let (unshadowed, _) = render(&mut scene, gpu, &without_shadows(&[spot]), 128);
+    assert_eq!(stats.shadow_views, 1);
+    assert!(darker(&image, &unshadowed, 64..100, 64..90) > 300, "the cube's shadow in the cone");
+    common::assert_matches_reference("shadow_spot", &image);
+}
+
+#[test]
+fn a_caster_outside_the_camera_view_still_shadows_what_is_in_view() {
+    let Some(gpu) = common::gpu() else { return };
+    let mut scene = cube_on_plane(gpu);
+    // Look straight down at a small patch of the plane beside the cube; a slab
+    // hangs high above and to the side, outside the view, in the sun's way.
+    scene.camera = Camera::perspective(30.0, 0.1, 50.0).looking_at(Vec3::new(1.5, 3.0, 0.01), Vec3::new(1.5, 0.0, 0.0));
+    let slab = Entity::new(
+        scene.entities[1].shape,
+        scene.entities[1].material,
+        Mat4::from_scale_rotation_translation(
+            Vec3::new(1.0, 0.2, 1.0),
+            glam::Quat::IDENTITY,
+            Vec3::new(-1.5, 6.0, 0.0),
+        ),
+    );
+    scene.entities.push(slab);
+    let sun = Light::directional(Vec3::new(0.5, -1.0, 0.0), Vec3::ONE, 1.0).with_shadows(ShadowSettings::default());
+    let (image, stats) = render(&mut scene, gpu, &[sun], 64);
+    assert_eq!(stats.instances_drawn, 1, "only the plane is in view");
+    scene.entities[2].cast_shadows = false;
+    let (clear, _) = render(&mut scene, gpu, &[sun], 64);
+    let (a, b) = (luma(image.get_pixel(32, 32)), luma(clear.get_pixel(32, 32)));
+    assert!(a < 0.7 * b, "the slab's shadow reaches the view: {a} against {b}");
 }

@@ -76,6 +76,7 @@ impl Renderer {
                 stats.pipelines_bound += 1;
                 stats.draw_calls += 1;
                 stats.draws += 1;
+                stats.passes.sky = super::PassStats { draw_calls: 1, draws: 1, instances: 1, cpu_ms: 0.0 };
                 // The sky's layout has groups 0–1 only: bind the forward groups again.
                 pass.set_bind_group(3, &self.forward.bind_group, &[]);
                 stats.bind_groups_set += 1;
@@ -100,6 +101,7 @@ impl Renderer {
     ) {
         let mut at = range.start;
         for stage in list.batches[range].chunk_by(|a, b| a.stage == b.stage) {
+            let (start, calls, draws) = (std::time::Instant::now(), stats.draw_calls, stats.draws);
             pass.push_debug_group(&stage_name(stage[0].stage));
             let naive = self.mode == FrameMode::Naive;
             for run in stage.chunk_by(|a, b| !naive && self.run_key(a) == self.run_key(b)) {
@@ -107,6 +109,16 @@ impl Renderer {
                 at += run.len();
             }
             pass.pop_debug_group();
+            let named = &mut stats.passes;
+            let cost = match stage[0].stage {
+                s if s < SKY_STAGE && s != Queue::AlphaTest.stage() => &mut named.opaque,
+                s if s == Queue::AlphaTest.stage() => &mut named.alpha_test,
+                _ => &mut named.transparent,
+            };
+            cost.draw_calls += stats.draw_calls - calls;
+            cost.draws += stats.draws - draws;
+            cost.instances += stage.iter().map(|b| u64::from(b.instance_count)).sum::<u64>();
+            cost.cpu_ms += super::ms_since(start);
         }
     }
 
