@@ -42,7 +42,7 @@ pub(crate) fn parse_obj(path: &Path, bytes: &[u8], options: LoadOptions) -> Resu
     // only when some normals must be computed.
     let computes_normals = models.iter().any(|m| m.mesh.normals.len() != m.mesh.positions.len());
     let triangles: usize = models.iter().map(|m| m.mesh.indices.len() / 3).sum();
-    let groups = smoothing_groups(path, bytes, &mut warnings, computes_normals).filter(|groups| {
+    let groups = computes_normals.then(|| smoothing_groups(path, bytes, &mut warnings)).flatten().filter(|groups| {
         let agrees = groups.len() == triangles;
         if !agrees {
             let message = format!("{} faces by smoothing group, {triangles} loaded; groups ignored", groups.len());
@@ -252,13 +252,10 @@ const FLAT: u64 = 1 << 33;
 /// The smoothing group of every triangle tobj makes from the OBJ text, in tobj's
 /// order: faces (`f` and `l` lines) in file order, an n-gon as n − 2 fan
 /// triangles, a point or a line as one (degenerate) triangle. `None` when
-/// `wanted` is false or the file has no `s` statement (then every face smooths
+/// the file has no `s` statement (then every face smooths
 /// with its neighbours). An `s` value that is neither a number nor `off` is a
 /// warning and means off.
-fn smoothing_groups(path: &Path, bytes: &[u8], warnings: &mut Vec<Diagnostic>, wanted: bool) -> Option<Vec<u64>> {
-    if !wanted {
-        return None;
-    }
+fn smoothing_groups(path: &Path, bytes: &[u8], warnings: &mut Vec<Diagnostic>) -> Option<Vec<u64>> {
     // tobj has read the file line by line as UTF-8 already.
     let text = std::str::from_utf8(bytes).ok()?;
     let mut groups = Vec::new();

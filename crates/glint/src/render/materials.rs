@@ -57,7 +57,13 @@ impl Renderer {
                 stats.bytes_uploaded.material += self.material_table.write(&self.queue, id.0, &material.to_gpu());
                 slot.dirty = false;
             }
-            slot.gpu = Some(MaterialGpuTwin { texture_set, pipelines: [None; VertexLayout::COUNT], samples, fog });
+            slot.gpu = Some(MaterialGpuTwin {
+                texture_set,
+                pipelines: [None; VertexLayout::COUNT],
+                shadow_pipelines: [[None; 2]; VertexLayout::COUNT],
+                samples,
+                fog,
+            });
         }
         let features = ShaderFeatures::for_material(&material, &self.environment);
         let key = Pipelines::key(features, layout, material.render_states(), samples);

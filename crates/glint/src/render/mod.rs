@@ -113,6 +113,8 @@ struct MaterialGpuTwin {
     /// Forward pipeline id per vertex layout (by `VertexLayout as usize`), built on
     /// first use with a mesh of that layout.
     pipelines: [Option<u16>; VertexLayout::COUNT],
+    /// Shadow pipeline ids per vertex layout: 2D depth maps, then cube distance maps.
+    shadow_pipelines: [[Option<u16>; 2]; VertexLayout::COUNT],
     samples: u32,
     /// Whether the environment had fog when the pipelines were chosen.
     fog: bool,
@@ -473,16 +475,7 @@ impl Renderer {
                 stats.shadow_views = shadow.views;
                 stats.passes.shadow = shadow.cost;
                 stats.pipelines_compiled += shadow.prepared.pipelines_compiled;
-                let (bytes, more) = (&mut stats.bytes_uploaded, shadow.prepared.bytes_uploaded);
-                bytes.scene += more.scene;
-                bytes.camera += more.camera;
-                bytes.material += more.material;
-                bytes.instances += more.instances;
-                bytes.draw_indices += more.draw_indices;
-                bytes.indirect += more.indirect;
-                bytes.textures += more.textures;
-                bytes.meshes += more.meshes;
-                bytes.finish();
+                stats.bytes_uploaded.add(&shadow.prepared.bytes_uploaded);
             }
             stats
         })

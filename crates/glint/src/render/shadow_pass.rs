@@ -126,14 +126,8 @@ impl Renderer {
         }
         debug_assert!(views.len() <= MAX_SHADOW_VIEWS);
         if !views.is_empty() && !self.shadow_maps.fits(size_2d, layers, size_cube, cubes) {
-            let keep = |have: u32, need: u32| have.max(need);
-            self.shadow_maps = ShadowMaps::new(
-                &self.device,
-                size_2d,
-                keep(self.shadow_maps.layers, layers),
-                size_cube,
-                keep(self.shadow_maps.cubes, cubes),
-            );
+            let (layers, cubes) = (layers.max(self.shadow_maps.layers), cubes.max(self.shadow_maps.cubes));
+            self.shadow_maps = ShadowMaps::new(&self.device, size_2d, layers, size_cube, cubes);
             self.scene_group = self.shadow_maps.scene_group(
                 &self.device,
                 &self.pipelines.scene_layout,
@@ -162,36 +156,36 @@ impl Renderer {
         // Blended materials cast no shadow.
         let blended: Vec<bool> = self.materials.iter().map(|m| m.material.alpha_mode == AlphaMode::Blend).collect();
         for view in views {
-            let frustum = Frustum::from_view_proj(view.view_proj());
-            self.collect_visible(&frustum, |s| s.cast_shadows && !blended[s.material.0 as usize]);
+            let view_proj = view.view_proj();
+            self.collect_visible(&Frustum::from_view_proj(view_proj), |s| {
+                s.cast_shadows && !blended[s.material.0 as usize]
+            });
             let pass = match view.target {
                 ViewTarget::Layer(_) => PassKind::ShadowDepth,
                 ViewTarget::CubeFace { .. } => PassKind::ShadowDistance,
             };
             let first_item = self.shadow_list.items.len();
             for k in 0..self.runs.len() {
-                let run = &self.runs[k];
-                let s = &self.submitted[run.entry];
-                let (material, shape, slot) = (s.material, s.shape, s.slot);
-                let key = Pipelines::shadow_key(self.pipelines.key_of(self.pipeline_of(s)), pass);
-                let (pipeline, built) = self.pipelines.forward_id(&self.device, key)?;
-                stats.pipelines_compiled += u32::from(built);
-                let twin = self.materials[material.0 as usize].gpu.as_ref().expect("prepared");
-                let queue = match self.materials[material.0 as usize].material.alpha_mode {
+                let (start, len, entry) = (self.runs[k].start, self.runs[k].len, self.runs[k].entry);
+                let pipeline = self.shadow_pipeline(entry, pass, stats)?;
+                let s = &self.submitted[entry];
+                let (material, shape) = (s.material, s.shape);
+                let slot = &self.materials[material.0 as usize];
+                let queue = match slot.material.alpha_mode {
                     AlphaMode::Mask { .. } => Queue::AlphaTest,
                     _ => Queue::Opaque,
                 };
+                let texture_set = slot.gpu.as_ref().expect("prepared").texture_set;
                 // Near to far from the light, so nearer casters hide the rest early.
-                let center = self.store.slot(slot).bounds.map_or(Vec3::ZERO, |(c, _)| Vec3::from(c));
-                let depth = view.view_proj().project_point3(center).z.clamp(0.0, 1.0);
-                let run = &self.runs[k];
+                let center = self.store.slot(s.slot).bounds.map_or(Vec3::ZERO, |(c, _)| Vec3::from(c));
+                let depth = view_proj.project_point3(center).z.clamp(0.0, 1.0);
                 self.shadow_list.items.push(DrawItem {
-                    key: queue::sort_key(queue.stage(), false, pipeline, twin.texture_set, material, shape, depth),
+                    key: queue::sort_key(queue.stage(), false, pipeline, texture_set, material, shape, depth),
                     pipeline,
                     material,
                     shape,
-                    first: run.start,
-                    count: run.len,
+                    first: start,
+                    count: len,
                 });
             }
             queue::sort(&mut self.shadow_list.items[first_item..]);
@@ -202,6 +196,26 @@ impl Renderer {
             ranges.push(range);
         }
         Ok(ranges)
+    }
+
+    /// The shadow pipeline of submitted entity `entry` for `pass`: cached in its
+    /// material's twin per vertex layout, built (from its forward pipeline's
+    /// variant) on first use.
+    fn shadow_pipeline(&mut self, entry: usize, pass: PassKind, stats: &mut FrameStats) -> Result<u16, RenderError> {
+        let s = &self.submitted[entry];
+        let layout = self.shapes[s.shape.0 as usize].layout.index();
+        let kind = usize::from(pass == PassKind::ShadowDistance);
+        let twin = self.materials[s.material.0 as usize].gpu.as_ref().expect("prepared");
+        if let Some(id) = twin.shadow_pipelines[layout][kind] {
+            return Ok(id);
+        }
+        let forward = twin.pipelines[layout].expect("prepared");
+        let key = Pipelines::shadow_key(self.pipelines.key_of(forward), pass);
+        let (id, built) = self.pipelines.forward_id(&self.device, key)?;
+        stats.pipelines_compiled += u32::from(built);
+        let twin = self.materials[s.material.0 as usize].gpu.as_mut().expect("prepared");
+        twin.shadow_pipelines[layout][kind] = Some(id);
+        Ok(id)
     }
 
     /// Write the instances that changed, each view's Camera record, the Shadow

@@ -161,12 +161,10 @@ const NEAR_FRACTION: f32 = 0.005;
 /// The view of a spot light, drawn into 2D layer `layer`.
 pub(crate) fn spot(light: &Light, settings: &ShadowSettings, layer: u32) -> Option<ShadowView> {
     let LightKind::Spot { position, direction, range, outer_angle, .. } = light.kind else { return None };
-    let dir = direction.normalize_or(Vec3::NEG_Y);
-    let up = if dir.cross(Vec3::Y).length_squared() < 1e-6 { Vec3::Z } else { Vec3::Y };
     let half = outer_angle.clamp(1e-3, std::f32::consts::FRAC_PI_2 * 0.99);
     let range = range.max(1e-3);
     Some(ShadowView {
-        view: glam::camera::rh::view::look_at_mat4(position, position + dir, up),
+        view: light_rotation(direction) * Mat4::from_translation(-position),
         proj: glam::camera::rh::proj::directx::perspective(2.0 * half, 1.0, range * NEAR_FRACTION, range),
         eye: position,
         distance_scale: 0.0,

@@ -29,6 +29,19 @@ pub struct UploadStats {
 }
 
 impl UploadStats {
+    /// Add another stage's counts to these (sums refreshed).
+    pub(crate) fn add(&mut self, other: &Self) {
+        self.scene += other.scene;
+        self.camera += other.camera;
+        self.material += other.material;
+        self.instances += other.instances;
+        self.draw_indices += other.draw_indices;
+        self.indirect += other.indirect;
+        self.textures += other.textures;
+        self.meshes += other.meshes;
+        self.finish();
+    }
+
     /// Fill in the sums from the per-block counts.
     pub(crate) fn finish(&mut self) {
         self.uniforms = self.scene + self.camera + self.material;
