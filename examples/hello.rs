@@ -1,9 +1,9 @@
 //! Tiny Graphics' program structure in glint: create everything once, then each
-//! frame update, submit and flush. Writes `hello.png`.
+//! frame update, submit, draw the shadow maps and flush. Writes `hello.png`.
 //!
 //! Run: `cargo run --example hello`
 use glam::{Mat4, Quat, Vec3};
-use glint::{asset::ShapeKind, Camera, Entity, Gpu, Light, Material, OffscreenTarget, Renderer};
+use glint::{asset::ShapeKind, Camera, Entity, Gpu, Light, Material, OffscreenTarget, Renderer, ShadowSettings};
 use std::f32::consts::TAU;
 
 fn main() -> Result<(), glint::Error> {
@@ -12,7 +12,7 @@ fn main() -> Result<(), glint::Error> {
     let mut renderer = Renderer::new(&gpu);
     let camera = Camera::perspective(45.0, 0.1, 100.0).looking_at(Vec3::new(0.0, 4.0, 9.0), Vec3::new(0.0, 0.5, 0.0));
     let lights = [
-        Light::directional(Vec3::new(-1.0, -2.0, -1.5), Vec3::ONE, 1.2),
+        Light::directional(Vec3::new(-1.0, -2.0, -1.5), Vec3::ONE, 1.2).with_shadows(ShadowSettings::default()),
         Light::point(Vec3::new(0.0, 2.5, 0.0), Vec3::new(1.0, 0.6, 0.3), 6.0, 6.0),
     ];
     let red = renderer.add_material(Material::color("red", 0.8, 0.12, 0.08));
@@ -26,7 +26,8 @@ fn main() -> Result<(), glint::Error> {
     let mut bouncer = Entity::new(ball, blue, Mat4::IDENTITY);
     let mut target = OffscreenTarget::new(&gpu, 640, 360, 4)?;
 
-    // Per frame: update entities, submit them, flush with camera and lights.
+    // Per frame: update entities, submit them, draw the shadow maps, flush with
+    // camera and lights (`renderer.render(..)` does the last three in one call).
     for frame in 0..3 {
         let t = frame as f32 * 0.4;
         *ring.transforms_mut() = (0..12)
@@ -37,10 +38,15 @@ fn main() -> Result<(), glint::Error> {
         renderer.submit(&ground);
         renderer.submit(&ring);
         renderer.submit(&bouncer);
+        renderer.shadow_pass(&camera, &lights, &target)?;
         let stats = renderer.flush(&camera, &lights, &mut target)?;
         println!(
-            "frame {frame}: {} draws, {} instances, {} bytes uploaded",
-            stats.draw_calls, stats.instances_drawn, stats.bytes_uploaded.total
+            "frame {frame}: {} draws, {} instances, {} shadow views ({} draws), {} bytes uploaded",
+            stats.draw_calls,
+            stats.instances_drawn,
+            stats.shadow_views,
+            stats.passes.shadow.draws,
+            stats.bytes_uploaded.total
         );
     }
     target.save_png(&gpu, "hello.png")?;

@@ -9,12 +9,17 @@ use serde::Serialize;
 pub struct ModeReport {
     /// `optimized` or `naive`.
     pub mode: &'static str,
-    /// Median CPU time of `flush`, ms.
+    /// Median CPU time of `flush`, ms (the shadow pass is apart: `shadow_cpu_ms_median`).
     pub cpu_ms_median: f64,
     /// 95th percentile CPU time of `flush`, ms.
     pub cpu_ms_p95: f64,
     /// Median GPU time of the forward pass from timestamp queries; null where unsupported.
     pub gpu_ms_median: Option<f64>,
+    /// Median CPU time of the shadow pass (planning, culling, batching and
+    /// encoding every shadow view), ms.
+    pub shadow_cpu_ms_median: f64,
+    /// Median GPU time of the shadow pass; null where unsupported or without shadow views.
+    pub shadow_gpu_ms_median: Option<f64>,
     /// Median CPU time per submitted instance, ns.
     pub ns_per_instance: f64,
     /// Median of cull + queue + sort + batch + upload per submitted instance, ns.
@@ -46,6 +51,12 @@ fn percentile(sorted: &[f64], p: f64) -> f64 {
     sorted[rank.min(sorted.len() - 1)]
 }
 
+/// The median of `values` (sorted in place), `None` when empty.
+fn median(values: &mut [f64]) -> Option<f64> {
+    values.sort_by(f64::total_cmp);
+    (!values.is_empty()).then(|| percentile(values, 0.5))
+}
+
 fn median_of(frames: &[FrameStats], f: impl Fn(&FrameStats) -> f64) -> f64 {
     let mut v: Vec<f64> = frames.iter().map(f).collect();
     v.sort_by(f64::total_cmp);
@@ -60,23 +71,28 @@ pub fn run_mode(gpu: &Gpu, desc: &SceneDesc, mode: FrameMode, config: &BenchConf
     renderer.set_mode(mode);
     let timed = renderer.enable_gpu_timing();
     let mut gpu_ms = Vec::new();
+    let mut shadow_gpu_ms = Vec::new();
     let entities = desc.instantiate(&mut renderer);
     let refs: Vec<_> = entities.iter().collect();
     renderer.precompile(&refs, config.msaa)?;
     let camera = desc.cameras[0];
     let mut frames = Vec::with_capacity(config.frames);
     for i in 0..config.warmup + config.frames {
+        // The frame's three calls, with the GPU let finish after the shadow pass and
+        // after flush, outside the measured CPU times: a CPU rasterizer's threads
+        // would otherwise share the cores with the next call's CPU work.
         for e in &entities {
             renderer.submit(e);
         }
-        let stats = renderer.flush(&camera, &desc.lights, &mut target)?;
-        // Let the GPU finish outside the measured CPU time, so a CPU rasterizer's
-        // threads do not share the cores with the next frame's CPU work.
+        renderer.shadow_pass(&camera, &desc.lights, &target)?;
         let _ = gpu.device.poll(wgpu::PollType::wait_indefinitely());
-        let frame_gpu_ms = renderer.read_gpu_time_ms();
+        let stats = renderer.flush(&camera, &desc.lights, &mut target)?;
+        let _ = gpu.device.poll(wgpu::PollType::wait_indefinitely());
+        let frame_gpu = renderer.read_gpu_times();
         if i >= config.warmup {
             frames.push(stats);
-            gpu_ms.extend(frame_gpu_ms);
+            gpu_ms.extend(frame_gpu.map(|t| t.forward_ms));
+            shadow_gpu_ms.extend(frame_gpu.and_then(|t| t.shadow_ms));
         }
     }
     let mut totals: Vec<f64> = frames.iter().map(|f| f.cpu_ms.total).collect();
@@ -103,10 +119,9 @@ pub fn run_mode(gpu: &Gpu, desc: &SceneDesc, mode: FrameMode, config: &BenchConf
         },
         cpu_ms_median: percentile(&totals, 0.5),
         cpu_ms_p95: percentile(&totals, 0.95),
-        gpu_ms_median: (timed && !gpu_ms.is_empty()).then(|| {
-            gpu_ms.sort_by(f64::total_cmp);
-            percentile(&gpu_ms, 0.5)
-        }),
+        gpu_ms_median: timed.then(|| median(&mut gpu_ms)).flatten(),
+        shadow_cpu_ms_median: median_of(&frames, |f| f.passes.shadow.cpu_ms),
+        shadow_gpu_ms_median: timed.then(|| median(&mut shadow_gpu_ms)).flatten(),
         ns_per_instance: percentile(&totals, 0.5) * 1e6 / instances,
         ns_per_instance_cull_sort_batch_upload: median_of(&frames, per_instance_stages) * 1e6 / instances,
         stage_ms_median,
@@ -138,4 +153,12 @@ pub fn print_mode(r: &ModeReport) {
         st.instances_drawn,
         st.bytes_uploaded.total
     );
+    if st.shadow_views > 0 {
+        let shadow = &st.passes.shadow;
+        let gpu = r.shadow_gpu_ms_median.map_or_else(|| "n/a".to_string(), |ms| format!("{ms:.3} ms"));
+        println!(
+            "           shadow pass: {} views, {} draws in {} draw calls, {} instances | cpu {:.4} ms median | gpu {gpu} median",
+            st.shadow_views, shadow.draws, shadow.draw_calls, shadow.instances, r.shadow_cpu_ms_median
+        );
+    }
 }

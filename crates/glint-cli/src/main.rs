@@ -254,10 +254,7 @@ fn render(args: RenderArgs) -> Result<(), Error> {
     });
     for k in 0..frames {
         desc.pose(time + k as f32 / fps, &mut entities, &mut renderer);
-        for entity in &entities {
-            renderer.submit(entity);
-        }
-        let frame = renderer.flush(&cam, &desc.lights, &mut target)?;
+        let frame = renderer.render(&entities, &cam, &desc.lights, &mut target)?;
         let path = numbered(output, k).map_err(|m| glint::Diagnostic::file(output, m))?;
         if let Some(dir) = path.parent().filter(|d| frames > 1 && !d.as_os_str().is_empty()) {
             std::fs::create_dir_all(dir)

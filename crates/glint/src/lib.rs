@@ -42,7 +42,8 @@ pub use asset::{Diagnostic, Texture};
 pub use gpu::{Gpu, GpuError, OffscreenTarget};
 pub use render::{FrameMode, FrameStats, RenderError, Renderer};
 pub use scene::{
-    AlphaMode, Background, Camera, Entity, Environment, Light, Material, MaterialId, Mesh, ShapeId, TextureId,
+    AlphaMode, Background, Camera, Entity, Environment, Light, Material, MaterialId, Mesh, ShadowSettings, ShapeId,
+    TextureId,
 };
 
 /// Any glint error, with the process exit code the CLI uses for it.

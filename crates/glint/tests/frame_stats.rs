@@ -20,10 +20,7 @@ fn sun() -> Vec<Light> {
 
 fn frame(renderer: &mut Renderer, gpu: &Gpu, entities: &[&Entity], lights: &[Light]) -> FrameStats {
     let mut target = OffscreenTarget::new(gpu, 64, 64, 1).expect("target");
-    for e in entities {
-        renderer.submit(e);
-    }
-    renderer.flush(&camera(), lights, &mut target).expect("frame")
+    renderer.render(entities.iter().copied(), &camera(), lights, &mut target).expect("frame")
 }
 
 /// A renderer holding a cube shape and a default material.
@@ -261,12 +258,18 @@ fn gpu_timing_reads_the_last_frames_pass_time() {
         eprintln!("skipping: {} has no timestamp queries", gpu.info().name);
         return;
     }
-    assert_eq!(r.read_gpu_time_ms(), None, "no frame yet");
+    assert_eq!(r.read_gpu_times(), None, "no frame yet");
     let e = Entity::instanced(cube, m, grid(1000));
     frame(&mut r, gpu, &[&e], &sun());
-    let ms = r.read_gpu_time_ms().expect("timed frame");
-    assert!(ms > 0.0 && ms < 60_000.0, "{ms} ms");
-    assert_eq!(r.read_gpu_time_ms(), None, "each frame is read once");
+    let times = r.read_gpu_times().expect("timed frame");
+    assert!(times.forward_ms > 0.0 && times.forward_ms < 60_000.0, "{times:?}");
+    assert_eq!(times.shadow_ms, None, "no shadow pass ran");
+    assert_eq!(r.read_gpu_times(), None, "each frame is read once");
+    let shadowed = [sun()[0].with_shadows(glint::ShadowSettings { map_size: 256, ..Default::default() })];
+    frame(&mut r, gpu, &[&e], &shadowed);
+    let times = r.read_gpu_times().expect("timed frame");
+    let shadow_ms = times.shadow_ms.expect("the shadow pass is timed");
+    assert!(shadow_ms > 0.0 && shadow_ms < 60_000.0, "{times:?}");
 }
 
 #[test]

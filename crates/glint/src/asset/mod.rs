@@ -10,14 +10,15 @@ mod placement;
 pub mod procedural;
 mod scn;
 mod scn_fields;
+mod scn_lights;
 mod scn_syntax;
 mod texture;
 
 pub use model::{AddedModel, Model, ModelPart, Morph, Skin};
 pub use procedural::ShapeKind;
 pub use scn::{
-    load_scene, load_scene_with, parse_scene, parse_scene_with, EntityDesc, MaterialDesc, MeshRef, SceneDesc,
-    TextureRef, MAX_INSTANCES,
+    load_scene, load_scene_with, parse_scene, parse_scene_with, DrawOptions, EntityDesc, MaterialDesc, MeshRef,
+    SceneDesc, TextureRef, MAX_INSTANCES,
 };
 pub use texture::{load_texture, Texture, MAX_TEXTURE_SIDE};
 

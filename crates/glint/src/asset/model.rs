@@ -292,7 +292,7 @@ impl Model {
             entities: vec![EntityDesc {
                 mesh: MeshRef::Model(0),
                 material: None,
-                render_order: None,
+                draw: Default::default(),
                 transforms: vec![Mat4::IDENTITY],
             }],
             models: vec![self],

@@ -5,6 +5,7 @@
 use super::model::AddedModel;
 use super::placement::place_instances;
 use super::scn_fields::{numbers, Fields};
+use super::scn_lights;
 use super::scn_syntax::{parse_blocks, Block, Pair};
 use super::texture::TextureCache;
 use super::{load_texture, Diagnostic, LoadOptions, Model, ShapeKind, Texture};
@@ -68,10 +69,37 @@ pub struct EntityDesc {
     pub mesh: MeshRef,
     /// Index into [`SceneDesc::materials`]; `None` for the default material.
     pub material: Option<usize>,
-    /// Draw-order override (see [`Entity::render_order`]).
-    pub render_order: Option<u8>,
+    /// Draw order and shadow flags.
+    pub draw: DrawOptions,
     /// One transform per instance.
     pub transforms: Vec<Mat4>,
+}
+
+/// How an `entity` or `instances` block's instances draw: keys `render_order`,
+/// `cast_shadows` and `receive_shadows` (see the same fields of [`Entity`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct DrawOptions {
+    /// Draw-order override (see [`Entity::render_order`]).
+    pub render_order: Option<u8>,
+    /// Whether the instances cast shadows (default true).
+    pub cast_shadows: bool,
+    /// Whether shadows fall on the instances (default true).
+    pub receive_shadows: bool,
+}
+
+impl Default for DrawOptions {
+    fn default() -> Self {
+        Self { render_order: None, cast_shadows: true, receive_shadows: true }
+    }
+}
+
+impl DrawOptions {
+    /// Set these options on `entity`.
+    pub fn apply(self, entity: &mut Entity) {
+        entity.render_order = self.render_order;
+        entity.cast_shadows = self.cast_shadows;
+        entity.receive_shadows = self.receive_shadows;
+    }
 }
 
 /// What an entity draws: a procedural shape, or a model file (every part of it).
@@ -101,7 +129,7 @@ pub struct SceneDesc {
     /// Models named by `mesh` keys, each file once, plus a copy per entity that
     /// overrides its materials (`mtl.NAME.key`).
     pub models: Vec<Model>,
-    /// Render tasks, one per (mesh, material, render order), in first-use order.
+    /// Render tasks, one per (mesh, material, draw options), in first-use order.
     pub entities: Vec<EntityDesc>,
     /// Non-fatal problems (unknown keys, repeated keys), `path:line: message`.
     pub warnings: Vec<Diagnostic>,
@@ -176,7 +204,7 @@ impl SceneDesc {
                 }
             }
             for entity in &mut entities[first..] {
-                entity.render_order = e.render_order;
+                e.draw.apply(entity);
             }
         }
         entities
@@ -233,7 +261,7 @@ pub fn parse_scene_with(path: &Path, text: &str, options: LoadOptions) -> Result
 struct Placement {
     mesh: MeshRef,
     material: Option<(String, usize)>,
-    render_order: Option<u8>,
+    draw: DrawOptions,
     transforms: Vec<Mat4>,
 }
 
@@ -406,9 +434,10 @@ impl Loader<'_> {
         match class {
             "world" => self.world(&mut f)?,
             "camera" => self.camera(&mut f)?,
-            "light_directional" => self.light_directional(&mut f)?,
-            "light_point" => self.light_point(&mut f)?,
-            "light_spot" => self.light_spot(&mut f)?,
+            "light_directional" | "light_point" | "light_spot" => {
+                let light = scn_lights::light(class, &mut f, &mut self.scene.warnings)?;
+                self.add_light(&f, light)?
+            }
             "material" => self.material(&mut f)?,
             "entity" => self.entity(&mut f)?,
             "instances" => self.instances(&mut f)?,
@@ -497,43 +526,6 @@ impl Loader<'_> {
         }
         self.scene.lights.push(light);
         Ok(())
-    }
-
-    fn light_common(f: &mut Fields) -> Result<(Vec3, f32), Diagnostic> {
-        Ok((f.color("color")?.unwrap_or(Vec3::ONE), f.number("intensity", 0.0..=1e9)?.unwrap_or(1.0)))
-    }
-
-    fn light_directional(&mut self, f: &mut Fields) -> Result<(), Diagnostic> {
-        let pair = f.require("direction")?;
-        let direction = Vec3::from(numbers::<3>(self.path, pair, "3 numbers (x y z)")?);
-        if direction.length_squared() < 1e-12 {
-            return Err(Diagnostic::at(self.path, pair.line, "\"direction\" must not be zero"));
-        }
-        let (color, intensity) = Self::light_common(f)?;
-        self.add_light(f, Light::directional(direction, color, intensity))
-    }
-
-    fn light_point(&mut self, f: &mut Fields) -> Result<(), Diagnostic> {
-        let pair = f.require("origin")?;
-        let origin = Vec3::from(numbers::<3>(self.path, pair, "3 numbers (x y z)")?);
-        let (color, intensity) = Self::light_common(f)?;
-        let range = f.number("range", 1e-3..=1e9)?.unwrap_or(10.0);
-        self.add_light(f, Light::point(origin, color, intensity, range))
-    }
-
-    fn light_spot(&mut self, f: &mut Fields) -> Result<(), Diagnostic> {
-        let origin = Vec3::from(numbers::<3>(self.path, f.require("origin")?, "3 numbers (x y z)")?);
-        let pair = f.require("direction")?;
-        let direction = Vec3::from(numbers::<3>(self.path, pair, "3 numbers (x y z)")?);
-        if direction.length_squared() < 1e-12 {
-            return Err(Diagnostic::at(self.path, pair.line, "\"direction\" must not be zero"));
-        }
-        let (color, intensity) = Self::light_common(f)?;
-        let range = f.number("range", 1e-3..=1e9)?.unwrap_or(10.0);
-        let outer = f.number("outer_angle", 0.1..=90.0)?.unwrap_or(30.0);
-        let inner = f.number("inner_angle", 0.0..=outer)?.unwrap_or(outer * 0.8);
-        let cone = (inner.to_radians(), outer.to_radians());
-        self.add_light(f, Light::spot(origin, direction, color, intensity, range, cone))
     }
 
     fn texture(&mut self, f: &mut Fields, key: &str, srgb: bool) -> Result<Option<TextureRef>, Diagnostic> {
@@ -625,14 +617,12 @@ impl Loader<'_> {
         Ok(self.scene.models.len() - 1)
     }
 
-    fn render_order(f: &mut Fields) -> Result<Option<u8>, Diagnostic> {
-        let Some(pair) = f.get("render_order") else { return Ok(None) };
-        pair.value.trim().parse::<u8>().map(Some).map_err(|_| {
-            Diagnostic::at(
-                f.path,
-                pair.line,
-                format!("\"render_order\" is '{}', expected a whole number 0..=255", pair.value),
-            )
+    /// The `render_order`, `cast_shadows` and `receive_shadows` keys.
+    fn draw_options(f: &mut Fields) -> Result<DrawOptions, Diagnostic> {
+        Ok(DrawOptions {
+            render_order: f.integer("render_order", 0..=255)?.map(|v| v as u8),
+            cast_shadows: f.flag("cast_shadows")?.unwrap_or(DrawOptions::default().cast_shadows),
+            receive_shadows: f.flag("receive_shadows")?.unwrap_or(DrawOptions::default().receive_shadows),
         })
     }
 
@@ -678,8 +668,8 @@ impl Loader<'_> {
         let scale = Self::scale(f)?;
         self.count_instances(1, f.block.line)?;
         let transform = Mat4::from_scale_rotation_translation(scale, rotation(angles), origin);
-        let render_order = Self::render_order(f)?;
-        self.placements.push(Placement { mesh, material, render_order, transforms: vec![transform] });
+        let draw = Self::draw_options(f)?;
+        self.placements.push(Placement { mesh, material, draw, transforms: vec![transform] });
         Ok(())
     }
 
@@ -732,15 +722,15 @@ impl Loader<'_> {
         }
         let random_yaw = f.flag("random_yaw")?.unwrap_or(false);
         let transforms = place_instances(count as usize, random, origin, extent, seed, (lo, hi), random_yaw);
-        let render_order = Self::render_order(f)?;
-        self.placements.push(Placement { mesh, material, render_order, transforms });
+        let draw = Self::draw_options(f)?;
+        self.placements.push(Placement { mesh, material, draw, transforms });
         Ok(())
     }
 
     /// Resolve material names and gather placements into one task per (mesh, material, render order).
     fn finish(mut self) -> Result<SceneDesc, Diagnostic> {
         self.scene.textures = std::mem::take(&mut self.textures).into_textures();
-        let mut tasks: HashMap<(MeshRef, Option<usize>, Option<u8>), usize> = HashMap::new();
+        let mut tasks: HashMap<(MeshRef, Option<usize>, DrawOptions), usize> = HashMap::new();
         for placement in std::mem::take(&mut self.placements) {
             let material = match placement.material {
                 None => None,
@@ -754,11 +744,11 @@ impl Loader<'_> {
                     })?)
                 }
             };
-            let task = *tasks.entry((placement.mesh, material, placement.render_order)).or_insert_with(|| {
+            let task = *tasks.entry((placement.mesh, material, placement.draw)).or_insert_with(|| {
                 self.scene.entities.push(EntityDesc {
                     mesh: placement.mesh,
                     material,
-                    render_order: placement.render_order,
+                    draw: placement.draw,
                     transforms: Vec::new(),
                 });
                 self.scene.entities.len() - 1

@@ -9,6 +9,7 @@
 use super::batch::Batch;
 use super::draw_list::DrawList;
 use super::queue::{Queue, SKY_STAGE};
+use super::timer::Timed;
 use super::views::ViewBlocks;
 use super::{FrameMode, FrameStats, Renderer};
 use crate::gpu::OffscreenTarget;
@@ -55,7 +56,7 @@ impl Renderer {
                 label: Some("forward pass"),
                 color_attachments: &[Some(target.color_attachment(clear))],
                 depth_stencil_attachment: Some(target.depth_attachment()),
-                timestamp_writes: self.gpu_timer.as_ref().map(|t| t.pass_writes()),
+                timestamp_writes: self.gpu_timer.as_ref().and_then(|t| t.pass_writes(Timed::Forward, true, true)),
                 ..Default::default()
             });
             pass.set_bind_group(0, &self.scene_group, &[]);
@@ -85,7 +86,7 @@ impl Renderer {
             self.draw_stages(&self.forward, &mut pass, sky_at..self.forward.batches.len(), &mut bound, stats);
         }
         if let Some(timer) = &mut self.gpu_timer {
-            timer.resolve(&mut encoder);
+            timer.resolve(&mut encoder, Timed::Forward);
         }
         encoder.finish()
     }

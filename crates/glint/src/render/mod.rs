@@ -36,6 +36,7 @@ mod views;
 
 pub use mesh_pool::MeshTooLarge;
 pub use stats::{FrameStats, PassStats, Passes, StageTimes, UploadStats};
+pub use timer::GpuTimes;
 
 use crate::asset::Texture;
 use crate::gpu::{Gpu, OffscreenTarget};
@@ -397,9 +398,9 @@ impl Renderer {
         self.culling = enabled;
     }
 
-    /// Time the forward pass on the GPU with timestamp queries, when the device has
-    /// them; returns whether timing is on. Read each frame's time with
-    /// [`Renderer::read_gpu_time_ms`].
+    /// Time the shadow and forward passes on the GPU with timestamp queries, when
+    /// the device has them; returns whether timing is on. Read each frame's times
+    /// with [`Renderer::read_gpu_times`].
     pub fn enable_gpu_timing(&mut self) -> bool {
         if self.gpu_timer.is_none() {
             self.gpu_timer = timer::GpuTimer::new(&self.device, &self.queue);
@@ -407,10 +408,10 @@ impl Renderer {
         self.gpu_timer.is_some()
     }
 
-    /// GPU time of the last frame's forward pass in milliseconds, waiting for the
-    /// GPU to finish it; `None` when timing is off or unsupported.
-    pub fn read_gpu_time_ms(&mut self) -> Option<f64> {
-        self.gpu_timer.as_mut()?.read_ms(&self.device)
+    /// GPU time of the last frame's passes, waiting for the GPU to finish them;
+    /// `None` when timing is off or unsupported, or the frame was already read.
+    pub fn read_gpu_times(&mut self) -> Option<GpuTimes> {
+        self.gpu_timer.as_mut()?.read(&self.device)
     }
 
     /// Build frames the optimized way (the default) or the naive way, for comparison.
@@ -436,6 +437,26 @@ impl Renderer {
             render_order: entity.render_order,
             cast_shadows: entity.cast_shadows,
         });
+    }
+
+    /// One whole frame of `entities`, the seed's three calls in order:
+    /// [`submit`](Self::submit) each, [`shadow_pass`](Self::shadow_pass), then
+    /// [`flush`](Self::flush). The statistics include the shadow pass's; the
+    /// shadow pass's error comes first.
+    pub fn render<'e>(
+        &mut self,
+        entities: impl IntoIterator<Item = &'e Entity>,
+        camera: &Camera,
+        lights: &[Light],
+        target: &mut OffscreenTarget,
+    ) -> Result<FrameStats, RenderError> {
+        for entity in entities {
+            self.submit(entity);
+        }
+        // Flush even after a failed shadow pass, so the submitted entities are dropped.
+        let shadows = self.shadow_pass(camera, lights, target);
+        let frame = self.flush(camera, lights, target);
+        shadows.and(frame)
     }
 
     /// Draw everything submitted since the last flush into `target`, seen by

@@ -14,6 +14,7 @@ use super::pipelines::{PassKind, Pipelines};
 use super::queue::{self, DrawItem, Queue};
 use super::shadow_maps::{ShadowGpu, ShadowMaps, MAX_2D_VIEWS, MAX_CUBES};
 use super::shadow_views::{self, ShadowView, ViewTarget};
+use super::timer::Timed;
 use super::views::{ViewBlocks, MAX_SHADOW_VIEWS};
 use super::{ms_since, FrameStats, PassStats, RenderError, Renderer};
 use crate::gpu::OffscreenTarget;
@@ -236,7 +237,7 @@ impl Renderer {
 
     /// One depth pass per view into its layer of the shadow maps.
     fn encode_shadow_views(
-        &self,
+        &mut self,
         views: &[ShadowView],
         ranges: &[std::ops::Range<usize>],
         cost: &mut PassStats,
@@ -258,12 +259,19 @@ impl Renderer {
                     depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(1.0), store: wgpu::StoreOp::Store }),
                     stencil_ops: None,
                 }),
+                timestamp_writes: self
+                    .gpu_timer
+                    .as_ref()
+                    .and_then(|t| t.pass_writes(Timed::Shadow, k == 0, k + 1 == views.len())),
                 ..Default::default()
             });
             pass.set_bind_group(1, &self.views.bind_group, &[ViewBlocks::offset(1 + k)]);
             pass.set_bind_group(3, &self.shadow_list.bind_group, &[]);
             stats.bind_groups_set += 2;
             self.draw_stages(&self.shadow_list, &mut pass, range.clone(), &mut Bound::default(), &mut stats);
+        }
+        if let Some(timer) = &mut self.gpu_timer {
+            timer.resolve(&mut encoder, Timed::Shadow);
         }
         cost.draw_calls = stats.draw_calls;
         cost.draws = stats.draws;

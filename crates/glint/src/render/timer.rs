@@ -1,18 +1,38 @@
-//! Core layer: GPU time of the forward pass from timestamp queries, where the
-//! device supports them (`Features::TIMESTAMP_QUERY`).
+//! Core layer: GPU time of the shadow pass and of the forward pass from timestamp
+//! queries, where the device supports them (`Features::TIMESTAMP_QUERY`).
 
-/// Two timestamps around the forward pass, resolved into a buffer and copied to
-/// one the CPU can map. Reading waits for the GPU, so only benchmarks ask.
+/// A pass the timer brackets with a pair of timestamps.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Timed {
+    /// From the first shadow view's pass to the last one's end.
+    Shadow = 0,
+    /// The forward pass.
+    Forward = 1,
+}
+
+/// GPU time of the last frame's passes, from [`Renderer::read_gpu_times`](crate::Renderer::read_gpu_times).
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct GpuTimes {
+    /// Every shadow view of the frame's shadow pass; `None` when it drew none.
+    pub shadow_ms: Option<f64>,
+    /// The forward pass: opaque, alpha-test, sky and transparent.
+    pub forward_ms: f64,
+}
+
+/// Two timestamps per [`Timed`] pass, each pair resolved into a buffer and copied
+/// to one the CPU can map. Reading waits for the GPU, so only benchmarks ask.
 pub(crate) struct GpuTimer {
     queries: wgpu::QuerySet,
     resolved: wgpu::Buffer,
     readback: wgpu::Buffer,
     period_ns: f64,
-    /// Whether the last frame wrote the timestamps.
-    written: bool,
+    /// Which pairs the last frame wrote.
+    written: [bool; 2],
 }
 
-const BYTES: u64 = 2 * std::mem::size_of::<u64>() as u64;
+const PAIR_BYTES: u64 = 2 * std::mem::size_of::<u64>() as u64;
+/// Where each pair is resolved: resolves must start on this alignment.
+const RESOLVE_STRIDE: u64 = wgpu::QUERY_RESOLVE_BUFFER_ALIGNMENT;
 
 impl GpuTimer {
     /// A timer, or `None` when the device has no timestamp queries.
@@ -20,46 +40,61 @@ impl GpuTimer {
         if !device.features().contains(wgpu::Features::TIMESTAMP_QUERY) {
             return None;
         }
-        let buffer = |label, usage| {
-            device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some(label),
-                size: BYTES,
-                usage,
-                mapped_at_creation: false,
-            })
+        let buffer = |label, size, usage| {
+            device.create_buffer(&wgpu::BufferDescriptor { label: Some(label), size, usage, mapped_at_creation: false })
         };
         Some(Self {
             queries: device.create_query_set(&wgpu::QuerySetDescriptor {
-                label: Some("gpu timer: forward pass timestamps"),
+                label: Some("gpu timer: shadow and forward pass timestamps"),
                 ty: wgpu::QueryType::Timestamp,
-                count: 2,
+                count: 4,
             }),
-            resolved: buffer("gpu timer: resolved", wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC),
-            readback: buffer("gpu timer: readback", wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ),
+            resolved: buffer(
+                "gpu timer: resolved",
+                RESOLVE_STRIDE + PAIR_BYTES,
+                wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+            ),
+            readback: buffer(
+                "gpu timer: readback",
+                2 * PAIR_BYTES,
+                wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+            ),
             period_ns: f64::from(queue.get_timestamp_period()),
-            written: false,
+            written: [false; 2],
         })
     }
 
-    /// Timestamp writes for the forward pass.
-    pub(crate) fn pass_writes(&self) -> wgpu::RenderPassTimestampWrites<'_> {
-        wgpu::RenderPassTimestampWrites {
+    /// Timestamp writes for a pass of `which`: at its beginning when `begin`,
+    /// at its end when `end`, none when neither (a timed span may cover several passes).
+    pub(crate) fn pass_writes(
+        &self,
+        which: Timed,
+        begin: bool,
+        end: bool,
+    ) -> Option<wgpu::RenderPassTimestampWrites<'_>> {
+        let first = 2 * which as u32;
+        (begin || end).then_some(wgpu::RenderPassTimestampWrites {
             query_set: &self.queries,
-            beginning_of_pass_write_index: Some(0),
-            end_of_pass_write_index: Some(1),
-        }
+            beginning_of_pass_write_index: begin.then_some(first),
+            end_of_pass_write_index: end.then_some(first + 1),
+        })
     }
 
-    /// After the pass: resolve the timestamps and copy them where the CPU can read.
-    pub(crate) fn resolve(&mut self, encoder: &mut wgpu::CommandEncoder) {
-        encoder.resolve_query_set(&self.queries, 0..2, &self.resolved, 0);
-        encoder.copy_buffer_to_buffer(&self.resolved, 0, &self.readback, 0, BYTES);
-        self.written = true;
+    /// After the last pass of `which`: resolve its timestamps and copy them where
+    /// the CPU can read them.
+    pub(crate) fn resolve(&mut self, encoder: &mut wgpu::CommandEncoder, which: Timed) {
+        let first = 2 * which as u32;
+        let at = which as u64 * RESOLVE_STRIDE;
+        encoder.resolve_query_set(&self.queries, first..first + 2, &self.resolved, at);
+        encoder.copy_buffer_to_buffer(&self.resolved, at, &self.readback, which as u64 * PAIR_BYTES, PAIR_BYTES);
+        self.written[which as usize] = true;
     }
 
-    /// Milliseconds between the two timestamps of the last frame, waiting for it.
-    pub(crate) fn read_ms(&mut self, device: &wgpu::Device) -> Option<f64> {
-        if !std::mem::take(&mut self.written) {
+    /// The last frame's pass times, waiting for it; `None` when it drew no
+    /// timed forward pass since the last read.
+    pub(crate) fn read(&mut self, device: &wgpu::Device) -> Option<GpuTimes> {
+        let written = std::mem::take(&mut self.written);
+        if !written[Timed::Forward as usize] {
             return None;
         }
         let (tx, rx) = std::sync::mpsc::channel();
@@ -68,11 +103,15 @@ impl GpuTimer {
         });
         device.poll(wgpu::PollType::wait_indefinitely()).ok()?;
         rx.recv().ok()?.ok()?;
-        let ticks: [u64; 2] = {
+        let ticks: [u64; 4] = {
             let view = self.readback.get_mapped_range(..).ok()?;
-            bytemuck::pod_read_unaligned(&view[..BYTES as usize])
+            bytemuck::pod_read_unaligned(&view[..2 * PAIR_BYTES as usize])
         };
         self.readback.unmap();
-        Some(ticks[1].saturating_sub(ticks[0]) as f64 * self.period_ns / 1e6)
+        let ms = |pair: usize| ticks[2 * pair + 1].saturating_sub(ticks[2 * pair]) as f64 * self.period_ns / 1e6;
+        Some(GpuTimes {
+            shadow_ms: written[Timed::Shadow as usize].then(|| ms(Timed::Shadow as usize)),
+            forward_ms: ms(Timed::Forward as usize),
+        })
     }
 }

@@ -50,11 +50,7 @@ pub fn render_desc(
     renderer.set_culling(culling);
     let entities = desc.instantiate(&mut renderer);
     let mut target = OffscreenTarget::new(gpu, size, size, 4).expect("target");
-    for e in &entities {
-        renderer.submit(e);
-    }
-    renderer.shadow_pass(&desc.cameras[0], &desc.lights, &target).expect("shadow pass");
-    let stats = renderer.flush(&desc.cameras[0], &desc.lights, &mut target).expect("frame");
+    let stats = renderer.render(&entities, &desc.cameras[0], &desc.lights, &mut target).expect("frame");
     (target.read_rgba8(gpu).expect("readback"), stats)
 }
 

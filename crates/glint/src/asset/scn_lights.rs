@@ -1,0 +1,133 @@
+//! `.scn` light blocks: `light_directional`, `light_point` and `light_spot`,
+//! with their shadow keys (see `docs/scn.md`).
+
+use super::scn_fields::{numbers, Fields};
+use super::Diagnostic;
+use crate::scene::{Light, ShadowSettings};
+use glam::Vec3;
+
+/// The light a `light_*` block describes; `class` is its classname, known to be
+/// one of the three. Shadow keys on a light without `"shadows" "1"` add a warning.
+pub(super) fn light(class: &str, f: &mut Fields, warnings: &mut Vec<Diagnostic>) -> Result<Light, Diagnostic> {
+    let light = match class {
+        "light_directional" => {
+            let direction = direction(f)?;
+            let (color, intensity) = color_intensity(f)?;
+            Light::directional(direction, color, intensity)
+        }
+        "light_point" => {
+            let origin = Vec3::from(numbers::<3>(f.path, f.require("origin")?, "3 numbers (x y z)")?);
+            let (color, intensity) = color_intensity(f)?;
+            Light::point(origin, color, intensity, range(f)?)
+        }
+        _ => {
+            let origin = Vec3::from(numbers::<3>(f.path, f.require("origin")?, "3 numbers (x y z)")?);
+            let direction = direction(f)?;
+            let (color, intensity) = color_intensity(f)?;
+            let range = range(f)?;
+            let outer = f.number("outer_angle", 0.1..=90.0)?.unwrap_or(30.0);
+            let inner = f.number("inner_angle", 0.0..=outer)?.unwrap_or(outer * 0.8);
+            Light::spot(origin, direction, color, intensity, range, (inner.to_radians(), outer.to_radians()))
+        }
+    };
+    let on = f.flag("shadows")?.unwrap_or(false);
+    let defaults = ShadowSettings::default();
+    let settings = ShadowSettings {
+        map_size: f.integer("shadow_map_size", 16..=8192)?.map_or(defaults.map_size, |v| v as u32),
+        depth_bias: f.number("shadow_bias", 0.0..=100.0)?.unwrap_or(defaults.depth_bias),
+        normal_bias: f.number("shadow_normal_bias", 0.0..=100.0)?.unwrap_or(defaults.normal_bias),
+        distance: if class == "light_directional" { f.number("shadow_distance", 1e-3..=1e9)? } else { None },
+    };
+    if !on && settings != defaults {
+        warnings.push(Diagnostic::at(
+            f.path,
+            f.block.line,
+            "shadow keys are ignored: this light has no \"shadows\" \"1\"",
+        ));
+    }
+    Ok(if on { light.with_shadows(settings) } else { light })
+}
+
+fn direction(f: &mut Fields) -> Result<Vec3, Diagnostic> {
+    let pair = f.require("direction")?;
+    let direction = Vec3::from(numbers::<3>(f.path, pair, "3 numbers (x y z)")?);
+    if direction.length_squared() < 1e-12 {
+        return Err(Diagnostic::at(f.path, pair.line, "\"direction\" must not be zero"));
+    }
+    Ok(direction)
+}
+
+fn color_intensity(f: &mut Fields) -> Result<(Vec3, f32), Diagnostic> {
+    Ok((f.color("color")?.unwrap_or(Vec3::ONE), f.number("intensity", 0.0..=1e9)?.unwrap_or(1.0)))
+}
+
+fn range(f: &mut Fields) -> Result<f32, Diagnostic> {
+    Ok(f.number("range", 1e-3..=1e9)?.unwrap_or(10.0))
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::asset::{parse_scene, SceneDesc};
+    use crate::scene::{LightKind, ShadowSettings};
+    use std::path::Path;
+
+    fn parse(text: &str) -> Result<SceneDesc, String> {
+        parse_scene(Path::new("t.scn"), text).map_err(|e| e.to_string())
+    }
+
+    #[test]
+    fn shadow_keys_on_lights() {
+        let scene = parse(
+            "{ \"classname\" \"light_directional\"\n\"direction\" \"0 -1 0\"\n\"shadows\" \"1\"\n\"shadow_map_size\" \"2048\"\n\"shadow_bias\" \"2\"\n\"shadow_normal_bias\" \"0.5\"\n\"shadow_distance\" \"40\" }\n\
+             { \"classname\" \"light_point\"\n\"origin\" \"0 2 0\"\n\"shadows\" \"1\" }\n\
+             { \"classname\" \"light_spot\"\n\"origin\" \"0 2 0\"\n\"direction\" \"0 -1 0\"\n\"shadows\" \"0\" }\n",
+        )
+        .unwrap();
+        assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+        let sun = ShadowSettings { map_size: 2048, depth_bias: 2.0, normal_bias: 0.5, distance: Some(40.0) };
+        assert_eq!(scene.lights[0].shadows, Some(sun));
+        assert_eq!(scene.lights[1].shadows, Some(ShadowSettings::default()));
+        assert!(matches!(scene.lights[2].kind, LightKind::Spot { .. }));
+        assert_eq!(scene.lights[2].shadows, None);
+    }
+
+    #[test]
+    fn shadow_keys_without_shadows_warn_and_bad_values_fail() {
+        let scene =
+            parse("{ \"classname\" \"light_point\"\n\"origin\" \"0 2 0\"\n\"shadow_map_size\" \"512\" }\n").unwrap();
+        assert_eq!(scene.lights[0].shadows, None);
+        assert_eq!(scene.warnings.len(), 1);
+        assert!(scene.warnings[0].to_string().contains("t.scn:1: shadow keys are ignored"), "{:?}", scene.warnings);
+        // shadow_distance is a directional light's key only.
+        let scene = parse(
+            "{ \"classname\" \"light_point\"\n\"origin\" \"0 2 0\"\n\"shadows\" \"1\"\n\"shadow_distance\" \"9\" }\n",
+        )
+        .unwrap();
+        assert!(scene.warnings[0].to_string().contains("t.scn:4: unknown key \"shadow_distance\""));
+        for (text, expected) in [
+            ("\"shadows\" \"yes\"", "t.scn:3: \"shadows\" is 'yes', expected 0 or 1"),
+            ("\"shadow_map_size\" \"8\"", "t.scn:3: \"shadow_map_size\" is '8', expected a whole number in 16..=8192"),
+            ("\"shadow_bias\" \"-1\"", "t.scn:3: \"shadow_bias\" is -1, expected a value in 0..=100"),
+        ] {
+            let block = format!("{{ \"classname\" \"light_point\"\n\"origin\" \"0 2 0\"\n{text} }}\n");
+            assert_eq!(parse(&block).unwrap_err(), expected);
+        }
+    }
+
+    #[test]
+    fn cast_and_receive_shadows_on_entities_and_instances() {
+        let scene = parse(
+            "{ \"classname\" \"entity\"\n\"mesh\" \"cube\"\n\"cast_shadows\" \"0\" }\n\
+             { \"classname\" \"entity\"\n\"mesh\" \"cube\" }\n\
+             { \"classname\" \"instances\"\n\"mesh\" \"cube\"\n\"count\" \"4\"\n\"receive_shadows\" \"0\" }\n",
+        )
+        .unwrap();
+        assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+        // Different shadow flags keep the same mesh and material in separate tasks.
+        let flags: Vec<_> =
+            scene.entities.iter().map(|e| (e.draw.cast_shadows, e.draw.receive_shadows, e.transforms.len())).collect();
+        assert_eq!(flags, [(false, true, 1), (true, true, 1), (true, false, 4)]);
+        let err = parse("{ \"classname\" \"entity\"\n\"mesh\" \"cube\"\n\"receive_shadows\" \"2\" }\n").unwrap_err();
+        assert_eq!(err, "t.scn:3: \"receive_shadows\" is '2', expected 0 or 1");
+    }
+}
