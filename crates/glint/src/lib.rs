@@ -39,7 +39,7 @@ pub mod scene;
 mod shader;
 
 pub use asset::{Diagnostic, Texture};
-pub use gpu::{Gpu, GpuError, OffscreenTarget};
+pub use gpu::{Gpu, GpuError, OffscreenTarget, WindowSurface};
 pub use render::{FrameMode, FrameStats, RenderError, Renderer};
 pub use scene::{
     AlphaMode, Background, Camera, Entity, Environment, Light, Material, MaterialId, Mesh, ShadowSettings, ShapeId,

@@ -1,4 +1,17 @@
 use std::fmt;
+use std::sync::Arc;
+
+/// What a window must provide for [`Gpu::for_window`]: window and display
+/// handles, shareable across threads (a `winit::window::Window` qualifies).
+pub trait WindowHandles:
+    wgpu::rwh::HasWindowHandle + wgpu::rwh::HasDisplayHandle + fmt::Debug + Send + Sync + 'static
+{
+}
+
+impl<T: wgpu::rwh::HasWindowHandle + wgpu::rwh::HasDisplayHandle + fmt::Debug + Send + Sync + 'static> WindowHandles
+    for T
+{
+}
 
 /// Errors from creating the GPU context or a target.
 #[derive(Debug, thiserror::Error)]
@@ -27,6 +40,9 @@ pub enum GpuError {
     /// The sample count is not 1 or 4, or the adapter cannot do it.
     #[error("MSAA sample count {0} is not supported here (use 1 or 4)")]
     SampleCount(u32),
+    /// The window's surface could not be created or has no format to show frames in.
+    #[error("cannot show frames in the window: {0}")]
+    Surface(String),
     /// Reading a frame back from the GPU failed.
     #[error("reading the frame back failed: {0}")]
     Readback(String),
@@ -74,6 +90,21 @@ impl Gpu {
     /// `WGPU_ADAPTER_NAME` (a case-insensitive substring) to choose an adapter.
     /// Returns [`GpuError::NoAdapter`] with the fix when nothing matches.
     pub fn headless() -> Result<Self, GpuError> {
+        Self::create(None).map(|(gpu, _)| gpu)
+    }
+
+    /// Create a context whose adapter can present to `window`, and the window's
+    /// surface (give it to [`WindowSurface::new`](super::WindowSurface::new)).
+    /// Chooses backends and adapters as [`Gpu::headless`] does.
+    pub fn for_window(window: Arc<dyn WindowHandles>) -> Result<(Self, wgpu::Surface<'static>), GpuError> {
+        match Self::create(Some(window))? {
+            (gpu, Some(surface)) => Ok((gpu, surface)),
+            (_, None) => Err(GpuError::Surface("no surface was made for the window".into())),
+        }
+    }
+
+    /// The context, on an adapter that can present to `window` when there is one.
+    fn create(window: Option<Arc<dyn WindowHandles>>) -> Result<(Self, Option<wgpu::Surface<'static>>), GpuError> {
         let from_env = wgpu::Backends::from_env();
         // Without WGPU_BACKEND, try the native APIs first and reach for GL only
         // when they have no adapter: probing EGL logs errors on machines without it.
@@ -83,7 +114,10 @@ impl Gpu {
         };
         let mut last = None;
         for backends in attempts {
-            let mut desc = wgpu::InstanceDescriptor::new_without_display_handle_from_env();
+            let mut desc = match &window {
+                Some(w) => wgpu::InstanceDescriptor::new_with_display_handle_from_env(Box::new(w.clone())),
+                None => wgpu::InstanceDescriptor::new_without_display_handle_from_env(),
+            };
             desc.backends = backends;
             // The renderer's indirect commands are made from its own validated data, so
             // wgpu's per-frame check of them is pure overhead (about 20 µs a frame on
@@ -93,8 +127,12 @@ impl Gpu {
                 desc.flags.remove(wgpu::InstanceFlags::VALIDATION_INDIRECT_CALL);
             }
             let instance = wgpu::Instance::new(desc);
-            match pollster::block_on(choose_adapter(&instance, backends)) {
-                Ok(adapter) => return Self::from_adapter(adapter),
+            let surface = match &window {
+                Some(w) => Some(instance.create_surface(w.clone()).map_err(|e| GpuError::Surface(e.to_string()))?),
+                None => None,
+            };
+            match pollster::block_on(choose_adapter(&instance, backends, surface.as_ref())) {
+                Ok(adapter) => return Ok((Self::from_adapter(adapter)?, surface)),
                 Err(e) => last = Some(e),
             }
         }
@@ -157,10 +195,15 @@ impl Gpu {
 
 /// Pick the adapter: the first whose name contains `WGPU_ADAPTER_NAME` when set,
 /// else the high-performance default.
-async fn choose_adapter(instance: &wgpu::Instance, backends: wgpu::Backends) -> Result<wgpu::Adapter, GpuError> {
+async fn choose_adapter(
+    instance: &wgpu::Instance,
+    backends: wgpu::Backends,
+    surface: Option<&wgpu::Surface<'_>>,
+) -> Result<wgpu::Adapter, GpuError> {
     if let Ok(wanted) = std::env::var("WGPU_ADAPTER_NAME") {
         let wanted = wanted.to_lowercase();
-        let adapters = instance.enumerate_adapters(backends).await;
+        let mut adapters = instance.enumerate_adapters(backends).await;
+        adapters.retain(|a| surface.is_none_or(|s| a.is_surface_supported(s)));
         let names: Vec<String> = adapters.iter().map(|a| a.get_info().name).collect();
         return adapters
             .into_iter()
@@ -169,6 +212,7 @@ async fn choose_adapter(instance: &wgpu::Instance, backends: wgpu::Backends) -> 
     }
     let options = wgpu::RequestAdapterOptions {
         power_preference: wgpu::PowerPreference::from_env().unwrap_or(wgpu::PowerPreference::HighPerformance),
+        compatible_surface: surface,
         ..Default::default()
     };
     instance

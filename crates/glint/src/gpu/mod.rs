@@ -2,13 +2,19 @@
 //!
 //! `gpu::` owns every wgpu handle that is not tied to one renderer: the
 //! [`Gpu`] context (instance, adapter, device, queue) and the
-//! [`OffscreenTarget`] a frame is drawn into and read back from.
+//! [`OffscreenTarget`] a frame is drawn into and read back from, and the
+//! [`WindowSurface`] that shows it in a window.
 
+mod blit;
 mod context;
 mod target;
+mod window;
 
-pub use context::{Gpu, GpuError};
+pub use context::{Gpu, GpuError, WindowHandles};
 pub use target::OffscreenTarget;
+pub use window::WindowSurface;
+
+pub(crate) use blit::{sampler_entry, texture_entry, Blitter};
 
 /// Colour format of every glint target: 8-bit sRGB, so shaders write linear values
 /// and the hardware encodes them.

@@ -47,7 +47,9 @@ impl OffscreenTarget {
             "offscreen target: colour",
             COLOR_FORMAT,
             1,
-            wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+            wgpu::TextureUsages::RENDER_ATTACHMENT
+                | wgpu::TextureUsages::COPY_SRC
+                | wgpu::TextureUsages::TEXTURE_BINDING,
         );
         let msaa_view = (samples > 1).then(|| {
             texture("offscreen target: msaa colour", COLOR_FORMAT, samples, wgpu::TextureUsages::RENDER_ATTACHMENT)
@@ -78,6 +80,11 @@ impl OffscreenTarget {
     /// Samples per pixel (1 or 4).
     pub fn samples(&self) -> u32 {
         self.samples
+    }
+
+    /// The single-sample colour texture holding the last frame (for blits).
+    pub(crate) fn color_view(&self) -> &wgpu::TextureView {
+        &self.resolved_view
     }
 
     /// The colour attachment for a pass that clears with `clear`: renders into the

@@ -6,7 +6,7 @@
 //! formats. Shader modules are cached per macro set, pipelines per key; a key's
 //! index in the cache is its id in sort keys.
 
-use crate::gpu::{COLOR_FORMAT, DEPTH_FORMAT};
+use crate::gpu::{sampler_entry, texture_entry, COLOR_FORMAT, DEPTH_FORMAT};
 use crate::scene::{BlendState, Compare, Cull, Mesh, RenderStates, SkinVertex, StencilOp, Vertex};
 use crate::shader::{ShaderError, ShaderFeatures, ShaderLibrary};
 use std::borrow::Cow;
@@ -151,30 +151,6 @@ fn uniform_entry(binding: u32, visibility: wgpu::ShaderStages, dynamic: bool) ->
             has_dynamic_offset: dynamic,
             min_binding_size: None,
         },
-        count: None,
-    }
-}
-
-/// A fragment-stage, filterable 2D texture binding.
-pub(crate) fn texture_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::FRAGMENT,
-        ty: wgpu::BindingType::Texture {
-            sample_type: wgpu::TextureSampleType::Float { filterable: true },
-            view_dimension: wgpu::TextureViewDimension::D2,
-            multisampled: false,
-        },
-        count: None,
-    }
-}
-
-/// A fragment-stage filtering sampler binding.
-pub(crate) fn sampler_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::FRAGMENT,
-        ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
         count: None,
     }
 }

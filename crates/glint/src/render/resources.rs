@@ -2,65 +2,23 @@
 //! the material table — and the Renderer block's instance buffers.
 
 use super::blocks::{InstanceGpu, MaterialGpu};
-use super::pipelines::{sampler_entry, texture_entry};
 use crate::asset::Texture;
+use crate::gpu::Blitter;
 
 /// Builds textures and fills their mip chains by repeated half-size blits.
 pub(crate) struct TextureUploader {
-    layout: wgpu::BindGroupLayout,
-    sampler: wgpu::Sampler,
+    blitter: Blitter,
     srgb: wgpu::RenderPipeline,
     linear: wgpu::RenderPipeline,
 }
 
 impl TextureUploader {
     pub(crate) fn new(device: &wgpu::Device) -> Self {
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("texture uploader: mip source layout"),
-            entries: &[texture_entry(0), sampler_entry(1)],
-        });
-        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("texture uploader: mip pipeline layout"),
-            bind_group_layouts: &[Some(&layout)],
-            immediate_size: 0,
-        });
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("texture uploader: mip shader"),
-            source: wgpu::ShaderSource::Wgsl(crate::shader::MIPMAP.into()),
-        });
-        let pipeline = |format: wgpu::TextureFormat| {
-            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some(&format!("texture uploader: mip pipeline ({format:?})")),
-                layout: Some(&pipeline_layout),
-                vertex: wgpu::VertexState {
-                    module: &module,
-                    entry_point: Some("vs_blit"),
-                    compilation_options: Default::default(),
-                    buffers: &[],
-                },
-                primitive: Default::default(),
-                depth_stencil: None,
-                multisample: Default::default(),
-                fragment: Some(wgpu::FragmentState {
-                    module: &module,
-                    entry_point: Some("fs_blit"),
-                    compilation_options: Default::default(),
-                    targets: &[Some(format.into())],
-                }),
-                multiview_mask: None,
-                cache: None,
-            })
-        };
+        let blitter = Blitter::new(device);
         Self {
-            sampler: device.create_sampler(&wgpu::SamplerDescriptor {
-                label: Some("texture uploader: mip sampler"),
-                mag_filter: wgpu::FilterMode::Linear,
-                min_filter: wgpu::FilterMode::Linear,
-                ..Default::default()
-            }),
-            srgb: pipeline(wgpu::TextureFormat::Rgba8UnormSrgb),
-            linear: pipeline(wgpu::TextureFormat::Rgba8Unorm),
-            layout,
+            srgb: blitter.pipeline(device, wgpu::TextureFormat::Rgba8UnormSrgb),
+            linear: blitter.pipeline(device, wgpu::TextureFormat::Rgba8Unorm),
+            blitter,
         }
     }
 
@@ -106,34 +64,7 @@ impl TextureUploader {
             })
         };
         for level in 1..levels {
-            let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("texture uploader: mip source"),
-                layout: &self.layout,
-                entries: &[
-                    wgpu::BindGroupEntry {
-                        binding: 0,
-                        resource: wgpu::BindingResource::TextureView(&level_view(level - 1)),
-                    },
-                    wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::Sampler(&self.sampler) },
-                ],
-            });
-            let target = level_view(level);
-            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some(&format!("texture '{}': mip {level}", texture.name)),
-                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: &target,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
-                        store: wgpu::StoreOp::Store,
-                    },
-                })],
-                ..Default::default()
-            });
-            pass.set_pipeline(pipeline);
-            pass.set_bind_group(0, &bind_group, &[]);
-            pass.draw(0..3, 0..1);
+            self.blitter.blit(device, &mut encoder, pipeline, &level_view(level - 1), &level_view(level));
         }
         queue.submit([encoder.finish()]);
         (gpu_texture.create_view(&Default::default()), texture.image.as_raw().len() as u64)

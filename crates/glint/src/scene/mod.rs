@@ -8,6 +8,7 @@
 mod camera;
 mod entity;
 mod environment;
+mod fly;
 mod light;
 mod material;
 mod mesh;
@@ -16,6 +17,7 @@ mod states;
 pub use camera::{Camera, Projection};
 pub use entity::Entity;
 pub use environment::{Background, Environment, Fog};
+pub use fly::{FlyCamera, FlyInput};
 pub use light::{Light, LightKind, ShadowSettings, CASCADES, MAX_LIGHTS};
 pub use material::{AlphaMode, MapSlots, Material, ShadingModel};
 pub use mesh::{smooth_normals, smooth_normals_in_groups, Aabb, BoundingSphere, Mesh, MeshError, SkinVertex, Vertex};

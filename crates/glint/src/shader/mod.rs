@@ -145,7 +145,7 @@ impl ShaderLibrary {
 }
 
 /// Mip blit shader: `vs_blit` / `fs_blit`, its own group 0.
-pub(crate) const MIPMAP: &str = include_str!("mipmap.wgsl");
+pub(crate) const BLIT: &str = include_str!("blit.wgsl");
 
 #[cfg(test)]
 mod tests {

@@ -1,5 +1,7 @@
-// Mip generation: each level is the previous one drawn at half size through a
-// linear sampler (sRGB views decode and re-encode, so filtering is in linear space).
+// Blit: the source texture drawn over the whole target through a linear sampler.
+// Mip generation draws each level from the one above at half size; a window shows
+// a frame at the same size (texel centres land on pixel centres: an exact copy).
+// sRGB views decode and re-encode, so filtering is in linear space.
 
 @group(0) @binding(0) var source: texture_2d<f32>;
 @group(0) @binding(1) var source_sampler: sampler;
