@@ -2,6 +2,7 @@
 
 mod bench;
 mod plot;
+mod view;
 
 use clap::{Parser, Subcommand, ValueEnum};
 use glint::asset::{load_scene_with, LoadOptions, Model, SceneDesc};
@@ -34,15 +35,8 @@ enum Command {
         /// Output PNG path.
         #[arg(short, long, default_value = "out.png")]
         output: PathBuf,
-        /// Image size, WIDTHxHEIGHT.
-        #[arg(long, default_value = "1280x720", value_parser = parse_size)]
-        size: (u32, u32),
-        /// Samples per pixel: 1 (no MSAA) or 4.
-        #[arg(long, default_value_t = 4, value_parser = parse_msaa)]
-        msaa: u32,
-        /// Which camera of the scene to render (0 = the first).
-        #[arg(long, default_value_t = 0)]
-        camera: usize,
+        #[command(flatten)]
+        picture: Picture,
         /// Print the frame's statistics as one JSON object on stdout.
         #[arg(long)]
         stats: bool,
@@ -86,12 +80,44 @@ enum Command {
         #[arg(long, value_name = "CHART.png")]
         plot: Option<PathBuf>,
     },
+    /// Open a window onto a .scn scene (or a model file) and fly through it.
+    #[command(after_help = view::KEYS)]
+    View {
+        /// The scene file.
+        scene: PathBuf,
+        #[command(flatten)]
+        picture: Picture,
+        /// Quit after this many frames.
+        #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+        frames: Option<u32>,
+        /// On quitting, write the last frame to this PNG.
+        #[arg(long, value_name = "PATH")]
+        screenshot: Option<PathBuf>,
+        /// Before frame FRAME (from 1): resize=WxH, minimize, restore or
+        /// screenshot=PATH. Repeatable; for scripted runs such as CI.
+        #[arg(long, value_name = "FRAME:ACTION", value_parser = view::parse_at)]
+        at: Vec<view::Scripted>,
+    },
     /// Parse and validate a .scn scene without a GPU, and summarise it.
     #[command(after_help = EXIT_CODES)]
     Check {
         /// The scene file.
         scene: PathBuf,
     },
+}
+
+/// Size, samples and camera of `render` and `view`.
+#[derive(clap::Args)]
+struct Picture {
+    /// Size in pixels (the window's, to begin with), WIDTHxHEIGHT.
+    #[arg(long, default_value = "1280x720", value_parser = parse_size)]
+    size: (u32, u32),
+    /// Samples per pixel: 1 (no MSAA) or 4.
+    #[arg(long, default_value_t = 4, value_parser = parse_msaa)]
+    msaa: u32,
+    /// Which camera of the scene to use (0 = the first).
+    #[arg(long, default_value_t = 0)]
+    camera: usize,
 }
 
 /// `glint bench --mode`.
@@ -351,22 +377,33 @@ fn main() -> ExitCode {
     };
     let options = LoadOptions { allow_outside_assets: cli.allow_outside_assets };
     let result = match &cli.command {
-        Command::Render { scene, output, size, msaa, camera, stats, no_cull, time, frames, fps } => {
-            render(RenderArgs {
-                scene,
-                output,
-                size: *size,
-                msaa: *msaa,
-                camera: *camera,
-                stats: *stats,
-                no_cull: *no_cull,
-                time: *time,
-                frames: *frames,
-                fps: *fps,
-                options,
-            })
-        }
+        Command::Render { scene, output, picture, stats, no_cull, time, frames, fps } => render(RenderArgs {
+            scene,
+            output,
+            size: picture.size,
+            msaa: picture.msaa,
+            camera: picture.camera,
+            stats: *stats,
+            no_cull: *no_cull,
+            time: *time,
+            frames: *frames,
+            fps: *fps,
+            options,
+        }),
         Command::Check { scene } => check(scene, options),
+        Command::View { scene, picture, frames, screenshot, at } => load(scene, options).and_then(|desc| {
+            let args = view::ViewArgs {
+                scene: scene.clone(),
+                size: picture.size,
+                msaa: picture.msaa,
+                camera: picture.camera,
+                frames: *frames,
+                screenshot: screenshot.clone(),
+                script: at.clone(),
+                options,
+            };
+            view::run(args, desc)
+        }),
         Command::Bench { scene, frames, warmup, mode, size, msaa, json, plot } => {
             let config = bench::BenchConfig { frames: *frames, warmup: *warmup, size: *size, msaa: *msaa };
             run_bench(scene, &config, *mode, *json, plot.as_deref(), options)

@@ -24,14 +24,18 @@ fn error_lines(o: &Output) -> Vec<String> {
 
 #[test]
 fn help_lists_every_subcommand_and_the_exit_codes() {
-    for args in [&["--help"][..], &["render", "--help"], &["check", "--help"]] {
+    for args in [&["--help"][..], &["render", "--help"], &["check", "--help"], &["view", "--help"]] {
         let out = glint(args);
         assert_eq!(out.status.code(), Some(0), "{args:?}");
         let text = String::from_utf8_lossy(&out.stdout);
         assert!(text.contains("Exit codes: 0 ok, 1 bad input"), "{args:?}: {text}");
     }
     let top = String::from_utf8_lossy(&glint(&["--help"]).stdout).into_owned();
-    assert!(top.contains("render") && top.contains("check"));
+    assert!(top.contains("render") && top.contains("check") && top.contains("view"));
+    let view = String::from_utf8_lossy(&glint(&["view", "--help"]).stdout).into_owned();
+    for key in ["W A S D", "Q E", "right mouse", "mouse wheel", "Shift", "F12", "Esc"] {
+        assert!(view.contains(key), "view --help lists {key}: {view}");
+    }
 }
 
 #[test]
@@ -211,6 +215,9 @@ fn render_writes_the_png_and_prints_stats_json() {
     assert!(stats["draw_calls"].as_u64().expect("n") < 12, "{stats}");
     assert!(stats["cpu_ms"]["total"].as_f64().expect("number") > 0.0);
     assert!(stats["bytes_uploaded"]["textures"].as_u64().expect("number") > 0);
+    // The sun's 4 cascades and the two point lights' cube faces.
+    assert_eq!(stats["shadow_views"], 4 + 2 * 6);
+    assert!(stats["passes"]["shadow"]["draws"].as_u64().expect("n") > 16, "{stats}");
     let image = std::fs::read(&png).expect("png written");
     assert_eq!(&image[1..4], b"PNG");
 
@@ -361,4 +368,50 @@ fn outside_assets_are_read_only_when_allowed() {
     let allowed = glint(&["check", obj, "--allow-outside-assets"]);
     assert_eq!(allowed.status.code(), Some(0), "{}", stderr(&allowed));
     assert!(String::from_utf8_lossy(&allowed.stdout).contains("1 materials"), "{}", stderr(&allowed));
+}
+
+/// The viewer under a virtual X display (`xvfb-run`): a few frames, a resize,
+/// minimise and restore, a screenshot on the way and one on quitting.
+#[test]
+fn view_runs_under_xvfb_resizes_and_takes_screenshots() {
+    let required = std::env::var("GLINT_REQUIRE_ADAPTER").as_deref() == Ok("1");
+    if Command::new("xvfb-run").arg("--help").output().is_err() {
+        assert!(!required, "GLINT_REQUIRE_ADAPTER=1 but xvfb-run is missing (apt-get install xvfb xauth)");
+        eprintln!("skipping: no xvfb-run (apt-get install xvfb xauth)");
+        return;
+    }
+    let dir = tempfile::tempdir().expect("tempdir");
+    let (mid, last, offscreen) =
+        (dir.path().join("mid.png"), dir.path().join("last.png"), dir.path().join("offscreen.png"));
+    let scene = repo("tests/scenes/lights.scn");
+    let scene = scene.to_str().expect("path");
+    let out = Command::new("xvfb-run")
+        .args(["-a", "-s", "-screen 0 640x480x24", env!("CARGO_BIN_EXE_glint"), "view", scene])
+        .args(["--size", "96x64", "--msaa", "1", "--frames", "10"])
+        .args(["--at", "3:resize=120x80", "--at", "5:minimize", "--at", "7:restore"])
+        .arg("--at")
+        .arg(format!("8:screenshot={}", mid.display()))
+        .arg("--screenshot")
+        .arg(&last)
+        .env("NODEVICE_SELECT", "1")
+        .output()
+        .expect("run xvfb-run");
+    if out.status.code() == Some(2) && !required {
+        eprintln!("skipping: no GPU adapter ({})", stderr(&out));
+        return;
+    }
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    for png in [&mid, &last] {
+        let image = image::open(png).unwrap_or_else(|e| panic!("{}: {e}\n{}", png.display(), stderr(&out))).into_rgb8();
+        assert_eq!(image.dimensions(), (120, 80), "{}: the frame follows the resized window", png.display());
+    }
+    // Untouched, the fly camera starts as the scene's camera: the viewer's frame is
+    // what `glint render` draws at that size.
+    let args = ["render", scene, "-o", offscreen.to_str().expect("path"), "--size", "120x80", "--msaa", "1"];
+    assert_eq!(glint(&args).status.code(), Some(0));
+    let (a, b) = (image::open(&last).expect("png").into_rgb8(), image::open(&offscreen).expect("png").into_rgb8());
+    let differing = a.pixels().zip(b.pixels()).filter(|(p, q)| p.0.iter().zip(q.0).any(|(x, y)| x.abs_diff(y) > 8));
+    assert!(differing.count() < 20, "the viewer's last frame differs from glint render's");
+    let lit = a.pixels().filter(|p| p.0.iter().any(|&c| c > 60)).count();
+    assert!(lit > 120 * 80 / 4, "the frame shows the lit floor: {lit} bright pixels");
 }

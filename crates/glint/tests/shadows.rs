@@ -150,3 +150,63 @@ fn a_caster_outside_the_camera_view_still_shadows_what_is_in_view() {
     let (a, b) = (luma(image.get_pixel(32, 32)), luma(clear.get_pixel(32, 32)));
     assert!(a < 0.7 * b, "the slab's shadow reaches the view: {a} against {b}");
 }
+
+/// World point → pixel of a `size`×`size` image seen by `camera`.
+fn pixel(camera: &Camera, size: u32, p: Vec3) -> (u32, u32) {
+    let clip = camera.projection(1.0) * camera.view() * p.extend(1.0);
+    let ndc = clip.truncate() / clip.w;
+    let s = size as f32;
+    (((ndc.x * 0.5 + 0.5) * s) as u32, ((0.5 - ndc.y * 0.5) * s) as u32)
+}
+
+#[test]
+fn cascades_shadow_every_pillar_down_a_three_hundred_metre_field() {
+    let Some(gpu) = common::gpu() else { return };
+    let mut renderer = Renderer::new(gpu);
+    let plane = renderer.add_shape(ShapeKind::Plane.mesh());
+    let cube = renderer.add_shape(ShapeKind::Cube.mesh());
+    let grey = renderer.add_material(Material::color("grey", 0.8, 0.8, 0.8));
+    let red = renderer.add_material(Material::color("red", 0.8, 0.2, 0.2));
+    // Sixteen 2×4×5 pillars every 14 m down a 500 m field, seen from so high at one
+    // end that no pillar hides the ground either side of another.
+    let pillars: Vec<Vec3> = (1..=16).map(|k| Vec3::new(0.0, 2.0, -14.0 * k as f32)).collect();
+    let entities = [
+        Entity::new(plane, grey, Mat4::from_scale(Vec3::splat(500.0))),
+        Entity::instanced(
+            cube,
+            red,
+            pillars
+                .iter()
+                .map(|&p| Mat4::from_scale_rotation_translation(Vec3::new(2.0, 4.0, 5.0), glam::Quat::IDENTITY, p))
+                .collect(),
+        ),
+    ];
+    let camera =
+        Camera::perspective(40.0, 0.5, 400.0).looking_at(Vec3::new(-10.0, 60.0, 60.0), Vec3::new(0.0, 0.0, -80.0));
+    // The sun shines along +X and down at 45°: each pillar's shadow lies 1..5 m to its right.
+    let sun = Light::directional(Vec3::new(1.0, -1.0, 0.0), Vec3::ONE, 1.0)
+        .with_shadows(ShadowSettings { map_size: 1024, ..Default::default() });
+    let size = 192;
+    let mut frame = |lights: &[Light]| {
+        let mut target = OffscreenTarget::new(gpu, size, size, 4).expect("target");
+        let stats = renderer.render(&entities, &camera, lights, &mut target).expect("frame");
+        (target.read_rgba8(gpu).expect("readback"), stats)
+    };
+    let (image, stats) = frame(&[sun]);
+    let (unshadowed, _) = frame(&without_shadows(&[sun]));
+    assert_eq!(stats.shadow_views, 4);
+    // Luma ratio, shadowed over unshadowed, of the 3×3 pixels around a ground point.
+    let ratios = |x: f32, z: f32| {
+        let (px, py) = pixel(&camera, size, Vec3::new(x, 0.0, z));
+        let around = (py - 1..=py + 1).flat_map(|y| (px - 1..=px + 1).map(move |x| (x, y)));
+        around.map(|(x, y)| luma(image.get_pixel(x, y)) / luma(unshadowed.get_pixel(x, y))).collect::<Vec<f32>>()
+    };
+    for (k, p) in pillars.iter().enumerate() {
+        let distance = (*p - camera.eye).length();
+        let shadow = ratios(3.0, p.z).into_iter().fold(f32::MAX, f32::min);
+        assert!(shadow < 0.6, "pillar {k} at {distance:.0} m: its shadow is only {shadow} as bright");
+        let sunny = ratios(-4.0, p.z).into_iter().fold(f32::MAX, f32::min);
+        assert!(sunny > 0.98, "pillar {k} at {distance:.0} m: its sunny side is {sunny} as bright (acne)");
+    }
+    common::assert_matches_reference("shadow_cascades", &image);
+}

@@ -1,0 +1,410 @@
+//! `glint view`: a window onto a scene with a free camera, hot reload of the
+//! scene file and screenshots. Frames are drawn exactly as `glint render` draws
+//! them (into an offscreen target) and then shown in the window.
+
+mod script;
+mod watch;
+
+pub use script::{parse_at, Action, Scripted};
+
+use glam::Vec2;
+use glint::asset::{LoadOptions, SceneDesc};
+use glint::scene::{FlyCamera, FlyInput};
+use glint::{Camera, Entity, Error, Gpu, GpuError, OffscreenTarget, Renderer, WindowSurface};
+use std::collections::HashSet;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+use watch::SceneWatch;
+use winit::application::ApplicationHandler;
+use winit::dpi::PhysicalSize;
+use winit::event::{DeviceEvent, DeviceId, ElementState, MouseButton, MouseScrollDelta, WindowEvent};
+use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop};
+use winit::keyboard::{KeyCode, PhysicalKey};
+use winit::window::{Window, WindowId};
+
+/// The keys, for `glint view --help`.
+pub const KEYS: &str = "\
+Keys:
+  W A S D       move forward, left, back, right
+  Q E           move down, up
+  right mouse   hold and move the mouse to look around
+  mouse wheel   faster or slower
+  Shift         move 4x faster while held
+  F12           save a screenshot (glint-NNNN.png in the current folder)
+  Esc           quit
+
+The scene file is loaded again when it changes on disk; a file with errors is
+reported here and the last good scene stays on screen. The title bar shows the
+frame time and draw count.
+
+Exit codes: 0 ok, 1 bad input (file:line: message on stderr), 2 no GPU adapter,
+3 other failures (no display, GPU or render errors).";
+
+/// How often the scene file is checked for changes.
+const WATCH_INTERVAL: Duration = Duration::from_millis(300);
+/// How often the title's frame time is refreshed (averaged over the interval).
+const TITLE_INTERVAL: Duration = Duration::from_millis(500);
+
+/// What `glint view` was asked for.
+pub struct ViewArgs {
+    /// The scene (or model) file.
+    pub scene: PathBuf,
+    /// Initial inner size of the window.
+    pub size: (u32, u32),
+    /// MSAA samples.
+    pub msaa: u32,
+    /// Which of the scene's cameras to start from.
+    pub camera: usize,
+    /// Quit after this many frames.
+    pub frames: Option<u32>,
+    /// Write the last frame here on quitting.
+    pub screenshot: Option<PathBuf>,
+    /// Window actions at given frames.
+    pub script: Vec<Scripted>,
+    /// How model files may reach outside their folder.
+    pub options: LoadOptions,
+}
+
+/// Open the window and run until it is closed (or `--frames` are drawn).
+pub fn run(args: ViewArgs, desc: SceneDesc) -> Result<(), Error> {
+    camera_of(&desc, &args.scene, args.camera)?;
+    let event_loop = EventLoop::new().map_err(|e| GpuError::Surface(format!("cannot open a window: {e}")))?;
+    event_loop.set_control_flow(ControlFlow::Poll);
+    let mut app = App { args, desc: Some(desc), view: None, result: Ok(()) };
+    event_loop.run_app(&mut app).map_err(|e| GpuError::Surface(format!("the window's event loop failed: {e}")))?;
+    app.result
+}
+
+fn camera_of(desc: &SceneDesc, scene: &Path, index: usize) -> Result<Camera, Error> {
+    desc.cameras.get(index).copied().ok_or_else(|| {
+        glint::Diagnostic::file(scene, format!("camera {index} requested, but the scene has {}", desc.cameras.len()))
+            .into()
+    })
+}
+
+struct App {
+    args: ViewArgs,
+    /// The scene until the window exists.
+    desc: Option<SceneDesc>,
+    view: Option<View>,
+    result: Result<(), Error>,
+}
+
+/// Everything that lives with the window.
+struct View {
+    window: Arc<Window>,
+    gpu: Gpu,
+    surface: WindowSurface,
+    target: OffscreenTarget,
+    msaa: u32,
+    scene: Scene,
+    watch: SceneWatch,
+    last_watch: Instant,
+    fly: FlyCamera,
+    input: Input,
+    started: Instant,
+    last_frame: Instant,
+    /// Frames counted so far (drawn or skipped while the window has no area).
+    frames: u32,
+    /// Frame times since the title was last refreshed.
+    title_frames: (u32, Duration),
+    last_title: Instant,
+}
+
+/// A loaded scene placed in its own renderer.
+struct Scene {
+    desc: SceneDesc,
+    renderer: Renderer,
+    entities: Vec<Entity>,
+    camera: Camera,
+}
+
+impl Scene {
+    fn new(gpu: &Gpu, desc: SceneDesc, camera: Camera) -> Self {
+        let mut renderer = Renderer::new(gpu);
+        let entities = desc.instantiate(&mut renderer);
+        Self { desc, renderer, entities, camera }
+    }
+}
+
+/// Keys and mouse state between frames.
+#[derive(Default)]
+struct Input {
+    held: HashSet<KeyCode>,
+    looking: bool,
+    look: Vec2,
+    wheel: f32,
+}
+
+impl Input {
+    fn axis(&self, plus: KeyCode, minus: KeyCode) -> f32 {
+        f32::from(u8::from(self.held.contains(&plus))) - f32::from(u8::from(self.held.contains(&minus)))
+    }
+
+    /// This frame's camera input; the mouse movement is used up.
+    fn take(&mut self) -> FlyInput {
+        FlyInput {
+            forward: self.axis(KeyCode::KeyW, KeyCode::KeyS),
+            right: self.axis(KeyCode::KeyD, KeyCode::KeyA),
+            up: self.axis(KeyCode::KeyE, KeyCode::KeyQ),
+            fast: self.held.contains(&KeyCode::ShiftLeft) || self.held.contains(&KeyCode::ShiftRight),
+            look: std::mem::take(&mut self.look),
+        }
+    }
+}
+
+impl App {
+    fn fail(&mut self, event_loop: &ActiveEventLoop, error: Error) {
+        if self.result.is_ok() {
+            self.result = Err(error);
+        }
+        event_loop.exit();
+    }
+
+    fn open(&mut self, event_loop: &ActiveEventLoop) -> Result<View, Error> {
+        let (width, height) = self.args.size;
+        let title = format!("glint: {}", self.args.scene.display());
+        let attributes =
+            Window::default_attributes().with_title(title).with_inner_size(PhysicalSize::new(width, height));
+        let window = Arc::new(
+            event_loop
+                .create_window(attributes)
+                .map_err(|e| GpuError::Surface(format!("cannot open a window: {e}")))?,
+        );
+        let (gpu, surface) = Gpu::for_window(window.clone())?;
+        let size = window.inner_size();
+        let surface = WindowSurface::new(&gpu, surface, size.width, size.height)?;
+        let msaa = if gpu.supports_msaa(self.args.msaa) { self.args.msaa } else { 1 };
+        let target = OffscreenTarget::new(&gpu, size.width.max(1), size.height.max(1), msaa)?;
+        let desc = self.desc.take().expect("the scene is kept until the window opens");
+        let camera = camera_of(&desc, &self.args.scene, self.args.camera)?;
+        let scene = Scene::new(&gpu, desc, camera);
+        eprintln!("glint view: {} on {} ({:?})", self.args.scene.display(), gpu.info().name, gpu.info().backend);
+        let now = Instant::now();
+        Ok(View {
+            fly: FlyCamera::from_camera(&camera, 0.5 * (camera.target - camera.eye).length().max(1.0)),
+            window,
+            surface,
+            target,
+            msaa,
+            scene,
+            watch: SceneWatch::new(&self.args.scene, self.args.options),
+            last_watch: now,
+            input: Input::default(),
+            started: now,
+            last_frame: now,
+            frames: 0,
+            title_frames: (0, Duration::ZERO),
+            last_title: now,
+            gpu,
+        })
+    }
+}
+
+impl View {
+    fn resize(&mut self, size: PhysicalSize<u32>) -> Result<(), GpuError> {
+        if self.surface.resize(&self.gpu, size.width, size.height)
+            && (self.target.width(), self.target.height()) != (size.width, size.height)
+        {
+            self.target = OffscreenTarget::new(&self.gpu, size.width, size.height, self.msaa)?;
+        }
+        Ok(())
+    }
+
+    /// Load the scene again if its file changed; a bad file is reported and the
+    /// current scene stays.
+    fn reload_if_changed(&mut self, path: &Path, camera_index: usize) {
+        if self.last_watch.elapsed() < WATCH_INTERVAL {
+            return;
+        }
+        self.last_watch = Instant::now();
+        match self.watch.poll() {
+            None => {}
+            Some(Err(e)) => eprintln!("error: {e}\n  (keeping the last good scene)"),
+            Some(Ok(desc)) => {
+                for warning in &desc.warnings {
+                    eprintln!("warning: {warning}");
+                }
+                // The camera's projection comes from the new file; its place stays the viewer's.
+                let camera = desc.cameras.get(camera_index).or(desc.cameras.first()).copied();
+                let camera = camera.unwrap_or(self.scene.camera);
+                self.scene = Scene::new(&self.gpu, desc, camera);
+                eprintln!("reloaded {}", path.display());
+            }
+        }
+    }
+
+    /// Move the camera, draw the scene and show it.
+    fn draw(&mut self) -> Result<(), Error> {
+        let now = Instant::now();
+        let dt = now - self.last_frame;
+        self.last_frame = now;
+        if self.input.wheel != 0.0 {
+            self.fly.change_speed(std::mem::take(&mut self.input.wheel));
+        }
+        self.fly.update(dt.as_secs_f32().min(0.25), &self.input.take());
+        let scene = &mut self.scene;
+        let time = (now - self.started).as_secs_f32();
+        scene.desc.pose(time, &mut scene.entities, &mut scene.renderer);
+        let camera = self.fly.apply(&scene.camera);
+        let stats = scene.renderer.render(&scene.entities, &camera, &scene.desc.lights, &mut self.target)?;
+        self.surface.present(&self.gpu, &self.target);
+        self.title_frames = (self.title_frames.0 + 1, self.title_frames.1 + dt);
+        if self.last_title.elapsed() >= TITLE_INTERVAL {
+            let (n, total) = std::mem::take(&mut self.title_frames);
+            let ms = total.as_secs_f64() * 1e3 / f64::from(n.max(1));
+            self.window.set_title(&format!(
+                "glint: {} | {ms:.1} ms | {} draws, {} shadow draws",
+                self.scene.desc.path.display(),
+                stats.draws,
+                stats.passes.shadow.draws
+            ));
+            self.last_title = Instant::now();
+        }
+        Ok(())
+    }
+
+    fn do_action(&mut self, action: &Action) -> Result<(), Error> {
+        match action {
+            Action::Resize(w, h) => {
+                // Where the window system answers at once (X11 without a window
+                // manager), follow it now rather than at the Resized event.
+                if let Some(size) = self.window.request_inner_size(PhysicalSize::new(*w, *h)) {
+                    self.resize(size)?;
+                }
+            }
+            Action::Minimize => self.window.set_minimized(true),
+            Action::Restore => self.window.set_minimized(false),
+            Action::Screenshot(path) => self.screenshot(path)?,
+        }
+        Ok(())
+    }
+
+    fn screenshot(&self, path: &Path) -> Result<(), Error> {
+        self.target.save_png(&self.gpu, path)?;
+        eprintln!("wrote {} ({}x{})", path.display(), self.target.width(), self.target.height());
+        Ok(())
+    }
+}
+
+/// The first `glint-NNNN.png` in the current folder that does not exist yet.
+fn next_screenshot_path() -> PathBuf {
+    (1..).map(|n| PathBuf::from(format!("glint-{n:04}.png"))).find(|p| !p.exists()).expect("some number is free")
+}
+
+impl ApplicationHandler for App {
+    fn resumed(&mut self, event_loop: &ActiveEventLoop) {
+        if self.view.is_some() || self.desc.is_none() {
+            return;
+        }
+        match self.open(event_loop) {
+            Ok(view) => self.view = Some(view),
+            Err(e) => self.fail(event_loop, e),
+        }
+    }
+
+    fn window_event(&mut self, event_loop: &ActiveEventLoop, _id: WindowId, event: WindowEvent) {
+        let Some(view) = &mut self.view else { return };
+        let result = match event {
+            WindowEvent::CloseRequested => {
+                event_loop.exit();
+                Ok(())
+            }
+            WindowEvent::Resized(size) => view.resize(size).map_err(Error::from),
+            WindowEvent::KeyboardInput { event, .. } => {
+                let PhysicalKey::Code(code) = event.physical_key else { return };
+                match event.state {
+                    ElementState::Released => {
+                        view.input.held.remove(&code);
+                        Ok(())
+                    }
+                    ElementState::Pressed => {
+                        view.input.held.insert(code);
+                        match code {
+                            KeyCode::Escape => {
+                                event_loop.exit();
+                                Ok(())
+                            }
+                            KeyCode::F12 if !event.repeat => view.screenshot(&next_screenshot_path()),
+                            _ => Ok(()),
+                        }
+                    }
+                }
+            }
+            WindowEvent::MouseInput { button: MouseButton::Right, state, .. } => {
+                view.input.looking = state == ElementState::Pressed;
+                Ok(())
+            }
+            WindowEvent::MouseWheel { delta, .. } => {
+                view.input.wheel += match delta {
+                    MouseScrollDelta::LineDelta(_, y) => y,
+                    MouseScrollDelta::PixelDelta(p) => p.y as f32 / 40.0,
+                };
+                Ok(())
+            }
+            WindowEvent::Focused(false) => {
+                view.input = Input::default();
+                Ok(())
+            }
+            WindowEvent::RedrawRequested => self.frame(event_loop, true),
+            _ => Ok(()),
+        };
+        if let Err(e) = result {
+            self.fail(event_loop, e);
+        }
+    }
+
+    fn device_event(&mut self, _event_loop: &ActiveEventLoop, _id: DeviceId, event: DeviceEvent) {
+        if let (Some(view), DeviceEvent::MouseMotion { delta }) = (&mut self.view, event) {
+            if view.input.looking {
+                view.input.look += Vec2::new(delta.0 as f32, delta.1 as f32);
+            }
+        }
+    }
+
+    fn exiting(&mut self, _event_loop: &ActiveEventLoop) {
+        if let (Some(view), Some(path), Ok(())) = (&self.view, &self.args.screenshot, &self.result) {
+            if let Err(e) = view.screenshot(path) {
+                self.result = Err(e);
+            }
+        }
+    }
+
+    fn about_to_wait(&mut self, event_loop: &ActiveEventLoop) {
+        let Some(view) = &self.view else { return };
+        let (width, height) = view.surface.size();
+        if width > 0 && height > 0 {
+            view.window.request_redraw();
+            event_loop.set_control_flow(ControlFlow::Poll);
+        } else {
+            // Minimised: nothing to draw into, but frames still count (so `--frames`
+            // ends) at a gentle pace instead of spinning.
+            event_loop.set_control_flow(ControlFlow::WaitUntil(Instant::now() + Duration::from_millis(16)));
+            if let Err(e) = self.frame(event_loop, false) {
+                self.fail(event_loop, e);
+            }
+        }
+    }
+}
+
+impl App {
+    /// One frame: scripted actions, hot reload, drawing (when `draw`), and the
+    /// `--frames` / `--screenshot` ending.
+    fn frame(&mut self, event_loop: &ActiveEventLoop, draw: bool) -> Result<(), Error> {
+        let Some(view) = &mut self.view else { return Ok(()) };
+        view.frames += 1;
+        let frame = view.frames;
+        for step in self.args.script.iter().filter(|s| s.frame == frame) {
+            view.do_action(&step.action)?;
+        }
+        view.reload_if_changed(&self.args.scene, self.args.camera);
+        if draw {
+            view.draw()?;
+        }
+        if self.args.frames.is_some_and(|n| view.frames >= n) {
+            event_loop.exit();
+        }
+        Ok(())
+    }
+}

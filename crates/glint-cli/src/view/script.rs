@@ -1,0 +1,65 @@
+//! `glint view --at FRAME:ACTION`: window actions at given frames, so a run
+//! under a virtual display (CI) can resize, minimise and take screenshots.
+
+use std::path::PathBuf;
+
+/// Something done to the window before drawing a frame.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Action {
+    /// Ask for this inner size in pixels.
+    Resize(u32, u32),
+    /// Minimise the window.
+    Minimize,
+    /// Restore it.
+    Restore,
+    /// Write the last drawn frame to this PNG.
+    Screenshot(PathBuf),
+}
+
+/// An [`Action`] and the frame (counted from 1) before which it happens.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Scripted {
+    /// Frame number, from 1.
+    pub frame: u32,
+    /// What happens.
+    pub action: Action,
+}
+
+/// Parse `FRAME:resize=WxH`, `FRAME:minimize`, `FRAME:restore` or `FRAME:screenshot=PATH`.
+pub fn parse_at(s: &str) -> Result<Scripted, String> {
+    let expected = "expected FRAME:resize=WxH, FRAME:minimize, FRAME:restore or FRAME:screenshot=PATH";
+    let (frame, action) = s.split_once(':').ok_or_else(|| format!("'{s}': {expected}"))?;
+    let frame = frame
+        .trim()
+        .parse::<u32>()
+        .ok()
+        .filter(|&f| f >= 1)
+        .ok_or_else(|| format!("'{s}': the frame must be a whole number from 1"))?;
+    let action = match action.split_once('=') {
+        None if action == "minimize" => Action::Minimize,
+        None if action == "restore" => Action::Restore,
+        Some(("screenshot", path)) if !path.is_empty() => Action::Screenshot(PathBuf::from(path)),
+        Some(("resize", size)) => {
+            let (w, h) = crate::parse_size(size)?;
+            Action::Resize(w, h)
+        }
+        _ => return Err(format!("'{s}': {expected}")),
+    };
+    Ok(Scripted { frame, action })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn parses_each_action_and_rejects_the_rest() {
+        assert_eq!(parse_at("3:resize=200x100"), Ok(Scripted { frame: 3, action: Action::Resize(200, 100) }));
+        assert_eq!(parse_at("1:minimize").map(|s| s.action), Ok(Action::Minimize));
+        assert_eq!(parse_at("9:restore").map(|s| s.action), Ok(Action::Restore));
+        assert_eq!(parse_at("4:screenshot=a:b.png").map(|s| s.action), Ok(Action::Screenshot("a:b.png".into())));
+        for bad in ["resize=2x2", "0:minimize", "x:minimize", "2:shrink", "2:resize=0x5", "2:screenshot="] {
+            assert!(parse_at(bad).is_err(), "{bad}");
+        }
+    }
+}
