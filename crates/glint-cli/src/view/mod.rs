@@ -21,7 +21,7 @@ use winit::dpi::PhysicalSize;
 use winit::event::{DeviceEvent, DeviceId, ElementState, MouseButton, MouseScrollDelta, WindowEvent};
 use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop};
 use winit::keyboard::{KeyCode, PhysicalKey};
-use winit::window::{Window, WindowId};
+use winit::window::{CursorGrabMode, Window, WindowId};
 
 /// The keys, for `glint view --help`.
 pub const KEYS: &str = "\
@@ -162,7 +162,7 @@ impl App {
         event_loop.exit();
     }
 
-    fn open(&mut self, event_loop: &ActiveEventLoop) -> Result<View, Error> {
+    fn open(&mut self, event_loop: &ActiveEventLoop, desc: SceneDesc) -> Result<View, Error> {
         let (width, height) = self.args.size;
         let title = format!("glint: {}", self.args.scene.display());
         let attributes =
@@ -177,7 +177,6 @@ impl App {
         let surface = WindowSurface::new(&gpu, surface, size.width, size.height)?;
         let msaa = if gpu.supports_msaa(self.args.msaa) { self.args.msaa } else { 1 };
         let target = OffscreenTarget::new(&gpu, size.width.max(1), size.height.max(1), msaa)?;
-        let desc = self.desc.take().expect("the scene is kept until the window opens");
         let camera = camera_of(&desc, &self.args.scene, self.args.camera)?;
         let scene = Scene::new(&gpu, desc, camera);
         eprintln!("glint view: {} on {} ({:?})", self.args.scene.display(), gpu.info().name, gpu.info().backend);
@@ -281,6 +280,23 @@ impl View {
         Ok(())
     }
 
+    /// Start or stop looking around: the cursor hides and stays put while the right
+    /// button is held (where the window system allows; looking works either way).
+    fn set_looking(&mut self, looking: bool) {
+        self.input.looking = looking;
+        self.window.set_cursor_visible(!looking);
+        let grab = if looking {
+            self.window
+                .set_cursor_grab(CursorGrabMode::Locked)
+                .or_else(|_| self.window.set_cursor_grab(CursorGrabMode::Confined))
+        } else {
+            self.window.set_cursor_grab(CursorGrabMode::None)
+        };
+        if let Err(e) = grab {
+            log::debug!("cursor grab: {e}");
+        }
+    }
+
     fn screenshot(&self, path: &Path) -> Result<(), Error> {
         self.target.save_png(&self.gpu, path)?;
         eprintln!("wrote {} ({}x{})", path.display(), self.target.width(), self.target.height());
@@ -290,15 +306,19 @@ impl View {
 
 /// The first `glint-NNNN.png` in the current folder that does not exist yet.
 fn next_screenshot_path() -> PathBuf {
-    (1..).map(|n| PathBuf::from(format!("glint-{n:04}.png"))).find(|p| !p.exists()).expect("some number is free")
+    (1..=9999)
+        .map(|n| PathBuf::from(format!("glint-{n:04}.png")))
+        .find(|p| !p.exists())
+        .unwrap_or_else(|| PathBuf::from("glint-screenshot.png"))
 }
 
 impl ApplicationHandler for App {
     fn resumed(&mut self, event_loop: &ActiveEventLoop) {
-        if self.view.is_some() || self.desc.is_none() {
+        if self.view.is_some() {
             return;
         }
-        match self.open(event_loop) {
+        let Some(desc) = self.desc.take() else { return };
+        match self.open(event_loop, desc) {
             Ok(view) => self.view = Some(view),
             Err(e) => self.fail(event_loop, e),
         }
@@ -333,7 +353,7 @@ impl ApplicationHandler for App {
                 }
             }
             WindowEvent::MouseInput { button: MouseButton::Right, state, .. } => {
-                view.input.looking = state == ElementState::Pressed;
+                view.set_looking(state == ElementState::Pressed);
                 Ok(())
             }
             WindowEvent::MouseWheel { delta, .. } => {
@@ -344,6 +364,7 @@ impl ApplicationHandler for App {
                 Ok(())
             }
             WindowEvent::Focused(false) => {
+                view.set_looking(false);
                 view.input = Input::default();
                 Ok(())
             }
