@@ -22,7 +22,7 @@ pub struct FlyInput {
     pub right: f32,
     /// +1 up the world's Y (E), −1 down (Q).
     pub up: f32,
-    /// Move [`FAST`] times faster (Shift).
+    /// Move four times faster (Shift).
     pub fast: bool,
     /// Mouse movement in pixels while looking (right button held); +x turns right, +y looks down.
     pub look: Vec2,
