@@ -37,6 +37,7 @@ pub mod gpu;
 pub mod render;
 pub mod scene;
 mod shader;
+pub mod sim;
 
 pub use asset::{Diagnostic, Texture};
 pub use gpu::{Gpu, GpuError, OffscreenTarget, WindowSurface};

@@ -1,0 +1,246 @@
+//! The two elastic energies of Discrete Elastic Plates, with their exact
+//! gradients and Hessians: edge stretching and hinge bending.
+//!
+//! - Stretching of edge (xᵢ, xⱼ): `E = ½ k ε²`, `ε = |xⱼ − xᵢ| / l̄ − 1`.
+//! - Bending of hinge (x₀, x₁; x₂, x₃), edge x₀x₁ shared by triangles (x₀, x₁, x₂)
+//!   and (x₀, x₁, x₃): `E = ½ k (θ − θ̄)²` with θ the signed dihedral angle,
+//!   `e = x₁ − x₀`, `n₁ = e × (x₂ − x₀)`, `n₂ = (x₃ − x₀) × e`,
+//!   `θ = atan2(ê · (n₁ × n₂), n₁ · n₂)` (the same as `sign(e · (n₁ × n₂)) ·
+//!   atan2(|n₁ × n₂|, n₁ · n₂)`, as both normals are perpendicular to e).
+//!
+//! The gradient of θ is the classic one: each wing moves along its face normal,
+//! `∂θ/∂x₂ = −|e| n₁ / |n₁|²`, `∂θ/∂x₃ = −|e| n₂ / |n₂|²`, and the edge's ends
+//! take the wings' gradients weighted by where each wing projects onto the edge.
+//! The Hessian of θ is the exact directional derivative of that gradient, by the
+//! product rule, along each of the twelve coordinates.
+
+use glam::DVec3;
+
+/// Stretching energy of one edge with rest length `rest` and stiffness `k`.
+pub fn stretch_energy(xi: DVec3, xj: DVec3, rest: f64, k: f64) -> f64 {
+    let strain = (xj - xi).length() / rest - 1.0;
+    0.5 * k * strain * strain
+}
+
+/// Gradient of [`stretch_energy`] with respect to `xj` (the one for `xi` is its negative).
+pub fn stretch_gradient(xi: DVec3, xj: DVec3, rest: f64, k: f64) -> DVec3 {
+    let d = xj - xi;
+    let length = d.length();
+    k * (length / rest - 1.0) / (rest * length) * d
+}
+
+/// The 3×3 block `K` of [`stretch_energy`]'s Hessian (rows, then columns):
+/// the 6×6 Hessian over (xi, xj) is `[[K, −K], [−K, K]]`.
+pub fn stretch_hessian_block(xi: DVec3, xj: DVec3, rest: f64, k: f64) -> [[f64; 3]; 3] {
+    let d = xj - xi;
+    let length = d.length();
+    let u = d / length;
+    let along = k / (rest * rest);
+    let across = k * (length / rest - 1.0) / (rest * length);
+    let mut block = [[0.0; 3]; 3];
+    for (r, row) in block.iter_mut().enumerate() {
+        for (c, v) in row.iter_mut().enumerate() {
+            let identity = if r == c { 1.0 } else { 0.0 };
+            *v = along * u[r] * u[c] + across * (identity - u[r] * u[c]);
+        }
+    }
+    block
+}
+
+/// Signed dihedral angle of the hinge `x` = [x₀, x₁, x₂, x₃] (0 when flat).
+pub fn hinge_angle(x: &[DVec3; 4]) -> f64 {
+    let e = x[1] - x[0];
+    let n1 = e.cross(x[2] - x[0]);
+    let n2 = (x[3] - x[0]).cross(e);
+    (e.normalize().dot(n1.cross(n2))).atan2(n1.dot(n2))
+}
+
+/// ∇θ at `x`, and its derivative along `dx` (the Hessian of θ times `dx`).
+fn angle_gradient_and_derivative(x: &[DVec3; 4], dx: &[DVec3; 4]) -> ([DVec3; 4], [DVec3; 4]) {
+    let (e, de) = (x[1] - x[0], dx[1] - dx[0]);
+    let (a, da) = (x[2] - x[0], dx[2] - dx[0]);
+    let (b, db) = (x[3] - x[0], dx[3] - dx[0]);
+    let (n1, dn1) = (e.cross(a), de.cross(a) + e.cross(da));
+    let (n2, dn2) = (b.cross(e), db.cross(e) + b.cross(de));
+    let length = e.length();
+    let d_length = e.dot(de) / length;
+    let (a1, da1) = (n1.length_squared(), 2.0 * n1.dot(dn1));
+    let (a2, da2) = (n2.length_squared(), 2.0 * n2.dot(dn2));
+    // Wings: g = −(L / A) n.
+    let wing = |n: DVec3, dn: DVec3, area2: f64, d_area2: f64| {
+        let s = length / area2;
+        let ds = d_length / area2 - length * d_area2 / (area2 * area2);
+        (-s * n, -(ds * n + s * dn))
+    };
+    let (g2, dg2) = wing(n1, dn1, a1, da1);
+    let (g3, dg3) = wing(n2, dn2, a2, da2);
+    // Where each wing projects onto the edge, as a fraction t of it from x₀.
+    let l2 = length * length;
+    let fraction = |w: DVec3, dw: DVec3| {
+        let t = w.dot(e) / l2;
+        (t, (dw.dot(e) + w.dot(de)) / l2 - 2.0 * t * d_length / length)
+    };
+    let (t2, dt2) = fraction(a, da);
+    let (t3, dt3) = fraction(b, db);
+    let g1 = -(t2 * g2 + t3 * g3);
+    let dg1 = -(dt2 * g2 + t2 * dg2 + dt3 * g3 + t3 * dg3);
+    let g0 = -((1.0 - t2) * g2 + (1.0 - t3) * g3);
+    let dg0 = -(-dt2 * g2 + (1.0 - t2) * dg2 - dt3 * g3 + (1.0 - t3) * dg3);
+    ([g0, g1, g2, g3], [dg0, dg1, dg2, dg3])
+}
+
+/// Bending energy of a hinge with rest angle `rest` and stiffness `k`.
+pub fn bend_energy(x: &[DVec3; 4], rest: f64, k: f64) -> f64 {
+    let d = hinge_angle(x) - rest;
+    0.5 * k * d * d
+}
+
+/// Gradient of [`bend_energy`], per hinge node.
+pub fn bend_gradient(x: &[DVec3; 4], rest: f64, k: f64) -> [DVec3; 4] {
+    let (g, _) = angle_gradient_and_derivative(x, &[DVec3::ZERO; 4]);
+    let s = k * (hinge_angle(x) - rest);
+    g.map(|v| s * v)
+}
+
+/// Hessian of [`bend_energy`] over the 12 coordinates (node-major: x₀.x, x₀.y, …, x₃.z).
+pub fn bend_hessian(x: &[DVec3; 4], rest: f64, k: f64) -> [[f64; 12]; 12] {
+    let strain = hinge_angle(x) - rest;
+    let mut h = [[0.0; 12]; 12];
+    let mut gradient = [0.0; 12];
+    for col in 0..12 {
+        let mut dx = [DVec3::ZERO; 4];
+        dx[col / 3][col % 3] = 1.0;
+        let (g, dg) = angle_gradient_and_derivative(x, &dx);
+        for row in 0..12 {
+            h[row][col] = k * strain * dg[row / 3][row % 3];
+        }
+        gradient = std::array::from_fn(|i| g[i / 3][i % 3]);
+    }
+    for row in 0..12 {
+        for col in 0..12 {
+            h[row][col] += k * gradient[row] * gradient[col];
+        }
+    }
+    // Exact in exact arithmetic; rounding leaves it a hair off symmetric.
+    for row in 0..12 {
+        for col in row + 1..12 {
+            let mean = 0.5 * (h[row][col] + h[col][row]);
+            h[row][col] = mean;
+            h[col][row] = mean;
+        }
+    }
+    h
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::{Rng, SeedableRng};
+
+    /// A hinge near a flat pair of triangles, each coordinate jittered.
+    fn random_hinge(rng: &mut rand_pcg::Pcg64) -> [DVec3; 4] {
+        let base = [
+            DVec3::new(0.0, 0.0, 0.0),
+            DVec3::new(1.0, 0.0, 0.0),
+            DVec3::new(0.4, 0.9, 0.0),
+            DVec3::new(0.6, -0.8, 0.0),
+        ];
+        base.map(|p| {
+            p + DVec3::new(rng.random_range(-0.3..0.3), rng.random_range(-0.3..0.3), rng.random_range(-0.4..0.4))
+        })
+    }
+
+    fn flat(x: &[DVec3; 4]) -> [f64; 12] {
+        std::array::from_fn(|i| x[i / 3][i % 3])
+    }
+
+    fn unflat(v: &[f64; 12]) -> [DVec3; 4] {
+        std::array::from_fn(|n| DVec3::new(v[3 * n], v[3 * n + 1], v[3 * n + 2]))
+    }
+
+    /// Central differences of `f` at `v`, per coordinate.
+    fn numeric<const N: usize>(v: &[f64; 12], f: impl Fn(&[f64; 12]) -> [f64; N]) -> [[f64; N]; 12] {
+        let h = 1e-6;
+        std::array::from_fn(|i| {
+            let (mut plus, mut minus) = (*v, *v);
+            plus[i] += h;
+            minus[i] -= h;
+            let (a, b) = (f(&plus), f(&minus));
+            std::array::from_fn(|k| (a[k] - b[k]) / (2.0 * h))
+        })
+    }
+
+    fn assert_close(analytic: f64, numeric: f64, scale: f64, what: &str) {
+        assert!(
+            (analytic - numeric).abs() <= 1e-5 * scale.max(1.0),
+            "{what}: analytic {analytic} vs numeric {numeric}"
+        );
+    }
+
+    #[test]
+    fn flat_hinge_has_zero_angle_and_folding_up_is_negative() {
+        let mut x = [DVec3::ZERO, DVec3::X, DVec3::new(0.5, 1.0, 0.0), DVec3::new(0.5, -1.0, 0.0)];
+        assert_eq!(hinge_angle(&x), 0.0);
+        x[2].z = 1.0;
+        x[3].z = 1.0;
+        assert!((hinge_angle(&x) + std::f64::consts::FRAC_PI_2).abs() < 1e-12, "{}", hinge_angle(&x));
+    }
+
+    #[test]
+    fn bending_gradient_and_hessian_match_finite_differences() {
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(7);
+        for _ in 0..50 {
+            let x = random_hinge(&mut rng);
+            let (rest, k) = (rng.random_range(-0.5..0.5), rng.random_range(0.5..2.0));
+            let v = flat(&x);
+            let g = flat(&bend_gradient(&x, rest, k));
+            let num_g = numeric(&v, |p| [bend_energy(&unflat(p), rest, k)]);
+            let h = bend_hessian(&x, rest, k);
+            let num_h = numeric(&v, |p| flat(&bend_gradient(&unflat(p), rest, k)));
+            let scale = h.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
+            for i in 0..12 {
+                assert_close(g[i], num_g[i][0], 1.0, &format!("gradient {i}"));
+                for j in 0..12 {
+                    assert_close(h[i][j], num_h[j][i], scale, &format!("hessian ({i}, {j})"));
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn stretching_gradient_and_hessian_match_finite_differences() {
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(3);
+        for _ in 0..50 {
+            let xi = DVec3::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0));
+            let xj =
+                xi + DVec3::new(rng.random_range(0.2..1.0), rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0));
+            let (rest, k) = (rng.random_range(0.3..1.5), rng.random_range(0.5..2.0));
+            let mut v = [0.0; 12];
+            v[..3].copy_from_slice(&xi.to_array());
+            v[3..6].copy_from_slice(&xj.to_array());
+            let energy = |p: &[f64; 12]| {
+                let (a, b) = (DVec3::from_slice(&p[..3]), DVec3::from_slice(&p[3..6]));
+                stretch_energy(a, b, rest, k)
+            };
+            let gradient = |p: &[f64; 12]| {
+                let (a, b) = (DVec3::from_slice(&p[..3]), DVec3::from_slice(&p[3..6]));
+                let g = stretch_gradient(a, b, rest, k);
+                let mut out = [0.0; 12];
+                out[..3].copy_from_slice(&(-g).to_array());
+                out[3..6].copy_from_slice(&g.to_array());
+                out
+            };
+            let num_g = numeric(&v, |p| [energy(p)]);
+            let g = gradient(&v);
+            let num_h = numeric(&v, gradient);
+            let block = stretch_hessian_block(xi, xj, rest, k);
+            for i in 0..6 {
+                assert_close(g[i], num_g[i][0], 1.0, &format!("gradient {i}"));
+                for j in 0..6 {
+                    let sign = if (i < 3) == (j < 3) { 1.0 } else { -1.0 };
+                    assert_close(sign * block[i % 3][j % 3], num_h[j][i], 1.0, &format!("hessian ({i}, {j})"));
+                }
+            }
+        }
+    }
+}

@@ -1,0 +1,3 @@
+//! Discrete Elastic Plates cloth.
+
+pub mod energy;
