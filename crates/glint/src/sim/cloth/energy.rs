@@ -111,25 +111,24 @@ pub fn bend_hessian(x: &[DVec3; 4], rest: f64, k: f64) -> [[f64; 12]; 12] {
         let mut dx = [DVec3::ZERO; 4];
         dx[col / 3][col % 3] = 1.0;
         let (g, dg) = angle_gradient_and_derivative(x, &dx);
-        for row in 0..12 {
-            h[row][col] = k * strain * dg[row / 3][row % 3];
+        for (row, line) in h.iter_mut().enumerate() {
+            line[col] = k * strain * dg[row / 3][row % 3];
         }
         gradient = std::array::from_fn(|i| g[i / 3][i % 3]);
     }
-    for row in 0..12 {
-        for col in 0..12 {
-            h[row][col] += k * gradient[row] * gradient[col];
+    for (line, gr) in h.iter_mut().zip(gradient) {
+        for (v, gc) in line.iter_mut().zip(gradient) {
+            *v += k * gr * gc;
         }
     }
     // Exact in exact arithmetic; rounding leaves it a hair off symmetric.
-    for row in 0..12 {
-        for col in row + 1..12 {
-            let mean = 0.5 * (h[row][col] + h[col][row]);
-            h[row][col] = mean;
-            h[col][row] = mean;
+    let mut symmetric = h;
+    for (row, line) in symmetric.iter_mut().enumerate() {
+        for (col, v) in line.iter_mut().enumerate() {
+            *v = 0.5 * (h[row][col] + h[col][row]);
         }
     }
-    h
+    symmetric
 }
 
 #[cfg(test)]

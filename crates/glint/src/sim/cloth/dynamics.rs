@@ -1,0 +1,526 @@
+//! [`Cloth`]: the state of a Discrete Elastic Plates sheet and its time steps.
+//!
+//! Every integrator is one Newton solve on the free degrees of freedom of
+//! `s·M (q − q̃) + ∇E(q) − F = 0` with Jacobian `s·M + ∇²E(q)`:
+//!
+//! | integrator | s | q̃ (predicted position) |
+//! | --- | --- | --- |
+//! | implicit Euler | 1/dt² | q₀ + dt v₀ |
+//! | Newmark-β (β = ¼, γ = ½) | 1/(β dt²) | q₀ + dt v₀ + dt² (½ − β) a₀ |
+//! | static equilibrium | 0 | — (the load is applied in steps) |
+//!
+//! A step that does not converge, or that produces a NaN or a collapsed
+//! triangle, is retried as two steps of half the size, down to dt / 2¹⁰.
+
+use super::energy::{
+    bend_energy, bend_gradient, bend_hessian, hinge_angle, stretch_energy, stretch_gradient, stretch_hessian_block,
+};
+use super::system::SparseSystem;
+use super::{ClothMesh, ClothMeshError, Topology};
+use glam::DVec3;
+use rayon::prelude::*;
+
+/// Newmark's β (average acceleration: unconditionally stable, no numerical damping).
+const NEWMARK_BETA: f64 = 0.25;
+/// Newmark's γ.
+const NEWMARK_GAMMA: f64 = 0.5;
+/// Most Newton iterations in one solve.
+const MAX_NEWTON: usize = 25;
+/// A step is split in halves at most this many times.
+pub const MAX_HALVINGS: u32 = 10;
+/// Load steps of a static solve.
+const LOAD_STEPS: usize = 10;
+/// A triangle whose area falls below this fraction of its rest area has collapsed.
+const COLLAPSED_AREA: f64 = 1e-3;
+
+/// The plate's material and the world it hangs in (SI units).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ClothParams {
+    /// Thickness h, metres.
+    pub thickness: f64,
+    /// Young's modulus E, pascals.
+    pub young: f64,
+    /// Poisson's ratio ν. Recorded for reference: the DEP constants used here
+    /// (`k_s = (√3/2) E h l̄`, `k_b = (2/√3) E h³ / 12`) do not depend on it.
+    pub poisson: f64,
+    /// Density ρ, kg/m³.
+    pub density: f64,
+    /// Gravity, m/s².
+    pub gravity: DVec3,
+}
+
+/// How [`Cloth::step`] advances time.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Integrator {
+    /// Backward Euler: stable at any step, loses energy.
+    ImplicitEuler,
+    /// Newmark-β with β = ¼, γ = ½: keeps energy much better.
+    Newmark,
+    /// No time: each step solves for the equilibrium under the full load.
+    Static,
+}
+
+/// Why a step could not be taken (the cloth is left as it was).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
+pub enum StepError {
+    /// Newton's method did not converge even at the smallest step.
+    #[error("Newton's method did not converge, even with the step halved {MAX_HALVINGS} times")]
+    NotConverged,
+}
+
+/// What the last [`Cloth::step`] took.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct StepStats {
+    /// Newton iterations over all sub-steps.
+    pub newton_iterations: u32,
+    /// Sub-steps taken (1 unless the step was halved).
+    pub substeps: u32,
+}
+
+/// A cloth: its mesh and elastic constants, pins, and positions and velocities.
+pub struct Cloth {
+    mesh: ClothMesh,
+    topology: Topology,
+    params: ClothParams,
+    rest_lengths: Vec<f64>,
+    stretch_k: Vec<f64>,
+    rest_angles: Vec<f64>,
+    bend_k: f64,
+    rest_areas: Vec<f64>,
+    /// Largest `k / l̄²` of the edges: the stiffness that sets the residual's rounding floor.
+    stiffest_edge: f64,
+    /// Lumped mass per node, kg.
+    mass: Vec<f64>,
+    /// First free degree of freedom of each node (`None` when pinned).
+    dof: Vec<Option<usize>>,
+    free_dofs: usize,
+    /// Where each element's and each free DOF's entries start in the system's values.
+    edge_slots: Vec<usize>,
+    hinge_slots: Vec<usize>,
+    diagonal_slot: usize,
+    system: SparseSystem,
+    /// Node positions, metres.
+    pub positions: Vec<DVec3>,
+    /// Node velocities, m/s.
+    pub velocities: Vec<DVec3>,
+    accelerations: Vec<DVec3>,
+    /// Simulated time, seconds.
+    pub time: f64,
+    /// What the last step took.
+    pub last_step: StepStats,
+}
+
+impl Cloth {
+    /// A cloth at rest in `mesh`'s positions with the nodes in `pinned` held fixed.
+    pub fn new(mesh: ClothMesh, params: ClothParams, pinned: &[bool]) -> Result<Self, ClothMeshError> {
+        let topology = mesh.topology()?;
+        let n = mesh.nodes.len();
+        let p = |i: u32| mesh.nodes[i as usize];
+        let rest_lengths: Vec<f64> = topology.edges.iter().map(|e| (p(e[1]) - p(e[0])).length()).collect();
+        let stretch_k = rest_lengths.iter().map(|l| 3f64.sqrt() / 2.0 * params.young * params.thickness * l).collect();
+        let rest_angles = topology.hinges.iter().map(|h| hinge_angle(&h.map(p))).collect();
+        let stiffest_edge =
+            rest_lengths.iter().map(|l| 3f64.sqrt() / 2.0 * params.young * params.thickness / l).fold(0.0f64, f64::max);
+        let bend_k = 2.0 / 3f64.sqrt() * params.young * params.thickness.powi(3) / 12.0;
+        let mut mass = vec![0.0; n];
+        let rest_areas: Vec<f64> =
+            mesh.triangles.iter().map(|t| 0.5 * (p(t[1]) - p(t[0])).cross(p(t[2]) - p(t[0])).length()).collect();
+        for (t, area) in mesh.triangles.iter().zip(&rest_areas) {
+            for &v in t {
+                mass[v as usize] += params.density * params.thickness * area / 3.0;
+            }
+        }
+        let mut free_dofs = 0;
+        let dof: Vec<Option<usize>> = (0..n)
+            .map(|i| {
+                (!pinned.get(i).copied().unwrap_or(false)).then(|| {
+                    free_dofs += 3;
+                    free_dofs - 3
+                })
+            })
+            .collect();
+        // The pattern: each element's free-node blocks, then the diagonal.
+        let mut pattern = Vec::new();
+        let element = |nodes: &[u32], pattern: &mut Vec<(usize, usize)>| {
+            let start = pattern.len();
+            for &a in nodes {
+                for &b in nodes {
+                    if let (Some(ra), Some(rb)) = (dof[a as usize], dof[b as usize]) {
+                        for r in 0..3 {
+                            for c in 0..3 {
+                                pattern.push((ra + r, rb + c));
+                            }
+                        }
+                    }
+                }
+            }
+            start
+        };
+        let edge_slots = topology.edges.iter().map(|e| element(e, &mut pattern)).collect();
+        let hinge_slots = topology.hinges.iter().map(|h| element(h, &mut pattern)).collect();
+        let diagonal_slot = pattern.len();
+        pattern.extend((0..free_dofs).map(|i| (i, i)));
+        let system = SparseSystem::new(free_dofs, &pattern);
+        Ok(Self {
+            positions: mesh.nodes.clone(),
+            velocities: vec![DVec3::ZERO; n],
+            // At rest in its rest shape only gravity accelerates it.
+            accelerations: dof.iter().map(|d| if d.is_some() { params.gravity } else { DVec3::ZERO }).collect(),
+            mesh,
+            topology,
+            params,
+            rest_lengths,
+            stretch_k,
+            rest_angles,
+            bend_k,
+            rest_areas,
+            stiffest_edge,
+            mass,
+            dof,
+            free_dofs,
+            edge_slots,
+            hinge_slots,
+            diagonal_slot,
+            system,
+            time: 0.0,
+            last_step: StepStats::default(),
+        })
+    }
+
+    /// The mesh (rest positions and triangles).
+    pub fn mesh(&self) -> &ClothMesh {
+        &self.mesh
+    }
+
+    /// Edges and hinges.
+    pub fn topology(&self) -> &Topology {
+        &self.topology
+    }
+
+    /// Lumped mass of each node, kg.
+    pub fn masses(&self) -> &[f64] {
+        &self.mass
+    }
+
+    /// Whether node `i` is pinned.
+    pub fn is_pinned(&self, i: usize) -> bool {
+        self.dof[i].is_none()
+    }
+
+    /// Stretching plus bending energy at `positions`, joules.
+    pub fn elastic_energy(&self, positions: &[DVec3]) -> f64 {
+        let p = |i: u32| positions[i as usize];
+        let stretch: f64 = (self.topology.edges.iter().zip(&self.rest_lengths).zip(&self.stretch_k))
+            .map(|((e, &l), &k)| stretch_energy(p(e[0]), p(e[1]), l, k))
+            .sum();
+        let bend: f64 = (self.topology.hinges.iter().zip(&self.rest_angles))
+            .map(|(h, &rest)| bend_energy(&h.map(p), rest, self.bend_k))
+            .sum();
+        stretch + bend
+    }
+
+    /// Kinetic + elastic − gravity's work (potential relative to the origin), joules.
+    pub fn total_energy(&self) -> f64 {
+        let kinetic: f64 = self.mass.iter().zip(&self.velocities).map(|(m, v)| 0.5 * m * v.length_squared()).sum();
+        let gravity: f64 = self.mass.iter().zip(&self.positions).map(|(m, x)| -m * self.params.gravity.dot(*x)).sum();
+        kinetic + self.elastic_energy(&self.positions) + gravity
+    }
+
+    /// ∇E at `positions`, per node.
+    pub fn elastic_gradient(&self, positions: &[DVec3]) -> Vec<DVec3> {
+        let p = |i: u32| positions[i as usize];
+        let mut g = vec![DVec3::ZERO; positions.len()];
+        for ((e, &l), &k) in self.topology.edges.iter().zip(&self.rest_lengths).zip(&self.stretch_k) {
+            let f = stretch_gradient(p(e[0]), p(e[1]), l, k);
+            g[e[0] as usize] -= f;
+            g[e[1] as usize] += f;
+        }
+        for (h, &rest) in self.topology.hinges.iter().zip(&self.rest_angles) {
+            for (node, f) in h.iter().zip(bend_gradient(&h.map(p), rest, self.bend_k)) {
+                g[*node as usize] += f;
+            }
+        }
+        g
+    }
+
+    /// Fill the system with `scale·M + ∇²E(positions)` over the free DOFs.
+    fn assemble(&mut self, positions: &[DVec3], scale: f64) {
+        let p = |i: u32| positions[i as usize];
+        let dof = &self.dof;
+        let values = &mut self.system.values;
+        let (elements, diagonal) = values.split_at_mut(self.diagonal_slot);
+        let (edge_values, hinge_values) =
+            elements.split_at_mut(self.hinge_slots.first().copied().unwrap_or(elements.len()));
+        // Each element owns the run of values from its slot to the next one's.
+        let runs = |slots: &[usize], end: usize, base: usize| -> Vec<(usize, usize)> {
+            (0..slots.len()).map(|i| (slots[i] - base, slots.get(i + 1).copied().unwrap_or(end) - base)).collect()
+        };
+        let edge_runs = runs(&self.edge_slots, edge_values.len(), 0);
+        let hinge_base = self.hinge_slots.first().copied().unwrap_or(0);
+        let hinge_runs = runs(&self.hinge_slots, hinge_base + hinge_values.len(), hinge_base);
+        split_runs(edge_values, &edge_runs).into_par_iter().enumerate().for_each(|(i, out)| {
+            let e = self.topology.edges[i];
+            let k = stretch_hessian_block(p(e[0]), p(e[1]), self.rest_lengths[i], self.stretch_k[i]);
+            let sign = |a: usize, b: usize| if a == b { 1.0 } else { -1.0 };
+            write_blocks(out, &e, dof, |a, b, r, c| sign(a, b) * k[r][c]);
+        });
+        split_runs(hinge_values, &hinge_runs).into_par_iter().enumerate().for_each(|(i, out)| {
+            let h = self.topology.hinges[i];
+            let m = bend_hessian(&h.map(p), self.rest_angles[i], self.bend_k);
+            write_blocks(out, &h, dof, |a, b, r, c| m[3 * a + r][3 * b + c]);
+        });
+        for (node, first) in self.dof.iter().enumerate() {
+            if let Some(first) = first {
+                for r in 0..3 {
+                    diagonal[first + r] = scale * self.mass[node];
+                }
+            }
+        }
+    }
+
+    /// Residual `s·M (q − q̃) + ∇E(q) − λ·F` over the free DOFs, and its norm.
+    fn residual(&self, q: &[DVec3], scale: f64, predicted: &[DVec3], load: f64) -> (Vec<f64>, f64) {
+        let g = self.elastic_gradient(q);
+        let mut r = vec![0.0; self.free_dofs];
+        for (node, first) in self.dof.iter().enumerate() {
+            if let Some(first) = *first {
+                let m = self.mass[node];
+                let v = scale * m * (q[node] - predicted[node]) + g[node] - load * m * self.params.gravity;
+                r[first..first + 3].copy_from_slice(&v.to_array());
+            }
+        }
+        let norm = r.iter().map(|v| v * v).sum::<f64>().sqrt();
+        (r, norm)
+    }
+
+    /// The potential whose gradient is the residual: `½ s (q − q̃)ᵀ M (q − q̃) + E(q) − λ Fᵀ q`.
+    fn potential(&self, q: &[DVec3], scale: f64, predicted: &[DVec3], load: f64) -> f64 {
+        let external: f64 = (self.mass.iter().zip(q).zip(predicted))
+            .map(|((m, x), p)| 0.5 * scale * m * (*x - *p).length_squared() - load * m * self.params.gravity.dot(*x))
+            .sum();
+        external + self.elastic_energy(q)
+    }
+
+    /// Newton's method from `q` (modified in place) on the residual above.
+    /// Returns the iterations, or `None` when it does not converge or goes bad.
+    fn newton(&mut self, q: &mut [DVec3], scale: f64, predicted: &[DVec3], load: f64) -> Option<u32> {
+        let weight: f64 = self.mass.iter().sum::<f64>() * self.params.gravity.length() * load;
+        let (mut r, mut norm) = self.residual(q, scale, predicted, load);
+        // Forces balance to a millionth of the load (and of the start's imbalance),
+        // or to the rounding floor of the stiffest edges, whichever is larger.
+        let extent = q.iter().fold(0.0f64, |m, p| m.max(p.abs().max_element()));
+        let floor = f64::EPSILON * extent * self.stiffest_edge * (self.free_dofs as f64).sqrt();
+        let tolerance = (1e-6 * (weight + norm)).max(floor) + 1e-14;
+        for iteration in 0..MAX_NEWTON as u32 {
+            if norm <= tolerance {
+                return Some(iteration);
+            }
+            self.assemble(q, scale);
+            let mut step: Vec<f64> = r.iter().map(|v| -v).collect();
+            self.system.solve(&mut step).ok()?;
+            // Backtrack until the potential or the residual falls. The residual
+            // alone is no guide from a flat sheet: bending it stretches the
+            // (very stiff) edges to second order, so the first full step raises
+            // the residual by orders of magnitude while lowering the potential.
+            let potential = self.potential(q, scale, predicted, load);
+            let mut alpha = 1.0;
+            let trial = loop {
+                let mut trial = q.to_vec();
+                for (node, first) in self.dof.iter().enumerate() {
+                    if let Some(first) = *first {
+                        trial[node] += alpha * DVec3::from_slice(&step[first..first + 3]);
+                    }
+                }
+                let (tr, tn) = self.residual(&trial, scale, predicted, load);
+                let better = tn < norm || self.potential(&trial, scale, predicted, load) <= potential;
+                if tn.is_finite() && (better || alpha < 1.0 / 1024.0) {
+                    break (trial, tr, tn);
+                }
+                alpha *= 0.5;
+            };
+            if !trial.2.is_finite() {
+                return None;
+            }
+            q.copy_from_slice(&trial.0);
+            (r, norm) = (trial.1, trial.2);
+        }
+        (norm <= tolerance).then_some(MAX_NEWTON as u32)
+    }
+
+    /// Whether a triangle has (nearly) collapsed or a position is not finite.
+    fn broken(&self, q: &[DVec3]) -> bool {
+        q.iter().any(|p| !p.is_finite())
+            || self.mesh.triangles.iter().zip(&self.rest_areas).any(|(t, rest)| {
+                let [a, b, c] = t.map(|v| q[v as usize]);
+                0.5 * (b - a).cross(c - a).length() < COLLAPSED_AREA * rest
+            })
+    }
+
+    /// Advance by `dt` seconds with `integrator` (a static solve ignores `dt`).
+    /// Pinned nodes stay where they are. On failure nothing changes.
+    pub fn step(&mut self, dt: f64, integrator: Integrator) -> Result<StepStats, StepError> {
+        let mut stats = StepStats::default();
+        if integrator == Integrator::Static {
+            let mut q = self.positions.clone();
+            let unused = q.clone(); // no inertia: the predicted position is never read
+            for k in 1..=LOAD_STEPS {
+                let load = k as f64 / LOAD_STEPS as f64;
+                stats.newton_iterations += self.newton(&mut q, 0.0, &unused, load).ok_or(StepError::NotConverged)?;
+            }
+            stats.substeps = 1;
+            self.positions = q;
+            self.velocities.fill(DVec3::ZERO);
+            self.accelerations.fill(DVec3::ZERO);
+            self.last_step = stats;
+            return Ok(stats);
+        }
+        self.substep(dt, integrator, 0, &mut stats)?;
+        self.last_step = stats;
+        Ok(stats)
+    }
+
+    fn substep(&mut self, dt: f64, integrator: Integrator, depth: u32, stats: &mut StepStats) -> Result<(), StepError> {
+        let (scale, predicted): (f64, Vec<DVec3>) = match integrator {
+            Integrator::ImplicitEuler => {
+                (1.0 / (dt * dt), self.positions.iter().zip(&self.velocities).map(|(x, v)| *x + dt * *v).collect())
+            }
+            _ => (
+                1.0 / (NEWMARK_BETA * dt * dt),
+                (self.positions.iter().zip(&self.velocities).zip(&self.accelerations))
+                    .map(|((x, v), a)| *x + dt * *v + dt * dt * (0.5 - NEWMARK_BETA) * *a)
+                    .collect(),
+            ),
+        };
+        let mut q = predicted.clone();
+        for (node, first) in self.dof.iter().enumerate() {
+            if first.is_none() {
+                q[node] = self.positions[node];
+            }
+        }
+        match self.newton(&mut q, scale, &predicted, 1.0).filter(|_| !self.broken(&q)) {
+            Some(iterations) => {
+                stats.newton_iterations += iterations;
+                stats.substeps += 1;
+                for node in 0..q.len() {
+                    if self.dof[node].is_none() {
+                        continue;
+                    }
+                    let a1 = scale * (q[node] - predicted[node]);
+                    match integrator {
+                        Integrator::ImplicitEuler => {
+                            let v1 = (q[node] - self.positions[node]) / dt;
+                            self.accelerations[node] = (v1 - self.velocities[node]) / dt;
+                            self.velocities[node] = v1;
+                        }
+                        _ => {
+                            let a0 = self.accelerations[node];
+                            self.velocities[node] += dt * ((1.0 - NEWMARK_GAMMA) * a0 + NEWMARK_GAMMA * a1);
+                            self.accelerations[node] = a1;
+                        }
+                    }
+                }
+                self.positions = q;
+                self.time += dt;
+                Ok(())
+            }
+            None if depth < MAX_HALVINGS => {
+                self.substep(dt / 2.0, integrator, depth + 1, stats)?;
+                self.substep(dt / 2.0, integrator, depth + 1, stats)
+            }
+            None => Err(StepError::NotConverged),
+        }
+    }
+}
+
+/// Cut `values` into the runs `(start, end)` (consecutive, covering it).
+fn split_runs<'v>(mut values: &'v mut [f64], runs: &[(usize, usize)]) -> Vec<&'v mut [f64]> {
+    let mut out = Vec::with_capacity(runs.len());
+    let mut at = 0;
+    for &(start, end) in runs {
+        debug_assert_eq!(start, at);
+        let (run, rest) = std::mem::take(&mut values).split_at_mut(end - start);
+        out.push(run);
+        values = rest;
+        at = end;
+    }
+    out
+}
+
+/// Write an element's blocks between its free nodes in pattern order:
+/// `entry(a, b, r, c)` is row `r` of node `a` against column `c` of node `b`.
+fn write_blocks(
+    out: &mut [f64],
+    nodes: &[u32],
+    dof: &[Option<usize>],
+    entry: impl Fn(usize, usize, usize, usize) -> f64,
+) {
+    let mut k = 0;
+    for (a, &na) in nodes.iter().enumerate() {
+        for (b, &nb) in nodes.iter().enumerate() {
+            if dof[na as usize].is_some() && dof[nb as usize].is_some() {
+                for r in 0..3 {
+                    for c in 0..3 {
+                        out[k] = entry(a, b, r, c);
+                        k += 1;
+                    }
+                }
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::{Rng, SeedableRng};
+
+    #[test]
+    fn the_assembled_jacobian_is_the_residuals_derivative() {
+        let params = ClothParams {
+            thickness: 1e-3,
+            young: 1e6,
+            poisson: 0.3,
+            density: 200.0,
+            gravity: DVec3::new(0.0, 0.0, -9.81),
+        };
+        let mesh = ClothMesh::sheet(0.3, 0.2, 4, 3);
+        let pinned: Vec<bool> = (0..mesh.nodes.len()).map(|i| i == 0 || i == 3).collect();
+        let mut cloth = Cloth::new(mesh, params, &pinned).unwrap();
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(11);
+        let q: Vec<DVec3> = cloth
+            .positions
+            .iter()
+            .map(|p| {
+                *p + DVec3::new(
+                    rng.random_range(-0.01..0.01),
+                    rng.random_range(-0.01..0.01),
+                    rng.random_range(-0.03..0.03),
+                )
+            })
+            .collect();
+        let predicted: Vec<DVec3> = q.iter().map(|p| *p + DVec3::splat(0.001)).collect();
+        let scale = 50.0;
+        cloth.assemble(&q, scale);
+        let jacobian = cloth.system.dense();
+        let h = 1e-7;
+        for (node, first) in cloth.dof.clone().iter().enumerate() {
+            let Some(first) = *first else { continue };
+            for axis in 0..3 {
+                let (mut plus, mut minus) = (q.clone(), q.clone());
+                plus[node][axis] += h;
+                minus[node][axis] -= h;
+                let (rp, _) = cloth.residual(&plus, scale, &predicted, 1.0);
+                let (rm, _) = cloth.residual(&minus, scale, &predicted, 1.0);
+                for row in 0..rp.len() {
+                    let numeric = (rp[row] - rm[row]) / (2.0 * h);
+                    let analytic = jacobian[row][first + axis];
+                    assert!(
+                        (numeric - analytic).abs() <= 1e-4 * (1.0 + analytic.abs()),
+                        "({row}, {}): {analytic} vs {numeric}",
+                        first + axis
+                    );
+                }
+            }
+        }
+    }
+}
