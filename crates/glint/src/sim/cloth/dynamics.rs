@@ -94,10 +94,9 @@ pub struct Cloth {
     /// First free degree of freedom of each node (`None` when pinned).
     dof: Vec<Option<usize>>,
     free_dofs: usize,
-    /// Where each element's and each free DOF's entries start in the system's values.
-    edge_slots: Vec<usize>,
-    hinge_slots: Vec<usize>,
-    diagonal_slot: usize,
+    /// How many of the system's values each element owns (edges, then hinges, in
+    /// pattern order); the free DOFs' diagonal follows them.
+    element_lengths: Vec<usize>,
     system: SparseSystem,
     /// Node positions, metres.
     pub positions: Vec<DVec3>,
@@ -140,6 +139,7 @@ impl Cloth {
             })
             .collect();
         // The pattern: each element's free-node blocks, then the diagonal.
+        // `element` returns how many entries it added.
         let mut pattern = Vec::new();
         let element = |nodes: &[u32], pattern: &mut Vec<(usize, usize)>| {
             let start = pattern.len();
@@ -154,11 +154,11 @@ impl Cloth {
                     }
                 }
             }
-            start
+            pattern.len() - start
         };
-        let edge_slots = topology.edges.iter().map(|e| element(e, &mut pattern)).collect();
-        let hinge_slots = topology.hinges.iter().map(|h| element(h, &mut pattern)).collect();
-        let diagonal_slot = pattern.len();
+        let hinges = topology.hinges.iter().map(|h| &h[..]);
+        let element_lengths =
+            topology.edges.iter().map(|e| &e[..]).chain(hinges).map(|nodes| element(nodes, &mut pattern)).collect();
         pattern.extend((0..free_dofs).map(|i| (i, i)));
         let system = SparseSystem::new(free_dofs, &pattern);
         Ok(Self {
@@ -178,9 +178,7 @@ impl Cloth {
             mass,
             dof,
             free_dofs,
-            edge_slots,
-            hinge_slots,
-            diagonal_slot,
+            element_lengths,
             system,
             time: 0.0,
             last_step: StepStats::default(),
@@ -248,26 +246,20 @@ impl Cloth {
         let p = |i: u32| positions[i as usize];
         let dof = &self.dof;
         let values = &mut self.system.values;
-        let (elements, diagonal) = values.split_at_mut(self.diagonal_slot);
-        let (edge_values, hinge_values) =
-            elements.split_at_mut(self.hinge_slots.first().copied().unwrap_or(elements.len()));
-        // Each element owns the run of values from its slot to the next one's.
-        let runs = |slots: &[usize], end: usize, base: usize| -> Vec<(usize, usize)> {
-            (0..slots.len()).map(|i| (slots[i] - base, slots.get(i + 1).copied().unwrap_or(end) - base)).collect()
-        };
-        let edge_runs = runs(&self.edge_slots, edge_values.len(), 0);
-        let hinge_base = self.hinge_slots.first().copied().unwrap_or(0);
-        let hinge_runs = runs(&self.hinge_slots, hinge_base + hinge_values.len(), hinge_base);
-        split_runs(edge_values, &edge_runs).into_par_iter().enumerate().for_each(|(i, out)| {
-            let e = self.topology.edges[i];
-            let k = stretch_hessian_block(p(e[0]), p(e[1]), self.rest_lengths[i], self.stretch_k[i]);
-            let sign = |a: usize, b: usize| if a == b { 1.0 } else { -1.0 };
-            write_blocks(out, &e, dof, |a, b, r, c| sign(a, b) * k[r][c]);
-        });
-        split_runs(hinge_values, &hinge_runs).into_par_iter().enumerate().for_each(|(i, out)| {
-            let h = self.topology.hinges[i];
-            let m = bend_hessian(&h.map(p), self.rest_angles[i], self.bend_k);
-            write_blocks(out, &h, dof, |a, b, r, c| m[3 * a + r][3 * b + c]);
+        let diagonal_at = values.len() - self.free_dofs;
+        let (elements, diagonal) = values.split_at_mut(diagonal_at);
+        let edges = self.topology.edges.len();
+        split_runs(elements, &self.element_lengths).into_par_iter().enumerate().for_each(|(i, out)| {
+            if i < edges {
+                let e = self.topology.edges[i];
+                let k = stretch_hessian_block(p(e[0]), p(e[1]), self.rest_lengths[i], self.stretch_k[i]);
+                let sign = |a: usize, b: usize| if a == b { 1.0 } else { -1.0 };
+                write_blocks(out, &e, dof, |a, b, r, c| sign(a, b) * k[r][c]);
+            } else {
+                let h = self.topology.hinges[i - edges];
+                let m = bend_hessian(&h.map(p), self.rest_angles[i - edges], self.bend_k);
+                write_blocks(out, &h, dof, |a, b, r, c| m[3 * a + r][3 * b + c]);
+            }
         });
         for (node, first) in self.dof.iter().enumerate() {
             if let Some(first) = first {
@@ -432,18 +424,16 @@ impl Cloth {
     }
 }
 
-/// Cut `values` into the runs `(start, end)` (consecutive, covering it).
-fn split_runs<'v>(mut values: &'v mut [f64], runs: &[(usize, usize)]) -> Vec<&'v mut [f64]> {
-    let mut out = Vec::with_capacity(runs.len());
-    let mut at = 0;
-    for &(start, end) in runs {
-        debug_assert_eq!(start, at);
-        let (run, rest) = std::mem::take(&mut values).split_at_mut(end - start);
-        out.push(run);
-        values = rest;
-        at = end;
-    }
-    out
+/// Cut `values` into consecutive runs of the given lengths.
+fn split_runs<'v>(mut values: &'v mut [f64], lengths: &[usize]) -> Vec<&'v mut [f64]> {
+    lengths
+        .iter()
+        .map(|&length| {
+            let (run, rest) = std::mem::take(&mut values).split_at_mut(length);
+            values = rest;
+            run
+        })
+        .collect()
 }
 
 /// Write an element's blocks between its free nodes in pattern order:
