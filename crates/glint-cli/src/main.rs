@@ -2,6 +2,7 @@
 
 mod bench;
 mod plot;
+mod sim;
 mod view;
 
 use clap::{Parser, Subcommand, ValueEnum};
@@ -98,12 +99,23 @@ enum Command {
         #[arg(long, value_name = "FRAME:ACTION", value_parser = view::parse_at)]
         at: Vec<view::Scripted>,
     },
+    /// Run a simulation without a GPU (see `glint sim cloth --help`).
+    #[command(subcommand, after_help = EXIT_CODES)]
+    Sim(SimCommand),
     /// Parse and validate a .scn scene without a GPU, and summarise it.
     #[command(after_help = EXIT_CODES)]
     Check {
         /// The scene file.
         scene: PathBuf,
     },
+}
+
+/// `glint sim` subcommands.
+#[derive(Subcommand)]
+enum SimCommand {
+    /// Discrete Elastic Plates cloth: write its trajectory as CSV, or benchmark it.
+    #[command(after_help = EXIT_CODES)]
+    Cloth(sim::ClothArgs),
 }
 
 /// Size, samples and camera of `render` and `view`.
@@ -391,6 +403,7 @@ fn main() -> ExitCode {
             options,
         }),
         Command::Check { scene } => check(scene, options),
+        Command::Sim(SimCommand::Cloth(args)) => sim::cloth(args),
         Command::View { scene, picture, frames, screenshot, at } => load(scene, options).and_then(|desc| {
             let args = view::ViewArgs {
                 scene: scene.clone(),

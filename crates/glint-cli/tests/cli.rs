@@ -24,7 +24,9 @@ fn error_lines(o: &Output) -> Vec<String> {
 
 #[test]
 fn help_lists_every_subcommand_and_the_exit_codes() {
-    for args in [&["--help"][..], &["render", "--help"], &["check", "--help"], &["view", "--help"]] {
+    for args in
+        [&["--help"][..], &["render", "--help"], &["check", "--help"], &["view", "--help"], &["sim", "cloth", "--help"]]
+    {
         let out = glint(args);
         assert_eq!(out.status.code(), Some(0), "{args:?}");
         let text = String::from_utf8_lossy(&out.stdout);
@@ -414,4 +416,114 @@ fn view_runs_under_xvfb_resizes_and_takes_screenshots() {
     assert!(differing.count() < 20, "the viewer's last frame differs from glint render's");
     let lit = a.pixels().filter(|p| p.0.iter().any(|&c| c > 60)).count();
     assert!(lit > 120 * 80 / 4, "the frame shows the lit floor: {lit} bright pixels");
+}
+
+/// The CSV a `glint sim cloth` run wrote: header and rows of numbers.
+fn read_trajectory(path: &Path) -> (Vec<String>, Vec<Vec<f64>>) {
+    let text = std::fs::read_to_string(path).expect("trajectory written");
+    let mut lines = text.lines();
+    let header = lines.next().expect("a header").split(',').map(str::to_owned).collect();
+    let rows = lines.map(|l| l.split(',').map(|v| v.parse().expect("a number")).collect()).collect();
+    (header, rows)
+}
+
+#[test]
+fn sim_cloth_writes_one_csv_row_per_step_and_benchmarks() {
+    let dir = tempfile::tempdir().unwrap();
+    let csv = dir.path().join("traj.csv");
+    let csv_arg = csv.to_str().unwrap();
+    let out = glint(&[
+        "sim",
+        "cloth",
+        "--sheet",
+        "0.2,0.1",
+        "--resolution",
+        "5,3",
+        "--thickness",
+        "1e-3",
+        "--young",
+        "1e6",
+        "--poisson",
+        "0.3",
+        "--density",
+        "200",
+        "--gravity",
+        "0 0 -9.81",
+        "--fix",
+        "x<=0",
+        "--dt",
+        "0.01",
+        "--steps",
+        "4",
+        "--integrator",
+        "implicit-euler",
+        "--out",
+        csv_arg,
+        "--bench",
+    ]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let (header, rows) = read_trajectory(&csv);
+    assert_eq!(header.len(), 2 + 3 * 15);
+    assert_eq!(&header[..5], ["step", "t", "x1", "y1", "z1"]);
+    assert_eq!(header.last().unwrap(), "z15");
+    assert_eq!(rows.len(), 4);
+    for (k, row) in rows.iter().enumerate() {
+        assert_eq!(row[0], (k + 1) as f64);
+        assert!((row[1] - 0.01 * (k + 1) as f64).abs() < 1e-12, "time {}", row[1]);
+    }
+    // Node 1 (x = 0) is pinned; node 5 (the far corner) falls.
+    let last = rows.last().unwrap();
+    assert_eq!(&last[2..5], [0.0, 0.0, 0.0]);
+    assert!(last[2 + 3 * 4 + 2] < -1e-4, "the free corner falls: z5 = {}", last[2 + 3 * 4 + 2]);
+    let report = String::from_utf8_lossy(&out.stdout);
+    assert!(report.contains("15 nodes (3 pinned)") && report.contains("steps/s"), "{report}");
+    assert!(report.contains("Newton iterations/step"), "{report}");
+
+    // A static solve writes one row: the equilibrium.
+    let out = glint(&[
+        "sim",
+        "cloth",
+        "--sheet",
+        "0.2,0.1",
+        "--resolution",
+        "5,3",
+        "--fix",
+        "x<=0",
+        "--integrator",
+        "static",
+        "--out",
+        csv_arg,
+    ]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let (_, rows) = read_trajectory(&csv);
+    assert_eq!(rows.len(), 1);
+    assert!(rows[0][2 + 3 * 4 + 2] < 0.0, "the free corner sags");
+}
+
+#[test]
+fn sim_cloth_reads_the_published_mesh_format_and_rejects_bad_input() {
+    let dir = tempfile::tempdir().unwrap();
+    let mesh = dir.path().join("plate.txt");
+    std::fs::write(&mesh, "# two triangles\n*Nodes\n0,0,0\n1,0,0\n1,1,0\n0,1,0\n*Triangles\n1,2,3\n1,3,4\n").unwrap();
+    let out = glint(&["sim", "cloth", "--mesh", mesh.to_str().unwrap(), "--fix", "nodes 1 2", "--steps", "2"]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+
+    std::fs::write(&mesh, "*Nodes\n0,0,0\n1,0,0\n*Triangles\n1,2,7\n").unwrap();
+    let out = glint(&["sim", "cloth", "--mesh", mesh.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(1));
+    let errors = error_lines(&out);
+    assert!(errors.len() == 1 && errors[0].contains("plate.txt:5: node 7"), "{errors:?}");
+
+    for (args, says) in [
+        (&["sim", "cloth", "--sheet", "1,1", "--resolution", "3,3", "--fix", "w<1"][..], "expected AXIS OP NUMBER"),
+        (&["sim", "cloth", "--sheet", "1,1", "--resolution", "1,3"], "--resolution 2..=1025"),
+        (&["sim", "cloth", "--sheet", "1,1", "--resolution", "3,3", "--dt", "0"], "above 0"),
+        (&["sim", "cloth", "--sheet", "1,1", "--resolution", "3,3", "--fix", "nodes 10"], "past the 9 nodes"),
+        (&["sim", "cloth", "--sheet", "1,1", "--resolution", "3,3", "--collider", "sphere 0 0 0"], "not a collider"),
+        (&["sim", "cloth", "--resolution", "3,3"], "required"),
+    ] {
+        let out = glint(args);
+        assert_eq!(out.status.code(), Some(1), "{args:?}");
+        assert!(stderr(&out).contains(says), "{args:?}: {}", stderr(&out));
+    }
 }

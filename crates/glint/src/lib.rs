@@ -59,6 +59,9 @@ pub enum Error {
     /// Invalid frame request (exit code 3).
     #[error(transparent)]
     Render(#[from] RenderError),
+    /// A simulation step failed (exit code 3).
+    #[error(transparent)]
+    Sim(#[from] sim::cloth::StepError),
 }
 
 impl Error {
@@ -67,7 +70,7 @@ impl Error {
         match self {
             Error::Asset(_) => 1,
             Error::Gpu(GpuError::NoAdapter(_) | GpuError::Device { .. }) => 2,
-            Error::Gpu(_) | Error::Render(_) => 3,
+            Error::Gpu(_) | Error::Render(_) | Error::Sim(_) => 3,
         }
     }
 }

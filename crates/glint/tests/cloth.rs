@@ -3,7 +3,7 @@
 //! integrators, and a large sheet under a huge time step.
 
 use glam::DVec3;
-use glint::sim::cloth::{Cloth, ClothMesh, ClothParams, Integrator};
+use glint::sim::cloth::{Cloth, ClothMesh, ClothParams, Collider, Integrator, PinMotion, PinSelector};
 
 /// An equilateral mesh of `width` × `height` with edges of `edge`: rows
 /// `edge·√3/2` apart, odd rows shifted by half an edge (with a node at each
@@ -188,4 +188,60 @@ fn hinge_stiffness_gives_the_plate_rigidity_on_a_cylinder() {
         );
         assert!((ratio - 1.0).abs() < 0.01, "ratio {ratio}");
     }
+}
+
+/// A square of cloth dropped onto a ball on a floor: it drapes over the ball
+/// and its corners come down, and no node ends up inside either collider.
+#[test]
+fn cloth_drapes_over_a_sphere_and_stops_on_the_floor() {
+    let params =
+        ClothParams { thickness: 1e-3, young: 1e6, poisson: 0.3, density: 200.0, gravity: DVec3::new(0.0, 0.0, -9.81) };
+    let mut mesh = ClothMesh::sheet(0.6, 0.6, 17, 17);
+    for p in &mut mesh.nodes {
+        *p += DVec3::new(-0.3, -0.3, 0.25);
+    }
+    let mut cloth = Cloth::new(mesh, params, &[]).expect("cloth");
+    let (ball, radius, floor, gap) = (DVec3::ZERO, 0.2, -0.21, 0.005);
+    cloth.set_colliders(
+        vec![
+            Collider::Sphere { centre: ball, radius },
+            Collider::Plane { point: DVec3::new(0.0, 0.0, floor), normal: DVec3::Z },
+        ],
+        gap,
+    );
+    for _ in 0..60 {
+        cloth.step(0.01, Integrator::ImplicitEuler).expect("step");
+    }
+    let inside_ball = cloth.positions.iter().map(|p| radius - (*p - ball).length()).fold(f64::MIN, f64::max);
+    let below_floor = cloth.positions.iter().map(|p| floor - p.z).fold(f64::MIN, f64::max);
+    let top = cloth.positions.iter().map(|p| p.z).fold(f64::MIN, f64::max);
+    let corner = cloth.positions[0];
+    eprintln!("deepest into the ball {inside_ball:.2e} m, below the floor {below_floor:.2e} m, top {top:.4} m, corner {corner}");
+    assert!(inside_ball < 0.0 && below_floor < 0.0, "contact holds the nodes outside");
+    assert!(top > radius && top < radius + 2.0 * gap, "the cloth rests on top of the ball: {top}");
+    assert!(corner.z < 0.0, "the corners fall past the ball's equator: {corner}");
+}
+
+/// Pins chosen by a predicate move with their motion, dragging the cloth.
+#[test]
+fn animated_pins_follow_their_motion() {
+    let params =
+        ClothParams { thickness: 1e-3, young: 1e6, poisson: 0.3, density: 200.0, gravity: DVec3::new(0.0, 0.0, -9.81) };
+    let mesh = ClothMesh::sheet(0.3, 0.3, 7, 7);
+    let pinned = PinSelector::parse("y>=0.3").unwrap().select(&mesh.nodes).unwrap();
+    assert_eq!(pinned.iter().filter(|p| **p).count(), 7);
+    let mut cloth = Cloth::new(mesh, params, &pinned).expect("cloth");
+    let lift = DVec3::new(0.0, 0.0, 0.5);
+    cloth.set_pin_motion(PinMotion { velocity: lift, ..PinMotion::default() });
+    for _ in 0..20 {
+        cloth.step(0.01, Integrator::ImplicitEuler).expect("step");
+    }
+    for (i, (p, rest)) in cloth.positions.iter().zip(&cloth.mesh().nodes).enumerate() {
+        if pinned[i] {
+            assert!((*p - (*rest + lift * 0.2)).length() < 1e-9, "pin {i} at {p}");
+            assert!((cloth.velocities[i] - lift).length() < 1e-6, "pin {i} moves at {}", cloth.velocities[i]);
+        }
+    }
+    let far_edge = cloth.positions[..7].iter().map(|p| p.z).sum::<f64>() / 7.0;
+    assert!(far_edge < 0.0 && far_edge > -0.3, "the free edge hangs below the lifted pins: {far_edge}");
 }

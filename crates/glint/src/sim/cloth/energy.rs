@@ -29,14 +29,26 @@ pub fn stretch_gradient(xi: DVec3, xj: DVec3, rest: f64, k: f64) -> DVec3 {
     k * (length / rest - 1.0) / (rest * length) * d
 }
 
+/// Which Hessian [`stretch_hessian_block`] and [`bend_hessian`] form.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Hessian {
+    /// The exact second derivative (may be indefinite).
+    Exact,
+    /// A positive semi-definite approximation: a compressed edge's negative
+    /// sideways stiffness is dropped, and so is the hinge term
+    /// `k (θ − θ̄) ∇²θ`, leaving `k ∇θ ∇θᵀ` (Gauss–Newton).
+    Definite,
+}
+
 /// The 3×3 block `K` of [`stretch_energy`]'s Hessian (rows, then columns):
 /// the 6×6 Hessian over (xi, xj) is `[[K, −K], [−K, K]]`.
-pub fn stretch_hessian_block(xi: DVec3, xj: DVec3, rest: f64, k: f64) -> [[f64; 3]; 3] {
+pub fn stretch_hessian_block(xi: DVec3, xj: DVec3, rest: f64, k: f64, kind: Hessian) -> [[f64; 3]; 3] {
     let d = xj - xi;
     let length = d.length();
     let u = d / length;
     let along = k / (rest * rest);
     let across = k * (length / rest - 1.0) / (rest * length);
+    let across = if kind == Hessian::Definite { across.max(0.0) } else { across };
     let mut block = [[0.0; 3]; 3];
     for (r, row) in block.iter_mut().enumerate() {
         for (c, v) in row.iter_mut().enumerate() {
@@ -103,18 +115,20 @@ pub fn bend_gradient(x: &[DVec3; 4], rest: f64, k: f64) -> [DVec3; 4] {
 }
 
 /// Hessian of [`bend_energy`] over the 12 coordinates (node-major: x₀.x, x₀.y, …, x₃.z).
-pub fn bend_hessian(x: &[DVec3; 4], rest: f64, k: f64) -> [[f64; 12]; 12] {
-    let strain = hinge_angle(x) - rest;
+pub fn bend_hessian(x: &[DVec3; 4], rest: f64, k: f64, kind: Hessian) -> [[f64; 12]; 12] {
     let mut h = [[0.0; 12]; 12];
-    let mut gradient = [0.0; 12];
-    for col in 0..12 {
-        let mut dx = [DVec3::ZERO; 4];
-        dx[col / 3][col % 3] = 1.0;
-        let (g, dg) = angle_gradient_and_derivative(x, &dx);
-        for (row, line) in h.iter_mut().enumerate() {
-            line[col] = k * strain * dg[row / 3][row % 3];
+    let (g, _) = angle_gradient_and_derivative(x, &[DVec3::ZERO; 4]);
+    let gradient: [f64; 12] = std::array::from_fn(|i| g[i / 3][i % 3]);
+    if kind == Hessian::Exact {
+        let strain = hinge_angle(x) - rest;
+        for col in 0..12 {
+            let mut dx = [DVec3::ZERO; 4];
+            dx[col / 3][col % 3] = 1.0;
+            let (_, dg) = angle_gradient_and_derivative(x, &dx);
+            for (row, line) in h.iter_mut().enumerate() {
+                line[col] = k * strain * dg[row / 3][row % 3];
+            }
         }
-        gradient = std::array::from_fn(|i| g[i / 3][i % 3]);
     }
     for (line, gr) in h.iter_mut().zip(gradient) {
         for (v, gc) in line.iter_mut().zip(gradient) {
@@ -194,7 +208,7 @@ mod tests {
             let v = flat(&x);
             let g = flat(&bend_gradient(&x, rest, k));
             let num_g = numeric(&v, |p| [bend_energy(&unflat(p), rest, k)]);
-            let h = bend_hessian(&x, rest, k);
+            let h = bend_hessian(&x, rest, k, Hessian::Exact);
             let num_h = numeric(&v, |p| flat(&bend_gradient(&unflat(p), rest, k)));
             let scale = h.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
             for i in 0..12 {
@@ -232,7 +246,7 @@ mod tests {
             let num_g = numeric(&v, |p| [energy(p)]);
             let g = gradient(&v);
             let num_h = numeric(&v, gradient);
-            let block = stretch_hessian_block(xi, xj, rest, k);
+            let block = stretch_hessian_block(xi, xj, rest, k, Hessian::Exact);
             for i in 0..6 {
                 assert_close(g[i], num_g[i][0], 1.0, &format!("gradient {i}"));
                 for j in 0..6 {
@@ -241,5 +255,31 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn definite_hessians_have_no_negative_directions() {
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(5);
+        let quadratic = |h: &dyn Fn(usize, usize) -> f64, v: &[f64]| -> f64 {
+            (0..v.len()).map(|i| (0..v.len()).map(|j| v[i] * h(i, j) * v[j]).sum::<f64>()).sum()
+        };
+        let (mut exact_negative, mut checked) = (0, 0);
+        for _ in 0..50 {
+            let x = random_hinge(&mut rng);
+            let rest = rng.random_range(-0.5..0.5);
+            let exact = bend_hessian(&x, rest, 1.0, Hessian::Exact);
+            let definite = bend_hessian(&x, rest, 1.0, Hessian::Definite);
+            // A squeezed edge (length 0.5 of rest 1).
+            let block = stretch_hessian_block(DVec3::ZERO, DVec3::new(0.3, 0.4, 0.0), 1.0, 1.0, Hessian::Definite);
+            let edge = |i: usize, j: usize| if (i < 3) == (j < 3) { 1.0 } else { -1.0 } * block[i % 3][j % 3];
+            for _ in 0..20 {
+                let v: [f64; 12] = std::array::from_fn(|_| rng.random_range(-1.0..1.0));
+                assert!(quadratic(&|i, j| definite[i][j], &v) >= -1e-12);
+                assert!(quadratic(&edge, &v[..6]) >= -1e-12);
+                exact_negative += usize::from(quadratic(&|i, j| exact[i][j], &v) < 0.0);
+                checked += 1;
+            }
+        }
+        assert!(exact_negative > 0, "the exact hinge Hessian is indefinite somewhere ({checked} tries)");
     }
 }

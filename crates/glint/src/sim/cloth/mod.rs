@@ -1,9 +1,13 @@
 //! Discrete Elastic Plates cloth.
 
+pub mod contact;
 pub mod energy;
 pub mod mesh;
+pub mod pins;
 
+pub use contact::Collider;
 pub use mesh::{ClothMesh, ClothMeshError, Topology};
+pub use pins::{PinMotion, PinSelector};
 mod dynamics;
 mod system;
 

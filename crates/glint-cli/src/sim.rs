@@ -1,0 +1,205 @@
+//! `glint sim cloth`: run a Discrete Elastic Plates simulation without a GPU,
+//! writing the trajectory as CSV and, with `--bench`, its speed.
+
+use clap::{Args, ValueEnum};
+use glam::DVec3;
+use glint::sim::cloth::{Cloth, ClothMesh, ClothParams, Collider, Integrator, PinSelector};
+use glint::{Diagnostic, Error};
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// `glint sim cloth` options.
+#[derive(Args)]
+#[command(group(clap::ArgGroup::new("shape").required(true).args(["mesh", "sheet"])))]
+pub struct ClothArgs {
+    /// The mesh: OBJ, or the `*Nodes` / `*Triangles` text format.
+    #[arg(long, value_name = "FILE")]
+    mesh: Option<PathBuf>,
+    /// A rectangular sheet in the XY plane, W,H metres.
+    #[arg(long, value_name = "W,H", value_parser = parse_pair::<f64>, requires = "resolution")]
+    sheet: Option<(f64, f64)>,
+    /// Nodes along the sheet's width and height, N,M (2..=1025 each).
+    #[arg(long, value_name = "N,M", value_parser = parse_pair::<u32>)]
+    resolution: Option<(u32, u32)>,
+    /// Thickness h, metres.
+    #[arg(long, default_value_t = 1e-3, value_parser = positive)]
+    thickness: f64,
+    /// Young's modulus E, pascals.
+    #[arg(long, default_value_t = 1e7, value_parser = positive)]
+    young: f64,
+    /// Poisson's ratio (recorded; the DEP constants do not use it).
+    #[arg(long, default_value_t = 0.3, value_parser = poisson)]
+    poisson: f64,
+    /// Density ρ, kg/m³.
+    #[arg(long, default_value_t = 200.0, value_parser = positive)]
+    density: f64,
+    /// Gravity, "GX GY GZ" in m/s².
+    #[arg(long, default_value = "0 0 -9.81", value_parser = parse_vector, allow_hyphen_values = true)]
+    gravity: DVec3,
+    /// Pinned nodes: a predicate on rest positions such as `x<=0.01`
+    /// (`&&`, `||`), `nodes 1 2 3` (1-based), or `none`.
+    #[arg(long, value_name = "PREDICATE", default_value = "none", value_parser = PinSelector::parse)]
+    fix: PinSelector,
+    /// A rigid obstacle: `plane PX PY PZ NX NY NZ`, `sphere CX CY CZ R` or
+    /// `box MINX MINY MINZ MAXX MAXY MAXZ`. Repeatable.
+    #[arg(long, value_name = "SHAPE", value_parser = Collider::parse)]
+    collider: Vec<Collider>,
+    /// Time step, seconds (ignored by `static`).
+    #[arg(long, default_value_t = 0.01, value_parser = positive)]
+    dt: f64,
+    /// Steps to take (`static` takes one).
+    #[arg(long, default_value_t = 100, value_parser = clap::value_parser!(u32).range(1..=10_000_000))]
+    steps: u32,
+    /// How to advance.
+    #[arg(long, value_enum, default_value_t = IntegratorArg::ImplicitEuler)]
+    integrator: IntegratorArg,
+    /// Write `step,t,x1,y1,z1,…` (1-based node numbers), one row per step.
+    #[arg(long, value_name = "traj.csv")]
+    out: Option<PathBuf>,
+    /// Print steps per second and Newton iterations per step.
+    #[arg(long)]
+    bench: bool,
+}
+
+/// `--integrator`.
+#[derive(Clone, Copy, ValueEnum)]
+enum IntegratorArg {
+    ImplicitEuler,
+    Newmark,
+    Static,
+}
+
+/// Run `glint sim cloth`.
+pub fn cloth(args: &ClothArgs) -> Result<(), Error> {
+    let mesh = match (&args.mesh, args.sheet, args.resolution) {
+        (Some(path), _, _) => ClothMesh::load(path)?,
+        (None, Some((w, h)), Some((n, m))) => {
+            let sizes = w.is_finite() && h.is_finite() && w > 0.0 && h > 0.0;
+            if !(sizes && (2..=1025).contains(&n) && (2..=1025).contains(&m)) {
+                return Err(usage("--sheet needs sizes above 0 and --resolution 2..=1025 nodes a side"));
+            }
+            ClothMesh::sheet(w, h, n, m)
+        }
+        _ => return Err(usage("give --mesh FILE, or --sheet W,H with --resolution N,M")),
+    };
+    let source = args.mesh.clone().unwrap_or_else(|| PathBuf::from("--sheet"));
+    let pinned = args.fix.select(&mesh.nodes).map_err(|m| Diagnostic::file(&source, format!("--fix: {m}")))?;
+    let params = ClothParams {
+        thickness: args.thickness,
+        young: args.young,
+        poisson: args.poisson,
+        density: args.density,
+        gravity: args.gravity,
+    };
+    let nodes = mesh.nodes.len();
+    let mut cloth = Cloth::new(mesh, params, &pinned).map_err(|e| Diagnostic::file(&source, e.to_string()))?;
+    cloth.set_colliders(args.collider.clone(), args.thickness.max(1e-3));
+    let (integrator, steps) = match args.integrator {
+        IntegratorArg::ImplicitEuler => (Integrator::ImplicitEuler, args.steps),
+        IntegratorArg::Newmark => (Integrator::Newmark, args.steps),
+        IntegratorArg::Static => (Integrator::Static, 1),
+    };
+    let mut out = args.out.as_deref().map(|path| Trajectory::create(path, nodes)).transpose()?;
+    let (mut stepping, mut iterations, mut factorizations, mut substeps) = (0.0, 0u64, 0u64, 0u64);
+    for step in 1..=steps {
+        let start = Instant::now();
+        let stats = cloth.step(args.dt, integrator)?;
+        stepping += start.elapsed().as_secs_f64();
+        iterations += u64::from(stats.newton_iterations);
+        factorizations += u64::from(stats.factorizations);
+        substeps += u64::from(stats.substeps);
+        if let Some(out) = &mut out {
+            out.row(step, cloth.time, &cloth.positions)?;
+        }
+    }
+    if let Some(out) = out {
+        out.finish()?;
+    }
+    if args.bench {
+        let pinned = pinned.iter().filter(|p| **p).count();
+        println!(
+            "cloth: {nodes} nodes ({pinned} pinned), {} edges, {} hinges, {} threads",
+            cloth.topology().edges.len(),
+            cloth.topology().hinges.len(),
+            rayon::current_num_threads()
+        );
+        println!(
+            "{steps} steps of {} s in {stepping:.3} s: {:.1} steps/s, {:.2} Newton iterations/step \
+             ({:.2} factorisations), {:.2} sub-steps/step",
+            args.dt,
+            f64::from(steps) / stepping,
+            iterations as f64 / f64::from(steps),
+            factorizations as f64 / f64::from(steps),
+            substeps as f64 / f64::from(steps)
+        );
+    }
+    Ok(())
+}
+
+/// The CSV trajectory being written.
+struct Trajectory<'p> {
+    path: &'p Path,
+    file: std::io::BufWriter<std::fs::File>,
+}
+
+impl<'p> Trajectory<'p> {
+    fn create(path: &'p Path, nodes: usize) -> Result<Self, Error> {
+        let file = std::fs::File::create(path).map_err(|e| Diagnostic::file(path, format!("cannot create: {e}")))?;
+        let mut t = Self { path, file: std::io::BufWriter::new(file) };
+        let mut header = String::from("step,t");
+        for n in 1..=nodes {
+            header.push_str(&format!(",x{n},y{n},z{n}"));
+        }
+        t.line(&header)?;
+        Ok(t)
+    }
+
+    fn row(&mut self, step: u32, time: f64, positions: &[DVec3]) -> Result<(), Error> {
+        let mut line = format!("{step},{time}");
+        for p in positions {
+            line.push_str(&format!(",{},{},{}", p.x, p.y, p.z));
+        }
+        self.line(&line)
+    }
+
+    fn line(&mut self, text: &str) -> Result<(), Error> {
+        writeln!(self.file, "{text}").map_err(|e| Diagnostic::file(self.path, format!("cannot write: {e}")).into())
+    }
+
+    fn finish(mut self) -> Result<(), Error> {
+        self.file.flush().map_err(|e| Diagnostic::file(self.path, format!("cannot write: {e}")).into())
+    }
+}
+
+fn usage(message: &str) -> Error {
+    Diagnostic::file(Path::new("glint sim cloth"), message).into()
+}
+
+fn parse_pair<T: std::str::FromStr>(s: &str) -> Result<(T, T), String> {
+    let (a, b) = s.split_once(',').ok_or_else(|| format!("'{s}' is not A,B"))?;
+    match (a.trim().parse(), b.trim().parse()) {
+        (Ok(a), Ok(b)) => Ok((a, b)),
+        _ => Err(format!("'{s}': expected two numbers, A,B")),
+    }
+}
+
+fn positive(s: &str) -> Result<f64, String> {
+    s.trim()
+        .parse::<f64>()
+        .ok()
+        .filter(|v| v.is_finite() && *v > 0.0)
+        .ok_or(format!("'{s}': expected a number above 0"))
+}
+
+fn poisson(s: &str) -> Result<f64, String> {
+    s.trim().parse::<f64>().ok().filter(|v| (0.0..=0.5).contains(v)).ok_or(format!("'{s}': expected 0 <= ν <= 0.5"))
+}
+
+fn parse_vector(s: &str) -> Result<DVec3, String> {
+    let v: Vec<f64> = s.split_whitespace().filter_map(|w| w.parse().ok().filter(|v: &f64| v.is_finite())).collect();
+    match v[..] {
+        [x, y, z] if s.split_whitespace().count() == 3 => Ok(DVec3::new(x, y, z)),
+        _ => Err(format!("'{s}': expected three numbers, \"X Y Z\"")),
+    }
+}
