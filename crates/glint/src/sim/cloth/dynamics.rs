@@ -174,7 +174,7 @@ impl Cloth {
         for first in (0..free_dofs).step_by(3) {
             pattern.extend(NODE_BLOCK.iter().map(|(r, c)| (first + r, first + c)));
         }
-        let system = SparseSystem::new(free_dofs, &pattern);
+        let system = SparseSystem::new(free_dofs, &pattern).map_err(|_| ClothMeshError::TooLarge(n))?;
         Ok(Self {
             positions: mesh.nodes.clone(),
             velocities: vec![DVec3::ZERO; n],

@@ -48,6 +48,9 @@ pub enum ClothMeshError {
     /// No triangles at all.
     #[error("the mesh has no triangles")]
     Empty,
+    /// The sparse system of this many nodes does not fit in memory.
+    #[error("a cloth of {0} nodes is too large: its linear system does not fit in memory")]
+    TooLarge(usize),
     /// A position is NaN or infinite.
     #[error("node {0} is not a finite position")]
     NotFinite(usize),

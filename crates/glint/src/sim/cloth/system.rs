@@ -48,21 +48,21 @@ pub struct SparseSystem {
 impl SparseSystem {
     /// A system whose entries are `pattern`'s (row, column) pairs, in that
     /// order, each with row ≥ column: the matrix is their symmetric extension.
-    pub fn new(n: usize, pattern: &[(usize, usize)]) -> Self {
+    /// Fails when the symbolic factorisation does not fit in memory.
+    pub fn new(n: usize, pattern: &[(usize, usize)]) -> Result<Self, SolveFailed> {
         debug_assert!(pattern.iter().all(|(r, c)| r >= c), "lower triangle only");
         let pairs: Vec<Pair<usize, usize>> = pattern.iter().map(|&(row, col)| Pair { row, col }).collect();
-        let (symbolic, argsort) =
-            SymbolicSparseColMat::try_new_from_indices(n, n, &pairs).expect("pattern indices are below n");
+        let (symbolic, argsort) = SymbolicSparseColMat::try_new_from_indices(n, n, &pairs).map_err(|_| SolveFailed)?;
         let cholesky =
             factorize_symbolic_cholesky(symbolic.as_ref(), Side::Lower, SymmetricOrdering::Amd, Default::default())
-                .expect("memory for the symbolic factorisation");
+                .map_err(|_| SolveFailed)?;
         let par = FACTOR_PAR;
         let scratch = MemBuffer::new(
             cholesky
                 .factorize_numeric_llt_scratch::<f64>(par, Spec::default())
                 .or(cholesky.solve_in_place_scratch::<f64>(1, par)),
         );
-        Self {
+        Ok(Self {
             n,
             cholesky_values: vec![0.0; cholesky.len_val()],
             symbolic,
@@ -74,7 +74,7 @@ impl SparseSystem {
             factor: Factor::None,
             #[cfg(test)]
             pattern: pattern.to_vec(),
-        }
+        })
     }
 
     /// The matrix as dense rows (duplicates summed, mirrored), for tests.
@@ -171,7 +171,7 @@ mod tests {
     fn solves_positive_definite_and_indefinite_systems() {
         // [[4, 1], [1, 3]] (duplicates summed: 4 = 3 + 1) and then an indefinite one.
         let pattern = [(0, 0), (0, 0), (1, 0), (1, 1)];
-        let mut system = SparseSystem::new(2, &pattern);
+        let mut system = SparseSystem::new(2, &pattern).unwrap();
         system.values.copy_from_slice(&[3.0, 1.0, 1.0, 3.0]);
         assert!(system.factorize_cholesky());
         let mut x = [1.0, 2.0];
