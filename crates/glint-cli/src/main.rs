@@ -291,7 +291,7 @@ fn render(args: RenderArgs) -> Result<(), Error> {
         bar
     });
     for k in 0..frames {
-        desc.pose(time + k as f32 / fps, &mut entities, &mut renderer);
+        desc.pose(time + k as f32 / fps, &mut entities, &mut renderer)?;
         let frame = renderer.render(&entities, &cam, &desc.lights, &mut target)?;
         let path = numbered(output, k).map_err(|m| glint::Diagnostic::file(output, m))?;
         if let Some(dir) = path.parent().filter(|d| frames > 1 && !d.as_os_str().is_empty()) {

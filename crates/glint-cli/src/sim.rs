@@ -45,6 +45,9 @@ pub struct ClothArgs {
     /// `box MINX MINY MINZ MAXX MAXY MAXZ`. Repeatable.
     #[arg(long, value_name = "SHAPE", value_parser = Collider::parse)]
     collider: Vec<Collider>,
+    /// Mass-proportional damping c, 1/s: a drag −c·m·v on every free node.
+    #[arg(long, default_value_t = 0.0, value_parser = non_negative)]
+    damping: f64,
     /// Time step, seconds (ignored by `static`).
     #[arg(long, default_value_t = 0.01, value_parser = positive)]
     dt: f64,
@@ -95,6 +98,7 @@ pub fn cloth(args: &ClothArgs) -> Result<(), Error> {
     let nodes = mesh.nodes.len();
     let mut cloth = Cloth::new(mesh, params, &pinned).map_err(|e| Diagnostic::file(&source, e.to_string()))?;
     cloth.set_colliders(args.collider.clone(), args.thickness.max(1e-3));
+    cloth.set_damping(args.damping);
     let (integrator, steps) = match args.integrator {
         IntegratorArg::ImplicitEuler => (Integrator::ImplicitEuler, args.steps),
         IntegratorArg::Newmark => (Integrator::Newmark, args.steps),
@@ -190,6 +194,14 @@ fn positive(s: &str) -> Result<f64, String> {
         .ok()
         .filter(|v| v.is_finite() && *v > 0.0)
         .ok_or(format!("'{s}': expected a number above 0"))
+}
+
+fn non_negative(s: &str) -> Result<f64, String> {
+    s.trim()
+        .parse::<f64>()
+        .ok()
+        .filter(|v| v.is_finite() && *v >= 0.0)
+        .ok_or(format!("'{s}': expected a number 0 or above"))
 }
 
 fn poisson(s: &str) -> Result<f64, String> {

@@ -245,3 +245,29 @@ fn animated_pins_follow_their_motion() {
     let far_edge = cloth.positions[..7].iter().map(|p| p.z).sum::<f64>() / 7.0;
     assert!(far_edge < 0.0 && far_edge > -0.3, "the free edge hangs below the lifted pins: {far_edge}");
 }
+
+#[test]
+fn damping_brings_a_falling_sheet_to_its_terminal_velocity() {
+    // Drag −c·m·v on a free sheet under gravity: every node falls at g/c in the
+    // end, with either integrator (both treat the drag implicitly).
+    for integrator in [Integrator::ImplicitEuler, Integrator::Newmark] {
+        let params = ClothParams {
+            thickness: 1e-3,
+            young: 1e6,
+            poisson: 0.3,
+            density: 200.0,
+            gravity: DVec3::new(0.0, 0.0, -9.81),
+        };
+        let mesh = ClothMesh::sheet(0.2, 0.2, 5, 5);
+        let mut cloth = Cloth::new(mesh.clone(), params, &vec![false; mesh.nodes.len()]).unwrap();
+        cloth.set_damping(5.0);
+        for _ in 0..300 {
+            cloth.step(0.01, integrator).unwrap();
+        }
+        let terminal = 9.81 / 5.0;
+        for v in &cloth.velocities {
+            assert!((v.z + terminal).abs() < 1e-3 * terminal, "{integrator:?}: {v} against {terminal}");
+            assert!(v.x.abs() < 1e-9 && v.y.abs() < 1e-9, "{integrator:?}: falls straight: {v}");
+        }
+    }
+}

@@ -95,3 +95,47 @@ fn metallic_roughness_grid() {
     // 25 spheres, each its own material: 25 draws, one indirect call.
     check("pbr", 25);
 }
+
+#[test]
+fn cloth_swings_with_its_debug_view_one_vertex_write_per_frame() {
+    // tests/scenes/cloth_debug.scn: a 9 × 9 sheet pinned at two corners, with
+    // seed 003's debug view (edge ribbons, pin markers). Posing moves it by
+    // rewriting the vertex buffers of the surface and the ribbons, nothing else.
+    let Some(gpu) = common::gpu() else { return };
+    let path = common::repo_root().join("tests/scenes/cloth_debug.scn");
+    let mut desc = glint::asset::load_scene(&path).expect("scene");
+    assert!(desc.warnings.is_empty(), "{:?}", desc.warnings);
+    let mut renderer = glint::Renderer::new(gpu);
+    let mut entities = desc.instantiate(&mut renderer);
+    assert_eq!(entities.len(), 4, "floor, cloth, ribbons, pins");
+    assert_eq!(entities[3].transforms().len(), 2, "two pinned corners");
+    let mut target = glint::OffscreenTarget::new(gpu, 256, 256, 4).expect("target");
+    let mut frame = |desc: &mut glint::asset::SceneDesc, entities: &mut Vec<glint::Entity>, time: f32| {
+        desc.pose(time, entities, &mut renderer).expect("the cloth steps");
+        let stats = renderer.render(entities.iter(), &desc.cameras[0], &desc.lights, &mut target).expect("frame");
+        (stats, target.read_rgba8(gpu).expect("readback"))
+    };
+    let (first, _) = frame(&mut desc, &mut entities, 0.0);
+    assert_eq!(first.draws, 4, "floor, cloth, ribbons, one instanced draw of both pins");
+    let edges = desc.cloths[0].view.edges.as_ref().expect("debug view").vertices().len();
+    let rest_bottom = desc.cloths[0].view.surface.aabb().min.y;
+    let (swung, image) = frame(&mut desc, &mut entities, 0.6);
+    let vertex_bytes = (81 + edges) as u64 * std::mem::size_of::<glint::scene::Vertex>() as u64;
+    assert_eq!(swung.bytes_uploaded.meshes, vertex_bytes, "one write of the surface's and the ribbons' vertices");
+    // The surface's and the ribbons' bounds moved, so their one instance record
+    // each (64 bytes: transform and material) is rewritten for culling; the
+    // pins did not move and are not.
+    assert_eq!(swung.bytes_uploaded.instances, 2 * 64, "two instance records, not the pins'");
+    let bottom = desc.cloths[0].view.surface.aabb().min.y;
+    assert!(bottom < rest_bottom - 0.3, "the free edge swung down: lowest point {bottom} (was {rest_bottom})");
+    common::assert_matches_reference("cloth_debug", &image);
+
+    // Deterministic: going back to 0 restarts from rest, and 0.6 s again is the same shape.
+    let before: Vec<_> = desc.cloths[0].view.surface.vertices().to_vec();
+    frame(&mut desc, &mut entities, 0.0);
+    assert_eq!(desc.cloths[0].view.surface.aabb().min.y, rest_bottom, "back at rest");
+    frame(&mut desc, &mut entities, 0.6);
+    assert!(desc.cloths[0].view.surface.vertices() == before.as_slice(), "the same time gives the same shape");
+    let (still, _) = frame(&mut desc, &mut entities, 0.6);
+    assert_eq!(still.bytes_uploaded.meshes, 0, "posing at the same time uploads nothing");
+}

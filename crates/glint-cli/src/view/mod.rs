@@ -245,7 +245,7 @@ impl View {
         self.fly.update(dt.as_secs_f32().min(0.25), &self.input.take());
         let scene = &mut self.scene;
         let time = (now - self.started).as_secs_f32();
-        scene.desc.pose(time, &mut scene.entities, &mut scene.renderer);
+        scene.desc.pose(time, &mut scene.entities, &mut scene.renderer)?;
         let camera = self.fly.apply(&scene.camera);
         let stats = scene.renderer.render(&scene.entities, &camera, &scene.desc.lights, &mut self.target)?;
         self.surface.present(&self.gpu, &self.target);

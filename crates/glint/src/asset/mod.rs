@@ -9,6 +9,7 @@ mod obj;
 mod placement;
 pub mod procedural;
 mod scn;
+mod scn_cloth;
 mod scn_fields;
 mod scn_lights;
 mod scn_syntax;
@@ -20,6 +21,7 @@ pub use scn::{
     load_scene, load_scene_with, parse_scene, parse_scene_with, DrawOptions, EntityDesc, MaterialDesc, MeshRef,
     SceneDesc, TextureRef, MAX_INSTANCES,
 };
+pub use scn_cloth::{ClothDesc, ClothSetup, MAX_POSE_STEPS};
 pub use texture::{load_texture, Texture, MAX_TEXTURE_SIDE};
 
 use std::fmt;

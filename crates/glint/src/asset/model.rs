@@ -295,6 +295,7 @@ impl Model {
                 draw: Default::default(),
                 transforms: vec![Mat4::IDENTITY],
             }],
+            cloths: Vec::new(),
             models: vec![self],
         }
     }

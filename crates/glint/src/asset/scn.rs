@@ -4,6 +4,7 @@
 
 use super::model::AddedModel;
 use super::placement::place_instances;
+use super::scn_cloth::{self, ClothDesc};
 use super::scn_fields::{numbers, Fields};
 use super::scn_lights;
 use super::scn_syntax::{parse_blocks, Block, Pair};
@@ -14,6 +15,7 @@ use crate::scene::{
     AlphaMode, Background, BlendState, Camera, Compare, Cull, Entity, Environment, Fog, Light, Material, MaterialId,
     RenderStates, ShadingModel, StencilOp, MAX_LIGHTS,
 };
+use crate::sim::cloth::ClothView;
 use crate::Renderer;
 use glam::{EulerRot, Mat4, Quat, Vec3, Vec4};
 use std::collections::HashMap;
@@ -131,6 +133,8 @@ pub struct SceneDesc {
     pub models: Vec<Model>,
     /// Render tasks, one per (mesh, material, draw options), in first-use order.
     pub entities: Vec<EntityDesc>,
+    /// Simulated cloths in file order; their entities follow the render tasks'.
+    pub cloths: Vec<ClothDesc>,
     /// Non-fatal problems (unknown keys, repeated keys), `path:line: message`.
     pub warnings: Vec<Diagnostic>,
 }
@@ -141,11 +145,14 @@ impl SceneDesc {
         self.entities.iter().map(|e| e.transforms.len()).sum()
     }
 
-    /// Pose every model at `time` seconds (see [`Model::pose`]) and move the
-    /// matching `entities` (as [`SceneDesc::instantiate`] returned them into
-    /// `renderer`) along: only entities of animated models change, so only they
-    /// are uploaded again; morphed meshes replace their shapes in `renderer`.
-    pub fn pose(&mut self, time: f32, entities: &mut [Entity], renderer: &mut Renderer) {
+    /// Pose every model at `time` seconds (see [`Model::pose`]), advance every
+    /// cloth to `time` (see [`ClothDesc::pose`]), and move the matching `entities`
+    /// (as [`SceneDesc::instantiate`] returned them into `renderer`) along: only
+    /// entities of animated models and moved cloths change, so only they are
+    /// uploaded again; morphed meshes and cloth surfaces replace their shapes in
+    /// `renderer` (one vertex-buffer write each). Fails when a cloth cannot reach
+    /// `time` (too many steps, or a step that does not converge).
+    pub fn pose(&mut self, time: f32, entities: &mut [Entity], renderer: &mut Renderer) -> Result<(), crate::Error> {
         let mut moved = vec![false; self.models.len()];
         let mut morphed = vec![Vec::new(); self.models.len()];
         for ((model, moved), morphed) in self.models.iter_mut().zip(&mut moved).zip(&mut morphed) {
@@ -171,6 +178,23 @@ impl SceneDesc {
                 }
             }
         }
+        for cloth in &mut self.cloths {
+            let count = cloth_entity_count(cloth);
+            if cloth.pose(time, &self.path)? {
+                let view = &cloth.view;
+                let meshes = std::iter::once(&view.surface).chain(&view.edges);
+                for (entity, mesh) in entities[next..].iter().zip(meshes) {
+                    renderer.update_shape(entity.shape, mesh.clone());
+                }
+                // Pins that did not move are not uploaded again.
+                let moved = pin_transforms(view);
+                if let Some(pins) = entities.get_mut(next + 2).filter(|p| count == 3 && p.transforms() != moved) {
+                    *pins.transforms_mut() = moved;
+                }
+            }
+            next += count;
+        }
+        Ok(())
     }
 
     /// Add this scene's shapes, textures and materials to `renderer`, set its
@@ -207,8 +231,55 @@ impl SceneDesc {
                 e.draw.apply(entity);
             }
         }
+        for cloth in &self.cloths {
+            let first = entities.len();
+            // Cloth is thin: both sides show, whatever the named material says.
+            let look = cloth.material.map_or_else(Material::default, |i| self.materials[i].resolve(&textures));
+            let material = renderer.add_material(Material { double_sided: true, ..look });
+            let surface = renderer.add_shape(cloth.view.surface.clone());
+            entities.push(Entity::new(surface, material, Mat4::IDENTITY));
+            if let Some(edges) = &cloth.view.edges {
+                let ink = Material {
+                    shading: ShadingModel::Unlit,
+                    double_sided: true,
+                    ..Material::color("cloth edges", 0.02, 0.02, 0.03)
+                };
+                let (ink, edges) = (renderer.add_material(ink), renderer.add_shape(edges.clone()));
+                entities.push(Entity::new(edges, ink, Mat4::IDENTITY));
+                if !cloth.view.pins.is_empty() {
+                    let red =
+                        Material { shading: ShadingModel::Unlit, ..Material::color("cloth pins", 1.0, 0.1, 0.05) };
+                    let red = renderer.add_material(red);
+                    let ball = *shapes
+                        .entry(ShapeKind::Sphere)
+                        .or_insert_with(|| renderer.add_shape(ShapeKind::Sphere.mesh()));
+                    entities.push(Entity::instanced(ball, red, pin_transforms(&cloth.view)));
+                }
+            }
+            for entity in &mut entities[first..] {
+                cloth.draw.apply(entity);
+            }
+        }
         entities
     }
+}
+
+/// Entities [`SceneDesc::instantiate`] makes for a cloth: its surface, and with
+/// the debug view its edge ribbons and (when it has pins) its pin markers.
+fn cloth_entity_count(cloth: &ClothDesc) -> usize {
+    match (&cloth.view.edges, cloth.view.pins.is_empty()) {
+        (None, _) => 1,
+        (Some(_), true) => 2,
+        (Some(_), false) => 3,
+    }
+}
+
+/// One sphere per pinned node, as big as the view's pin markers.
+fn pin_transforms(view: &ClothView) -> Vec<Mat4> {
+    view.pins
+        .iter()
+        .map(|&p| Mat4::from_scale_rotation_translation(Vec3::splat(view.pin_size), Quat::IDENTITY, p))
+        .collect()
 }
 
 /// Read, parse and validate a `.scn` file, decoding the textures it names.
@@ -243,12 +314,14 @@ pub fn parse_scene_with(path: &Path, text: &str, options: LoadOptions) -> Result
             textures: Vec::new(),
             models: Vec::new(),
             entities: Vec::new(),
+            cloths: Vec::new(),
             warnings: Vec::new(),
         },
         textures: TextureCache::default(),
         model_index: HashMap::new(),
         options,
         placements: Vec::new(),
+        cloths: Vec::new(),
         instances: 0,
     };
     for block in &blocks {
@@ -273,6 +346,8 @@ struct Loader<'a> {
     model_index: HashMap<PathBuf, usize>,
     options: LoadOptions,
     placements: Vec<Placement>,
+    /// Cloths with their material names, resolved in [`Loader::finish`].
+    cloths: Vec<(ClothDesc, Option<(String, usize)>)>,
     instances: u64,
 }
 
@@ -417,7 +492,7 @@ fn render_states(f: &mut Fields, derived: RenderStates) -> Result<Option<RenderS
 }
 
 /// Rotation from Quake-style angles in degrees: pitch about X, yaw about Y, roll about Z.
-fn rotation(angles: Vec3) -> Quat {
+pub(crate) fn rotation(angles: Vec3) -> Quat {
     let r = angles * (std::f32::consts::PI / 180.0);
     Quat::from_euler(EulerRot::YXZ, r.y, r.x, r.z)
 }
@@ -441,11 +516,17 @@ impl Loader<'_> {
             "material" => self.material(&mut f)?,
             "entity" => self.entity(&mut f)?,
             "instances" => self.instances(&mut f)?,
+            "cloth" => {
+                let mut cloth = scn_cloth::parse(&mut f, &self.dir)?;
+                cloth.draw = Self::draw_options(&mut f)?;
+                let material = Self::material_ref(&mut f);
+                self.cloths.push((cloth, material));
+            }
             other => {
                 return Err(Diagnostic::at(
                     self.path,
                     class_pair.line,
-                    format!("unknown classname '{other}', expected one of: world, camera, light_directional, light_point, light_spot, material, entity, instances"),
+                    format!("unknown classname '{other}', expected one of: world, camera, light_directional, light_point, light_spot, material, entity, instances, cloth"),
                 ))
             }
         }
@@ -727,23 +808,20 @@ impl Loader<'_> {
         Ok(())
     }
 
+    /// A material name (and the line naming it) as an index into the scene's materials.
+    fn material_index(&self, name: Option<(String, usize)>) -> Result<Option<usize>, Diagnostic> {
+        let Some((name, line)) = name else { return Ok(None) };
+        let index = self.scene.materials.iter().position(|m| m.material.name == name);
+        let message = || format!("unknown material '{name}' (define it in a material block)");
+        index.map(Some).ok_or_else(|| Diagnostic::at(self.path, line, message()))
+    }
+
     /// Resolve material names and gather placements into one task per (mesh, material, render order).
     fn finish(mut self) -> Result<SceneDesc, Diagnostic> {
         self.scene.textures = std::mem::take(&mut self.textures).into_textures();
         let mut tasks: HashMap<(MeshRef, Option<usize>, DrawOptions), usize> = HashMap::new();
         for placement in std::mem::take(&mut self.placements) {
-            let material = match placement.material {
-                None => None,
-                Some((name, line)) => {
-                    Some(self.scene.materials.iter().position(|m| m.material.name == name).ok_or_else(|| {
-                        Diagnostic::at(
-                            self.path,
-                            line,
-                            format!("unknown material '{name}' (define it in a material block)"),
-                        )
-                    })?)
-                }
-            };
+            let material = self.material_index(placement.material)?;
             let task = *tasks.entry((placement.mesh, material, placement.draw)).or_insert_with(|| {
                 self.scene.entities.push(EntityDesc {
                     mesh: placement.mesh,
@@ -754,6 +832,10 @@ impl Loader<'_> {
                 self.scene.entities.len() - 1
             });
             self.scene.entities[task].transforms.extend(placement.transforms);
+        }
+        for (mut cloth, material) in std::mem::take(&mut self.cloths) {
+            cloth.material = self.material_index(material)?;
+            self.scene.cloths.push(cloth);
         }
         if self.scene.cameras.is_empty() {
             self.scene

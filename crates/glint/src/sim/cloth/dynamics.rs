@@ -117,6 +117,8 @@ pub struct Cloth {
     element_slots: Vec<[u8; 2]>,
     pin_motion: PinMotion,
     contact: Contact,
+    /// Mass-proportional damping c, 1/s: each free node feels `−c·m·v`.
+    damping: f64,
     system: SparseSystem,
     /// Node positions, metres.
     pub positions: Vec<DVec3>,
@@ -196,6 +198,7 @@ impl Cloth {
             element_slots,
             pin_motion: PinMotion::default(),
             contact: Contact::default(),
+            damping: 0.0,
             system,
             time: 0.0,
             last_step: StepStats::default(),
@@ -211,6 +214,14 @@ impl Cloth {
     /// each surface (see [`super::contact`]).
     pub fn set_colliders(&mut self, colliders: Vec<Collider>, distance: f64) {
         self.contact = Contact { colliders, distance };
+    }
+
+    /// Damp motion with a drag `−c·m·v` on every free node (`c` in 1/s, 0 for
+    /// none, the default): a stand-in for air and internal friction, so a drape
+    /// settles instead of swinging for ever. It is implicit like the rest: the
+    /// velocity is the step's end velocity. Negative or non-finite `c` counts as 0.
+    pub fn set_damping(&mut self, c: f64) {
+        self.damping = if c.is_finite() { c.max(0.0) } else { 0.0 };
     }
 
     /// The colliders and contact distance.
@@ -460,6 +471,36 @@ impl Cloth {
         Ok(stats)
     }
 
+    /// The inertia term with damping folded in. The end velocity is linear in
+    /// the end position, `v₁ = κ (q − q_d)` (implicit Euler: κ = 1/dt, q_d = x₀;
+    /// Newmark: κ = γ/(β dt), q_d = q̃ − (v₀ + dt(1−γ)a₀)/κ), so the drag's
+    /// residual `c m κ (q − q_d)` and the inertia's `s m (q − q̃)` add up to one
+    /// term `s' m (q − q̂)` with `s' = s + cκ` and `q̂ = (s q̃ + cκ q_d)/s'`.
+    fn damped(&self, dt: f64, integrator: Integrator, scale: f64, predicted: &[DVec3]) -> (f64, Vec<DVec3>) {
+        if self.damping == 0.0 {
+            return (scale, predicted.to_vec());
+        }
+        let kappa = match integrator {
+            Integrator::ImplicitEuler => 1.0 / dt,
+            _ => NEWMARK_GAMMA / (NEWMARK_BETA * dt),
+        };
+        let drag = self.damping * kappa;
+        let total = scale + drag;
+        let target = (0..predicted.len())
+            .map(|i| {
+                let q_d = match integrator {
+                    Integrator::ImplicitEuler => self.positions[i],
+                    _ => {
+                        let v = self.velocities[i] + dt * (1.0 - NEWMARK_GAMMA) * self.accelerations[i];
+                        predicted[i] - v / kappa
+                    }
+                };
+                (scale * predicted[i] + drag * q_d) / total
+            })
+            .collect();
+        (total, target)
+    }
+
     fn substep(&mut self, dt: f64, integrator: Integrator, depth: u32, stats: &mut StepStats) -> Result<(), StepError> {
         let (scale, predicted): (f64, Vec<DVec3>) = match integrator {
             Integrator::ImplicitEuler => {
@@ -478,7 +519,8 @@ impl Cloth {
                 q[node] = self.pin_motion.at(self.mesh.nodes[node], self.time + dt);
             }
         }
-        match self.newton(&mut q, scale, &predicted, 1.0, stats).filter(|_| !self.broken(&q)) {
+        let (solve_scale, target) = self.damped(dt, integrator, scale, &predicted);
+        match self.newton(&mut q, solve_scale, &target, 1.0, stats).filter(|_| !self.broken(&q)) {
             Some(()) => {
                 stats.substeps += 1;
                 for node in 0..q.len() {

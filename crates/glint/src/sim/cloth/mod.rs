@@ -4,10 +4,12 @@ pub mod contact;
 pub mod energy;
 pub mod mesh;
 pub mod pins;
+pub mod view;
 
 pub use contact::Collider;
 pub use mesh::{ClothMesh, ClothMeshError, Topology};
 pub use pins::{PinMotion, PinSelector};
+pub use view::ClothView;
 mod dynamics;
 mod system;
 

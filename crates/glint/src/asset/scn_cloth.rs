@@ -1,0 +1,321 @@
+//! The `.scn` `cloth` class: a Discrete Elastic Plates sheet simulated in world
+//! space and advanced by [`SceneDesc::pose`](super::SceneDesc::pose) to the
+//! requested time, deterministically (the same time always gives the same shape).
+
+use super::scn_fields::Fields;
+use super::Diagnostic;
+use crate::sim::cloth::{Cloth, ClothMesh, ClothParams, ClothView, Collider, Integrator, PinMotion, PinSelector};
+use glam::{DVec3, Vec3};
+use std::path::Path;
+
+/// Most steps one pose may take for one cloth (`--time` over `dt`): a later time
+/// is an error rather than hours of stepping.
+pub const MAX_POSE_STEPS: u64 = 100_000;
+
+/// Most nodes a `resolution` may give a side of a cloth sheet.
+const MAX_SIDE: i64 = 257;
+
+/// A `cloth` block: everything needed to (re)start its simulation, and how it looks now.
+#[derive(Clone, Debug)]
+pub struct ClothDesc {
+    /// The simulation at rest.
+    pub setup: ClothSetup,
+    /// How it steps.
+    pub integrator: Integrator,
+    /// Time step, seconds.
+    pub dt: f64,
+    /// Index into [`SceneDesc::materials`](super::SceneDesc::materials); `None` for the default.
+    pub material: Option<usize>,
+    /// Shadow flags and draw order.
+    pub draw: super::DrawOptions,
+    /// Whether to draw seed 003's debug view (edge ribbons, pin markers) too.
+    pub debug: bool,
+    /// The block's line, for errors while posing.
+    pub line: usize,
+    /// Its meshes as of the last pose.
+    pub view: ClothView,
+    run: Run,
+}
+
+/// What a cloth starts from.
+#[derive(Clone, Debug)]
+pub struct ClothSetup {
+    /// The rest mesh, placed in the world (`origin`, `angles`).
+    pub mesh: ClothMesh,
+    /// Material and gravity.
+    pub params: ClothParams,
+    /// Which nodes are pinned.
+    pub pinned: Vec<bool>,
+    /// How the pinned nodes move (`pin_velocity`, `pin_spin` about `origin`).
+    pub pin_motion: PinMotion,
+    /// Rigid obstacles (`colliders`).
+    pub colliders: Vec<Collider>,
+    /// Contact distance δ, metres.
+    pub contact_distance: f64,
+    /// Mass-proportional damping, 1/s (see [`Cloth::set_damping`]).
+    pub damping: f64,
+}
+
+impl ClothSetup {
+    /// A fresh simulation at rest.
+    pub fn start(&self) -> Result<Cloth, String> {
+        let mut cloth = Cloth::new(self.mesh.clone(), self.params, &self.pinned).map_err(|e| e.to_string())?;
+        cloth.set_pin_motion(self.pin_motion);
+        cloth.set_colliders(self.colliders.clone(), self.contact_distance);
+        cloth.set_damping(self.damping);
+        Ok(cloth)
+    }
+}
+
+/// The running simulation and how many steps it has taken. Cloning a scene does
+/// not clone a simulation: the copy restarts from rest when it is next posed.
+#[derive(Default)]
+struct Run(Option<(Box<Cloth>, u64)>);
+
+impl Clone for Run {
+    fn clone(&self) -> Self {
+        Self(None)
+    }
+}
+
+impl std::fmt::Debug for Run {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match &self.0 {
+            Some((cloth, steps)) => write!(f, "Run {{ steps: {steps}, time: {} }}", cloth.time),
+            None => write!(f, "Run(at rest)"),
+        }
+    }
+}
+
+impl ClothDesc {
+    /// Advance (or restart and advance) the simulation to `time` seconds and
+    /// update [`ClothDesc::view`]. Returns whether the view changed. A static
+    /// cloth takes its one equilibrium step whatever the time.
+    pub fn pose(&mut self, time: f32, scene: &Path) -> Result<bool, crate::Error> {
+        let target = match self.integrator {
+            Integrator::Static => 1,
+            _ => (f64::from(time.max(0.0)) / self.dt + 1e-6).floor() as u64,
+        };
+        if target > MAX_POSE_STEPS {
+            let message = format!(
+                "cloth: time {time} s is {target} steps of dt {} s, more than the {MAX_POSE_STEPS} one pose may take",
+                self.dt
+            );
+            return Err(Diagnostic::at(scene, self.line, message).into());
+        }
+        let restart = self.run.0.as_ref().is_none_or(|(_, steps)| *steps > target);
+        if restart {
+            let cloth = self.setup.start().map_err(|m| Diagnostic::at(scene, self.line, format!("cloth: {m}")))?;
+            self.run.0 = Some((Box::new(cloth), 0));
+        }
+        let Some((cloth, steps)) = &mut self.run.0 else { unreachable!("started above") };
+        let moved = restart || *steps < target;
+        while *steps < target {
+            cloth.step(self.dt, self.integrator)?;
+            *steps += 1;
+        }
+        if moved {
+            self.view.update(cloth);
+        }
+        Ok(moved)
+    }
+}
+
+/// Read a `cloth` block (all but `material` and the draw options, which the
+/// loader reads as for entities); `dir` anchors a relative `mesh` path.
+pub(crate) fn parse(f: &mut Fields, dir: &Path) -> Result<ClothDesc, Diagnostic> {
+    let at = |line: usize, m: String| Diagnostic::at(f.path, line, m);
+    let local = local_mesh(f, dir)?;
+    let origin = f.vec3("origin")?.unwrap_or(Vec3::ZERO);
+    let rotation = super::scn::rotation(f.vec3("angles")?.unwrap_or(Vec3::ZERO));
+    let pins_pair = f.get("pins");
+    let selector = match pins_pair {
+        Some(p) => PinSelector::parse(&p.value).map_err(|m| at(p.line, format!("\"pins\": {m}")))?,
+        None => PinSelector::None,
+    };
+    let pinned = selector
+        .select(&local.nodes)
+        .map_err(|m| at(pins_pair.map_or(f.block.line, |p| p.line), format!("\"pins\": {m}")))?;
+    let (rotation, origin) = (rotation.as_dquat(), exact3(origin));
+    let place = |p: DVec3| rotation * p + origin;
+    let mesh = ClothMesh::new(local.nodes.iter().map(|&p| place(p)).collect(), local.triangles.clone())
+        .map_err(|e| at(f.block.line, format!("cloth mesh: {e}")))?;
+    let thickness = exact(f.number("thickness", 1e-6..=1.0)?.unwrap_or(1e-3));
+    let params = ClothParams {
+        thickness,
+        young: exact(f.number("young", 1.0..=1e13)?.unwrap_or(1e7)),
+        poisson: exact(f.number("poisson", 0.0..=0.5)?.unwrap_or(0.3)),
+        density: exact(f.number("density", 1e-3..=1e5)?.unwrap_or(200.0)),
+        gravity: exact3(f.vec3("gravity")?.unwrap_or(Vec3::new(0.0, -9.81, 0.0))),
+    };
+    let pin_motion = PinMotion {
+        velocity: exact3(f.vec3("pin_velocity")?.unwrap_or(Vec3::ZERO)),
+        angular_velocity: exact3(f.vec3("pin_spin")?.unwrap_or(Vec3::ZERO)),
+        centre: origin,
+    };
+    let colliders = match f.get("colliders") {
+        None => Vec::new(),
+        Some(p) => p
+            .value
+            .split(';')
+            .filter(|c| !c.trim().is_empty())
+            .map(|c| Collider::parse(c).map_err(|m| at(p.line, format!("\"colliders\": {m}"))))
+            .collect::<Result<_, _>>()?,
+    };
+    let contact_distance = f.number("contact_distance", 1e-6..=1.0)?.map_or(thickness.max(1e-3), exact);
+    let integrator = match f.choice("integrator", &["implicit_euler", "newmark", "static"])? {
+        None | Some((0, _)) => Integrator::ImplicitEuler,
+        Some((1, _)) => Integrator::Newmark,
+        Some(_) => Integrator::Static,
+    };
+    let dt = exact(f.number("dt", 1e-5..=1.0)?.unwrap_or(0.01));
+    let damping = exact(f.number("damping", 0.0..=1e6)?.unwrap_or(0.0));
+    let debug = f.flag("debug")?.unwrap_or(false);
+    let setup = ClothSetup { mesh, params, pinned, pin_motion, colliders, contact_distance, damping };
+    let cloth = setup.start().map_err(|m| at(f.block.line, format!("cloth: {m}")))?;
+    Ok(ClothDesc {
+        setup,
+        integrator,
+        dt,
+        material: None,
+        draw: super::DrawOptions::default(),
+        debug,
+        line: f.block.line,
+        view: ClothView::new(&cloth, debug),
+        run: Run(Some((Box::new(cloth), 0))),
+    })
+}
+
+/// A number as written: the shortest decimal that reads back as this `f32`
+/// (what the file said, to 7 digits), in double precision, so `0.05` is 0.05
+/// and not 0.0500000007.
+fn exact(v: f32) -> f64 {
+    v.to_string().parse().unwrap_or(f64::from(v))
+}
+
+fn exact3(v: Vec3) -> DVec3 {
+    DVec3::new(exact(v.x), exact(v.y), exact(v.z))
+}
+
+/// The cloth's mesh in its own coordinates: a `mesh` file, or a `size` × `resolution`
+/// sheet in the XZ plane centred on the origin, facing +Y (x across its width,
+/// z across its depth; pin predicates read these coordinates).
+fn local_mesh(f: &mut Fields, dir: &Path) -> Result<ClothMesh, Diagnostic> {
+    if let Some(pair) = f.get("mesh") {
+        return ClothMesh::load(&dir.join(pair.value.trim()))
+            .map_err(|e| Diagnostic::at(f.path, pair.line, format!("\"mesh\": {e}")));
+    }
+    let [w, d] = f.numbers::<2>("size", "2 numbers (width depth)")?.unwrap_or([1.0, 1.0]);
+    if w <= 0.0 || d <= 0.0 {
+        return Err(Diagnostic::at(f.path, f.block.line, "\"size\" must be two sizes above 0"));
+    }
+    let [n, m] = match f.get("resolution") {
+        None => [17, 17],
+        Some(p) => {
+            let words: Vec<Option<i64>> = p.value.split_whitespace().map(|w| w.parse().ok()).collect();
+            match words[..] {
+                [Some(n), Some(m)] if (2..=MAX_SIDE).contains(&n) && (2..=MAX_SIDE).contains(&m) => [n, m],
+                _ => {
+                    let message =
+                        format!("\"resolution\" is '{}', expected 2 whole numbers in 2..={MAX_SIDE}", p.value);
+                    return Err(Diagnostic::at(f.path, p.line, message));
+                }
+            }
+        }
+    };
+    let (w, d) = (exact(w), exact(d));
+    let sheet = ClothMesh::sheet(w, d, n as u32, m as u32);
+    let (hw, hd) = (w / 2.0, d / 2.0);
+    // The XY sheet turned to lie in XZ facing +Y: (x, y) → (x − w/2, 0, d/2 − y).
+    let nodes = sheet.nodes.iter().map(|p| DVec3::new(p.x - hw, 0.0, hd - p.y)).collect();
+    Ok(ClothMesh { nodes, triangles: sheet.triangles })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::{parse_scene, SceneDesc};
+    use super::*;
+
+    fn parse(body: &str) -> Result<SceneDesc, Diagnostic> {
+        parse_scene(Path::new("dir/t.scn"), &format!("{{\n\"classname\" \"cloth\"\n{body}}}\n"))
+    }
+
+    #[test]
+    fn a_sheet_is_placed_in_the_world_with_pins_read_in_its_own_coordinates() {
+        let scene = parse("\"size\" \"2 1\"\n\"resolution\" \"3 2\"\n\"origin\" \"0 1 0\"\n\"angles\" \"0 90 0\"\n\"pins\" \"x<=-1\"\n\"integrator\" \"newmark\"\n\"colliders\" \"plane 0 0 0 0 1 0; sphere 0 0.5 0 0.25\"\n").unwrap();
+        assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+        let cloth = &scene.cloths[0];
+        assert_eq!(cloth.setup.mesh.nodes.len(), 6);
+        // Local (-1, 0, 0.5) is the first node; yaw 90° turns +X to -Z, and origin lifts it 1 m.
+        let first = cloth.setup.mesh.nodes[0];
+        assert!(first.distance(DVec3::new(0.5, 1.0, 1.0)) < 1e-6, "{first}");
+        assert_eq!(cloth.setup.pinned, [true, false, false, true, false, false], "the x = -1 edge, before placement");
+        assert_eq!(cloth.integrator, Integrator::Newmark);
+        assert_eq!(cloth.setup.colliders.len(), 2);
+        assert_eq!(cloth.setup.contact_distance, 1e-3);
+        assert_eq!(cloth.setup.params.gravity, DVec3::new(0.0, -9.81, 0.0));
+        assert!(cloth.view.edges.is_none());
+    }
+
+    #[test]
+    fn posing_steps_to_the_time_and_restarts_when_it_goes_back() {
+        let mut scene =
+            parse("\"size\" \"1 1\"\n\"resolution\" \"4 4\"\n\"pins\" \"z<=-0.5\"\n\"dt\" \"0.05\"\n").unwrap();
+        let cloth = &mut scene.cloths[0];
+        let rest = cloth.view.surface.aabb();
+        assert!(!cloth.pose(0.0, Path::new("t.scn")).unwrap(), "time 0 is the rest state it already has");
+        assert!(cloth.pose(0.5, Path::new("t.scn")).unwrap());
+        let swung = cloth.view.surface.aabb();
+        assert!(swung.min.y < rest.min.y - 0.2, "the free edge fell: {swung:?}");
+        assert!(!cloth.pose(0.52, Path::new("t.scn")).unwrap(), "less than a step later: no new step");
+        assert!(cloth.pose(0.1, Path::new("t.scn")).unwrap(), "earlier: restarted from rest");
+        assert!(cloth.view.surface.aabb().min.y > swung.min.y);
+        let err = cloth.pose(1e6, Path::new("t.scn")).unwrap_err().to_string();
+        assert!(err.starts_with("t.scn:1: cloth: time 1000000 s is 20000000 steps"), "{err}");
+    }
+
+    #[test]
+    fn a_static_cloth_takes_its_equilibrium_step_at_any_time() {
+        let mut scene =
+            parse("\"size\" \"0.1 0.1\"\n\"resolution\" \"3 3\"\n\"pins\" \"z<=-0.05\"\n\"young\" \"1e9\"\n\"integrator\" \"static\"\n").unwrap();
+        let cloth = &mut scene.cloths[0];
+        assert!(cloth.pose(0.0, Path::new("t.scn")).unwrap());
+        let hanging = cloth.view.surface.aabb();
+        assert!(hanging.min.y < -1e-4, "it sags at equilibrium: {hanging:?}");
+        assert!(!cloth.pose(5.0, Path::new("t.scn")).unwrap(), "the same equilibrium later");
+    }
+
+    #[test]
+    fn bad_cloth_blocks_say_where_and_what() {
+        for (body, line, message) in [
+            ("\"resolution\" \"1 5\"\n", 3, "expected 2 whole numbers in 2..=257"),
+            ("\"resolution\" \"5\"\n", 3, "expected 2 whole numbers"),
+            ("\"size\" \"0 1\"\n", 1, "\"size\" must be two sizes above 0"),
+            ("\"pins\" \"w<3\"\n", 3, "\"pins\""),
+            ("\"pins\" \"nodes 1 9999\"\n", 3, "\"pins\""),
+            ("\"colliders\" \"plane 0 0 0\"\n", 3, "\"colliders\": 'plane 0 0 0' is not a collider"),
+            ("\"integrator\" \"rk4\"\n", 3, "expected one of: implicit_euler, newmark, static"),
+            ("\"dt\" \"0\"\n", 3, "\"dt\" is 0"),
+            ("\"young\" \"-5\"\n", 3, "\"young\" is -5"),
+            ("\"mesh\" \"missing.obj\"\n", 3, "\"mesh\": "),
+            ("\"material\" \"silk\"\n", 3, "unknown material 'silk'"),
+            ("\"debug\" \"yes\"\n", 3, "expected 0 or 1"),
+        ] {
+            let err = parse(body).unwrap_err();
+            assert_eq!(err.line, Some(line), "{body}: {err}");
+            assert!(err.message.contains(message), "{body}: {err}");
+        }
+        let warned = parse("\"sise\" \"1 1\"\n").unwrap();
+        assert!(warned.warnings[0].message.contains("unknown key \"sise\" in cloth block"));
+    }
+
+    #[test]
+    fn the_tablecloth_scene_loads_without_warnings() {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/tablecloth.scn");
+        let scene = super::super::load_scene(&path).unwrap();
+        assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+        assert_eq!(scene.cloths.len(), 1);
+        assert_eq!(scene.cloths[0].setup.mesh.nodes.len(), 33 * 33);
+        assert_eq!(scene.cloths[0].setup.colliders.len(), 2);
+    }
+}
