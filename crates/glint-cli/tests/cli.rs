@@ -112,6 +112,12 @@ const MALFORMED: &[(&str, &str, usize, &str)] = &[
         4,
         "expected a PNG or JPEG",
     ),
+    (
+        "cloth_collider",
+        "{\n\"classname\" \"cloth\"\n\"colliders\" \"plane 0 0 0 0 1 0; cone 1\"\n}\n",
+        3,
+        "'cone 1' is not a collider",
+    ),
 ];
 
 #[test]
@@ -353,6 +359,27 @@ fn render_writes_numbered_frame_sequences_of_animations() {
     let single = glint(&["render", model, "-o", dir.path().join("one.png").to_str().expect("path"), "--frames", "2"]);
     assert_eq!(single.status.code(), Some(1), "several frames need a numbered name");
     assert!(stderr(&single).contains("%04d"), "{}", stderr(&single));
+}
+
+#[test]
+fn render_steps_a_cloth_to_the_time_and_refuses_an_endless_one() {
+    let scene = repo("tests/scenes/cloth_debug.scn");
+    let scene = scene.to_str().expect("path");
+    let dir = tempfile::tempdir().expect("temp dir");
+    let png = |name: &str| dir.path().join(name).to_str().expect("path").to_string();
+    let render = |time: &str, out: &str| glint(&["render", scene, "-o", out, "--size", "48x48", "--time", time]);
+    let (rest, swung) = (render("0", &png("rest.png")), render("0.6", &png("swung.png")));
+    if rest.status.code() == Some(2) && std::env::var("GLINT_REQUIRE_ADAPTER").as_deref() != Ok("1") {
+        eprintln!("skipping: no GPU adapter");
+        return;
+    }
+    assert_eq!((rest.status.code(), swung.status.code()), (Some(0), Some(0)), "{}{}", stderr(&rest), stderr(&swung));
+    let read = |name: &str| image::open(dir.path().join(name)).expect("written").to_rgb8();
+    assert_ne!(read("rest.png"), read("swung.png"), "the cloth moved between 0 and 0.6 s");
+    let endless = render("1e9", &png("never.png"));
+    assert_eq!(endless.status.code(), Some(1), "{}", stderr(&endless));
+    let want = format!("error: {scene}:23: cloth: time 1000000000 s is");
+    assert!(stderr(&endless).contains(&want), "'{}' should contain '{want}'", stderr(&endless));
 }
 
 #[test]

@@ -43,6 +43,10 @@ Exit codes: 0 ok, 1 bad input (file:line: message on stderr), 2 no GPU adapter,
 
 /// How often the scene file is checked for changes.
 const WATCH_INTERVAL: Duration = Duration::from_millis(300);
+/// Most scene time one frame advances, seconds. A cloth slower to simulate than
+/// real time then runs in slow motion instead of falling further behind every
+/// frame (each pose steps it all the way to the scene time).
+const MAX_FRAME_ADVANCE: f32 = 1.0 / 30.0;
 /// How often the title's frame time is refreshed (averaged over the interval).
 const TITLE_INTERVAL: Duration = Duration::from_millis(500);
 
@@ -103,7 +107,9 @@ struct View {
     last_watch: Instant,
     fly: FlyCamera,
     input: Input,
-    started: Instant,
+    /// Animation and simulation time, seconds: real time, but at most
+    /// [`MAX_FRAME_ADVANCE`] per frame.
+    scene_time: f32,
     last_frame: Instant,
     /// Frames counted so far (drawn or skipped while the window has no area).
     frames: u32,
@@ -191,7 +197,7 @@ impl App {
             watch: SceneWatch::new(&self.args.scene, self.args.options),
             last_watch: now,
             input: Input::default(),
-            started: now,
+            scene_time: 0.0,
             last_frame: now,
             frames: 0,
             title_frames: (0, Duration::ZERO),
@@ -229,6 +235,9 @@ impl View {
                 let camera = desc.cameras.get(camera_index).or(desc.cameras.first()).copied();
                 let camera = camera.unwrap_or(self.scene.camera);
                 self.scene = Scene::new(&self.gpu, desc, camera);
+                // Animations and cloths start again from the beginning, rather
+                // than a new cloth stepping all the way to the old time at once.
+                self.scene_time = 0.0;
                 eprintln!("reloaded {}", path.display());
             }
         }
@@ -244,8 +253,8 @@ impl View {
         }
         self.fly.update(dt.as_secs_f32().min(0.25), &self.input.take());
         let scene = &mut self.scene;
-        let time = (now - self.started).as_secs_f32();
-        scene.desc.pose(time, &mut scene.entities, &mut scene.renderer)?;
+        self.scene_time += dt.as_secs_f32().min(MAX_FRAME_ADVANCE);
+        scene.desc.pose(self.scene_time, &mut scene.entities, &mut scene.renderer)?;
         let camera = self.fly.apply(&scene.camera);
         let stats = scene.renderer.render(&scene.entities, &camera, &scene.desc.lights, &mut self.target)?;
         self.surface.present(&self.gpu, &self.target);

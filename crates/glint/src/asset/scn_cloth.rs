@@ -159,7 +159,7 @@ pub(crate) fn parse(f: &mut Fields, dir: &Path) -> Result<ClothDesc, Diagnostic>
             .value
             .split(';')
             .filter(|c| !c.trim().is_empty())
-            .map(|c| Collider::parse(c).map_err(|m| at(p.line, format!("\"colliders\": {m}"))))
+            .map(|c| Collider::parse(c.trim()).map_err(|m| at(p.line, format!("\"colliders\": {m}"))))
             .collect::<Result<_, _>>()?,
     };
     let contact_distance = f.number("contact_distance", 1e-6..=1.0)?.map_or(thickness.max(1e-3), exact);
