@@ -299,3 +299,29 @@ fn a_129_by_129_sheet_at_a_large_step_stays_finite_and_comes_to_rest() {
     assert!(low > 0.0 && high < distance, "lying on the floor, inside the contact distance: z in {low}..{high}");
     eprintln!("129 x 129 at dt = 0.1: {substeps} sub-steps for 20 steps");
 }
+
+#[test]
+fn a_large_deflection_static_solve_halves_its_load_steps() {
+    // A 0.5 m plate of 5 × 5 nodes clamped by its first two rows: linear theory
+    // puts the tip 0.58 m down, more than the 0.375 m that is free, so the
+    // plate swings far over. Newton cannot take a tenth of that load at once;
+    // the static solve halves the increment where it must and still ends in
+    // equilibrium.
+    let params =
+        ClothParams { thickness: 1e-3, young: 1e8, poisson: 0.3, density: 200.0, gravity: DVec3::new(0.0, 0.0, -9.81) };
+    let mesh = ClothMesh::sheet(0.5, 0.5, 5, 5);
+    let pinned: Vec<bool> = mesh.nodes.iter().map(|p| p.y <= 0.13).collect();
+    let mut cloth = Cloth::new(mesh, params, &pinned).expect("cloth");
+    let stats = cloth.step(1.0, Integrator::Static).expect("equilibrium");
+    assert!(stats.substeps > 10, "some load increment was halved: {stats:?}");
+    let lowest = cloth.positions.iter().map(|p| p.z).fold(f64::MAX, f64::min);
+    assert!((-0.375..-0.2).contains(&lowest), "the free edge hangs far down, but no further than it is long: {lowest}");
+    let gradient = cloth.elastic_gradient(&cloth.positions);
+    let weight: f64 = cloth.masses().iter().sum::<f64>() * 9.81;
+    for (i, (g, m)) in gradient.iter().zip(cloth.masses()).enumerate() {
+        if !cloth.is_pinned(i) {
+            let residual = *g - *m * params.gravity;
+            assert!(residual.length() < 1e-5 * weight, "node {i} out of balance by {residual}");
+        }
+    }
+}

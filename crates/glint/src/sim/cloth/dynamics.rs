@@ -38,7 +38,9 @@ const NEWMARK_GAMMA: f64 = 0.5;
 const MAX_NEWTON: usize = 40;
 /// A step is split in halves at most this many times.
 pub const MAX_HALVINGS: u32 = 10;
-/// Load steps of a static solve.
+/// Load steps of a static solve, when each converges: the load grows by
+/// 1/`LOAD_STEPS` of the full load at a time, and by half as much again after a
+/// failed increment (down to 2^-[`MAX_HALVINGS`] of that).
 const LOAD_STEPS: usize = 10;
 /// A triangle whose area falls below this fraction of its rest area has collapsed.
 const COLLAPSED_AREA: f64 = 1e-3;
@@ -76,8 +78,8 @@ pub enum Integrator {
 /// Why a step could not be taken (the cloth is left as it was).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
 pub enum StepError {
-    /// Newton's method did not converge even at the smallest step.
-    #[error("Newton's method did not converge, even with the step halved {MAX_HALVINGS} times")]
+    /// Newton's method did not converge even at the smallest step (or load increment).
+    #[error("Newton's method did not converge, even with the time step (or static load increment) halved {MAX_HALVINGS} times")]
     NotConverged,
 }
 
@@ -88,7 +90,8 @@ pub struct StepStats {
     pub newton_iterations: u32,
     /// Jacobian factorisations over all sub-steps (iterations that reuse one do not count).
     pub factorizations: u32,
-    /// Sub-steps taken (1 unless the step was halved).
+    /// Sub-steps taken (1 unless the step was halved); for a static solve, the
+    /// load increments.
     pub substeps: u32,
 }
 
@@ -400,7 +403,7 @@ impl Cloth {
             // the residual by orders of magnitude while lowering the potential.
             let potential = self.potential(q, scale, predicted, load);
             let mut alpha = 1.0;
-            let trial = loop {
+            let found = loop {
                 let mut trial = q.to_vec();
                 for (node, first) in self.dof.iter().enumerate() {
                     if let Some(first) = *first {
@@ -408,15 +411,23 @@ impl Cloth {
                     }
                 }
                 let (tr, tn) = self.residual(&trial, scale, predicted, load);
-                let better = tn < norm || self.potential(&trial, scale, predicted, load) <= potential;
-                if tn.is_finite() && (better || alpha < 1.0 / 1024.0) {
-                    break (trial, tr, tn);
+                if tn.is_finite() && (tn < norm || self.potential(&trial, scale, predicted, load) <= potential) {
+                    break Some((trial, tr, tn));
+                }
+                if alpha < 1.0 / 1024.0 {
+                    break None;
                 }
                 alpha *= 0.5;
             };
-            if !trial.2.is_finite() {
+            // No step along this direction helps: with a reused factor, refresh
+            // it and try again; with a fresh one, give up (the caller halves).
+            let Some(trial) = found else {
+                if factored {
+                    factored = false;
+                    continue;
+                }
                 return None;
-            }
+            };
             factored = alpha == 1.0 && trial.2 <= 0.5 * norm;
             q.copy_from_slice(&trial.0);
             (r, norm) = (trial.1, trial.2);
@@ -455,11 +466,18 @@ impl Cloth {
         if integrator == Integrator::Static {
             let mut q = self.positions.clone();
             let unused = q.clone(); // no inertia: the predicted position is never read
-            for k in 1..=LOAD_STEPS {
-                let load = k as f64 / LOAD_STEPS as f64;
-                self.newton(&mut q, 0.0, &unused, load, &mut stats).ok_or(StepError::NotConverged)?;
+            let (full, mut load, mut halvings) = (1.0 / LOAD_STEPS as f64, 0.0, 0);
+            while load < 1.0 {
+                // The last increment ends exactly at the full load, whatever the rounding.
+                let next = load + full / f64::from(1u32 << halvings);
+                let next = if next > 1.0 - 1e-9 { 1.0 } else { next };
+                let mut trial = q.clone();
+                match self.newton(&mut trial, 0.0, &unused, next, &mut stats).filter(|_| !self.broken(&trial)) {
+                    Some(()) => (q, load, stats.substeps) = (trial, next, stats.substeps + 1),
+                    None if halvings < MAX_HALVINGS => halvings += 1,
+                    None => return Err(StepError::NotConverged),
+                }
             }
-            stats.substeps = 1;
             self.positions = q;
             self.velocities.fill(DVec3::ZERO);
             self.accelerations.fill(DVec3::ZERO);
