@@ -173,6 +173,7 @@ pub(crate) fn parse(f: &mut Fields, dir: &Path) -> Result<ClothDesc, Diagnostic>
     let debug = f.flag("debug")?.unwrap_or(false);
     let setup = ClothSetup { mesh, params, pinned, pin_motion, colliders, contact_distance, damping };
     let cloth = setup.start().map_err(|m| at(f.block.line, format!("cloth: {m}")))?;
+    let view = ClothView::new(&cloth, debug).map_err(|e| at(f.block.line, format!("cloth: {e}")))?;
     Ok(ClothDesc {
         setup,
         integrator,
@@ -181,7 +182,7 @@ pub(crate) fn parse(f: &mut Fields, dir: &Path) -> Result<ClothDesc, Diagnostic>
         draw: super::DrawOptions::default(),
         debug,
         line: f.block.line,
-        view: ClothView::new(&cloth, debug),
+        view,
         run: Run(Some((Box::new(cloth), 0))),
     })
 }
@@ -276,8 +277,10 @@ mod tests {
 
     #[test]
     fn a_static_cloth_takes_its_equilibrium_step_at_any_time() {
-        let mut scene =
-            parse("\"size\" \"0.1 0.1\"\n\"resolution\" \"3 3\"\n\"pins\" \"z<=-0.05\"\n\"young\" \"1e9\"\n\"integrator\" \"static\"\n").unwrap();
+        // A 0.1 m cantilever clamped by its back two rows of nodes (one row
+        // alone would be a hinge, free to swing).
+        let body = "\"size\" \"0.1 0.1\"\n\"resolution\" \"5 5\"\n\"pins\" \"z<=-0.02\"\n\"young\" \"1e9\"\n";
+        let mut scene = parse(&format!("{body}\"integrator\" \"static\"\n")).unwrap();
         let cloth = &mut scene.cloths[0];
         assert!(cloth.pose(0.0, Path::new("t.scn")).unwrap());
         let hanging = cloth.view.surface.aabb();
@@ -300,6 +303,7 @@ mod tests {
             ("\"mesh\" \"missing.obj\"\n", 3, "\"mesh\": "),
             ("\"material\" \"silk\"\n", 3, "unknown material 'silk'"),
             ("\"debug\" \"yes\"\n", 3, "expected 0 or 1"),
+            ("\"size\" \"1e38 1e38\"\n\"origin\" \"3.4e38 0 0\"\n", 1, "cloth: "),
         ] {
             let err = parse(body).unwrap_err();
             assert_eq!(err.line, Some(line), "{body}: {err}");

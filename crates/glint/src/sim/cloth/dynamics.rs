@@ -403,7 +403,7 @@ impl Cloth {
             // the residual by orders of magnitude while lowering the potential.
             let potential = self.potential(q, scale, predicted, load);
             let mut alpha = 1.0;
-            let found = loop {
+            let trial = loop {
                 let mut trial = q.to_vec();
                 for (node, first) in self.dof.iter().enumerate() {
                     if let Some(first) = *first {
@@ -411,22 +411,11 @@ impl Cloth {
                     }
                 }
                 let (tr, tn) = self.residual(&trial, scale, predicted, load);
-                if tn.is_finite() && (tn < norm || self.potential(&trial, scale, predicted, load) <= potential) {
-                    break Some((trial, tr, tn));
-                }
-                if alpha < 1.0 / 1024.0 {
-                    break None;
+                let better = tn < norm || self.potential(&trial, scale, predicted, load) <= potential;
+                if tn.is_finite() && (better || alpha < 1.0 / 1024.0) {
+                    break (trial, tr, tn);
                 }
                 alpha *= 0.5;
-            };
-            // No step along this direction helps: with a reused factor, refresh
-            // it and try again; with a fresh one, give up (the caller halves).
-            let Some(trial) = found else {
-                if factored {
-                    factored = false;
-                    continue;
-                }
-                return None;
             };
             factored = alpha == 1.0 && trial.2 <= 0.5 * norm;
             q.copy_from_slice(&trial.0);

@@ -8,7 +8,7 @@
 //! without fighting the surface for depth.
 
 use super::Cloth;
-use crate::scene::{Mesh, Vertex};
+use crate::scene::{Mesh, MeshError, Vertex};
 use glam::{Vec2, Vec3};
 
 /// Ribbon width as a fraction of the mean rest edge length.
@@ -35,14 +35,14 @@ pub struct ClothView {
 }
 
 impl ClothView {
-    /// The view of `cloth` as it is now, with debug ribbons when `debug`.
-    pub fn new(cloth: &Cloth, debug: bool) -> Self {
+    /// The view of `cloth` as it is now, with debug ribbons when `debug`. Fails
+    /// when a position does not fit in single precision.
+    pub fn new(cloth: &Cloth, debug: bool) -> Result<Self, MeshError> {
         let positions = positions(cloth);
         let normals = node_normals(&positions, &cloth.mesh().triangles);
         let uvs = rest_uvs(&cloth.mesh().nodes);
         let indices = cloth.mesh().triangles.iter().flatten().copied().collect();
-        let surface = Mesh::from_attributes(&positions, &normals, &uvs, indices)
-            .expect("a validated cloth mesh has finite positions, triangles and in-range indices");
+        let surface = Mesh::from_attributes(&positions, &normals, &uvs, indices)?;
         let edges = &cloth.topology().edges;
         let rest = &cloth.mesh().nodes;
         let total: f64 = edges.iter().map(|[a, b]| rest[*a as usize].distance(rest[*b as usize])).sum();
@@ -52,9 +52,9 @@ impl ClothView {
         if debug {
             let ribbons = view.ribbon_vertices(cloth, &positions, &normals);
             let indices = (0..edges.len() as u32 * 2).flat_map(|q| [0, 1, 2, 0, 2, 3].map(|k| 4 * q + k)).collect();
-            view.edges = Some(Mesh::from_vertices(ribbons, indices).expect("ribbon quads are whole triangles"));
+            view.edges = Some(Mesh::from_vertices(ribbons, indices)?);
         }
-        view
+        Ok(view)
     }
 
     /// Move every mesh to `cloth`'s current positions. Returns false (and leaves
@@ -154,7 +154,7 @@ mod tests {
     #[test]
     fn surface_has_a_vertex_per_node_facing_the_sheet_normal() {
         let c = cloth(false);
-        let view = ClothView::new(&c, false);
+        let view = ClothView::new(&c, false).unwrap();
         assert_eq!(view.surface.vertices().len(), 15);
         assert_eq!(view.surface.indices().len(), 3 * c.mesh().triangles.len());
         assert!(view.surface.vertices().iter().all(|v| Vec3::from(v.normal).distance(Vec3::Z) < 1e-6));
@@ -169,7 +169,7 @@ mod tests {
     #[test]
     fn update_follows_the_positions_and_ribbons_straddle_the_surface() {
         let mut c = cloth(true);
-        let mut view = ClothView::new(&c, true);
+        let mut view = ClothView::new(&c, true).unwrap();
         let edges = c.topology().edges.len();
         assert_eq!(view.edges.as_ref().unwrap().vertices().len(), 8 * edges);
         // Lift the sheet 2 m and fold nothing: every vertex moves by exactly that.
