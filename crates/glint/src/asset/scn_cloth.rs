@@ -103,12 +103,14 @@ impl ClothDesc {
             );
             return Err(Diagnostic::at(scene, self.line, message).into());
         }
-        let restart = self.run.0.as_ref().is_none_or(|(_, steps)| *steps > target);
-        if restart {
-            let cloth = self.setup.start().map_err(|m| Diagnostic::at(scene, self.line, format!("cloth: {m}")))?;
-            self.run.0 = Some((Box::new(cloth), 0));
-        }
-        let Some((cloth, steps)) = &mut self.run.0 else { unreachable!("started above") };
+        let (run, restart) = match self.run.0.take() {
+            Some(run) if run.1 <= target => (run, false),
+            _ => {
+                let cloth = self.setup.start().map_err(|m| Diagnostic::at(scene, self.line, format!("cloth: {m}")))?;
+                ((Box::new(cloth), 0), true)
+            }
+        };
+        let (cloth, steps) = self.run.0.insert(run);
         let moved = restart || *steps < target;
         while *steps < target {
             cloth.step(self.dt, self.integrator)?;
