@@ -67,38 +67,59 @@ pub fn hinge_angle(x: &[DVec3; 4]) -> f64 {
     (e.normalize().dot(n1.cross(n2))).atan2(n1.dot(n2))
 }
 
-/// ∇θ at `x`, and its derivative along `dx` (the Hessian of θ times `dx`).
-fn angle_gradient_and_derivative(x: &[DVec3; 4], dx: &[DVec3; 4]) -> ([DVec3; 4], [DVec3; 4]) {
-    let (e, de) = (x[1] - x[0], dx[1] - dx[0]);
-    let (a, da) = (x[2] - x[0], dx[2] - dx[0]);
-    let (b, db) = (x[3] - x[0], dx[3] - dx[0]);
-    let (n1, dn1) = (e.cross(a), de.cross(a) + e.cross(da));
-    let (n2, dn2) = (b.cross(e), db.cross(e) + b.cross(de));
-    let length = e.length();
-    let d_length = e.dot(de) / length;
-    let (a1, da1) = (n1.length_squared(), 2.0 * n1.dot(dn1));
-    let (a2, da2) = (n2.length_squared(), 2.0 * n2.dot(dn2));
-    // Wings: g = −(L / A) n.
-    let wing = |n: DVec3, dn: DVec3, area2: f64, d_area2: f64| {
-        let s = length / area2;
-        let ds = d_length / area2 - length * d_area2 / (area2 * area2);
-        (-s * n, -(ds * n + s * dn))
-    };
-    let (g2, dg2) = wing(n1, dn1, a1, da1);
-    let (g3, dg3) = wing(n2, dn2, a2, da2);
-    // Where each wing projects onto the edge, as a fraction t of it from x₀.
-    let l2 = length * length;
-    let fraction = |w: DVec3, dw: DVec3| {
-        let t = w.dot(e) / l2;
-        (t, (dw.dot(e) + w.dot(de)) / l2 - 2.0 * t * d_length / length)
-    };
-    let (t2, dt2) = fraction(a, da);
-    let (t3, dt3) = fraction(b, db);
-    let g1 = -(t2 * g2 + t3 * g3);
-    let dg1 = -(dt2 * g2 + t2 * dg2 + dt3 * g3 + t3 * dg3);
-    let g0 = -((1.0 - t2) * g2 + (1.0 - t3) * g3);
-    let dg0 = -(-dt2 * g2 + (1.0 - t2) * dg2 - dt3 * g3 + (1.0 - t3) * dg3);
-    ([g0, g1, g2, g3], [dg0, dg1, dg2, dg3])
+/// The hinge quantities ∇θ is built from, computed once so that the Hessian's
+/// twelve directional derivatives share them.
+struct HingeFrame {
+    e: DVec3,
+    a: DVec3,
+    b: DVec3,
+    n1: DVec3,
+    n2: DVec3,
+    length: f64,
+    a1: f64,
+    a2: f64,
+    t2: f64,
+    t3: f64,
+    /// ∇θ per node.
+    gradient: [DVec3; 4],
+}
+
+impl HingeFrame {
+    fn new(x: &[DVec3; 4]) -> Self {
+        let (e, a, b) = (x[1] - x[0], x[2] - x[0], x[3] - x[0]);
+        let (n1, n2) = (e.cross(a), b.cross(e));
+        let length = e.length();
+        let (a1, a2) = (n1.length_squared(), n2.length_squared());
+        // Wings: g = −(L / A) n.
+        let (g2, g3) = (-(length / a1) * n1, -(length / a2) * n2);
+        // Where each wing projects onto the edge, as a fraction t of it from x₀.
+        let l2 = length * length;
+        let (t2, t3) = (a.dot(e) / l2, b.dot(e) / l2);
+        let g1 = -(t2 * g2 + t3 * g3);
+        let g0 = -((1.0 - t2) * g2 + (1.0 - t3) * g3);
+        Self { e, a, b, n1, n2, length, a1, a2, t2, t3, gradient: [g0, g1, g2, g3] }
+    }
+
+    /// The derivative of ∇θ along `dx` (the Hessian of θ times `dx`).
+    fn derivative(&self, dx: &[DVec3; 4]) -> [DVec3; 4] {
+        let Self { e, a, b, n1, n2, length, a1, a2, t2, t3, gradient: [_, _, g2, g3] } = *self;
+        let (de, da, db) = (dx[1] - dx[0], dx[2] - dx[0], dx[3] - dx[0]);
+        let dn1 = de.cross(a) + e.cross(da);
+        let dn2 = db.cross(e) + b.cross(de);
+        let d_length = e.dot(de) / length;
+        let (da1, da2) = (2.0 * n1.dot(dn1), 2.0 * n2.dot(dn2));
+        let wing = |n: DVec3, dn: DVec3, area2: f64, d_area2: f64| {
+            let ds = d_length / area2 - length * d_area2 / (area2 * area2);
+            -(ds * n + (length / area2) * dn)
+        };
+        let (dg2, dg3) = (wing(n1, dn1, a1, da1), wing(n2, dn2, a2, da2));
+        let l2 = length * length;
+        let fraction = |t: f64, w: DVec3, dw: DVec3| (dw.dot(e) + w.dot(de)) / l2 - 2.0 * t * d_length / length;
+        let (dt2, dt3) = (fraction(t2, a, da), fraction(t3, b, db));
+        let dg1 = -(dt2 * g2 + t2 * dg2 + dt3 * g3 + t3 * dg3);
+        let dg0 = -(-dt2 * g2 + (1.0 - t2) * dg2 - dt3 * g3 + (1.0 - t3) * dg3);
+        [dg0, dg1, dg2, dg3]
+    }
 }
 
 /// Bending energy of a hinge with rest angle `rest` and stiffness `k`.
@@ -109,22 +130,21 @@ pub fn bend_energy(x: &[DVec3; 4], rest: f64, k: f64) -> f64 {
 
 /// Gradient of [`bend_energy`], per hinge node.
 pub fn bend_gradient(x: &[DVec3; 4], rest: f64, k: f64) -> [DVec3; 4] {
-    let (g, _) = angle_gradient_and_derivative(x, &[DVec3::ZERO; 4]);
     let s = k * (hinge_angle(x) - rest);
-    g.map(|v| s * v)
+    HingeFrame::new(x).gradient.map(|v| s * v)
 }
 
 /// Hessian of [`bend_energy`] over the 12 coordinates (node-major: x₀.x, x₀.y, …, x₃.z).
 pub fn bend_hessian(x: &[DVec3; 4], rest: f64, k: f64, kind: Hessian) -> [[f64; 12]; 12] {
     let mut h = [[0.0; 12]; 12];
-    let (g, _) = angle_gradient_and_derivative(x, &[DVec3::ZERO; 4]);
-    let gradient: [f64; 12] = std::array::from_fn(|i| g[i / 3][i % 3]);
+    let frame = HingeFrame::new(x);
+    let gradient: [f64; 12] = std::array::from_fn(|i| frame.gradient[i / 3][i % 3]);
     if kind == Hessian::Exact {
         let strain = hinge_angle(x) - rest;
         for col in 0..12 {
             let mut dx = [DVec3::ZERO; 4];
             dx[col / 3][col % 3] = 1.0;
-            let (_, dg) = angle_gradient_and_derivative(x, &dx);
+            let dg = frame.derivative(&dx);
             for (row, line) in h.iter_mut().enumerate() {
                 line[col] = k * strain * dg[row / 3][row % 3];
             }
