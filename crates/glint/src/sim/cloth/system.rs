@@ -1,8 +1,8 @@
 //! The sparse linear system of a Newton step: a fixed pattern over the free
 //! degrees of freedom (the lower triangle of the 3×3 blocks between the nodes
 //! of each edge and hinge, and of each node with itself), filled anew when the
-//! Jacobian is refreshed, and factorised with faer. The pattern's sort order,
-//! the fill-reducing ordering and the symbolic Cholesky factorisation are
+//! Jacobian is refreshed, and factorised with faer. Each entry's slot in the
+//! matrix, the fill-reducing ordering and the symbolic Cholesky factorisation are
 //! computed once; the numeric factor lives in a buffer reused every time, so
 //! one factorisation can serve several solves.
 
@@ -10,7 +10,7 @@ use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::solvers::Solve;
 use faer::sparse::linalg::cholesky::{factorize_symbolic_cholesky, LltRef, SymbolicCholesky, SymmetricOrdering};
 use faer::sparse::linalg::solvers::{Lu, SymbolicLu};
-use faer::sparse::{Argsort, Pair, SparseColMat, SymbolicSparseColMat};
+use faer::sparse::{Pair, SparseColMat, SparseColMatRef, SymbolicSparseColMat};
 use faer::{Conj, Side, Spec};
 
 /// Factorisations run on one thread: on the 2-core reference machine faer's
@@ -33,8 +33,11 @@ enum Factor {
 pub struct SparseSystem {
     n: usize,
     symbolic: SymbolicSparseColMat<usize>,
-    argsort: Argsort<usize>,
-    /// One value per pattern entry (duplicates summed by faer), in pattern order.
+    /// Where each pattern entry's value goes among the matrix's (deduplicated) values.
+    slots: Vec<usize>,
+    /// The matrix's values in column order, duplicates summed.
+    matrix_values: Vec<f64>,
+    /// One value per pattern entry, in pattern order.
     pub values: Vec<f64>,
     cholesky: SymbolicCholesky<usize>,
     cholesky_values: Vec<f64>,
@@ -52,7 +55,14 @@ impl SparseSystem {
     pub fn new(n: usize, pattern: &[(usize, usize)]) -> Result<Self, SolveFailed> {
         debug_assert!(pattern.iter().all(|(r, c)| r >= c), "lower triangle only");
         let pairs: Vec<Pair<usize, usize>> = pattern.iter().map(|&(row, col)| Pair { row, col }).collect();
-        let (symbolic, argsort) = SymbolicSparseColMat::try_new_from_indices(n, n, &pairs).map_err(|_| SolveFailed)?;
+        let (symbolic, _) = SymbolicSparseColMat::try_new_from_indices(n, n, &pairs).map_err(|_| SolveFailed)?;
+        let slots = pattern
+            .iter()
+            .map(|&(row, col)| {
+                let rows = symbolic.row_idx_of_col_raw(col);
+                rows.binary_search(&row).map(|i| symbolic.col_ptr()[col] + i).map_err(|_| SolveFailed)
+            })
+            .collect::<Result<Vec<_>, _>>()?;
         let cholesky =
             factorize_symbolic_cholesky(symbolic.as_ref(), Side::Lower, SymmetricOrdering::Amd, Default::default())
                 .map_err(|_| SolveFailed)?;
@@ -65,8 +75,9 @@ impl SparseSystem {
         Ok(Self {
             n,
             cholesky_values: vec![0.0; cholesky.len_val()],
+            matrix_values: vec![0.0; symbolic.row_idx().len()],
             symbolic,
-            argsort,
+            slots,
             values: vec![0.0; pattern.len()],
             cholesky,
             scratch,
@@ -90,22 +101,27 @@ impl SparseSystem {
         m
     }
 
-    fn matrix(&self) -> Result<SparseColMat<usize, f64>, SolveFailed> {
-        SparseColMat::new_from_argsort(self.symbolic.clone(), &self.argsort, &self.values).map_err(|_| SolveFailed)
+    /// Sum [`SparseSystem::values`] into the matrix's values, each into its slot.
+    fn fill_matrix(&mut self) {
+        self.matrix_values.fill(0.0);
+        for (&slot, &v) in self.slots.iter().zip(&self.values) {
+            self.matrix_values[slot] += v;
+        }
     }
 
     /// Cholesky-factorise the matrix of [`SparseSystem::values`]; false (and no
     /// factor) when it is not positive definite.
     pub fn factorize_cholesky(&mut self) -> bool {
         self.factor = Factor::None;
-        let Ok(matrix) = self.matrix() else { return false };
+        self.fill_matrix();
+        let matrix = SparseColMatRef::new(self.symbolic.as_ref(), &self.matrix_values);
         let par = FACTOR_PAR;
         let stack = MemStack::new(&mut self.scratch);
         let ok = self
             .cholesky
             .factorize_numeric_llt(
                 &mut self.cholesky_values,
-                matrix.as_ref(),
+                matrix,
                 Side::Lower,
                 Default::default(),
                 par,
@@ -122,10 +138,11 @@ impl SparseSystem {
     /// LU-factorise the (symmetric, perhaps indefinite) matrix.
     pub fn factorize_lu(&mut self) -> Result<(), SolveFailed> {
         self.factor = Factor::None;
-        let lower = self.matrix()?;
+        self.fill_matrix();
+        let (n, lower) = (self.n, SparseColMatRef::new(self.symbolic.as_ref(), &self.matrix_values));
         // LU needs the whole matrix: the lower triangle plus its mirror.
         let mut triplets = Vec::with_capacity(2 * lower.compute_nnz());
-        for (col, (rows, values)) in (0..self.n).map(|c| (c, (lower.row_idx_of_col_raw(c), lower.val_of_col(c)))) {
+        for (col, (rows, values)) in (0..n).map(|c| (c, (lower.row_idx_of_col_raw(c), lower.val_of_col(c)))) {
             for (&row, &v) in rows.iter().zip(values) {
                 triplets.push(faer::sparse::Triplet::new(row, col, v));
                 if row != col {
