@@ -95,6 +95,11 @@ fn cantilever_tip_deflection_matches_the_published_ratio_to_euler_bernoulli() {
     assert!((reactions + weight).length() <= 1e-6 * weight.length(), "pins {reactions:?} against weight {weight:?}");
 }
 
+/// A 1 mm sheet of density 200 kg/m³ under gravity along −Z, Young's modulus `young`.
+fn fabric(young: f64) -> ClothParams {
+    ClothParams { thickness: 1e-3, young, poisson: 0.3, density: 200.0, gravity: DVec3::new(0.0, 0.0, -9.81) }
+}
+
 /// A 0.2 m square sheet hinged along one edge, released horizontally.
 fn swinging_sheet() -> Cloth {
     let params =
@@ -194,8 +199,7 @@ fn hinge_stiffness_gives_the_plate_rigidity_on_a_cylinder() {
 /// and its corners come down, and no node ends up inside either collider.
 #[test]
 fn cloth_drapes_over_a_sphere_and_stops_on_the_floor() {
-    let params =
-        ClothParams { thickness: 1e-3, young: 1e6, poisson: 0.3, density: 200.0, gravity: DVec3::new(0.0, 0.0, -9.81) };
+    let params = fabric(1e6);
     let mut mesh = ClothMesh::sheet(0.6, 0.6, 17, 17);
     for p in &mut mesh.nodes {
         *p += DVec3::new(-0.3, -0.3, 0.25);
@@ -225,8 +229,7 @@ fn cloth_drapes_over_a_sphere_and_stops_on_the_floor() {
 /// Pins chosen by a predicate move with their motion, dragging the cloth.
 #[test]
 fn animated_pins_follow_their_motion() {
-    let params =
-        ClothParams { thickness: 1e-3, young: 1e6, poisson: 0.3, density: 200.0, gravity: DVec3::new(0.0, 0.0, -9.81) };
+    let params = fabric(1e6);
     let mesh = ClothMesh::sheet(0.3, 0.3, 7, 7);
     let pinned = PinSelector::parse("y>=0.3").unwrap().select(&mesh.nodes).unwrap();
     assert_eq!(pinned.iter().filter(|p| **p).count(), 7);
@@ -251,13 +254,7 @@ fn damping_brings_a_falling_sheet_to_its_terminal_velocity() {
     // Drag −c·m·v on a free sheet under gravity: every node falls at g/c in the
     // end, with either integrator (both treat the drag implicitly).
     for integrator in [Integrator::ImplicitEuler, Integrator::Newmark] {
-        let params = ClothParams {
-            thickness: 1e-3,
-            young: 1e6,
-            poisson: 0.3,
-            density: 200.0,
-            gravity: DVec3::new(0.0, 0.0, -9.81),
-        };
+        let params = fabric(1e6);
         let mesh = ClothMesh::sheet(0.2, 0.2, 5, 5);
         let mut cloth = Cloth::new(mesh.clone(), params, &vec![false; mesh.nodes.len()]).unwrap();
         cloth.set_damping(5.0);
@@ -277,8 +274,7 @@ fn a_129_by_129_sheet_at_a_large_step_stays_finite_and_comes_to_rest() {
     // 16,641 nodes at dt = 0.1 s, ten times the default: a 1 m sheet tilted
     // 6° lands edge-first on a floor, tips flat and stops. Every step must
     // converge (halving if it has to) and leave every position finite.
-    let params =
-        ClothParams { thickness: 1e-3, young: 1e7, poisson: 0.3, density: 200.0, gravity: DVec3::new(0.0, 0.0, -9.81) };
+    let params = fabric(1e7);
     let mut mesh = ClothMesh::sheet(1.0, 1.0, 129, 129);
     for p in &mut mesh.nodes {
         // Tilt about the x axis (lengths kept): the y = 0 edge is lowest, 2 cm up.
@@ -307,8 +303,7 @@ fn a_large_deflection_static_solve_halves_its_load_steps() {
     // plate swings far over. Newton cannot take a tenth of that load at once;
     // the static solve halves the increment where it must and still ends in
     // equilibrium.
-    let params =
-        ClothParams { thickness: 1e-3, young: 1e8, poisson: 0.3, density: 200.0, gravity: DVec3::new(0.0, 0.0, -9.81) };
+    let params = fabric(1e8);
     let mesh = ClothMesh::sheet(0.5, 0.5, 5, 5);
     let pinned: Vec<bool> = mesh.nodes.iter().map(|p| p.y <= 0.13).collect();
     let mut cloth = Cloth::new(mesh, params, &pinned).expect("cloth");

@@ -187,9 +187,11 @@ impl SceneDesc {
                     renderer.update_shape(entity.shape, mesh.clone());
                 }
                 // Pins that did not move are not uploaded again.
-                let moved = pin_transforms(view);
-                if let Some(pins) = entities.get_mut(next + 2).filter(|p| count == 3 && p.transforms() != moved) {
-                    *pins.transforms_mut() = moved;
+                if count == 3 {
+                    let (moved, pins) = (pin_transforms(view), &mut entities[next + 2]);
+                    if pins.transforms() != moved {
+                        *pins.transforms_mut() = moved;
+                    }
                 }
             }
             next += count;
