@@ -115,6 +115,27 @@ fn two_point_lights_cast_cube_shadows() {
 #[test]
 fn a_spot_light_casts_through_its_cone() {
     let Some(gpu) = common::gpu() else { return };
+    lone_spot_light(gpu);
+}
+
+#[test]
+fn a_lone_point_light_casts_a_cube_shadow() {
+    let Some(gpu) = common::gpu() else { return };
+    lone_point_light(gpu);
+}
+
+/// wgpu's GL backend fixes a texture's binding type from its layer count when
+/// it is made: one layer reads as a 2D texture, six as one cube. A lone spot or
+/// point light is the case where the shadow maps would have those counts.
+#[test]
+fn on_gl_a_lone_spot_and_a_lone_point_light_cast_the_same_shadows() {
+    let Some(gpu) = common::gl_gpu() else { return };
+    lone_spot_light(gpu);
+    lone_point_light(gpu);
+}
+
+/// A spot light, the only shadow caster of a fresh renderer: one 2D shadow map.
+fn lone_spot_light(gpu: &glint::Gpu) {
     let mut scene = cube_on_plane(gpu);
     let spot = Light::spot(Vec3::new(-1.5, 3.0, -1.5), Vec3::new(1.0, -2.0, 1.0), Vec3::ONE, 12.0, 10.0, (0.5, 0.7))
         .with_shadows(ShadowSettings { map_size: 256, ..Default::default() });
@@ -123,6 +144,19 @@ fn a_spot_light_casts_through_its_cone() {
     assert_eq!(stats.shadow_views, 1);
     assert!(darker(&image, &unshadowed, 64..100, 64..90) > 300, "the cube's shadow in the cone");
     common::assert_matches_reference("shadow_spot", &image);
+}
+
+/// A point light, the only shadow caster of a fresh renderer: one cube of six faces.
+fn lone_point_light(gpu: &glint::Gpu) {
+    let mut scene = cube_on_plane(gpu);
+    let settings = ShadowSettings { map_size: 256, ..Default::default() };
+    let light = Light::point(Vec3::new(-2.0, 2.0, 0.5), Vec3::new(1.0, 0.8, 0.6), 2.5, 12.0).with_shadows(settings);
+    let (image, stats) = render(&mut scene, gpu, &[light], 128);
+    let (unshadowed, _) = render(&mut scene, gpu, &without_shadows(&[light]), 128);
+    assert_eq!(stats.shadow_views, 6);
+    assert!(darker(&image, &unshadowed, 72..128, 48..74) > 150, "the shadow to the right of the cube");
+    assert_eq!(darker(&image, &unshadowed, 0..50, 50..110), 0, "nothing of it on the left");
+    common::assert_matches_reference("shadow_point_lone", &image);
 }
 
 #[test]

@@ -90,25 +90,35 @@ impl Gpu {
     /// `WGPU_ADAPTER_NAME` (a case-insensitive substring) to choose an adapter.
     /// Returns [`GpuError::NoAdapter`] with the fix when nothing matches.
     pub fn headless() -> Result<Self, GpuError> {
-        Self::create(None).map(|(gpu, _)| gpu)
+        Self::create(None, None).map(|(gpu, _)| gpu)
+    }
+
+    /// Create a headless context on the best adapter of `backends` only (for
+    /// example `wgpu::Backends::GL`), whatever `WGPU_BACKEND` says.
+    pub fn headless_on(backends: wgpu::Backends) -> Result<Self, GpuError> {
+        Self::create(None, Some(backends)).map(|(gpu, _)| gpu)
     }
 
     /// Create a context whose adapter can present to `window`, and the window's
     /// surface (give it to [`WindowSurface::new`](super::WindowSurface::new)).
     /// Chooses backends and adapters as [`Gpu::headless`] does.
     pub fn for_window(window: Arc<dyn WindowHandles>) -> Result<(Self, wgpu::Surface<'static>), GpuError> {
-        match Self::create(Some(window))? {
+        match Self::create(Some(window), None)? {
             (gpu, Some(surface)) => Ok((gpu, surface)),
             (_, None) => Err(GpuError::Surface("no surface was made for the window".into())),
         }
     }
 
-    /// The context, on an adapter that can present to `window` when there is one.
-    fn create(window: Option<Arc<dyn WindowHandles>>) -> Result<(Self, Option<wgpu::Surface<'static>>), GpuError> {
-        let from_env = wgpu::Backends::from_env();
+    /// The context, on an adapter of `only` (else of `WGPU_BACKEND`'s backends)
+    /// that can present to `window` when there is one.
+    fn create(
+        window: Option<Arc<dyn WindowHandles>>,
+        only: Option<wgpu::Backends>,
+    ) -> Result<(Self, Option<wgpu::Surface<'static>>), GpuError> {
+        let chosen = only.or_else(wgpu::Backends::from_env);
         // Without WGPU_BACKEND, try the native APIs first and reach for GL only
         // when they have no adapter: probing EGL logs errors on machines without it.
-        let attempts = match from_env {
+        let attempts = match chosen {
             Some(backends) => vec![backends],
             None => vec![wgpu::Backends::PRIMARY, wgpu::Backends::all()],
         };

@@ -244,7 +244,7 @@ impl Renderer {
         let pipelines = Pipelines::new(&device);
         let scene_block = UniformBlock::new(&device, "renderer: scene block");
         let shadow_block = UniformBlock::new(&device, "renderer: shadow block");
-        let shadow_maps = ShadowMaps::new(&device, 1, 1, 1, 1);
+        let shadow_maps = ShadowMaps::new(&device, gpu.info().backend == wgpu::Backend::Gl, 1, 1, 1, 1);
         let scene_group =
             shadow_maps.scene_group(&device, &pipelines.scene_layout, &scene_block.buffer, &shadow_block.buffer);
         let views = ViewBlocks::new(&device, &pipelines.camera_layout);

@@ -49,6 +49,8 @@ impl ShadowGpu {
 
 /// The shadow-map textures, one attachment view per layer, and the sampler.
 pub(crate) struct ShadowMaps {
+    /// Whether the device is on wgpu's GL backend (see [`ShadowMaps::new`]).
+    pub gl: bool,
     pub size_2d: u32,
     pub layers: u32,
     pub size_cube: u32,
@@ -91,11 +93,19 @@ fn layer_views(texture: &wgpu::Texture, layers: u32) -> Vec<wgpu::TextureView> {
 impl ShadowMaps {
     /// Maps of at least `layers` 2D layers of `size_2d`² texels and `cubes` cubes
     /// of `size_cube`² (at least one of each, so the bind group always has them).
-    pub(crate) fn new(device: &wgpu::Device, size_2d: u32, layers: u32, size_cube: u32, cubes: u32) -> Self {
-        let (layers, cubes) = (layers.max(1), cubes.max(1));
+    ///
+    /// On `gl` (wgpu's GL backend) at least two of each: GL fixes a texture's
+    /// binding type when it is made, and wgpu guesses it from the layer count,
+    /// taking one layer for a plain 2D texture and six for one cube. Bound as a
+    /// 2D array or cube array, such a texture samples wrongly (a lone spot
+    /// light's shadow was lost).
+    pub(crate) fn new(device: &wgpu::Device, gl: bool, size_2d: u32, layers: u32, size_cube: u32, cubes: u32) -> Self {
+        let least = if gl { 2 } else { 1 };
+        let (layers, cubes) = (layers.max(least), cubes.max(least));
         let maps = depth_texture(device, "shadow maps (2D array)", size_2d, layers);
         let cube_maps = depth_texture(device, "shadow maps (cube array)", size_cube, 6 * cubes);
         Self {
+            gl,
             size_2d,
             layers,
             size_cube,

@@ -128,7 +128,7 @@ impl Renderer {
         debug_assert!(views.len() <= MAX_SHADOW_VIEWS);
         if !views.is_empty() && !self.shadow_maps.fits(size_2d, layers, size_cube, cubes) {
             let (layers, cubes) = (layers.max(self.shadow_maps.layers), cubes.max(self.shadow_maps.cubes));
-            self.shadow_maps = ShadowMaps::new(&self.device, size_2d, layers, size_cube, cubes);
+            self.shadow_maps = ShadowMaps::new(&self.device, self.shadow_maps.gl, size_2d, layers, size_cube, cubes);
             self.scene_group = self.shadow_maps.scene_group(
                 &self.device,
                 &self.pipelines.scene_layout,

@@ -15,7 +15,20 @@ pub fn repo_root() -> PathBuf {
 /// With `GLINT_REQUIRE_ADAPTER=1` a missing adapter fails the test instead.
 pub fn gpu() -> Option<&'static Gpu> {
     static GPU: OnceLock<Result<Gpu, String>> = OnceLock::new();
-    match GPU.get_or_init(|| Gpu::headless().map_err(|e| e.to_string())) {
+    shared(&GPU, Gpu::headless)
+}
+
+/// A GPU on wgpu's GL backend (Mesa llvmpipe through EGL here), like [`gpu`].
+pub fn gl_gpu() -> Option<&'static Gpu> {
+    static GPU: OnceLock<Result<Gpu, String>> = OnceLock::new();
+    shared(&GPU, || Gpu::headless_on(wgpu::Backends::GL))
+}
+
+fn shared(
+    cell: &'static OnceLock<Result<Gpu, String>>,
+    create: impl FnOnce() -> Result<Gpu, glint::GpuError>,
+) -> Option<&'static Gpu> {
+    match cell.get_or_init(|| create().map_err(|e| e.to_string())) {
         Ok(gpu) => Some(gpu),
         Err(e) if std::env::var("GLINT_REQUIRE_ADAPTER").as_deref() == Ok("1") => {
             panic!("GLINT_REQUIRE_ADAPTER=1 but there is no adapter: {e}")
