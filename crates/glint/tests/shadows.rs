@@ -16,7 +16,11 @@ struct CubeOnPlane {
 }
 
 fn cube_on_plane(gpu: &glint::Gpu) -> CubeOnPlane {
-    let mut renderer = Renderer::new(gpu);
+    drawn_by(Renderer::new(gpu))
+}
+
+/// [`cube_on_plane`] drawn by `renderer`.
+fn drawn_by(mut renderer: Renderer) -> CubeOnPlane {
     let plane = renderer.add_shape(ShapeKind::Plane.mesh());
     let cube = renderer.add_shape(ShapeKind::Cube.mesh());
     let grey = renderer.add_material(Material::color("grey", 0.8, 0.8, 0.8));
@@ -132,6 +136,26 @@ fn on_gl_a_lone_spot_and_a_lone_point_light_cast_the_same_shadows() {
     let Some(gpu) = common::gl_gpu() else { return };
     lone_spot_light(gpu);
     lone_point_light(gpu);
+}
+
+/// What an adapter without cube-map arrays (some GLES drivers, NVIDIA's through EGL among them) draws:
+/// the point lights' maps are one cube, so the first point light casts its
+/// shadow and the second is drawn without one.
+#[test]
+fn without_cube_arrays_the_first_point_light_keeps_its_shadow() {
+    let Some(gpu) = common::gpu() else { return };
+    let mut scene = drawn_by(Renderer::with_cube_array_shadows(gpu, false));
+    let settings = ShadowSettings { map_size: 256, ..Default::default() };
+    let lights = [
+        Light::point(Vec3::new(-2.0, 2.0, 0.5), Vec3::new(1.0, 0.8, 0.6), 2.5, 12.0).with_shadows(settings),
+        Light::point(Vec3::new(2.0, 1.5, -1.0), Vec3::new(0.6, 0.8, 1.0), 2.5, 12.0).with_shadows(settings),
+    ];
+    let (image, stats) = render(&mut scene, gpu, &lights, 128);
+    let (unshadowed, _) = render(&mut scene, gpu, &without_shadows(&lights), 128);
+    assert_eq!(stats.shadow_views, 6, "one cube");
+    assert!(darker(&image, &unshadowed, 72..128, 48..74) > 150, "the first light's shadow, right of the cube");
+    let (first_only, _) = render(&mut scene, gpu, &[lights[0], without_shadows(&lights)[1]], 128);
+    assert!(image == first_only, "the second light is drawn as if it cast no shadow");
 }
 
 /// A spot light, the only shadow caster of a fresh renderer: one 2D shadow map.

@@ -27,6 +27,16 @@ pub enum GpuError {
         /// What wgpu said.
         source: wgpu::RequestDeviceError,
     },
+    /// The adapter lacks something the renderer cannot do without.
+    #[error("GPU adapter '{adapter}' ({backend:?}) cannot run glint: it has no {missing}; try another backend (WGPU_BACKEND=vulkan, or leave it unset)")]
+    Unsupported {
+        /// Adapter name.
+        adapter: String,
+        /// Its backend.
+        backend: wgpu::Backend,
+        /// What it lacks.
+        missing: &'static str,
+    },
     /// A target size was zero or beyond the device limits.
     #[error("target size {width}x{height} is not supported (1..={max} per side)")]
     TargetSize {
@@ -153,6 +163,17 @@ impl Gpu {
     pub fn from_adapter(adapter: wgpu::Adapter) -> Result<Self, GpuError> {
         let info = adapter.get_info();
         let features = adapter.features();
+        // Vertex shaders read every instance's record from a storage buffer. Some
+        // GLES drivers (NVIDIA's through EGL) have none there, and wgpu would
+        // panic making the first pipeline.
+        let flags = adapter.get_downlevel_capabilities().flags;
+        if !flags.contains(wgpu::DownlevelFlags::VERTEX_STORAGE) {
+            return Err(GpuError::Unsupported {
+                adapter: info.name,
+                backend: info.backend,
+                missing: "storage buffers in vertex shaders (DownlevelFlags::VERTEX_STORAGE), where instances live",
+            });
+        }
         let desc = wgpu::DeviceDescriptor {
             label: Some("glint device"),
             // Timestamps let benchmarks report GPU time; a first instance in indirect
@@ -163,12 +184,7 @@ impl Gpu {
         };
         let (device, queue) = pollster::block_on(adapter.request_device(&desc))
             .map_err(|source| GpuError::Device { adapter: info.name.clone(), source })?;
-        let anisotropy =
-            if adapter.get_downlevel_capabilities().flags.contains(wgpu::DownlevelFlags::ANISOTROPIC_FILTERING) {
-                16
-            } else {
-                1
-            };
+        let anisotropy = if flags.contains(wgpu::DownlevelFlags::ANISOTROPIC_FILTERING) { 16 } else { 1 };
         log::info!(
             "glint: adapter '{}' ({:?}, {:?}); features {:?}",
             info.name,

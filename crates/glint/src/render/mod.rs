@@ -54,7 +54,7 @@ use pipelines::{Pipelines, VertexLayout};
 use queue::{DrawItem, Queue};
 use rayon::prelude::*;
 use resources::{InstanceBuffer, MaterialTable, TextureUploader};
-use shadow_maps::{ShadowGpu, ShadowMaps};
+use shadow_maps::{ShadowGpu, ShadowMaps, ShadowSupport};
 use std::time::Instant;
 use views::ViewBlocks;
 
@@ -239,12 +239,26 @@ fn ms_since(t: Instant) -> f64 {
 impl Renderer {
     /// Create a renderer on `gpu`'s device.
     pub fn new(gpu: &Gpu) -> Self {
+        Self::with_cube_array_shadows(gpu, true)
+    }
+
+    /// A renderer that keeps point lights' shadow maps in a cube-map array
+    /// only when `allowed` and the adapter can sample one; otherwise only the
+    /// first shadow-casting point light of a frame casts shadows.
+    /// [`Renderer::new`] allows them; disallowing shows on any adapter what
+    /// adapters without them (some GLES drivers) draw.
+    pub fn with_cube_array_shadows(gpu: &Gpu, allowed: bool) -> Self {
         let device = gpu.device.clone();
         let queue = gpu.queue.clone();
-        let pipelines = Pipelines::new(&device);
+        let flags = gpu.adapter.get_downlevel_capabilities().flags;
+        let shadows = ShadowSupport {
+            gl: gpu.info().backend == wgpu::Backend::Gl,
+            cube_arrays: allowed && flags.contains(wgpu::DownlevelFlags::CUBE_ARRAY_TEXTURES),
+        };
+        let pipelines = Pipelines::new(&device, shadows);
         let scene_block = UniformBlock::new(&device, "renderer: scene block");
         let shadow_block = UniformBlock::new(&device, "renderer: shadow block");
-        let shadow_maps = ShadowMaps::new(&device, gpu.info().backend == wgpu::Backend::Gl, 1, 1, 1, 1);
+        let shadow_maps = ShadowMaps::new(&device, shadows, 1, 1, 1, 1);
         let scene_group =
             shadow_maps.scene_group(&device, &pipelines.scene_layout, &scene_block.buffer, &shadow_block.buffer);
         let views = ViewBlocks::new(&device, &pipelines.camera_layout);
@@ -879,6 +893,20 @@ mod tests {
                 None
             }
         }
+    }
+
+    #[test]
+    fn errors_while_pipelines_are_made_are_caught_not_left_to_panic() {
+        let Some(gpu) = gpu() else { return };
+        let scope = pipelines::DriverErrors::watch(&gpu.device);
+        // Invalid on every adapter: anisotropy must be at least 1.
+        let _sampler =
+            gpu.device.create_sampler(&wgpu::SamplerDescriptor { anisotropy_clamp: 0, ..Default::default() });
+        let error = scope.finish().expect("the error is caught");
+        assert!(matches!(error, wgpu::Error::Validation { .. }), "{error}");
+        let clean = pipelines::DriverErrors::watch(&gpu.device);
+        let _sampler = gpu.device.create_sampler(&wgpu::SamplerDescriptor::default());
+        assert!(clean.finish().is_none(), "nothing to catch");
     }
 
     #[test]

@@ -6,6 +6,7 @@
 //! formats. Shader modules are cached per macro set, pipelines per key; a key's
 //! index in the cache is its id in sort keys.
 
+use super::shadow_maps::ShadowSupport;
 use crate::gpu::{sampler_entry, texture_entry, COLOR_FORMAT, DEPTH_FORMAT};
 use crate::scene::{BlendState, Compare, Cull, Mesh, RenderStates, SkinVertex, StencilOp, Vertex};
 use crate::shader::{ShaderError, ShaderFeatures, ShaderLibrary};
@@ -217,7 +218,7 @@ fn depth_stencil(states: &RenderStates, format: wgpu::TextureFormat) -> wgpu::De
 }
 
 impl Pipelines {
-    pub(crate) fn new(device: &wgpu::Device) -> Self {
+    pub(crate) fn new(device: &wgpu::Device, shadows: ShadowSupport) -> Self {
         let all = wgpu::ShaderStages::VERTEX_FRAGMENT;
         let layout = |label, entries: &[wgpu::BindGroupLayoutEntry]| {
             device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some(label), entries })
@@ -239,7 +240,7 @@ impl Pipelines {
                 uniform_entry(0, all, false),
                 uniform_entry(1, fragment, false),
                 depth_texture(2, wgpu::TextureViewDimension::D2Array),
-                depth_texture(3, wgpu::TextureViewDimension::CubeArray),
+                depth_texture(3, shadows.cube_dimension()),
                 wgpu::BindGroupLayoutEntry {
                     binding: 4,
                     visibility: fragment,
@@ -307,7 +308,7 @@ impl Pipelines {
             layout: pipeline_layout,
             shadow_layout,
             sky_layout,
-            library: ShaderLibrary::new(),
+            library: ShaderLibrary::new(shadows.cube_arrays),
             modules: HashMap::new(),
             sky_module: None,
             forward_cache: Vec::new(),
@@ -378,12 +379,17 @@ impl Pipelines {
         if let Some(&id) = self.forward_index.get(&key) {
             return Ok((id, false));
         }
+        let label = format!("renderer: forward shader {:?}", key.features);
+        let scope = DriverErrors::watch(device);
         if !self.modules.contains_key(&key.features) {
             let module = self.library.forward(key.features)?;
-            let label = format!("renderer: forward shader {:?}", key.features);
             self.modules.insert(key.features, shader_module(device, &label, module));
         }
         let pipeline = self.build_forward(device, key);
+        if let Some(error) = scope.finish() {
+            self.modules.remove(&key.features);
+            return Err(ShaderError::refused(&label, &error));
+        }
         let id = self.forward_cache.len() as u16;
         self.forward_cache.push((key, pipeline));
         self.forward_index.insert(key, id);
@@ -414,6 +420,7 @@ impl Pipelines {
         if self.sky_cache.contains_key(&samples) {
             return Ok(false);
         }
+        let scope = DriverErrors::watch(device);
         if self.sky_module.is_none() {
             let module = self.library.sky()?;
             self.sky_module = Some(shader_module(device, "renderer: sky shader", module));
@@ -444,6 +451,10 @@ impl Pipelines {
             multiview_mask: None,
             cache: None,
         });
+        if let Some(error) = scope.finish() {
+            self.sky_module = None;
+            return Err(ShaderError::refused("renderer: sky shader", &error));
+        }
         self.sky_cache.insert(samples, pipeline);
         Ok(true)
     }
@@ -503,6 +514,29 @@ impl Pipelines {
             multiview_mask: None,
             cache: None,
         })
+    }
+}
+
+/// Errors wgpu reports while shaders and pipelines are made, caught instead of
+/// left to wgpu's default handler, which panics. A driver that cannot translate
+/// a shader reports one (NVIDIA's GLES through EGL: "the selected version
+/// doesn't support BUFFER_STORAGE").
+pub(super) struct DriverErrors {
+    // Dropped (popped) in this order, the reverse of pushing.
+    internal: wgpu::ErrorScopeGuard,
+    validation: wgpu::ErrorScopeGuard,
+}
+
+impl DriverErrors {
+    pub(super) fn watch(device: &wgpu::Device) -> Self {
+        let validation = device.push_error_scope(wgpu::ErrorFilter::Validation);
+        Self { internal: device.push_error_scope(wgpu::ErrorFilter::Internal), validation }
+    }
+
+    /// The first error caught, if any.
+    pub(super) fn finish(self) -> Option<wgpu::Error> {
+        let internal = pollster::block_on(self.internal.pop());
+        pollster::block_on(self.validation.pop()).or(internal)
     }
 }
 

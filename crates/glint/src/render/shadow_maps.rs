@@ -8,7 +8,7 @@ use super::shadow_views::{ShadowView, ViewTarget};
 
 /// 2D shadow views (cascades and spot lights) the Shadow block holds.
 pub(crate) const MAX_2D_VIEWS: usize = 16;
-/// Shadow-casting point lights at once.
+/// Shadow-casting point lights at once (one where cube arrays are missing).
 pub(crate) const MAX_CUBES: usize = 4;
 /// Shadow maps are 32-bit float depth.
 pub(crate) const SHADOW_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
@@ -47,10 +47,41 @@ impl ShadowGpu {
     }
 }
 
+/// What the adapter allows the shadow maps.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct ShadowSupport {
+    /// The device is on wgpu's GL backend (see [`ShadowMaps::new`]).
+    pub gl: bool,
+    /// Cube-map arrays can be sampled (`DownlevelFlags::CUBE_ARRAY_TEXTURES`).
+    /// Without them (some GLES drivers) the point lights' maps are one
+    /// cube, so only the first shadow-casting point light casts shadows, and
+    /// the shaders get the `SINGLE_SHADOW_CUBE` def.
+    pub cube_arrays: bool,
+}
+
+impl ShadowSupport {
+    /// How many point lights can cast shadows at once.
+    pub(crate) fn max_cubes(self) -> usize {
+        if self.cube_arrays {
+            MAX_CUBES
+        } else {
+            1
+        }
+    }
+
+    /// How group 0 binds the point lights' maps.
+    pub(crate) fn cube_dimension(self) -> wgpu::TextureViewDimension {
+        if self.cube_arrays {
+            wgpu::TextureViewDimension::CubeArray
+        } else {
+            wgpu::TextureViewDimension::Cube
+        }
+    }
+}
+
 /// The shadow-map textures, one attachment view per layer, and the sampler.
 pub(crate) struct ShadowMaps {
-    /// Whether the device is on wgpu's GL backend (see [`ShadowMaps::new`]).
-    pub gl: bool,
+    pub support: ShadowSupport,
     pub size_2d: u32,
     pub layers: u32,
     pub size_cube: u32,
@@ -94,18 +125,26 @@ impl ShadowMaps {
     /// Maps of at least `layers` 2D layers of `size_2d`² texels and `cubes` cubes
     /// of `size_cube`² (at least one of each, so the bind group always has them).
     ///
-    /// On `gl` (wgpu's GL backend) at least two of each: GL fixes a texture's
-    /// binding type when it is made, and wgpu guesses it from the layer count,
-    /// taking one layer for a plain 2D texture and six for one cube. Bound as a
-    /// 2D array or cube array, such a texture samples wrongly (a lone spot
-    /// light's shadow was lost).
-    pub(crate) fn new(device: &wgpu::Device, gl: bool, size_2d: u32, layers: u32, size_cube: u32, cubes: u32) -> Self {
-        let least = if gl { 2 } else { 1 };
-        let (layers, cubes) = (layers.max(least), cubes.max(least));
+    /// On wgpu's GL backend at least two of each (one cube without cube
+    /// arrays): GL fixes a texture's binding type when it is made, and wgpu
+    /// guesses it from the layer count, taking one layer for a plain 2D texture
+    /// and six for one cube. Bound as a 2D array or cube array, such a texture
+    /// samples wrongly (a lone spot light's shadow was lost).
+    pub(crate) fn new(
+        device: &wgpu::Device,
+        support: ShadowSupport,
+        size_2d: u32,
+        layers: u32,
+        size_cube: u32,
+        cubes: u32,
+    ) -> Self {
+        let least = if support.gl { 2 } else { 1 };
+        let layers = layers.max(least);
+        let cubes = if support.cube_arrays { cubes.max(least) } else { 1 };
         let maps = depth_texture(device, "shadow maps (2D array)", size_2d, layers);
         let cube_maps = depth_texture(device, "shadow maps (cube array)", size_cube, 6 * cubes);
         Self {
-            gl,
+            support,
             size_2d,
             layers,
             size_cube,
@@ -115,7 +154,7 @@ impl ShadowMaps {
                 ..Default::default()
             }),
             cube_maps: cube_maps.create_view(&wgpu::TextureViewDescriptor {
-                dimension: Some(wgpu::TextureViewDimension::CubeArray),
+                dimension: Some(support.cube_dimension()),
                 ..Default::default()
             }),
             layer_views: layer_views(&maps, layers),

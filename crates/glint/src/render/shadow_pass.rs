@@ -12,7 +12,7 @@ use super::cull::Frustum;
 use super::encode::Bound;
 use super::pipelines::{PassKind, Pipelines};
 use super::queue::{self, DrawItem, Queue};
-use super::shadow_maps::{ShadowGpu, ShadowMaps, MAX_2D_VIEWS, MAX_CUBES};
+use super::shadow_maps::{ShadowGpu, ShadowMaps, MAX_2D_VIEWS};
 use super::shadow_views::{self, ShadowView, ViewTarget};
 use super::timer::Timed;
 use super::views::{ViewBlocks, MAX_SHADOW_VIEWS};
@@ -114,7 +114,7 @@ impl Renderer {
                     (first[k], layers) = (Some(layers), layers + 1);
                     true
                 }
-                LightKind::Point { .. } if (cubes as usize) < MAX_CUBES => {
+                LightKind::Point { .. } if (cubes as usize) < self.shadow_maps.support.max_cubes() => {
                     views.extend(shadow_views::cube(light, &shared(size_cube), cubes).into_iter().flatten());
                     (first[k], cubes) = (Some(cubes), cubes + 1);
                     true
@@ -128,7 +128,8 @@ impl Renderer {
         debug_assert!(views.len() <= MAX_SHADOW_VIEWS);
         if !views.is_empty() && !self.shadow_maps.fits(size_2d, layers, size_cube, cubes) {
             let (layers, cubes) = (layers.max(self.shadow_maps.layers), cubes.max(self.shadow_maps.cubes));
-            self.shadow_maps = ShadowMaps::new(&self.device, self.shadow_maps.gl, size_2d, layers, size_cube, cubes);
+            self.shadow_maps =
+                ShadowMaps::new(&self.device, self.shadow_maps.support, size_2d, layers, size_cube, cubes);
             self.scene_group = self.shadow_maps.scene_group(
                 &self.device,
                 &self.pipelines.scene_layout,

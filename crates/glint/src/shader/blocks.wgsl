@@ -49,6 +49,10 @@ struct ShadowBlock {
 @group(0) @binding(0) var<uniform> scene: SceneBlock;
 @group(0) @binding(1) var<uniform> shadows: ShadowBlock;
 @group(0) @binding(2) var shadow_maps: texture_depth_2d_array;
+#ifdef SINGLE_SHADOW_CUBE
+@group(0) @binding(3) var shadow_cubes: texture_depth_cube;
+#else
 @group(0) @binding(3) var shadow_cubes: texture_depth_cube_array;
+#endif
 @group(0) @binding(4) var shadow_sampler: sampler_comparison;
 @group(1) @binding(0) var<uniform> camera: CameraBlock;

@@ -276,7 +276,11 @@ fn cube_shadow(cube: u32, light: Light, q: vec3<f32>) -> f32 {
     for (var y = -1; y <= 1; y++) {
         for (var x = -1; x <= 1; x++) {
             let dir = n + (t * f32(x) + b * f32(y)) * step;
+#ifdef SINGLE_SHADOW_CUBE
+            lit += textureSampleCompareLevel(shadow_cubes, shadow_sampler, dir, depth);
+#else
             lit += textureSampleCompareLevel(shadow_cubes, shadow_sampler, dir, cube, depth);
+#endif
         }
     }
     return lit / 9.0;

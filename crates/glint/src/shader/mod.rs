@@ -88,32 +88,49 @@ impl ShaderFeatures {
     }
 }
 
-/// A shader that failed to compose: always a bug in glint's own WGSL.
+/// A shader that failed to compose (a bug in glint's own WGSL), or a pipeline
+/// the adapter's driver refused (for example a GLES driver that cannot
+/// translate it).
 #[derive(Debug, thiserror::Error)]
-#[error("shader '{name}' did not compose: {message}")]
+#[error("shader '{name}' did not build: {message}")]
 pub struct ShaderError {
     name: String,
     message: String,
 }
 
+impl ShaderError {
+    /// The driver refused what `name` built.
+    pub(crate) fn refused(name: &str, error: &wgpu::Error) -> Self {
+        Self { name: name.into(), message: error.to_string() }
+    }
+}
+
 /// Composes glint's shaders with naga_oil.
-#[derive(Default)]
 pub(crate) struct ShaderLibrary {
     composer: Composer,
     blocks_added: bool,
+    /// Defs every shader gets: `SINGLE_SHADOW_CUBE` where the adapter cannot
+    /// sample cube-map arrays (point-light shadows then come from one cube).
+    device_defs: HashMap<String, ShaderDefValue>,
 }
 
 impl ShaderLibrary {
-    pub(crate) fn new() -> Self {
-        Self::default()
+    /// A library for an adapter that can (or cannot) sample cube-map arrays.
+    pub(crate) fn new(cube_arrays: bool) -> Self {
+        let mut device_defs = HashMap::new();
+        if !cube_arrays {
+            device_defs.insert("SINGLE_SHADOW_CUBE".to_string(), ShaderDefValue::Bool(true));
+        }
+        Self { composer: Composer::default(), blocks_added: false, device_defs }
     }
 
     fn compose(
         &mut self,
         name: &str,
         source: &str,
-        defs: HashMap<String, ShaderDefValue>,
+        mut defs: HashMap<String, ShaderDefValue>,
     ) -> Result<wgpu::naga::Module, ShaderError> {
+        defs.extend(self.device_defs.clone());
         let fail = |name: &str, e: naga_oil::compose::ComposerError, composer: &Composer| ShaderError {
             name: name.into(),
             message: e.emit_to_string(composer),
@@ -156,7 +173,7 @@ mod tests {
         // Every #ifdef region and every interaction of up to three of them (the
         // nesting is at most three deep), plus everything at once: exhaustive
         // would be 2^bits, which grows too fast to keep.
-        let mut library = ShaderLibrary::new();
+        let mut library = ShaderLibrary::new(true);
         let bits: Vec<u32> = ShaderFeatures::all().iter().map(|f| f.bits()).collect();
         let mut sets = vec![0, ShaderFeatures::all().bits()];
         for (i, a) in bits.iter().enumerate() {
@@ -172,6 +189,23 @@ mod tests {
             validator.validate(&module).unwrap_or_else(|e| panic!("{features:?}: {e:?}"));
         }
         library.sky().expect("sky composes");
+    }
+
+    #[test]
+    fn without_cube_arrays_the_shaders_need_no_cube_array_capability() {
+        // The capability NVIDIA's GL driver lacks: with it the forward shader
+        // failed validation there, and wgpu panicked making the pipeline.
+        let cube_arrays = wgpu::naga::valid::Capabilities::CUBE_ARRAY_TEXTURES;
+        let without = wgpu::naga::valid::Capabilities::all() - cube_arrays;
+        let validate = |module: &wgpu::naga::Module, capabilities| {
+            wgpu::naga::valid::Validator::new(Default::default(), capabilities).validate(module).is_ok()
+        };
+        let all = ShaderFeatures::all();
+        let downlevel = ShaderLibrary::new(false).forward(all).expect("composes");
+        assert!(validate(&downlevel, without), "valid without cube arrays");
+        let full = ShaderLibrary::new(true).forward(all).expect("composes");
+        assert!(!validate(&full, without), "the full shader samples a cube array");
+        assert!(validate(&full, wgpu::naga::valid::Capabilities::all()), "valid with them");
     }
 
     #[test]
