@@ -163,9 +163,10 @@ impl Gpu {
     pub fn from_adapter(adapter: wgpu::Adapter) -> Result<Self, GpuError> {
         let info = adapter.get_info();
         let features = adapter.features();
-        // Vertex shaders read every instance's record from a storage buffer. Some
-        // GLES drivers (NVIDIA's through EGL) have none there, and wgpu would
-        // panic making the first pipeline.
+        // Vertex shaders read every instance's record from a storage buffer.
+        // WebGL2 and some GLES drivers have none there; say so before anything
+        // is built. (NVIDIA's GLES claims them but cannot translate the shader:
+        // that is caught when the pipeline is made, see render::pipelines.)
         let flags = adapter.get_downlevel_capabilities().flags;
         if !flags.contains(wgpu::DownlevelFlags::VERTEX_STORAGE) {
             return Err(GpuError::Unsupported {
