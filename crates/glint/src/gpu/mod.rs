@@ -7,6 +7,7 @@
 
 mod blit;
 mod context;
+mod errors;
 mod target;
 mod window;
 
@@ -15,6 +16,7 @@ pub use target::OffscreenTarget;
 pub use window::WindowSurface;
 
 pub(crate) use blit::{sampler_entry, texture_entry, Blitter};
+pub(crate) use errors::DriverErrors;
 
 /// Colour format of every glint target: 8-bit sRGB, so shaders write linear values
 /// and the hardware encodes them.

@@ -7,6 +7,7 @@ use super::batch::{self, Batch};
 use super::mesh_pool::MeshRange;
 use super::queue::DrawItem;
 use super::resources::GrowBuffer;
+use super::RenderError;
 
 /// The draws of one pass kind and their GPU buffers.
 pub(crate) struct DrawList {
@@ -108,9 +109,9 @@ impl DrawList {
         queue: &wgpu::Queue,
         (layout, instances): (&wgpu::BindGroupLayout, &wgpu::Buffer),
         one_by_one: bool,
-    ) -> ListUpload {
+    ) -> Result<ListUpload, RenderError> {
         let mut written = ListUpload { draw_indices: 0, indirect: 0 };
-        if self.draw_index_buffer.reserve(device, std::mem::size_of_val(self.draw_indices.as_slice()) as u64) {
+        if self.draw_index_buffer.reserve(device, std::mem::size_of_val(self.draw_indices.as_slice()) as u64)? {
             self.uploaded_draw_indices.clear();
             self.rebind(device, layout, instances);
         }
@@ -124,7 +125,7 @@ impl DrawList {
             self.uploaded_draw_indices.clone_from(&self.draw_indices);
         }
         if let Some(indirect) = &mut self.indirect {
-            if indirect.reserve(device, std::mem::size_of_val(self.indirect_args.as_slice()) as u64) {
+            if indirect.reserve(device, std::mem::size_of_val(self.indirect_args.as_slice()) as u64)? {
                 self.uploaded_indirect_args.clear();
             }
             if bytemuck::cast_slice::<_, u8>(&self.indirect_args)
@@ -134,7 +135,7 @@ impl DrawList {
                 self.uploaded_indirect_args.clone_from(&self.indirect_args);
             }
         }
-        written
+        Ok(written)
     }
 }
 

@@ -35,6 +35,7 @@ mod timer;
 mod views;
 
 pub use mesh_pool::MeshTooLarge;
+pub use shadow_maps::{ShadowLayout, MAX_CUBES, MAX_SHADOW_MAP_BYTES};
 pub use stats::{FrameStats, PassStats, Passes, StageTimes, UploadStats};
 pub use timer::GpuTimes;
 
@@ -80,6 +81,26 @@ pub enum RenderError {
         shape: ShapeId,
         /// Its size and the limit.
         source: MeshTooLarge,
+    },
+    /// A GPU resource the frame needs is larger than glint or the adapter allows.
+    #[error("{what} needs {bytes} bytes, more than the {limit}-byte limit ({limit_name})")]
+    TooLarge {
+        /// The resource.
+        what: &'static str,
+        /// What it needs.
+        bytes: u64,
+        /// The most allowed.
+        limit: u64,
+        /// Which limit that is.
+        limit_name: &'static str,
+    },
+    /// The device refused to create a resource (out of memory, or a limit).
+    #[error("the GPU could not create {what}: {message}")]
+    Device {
+        /// The resource.
+        what: &'static str,
+        /// What wgpu said.
+        message: String,
     },
     /// A material names a texture this renderer never created.
     #[error("material '{material}' uses unknown texture id {texture:?}")]
@@ -560,7 +581,7 @@ impl Renderer {
         }
 
         let t = Instant::now();
-        self.upload(camera, lights, aspect, &mut stats);
+        self.upload(camera, lights, aspect, &mut stats)?;
         stats.cpu_ms.upload = ms_since(t);
 
         let t = Instant::now();
@@ -603,7 +624,7 @@ impl Renderer {
         samples: u32,
         stats: &mut FrameStats,
     ) -> Result<(), RenderError> {
-        if self.material_table.reserve(&self.device, self.materials.len()) {
+        if self.material_table.reserve(&self.device, self.materials.len())? {
             // A new table: every entry is written again, every texture set rebound to it.
             for slot in &mut self.materials {
                 slot.dirty = true;
@@ -765,14 +786,20 @@ impl Renderer {
 
     /// Stage 6: write the blocks that changed, the instances that changed, and this
     /// frame's draw indices and indirect commands where they differ from the last frame's.
-    fn upload(&mut self, camera: &Camera, lights: &[Light], aspect: f32, stats: &mut FrameStats) {
+    fn upload(
+        &mut self,
+        camera: &Camera,
+        lights: &[Light],
+        aspect: f32,
+        stats: &mut FrameStats,
+    ) -> Result<(), RenderError> {
         let bytes = &mut stats.bytes_uploaded;
         // Shadows only for the lights this frame's shadow pass drew maps for.
         let shadowed = self.shadow_frame.as_ref().filter(|f| f.lights == lights).map(|f| f.first_view.as_slice());
         let scene = SceneGpu::new(&self.environment, lights, shadowed.unwrap_or(&[]));
         bytes.scene += self.scene_block.update(&self.queue, scene);
         bytes.camera += self.views.update(&self.queue, 0, camera.to_gpu(aspect));
-        self.upload_instances(bytes);
+        self.upload_instances(bytes)?;
         let naive = self.mode == FrameMode::Naive;
         if naive {
             // Every draw's material entry written before it, one small write each.
@@ -782,16 +809,17 @@ impl Renderer {
             }
         }
         let layout = &self.pipelines.instance_layout;
-        let written = self.forward.upload(&self.device, &self.queue, (layout, self.instances.buffer()), naive);
+        let written = self.forward.upload(&self.device, &self.queue, (layout, self.instances.buffer()), naive)?;
         bytes.draw_indices += written.draw_indices;
         bytes.indirect += written.indirect;
         stats.instances_drawn = self.forward.draw_indices.len() as u64;
+        Ok(())
     }
 
     /// Write the instances that changed (all of them when the buffer grew, and
     /// then every draw list is bound to the new buffer).
-    fn upload_instances(&mut self, bytes: &mut UploadStats) {
-        if self.instances.reserve(&self.device, self.store.len()) {
+    fn upload_instances(&mut self, bytes: &mut UploadStats) -> Result<(), RenderError> {
+        if self.instances.reserve(&self.device, self.store.len())? {
             self.store.mark_all_dirty();
             self.forward.rebind(&self.device, &self.pipelines.instance_layout, self.instances.buffer());
             self.shadow_list.rebind(&self.device, &self.pipelines.instance_layout, self.instances.buffer());
@@ -800,6 +828,7 @@ impl Renderer {
             let data = &self.store.instances[range.start as usize..range.end as usize];
             bytes.instances += self.instances.write(&self.queue, range.start, data);
         }
+        Ok(())
     }
 }
 
@@ -898,13 +927,13 @@ mod tests {
     #[test]
     fn errors_while_pipelines_are_made_are_caught_not_left_to_panic() {
         let Some(gpu) = gpu() else { return };
-        let scope = pipelines::DriverErrors::watch(&gpu.device);
+        let scope = crate::gpu::DriverErrors::watch(&gpu.device);
         // Invalid on every adapter: anisotropy must be at least 1.
         let _sampler =
             gpu.device.create_sampler(&wgpu::SamplerDescriptor { anisotropy_clamp: 0, ..Default::default() });
         let error = scope.finish().expect("the error is caught");
         assert!(matches!(error, wgpu::Error::Validation { .. }), "{error}");
-        let clean = pipelines::DriverErrors::watch(&gpu.device);
+        let clean = crate::gpu::DriverErrors::watch(&gpu.device);
         let _sampler = gpu.device.create_sampler(&wgpu::SamplerDescriptor::default());
         assert!(clean.finish().is_none(), "nothing to catch");
     }

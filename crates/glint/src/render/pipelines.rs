@@ -7,7 +7,7 @@
 //! index in the cache is its id in sort keys.
 
 use super::shadow_maps::ShadowSupport;
-use crate::gpu::{sampler_entry, texture_entry, COLOR_FORMAT, DEPTH_FORMAT};
+use crate::gpu::{sampler_entry, texture_entry, DriverErrors, COLOR_FORMAT, DEPTH_FORMAT};
 use crate::scene::{BlendState, Compare, Cull, Mesh, RenderStates, SkinVertex, StencilOp, Vertex};
 use crate::shader::{ShaderError, ShaderFeatures, ShaderLibrary};
 use std::borrow::Cow;
@@ -514,29 +514,6 @@ impl Pipelines {
             multiview_mask: None,
             cache: None,
         })
-    }
-}
-
-/// Errors wgpu reports while shaders and pipelines are made, caught instead of
-/// left to wgpu's default handler, which panics. A driver that cannot translate
-/// a shader reports one (NVIDIA's GLES through EGL: "the selected version
-/// doesn't support BUFFER_STORAGE").
-pub(super) struct DriverErrors {
-    // Dropped (popped) in this order, the reverse of pushing.
-    internal: wgpu::ErrorScopeGuard,
-    validation: wgpu::ErrorScopeGuard,
-}
-
-impl DriverErrors {
-    pub(super) fn watch(device: &wgpu::Device) -> Self {
-        let validation = device.push_error_scope(wgpu::ErrorFilter::Validation);
-        Self { internal: device.push_error_scope(wgpu::ErrorFilter::Internal), validation }
-    }
-
-    /// The first error caught, if any.
-    pub(super) fn finish(self) -> Option<wgpu::Error> {
-        let internal = pollster::block_on(self.internal.pop());
-        pollster::block_on(self.validation.pop()).or(internal)
     }
 }
 

@@ -3,7 +3,8 @@
 
 use super::blocks::{InstanceGpu, MaterialGpu};
 use crate::asset::Texture;
-use crate::gpu::Blitter;
+use super::RenderError;
+use crate::gpu::{Blitter, DriverErrors};
 
 /// Builds textures and fills their mip chains by repeated half-size blits.
 pub(crate) struct TextureUploader {
@@ -90,12 +91,38 @@ impl GrowBuffer {
     }
 
     /// Make room for `bytes`; returns whether the buffer was replaced.
-    pub(crate) fn reserve(&mut self, device: &wgpu::Device, bytes: u64) -> bool {
+    ///
+    /// Fails, keeping the old buffer, when `bytes` is over the adapter's largest
+    /// buffer (or, for a storage buffer, its largest binding), or when the device
+    /// cannot allocate it. Growth doubles, but never past that limit.
+    pub(crate) fn reserve(&mut self, device: &wgpu::Device, bytes: u64) -> Result<bool, RenderError> {
         if bytes <= self.buffer.size() {
-            return false;
+            return Ok(false);
         }
-        *self = Self::new(device, self.label, self.usage, bytes);
-        true
+        let limits = device.limits();
+        let (limit, limit_name) = if self.usage.contains(wgpu::BufferUsages::STORAGE)
+            && u64::from(limits.max_storage_buffer_binding_size) < limits.max_buffer_size
+        {
+            (u64::from(limits.max_storage_buffer_binding_size), "the adapter's max_storage_buffer_binding_size")
+        } else {
+            (limits.max_buffer_size, "the adapter's max_buffer_size")
+        };
+        if bytes > limit {
+            return Err(RenderError::TooLarge { what: self.label, bytes, limit, limit_name });
+        }
+        let size = bytes.max(256).next_power_of_two().min(limit & !255).max(bytes);
+        let scope = DriverErrors::watch(device);
+        let buffer = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some(self.label),
+            size,
+            usage: self.usage | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        if let Some(error) = scope.finish() {
+            return Err(RenderError::Device { what: self.label, message: error.to_string() });
+        }
+        self.buffer = buffer;
+        Ok(true)
     }
 
     /// Write `data` at element `first` (elements of `T`); returns bytes written.
@@ -120,7 +147,7 @@ impl MaterialTable {
 
     /// Make room for `materials`; returns whether the table was replaced (every
     /// material must be written again and every material bind group rebuilt).
-    pub(crate) fn reserve(&mut self, device: &wgpu::Device, materials: usize) -> bool {
+    pub(crate) fn reserve(&mut self, device: &wgpu::Device, materials: usize) -> Result<bool, RenderError> {
         self.0.reserve(device, (materials * std::mem::size_of::<MaterialGpu>()) as u64)
     }
 
@@ -146,7 +173,7 @@ impl InstanceBuffer {
 
     /// Make room for `instances` records. Returns whether the buffer was replaced
     /// (its contents must be written again and its bind groups rebuilt).
-    pub(crate) fn reserve(&mut self, device: &wgpu::Device, instances: usize) -> bool {
+    pub(crate) fn reserve(&mut self, device: &wgpu::Device, instances: usize) -> Result<bool, RenderError> {
         self.0.reserve(device, (instances * std::mem::size_of::<InstanceGpu>()) as u64)
     }
 

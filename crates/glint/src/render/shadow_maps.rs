@@ -5,13 +5,20 @@
 //! view's matrix. Maps of one kind share the largest size any light asks for.
 
 use super::shadow_views::{ShadowView, ViewTarget};
+use super::RenderError;
+use crate::gpu::DriverErrors;
+use crate::scene::{Light, LightKind, CASCADES};
 
 /// 2D shadow views (cascades and spot lights) the Shadow block holds.
 pub(crate) const MAX_2D_VIEWS: usize = 16;
 /// Shadow-casting point lights at once (one where cube arrays are missing).
-pub(crate) const MAX_CUBES: usize = 4;
+pub const MAX_CUBES: usize = 4;
 /// Shadow maps are 32-bit float depth.
 pub(crate) const SHADOW_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+/// Most memory the shadow maps of one frame may take: one directional light's
+/// four 8192² cascades, or four point lights' cubes at 2048². A frame that asks
+/// for more is refused (see [`ShadowLayout::bytes`]) before anything is allocated.
+pub const MAX_SHADOW_MAP_BYTES: u64 = 1 << 30;
 /// Fraction of a cascade over which it blends into the next.
 const CASCADE_BLEND: f32 = 0.1;
 
@@ -44,6 +51,60 @@ impl ShadowGpu {
             }
         }
         block
+    }
+}
+
+/// Where each shadow-casting light's views go in the shadow maps, and how big
+/// the maps are: the one plan that both the renderer and scene checks use.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct ShadowLayout {
+    /// Side of every 2D map (the largest any directional or spot light asks for).
+    pub size_2d: u32,
+    /// Side of every cube face (the largest any point light asks for).
+    pub size_cube: u32,
+    /// 2D layers and cubes in use.
+    pub layers: u32,
+    /// Cubes in use.
+    pub cubes: u32,
+    /// Per light, its first 2D layer (directional, spot) or cube (point); `None`
+    /// for lights without shadows or past the maps' room.
+    pub first: Vec<Option<u32>>,
+}
+
+impl ShadowLayout {
+    /// Place `lights` in order: four layers per directional light, one per spot
+    /// light (16 layers in all), a cube per point light (`max_cubes` in all).
+    pub fn plan(lights: &[Light], max_cubes: usize) -> Self {
+        let size_of = |l: &Light| l.shadows.map_or(0, |s| s.map_size.clamp(16, 8192));
+        let point = |l: &&Light| matches!(l.kind, LightKind::Point { .. });
+        let size_2d = lights.iter().filter(|l| !point(l)).map(size_of).max().unwrap_or(0).max(1);
+        let size_cube = lights.iter().filter(point).map(size_of).max().unwrap_or(0).max(1);
+        let (mut layers, mut cubes) = (0u32, 0u32);
+        let first = lights
+            .iter()
+            .map(|light| {
+                light.shadows?;
+                let (slot, count) = match light.kind {
+                    LightKind::Directional { .. } if layers as usize + CASCADES <= MAX_2D_VIEWS => {
+                        (&mut layers, CASCADES as u32)
+                    }
+                    LightKind::Spot { .. } if (layers as usize) < MAX_2D_VIEWS => (&mut layers, 1),
+                    LightKind::Point { .. } if (cubes as usize) < max_cubes => (&mut cubes, 1),
+                    _ => return None,
+                };
+                *slot += count;
+                Some(*slot - count)
+            })
+            .collect();
+        Self { size_2d, size_cube, layers, cubes, first }
+    }
+
+    /// Bytes of depth the maps take (4 per texel), with at least `least` layers
+    /// and cubes as [`ShadowMaps::new`] allocates them.
+    pub fn bytes(&self, least: u32) -> u64 {
+        let texels = |size: u32| u64::from(size) * u64::from(size);
+        4 * (texels(self.size_2d) * u64::from(self.layers.max(least))
+            + texels(self.size_cube) * 6 * u64::from(self.cubes.max(least)))
     }
 }
 
@@ -166,6 +227,32 @@ impl ShadowMaps {
                 compare: Some(wgpu::CompareFunction::LessEqual),
                 ..Default::default()
             }),
+        }
+    }
+
+    /// [`ShadowMaps::new`] for a frame's lights: refused before anything is
+    /// allocated when the maps would take more than [`MAX_SHADOW_MAP_BYTES`], and
+    /// an error (not a panic) when the device cannot make them.
+    pub(crate) fn checked(
+        device: &wgpu::Device,
+        support: ShadowSupport,
+        size_2d: u32,
+        layers: u32,
+        size_cube: u32,
+        cubes: u32,
+    ) -> Result<Self, RenderError> {
+        let least = if support.gl { 2 } else { 1 };
+        let cubes = if support.cube_arrays { cubes } else { 1 };
+        let bytes = ShadowLayout { size_2d, size_cube, layers, cubes, first: Vec::new() }.bytes(least);
+        if bytes > MAX_SHADOW_MAP_BYTES {
+            let limit_name = "MAX_SHADOW_MAP_BYTES: lower the lights' shadow_map_size";
+            return Err(RenderError::TooLarge { what: "the shadow maps", bytes, limit: MAX_SHADOW_MAP_BYTES, limit_name });
+        }
+        let scope = DriverErrors::watch(device);
+        let maps = Self::new(device, support, size_2d, layers, size_cube, cubes);
+        match scope.finish() {
+            Some(error) => Err(RenderError::Device { what: "the shadow maps", message: error.to_string() }),
+            None => Ok(maps),
         }
     }
 

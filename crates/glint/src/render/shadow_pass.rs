@@ -12,13 +12,13 @@ use super::cull::Frustum;
 use super::encode::Bound;
 use super::pipelines::{PassKind, Pipelines};
 use super::queue::{self, DrawItem, Queue};
-use super::shadow_maps::{ShadowGpu, ShadowMaps, MAX_2D_VIEWS};
+use super::shadow_maps::{ShadowGpu, ShadowLayout, ShadowMaps};
 use super::shadow_views::{self, ShadowView, ViewTarget};
 use super::timer::Timed;
 use super::views::{ViewBlocks, MAX_SHADOW_VIEWS};
 use super::{ms_since, FrameStats, PassStats, RenderError, Renderer};
 use crate::gpu::OffscreenTarget;
-use crate::scene::{Aabb, AlphaMode, Camera, Light, LightKind, CASCADES, MAX_LIGHTS};
+use crate::scene::{Aabb, AlphaMode, Camera, Light, LightKind, MAX_LIGHTS};
 use glam::Vec3;
 use std::time::Instant;
 
@@ -64,7 +64,7 @@ impl Renderer {
         let mut prepared = FrameStats::default();
         self.prepare(target.samples(), &mut prepared)?;
         let aspect = target.width() as f32 / target.height() as f32;
-        let (views, first_view) = self.plan_shadow_views(camera, aspect, lights);
+        let (views, first_view) = self.plan_shadow_views(camera, aspect, lights)?;
         let mut frame = ShadowFrame {
             lights: lights.to_vec(),
             first_view,
@@ -74,7 +74,7 @@ impl Renderer {
         };
         if !views.is_empty() {
             let ranges = self.batch_shadow_views(&views, &mut frame.prepared)?;
-            self.upload_shadow_views(&views, &mut frame.prepared);
+            self.upload_shadow_views(&views, &mut frame.prepared)?;
             let commands = self.encode_shadow_views(&views, &ranges, &mut frame.cost);
             self.queue.submit([commands]);
         }
@@ -90,46 +90,38 @@ impl Renderer {
         camera: &Camera,
         aspect: f32,
         lights: &[Light],
-    ) -> (Vec<ShadowView>, Vec<Option<u32>>) {
-        // Maps of one kind share the largest size asked for: find the sizes first.
-        let size_of = |l: &Light| l.shadows.map_or(0, |s| s.map_size.clamp(16, 8192));
-        let points = |l: &&Light| matches!(l.kind, LightKind::Point { .. });
-        let size_2d = lights.iter().filter(|l| !points(l)).map(size_of).max().unwrap_or(0).max(1);
-        let size_cube = lights.iter().filter(points).map(size_of).max().unwrap_or(0).max(1);
+    ) -> Result<(Vec<ShadowView>, Vec<Option<u32>>), RenderError> {
+        let layout = ShadowLayout::plan(lights, self.shadow_maps.support.max_cubes());
         let casters = self.caster_bounds();
-        let (mut views, mut first) = (Vec::new(), vec![None; lights.len()]);
-        let (mut layers, mut cubes) = (0u32, 0u32);
-        for (k, light) in lights.iter().enumerate() {
+        let mut views = Vec::new();
+        for (k, (light, first)) in lights.iter().zip(&layout.first).enumerate() {
             let Some(settings) = light.shadows else { continue };
-            let shared = |size| crate::scene::ShadowSettings { map_size: size, ..settings };
-            let placed = match light.kind {
-                LightKind::Directional { direction } if layers as usize + CASCADES <= MAX_2D_VIEWS => {
-                    let settings = shared(size_2d);
-                    views.extend(shadow_views::cascades(camera, aspect, direction, &settings, casters, layers));
-                    (first[k], layers) = (Some(layers), layers + CASCADES as u32);
-                    true
-                }
-                LightKind::Spot { .. } if (layers as usize) < MAX_2D_VIEWS => {
-                    views.extend(shadow_views::spot(light, &shared(size_2d), layers));
-                    (first[k], layers) = (Some(layers), layers + 1);
-                    true
-                }
-                LightKind::Point { .. } if (cubes as usize) < self.shadow_maps.support.max_cubes() => {
-                    views.extend(shadow_views::cube(light, &shared(size_cube), cubes).into_iter().flatten());
-                    (first[k], cubes) = (Some(cubes), cubes + 1);
-                    true
-                }
-                _ => false,
-            };
-            if !placed {
+            let Some(first) = *first else {
                 log::warn!("light {k}: no room left in the shadow maps; drawn without shadows");
+                continue;
+            };
+            let shared = |size| crate::scene::ShadowSettings { map_size: size, ..settings };
+            match light.kind {
+                LightKind::Directional { direction } => views.extend(shadow_views::cascades(
+                    camera,
+                    aspect,
+                    direction,
+                    &shared(layout.size_2d),
+                    casters,
+                    first,
+                )),
+                LightKind::Spot { .. } => views.extend(shadow_views::spot(light, &shared(layout.size_2d), first)),
+                LightKind::Point { .. } => {
+                    views.extend(shadow_views::cube(light, &shared(layout.size_cube), first).into_iter().flatten())
+                }
             }
         }
+        let ShadowLayout { size_2d, size_cube, layers, cubes, first } = layout;
         debug_assert!(views.len() <= MAX_SHADOW_VIEWS);
         if !views.is_empty() && !self.shadow_maps.fits(size_2d, layers, size_cube, cubes) {
             let (layers, cubes) = (layers.max(self.shadow_maps.layers), cubes.max(self.shadow_maps.cubes));
             self.shadow_maps =
-                ShadowMaps::new(&self.device, self.shadow_maps.support, size_2d, layers, size_cube, cubes);
+                ShadowMaps::checked(&self.device, self.shadow_maps.support, size_2d, layers, size_cube, cubes)?;
             self.scene_group = self.shadow_maps.scene_group(
                 &self.device,
                 &self.pipelines.scene_layout,
@@ -137,7 +129,7 @@ impl Renderer {
                 &self.shadow_block.buffer,
             );
         }
-        (views, first)
+        Ok((views, first))
     }
 
     /// The world box around every submitted entity that casts shadows.
@@ -222,18 +214,19 @@ impl Renderer {
 
     /// Write the instances that changed, each view's Camera record, the Shadow
     /// block, and the shadow list's indices and commands.
-    fn upload_shadow_views(&mut self, views: &[ShadowView], stats: &mut FrameStats) {
+    fn upload_shadow_views(&mut self, views: &[ShadowView], stats: &mut FrameStats) -> Result<(), RenderError> {
         let bytes = &mut stats.bytes_uploaded;
-        self.upload_instances(bytes);
+        self.upload_instances(bytes)?;
         for (k, view) in views.iter().enumerate() {
             bytes.camera += self.views.update(&self.queue, 1 + k, CameraGpu::for_shadow(view));
         }
         let block = ShadowGpu::new(views, self.shadow_maps.size_2d, self.shadow_maps.size_cube);
         bytes.scene += self.shadow_block.update(&self.queue, block);
         let layout = &self.pipelines.instance_layout;
-        let written = self.shadow_list.upload(&self.device, &self.queue, (layout, self.instances.buffer()), false);
+        let written = self.shadow_list.upload(&self.device, &self.queue, (layout, self.instances.buffer()), false)?;
         bytes.draw_indices += written.draw_indices;
         bytes.indirect += written.indirect;
+        Ok(())
     }
 
     /// One depth pass per view into its layer of the shadow maps.
