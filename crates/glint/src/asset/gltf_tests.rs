@@ -517,3 +517,24 @@ fn a_fifo_named_as_a_buffer_is_refused_at_once() {
     assert!(message.contains("not a regular file"), "{message}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn the_hostile_fuzz_seeds_are_errors() {
+    // fuzz/seeds/model: the first byte picks the format (as the fuzz target reads it).
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fuzz/seeds/model");
+    let hostile = [
+        "gltf_stride_4",
+        "gltf_channel_missing_node",
+        "gltf_sparse_unsorted",
+        "gltf_index_overrun",
+        "gltf_zero_count",
+        "gltf_camera_type_mismatch",
+        "gltf_negative_light",
+    ];
+    for name in hostile {
+        let bytes = std::fs::read(dir.join(name)).unwrap_or_else(|e| panic!("{name}: {e}"));
+        let Some((&1, file)) = bytes.split_first() else { panic!("{name}: expected the glTF kind byte 1") };
+        let result = Model::parse(Path::new("/nonexistent/fuzz.gltf"), file, LoadOptions::default());
+        assert!(result.is_err(), "{name} is hostile and must be an error");
+    }
+}
