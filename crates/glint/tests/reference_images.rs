@@ -73,7 +73,7 @@ fn a_reference_test_fails_on_a_visibly_different_image() {
         return;
     }
     let path = common::repo_root().join("tests/scenes/lights.scn");
-    let desc = glint::asset::load_scene(&path).expect("scene");
+    let desc = common::load_scene(&path);
     let mut renderer = glint::Renderer::new(gpu);
     let entities = desc.instantiate(&mut renderer);
     let mut target = glint::OffscreenTarget::new(gpu, 256, 256, 4).expect("target");
@@ -103,7 +103,7 @@ fn cloth_swings_with_its_debug_view_one_vertex_write_per_frame() {
     // rewriting the vertex buffers of the surface and the ribbons, nothing else.
     let Some(gpu) = common::gpu() else { return };
     let path = common::repo_root().join("tests/scenes/cloth_debug.scn");
-    let mut desc = glint::asset::load_scene(&path).expect("scene");
+    let mut desc = common::load_scene(&path);
     assert!(desc.warnings.is_empty(), "{:?}", desc.warnings);
     let mut renderer = glint::Renderer::new(gpu);
     let mut entities = desc.instantiate(&mut renderer);

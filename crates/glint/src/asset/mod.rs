@@ -3,7 +3,12 @@
 //! [`Diagnostic`] naming the file, the line where there is one, and what was expected.
 
 pub mod animation;
+mod files;
 mod gltf;
+mod gltf_check;
+mod gltf_data;
+#[cfg(test)]
+mod gltf_tests;
 mod model;
 mod obj;
 mod placement;
@@ -22,74 +27,33 @@ pub use scn::{
     SceneDesc, TextureRef, MAX_INSTANCES,
 };
 pub use scn_cloth::{ClothDesc, ClothSetup, MAX_POSE_STEPS};
-pub use texture::{load_texture, Texture, MAX_TEXTURE_SIDE};
+pub use files::{MAX_BUFFER_BYTES, MAX_IMAGE_FILE_BYTES, MAX_MODEL_BYTES, MAX_SCENE_BYTES, MAX_SCENE_TOTAL_BYTES};
+pub(crate) use files::{read_file, AssetFolder};
+pub use texture::{load_texture, Texture, MAX_TEXTURE_MEMORY, MAX_TEXTURE_SIDE};
 
 use std::fmt;
-use std::path::{Component, Path, PathBuf};
+use std::path::{Path, PathBuf};
 
-/// Largest model file (OBJ, MTL, glTF, GLB) read, in bytes.
-pub const MAX_MODEL_BYTES: u64 = 1 << 31;
-
-/// Read a whole model file, refusing ones larger than [`MAX_MODEL_BYTES`].
-pub(crate) fn read_capped(path: &Path) -> Result<Vec<u8>, Diagnostic> {
-    let size = std::fs::metadata(path).map_err(|e| Diagnostic::file(path, format!("cannot read: {e}")))?.len();
-    if size > MAX_MODEL_BYTES {
-        return Err(Diagnostic::file(path, format!("{size} bytes is larger than the {MAX_MODEL_BYTES}-byte limit")));
-    }
-    std::fs::read(path).map_err(|e| Diagnostic::file(path, format!("cannot read: {e}")))
-}
-
-/// How model files are read.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+/// How model and scene files are read: which folders the paths inside them may
+/// name (see `docs/limits.md`).
+#[derive(Clone, Debug, PartialEq, Eq)]
 pub struct LoadOptions {
-    /// Let a model name files outside its own folder (absolute paths, `..` that
-    /// leaves it, `file:` URIs). Off by default: a model from elsewhere cannot
-    /// make glint read arbitrary files.
+    /// Let files name assets outside their asset roots (absolute paths, `..` that
+    /// leaves them, symlinks out, `file:` URIs). Off by default: a scene or model
+    /// from elsewhere cannot make glint read arbitrary files.
     pub allow_outside_assets: bool,
+    /// Folders besides a file's own that its paths may name (`--asset-root`). A
+    /// scene's own folder counts, widened to the current directory when the scene
+    /// lies inside it; a model's own folder counts.
+    pub asset_roots: Vec<PathBuf>,
+    /// Most bytes of decoded texture pixels the load may hold (default
+    /// [`MAX_TEXTURE_MEMORY`]); a scene passes what it has left to its models.
+    pub texture_memory: u64,
 }
 
-/// The folder a model's relative paths resolve in, and whether they may leave it.
-pub(crate) struct AssetFolder {
-    folder: PathBuf,
-    allow_outside: bool,
-}
-
-impl AssetFolder {
-    /// The folder of the model file `path`.
-    pub(crate) fn of(path: &Path, options: LoadOptions) -> Self {
-        Self {
-            folder: path.parent().unwrap_or(Path::new("")).to_path_buf(),
-            allow_outside: options.allow_outside_assets,
-        }
-    }
-
-    /// Resolve `relative` (as written in `file`): inside the folder only, unless
-    /// outside assets are allowed. URIs with a scheme (`file:`, `http:`) are
-    /// outside by definition.
-    pub(crate) fn resolve(&self, relative: &str, file: &Path) -> Result<PathBuf, Diagnostic> {
-        if self.allow_outside {
-            return Ok(self.folder.join(relative));
-        }
-        let outside = || {
-            let message = format!(
-                "'{relative}' points outside the model's folder; only relative paths inside it are read (--allow-outside-assets reads it)"
-            );
-            Diagnostic::file(file, message)
-        };
-        let scheme = relative.split_once(':').is_some_and(|(s, _)| s.len() > 1 && !s.contains(['/', '\\']));
-        if scheme {
-            return Err(outside());
-        }
-        let mut depth = 0usize;
-        for c in Path::new(relative).components() {
-            match c {
-                Component::Normal(_) => depth += 1,
-                Component::CurDir => {}
-                Component::ParentDir if depth > 0 => depth -= 1,
-                _ => return Err(outside()),
-            }
-        }
-        Ok(self.folder.join(relative))
+impl Default for LoadOptions {
+    fn default() -> Self {
+        Self { allow_outside_assets: false, asset_roots: Vec::new(), texture_memory: MAX_TEXTURE_MEMORY }
     }
 }
 

@@ -1,10 +1,16 @@
-use super::{Diagnostic, TextureRef};
+use super::{read_file, Diagnostic, TextureRef, MAX_IMAGE_FILE_BYTES};
 use std::collections::HashMap;
 use std::hash::Hash;
+use std::io::Cursor;
 use std::path::Path;
 
 /// Largest accepted side of a texture, in pixels.
 pub const MAX_TEXTURE_SIDE: u32 = 8192;
+
+/// Most decoded texture memory (RGBA8 pixels, before mipmaps) that one scene,
+/// with every model it places, or one model loaded alone may hold: four
+/// 8192 × 8192 textures, or sixty-four of 2048 × 2048.
+pub const MAX_TEXTURE_MEMORY: u64 = 1 << 30;
 
 /// A decoded texture waiting to be uploaded: RGBA8 pixels and how to read them.
 ///
@@ -26,6 +32,11 @@ impl Texture {
         Self { name: name.into(), image, srgb }
     }
 
+    /// Bytes of decoded pixels.
+    pub fn bytes(&self) -> u64 {
+        4 * u64::from(self.image.width()) * u64::from(self.image.height())
+    }
+
     /// Number of mip levels down to 1×1.
     pub fn mip_levels(&self) -> u32 {
         32 - self.image.width().max(self.image.height()).max(1).leading_zeros()
@@ -34,33 +45,50 @@ impl Texture {
 
 /// Textures decoded while loading one file, each source once per colour space;
 /// a texture's index is its [`TextureRef`].
+///
+/// The cache holds at most `limit` bytes of decoded pixels: each decode is told
+/// how many are left, and refuses an image that needs more before decoding it.
 pub(crate) struct TextureCache<K> {
     textures: Vec<Texture>,
     index: HashMap<(K, bool), TextureRef>,
-}
-
-impl<K: Hash + Eq> Default for TextureCache<K> {
-    fn default() -> Self {
-        Self { textures: Vec::new(), index: HashMap::new() }
-    }
+    /// Decoded bytes held, and the most allowed.
+    used: u64,
+    limit: u64,
 }
 
 impl<K: Hash + Eq> TextureCache<K> {
+    /// An empty cache that may hold `limit` bytes of decoded pixels.
+    pub(crate) fn new(limit: u64) -> Self {
+        Self { textures: Vec::new(), index: HashMap::new(), used: 0, limit }
+    }
+
     /// The texture from `source` read as sRGB or not, decoding it with `decode`
-    /// the first time it is asked for.
+    /// (given the bytes still free) the first time it is asked for.
     pub(crate) fn get_or_decode<E>(
         &mut self,
         source: K,
         srgb: bool,
-        decode: impl FnOnce() -> Result<Texture, E>,
+        decode: impl FnOnce(u64) -> Result<Texture, E>,
     ) -> Result<TextureRef, E> {
         let key = (source, srgb);
         if let Some(&i) = self.index.get(&key) {
             return Ok(i);
         }
-        self.textures.push(decode()?);
+        let texture = decode(self.free())?;
+        self.used += texture.bytes();
+        self.textures.push(texture);
         self.index.insert(key, self.textures.len() - 1);
         Ok(self.textures.len() - 1)
+    }
+
+    /// Bytes of decoded pixels that may still be added.
+    pub(crate) fn free(&self) -> u64 {
+        self.limit.saturating_sub(self.used)
+    }
+
+    /// Count `bytes` held elsewhere (a model's textures) against the limit.
+    pub(crate) fn charge(&mut self, bytes: u64) {
+        self.used += bytes;
     }
 
     /// The decoded textures, in [`TextureRef`] order.
@@ -90,24 +118,54 @@ pub(crate) fn with_dissolve(color: Option<&Texture>, dissolve: &Texture) -> Text
 
 /// Decode a PNG or JPEG file into a [`Texture`].
 ///
-/// Rejects images wider or taller than [`MAX_TEXTURE_SIDE`] before decoding their
-/// pixels, and any file that is missing, unreadable or not a supported image.
+/// Rejects anything but a regular file of at most [`MAX_IMAGE_FILE_BYTES`],
+/// images wider or taller than [`MAX_TEXTURE_SIDE`] or needing more than
+/// [`MAX_TEXTURE_MEMORY`] (both before decoding their pixels), and any file that
+/// is missing, unreadable or not a supported image.
 pub fn load_texture(path: &Path, srgb: bool) -> Result<Texture, Diagnostic> {
-    let fail = |m: String| Diagnostic::file(path, m);
-    let mut reader = image::ImageReader::open(path)
-        .map_err(|e| fail(format!("cannot open texture: {e}")))?
-        .with_guessed_format()
-        .map_err(|e| fail(format!("cannot read texture: {e}")))?;
-    match reader.format() {
+    read_texture(path, srgb, MAX_TEXTURE_MEMORY)
+}
+
+/// [`load_texture`] with at most `free` bytes of decoded pixels to spend.
+pub(crate) fn read_texture(path: &Path, srgb: bool, free: u64) -> Result<Texture, Diagnostic> {
+    let bytes = read_file(path, MAX_IMAGE_FILE_BYTES)?;
+    let name = path.file_name().map_or_else(|| "texture".into(), |n| n.to_string_lossy().into_owned());
+    decode_texture(&bytes, name, srgb, free).map_err(|m| Diagnostic::file(path, m))
+}
+
+/// Decode PNG or JPEG bytes into a [`Texture`] called `name`, refusing (before
+/// decoding the pixels) an image larger than [`MAX_TEXTURE_SIDE`] or needing more
+/// than `free` bytes. The error says what was wrong, never quoting the bytes.
+pub(crate) fn decode_texture(bytes: &[u8], name: String, srgb: bool, free: u64) -> Result<Texture, String> {
+    let reader = |bytes| image::ImageReader::new(Cursor::new(bytes)).with_guessed_format();
+    let mut decoder = reader(bytes).map_err(|e| format!("cannot read texture: {e}"))?;
+    match decoder.format() {
         Some(image::ImageFormat::Png | image::ImageFormat::Jpeg) => {}
-        other => return Err(fail(format!("expected a PNG or JPEG image, found {other:?}"))),
+        Some(other) => return Err(format!("expected a PNG or JPEG image, found {other:?}")),
+        None => return Err("expected a PNG or JPEG image".into()),
+    }
+    let (w, h) = reader(bytes)
+        .map_err(|e| format!("cannot read texture: {e}"))?
+        .into_dimensions()
+        .map_err(|e| format!("cannot read texture: {e}"))?;
+    if w.max(h) > MAX_TEXTURE_SIDE {
+        return Err(format!("{w} x {h} pixels: textures may be at most {MAX_TEXTURE_SIDE} pixels a side"));
+    }
+    let needs = 4 * u64::from(w) * u64::from(h);
+    if needs > free {
+        let mib = |bytes: u64| bytes as f64 / f64::from(1 << 20);
+        return Err(format!(
+            "{w} x {h} pixels need {:.1} MiB decoded, but only {:.1} MiB of the {} MiB texture memory limit are left",
+            mib(needs),
+            mib(free),
+            MAX_TEXTURE_MEMORY >> 20
+        ));
     }
     let mut limits = image::Limits::default();
     limits.max_image_width = Some(MAX_TEXTURE_SIDE);
     limits.max_image_height = Some(MAX_TEXTURE_SIDE);
-    limits.max_alloc = Some(4 * u64::from(MAX_TEXTURE_SIDE) * u64::from(MAX_TEXTURE_SIDE));
-    reader.limits(limits);
-    let image = reader.decode().map_err(|e| fail(format!("cannot decode texture: {e}")))?.into_rgba8();
-    let name = path.file_name().map_or_else(|| "texture".into(), |n| n.to_string_lossy().into_owned());
+    limits.max_alloc = Some(needs.max(1 << 20) * 2);
+    decoder.limits(limits);
+    let image = decoder.decode().map_err(|e| format!("cannot decode texture: {e}"))?.into_rgba8();
     Ok(Texture::new(name, image, srgb))
 }

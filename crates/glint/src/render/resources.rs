@@ -2,8 +2,8 @@
 //! the material table — and the Renderer block's instance buffers.
 
 use super::blocks::{InstanceGpu, MaterialGpu};
-use crate::asset::Texture;
 use super::RenderError;
+use crate::asset::Texture;
 use crate::gpu::{Blitter, DriverErrors};
 
 /// Builds textures and fills their mip chains by repeated half-size blits.

@@ -100,9 +100,10 @@ impl ShadowLayout {
     }
 
     /// Bytes of depth the maps take (4 per texel), with at least `least` layers
-    /// and cubes as [`ShadowMaps::new`] allocates them.
+    /// and cubes as [`ShadowMaps::new`] allocates them; the 1-texel placeholders
+    /// kept for a kind no light uses count nothing.
     pub fn bytes(&self, least: u32) -> u64 {
-        let texels = |size: u32| u64::from(size) * u64::from(size);
+        let texels = |size: u32| if size > 1 { u64::from(size) * u64::from(size) } else { 0 };
         4 * (texels(self.size_2d) * u64::from(self.layers.max(least))
             + texels(self.size_cube) * 6 * u64::from(self.cubes.max(least)))
     }
@@ -246,7 +247,12 @@ impl ShadowMaps {
         let bytes = ShadowLayout { size_2d, size_cube, layers, cubes, first: Vec::new() }.bytes(least);
         if bytes > MAX_SHADOW_MAP_BYTES {
             let limit_name = "MAX_SHADOW_MAP_BYTES: lower the lights' shadow_map_size";
-            return Err(RenderError::TooLarge { what: "the shadow maps", bytes, limit: MAX_SHADOW_MAP_BYTES, limit_name });
+            return Err(RenderError::TooLarge {
+                what: "the shadow maps",
+                bytes,
+                limit: MAX_SHADOW_MAP_BYTES,
+                limit_name,
+            });
         }
         let scope = DriverErrors::watch(device);
         let maps = Self::new(device, support, size_2d, layers, size_cube, cubes);

@@ -40,6 +40,13 @@ fn shared(
     }
 }
 
+/// Load a scene file with the repository root as an asset root (the tests run
+/// in the crate's folder, so the current directory does not widen it).
+pub fn load_scene(path: &Path) -> glint::asset::SceneDesc {
+    let options = glint::asset::LoadOptions { asset_roots: vec![repo_root()], ..Default::default() };
+    glint::asset::load_scene_with(path, options).unwrap_or_else(|e| panic!("{e}"))
+}
+
 /// Render one frame of a scene under `tests/scenes/` at `size`×`size` with 4× MSAA.
 pub fn render_scene(gpu: &Gpu, name: &str, size: u32) -> (image::RgbaImage, FrameStats) {
     render_file(gpu, &repo_root().join("tests/scenes").join(format!("{name}.scn")), size, true)
@@ -47,7 +54,7 @@ pub fn render_scene(gpu: &Gpu, name: &str, size: u32) -> (image::RgbaImage, Fram
 
 /// Render one frame of the scene file at `path`, culling on or off.
 pub fn render_file(gpu: &Gpu, path: &Path, size: u32, culling: bool) -> (image::RgbaImage, FrameStats) {
-    let desc = glint::asset::load_scene(path).unwrap_or_else(|e| panic!("{e}"));
+    let desc = load_scene(path);
     assert!(desc.warnings.is_empty(), "{:?}", desc.warnings);
     render_desc(gpu, &desc, size, culling)
 }

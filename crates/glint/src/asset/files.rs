@@ -1,0 +1,232 @@
+//! Core layer: opening files glint did not write. Every file is read through
+//! [`read_file`] (regular files only, size checked from metadata before a byte is
+//! read) and every path a file names goes through [`AssetFolder::resolve`]
+//! (inside the asset roots after resolving symlinks). The numbers are the policy
+//! in `docs/limits.md`.
+
+use super::{Diagnostic, LoadOptions};
+use std::io::Read;
+use std::path::{Component, Path, PathBuf};
+
+/// Largest `.scn` file read, in bytes.
+pub const MAX_SCENE_BYTES: u64 = 64 << 20;
+/// Largest model file (OBJ, MTL, glTF JSON, GLB) read, in bytes.
+pub const MAX_MODEL_BYTES: u64 = 1 << 30;
+/// Largest external glTF buffer (`.bin`) read, in bytes.
+pub const MAX_BUFFER_BYTES: u64 = 1 << 30;
+/// Largest image file (PNG, JPEG) read, in bytes.
+pub const MAX_IMAGE_FILE_BYTES: u64 = 256 << 20;
+/// Largest total of bytes one scene load reads, over the scene, its models,
+/// their buffers and every texture.
+pub const MAX_SCENE_TOTAL_BYTES: u64 = 4 << 30;
+
+/// Read the whole file at `path`, refusing anything but a regular file (FIFOs,
+/// devices and directories would block or never end) and files over `limit`
+/// bytes.
+///
+/// The size comes from the file's metadata before anything is read, and the read
+/// itself stops one byte past `limit`, so a file that grows meanwhile is refused
+/// too. Errors name `path`.
+pub(crate) fn read_file(path: &Path, limit: u64) -> Result<Vec<u8>, Diagnostic> {
+    let fail = |e: std::io::Error| Diagnostic::file(path, format!("cannot read: {e}"));
+    // Checked before opening: opening a FIFO for reading blocks until a writer comes.
+    let size = regular_size(path, std::fs::metadata(path).map_err(fail)?, limit)?;
+    let file = std::fs::File::open(path).map_err(fail)?;
+    // The path may have been swapped between the check and the open.
+    regular_size(path, file.metadata().map_err(fail)?, limit)?;
+    let mut bytes = Vec::with_capacity(usize::try_from(size).unwrap_or(0));
+    file.take(limit.saturating_add(1)).read_to_end(&mut bytes).map_err(fail)?;
+    if bytes.len() as u64 > limit {
+        return Err(over_limit(path, bytes.len() as u64, limit));
+    }
+    Ok(bytes)
+}
+
+/// The size of a regular file, or why it is not read.
+fn regular_size(path: &Path, meta: std::fs::Metadata, limit: u64) -> Result<u64, Diagnostic> {
+    if !meta.is_file() {
+        return Err(Diagnostic::file(path, "not a regular file"));
+    }
+    if meta.len() > limit {
+        return Err(over_limit(path, meta.len(), limit));
+    }
+    Ok(meta.len())
+}
+
+fn over_limit(path: &Path, size: u64, limit: u64) -> Diagnostic {
+    Diagnostic::file(path, format!("{size} bytes is larger than the {limit}-byte limit for this kind of file"))
+}
+
+/// The folder a file's relative paths resolve in, and the roots they must stay
+/// inside (after symlinks are resolved) unless outside assets are allowed.
+pub(crate) struct AssetFolder {
+    folder: PathBuf,
+    /// Canonical folders a resolved path must lie in.
+    roots: Vec<PathBuf>,
+    allow_outside: bool,
+    /// What `roots` are called in messages ("the model's folder").
+    roots_name: &'static str,
+}
+
+impl AssetFolder {
+    /// For a model file `path`: its own folder, plus `options.asset_roots`.
+    pub(crate) fn of(path: &Path, options: &LoadOptions) -> Self {
+        let folder = parent(path);
+        let mut roots = vec![canonical(&folder)];
+        roots.extend(options.asset_roots.iter().map(|r| canonical(r)));
+        let roots_name = if options.asset_roots.is_empty() { "the model's folder" } else { "the asset roots" };
+        Self { folder, roots, allow_outside: options.allow_outside_assets, roots_name }
+    }
+
+    /// For a scene file `path`: its own folder, widened to the current directory
+    /// when the scene lies inside it (so `glint render scenes/x.scn` may use
+    /// `../assets`), plus `options.asset_roots`.
+    pub(crate) fn for_scene(path: &Path, options: &LoadOptions) -> Self {
+        let folder = parent(path);
+        let own = canonical(&folder);
+        let mut roots = vec![own.clone()];
+        if let Ok(cwd) = std::env::current_dir().and_then(std::fs::canonicalize) {
+            if own.starts_with(&cwd) {
+                roots.push(cwd);
+            }
+        }
+        roots.extend(options.asset_roots.iter().map(|r| canonical(r)));
+        Self { folder, roots, allow_outside: options.allow_outside_assets, roots_name: "the scene's asset roots" }
+    }
+
+    /// Resolve `relative` (as written in `file`): the path to read, which after
+    /// resolving symlinks lies inside the roots, unless outside assets are
+    /// allowed. URIs with a scheme (`file:`, `http:`) are outside by definition.
+    /// A path that does not exist is checked as written (reading it then fails).
+    pub(crate) fn resolve(&self, relative: &str, file: &Path) -> Result<PathBuf, Diagnostic> {
+        let path = self.folder.join(relative);
+        if self.allow_outside {
+            return Ok(path);
+        }
+        let outside = || {
+            let message = format!(
+                "'{relative}' points outside {}; only paths inside it are read (--asset-root DIR widens it, --allow-outside-assets lifts it)",
+                self.roots_name
+            );
+            Diagnostic::file(file, message)
+        };
+        let scheme = relative.split_once(':').is_some_and(|(s, _)| s.len() > 1 && !s.contains(['/', '\\']));
+        if scheme {
+            return Err(outside());
+        }
+        let real = std::fs::canonicalize(&path).unwrap_or_else(|_| lexical(&canonical(&self.folder).join(relative)));
+        if self.roots.iter().any(|root| real.starts_with(root)) {
+            Ok(path)
+        } else {
+            Err(outside())
+        }
+    }
+}
+
+/// The folder of `path` ("" for a bare file name).
+fn parent(path: &Path) -> PathBuf {
+    path.parent().unwrap_or(Path::new("")).to_path_buf()
+}
+
+/// `path` with symlinks resolved, or made absolute and normalised as written
+/// when it does not exist.
+fn canonical(path: &Path) -> PathBuf {
+    let path = if path.as_os_str().is_empty() { Path::new(".") } else { path };
+    std::fs::canonicalize(path).unwrap_or_else(|_| lexical(path))
+}
+
+/// `path` made absolute against the current directory, with `.` and `..`
+/// applied as written.
+fn lexical(path: &Path) -> PathBuf {
+    let absolute = std::env::current_dir().map(|cwd| cwd.join(path)).unwrap_or_else(|_| path.to_path_buf());
+    let mut out = PathBuf::new();
+    for c in absolute.components() {
+        match c {
+            Component::ParentDir => {
+                out.pop();
+            }
+            Component::CurDir => {}
+            other => out.push(other),
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    #[cfg(unix)]
+    use std::os::unix::fs::symlink;
+
+    #[test]
+    fn paths_stay_inside_the_model_folder() {
+        let obj = Path::new("m/model.obj");
+        let inside = AssetFolder::of(obj, &LoadOptions::default());
+        assert_eq!(inside.resolve("tex/a.png", obj).expect("inside"), Path::new("m/tex/a.png"));
+        assert!(inside.resolve("tex/../a.png", obj).is_ok());
+        for outside in ["../secret.png", "tex/../../secret.png", "/etc/passwd", "file:///etc/passwd", "http://x/y.png"]
+        {
+            assert!(inside.resolve(outside, obj).is_err(), "{outside}");
+        }
+        let anywhere = AssetFolder::of(obj, &LoadOptions { allow_outside_assets: true, ..LoadOptions::default() });
+        assert_eq!(anywhere.resolve("../shared/a.png", obj).expect("allowed"), Path::new("m/../shared/a.png"));
+    }
+
+    #[cfg(unix)]
+    /// A fresh folder under the system's temporary directory.
+    fn temp_dir(name: &str) -> PathBuf {
+        let dir = std::env::temp_dir().join(format!("glint-files-{name}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).expect("temp dir");
+        dir
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn only_regular_files_are_read() {
+        let dir = temp_dir("regular");
+        let fifo = dir.join("pipe.obj");
+        let made = std::process::Command::new("mkfifo").arg(&fifo).status().expect("mkfifo runs");
+        assert!(made.success());
+        // Without the check this blocks for ever: nobody writes to the FIFO.
+        let error = read_file(&fifo, MAX_MODEL_BYTES).expect_err("a FIFO is refused");
+        assert!(error.to_string().ends_with("pipe.obj: not a regular file"), "{error}");
+        symlink("/dev/zero", dir.join("zero.png")).expect("symlink");
+        let error = read_file(&dir.join("zero.png"), MAX_IMAGE_FILE_BYTES).expect_err("a device is refused");
+        assert!(error.message.contains("not a regular file"), "{error}");
+        assert!(read_file(&dir, MAX_MODEL_BYTES).expect_err("a folder").message.contains("not a regular file"));
+        std::fs::write(dir.join("big.mtl"), [b'#'; 100]).expect("write");
+        let error = read_file(&dir.join("big.mtl"), 99).expect_err("over the limit");
+        assert!(error.message.contains("100 bytes is larger than the 99-byte limit"), "{error}");
+        assert_eq!(read_file(&dir.join("big.mtl"), 100).expect("at the limit").len(), 100);
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn symlinks_are_resolved_before_the_folder_check() {
+        let dir = temp_dir("links");
+        let model = dir.join("model");
+        let elsewhere = dir.join("elsewhere");
+        std::fs::create_dir_all(&model).expect("dir");
+        std::fs::create_dir_all(&elsewhere).expect("dir");
+        std::fs::write(elsewhere.join("x.mtl"), "newmtl a\n").expect("write");
+        std::fs::write(model.join("own.mtl"), "newmtl a\n").expect("write");
+        symlink(&elsewhere, model.join("linkdir")).expect("symlink");
+        symlink("/etc/passwd", model.join("passwd.mtl")).expect("symlink");
+        symlink(model.join("own.mtl"), model.join("alias.mtl")).expect("symlink");
+        let obj = model.join("m.obj");
+        let folder = AssetFolder::of(&obj, &LoadOptions::default());
+        for escape in ["linkdir/x.mtl", "passwd.mtl", "../elsewhere/x.mtl", "/etc/passwd", "file:///etc/passwd"] {
+            let error = folder.resolve(escape, &obj).expect_err(escape);
+            assert!(error.message.contains("points outside the model's folder"), "{escape}: {error}");
+        }
+        assert_eq!(folder.resolve("alias.mtl", &obj).expect("a link inside stays inside"), model.join("alias.mtl"));
+        assert_eq!(folder.resolve("missing.mtl", &obj).expect("checked as written"), model.join("missing.mtl"));
+        // An asset root widens the folder; allowing outside assets lifts it.
+        let widened = LoadOptions { asset_roots: vec![elsewhere.clone()], ..LoadOptions::default() };
+        assert!(AssetFolder::of(&obj, &widened).resolve("linkdir/x.mtl", &obj).is_ok());
+        assert!(AssetFolder::of(&obj, &widened).resolve("passwd.mtl", &obj).is_err());
+        let anywhere = LoadOptions { allow_outside_assets: true, ..LoadOptions::default() };
+        assert!(AssetFolder::of(&obj, &anywhere).resolve("passwd.mtl", &obj).is_ok());
+    }
+}
