@@ -85,3 +85,21 @@ fn a_scene_check_refuses_shadow_maps_the_renderer_would_refuse() {
     let small = format!("{}{}{}", light(2048), light(2048), light(2048));
     parse_scene(Path::new("s.scn"), &small).expect("three suns at 2048 fit");
 }
+
+#[test]
+fn a_texture_wider_than_the_adapter_allows_is_an_error_not_a_panic() {
+    let Some(gpu) = common::gpu() else { return };
+    let side = gpu.device.limits().max_texture_dimension_2d;
+    let mut renderer = Renderer::new(gpu);
+    let cube = renderer.add_shape(ShapeKind::Cube.mesh());
+    let wide = renderer.add_texture(glint::Texture::new("wide", image::RgbaImage::new(side + 1, 1), true));
+    let material = renderer.add_material(Material { diffuse_map: Some(wide), ..Material::default() });
+    let entity = Entity::new(cube, material, Mat4::IDENTITY);
+    let mut target = OffscreenTarget::new(gpu, 32, 32, 1).expect("target");
+    renderer.submit(&entity);
+    let error = renderer.flush(&camera(), &[], &mut target).expect_err("wider than the adapter allows");
+    assert!(
+        matches!(&error, RenderError::TextureTooLarge { name, width, .. } if name == "wide" && *width == side + 1),
+        "{error}"
+    );
+}

@@ -39,7 +39,21 @@ impl Renderer {
                     .get_mut(texture.0 as usize)
                     .ok_or_else(|| RenderError::UnknownTexture { material: material.name.clone(), texture })?;
                 if let Some(pending) = tex.pending.take() {
+                    let side = self.device.limits().max_texture_dimension_2d;
+                    let (w, h) = pending.image.dimensions();
+                    if w.max(h) > side {
+                        return Err(RenderError::TextureTooLarge {
+                            name: pending.name.clone(),
+                            width: w,
+                            height: h,
+                            side,
+                        });
+                    }
+                    let scope = crate::gpu::DriverErrors::watch(&self.device);
                     let (view, bytes) = self.uploader.upload(&self.device, &self.queue, &pending);
+                    if let Some(error) = scope.finish() {
+                        return Err(RenderError::Device { what: "a texture", message: error.to_string() });
+                    }
                     tex.view = Some(view);
                     stats.bytes_uploaded.textures += bytes;
                 }

@@ -94,7 +94,20 @@ pub enum RenderError {
         /// Which limit that is.
         limit_name: &'static str,
     },
-    /// The device refused to create a resource (out of memory, or a limit).
+    /// A texture wider or taller than the adapter allows.
+    #[error("texture '{name}' is {width} x {height}, larger than this adapter's {side} texels a side (max_texture_dimension_2d)")]
+    TextureTooLarge {
+        /// The texture's name.
+        name: String,
+        /// Its size.
+        width: u32,
+        /// Its size.
+        height: u32,
+        /// The adapter's largest side.
+        side: u32,
+    },
+    /// The device refused to create a resource (out of memory, or a limit). The
+    /// renderer may hold a broken resource afterwards: make a new one.
     #[error("the GPU could not create {what}: {message}")]
     Device {
         /// The resource.
@@ -636,10 +649,12 @@ impl Renderer {
         for &(shape, material) in uses {
             let slot = self.shapes.get_mut(shape.0 as usize).ok_or(RenderError::UnknownShape(shape))?;
             if slot.gpu.is_none() {
-                let (range, bytes) = self
-                    .mesh_pool
-                    .add(&self.device, &self.queue, &slot.mesh)
-                    .map_err(|source| RenderError::MeshTooLarge { shape, source })?;
+                let scope = crate::gpu::DriverErrors::watch(&self.device);
+                let added = self.mesh_pool.add(&self.device, &self.queue, &slot.mesh);
+                if let Some(error) = scope.finish() {
+                    return Err(RenderError::Device { what: "the mesh pool", message: error.to_string() });
+                }
+                let (range, bytes) = added.map_err(|source| RenderError::MeshTooLarge { shape, source })?;
                 slot.gpu = Some(range);
                 stats.bytes_uploaded.meshes += bytes;
             }
