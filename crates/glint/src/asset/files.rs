@@ -12,6 +12,9 @@ use std::path::{Component, Path, PathBuf};
 pub const MAX_SCENE_BYTES: u64 = 64 << 20;
 /// Largest model file (OBJ, MTL, glTF JSON, GLB) read, in bytes.
 pub const MAX_MODEL_BYTES: u64 = 1 << 30;
+/// Largest MTL material library read, in bytes: a library defines materials,
+/// not geometry (the largest in the sample models is under 20 KB).
+pub const MAX_MATERIAL_LIBRARY_BYTES: u64 = 64 << 20;
 /// Largest external glTF buffer (`.bin`) read, in bytes.
 pub const MAX_BUFFER_BYTES: u64 = 1 << 30;
 /// Largest image file (PNG, JPEG) read, in bytes.
