@@ -49,7 +49,7 @@ fn instances_past_the_storage_binding_are_an_error_not_a_panic() {
     // More 64-byte records than the 128 MiB storage binding of wgpu's baseline
     // limits holds: creating the bind group panicked inside wgpu.
     let Some(gpu) = common::gpu() else { return };
-    let binding = u64::from(gpu.device.limits().max_storage_buffer_binding_size);
+    let binding = gpu.device.limits().max_storage_buffer_binding_size;
     let count = (binding / 64 + 1) as usize;
     let mut renderer = Renderer::new(gpu);
     let cube = renderer.add_shape(ShapeKind::Cube.mesh());
@@ -69,7 +69,7 @@ fn instances_past_the_storage_binding_are_an_error_not_a_panic() {
         other => panic!("expected TooLarge, got {other}"),
     }
     // A scene at the documented maximum fits the baseline binding.
-    assert!(MAX_INSTANCES * 64 <= u64::from(wgpu::Limits::downlevel_defaults().max_storage_buffer_binding_size));
+    assert!(MAX_INSTANCES * 64 <= wgpu::Limits::downlevel_defaults().max_storage_buffer_binding_size);
 }
 
 #[test]

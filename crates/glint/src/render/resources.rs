@@ -101,9 +101,9 @@ impl GrowBuffer {
         }
         let limits = device.limits();
         let (limit, limit_name) = if self.usage.contains(wgpu::BufferUsages::STORAGE)
-            && u64::from(limits.max_storage_buffer_binding_size) < limits.max_buffer_size
+            && limits.max_storage_buffer_binding_size < limits.max_buffer_size
         {
-            (u64::from(limits.max_storage_buffer_binding_size), "the adapter's max_storage_buffer_binding_size")
+            (limits.max_storage_buffer_binding_size, "the adapter's max_storage_buffer_binding_size")
         } else {
             (limits.max_buffer_size, "the adapter's max_buffer_size")
         };
