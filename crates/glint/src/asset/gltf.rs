@@ -8,14 +8,21 @@
 //! roughness, emissive (and `KHR_materials_emissive_strength`), their maps, the
 //! normal and occlusion maps, alpha modes, double-sidedness and the
 //! `KHR_texture_transform` scale of the base colour map.
-//! URIs resolve only inside the model's folder (`data:` URIs always work; see
-//! [`LoadOptions`]).
+//!
+//! Nothing reaches the crate's readers unchecked: the JSON is validated first
+//! (`gltf_check`: indices, byte ranges, accessor types, values the specification
+//! bounds), and buffers and images are read by `gltf_data` rather than the
+//! crate's importers, with size limits, and images only when a material uses
+//! them. URIs resolve only inside the model's folder (`data:` URIs always work;
+//! see [`LoadOptions`]).
 
 use super::animation::{Animation, Channel, Interpolation, ModelNode, Property};
+use super::gltf_check::{check_buffers, check_json};
+use super::gltf_data::{read_buffers, read_image, UriBase};
 use super::model::{Model, ModelPart};
 use super::model::{Morph, Skin};
-use super::texture::TextureCache;
-use super::{AssetFolder, Diagnostic, LoadOptions, MaterialDesc, Texture, MAX_TEXTURE_SIDE};
+use super::texture::{decode_texture, TextureCache};
+use super::{AssetFolder, Diagnostic, LoadOptions, MaterialDesc};
 use crate::scene::{AlphaMode, Camera, Light, MapSlots, Material, Mesh, ShadingModel, SkinVertex};
 use glam::{Mat4, Quat, Vec2, Vec3, Vec4};
 use std::collections::HashMap;
@@ -28,9 +35,8 @@ pub(crate) fn parse_gltf(path: &Path, bytes: &[u8], options: LoadOptions) -> Res
     let invalid = |e: gltf::Error| fail(format!("invalid glTF: {e}"));
     let gltf::Gltf { document, blob } = gltf::Gltf::from_slice_without_validation(bytes).map_err(invalid)?;
     // Checks the gltf crate (1.4) panics on instead of reporting (found by fuzzing):
-    // its validation indexes a primitive's POSITION accessor before checking it
-    // exists, and reading an image unwraps its URI, or its MIME type when it
-    // lives in a buffer view.
+    // reading an image unwraps its URI, or its MIME type when it lives in a
+    // buffer view. The rest of what its readers assume is checked in gltf_check.
     let json = document.into_json();
     for (i, image) in json.images.iter().enumerate() {
         let ok = match (&image.uri, &image.buffer_view) {
@@ -42,47 +48,26 @@ pub(crate) fn parse_gltf(path: &Path, bytes: &[u8], options: LoadOptions) -> Res
             return Err(fail(format!("image {i}: expected a uri, or a bufferView with a mimeType")));
         }
     }
-    for (m, mesh) in json.meshes.iter().enumerate() {
-        for (p, primitive) in mesh.primitives.iter().enumerate() {
-            if let Some(bad) = primitive.attributes.values().find(|a| a.value() >= json.accessors.len()) {
-                let message = format!("mesh {m} primitive {p}: accessor {} does not exist", bad.value());
-                return Err(fail(message));
-            }
-        }
-    }
+    let mut notes = Vec::new();
+    check_json(&json, &mut notes).map_err(fail)?;
     let document = gltf::Document::from_json(json).map_err(invalid)?;
-    let assets = AssetFolder::of(path, options);
-    let folder = path.parent().unwrap_or(Path::new("")).to_path_buf();
-    // Check every URI before anything reads it.
-    let uris = document
-        .buffers()
-        .filter_map(|b| match b.source() {
-            gltf::buffer::Source::Uri(uri) => Some(uri),
-            gltf::buffer::Source::Bin => None,
-        })
-        .chain(document.images().filter_map(|i| match i.source() {
-            gltf::image::Source::Uri { uri, .. } => Some(uri),
-            gltf::image::Source::View { .. } => None,
-        }));
-    for uri in uris {
-        // The gltf crate reads a URI without ':' as a percent-encoded relative path
-        // (and panics when it does not decode to UTF-8): check what it will open.
-        if !uri.contains(':') {
-            let decoded = urlencoding::decode(uri)
-                .map_err(|_| fail(format!("uri '{uri}': percent-encoding does not decode to UTF-8")))?;
-            assets.resolve(&decoded, path)?;
-        } else if !uri.starts_with("data:") {
-            assets.resolve(uri, path)?;
-        }
-    }
-    let buffers = gltf::import_buffers(&document, Some(&folder), blob).map_err(|e| fail(format!("buffer: {e}")))?;
-    let images = gltf::import_images(&document, Some(&folder), &buffers).map_err(|e| fail(format!("image: {e}")))?;
-    let mut warnings = Vec::new();
-    let mut textures = TextureCache::default();
+    let json = document.as_json();
+    let assets = AssetFolder::of(path, &options);
+    let uris = UriBase { path, assets: &assets };
+    // Every URI is checked before anything is read.
+    uris.check_uris(json)?;
+    let buffers = read_buffers(json, blob, &uris)?;
+    check_buffers(json, &buffers).map_err(fail)?;
+    let mut warnings: Vec<Diagnostic> = notes.into_iter().map(fail).collect();
+    let mut textures = TextureCache::new(options.texture_memory);
     let mut texture = |info: Option<(usize, Option<String>)>, srgb: bool, warnings: &mut Vec<Diagnostic>| {
         let (image, name) = info?;
         let name = name.unwrap_or_else(|| format!("image {image}"));
-        let decoded = textures.get_or_decode(image, srgb, || to_texture(&images[image], name, srgb));
+        // Only images a material uses are read and decoded.
+        let decoded = textures.get_or_decode(image, srgb, |free| {
+            let bytes = read_image(json, image, &buffers, &uris)?;
+            decode_texture(&bytes, name, srgb, free)
+        });
         decoded.map_err(|e| warnings.push(fail(format!("image {image}: {e}; drawn without it")))).ok()
     };
     let image_of = |t: gltf::texture::Texture| (t.source().index(), t.source().name().map(str::to_string));
@@ -197,7 +182,10 @@ pub(crate) fn parse_gltf(path: &Path, bytes: &[u8], options: LoadOptions) -> Res
         model.nodes.push(ModelNode {
             parent: parent_node,
             translation: Vec3::from(t),
-            rotation: Quat::from_array(r).normalize(),
+            // A matrix with a zero scale decomposes to no rotation at all.
+            rotation: Some(Quat::from_array(r))
+                .filter(|q| q.is_finite() && q.length() > 0.0)
+                .map_or(Quat::IDENTITY, Quat::normalize),
             scale: Vec3::from(s),
             placements: Vec::new(),
             weights: Vec::new(),
@@ -266,13 +254,9 @@ pub(crate) fn parse_gltf(path: &Path, bytes: &[u8], options: LoadOptions) -> Res
 }
 
 /// Read one animation channel for model node `node`.
-fn read_channel(
-    channel: &gltf::animation::Channel,
-    node: usize,
-    buffers: &[gltf::buffer::Data],
-) -> Result<Channel, String> {
+fn read_channel(channel: &gltf::animation::Channel, node: usize, buffers: &[Vec<u8>]) -> Result<Channel, String> {
     use gltf::animation::util::ReadOutputs;
-    let reader = channel.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
+    let reader = channel.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
     let times: Vec<f32> = reader.read_inputs().ok_or("no key times")?.collect();
     // The crate's reader panics on unsigned-int rotations and weights (not allowed by the spec).
     if channel.sampler().output().data_type() == gltf::accessor::DataType::U32 {
@@ -312,7 +296,7 @@ fn read_channel(
 /// must name joints its skin has.
 fn read_skins(
     document: &gltf::Document,
-    buffers: &[gltf::buffer::Data],
+    buffers: &[Vec<u8>],
     glint_node: &[Option<usize>],
     model: &mut Model,
 ) -> Result<(), String> {
@@ -339,7 +323,7 @@ fn read_skins(
                     .ok_or_else(|| format!("skin {index}: joint node {} is not in the scene", j.index()))
             })
             .collect::<Result<Vec<usize>, String>>()?;
-        let reader = skin.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
+        let reader = skin.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
         let inverse_bind: Vec<Mat4> = match reader.read_inverse_bind_matrices() {
             Some(m) => m.map(|m| Mat4::from_cols_array_2d(&m)).collect(),
             None => vec![Mat4::IDENTITY; joint_count],
@@ -357,15 +341,11 @@ fn read_skins(
 
 /// Read one primitive, with its morph targets: `Ok(None)` for a primitive that is
 /// not a triangle list. Every attribute must have one value per position.
-fn read_primitive(
-    primitive: &gltf::Primitive,
-    buffers: &[gltf::buffer::Data],
-) -> Result<Option<(Mesh, Option<Morph>)>, String> {
+fn read_primitive(primitive: &gltf::Primitive, buffers: &[Vec<u8>]) -> Result<Option<(Mesh, Option<Morph>)>, String> {
     if primitive.mode() != gltf::mesh::Mode::Triangles {
         return Ok(None);
     }
-    check_component_types(primitive)?;
-    let reader = primitive.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
+    let reader = primitive.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
     let positions: Vec<Vec3> = reader.read_positions().ok_or("no POSITION attribute")?.map(Vec3::from).collect();
     let count = positions.len();
     let check = |what: &str, n: usize| {
@@ -450,33 +430,6 @@ fn read_primitive(
     Ok(Some((mesh, morph)))
 }
 
-/// The gltf crate's readers panic on component types the spec does not allow
-/// (found by fuzzing: float indices), so those are errors first.
-fn check_component_types(primitive: &gltf::Primitive) -> Result<(), String> {
-    use gltf::accessor::DataType::{F32, U16, U32, U8};
-    use gltf::Semantic;
-    let check = |accessor: &gltf::Accessor, what: String, allowed: &[gltf::accessor::DataType]| {
-        if allowed.contains(&accessor.data_type()) {
-            Ok(())
-        } else {
-            Err(format!("{what}: component type {:?} is not allowed", accessor.data_type()))
-        }
-    };
-    if let Some(indices) = primitive.indices() {
-        check(&indices, "indices".into(), &[U8, U16, U32])?;
-    }
-    for (semantic, accessor) in primitive.attributes() {
-        match semantic {
-            Semantic::TexCoords(_) | Semantic::Colors(_) | Semantic::Weights(_) => {
-                check(&accessor, semantic.to_string(), &[U8, U16, F32])?
-            }
-            Semantic::Joints(_) => check(&accessor, semantic.to_string(), &[U8, U16])?,
-            _ => {}
-        }
-    }
-    Ok(())
-}
-
 /// `v` in the order of `corners` (when the vertices were split), else as it is.
 fn pick<T: Copy>(v: Vec<T>, corners: Option<&[usize]>) -> Vec<T> {
     match corners {
@@ -491,27 +444,6 @@ fn transform_of(info: &gltf::texture::Info) -> [f32; 5] {
         let ([ox, oy], [sx, sy]) = (t.offset(), t.scale());
         [ox, oy, t.rotation(), sx, sy]
     })
-}
-
-/// Convert decoded pixels to RGBA8, refusing images over [`MAX_TEXTURE_SIDE`].
-fn to_texture(data: &gltf::image::Data, name: String, srgb: bool) -> Result<Texture, String> {
-    use gltf::image::Format;
-    let (w, h) = (data.width, data.height);
-    if w > MAX_TEXTURE_SIDE || h > MAX_TEXTURE_SIDE {
-        return Err(format!("{w}x{h} is larger than {MAX_TEXTURE_SIDE} pixels a side"));
-    }
-    let px = &data.pixels;
-    let rgba: Vec<u8> = match data.format {
-        Format::R8G8B8A8 => px.clone(),
-        Format::R8G8B8 => px.chunks_exact(3).flat_map(|p| [p[0], p[1], p[2], 255]).collect(),
-        Format::R8G8 => px.chunks_exact(2).flat_map(|p| [p[0], p[0], p[0], p[1]]).collect(),
-        Format::R8 => px.iter().flat_map(|&v| [v, v, v, 255]).collect(),
-        Format::R16G16B16A16 => px.chunks_exact(2).map(|c| c[1]).collect(),
-        Format::R16G16B16 => px.chunks_exact(6).flat_map(|p| [p[1], p[3], p[5], 255]).collect(),
-        other => return Err(format!("pixel format {other:?} is not supported yet")),
-    };
-    let image = image::RgbaImage::from_raw(w, h, rgba).ok_or("pixel data does not match its size")?;
-    Ok(Texture::new(name, image, srgb))
 }
 
 /// A glTF camera at node transform `world` (looking down its local −Z).

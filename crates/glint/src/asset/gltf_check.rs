@@ -32,6 +32,7 @@ pub(super) fn check_json(root: &json::Root, warnings: &mut Vec<String>) -> Resul
     for (i, accessor) in root.accessors.iter().enumerate() {
         check_accessor(root, accessor).map_err(|e| format!("accessor {i}: {e}"))?;
     }
+    check_work(root)?;
     check_nodes(root, warnings)?;
     check_cameras(root, warnings)?;
     check_lights(root, warnings)?;
@@ -52,6 +53,64 @@ pub(super) fn check_buffers(root: &json::Root, buffers: &[Vec<u8>]) -> Result<()
         if let Some(sparse) = &accessor.sparse {
             check_sparse_indices(root, buffers, accessor.count.0, sparse).map_err(|e| format!("accessor {i}: {e}"))?;
         }
+    }
+    Ok(())
+}
+
+/// Most vertices one model builds, each morph target's copy counted: 16.7 M,
+/// about 800 MB of vertex data. Accessors may be shared, so one buffer's data can
+/// be read many times over (by many meshes, skins and morph targets); this bounds
+/// what is built, not what is stored.
+pub(super) const MAX_MODEL_VERTICES: u64 = 1 << 24;
+
+/// Most animation keys one model reads (key times plus values, over every
+/// channel): 16.7 M, about 270 MB once stored.
+pub(super) const MAX_ANIMATION_KEYS: u64 = 1 << 24;
+
+/// The vertices and animation keys the loader will build, against
+/// [`MAX_MODEL_VERTICES`] and [`MAX_ANIMATION_KEYS`], before any is read.
+fn check_work(root: &json::Root) -> Result<(), String> {
+    use json::mesh::{Mode, Semantic};
+    let count = |a: Index<json::Accessor>| root.accessors.get(a.value()).map_or(0, |a| a.count.0);
+    // A mesh is built once per skin it is drawn with.
+    let mut uses: Vec<(usize, Option<usize>)> =
+        root.nodes.iter().filter_map(|n| n.mesh.map(|m| (m.value(), n.skin.map(|s| s.value())))).collect();
+    uses.sort_unstable();
+    uses.dedup();
+    let mut vertices: u128 = 0;
+    for (m, _) in uses {
+        for primitive in root.meshes.get(m).map_or(&[][..], |mesh| &mesh.primitives[..]) {
+            if primitive.mode != Checked::Valid(Mode::Triangles) {
+                continue;
+            }
+            let attribute = |s: Semantic| primitive.attributes.get(&Checked::Valid(s)).copied();
+            let positions = attribute(Semantic::Positions).map_or(0, count);
+            // Without normals every corner also becomes its own vertex.
+            let corners = match (attribute(Semantic::Normals), primitive.indices) {
+                (None, Some(indices)) => count(indices),
+                (None, None) => positions,
+                (Some(_), _) => 0,
+            };
+            let built = positions + corners;
+            let copies = 1 + primitive.targets.as_ref().map_or(0, Vec::len) as u128;
+            vertices += u128::from(built) * copies;
+        }
+        if vertices > u128::from(MAX_MODEL_VERTICES) {
+            return Err(format!(
+                "the meshes would build {vertices} vertices (morph targets counted), more than the {MAX_MODEL_VERTICES} limit"
+            ));
+        }
+    }
+    let mut keys: u128 = 0;
+    for animation in &root.animations {
+        for channel in &animation.channels {
+            if let Some(sampler) = animation.samplers.get(channel.sampler.value()) {
+                keys += u128::from(count(sampler.input)) + u128::from(count(sampler.output));
+            }
+        }
+    }
+    if keys > u128::from(MAX_ANIMATION_KEYS) {
+        return Err(format!("the animations would read {keys} keys, more than the {MAX_ANIMATION_KEYS} limit"));
     }
     Ok(())
 }

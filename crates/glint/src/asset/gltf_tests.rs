@@ -538,3 +538,25 @@ fn the_hostile_fuzz_seeds_are_errors() {
         assert!(result.is_err(), "{name} is hostile and must be an error");
     }
 }
+
+#[test]
+fn what_a_model_builds_is_bounded() {
+    use super::gltf_check::{MAX_ANIMATION_KEYS, MAX_MODEL_VERTICES};
+    // Sparse accessors over zeros: large counts in a few bytes of JSON.
+    let zeros = |count: u64, kind: &str| {
+        json!({"componentType": 5126, "count": count, "type": kind, "min": [0, 0, 0], "max": [1, 1, 1],
+            "sparse": {"count": 1, "indices": {"bufferView": 4, "byteOffset": 2, "componentType": 5121},
+                "values": {"bufferView": 5}}})
+    };
+    let half = MAX_MODEL_VERTICES / 2 + 1;
+    let big = with(triangle(), "/accessors/0", zeros(half, "VEC3"));
+    assert!(parse(&big).is_ok(), "half the limit is fine");
+    // A morph target is one more copy of every vertex: over the limit before anything is read.
+    let doc = with(big, "/meshes/0/primitives/0/targets", json!([{"POSITION": 0}]));
+    assert_error(&doc, &format!("{} vertices (morph targets counted), more than the 16777216 limit", 2 * (half + 3)));
+    let doc = with(animated(0), "/accessors/2", zeros(MAX_ANIMATION_KEYS, "SCALAR"));
+    assert_error(
+        &doc,
+        &format!("the animations would read {} keys, more than the 16777216 limit", MAX_ANIMATION_KEYS + 2),
+    );
+}
