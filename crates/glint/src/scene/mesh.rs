@@ -1,4 +1,5 @@
 use glam::{Vec2, Vec3};
+use std::collections::HashMap;
 
 /// One vertex of glint's single interleaved vertex layout (48 bytes).
 ///
@@ -311,8 +312,13 @@ impl Mesh {
             .map(|t| [t[0], t[1], t[2]])
             .filter(|&[a, b, c]| (position(b) - position(a)).cross(position(c) - position(a)).length_squared() > 0.0)
             .collect();
-        if !faces.is_empty() && !mikktspace::generate_tangents(&mut Geometry { vertices: &mut self.vertices, faces }) {
-            log::warn!("tangent generation failed; normal maps on this mesh will be flat");
+        if !faces.is_empty() {
+            if !mikktspace_is_affordable(&self.vertices, &faces) {
+                log::debug!("{} triangles crowd one edge or corner: tangents without MikkTSpace", faces.len());
+                accumulate_tangents(&mut self.vertices, &faces);
+            } else if !mikktspace::generate_tangents(&mut Geometry { vertices: &mut self.vertices, faces }) {
+                log::warn!("tangent generation failed; normal maps on this mesh will be flat");
+            }
         }
         // Degenerate UVs leave tangents unusable: fall back to any vector ⟂ normal.
         for v in &mut self.vertices {
@@ -323,6 +329,106 @@ impl Mesh {
                 v.tangent = [any.x, any.y, any.z, 1.0];
             }
         }
+    }
+}
+
+/// Whether MikkTSpace finishes these faces in about linear time. It welds
+/// corners with equal position, normal and uv, then scans every face on an edge
+/// for its neighbour, compares every face around a welded vertex with every other
+/// (copying a buffer as long as the largest such fan for each), compares the
+/// corners at one position with each distinct corner there, and recurses once per
+/// face around a vertex. Real meshes cost a few dozen steps per corner; a hostile
+/// file's thousands of faces on one edge or corner would cost their square (or
+/// overflow the stack), so above a budget of steps per corner the caller uses
+/// [`accumulate_tangents`] instead.
+fn mikktspace_is_affordable(vertices: &[Vertex], faces: &[[u32; 3]]) -> bool {
+    /// Steps allowed per corner, and for any mesh.
+    const PER_CORNER: u64 = 256;
+    const ANY_MESH: u64 = 1 << 22;
+    /// Most faces around one vertex (recursion depth).
+    const MOST_AROUND_A_VERTEX: u64 = 4096;
+    // -0.0 and 0.0 weld too.
+    let bits = |x: f32| if x == 0.0 { 0 } else { x.to_bits() };
+    let key = |v: &Vertex| {
+        let [p, n, uv] = [&v.position[..], &v.normal[..], &v.uv[..]];
+        let mut k = [0u32; 8];
+        for (slot, x) in k.iter_mut().zip(p.iter().chain(n).chain(uv)) {
+            *slot = bits(*x);
+        }
+        k
+    };
+    let mut welded: HashMap<[u32; 8], u32> = HashMap::with_capacity(vertices.len());
+    let ids: Vec<u32> = vertices
+        .iter()
+        .map(|v| {
+            let next = welded.len() as u32;
+            *welded.entry(key(v)).or_insert(next)
+        })
+        .collect();
+    let corners = faces.len() as u64 * 3;
+    let mut around = vec![0u64; welded.len()];
+    for &i in faces.iter().flatten() {
+        around[ids[i as usize] as usize] += 1;
+    }
+    let most_around = around.iter().copied().max().unwrap_or(0);
+    if most_around > MOST_AROUND_A_VERTEX {
+        return false;
+    }
+    let mut edges: HashMap<(u32, u32), u64> = HashMap::with_capacity(faces.len() * 3 / 2);
+    for face in faces {
+        let w = face.map(|i| ids[i as usize]);
+        for k in 0..3 {
+            let (a, b) = (w[k], w[(k + 1) % 3]);
+            *edges.entry((a.min(b), a.max(b))).or_insert(0) += 1;
+        }
+    }
+    // Corners at each position, and distinct welded vertices there.
+    let mut at_position: HashMap<[u32; 3], (u64, u64)> = HashMap::new();
+    for (k, &id) in &welded {
+        let here = at_position.entry([k[0], k[1], k[2]]).or_insert((0, 0));
+        here.0 += around[id as usize];
+        here.1 += 1;
+    }
+    let square = |n: u64| n.saturating_mul(n);
+    let cost = corners
+        .saturating_mul(most_around)
+        .saturating_add(around.iter().map(|&n| square(n)).fold(0, u64::saturating_add))
+        .saturating_add(edges.values().map(|&n| square(n)).fold(0, u64::saturating_add))
+        .saturating_add(at_position.values().map(|&(c, d)| c.saturating_mul(d)).fold(0, u64::saturating_add));
+    cost <= corners.saturating_mul(PER_CORNER).saturating_add(ANY_MESH)
+}
+
+/// Per-vertex tangents in one pass over the faces: each face adds its
+/// texture-space u and v directions to its corners; the sum's part perpendicular
+/// to the normal is the tangent, and the sign says whether v runs up the image
+/// along normal × tangent, as MikkTSpace's does after [`Mesh::generate_tangents`]
+/// flips it. Used where MikkTSpace would take quadratic time; vertices with no
+/// usable direction are fixed up by the caller.
+fn accumulate_tangents(vertices: &mut [Vertex], faces: &[[u32; 3]]) {
+    let mut sums = vec![(Vec3::ZERO, Vec3::ZERO); vertices.len()];
+    for face in faces {
+        let [a, b, c] = face.map(|i| &vertices[i as usize]);
+        let [pa, pb, pc] = [a, b, c].map(|v| Vec3::from(v.position));
+        let [ta, tb, tc] = [a, b, c].map(|v| Vec2::from(v.uv));
+        let (e1, e2, d1, d2) = (pb - pa, pc - pa, tb - ta, tc - ta);
+        let det = d1.x * d2.y - d2.x * d1.y;
+        if det == 0.0 || !det.is_finite() {
+            continue;
+        }
+        let du = (e1 * d2.y - e2 * d1.y) / det;
+        let dv = (e2 * d1.x - e1 * d2.x) / det;
+        for &i in face {
+            let sum = &mut sums[i as usize];
+            sum.0 += du;
+            sum.1 += dv;
+        }
+    }
+    for (v, (du, dv)) in vertices.iter_mut().zip(sums) {
+        let n = Vec3::from(v.normal);
+        let t = (du - n * n.dot(du)).normalize_or_zero();
+        // glint's uvs run down the image, so "up" is -dv.
+        let w = if n.cross(t).dot(-dv) < 0.0 { -1.0 } else { 1.0 };
+        v.tangent = [t.x, t.y, t.z, w];
     }
 }
 
@@ -354,7 +460,7 @@ pub fn smooth_normals_in_groups(positions: &[Vec3], indices: &[u32], groups: &[u
         let p = positions[i];
         (p.x.to_bits(), p.y.to_bits(), p.z.to_bits(), groups.get(i).copied().unwrap_or(0))
     };
-    let mut sums: std::collections::HashMap<(u32, u32, u32, u64), Vec3> = std::collections::HashMap::new();
+    let mut sums: HashMap<(u32, u32, u32, u64), Vec3> = HashMap::new();
     for tri in indices.chunks_exact(3) {
         let corners = [tri[0] as usize, tri[1] as usize, tri[2] as usize];
         if corners.iter().any(|&i| i >= positions.len()) {
@@ -406,5 +512,85 @@ mod tests {
         let normals = smooth_normals(&p, &[0, 1, 2, 3, 4, 5]);
         assert!(normals.iter().all(|n| (*n - Vec3::Z).length() < 1e-6), "{normals:?}");
         assert_eq!(smooth_normals(&[Vec3::ZERO], &[]), vec![Vec3::Y], "an unused vertex gets +Y");
+    }
+
+    /// An n × n grid of quads in z = 0, its uvs from `uv(x, y)`.
+    fn grid(n: u32, uv: impl Fn(f32, f32) -> Vec2) -> (Vec<Vertex>, Vec<[u32; 3]>) {
+        let mut vertices = Vec::new();
+        for y in 0..=n {
+            for x in 0..=n {
+                let (fx, fy) = (x as f32, y as f32);
+                let normal = [0.0, 0.0, 1.0];
+                vertices.push(Vertex {
+                    position: [fx, fy, 0.0],
+                    normal,
+                    uv: uv(fx, fy).to_array(),
+                    ..Vertex::default()
+                });
+            }
+        }
+        let at = |x: u32, y: u32| y * (n + 1) + x;
+        let mut faces = Vec::new();
+        for y in 0..n {
+            for x in 0..n {
+                faces.push([at(x, y), at(x + 1, y), at(x + 1, y + 1)]);
+                faces.push([at(x, y), at(x + 1, y + 1), at(x, y + 1)]);
+            }
+        }
+        (vertices, faces)
+    }
+
+    #[test]
+    fn linear_tangents_agree_with_mikktspace() {
+        // Sheared, rotated and mirrored uv layouts: the direction and the sign.
+        let layouts: [&dyn Fn(f32, f32) -> Vec2; 3] =
+            [&|x, y| Vec2::new(0.1 * x + 0.02 * y, 0.1 * y), &|x, y| Vec2::new(0.1 * y, 0.1 * x), &|x, y| {
+                Vec2::new(-0.1 * x, -0.1 * y)
+            }];
+        for (k, uv) in layouts.into_iter().enumerate() {
+            let (vertices, faces) = grid(4, uv);
+            assert!(mikktspace_is_affordable(&vertices, &faces), "a grid is cheap");
+            let indices = faces.iter().flatten().copied().collect();
+            let mikk = Mesh::from_attributes(
+                &vertices.iter().map(|v| Vec3::from(v.position)).collect::<Vec<_>>(),
+                &vertices.iter().map(|v| Vec3::from(v.normal)).collect::<Vec<_>>(),
+                &vertices.iter().map(|v| Vec2::from(v.uv)).collect::<Vec<_>>(),
+                indices,
+            )
+            .expect("valid");
+            let mut linear = vertices.clone();
+            accumulate_tangents(&mut linear, &faces);
+            for (m, l) in mikk.vertices().iter().zip(&linear) {
+                let (tm, tl) = (Vec3::from_slice(&m.tangent[..3]), Vec3::from_slice(&l.tangent[..3]));
+                assert!(tm.dot(tl) > 0.999, "layout {k}: {tm} vs {tl}");
+                assert_eq!(m.tangent[3], l.tangent[3], "layout {k}: the sign");
+            }
+        }
+    }
+
+    #[test]
+    fn crowded_edges_and_corners_skip_mikktspace() {
+        // A face repeated 20,000 times: MikkTSpace's neighbour search would
+        // compare each copy's edges with every other's.
+        let (vertices, faces) = grid(1, Vec2::new);
+        let repeated = vec![faces[0]; 20_000];
+        assert!(!mikktspace_is_affordable(&vertices, &repeated));
+        // Copies of the three vertices do not help: MikkTSpace welds equal ones.
+        let copies: Vec<Vertex> = (0..20_000).flat_map(|_| faces[0].map(|i| vertices[i as usize])).collect();
+        let separate: Vec<[u32; 3]> = (0..20_000u32).map(|f| [3 * f, 3 * f + 1, 3 * f + 2]).collect();
+        assert!(!mikktspace_is_affordable(&copies, &separate));
+        // A fan of 10,000 triangles round one vertex (MikkTSpace recurses once per triangle).
+        let mut fan = vec![Vertex { normal: [0.0, 0.0, 1.0], ..Vertex::default() }];
+        fan.extend((0..=10_000).map(|i| {
+            let a = i as f32 * 1e-4 * std::f32::consts::PI;
+            Vertex { position: [a.cos(), a.sin(), 0.0], normal: [0.0, 0.0, 1.0], ..Vertex::default() }
+        }));
+        let fan_faces: Vec<[u32; 3]> = (1..=10_000u32).map(|i| [0, i, i + 1]).collect();
+        assert!(!mikktspace_is_affordable(&fan, &fan_faces));
+        // Either way every vertex gets a usable tangent.
+        let p: Vec<Vec3> = copies.iter().map(|v| Vec3::from(v.position)).collect();
+        let mesh = Mesh::from_attributes(&p, &vec![Vec3::Z; p.len()], &vec![Vec2::ZERO; p.len()], separate.concat())
+            .expect("valid");
+        assert!(mesh.vertices().iter().all(|v| v.tangent.iter().all(|c| c.is_finite())));
     }
 }
