@@ -61,7 +61,9 @@ fn materials_are_overridden_by_name() {
 
 #[test]
 fn scenes_place_models_and_override_their_materials_per_entity() {
+    // tests/scenes/../models is outside the scene's folder: the repository is an asset root.
     let scn = common::repo_root().join("tests/scenes/inline.scn");
+    let options = glint::asset::LoadOptions { asset_roots: vec![common::repo_root()], ..Default::default() };
     let text = r#"
 {
 "classname" "entity"
@@ -85,7 +87,7 @@ fn scenes_place_models_and_override_their_materials_per_entity() {
 "count" "4"
 }
 "#;
-    let desc = parse_scene(&scn, text).expect("valid");
+    let desc = glint::asset::parse_scene_with(&scn, text, options.clone()).expect("valid");
     assert_eq!(desc.models.len(), 2, "the file once, plus one overridden copy");
     let red = |m: &Model| m.materials[1].material.clone();
     assert_eq!(red(&desc.models[0]).base_color, Vec4::new(0.9, 0.1, 0.1, 0.5), "the original is untouched");
@@ -102,7 +104,7 @@ fn scenes_place_models_and_override_their_materials_per_entity() {
 
     let bad = |extra: &str| {
         let text = format!("{{\n\"classname\" \"entity\"\n\"mesh\" \"../models/two_materials.obj\"\n{extra}\n}}");
-        parse_scene(&scn, &text).expect_err("invalid").to_string()
+        glint::asset::parse_scene_with(&scn, &text, options.clone()).expect_err("invalid").to_string()
     };
     let e = bad("\"mtl.Wood.base_color\" \"1 0 0\"");
     assert!(
@@ -130,6 +132,10 @@ fn bad_obj_files_are_errors_with_file_and_line() {
         ("short_vertex", "v 0 0 0\nv 1 0\nf 1 2 3\n", 2),
         ("index_out_of_range", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n", 4),
         ("bad_number", "v 0 0 0\nv 1 zero 0\n", 2),
+        ("nan_position", "v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n", 2),
+        ("nan_normal", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn nan nan nan\nf 1//1 2//1 3//1\n", 4),
+        ("inf_uv", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 inf\nf 1/1 2/1 3/1\n", 4),
+        ("only_lines", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\ng wire\nl 1 2\nl 2 3\n", 6),
     ];
     for (name, text, line) in cases {
         let e = load_text(name, text).expect_err(name);
@@ -182,16 +188,44 @@ fn the_cornell_box_shows_its_red_and_green_walls() {
     common::assert_matches_reference("obj_cornell_box", &image);
 }
 
+/// Every corner of every triangle of `model` has about its face's normal (within
+/// 3°: a slightly bent quad's two triangles share the quad's normal).
+fn all_flat(model: &Model) -> bool {
+    model.parts.iter().all(|part| {
+        let vertex = |i: u32| part.mesh.vertices()[i as usize];
+        part.mesh.indices().chunks_exact(3).all(|t| {
+            let [a, b, c] = [t[0], t[1], t[2]].map(|i| Vec3::from(vertex(i).position));
+            let face = (b - a).cross(c - a).normalize_or_zero();
+            face == Vec3::ZERO || t.iter().all(|&i| (Vec3::from(vertex(i).normal) - face).length() < 0.05)
+        })
+    })
+}
+
 #[test]
-fn the_teapot_renders_with_computed_normals() {
-    let (Some(gpu), Some(path)) = (common::gpu(), shared_obj("teapot.obj")) else { return };
-    let model = Model::load(&path).expect("loads");
-    assert!(model.parts.iter().all(|p| p
-        .mesh
-        .vertices()
-        .iter()
-        .all(|v| (Vec3::from(v.normal).length() - 1.0).abs() < 1e-3)));
-    let (image, _) = common::render_desc(gpu, &model.into_scene(), 128, true);
+fn the_cornell_box_has_flat_walls_and_boxes() {
+    // No `s` statements and no normals: every face flat, as in Blender.
+    let Some(path) = shared_obj("cornell_box.obj") else { return };
+    assert!(all_flat(&Model::load(&path).expect("loads")));
+}
+
+#[test]
+fn the_teapot_is_faceted_without_smoothing_groups_and_smooth_in_one() {
+    let Some(path) = shared_obj("teapot.obj") else { return };
+    let text = std::fs::read_to_string(&path).expect("read");
+    assert!(!text.lines().any(|l| l.starts_with("s ") || l.starts_with("vn ")), "the file gives no smoothing");
+    let faceted = Model::load(&path).expect("loads");
+    assert!(all_flat(&faceted), "no s statements: flat faces");
+    // The same file in one smoothing group.
+    let smooth = load_text("teapot_s1", &format!("s 1\n{text}")).expect("loads");
+    assert!(!all_flat(&smooth));
+    for model in [&faceted, &smooth] {
+        let normals = model.parts.iter().flat_map(|p| p.mesh.vertices());
+        assert!(normals.into_iter().all(|v| (Vec3::from(v.normal).length() - 1.0).abs() < 1e-3));
+    }
+    let Some(gpu) = common::gpu() else { return };
+    let (image, _) = common::render_desc(gpu, &faceted.into_scene(), 128, true);
+    common::assert_matches_reference("obj_teapot_faceted", &image);
+    let (image, _) = common::render_desc(gpu, &smooth.into_scene(), 128, true);
     common::assert_matches_reference("obj_teapot", &image);
 }
 
@@ -366,8 +400,8 @@ fn obj_map_d_cuts_the_surface_away() {
 #[test]
 fn obj_smoothing_groups_decide_which_edges_are_sharp() {
     // tests/models/smoothing.obj (make_models.py): two octagonal prisms without
-    // normals; the left one's sides are smoothing group 1 with flat caps, the
-    // right one is flat all over.
+    // normals; the left one's sides are smoothing group 1 with flat caps (`s off`),
+    // the right one is flat all over.
     let model = Model::load(&models_dir().join("smoothing.obj")).expect("loads");
     assert!(model.warnings.is_empty(), "{:?}", model.warnings);
     let normals = |part: usize| -> Vec<Vec3> {
@@ -381,6 +415,16 @@ fn obj_smoothing_groups_decide_which_edges_are_sharp() {
     for n in [&rounded, &faceted] {
         assert_eq!(n.iter().filter(vertical).count(), 16, "flat caps");
         assert_eq!(n.len(), n.iter().filter(horizontal).count() + 16, "nothing smooths across the rim");
+    }
+
+    // Without its `s` statements the file is flat all over: the rounded prism's
+    // sides get four corners each too.
+    let text = std::fs::read_to_string(models_dir().join("smoothing.obj")).expect("read");
+    let without_s: String = text.lines().filter(|l| !l.starts_with("s ")).map(|l| format!("{l}\n")).collect();
+    let flat = load_text("smoothing_without_s", &without_s).expect("loads");
+    for part in &flat.parts {
+        let horizontal = part.mesh.vertices().iter().filter(|v| v.normal[1].abs() < 1e-5).count();
+        assert_eq!(horizontal, 32, "{}: flat sides", part.name);
     }
 
     let Some(gpu) = common::gpu() else { return };
