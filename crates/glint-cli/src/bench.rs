@@ -129,21 +129,22 @@ pub fn run_mode(gpu: &Gpu, desc: &SceneDesc, mode: FrameMode, config: &BenchConf
     })
 }
 
-/// Print one mode's report for people.
-pub fn print_mode(r: &ModeReport) {
+/// One mode's report for people, as lines of text.
+pub fn format_mode(r: &ModeReport) -> String {
+    let mut text = String::new();
     let s = &r.stage_ms_median;
     let gpu = r.gpu_ms_median.map_or_else(|| "n/a".to_string(), |ms| format!("{ms:.3} ms"));
-    println!(
-        "{:>9}: cpu {:.4} ms median, {:.4} ms p95 | gpu {gpu} median | {:.2} ns/instance ({:.2} ns cull+sort+batch+upload)",
+    text.push_str(&format!(
+        "{:>9}: cpu {:.4} ms median, {:.4} ms p95 | gpu {gpu} median | {:.2} ns/instance ({:.2} ns cull+sort+batch+upload)\n",
         r.mode, r.cpu_ms_median, r.cpu_ms_p95, r.ns_per_instance, r.ns_per_instance_cull_sort_batch_upload
-    );
-    println!(
-        "           stages (median ms): prepare {:.4}  cull {:.4}  queue {:.4}  sort {:.4}  batch {:.4}  upload {:.4}  encode {:.4}  submit {:.4}",
+    ));
+    text.push_str(&format!(
+        "           stages (median ms): prepare {:.4}  cull {:.4}  queue {:.4}  sort {:.4}  batch {:.4}  upload {:.4}  encode {:.4}  submit {:.4}\n",
         s.prepare, s.cull, s.queue, s.sort, s.batch, s.upload, s.encode, s.submit
-    );
+    ));
     let st = &r.stats;
-    println!(
-        "           frame: {} draws in {} draw calls, {} pipelines bound, {} bind groups, {} instances submitted, {} culled, {} drawn, {} bytes uploaded",
+    text.push_str(&format!(
+        "           frame: {} draws in {} draw calls, {} pipelines bound, {} bind groups, {} instances submitted, {} culled, {} drawn, {} bytes uploaded\n",
         st.draws,
         st.draw_calls,
         st.pipelines_bound,
@@ -152,13 +153,14 @@ pub fn print_mode(r: &ModeReport) {
         st.instances_culled,
         st.instances_drawn,
         st.bytes_uploaded.total
-    );
+    ));
     if st.shadow_views > 0 {
         let shadow = &st.passes.shadow;
         let gpu = r.shadow_gpu_ms_median.map_or_else(|| "n/a".to_string(), |ms| format!("{ms:.3} ms"));
-        println!(
-            "           shadow pass: {} views, {} draws in {} draw calls, {} instances | cpu {:.4} ms median | gpu {gpu} median",
+        text.push_str(&format!(
+            "           shadow pass: {} views, {} draws in {} draw calls, {} instances | cpu {:.4} ms median | gpu {gpu} median\n",
             st.shadow_views, shadow.draws, shadow.draw_calls, shadow.instances, r.shadow_cpu_ms_median
-        );
+        ));
     }
+    text
 }

@@ -1,6 +1,7 @@
 //! The `glint` command-line tool.
 
 mod bench;
+mod output;
 mod plot;
 mod sim;
 mod view;
@@ -12,7 +13,14 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 const EXIT_CODES: &str =
-    "Exit codes: 0 ok, 1 bad input (file:line: message on stderr), 2 no GPU adapter, 3 other GPU or render failure.";
+    "Exit codes: 0 ok, 1 bad input or an output that cannot be written (file:line: message on stderr), 2 no GPU adapter, 3 other GPU or render failure.";
+
+/// Most frames `glint bench` measures (and warms up) per mode: each keeps its
+/// statistics until the report.
+const MAX_BENCH_FRAMES: u64 = 100_000;
+
+/// Lowest and highest `--fps` of `glint render`.
+const FPS_RANGE: std::ops::RangeInclusive<f32> = 0.001..=1000.0;
 
 /// glint: a real-time 3D renderer on wgpu.
 #[derive(Parser)]
@@ -50,7 +58,7 @@ enum Command {
         /// Render this many frames from --time on, -o naming them with %04d.
         #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=100_000))]
         frames: u32,
-        /// Frames per second of the sequence.
+        /// Frames per second of the sequence (0.001..=1000).
         #[arg(long, default_value_t = 30.0, value_parser = parse_fps)]
         fps: f32,
     },
@@ -59,11 +67,11 @@ enum Command {
     Bench {
         /// The scene file.
         scene: PathBuf,
-        /// Measured frames per mode.
-        #[arg(long, default_value_t = 100)]
+        /// Measured frames per mode (1..=100000).
+        #[arg(long, default_value_t = 100, value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(1..=MAX_BENCH_FRAMES))]
         frames: usize,
-        /// Unmeasured frames before them.
-        #[arg(long, default_value_t = 5)]
+        /// Unmeasured frames before them (0..=100000).
+        #[arg(long, default_value_t = 5, value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(0..=MAX_BENCH_FRAMES))]
         warmup: usize,
         /// Which way to build frames.
         #[arg(long, value_enum, default_value_t = BenchMode::Both)]
@@ -173,10 +181,10 @@ fn run_bench(
             "modes": modes,
             "speedup": speedup,
         });
-        println!("{out}");
+        output::print(&format!("{out}\n"))?;
     } else {
-        println!(
-            "{} on {} ({:?}), {}x{} {}x MSAA, {frames} frames after {warmup} warm-up",
+        let mut text = format!(
+            "{} on {} ({:?}), {}x{} {}x MSAA, {frames} frames after {warmup} warm-up\n",
             scene.display(),
             gpu.info().name,
             gpu.info().backend,
@@ -185,11 +193,12 @@ fn run_bench(
             msaa
         );
         for r in &reports {
-            bench::print_mode(r);
+            text.push_str(&bench::format_mode(r));
         }
         if let Some(x) = speedup {
-            println!("speedup (naive CPU median / optimized CPU median): {x:.1}x");
+            text.push_str(&format!("speedup (naive CPU median / optimized CPU median): {x:.1}x\n"));
         }
+        output::print(&text)?;
     }
     if let Some(path) = plot {
         let name = scene.file_name().map_or_else(|| scene.display().to_string(), |n| n.to_string_lossy().into());
@@ -217,8 +226,10 @@ fn parse_time(s: &str) -> Result<f32, String> {
 
 fn parse_fps(s: &str) -> Result<f32, String> {
     match s.trim().parse::<f32>() {
-        Ok(f) if f.is_finite() && f > 0.0 => Ok(f),
-        _ => Err(format!("'{s}' is not a frame rate: expected a number above 0")),
+        Ok(f) if FPS_RANGE.contains(&f) => Ok(f),
+        _ => {
+            Err(format!("'{s}' is not a frame rate: expected a number in {}..={}", FPS_RANGE.start(), FPS_RANGE.end()))
+        }
     }
 }
 
@@ -273,6 +284,9 @@ fn render(args: RenderArgs) -> Result<(), Error> {
         let message = "--frames needs a numbered output such as -o frames/%04d.png";
         return Err(glint::Diagnostic::file(output, message).into());
     }
+    // Refuse cloth work over the limits before starting a GPU: posing at the
+    // last frame's time is the most work any frame takes.
+    desc.check_pose(time + (frames - 1) as f32 / fps)?;
     let gpu = Gpu::headless()?;
     let msaa = if gpu.supports_msaa(msaa) {
         msaa
@@ -298,7 +312,7 @@ fn render(args: RenderArgs) -> Result<(), Error> {
             std::fs::create_dir_all(dir)
                 .map_err(|e| glint::Diagnostic::file(dir, format!("cannot create the frames folder: {e}")))?;
         }
-        target.save_png(&gpu, &path)?;
+        output::save_png(&gpu, &target, &path)?;
         if let Some(bar) = &progress {
             bar.inc(1);
         }
@@ -308,7 +322,7 @@ fn render(args: RenderArgs) -> Result<(), Error> {
             json["adapter"] = format!("{} ({:?})", info.name, info.backend).into();
             json["size"] = format!("{width}x{height}").into();
             json["msaa"] = msaa.into();
-            println!("{json}");
+            output::print(&format!("{json}\n"))?;
         }
     }
     if let Some(bar) = progress {
@@ -333,34 +347,40 @@ fn numbered(pattern: &Path, k: u32) -> Result<PathBuf, String> {
 
 fn check(scene: &Path, options: LoadOptions) -> Result<(), Error> {
     let desc = load(scene, options)?;
-    println!("{}: ok", scene.display());
-    println!("  cameras:    {}", desc.cameras.len());
-    println!("  lights:     {}", desc.lights.len());
-    println!("  materials:  {}", desc.materials.len());
-    println!("  textures:   {}", desc.textures.len());
-    println!("  render tasks (mesh x material): {}", desc.entities.len());
+    let mut text = String::new();
+    let mut line = |l: String| {
+        text.push_str(&l);
+        text.push('\n');
+    };
+    line(format!("{}: ok", scene.display()));
+    line(format!("  cameras:    {}", desc.cameras.len()));
+    line(format!("  lights:     {}", desc.lights.len()));
+    line(format!("  materials:  {}", desc.materials.len()));
+    line(format!("  textures:   {}", desc.textures.len()));
+    line(format!("  render tasks (mesh x material): {}", desc.entities.len()));
     for model in &desc.models {
         let triangles: usize = model.parts.iter().map(|p| p.mesh.indices().len() / 3).sum();
-        println!(
+        line(format!(
             "  model {}: {} parts, {} materials, {} textures, {triangles} triangles",
             model.path.display(),
             model.parts.len(),
             model.materials.len(),
             model.textures.len()
-        );
+        ));
         for a in &model.animations {
-            println!("    animation '{}': {} channels, {:.2} s", a.name, a.channels.len(), a.duration());
+            line(format!("    animation '{}': {} channels, {:.2} s", a.name, a.channels.len(), a.duration()));
         }
         for skin in &model.skins {
-            println!("    skin '{}': {} joints", skin.name, skin.joints.len());
+            line(format!("    skin '{}': {} joints", skin.name, skin.joints.len()));
         }
         for part in model.parts.iter().filter(|p| p.morph.is_some()) {
             let targets = part.morph.as_ref().map_or(0, |m| m.targets.len());
-            println!("    part '{}': {targets} morph targets", part.name);
+            line(format!("    part '{}': {targets} morph targets", part.name));
         }
     }
-    println!("  instances:  {}", desc.instance_count());
-    println!("  warnings:   {}", desc.warnings.len());
+    line(format!("  instances:  {}", desc.instance_count()));
+    line(format!("  warnings:   {}", desc.warnings.len()));
+    output::print(&text)?;
     if desc.lights.len() > glint::scene::MAX_LIGHTS {
         return Err(glint::Diagnostic::file(
             scene,
@@ -383,8 +403,9 @@ fn main() -> ExitCode {
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
         Err(e) => {
-            let _ = e.print();
-            return ExitCode::from(if e.use_stderr() { 1 } else { 0 });
+            // Help and version go to stdout: a failed write there is a failure too.
+            let printed = e.print().and_then(|()| std::io::Write::flush(&mut std::io::stdout()));
+            return ExitCode::from(if e.use_stderr() || printed.is_err() { 1 } else { 0 });
         }
     };
     let options = LoadOptions { allow_outside_assets: cli.allow_outside_assets };

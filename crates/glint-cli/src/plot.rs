@@ -63,5 +63,6 @@ pub fn stage_chart(path: &Path, title: &str, reports: &[ModeReport]) -> Result<(
         root.present().map_err(|e| fail(&e))?;
     }
     let image = image::RgbImage::from_raw(width, height, pixels).expect("buffer is width × height × 3");
-    image.save_with_format(path, image::ImageFormat::Png).map_err(|e| fail(&e))
+    let bytes = crate::output::png_bytes(&image).map_err(|e| fail(&e))?;
+    crate::output::write_file(path, &bytes)
 }

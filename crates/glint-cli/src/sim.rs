@@ -9,6 +9,11 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+/// Most nodes a side of `--sheet`: a 1025 × 1025 sheet's solver would need
+/// about 22 GB; larger meshes from files are refused by the solver's memory
+/// estimate before it is allocated.
+const MAX_SIDE: u32 = 257;
+
 /// `glint sim cloth` options.
 #[derive(Args)]
 #[command(group(clap::ArgGroup::new("shape").required(true).args(["mesh", "sheet"])))]
@@ -19,7 +24,8 @@ pub struct ClothArgs {
     /// A rectangular sheet in the XY plane, W,H metres.
     #[arg(long, value_name = "W,H", value_parser = parse_pair::<f64>, requires = "resolution")]
     sheet: Option<(f64, f64)>,
-    /// Nodes along the sheet's width and height, N,M (2..=1025 each).
+    /// Nodes along the sheet's width and height, N,M (2..=257 each; one step
+    /// at 257 × 257 takes about two minutes and 1 GB).
     #[arg(long, value_name = "N,M", value_parser = parse_pair::<u32>)]
     resolution: Option<(u32, u32)>,
     /// Thickness h, metres.
@@ -79,8 +85,10 @@ pub fn cloth(args: &ClothArgs) -> Result<(), Error> {
         (Some(path), _, _) => ClothMesh::load(path)?,
         (None, Some((w, h)), Some((n, m))) => {
             let sizes = w.is_finite() && h.is_finite() && w > 0.0 && h > 0.0;
-            if !(sizes && (2..=1025).contains(&n) && (2..=1025).contains(&m)) {
-                return Err(usage("--sheet needs sizes above 0 and --resolution 2..=1025 nodes a side"));
+            if !(sizes && (2..=MAX_SIDE).contains(&n) && (2..=MAX_SIDE).contains(&m)) {
+                return Err(usage(&format!(
+                    "--sheet needs sizes above 0 and --resolution 2..={MAX_SIDE} nodes a side"
+                )));
             }
             ClothMesh::sheet(w, h, n, m)
         }
@@ -122,21 +130,20 @@ pub fn cloth(args: &ClothArgs) -> Result<(), Error> {
     }
     if args.bench {
         let pinned = pinned.iter().filter(|p| **p).count();
-        println!(
-            "cloth: {nodes} nodes ({pinned} pinned), {} edges, {} hinges, {} threads",
+        let text = format!(
+            "cloth: {nodes} nodes ({pinned} pinned), {} edges, {} hinges, {} threads\n\
+             {steps} steps of {} s in {stepping:.3} s: {:.1} steps/s, {:.2} Newton iterations/step \
+             ({:.2} factorisations), {:.2} sub-steps/step\n",
             cloth.topology().edges.len(),
             cloth.topology().hinges.len(),
-            rayon::current_num_threads()
-        );
-        println!(
-            "{steps} steps of {} s in {stepping:.3} s: {:.1} steps/s, {:.2} Newton iterations/step \
-             ({:.2} factorisations), {:.2} sub-steps/step",
+            rayon::current_num_threads(),
             args.dt,
             f64::from(steps) / stepping,
             iterations as f64 / f64::from(steps),
             factorizations as f64 / f64::from(steps),
             substeps as f64 / f64::from(steps)
         );
+        crate::output::print(&text)?;
     }
     Ok(())
 }

@@ -529,7 +529,7 @@ fn sim_cloth_reads_the_published_mesh_format_and_rejects_bad_input() {
 
     for (args, says) in [
         (&["sim", "cloth", "--sheet", "1,1", "--resolution", "3,3", "--fix", "w<1"][..], "expected AXIS OP NUMBER"),
-        (&["sim", "cloth", "--sheet", "1,1", "--resolution", "1,3"], "--resolution 2..=1025"),
+        (&["sim", "cloth", "--sheet", "1,1", "--resolution", "1,3"], "--resolution 2..=257"),
         (&["sim", "cloth", "--sheet", "1,1", "--resolution", "3,3", "--dt", "0"], "above 0"),
         (&["sim", "cloth", "--sheet", "1,1", "--resolution", "3,3", "--fix", "nodes 10"], "past the 9 nodes"),
         (&["sim", "cloth", "--sheet", "1,1", "--resolution", "3,3", "--collider", "sphere 0 0 0"], "not a collider"),
@@ -539,4 +539,160 @@ fn sim_cloth_reads_the_published_mesh_format_and_rejects_bad_input() {
         assert_eq!(out.status.code(), Some(1), "{args:?}");
         assert!(stderr(&out).contains(says), "{args:?}: {}", stderr(&out));
     }
+}
+
+/// Run glint with its standard output on `/dev/full`, where every write fails
+/// with ENOSPC (`None` where the device is missing).
+fn glint_to_full_stdout(args: &[&str]) -> Option<Output> {
+    let full = std::fs::OpenOptions::new().write(true).open("/dev/full").ok()?;
+    let out = Command::new(env!("CARGO_BIN_EXE_glint"))
+        .args(args)
+        .env("NODEVICE_SELECT", "1")
+        .stdout(full)
+        .output()
+        .expect("run glint");
+    Some(out)
+}
+
+/// No adapter (exit 2) skips a GPU test unless CI requires one.
+fn no_adapter(out: &Output) -> bool {
+    let skip = out.status.code() == Some(2) && std::env::var("GLINT_REQUIRE_ADAPTER").as_deref() != Ok("1");
+    if skip {
+        eprintln!("skipping: no GPU adapter ({})", stderr(out));
+    }
+    skip
+}
+
+/// A failed write is exit 1 with one error line naming what could not be
+/// written, never a panic.
+fn assert_write_failed(out: &Output, what: &str) {
+    let text = stderr(out);
+    assert_eq!(out.status.code(), Some(1), "{text}");
+    assert!(!text.contains("panicked"), "{text}");
+    let errors = error_lines(out);
+    assert_eq!(errors.len(), 1, "{text}");
+    assert!(errors[0].starts_with(&format!("error: {what}: cannot write: ")), "{errors:?}");
+}
+
+#[test]
+fn results_on_a_full_stdout_are_an_error_not_a_panic_or_success() {
+    let scene = repo("tests/scenes/ortho.scn");
+    let scene = scene.to_str().expect("path");
+    let Some(out) = glint_to_full_stdout(&["check", scene]) else { return };
+    assert_write_failed(&out, "standard output");
+    let sheet = ["sim", "cloth", "--sheet", "0.2,0.1", "--resolution", "5,3", "--fix", "x<=0.05", "--steps", "2"];
+    let out = glint_to_full_stdout(&[&sheet[..], &["--bench"]].concat()).expect("opened before");
+    assert_write_failed(&out, "standard output");
+    // The trajectory written to standard output, and to a full device by name.
+    let out = glint_to_full_stdout(&[&sheet[..], &["--out", "/dev/stdout"]].concat()).expect("opened before");
+    assert_write_failed(&out, "/dev/stdout");
+    let out = glint(&[&sheet[..], &["--out", "/dev/full"]].concat());
+    assert_write_failed(&out, "/dev/full");
+    let out = glint_to_full_stdout(&["--help"]).expect("opened before");
+    assert_eq!(out.status.code(), Some(1), "help that cannot be printed is not a success");
+    let dir = tempfile::tempdir().expect("temp dir");
+    let png = dir.path().join("a.png");
+    let png = png.to_str().expect("path");
+    let out = glint_to_full_stdout(&["render", scene, "-o", png, "--size", "16x16", "--stats"]).expect("opened before");
+    if no_adapter(&out) {
+        return;
+    }
+    assert_write_failed(&out, "standard output");
+    let out = glint_to_full_stdout(&["bench", scene, "--frames", "2", "--warmup", "0", "--size", "16x16"])
+        .expect("opened before");
+    assert_write_failed(&out, "standard output");
+    let out = glint_to_full_stdout(&["bench", scene, "--frames", "2", "--size", "16x16", "--json"]).expect("opened");
+    assert_write_failed(&out, "standard output");
+}
+
+#[test]
+fn images_that_cannot_be_written_are_an_error_with_the_path() {
+    let scene = repo("tests/scenes/ortho.scn");
+    let scene = scene.to_str().expect("path");
+    let out = glint(&["render", scene, "-o", "/dev/full", "--size", "16x16"]);
+    if no_adapter(&out) {
+        return;
+    }
+    assert_write_failed(&out, "/dev/full");
+    // procfs takes the open but refuses the write (EIO).
+    if Path::new("/proc/version").exists() {
+        let out = glint(&["render", scene, "-o", "/proc/version", "--size", "16x16"]);
+        assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
+        assert!(stderr(&out).contains("error: /proc/version: cannot "), "{}", stderr(&out));
+    }
+    let out = glint(&["bench", scene, "--frames", "2", "--size", "16x16", "--plot", "/dev/full"]);
+    assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
+    assert!(stderr(&out).contains("error: /dev/full: cannot write: "), "{}", stderr(&out));
+}
+
+#[test]
+fn count_arguments_are_bounded_with_a_one_line_error() {
+    let scene = repo("tests/scenes/ortho.scn");
+    let scene = scene.to_str().expect("path");
+    for (args, says) in [
+        (&["bench", scene, "--frames", "9223372036854775807"][..], "1..=100000"),
+        (&["bench", scene, "--frames", "0"], "1..=100000"),
+        (&["bench", scene, "--warmup", "18446744073709551615"], "0..=100000"),
+        (&["render", scene, "-o", "/nonexistent/x.png", "--frames", "100001"], "1..=100000"),
+        (&["render", scene, "-o", "/nonexistent/x.png", "--fps", "1e-30"], "0.001..=1000"),
+        (&["render", scene, "-o", "/nonexistent/x.png", "--fps", "inf"], "0.001..=1000"),
+        (&["sim", "cloth", "--sheet", "1,1", "--resolution", "3,3", "--steps", "4294967296"], "--steps"),
+        (&["sim", "cloth", "--sheet", "1,1", "--resolution", "1025,1025"], "--resolution 2..=257"),
+    ] {
+        let out = glint(args);
+        let text = stderr(&out);
+        assert_eq!(out.status.code(), Some(1), "{args:?}: {text}");
+        assert!(!text.contains("panicked"), "{args:?}: {text}");
+        assert_eq!(error_lines(&out).len(), 1, "{args:?}: {text}");
+        assert!(text.contains(says), "{args:?}: {text}");
+    }
+}
+
+#[test]
+fn cloth_limits_are_file_line_errors_before_any_work() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let scene = dir.path().join("cloth.scn");
+    // 65 × 65 nodes at dt = 1e-5 to 1 s: 100,000 steps (the most one pose may
+    // take), but far over the node²-step budget: refused before a GPU starts
+    // or a step is taken.
+    let text = "// a fine cloth\n{\n\"classname\" \"cloth\"\n\"resolution\" \"65 65\"\n\"dt\" \"1e-5\"\n}\n";
+    std::fs::write(&scene, text).expect("write scene");
+    let scene = scene.to_str().expect("path");
+    let out = glint(&["render", scene, "-o", dir.path().join("x.png").to_str().expect("path"), "--time", "1"]);
+    assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
+    let errors = error_lines(&out);
+    assert_eq!(errors.len(), 1, "{}", stderr(&out));
+    assert!(errors[0].starts_with(&format!("error: {scene}:2: cloth: ")), "{errors:?}");
+    assert!(errors[0].contains("node²-steps"), "{errors:?}");
+    // A resolution over the maximum.
+    let big = dir.path().join("big.scn");
+    std::fs::write(&big, "{\n\"classname\" \"cloth\"\n\"resolution\" \"257 257\"\n}\n").expect("write scene");
+    let out = glint(&["check", big.to_str().expect("path")]);
+    assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
+    assert!(stderr(&out).contains("big.scn:3: \"resolution\" is '257 257'"), "{}", stderr(&out));
+    // Five 129 × 129 sheets: more cloth nodes than a scene may have, refused at the fifth.
+    let sheet = "{\n\"classname\" \"cloth\"\n\"resolution\" \"129 129\"\n}\n";
+    std::fs::write(&big, sheet.repeat(5)).expect("write scene");
+    let out = glint(&["check", big.to_str().expect("path")]);
+    assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
+    assert!(stderr(&out).contains("big.scn:17: cloth: the scene's cloths would have"), "{}", stderr(&out));
+}
+
+#[test]
+fn a_scene_in_utf16_or_invalid_utf8_is_an_error_with_its_line() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let text = "// a scene\n{\n\"classname\" \"world\"\n}\n";
+    let utf16: Vec<u8> = std::iter::once(0xFEFF).chain(text.encode_utf16()).flat_map(u16::to_le_bytes).collect();
+    let wide = dir.path().join("wide.scn");
+    std::fs::write(&wide, utf16).expect("write");
+    let out = glint(&["check", wide.to_str().expect("path")]);
+    assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
+    let want = format!("error: {}:1: expected UTF-8 text, found UTF-16", wide.display());
+    assert!(stderr(&out).contains(&want), "{}", stderr(&out));
+    let latin1 = dir.path().join("latin1.scn");
+    std::fs::write(&latin1, b"{\n\"classname\" \"material\"\n\"name\" \"caf\xE9\"\n}\n").expect("write");
+    let out = glint(&["check", latin1.to_str().expect("path")]);
+    assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
+    let want = format!("error: {}:3: invalid UTF-8 at column 12", latin1.display());
+    assert!(stderr(&out).contains(&want), "{}", stderr(&out));
 }

@@ -307,7 +307,7 @@ impl View {
     }
 
     fn screenshot(&self, path: &Path) -> Result<(), Error> {
-        self.target.save_png(&self.gpu, path)?;
+        crate::output::save_png(&self.gpu, &self.target, path)?;
         eprintln!("wrote {} ({}x{})", path.display(), self.target.width(), self.target.height());
         Ok(())
     }

@@ -216,6 +216,18 @@ pub fn torus(segments: u32, sides: u32) -> Mesh {
     b.finish()
 }
 
+/// Most vertices the distinct `blob` meshes of one scene may have together
+/// (blobs of the same detail and seed share one mesh): about four blobs at
+/// detail 1024 (4.2 M vertices, 8.4 M triangles, built with normals and
+/// tangents when the scene is instantiated); see `docs/limits.md`.
+pub const MAX_SCENE_BLOB_VERTICES: u64 = 4 * 1025 * 1025;
+
+/// Vertices of a blob of `detail` rings and segments: a (detail + 1)² grid.
+pub fn blob_vertex_count(detail: u32) -> u64 {
+    let side = u64::from(detail.clamp(3, 1024)) + 1;
+    side * side
+}
+
 /// A sphere of radius ≤ 0.5 whose radius varies smoothly with direction: four
 /// random plane waves picked by `seed` (PCG32), `detail` rings and segments.
 pub fn blob(detail: u32, seed: u32) -> Mesh {

@@ -4,10 +4,11 @@
 
 use super::model::AddedModel;
 use super::placement::place_instances;
+use super::procedural::{blob_vertex_count, MAX_SCENE_BLOB_VERTICES};
 use super::scn_cloth::{self, ClothDesc};
 use super::scn_fields::{numbers, Fields};
 use super::scn_lights;
-use super::scn_syntax::{parse_blocks, Block, Pair};
+use super::scn_syntax::{decode_scene_text, parse_blocks, Block, Pair};
 use super::texture::TextureCache;
 use super::{load_texture, Diagnostic, LoadOptions, Model, ShapeKind, Texture};
 use crate::scene::TextureId;
@@ -145,6 +146,19 @@ impl SceneDesc {
         self.entities.iter().map(|e| e.transforms.len()).sum()
     }
 
+    /// Check, without stepping, that posing at `time` stays within the cloth
+    /// limits ([`MAX_POSE_STEPS`](super::MAX_POSE_STEPS) per cloth, 10⁹
+    /// node²-steps over all of them; see `docs/limits.md`): the error names the
+    /// cloth block that goes over. Posing at an earlier time takes no more work.
+    pub fn check_pose(&self, time: f32) -> Result<(), Diagnostic> {
+        let mut work = 0u64;
+        for cloth in &self.cloths {
+            cloth.check_pose(time, work, &self.path)?;
+            work = work.saturating_add(cloth.pose_work(time));
+        }
+        Ok(())
+    }
+
     /// Pose every model at `time` seconds (see [`Model::pose`]), advance every
     /// cloth to `time` (see [`ClothDesc::pose`]), and move the matching `entities`
     /// (as [`SceneDesc::instantiate`] returned them into `renderer`) along: only
@@ -153,6 +167,7 @@ impl SceneDesc {
     /// `renderer` (one vertex-buffer write each). Fails when a cloth cannot reach
     /// `time` (too many steps, or a step that does not converge).
     pub fn pose(&mut self, time: f32, entities: &mut [Entity], renderer: &mut Renderer) -> Result<(), crate::Error> {
+        self.check_pose(time)?;
         let mut moved = vec![false; self.models.len()];
         let mut morphed = vec![Vec::new(); self.models.len()];
         for ((model, moved), morphed) in self.models.iter_mut().zip(&mut moved).zip(&mut morphed) {
@@ -291,7 +306,8 @@ pub fn load_scene(path: &Path) -> Result<SceneDesc, Diagnostic> {
 
 /// [`load_scene`] with options for the models it names.
 pub fn load_scene_with(path: &Path, options: LoadOptions) -> Result<SceneDesc, Diagnostic> {
-    let text = std::fs::read_to_string(path).map_err(|e| Diagnostic::file(path, format!("cannot read scene: {e}")))?;
+    let bytes = std::fs::read(path).map_err(|e| Diagnostic::file(path, format!("cannot read scene: {e}")))?;
+    let text = decode_scene_text(path, &bytes)?;
     parse_scene_with(path, &text, options)
 }
 
@@ -321,6 +337,9 @@ pub fn parse_scene_with(path: &Path, text: &str, options: LoadOptions) -> Result
         },
         textures: TextureCache::default(),
         model_index: HashMap::new(),
+        material_names: HashMap::new(),
+        blobs: std::collections::HashSet::new(),
+        blob_vertices: 0,
         options,
         placements: Vec::new(),
         cloths: Vec::new(),
@@ -346,6 +365,13 @@ struct Loader<'a> {
     scene: SceneDesc,
     textures: TextureCache<PathBuf>,
     model_index: HashMap<PathBuf, usize>,
+    /// Each material's index in `scene.materials`, by name: resolving a name
+    /// and refusing a repeated one take constant time, so N blocks load in linear
+    /// time (a linear search made 10⁶ material blocks take minutes).
+    material_names: HashMap<String, usize>,
+    /// The distinct blob meshes named so far, (detail, seed), and their vertices.
+    blobs: std::collections::HashSet<(u32, u32)>,
+    blob_vertices: u64,
     options: LoadOptions,
     placements: Vec<Placement>,
     /// Cloths with their material names, resolved in [`Loader::finish`].
@@ -519,7 +545,8 @@ impl Loader<'_> {
             "entity" => self.entity(&mut f)?,
             "instances" => self.instances(&mut f)?,
             "cloth" => {
-                let mut cloth = scn_cloth::parse(&mut f, &self.dir)?;
+                let nodes: u64 = self.cloths.iter().map(|(c, _)| c.setup.mesh.nodes.len() as u64).sum();
+                let mut cloth = scn_cloth::parse(&mut f, &self.dir, nodes)?;
                 cloth.draw = Self::draw_options(&mut f)?;
                 let material = Self::material_ref(&mut f);
                 self.cloths.push((cloth, material));
@@ -623,7 +650,7 @@ impl Loader<'_> {
     fn material(&mut self, f: &mut Fields) -> Result<(), Diagnostic> {
         let name_pair = f.require("name")?;
         let name = name_pair.value.trim().to_string();
-        if self.scene.materials.iter().any(|m| m.material.name == name) {
+        if self.material_names.contains_key(&name) {
             return Err(Diagnostic::at(self.path, name_pair.line, format!("material '{name}' is defined twice")));
         }
         let material = material_fields(f, Material { name, ..Material::default() })?;
@@ -636,6 +663,7 @@ impl Loader<'_> {
             emissive_map: self.texture(f, "emissive_map", true)?,
             material,
         };
+        self.material_names.insert(desc.material.name.clone(), self.scene.materials.len());
         self.scene.materials.push(desc);
         Ok(())
     }
@@ -646,7 +674,11 @@ impl Loader<'_> {
         let pair = f.require("mesh")?;
         let value = pair.value.trim();
         if !Model::is_model_path(Path::new(value)) {
-            return f.mesh().map(MeshRef::Shape);
+            let kind = f.mesh()?;
+            if let ShapeKind::Blob { detail, seed } = kind {
+                self.count_blob(detail, seed, pair.line)?;
+            }
+            return Ok(MeshRef::Shape(kind));
         }
         let file = self.dir.join(value);
         let index = match self.model_index.get(&file) {
@@ -666,7 +698,9 @@ impl Loader<'_> {
     /// Apply this block's `mtl.NAME.key` pairs to a copy of model `index`; returns
     /// the copy's index, or `index` when there are none.
     fn model_overrides(&mut self, f: &mut Fields, index: usize) -> Result<usize, Diagnostic> {
+        // In first-mention order, found by name in constant time.
         let mut by_material: Vec<(String, Vec<Pair>)> = Vec::new();
+        let mut slot: HashMap<&str, usize> = HashMap::new();
         for (i, pair) in f.block.pairs.iter().enumerate() {
             let Some(rest) = pair.key.strip_prefix("mtl.") else { continue };
             f.used[i] = true;
@@ -674,19 +708,31 @@ impl Loader<'_> {
                 Diagnostic::at(self.path, pair.line, format!("\"{}\": expected mtl.MATERIAL.key", pair.key))
             })?;
             let stripped = Pair { key: key.to_string(), value: pair.value.clone(), line: pair.line };
-            match by_material.iter_mut().find(|(n, _)| n == name) {
-                Some((_, pairs)) => pairs.push(stripped),
-                None => by_material.push((name.to_string(), vec![stripped])),
+            match slot.get(name) {
+                Some(&k) => by_material[k].1.push(stripped),
+                None => {
+                    slot.insert(name, by_material.len());
+                    by_material.push((name.to_string(), vec![stripped]));
+                }
             }
         }
         if by_material.is_empty() {
             return Ok(index);
         }
         let mut model = self.scene.models[index].clone();
+        let mut named: HashMap<String, usize> = HashMap::new();
+        for (k, m) in model.materials.iter().enumerate() {
+            named.entry(m.material.name.clone()).or_insert(k);
+        }
         for (name, pairs) in by_material {
             let line = pairs[0].line;
-            let Some(desc) = model.materials.iter_mut().find(|m| m.material.name == name) else {
-                let names: Vec<&str> = model.materials.iter().map(|m| m.material.name.as_str()).collect();
+            let Some(desc) = named.get(&name).map(|&k| &mut model.materials[k]) else {
+                const SHOWN: usize = 20;
+                let mut names: Vec<&str> =
+                    model.materials.iter().take(SHOWN).map(|m| m.material.name.as_str()).collect();
+                if model.materials.len() > SHOWN {
+                    names.push("…");
+                }
                 let message = format!("the model has no material '{name}' (it has: {})", names.join(", "));
                 return Err(Diagnostic::at(self.path, line, message));
             };
@@ -711,6 +757,25 @@ impl Loader<'_> {
 
     fn material_ref(f: &mut Fields) -> Option<(String, usize)> {
         f.get("material").map(|p| (p.value.trim().to_string(), p.line))
+    }
+
+    /// Count a `blob` mesh against [`MAX_SCENE_BLOB_VERTICES`] (each distinct
+    /// detail and seed once: they share a mesh), before any is built.
+    fn count_blob(&mut self, detail: u32, seed: u32, line: usize) -> Result<(), Diagnostic> {
+        if !self.blobs.insert((detail, seed)) {
+            return Ok(());
+        }
+        self.blob_vertices += blob_vertex_count(detail);
+        if self.blob_vertices > MAX_SCENE_BLOB_VERTICES {
+            let message = format!(
+                "the scene's distinct blobs ({} so far: each detail and seed is its own mesh) have {} vertices, \
+                 more than the {MAX_SCENE_BLOB_VERTICES} glint builds for one scene: lower \"detail\" or reuse a \"mesh_seed\"",
+                self.blobs.len(),
+                self.blob_vertices
+            );
+            return Err(Diagnostic::at(self.path, line, message));
+        }
+        Ok(())
     }
 
     fn count_instances(&mut self, n: u64, line: usize) -> Result<(), Diagnostic> {
@@ -813,7 +878,7 @@ impl Loader<'_> {
     /// A material name (and the line naming it) as an index into the scene's materials.
     fn material_index(&self, name: Option<(String, usize)>) -> Result<Option<usize>, Diagnostic> {
         let Some((name, line)) = name else { return Ok(None) };
-        let index = self.scene.materials.iter().position(|m| m.material.name == name);
+        let index = self.material_names.get(&name).copied();
         let message = || format!("unknown material '{name}' (define it in a material block)");
         index.map(Some).ok_or_else(|| Diagnostic::at(self.path, line, message()))
     }
@@ -992,6 +1057,84 @@ mod tests {
         let err = parse(&light.repeat(MAX_LIGHTS + 1)).unwrap_err();
         assert_eq!(err.line, Some(4 * MAX_LIGHTS + 1));
         assert!(err.message.contains("more than 64 lights"), "{err}");
+    }
+
+    /// 10⁶ material blocks (and entities naming the last of them, and one block
+    /// of 10⁵ repeated keys), timed and printed: a benchmark, not a timed test.
+    /// `cargo test --release -p glint --lib scn::tests::load_benchmark -- --ignored --nocapture`
+    #[test]
+    #[ignore = "benchmark: run in release with --ignored --nocapture"]
+    fn load_benchmark_materials_and_long_blocks() {
+        use std::fmt::Write;
+        for n in [100_000usize, 1_000_000] {
+            let mut text = String::with_capacity(n * 64);
+            for i in 0..n {
+                let _ = write!(text, "{{\n\"classname\" \"material\"\n\"name\" \"m{i}\"\n\"diffuse\" \"0.5\"\n}}\n");
+            }
+            for i in 0..1000 {
+                let _ = write!(
+                    text,
+                    "{{\n\"classname\" \"entity\"\n\"mesh\" \"cube\"\n\"material\" \"m{}\"\n}}\n",
+                    n - 1 - i
+                );
+            }
+            let start = std::time::Instant::now();
+            let scene = parse(&text).unwrap();
+            let elapsed = start.elapsed();
+            assert_eq!((scene.materials.len(), scene.entities.len()), (n, 1000));
+            eprintln!("{n} material blocks + 1000 entities ({} MB): {:.3} s", text.len() >> 20, elapsed.as_secs_f64());
+        }
+        let pairs = 100_000;
+        let text = format!("{{\n\"classname\" \"world\"\n{}}}\n", "\"ambient\" \"0.1 0.1 0.1\"\n".repeat(pairs));
+        let start = std::time::Instant::now();
+        let scene = parse(&text).unwrap();
+        let elapsed = start.elapsed();
+        assert_eq!(scene.warnings.len(), pairs - 1);
+        eprintln!("one block of {pairs} repeated keys: {:.3} s", elapsed.as_secs_f64());
+    }
+
+    #[test]
+    fn names_resolve_through_the_map_and_repeats_are_reported() {
+        let mut text = String::new();
+        for i in 0..50 {
+            text.push_str(&format!(
+                "{{\n\"classname\" \"material\"\n\"name\" \"m{i}\"\n\"diffuse\" \"{}\"\n}}\n",
+                i as f32 / 100.0
+            ));
+        }
+        text.push_str("{\n\"classname\" \"entity\"\n\"mesh\" \"cube\"\n\"material\" \"m37\"\n}\n");
+        let scene = parse(&text).unwrap();
+        let task = scene.entities[0].material.expect("named");
+        assert_eq!((task, scene.materials[task].material.diffuse), (37, 0.37));
+        // The same name again is an error at its "name" line (after 255 lines of blocks).
+        let again = format!("{text}{{\n\"classname\" \"material\"\n\"name\" \"m12\"\n}}\n");
+        let err = parse(&again).unwrap_err();
+        assert_eq!(err.line, Some(258), "{err}");
+        assert!(err.message.contains("material 'm12' is defined twice"), "{err}");
+        // Repeated keys warn once per earlier copy, unknown ones once each.
+        let scene = parse("{\n\"classname\" \"world\"\n\"ambient\" \"1 1 1\"\n\"ambient\" \"0 0 0\"\n\"x\" \"1\"\n\"ambient\" \"0.5 0.5 0.5\"\n}\n").unwrap();
+        let lines: Vec<_> = scene.warnings.iter().map(|w| (w.line, w.message.contains("given again"))).collect();
+        assert_eq!(lines, [(Some(3), true), (Some(4), true), (Some(5), false)]);
+        assert_eq!(scene.environment.ambient, Vec3::splat(0.5));
+    }
+
+    #[test]
+    fn distinct_blobs_are_capped_by_their_vertices_before_any_is_built() {
+        let blob = |detail: u32, seed: u32| {
+            format!("{{\n\"classname\" \"entity\"\n\"mesh\" \"blob\"\n\"detail\" \"{detail}\"\n\"mesh_seed\" \"{seed}\"\n}}\n")
+        };
+        let fits = (MAX_SCENE_BLOB_VERTICES / blob_vertex_count(1024)) as u32;
+        assert!(fits >= 1);
+        // The same blob a hundred times is one mesh.
+        assert!(parse(&blob(1024, 7).repeat(100)).is_ok());
+        let most: String = (0..fits).map(|seed| blob(1024, seed)).collect();
+        assert!(parse(&most).is_ok());
+        let err = parse(&format!("{most}{}", blob(1024, fits))).unwrap_err();
+        assert_eq!(err.line, Some(6 * fits as usize + 3), "{err}");
+        assert!(err.message.contains("distinct blobs"), "{err}");
+        // Small blobs fit by the thousand.
+        let small: String = (0..1000).map(|seed| blob(16, seed)).collect();
+        assert!(parse(&small).is_ok());
     }
 
     #[test]

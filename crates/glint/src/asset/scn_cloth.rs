@@ -12,8 +12,27 @@ use std::path::Path;
 /// is an error rather than hours of stepping.
 pub const MAX_POSE_STEPS: u64 = 100_000;
 
-/// Most nodes a `resolution` may give a side of a cloth sheet.
-const MAX_SIDE: i64 = 257;
+/// Most work posing a scene may take, in node²-steps: steps × nodes² summed
+/// over its cloths. A step's Newton solve costs about 2–3·10⁻⁸ s × nodes² on the
+/// 2-core reference machine (measured: 0.07 s at 33 × 33, 0.42 s at 65 × 65,
+/// 5.1 s at 129 × 129, 119 s at 257 × 257), so this bound keeps the work it
+/// allows to about half a minute of free swinging, a minute or two with
+/// contact (see `docs/limits.md`). A static cloth's equilibrium counts as
+/// [`STATIC_STEPS`] steps.
+pub const MAX_POSE_NODE_STEPS: u64 = 1_000_000_000;
+
+/// Most cloth nodes one scene may have, over all its cloth blocks: four
+/// 129 × 129 sheets. Each cloth's solver is built as the scene loads (about
+/// 14 KB a node), so this bounds what `glint check` allocates too.
+pub const MAX_SCENE_CLOTH_NODES: u64 = 4 * 129 * 129;
+
+/// Steps a static cloth's equilibrium counts as against [`MAX_POSE_NODE_STEPS`]:
+/// its load is applied in ten increments, each a Newton solve like a step's.
+pub const STATIC_STEPS: u64 = 10;
+
+/// Most nodes a `resolution` may give a side of a cloth sheet (one step of a
+/// 257 × 257 sheet took two minutes: see [`MAX_POSE_NODE_STEPS`]).
+const MAX_SIDE: i64 = 129;
 
 /// A `cloth` block: everything needed to (re)start its simulation, and how it looks now.
 #[derive(Clone, Debug)]
@@ -88,21 +107,58 @@ impl std::fmt::Debug for Run {
 }
 
 impl ClothDesc {
-    /// Advance (or restart and advance) the simulation to `time` seconds and
-    /// update [`ClothDesc::view`]. Returns whether the view changed. A static
-    /// cloth takes its one equilibrium step whatever the time.
-    pub fn pose(&mut self, time: f32, scene: &Path) -> Result<bool, crate::Error> {
-        let target = match self.integrator {
+    /// Steps a pose at `time` takes from rest (1 for a static cloth).
+    pub fn steps_to(&self, time: f32) -> u64 {
+        match self.integrator {
             Integrator::Static => 1,
             _ => (f64::from(time.max(0.0)) / self.dt + 1e-6).floor() as u64,
+        }
+    }
+
+    /// The work of posing at `time` in node²-steps (see [`MAX_POSE_NODE_STEPS`]).
+    pub fn pose_work(&self, time: f32) -> u64 {
+        let steps = match self.integrator {
+            Integrator::Static => STATIC_STEPS,
+            _ => self.steps_to(time),
         };
+        let nodes = self.setup.mesh.nodes.len() as u64;
+        steps.saturating_mul(nodes.saturating_mul(nodes))
+    }
+
+    /// Check that posing at `time`, after `others` node²-steps spent on the
+    /// scene's other cloths, stays within [`MAX_POSE_STEPS`] and
+    /// [`MAX_POSE_NODE_STEPS`], without stepping; returns the steps it takes.
+    pub fn check_pose(&self, time: f32, others: u64, scene: &Path) -> Result<u64, Diagnostic> {
+        let target = self.steps_to(time);
         if target > MAX_POSE_STEPS {
             let message = format!(
                 "cloth: time {time} s is {target} steps of dt {} s, more than the {MAX_POSE_STEPS} one pose may take",
                 self.dt
             );
-            return Err(Diagnostic::at(scene, self.line, message).into());
+            return Err(Diagnostic::at(scene, self.line, message));
         }
+        let work = self.pose_work(time).saturating_add(others);
+        if work > MAX_POSE_NODE_STEPS {
+            let nodes = self.setup.mesh.nodes.len();
+            let what = match self.integrator {
+                Integrator::Static => format!("a static solve of {nodes} nodes counts as {STATIC_STEPS} steps"),
+                _ => format!("time {time} s is {target} steps of dt {} s for {nodes} nodes", self.dt),
+            };
+            let others = if others > 0 { format!(" with the scene's other cloths ({others})") } else { String::new() };
+            let message = format!(
+                "cloth: {what}: {work} node²-steps{others}, more than the {MAX_POSE_NODE_STEPS} a scene's pose may take \
+                 (a coarser resolution, a larger \"dt\" or an earlier time fits)"
+            );
+            return Err(Diagnostic::at(scene, self.line, message));
+        }
+        Ok(target)
+    }
+
+    /// Advance (or restart and advance) the simulation to `time` seconds and
+    /// update [`ClothDesc::view`]. Returns whether the view changed. A static
+    /// cloth takes its one equilibrium step whatever the time.
+    pub fn pose(&mut self, time: f32, scene: &Path) -> Result<bool, crate::Error> {
+        let target = self.check_pose(time, 0, scene)?;
         let (run, restart) = match self.run.0.take() {
             Some(run) if run.1 <= target => (run, false),
             _ => {
@@ -125,9 +181,19 @@ impl ClothDesc {
 
 /// Read a `cloth` block (all but `material` and the draw options, which the
 /// loader reads as for entities); `dir` anchors a relative `mesh` path.
-pub(crate) fn parse(f: &mut Fields, dir: &Path) -> Result<ClothDesc, Diagnostic> {
+/// `nodes_before` is how many cloth nodes the scene's earlier blocks have: the
+/// total is checked against [`MAX_SCENE_CLOTH_NODES`] before the solver is built.
+pub(crate) fn parse(f: &mut Fields, dir: &Path, nodes_before: u64) -> Result<ClothDesc, Diagnostic> {
     let at = |line: usize, m: String| Diagnostic::at(f.path, line, m);
     let local = local_mesh(f, dir)?;
+    let nodes = nodes_before.saturating_add(local.nodes.len() as u64);
+    if nodes > MAX_SCENE_CLOTH_NODES {
+        let message = format!(
+            "cloth: the scene's cloths would have {nodes} nodes, more than the {MAX_SCENE_CLOTH_NODES} glint \
+             simulates in one scene (four 129 × 129 sheets)"
+        );
+        return Err(at(f.block.line, message));
+    }
     let origin = f.vec3("origin")?.unwrap_or(Vec3::ZERO);
     let rotation = super::scn::rotation(f.vec3("angles")?.unwrap_or(Vec3::ZERO));
     let pins_pair = f.get("pins");
@@ -291,9 +357,81 @@ mod tests {
     }
 
     #[test]
+    fn posing_work_is_capped_over_every_cloth_before_any_step() {
+        let block = "{\n\"classname\" \"cloth\"\n\"resolution\" \"65 65\"\n\"pins\" \"z<=-0.5\"\n\"dt\" \"0.01\"\n}\n";
+        let one = parse_scene(Path::new("dir/t.scn"), block).unwrap();
+        let nodes = 65 * 65;
+        let fits = MAX_POSE_NODE_STEPS / (nodes * nodes);
+        // Half a step past a whole number of steps, so rounding cannot tip it.
+        let at = |steps: u64| (steps as f32 + 0.5) * 0.01;
+        assert_eq!(one.cloths[0].steps_to(at(fits)), fits);
+        assert!(one.check_pose(at(fits)).is_ok());
+        let err = one.check_pose(at(fits + 1)).unwrap_err();
+        assert_eq!(err.line, Some(1), "{err}");
+        assert!(err.message.contains(&format!("{} node²-steps", (fits + 1) * nodes * nodes)), "{err}");
+        assert!(err.message.contains(&format!("more than the {MAX_POSE_NODE_STEPS}")), "{err}");
+        // Two cloths share the budget: the second is named.
+        let two = parse_scene(Path::new("dir/t.scn"), &block.repeat(2)).unwrap();
+        assert!(two.check_pose(at(fits / 2)).is_ok());
+        let err = two.check_pose(at(fits)).unwrap_err();
+        assert_eq!(err.line, Some(7), "{err}");
+        assert!(err.message.contains("other cloths"), "{err}");
+        // Posing itself refuses before stepping (a step of this sheet takes seconds in a debug build).
+        let mut one = one;
+        let err = one.cloths[0].pose(at(fits + 1), Path::new("t.scn")).unwrap_err().to_string();
+        assert!(err.starts_with("t.scn:1: cloth: time"), "{err}");
+    }
+
+    #[test]
+    fn a_static_solve_counts_as_ten_steps_whatever_the_time() {
+        let scene = parse("\"resolution\" \"9 9\"\n\"pins\" \"z<=-0.5\"\n\"integrator\" \"static\"\n").unwrap();
+        let cloth = &scene.cloths[0];
+        assert_eq!((cloth.steps_to(1e6), cloth.pose_work(1e6)), (1, STATIC_STEPS * 81 * 81));
+        assert!(scene.check_pose(1e6).is_ok());
+    }
+
+    #[test]
+    fn a_cloth_mesh_with_too_many_nodes_is_refused_at_its_block() {
+        // A 320 × 320 grid of nodes from a mesh file: more nodes than a scene
+        // may simulate, refused before its solver is built.
+        let dir = tempfile_dir();
+        let n = 320u32;
+        let mut obj = String::new();
+        for j in 0..n {
+            for i in 0..n {
+                obj.push_str(&format!("v {} {} 0\n", i as f64 / 100.0, j as f64 / 100.0));
+            }
+        }
+        for j in 0..n - 1 {
+            for i in 0..n - 1 {
+                let a = j * n + i + 1;
+                obj.push_str(&format!("f {a} {} {}\nf {a} {} {}\n", a + 1, a + n + 1, a + n + 1, a + n));
+            }
+        }
+        std::fs::write(dir.join("big.obj"), obj).unwrap();
+        let scene = dir.join("t.scn");
+        std::fs::write(&scene, "// big\n{\n\"classname\" \"cloth\"\n\"mesh\" \"big.obj\"\n}\n").unwrap();
+        let err = super::super::load_scene(&scene).unwrap_err();
+        let _ = std::fs::remove_dir_all(&dir);
+        assert_eq!(err.line, Some(2), "{err}");
+        assert!(err.message.contains(&format!("would have {} nodes, more than the", n * n)), "{err}");
+    }
+
+    /// A fresh folder under the system's temporary folder.
+    fn tempfile_dir() -> std::path::PathBuf {
+        let dir = std::env::temp_dir().join(format!(
+            "glint-scn-cloth-{}-{:?}",
+            std::process::id(),
+            std::thread::current().id()
+        ));
+        std::fs::create_dir_all(&dir).unwrap();
+        dir
+    }
+
+    #[test]
     fn bad_cloth_blocks_say_where_and_what() {
         for (body, line, message) in [
-            ("\"resolution\" \"1 5\"\n", 3, "expected 2 whole numbers in 2..=257"),
+            ("\"resolution\" \"1 5\"\n", 3, "expected 2 whole numbers in 2..=129"),
             ("\"resolution\" \"5\"\n", 3, "expected 2 whole numbers"),
             ("\"size\" \"0 1\"\n", 1, "\"size\" must be two sizes above 0"),
             ("\"pins\" \"w<3\"\n", 3, "\"pins\""),

@@ -4,6 +4,7 @@
 use super::scn_syntax::{Block, Pair};
 use super::{Diagnostic, ShapeKind};
 use glam::Vec3;
+use std::collections::HashMap;
 use std::path::Path;
 
 /// The pairs of one block, looked up by key; reports keys never asked for.
@@ -135,9 +136,19 @@ impl<'b> Fields<'b> {
 
     /// Warnings for keys this class does not know, and for keys given twice.
     pub(crate) fn leftovers(&self) -> Vec<Diagnostic> {
+        // Whether a later pair has the same key: by comparing with every later
+        // pair in a short block, through a map of each key's last pair in a long
+        // one, so that a block of N pairs is checked in linear time.
+        let pairs = &self.block.pairs;
+        let last: Option<HashMap<&str, usize>> =
+            (pairs.len() > 32).then(|| pairs.iter().enumerate().map(|(i, p)| (p.key.as_str(), i)).collect());
+        let repeated = |i: usize, key: &str| match &last {
+            Some(last) => last.get(key).is_some_and(|&j| j > i),
+            None => pairs[i + 1..].iter().any(|p| p.key == key),
+        };
         let mut out = Vec::new();
-        for (i, pair) in self.block.pairs.iter().enumerate() {
-            if self.block.pairs[i + 1..].iter().any(|p| p.key == pair.key) {
+        for (i, pair) in pairs.iter().enumerate() {
+            if repeated(i, &pair.key) {
                 out.push(Diagnostic::at(
                     self.path,
                     pair.line,

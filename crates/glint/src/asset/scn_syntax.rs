@@ -90,6 +90,50 @@ fn flush_pair(
     }
 }
 
+/// The text of a `.scn` file from its bytes. A scene is UTF-8 (a UTF-8 byte-order
+/// mark is skipped); UTF-16 or UTF-32 (a byte-order mark, or the NUL bytes ASCII
+/// text has in them) is refused at line 1, and any other invalid UTF-8 or NUL
+/// byte at its line and column, with its byte offset. No byte of the file is
+/// quoted: it may not be a scene at all.
+pub(crate) fn decode_scene_text(path: &Path, bytes: &[u8]) -> Result<String, Diagnostic> {
+    let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
+    if let Some(encoding) = wide_encoding(bytes) {
+        let message = format!("expected UTF-8 text, found {encoding}: save the scene as UTF-8");
+        return Err(Diagnostic::at(path, 1, message));
+    }
+    let bad = |at: usize, what: &str| {
+        let before = &bytes[..at];
+        let line = before.iter().filter(|&&b| b == b'\n').count() + 1;
+        let line_start = before.iter().rposition(|&b| b == b'\n').map_or(0, |i| i + 1);
+        // Column in characters: everything before `at` on the line is valid UTF-8.
+        let column = String::from_utf8_lossy(&before[line_start..]).chars().count() + 1;
+        Diagnostic::at(path, line, format!("{what} at column {column} (byte {at} of the file): expected UTF-8 text"))
+    };
+    let text = match std::str::from_utf8(bytes) {
+        Ok(text) => text,
+        Err(e) => return Err(bad(e.valid_up_to(), "invalid UTF-8")),
+    };
+    if let Some(at) = text.bytes().position(|b| b == 0) {
+        return Err(bad(at, "a NUL byte"));
+    }
+    Ok(text.to_owned())
+}
+
+/// The wide Unicode encoding `bytes` look like: a UTF-16 or UTF-32 byte-order
+/// mark, or (with none) NUL bytes in at least a quarter of the first 256
+/// bytes, as ASCII text in UTF-16 has every other byte NUL.
+fn wide_encoding(bytes: &[u8]) -> Option<&'static str> {
+    if bytes.starts_with(&[0xFF, 0xFE, 0, 0]) || bytes.starts_with(&[0, 0, 0xFE, 0xFF]) {
+        return Some("UTF-32");
+    }
+    if bytes.starts_with(&[0xFF, 0xFE]) || bytes.starts_with(&[0xFE, 0xFF]) {
+        return Some("UTF-16");
+    }
+    let head = &bytes[..bytes.len().min(256)];
+    let nuls = head.iter().filter(|&&b| b == 0).count();
+    (head.len() >= 2 && nuls * 4 >= head.len()).then_some("UTF-16 (NUL bytes between the characters)")
+}
+
 /// Parse the text of a `.scn` file into blocks. `path` is only used in messages.
 ///
 /// Errors: unterminated quote or block, a `}` with no block open, a pair outside a
@@ -166,6 +210,62 @@ mod tests {
             assert_eq!(err.line, Some(line), "{text:?}: {err}");
             assert!(err.message.contains(want), "{text:?}: {err}");
         }
+    }
+
+    fn decode(bytes: &[u8]) -> Result<String, Diagnostic> {
+        decode_scene_text(Path::new("t.scn"), bytes)
+    }
+
+    fn utf16(text: &str, big_endian: bool, bom: bool) -> Vec<u8> {
+        let units = bom.then_some(0xFEFF).into_iter().chain(text.encode_utf16());
+        units.flat_map(|u| if big_endian { u.to_be_bytes() } else { u.to_le_bytes() }).collect()
+    }
+
+    #[test]
+    fn utf8_text_decodes_and_its_byte_order_mark_is_skipped() {
+        let text = "{\n\"classname\" \"material\"\n\"name\" \"žluť\"\n}\n";
+        assert_eq!(decode(text.as_bytes()).unwrap(), text);
+        let with_bom = [&b"\xEF\xBB\xBF"[..], text.as_bytes()].concat();
+        assert_eq!(decode(&with_bom).unwrap(), text);
+        assert_eq!(decode(b"").unwrap(), "");
+    }
+
+    #[test]
+    fn utf16_and_utf32_are_refused_at_line_1() {
+        let text = "// a scene\n{\n\"classname\" \"world\"\n}\n";
+        for (big_endian, bom) in [(false, true), (true, true), (false, false), (true, false)] {
+            let err = decode(&utf16(text, big_endian, bom)).unwrap_err();
+            assert_eq!(err.line, Some(1), "{err}");
+            assert!(err.message.contains("expected UTF-8 text, found UTF-16"), "{err}");
+        }
+        let utf32: Vec<u8> =
+            std::iter::once('\u{feff}').chain(text.chars()).flat_map(|c| (c as u32).to_le_bytes()).collect();
+        let err = decode(&utf32).unwrap_err();
+        assert!(err.message.contains("found UTF-32"), "{err}");
+    }
+
+    #[test]
+    fn invalid_utf8_names_the_line_column_and_byte() {
+        // "é" in Latin-1 (0xE9) on line 3, after `"name" "caf`.
+        let mut bytes = b"{\n\"classname\" \"material\"\n\"name\" \"caf".to_vec();
+        let at = bytes.len();
+        bytes.extend_from_slice(b"\xE9\"\n}\n");
+        let err = decode(&bytes).unwrap_err();
+        assert_eq!(err.line, Some(3), "{err}");
+        assert!(err.message.contains("invalid UTF-8 at column 12"), "{err}");
+        assert!(err.message.contains(&format!("byte {at} of the file")), "{err}");
+        // Columns count characters, not bytes; a truncated sequence at the end is invalid too.
+        let err = decode(&["\"ž\" ".as_bytes(), b"\xC5"].concat()).unwrap_err();
+        assert_eq!((err.line, err.message.contains("column 5")), (Some(1), true), "{err}");
+        let err = decode(b"{\n}\n\xC5").unwrap_err();
+        assert_eq!(err.line, Some(3), "{err}");
+    }
+
+    #[test]
+    fn a_stray_nul_byte_is_an_error_at_its_line() {
+        let err = decode(b"{\n\"classname\" \"world\"\n\"ambient\" \"0\x00\"\n}\n").unwrap_err();
+        assert_eq!(err.line, Some(3), "{err}");
+        assert!(err.message.contains("a NUL byte at column 13"), "{err}");
     }
 
     #[test]

@@ -25,7 +25,7 @@ use super::energy::{
     Hessian,
 };
 use super::pins::PinMotion;
-use super::system::SparseSystem;
+use super::system::{SparseSystem, SystemError, BYTES_PER_PATTERN_ENTRY, MAX_SYSTEM_BYTES};
 use super::{ClothMesh, ClothMeshError, Topology};
 use glam::DVec3;
 use rayon::prelude::*;
@@ -163,6 +163,18 @@ impl Cloth {
                 })
             })
             .collect();
+        // Refuse a system too large for memory before allocating its pattern
+        // (a 1025 × 1025 sheet's alone would be 3.5 GB).
+        let free_in = |nodes: &[u32]| 3 * nodes.iter().filter(|&&v| dof[v as usize].is_some()).count() as u64;
+        let entries = (topology.edges.iter().map(|e| free_in(e)))
+            .chain(topology.hinges.iter().map(|h| free_in(h)))
+            .map(|k| k * (k + 1) / 2)
+            .sum::<u64>()
+            + 2 * free_dofs as u64;
+        let estimate = entries.saturating_mul(BYTES_PER_PATTERN_ENTRY);
+        if estimate > MAX_SYSTEM_BYTES {
+            return Err(ClothMeshError::TooLarge { nodes: n, bytes: estimate, max: MAX_SYSTEM_BYTES });
+        }
         // The pattern: each element's entries, then each free node's own block.
         let (mut pattern, mut element_slots) = (Vec::new(), Vec::new());
         let hinges = topology.hinges.iter().map(|h| &h[..]);
@@ -179,7 +191,10 @@ impl Cloth {
         for first in (0..free_dofs).step_by(3) {
             pattern.extend(NODE_BLOCK.iter().map(|(r, c)| (first + r, first + c)));
         }
-        let system = SparseSystem::new(free_dofs, &pattern).map_err(|_| ClothMeshError::TooLarge(n))?;
+        let system = SparseSystem::new(free_dofs, &pattern).map_err(|e| match e {
+            SystemError::TooLarge(bytes) => ClothMeshError::TooLarge { nodes: n, bytes, max: MAX_SYSTEM_BYTES },
+            SystemError::Failed => ClothMeshError::TooLarge { nodes: n, bytes: estimate, max: MAX_SYSTEM_BYTES },
+        })?;
         Ok(Self {
             positions: mesh.nodes.clone(),
             velocities: vec![DVec3::ZERO; n],
@@ -605,6 +620,24 @@ fn element_entries<'a>(
 mod tests {
     use super::*;
     use rand::{Rng, SeedableRng};
+
+    #[test]
+    fn a_system_too_large_for_memory_is_refused_before_it_is_built() {
+        let params = ClothParams { thickness: 1e-3, young: 1e7, poisson: 0.3, density: 200.0, gravity: DVec3::ZERO };
+        // 1025 × 1025 nodes: about 22 GB of pattern and factor, refused from the counts.
+        let mesh = ClothMesh::sheet(1.0, 1.0, 1025, 1025);
+        let nodes = mesh.nodes.len();
+        match Cloth::new(mesh, params, &[]) {
+            Err(ClothMeshError::TooLarge { nodes: n, bytes, max }) => {
+                assert_eq!((n, max), (nodes, MAX_SYSTEM_BYTES));
+                assert!(bytes > max, "{bytes}");
+            }
+            Err(e) => panic!("{e}"),
+            Ok(_) => panic!("a 1025 × 1025 cloth was built"),
+        }
+        let small = ClothMesh::sheet(1.0, 1.0, 9, 9);
+        assert!(Cloth::new(small, params, &[]).is_ok());
+    }
 
     #[test]
     fn the_assembled_jacobian_is_the_residuals_derivative() {

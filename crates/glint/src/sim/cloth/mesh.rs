@@ -2,7 +2,7 @@
 //! the plain-text `*Nodes` / `*Triangles` format of published DEP benchmarks;
 //! and its topology: unique edges and the hinges of interior edges.
 
-use crate::asset::{read_capped, Diagnostic};
+use crate::asset::{read_file, Diagnostic, MAX_MODEL_BYTES};
 use glam::DVec3;
 use std::collections::HashMap;
 use std::path::Path;
@@ -48,9 +48,21 @@ pub enum ClothMeshError {
     /// No triangles at all.
     #[error("the mesh has no triangles")]
     Empty,
-    /// The sparse system of this many nodes does not fit in memory.
-    #[error("a cloth of {0} nodes is too large: its linear system does not fit in memory")]
-    TooLarge(usize),
+    /// The cloth's sparse linear system would take more memory than glint allows
+    /// (see `MAX_SYSTEM_BYTES`), checked before it is allocated.
+    #[error(
+        "a cloth of {nodes} nodes is too large: its linear system would take about {} MiB, more than the {} MiB glint allows",
+        bytes.div_ceil(1 << 20),
+        max >> 20
+    )]
+    TooLarge {
+        /// Nodes of the mesh.
+        nodes: usize,
+        /// Estimated bytes of its system.
+        bytes: u64,
+        /// The limit.
+        max: u64,
+    },
     /// A position is NaN or infinite.
     #[error("node {0} is not a finite position")]
     NotFinite(usize),
@@ -94,7 +106,7 @@ impl ClothMesh {
     /// Read a mesh: `.obj` through tobj (positions and faces, triangulated; other
     /// data ignored), anything else as the `*Nodes` / `*Triangles` text format.
     pub fn load(path: &Path) -> Result<Self, Diagnostic> {
-        let bytes = read_capped(path)?;
+        let bytes = read_file(path, MAX_MODEL_BYTES)?;
         let mesh = if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("obj")) {
             Self::parse_obj(path, &bytes)?
         } else {

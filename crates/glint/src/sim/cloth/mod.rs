@@ -14,3 +14,4 @@ mod dynamics;
 mod system;
 
 pub use dynamics::{Cloth, ClothParams, Integrator, StepError, StepStats, MAX_HALVINGS};
+pub use system::MAX_SYSTEM_BYTES;

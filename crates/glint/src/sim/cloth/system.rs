@@ -22,6 +22,33 @@ const FACTOR_PAR: faer::Par = faer::Par::Seq;
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct SolveFailed;
 
+/// Most bytes one cloth's linear system may hold: its pattern and the numeric
+/// Cholesky factor (estimated from the pattern before either is allocated), or
+/// an LU factor. Chosen from measurements on the 23 GiB, 2-core reference
+/// machine (see `docs/limits.md`): a 257 × 257 sheet's system takes about
+/// 0.3 GiB, while a 1025 × 1025 sheet would need over 8 GiB.
+pub const MAX_SYSTEM_BYTES: u64 = 2 << 30;
+
+/// Bytes per pattern entry while a system is built: the entry itself (16), its
+/// faer index pair (16) and the sort faer does on them (16), its value (8)
+/// and slot (8), and the element's local index (2), rounded up.
+pub const BYTES_PER_PATTERN_ENTRY: u64 = 72;
+
+/// An LU factor's size over the Cholesky factor's, for the memory check before
+/// an LU factorisation: partial pivoting fills in far more than Cholesky (a
+/// 257 × 257 static sheet's LU reached 5.25 GB, about 16 times its Cholesky
+/// factor).
+const LU_OVER_CHOLESKY: u64 = 16;
+
+/// Why [`SparseSystem::new`] could not build a system.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SystemError {
+    /// The Cholesky factor would take this many bytes, more than [`MAX_SYSTEM_BYTES`].
+    TooLarge(u64),
+    /// faer could not build the pattern or its symbolic factorisation.
+    Failed,
+}
+
 /// The factor the last [`SparseSystem::factorize`] produced.
 enum Factor {
     None,
@@ -51,27 +78,36 @@ pub struct SparseSystem {
 impl SparseSystem {
     /// A system whose entries are `pattern`'s (row, column) pairs, in that
     /// order, each with row ≥ column: the matrix is their symmetric extension.
-    /// Fails when the symbolic factorisation does not fit in memory.
-    pub fn new(n: usize, pattern: &[(usize, usize)]) -> Result<Self, SolveFailed> {
+    /// Fails when the symbolic factorisation does not fit in memory, or when
+    /// the pattern and numeric factor together would take more than
+    /// [`MAX_SYSTEM_BYTES`] (checked before the factor is allocated).
+    pub fn new(n: usize, pattern: &[(usize, usize)]) -> Result<Self, SystemError> {
         debug_assert!(pattern.iter().all(|(r, c)| r >= c), "lower triangle only");
         let pairs: Vec<Pair<usize, usize>> = pattern.iter().map(|&(row, col)| Pair { row, col }).collect();
-        let (symbolic, _) = SymbolicSparseColMat::try_new_from_indices(n, n, &pairs).map_err(|_| SolveFailed)?;
+        let (symbolic, _) =
+            SymbolicSparseColMat::try_new_from_indices(n, n, &pairs).map_err(|_| SystemError::Failed)?;
+        drop(pairs);
         let slots = pattern
             .iter()
             .map(|&(row, col)| {
                 let rows = symbolic.row_idx_of_col_raw(col);
-                rows.binary_search(&row).map(|i| symbolic.col_ptr()[col] + i).map_err(|_| SolveFailed)
+                rows.binary_search(&row).map(|i| symbolic.col_ptr()[col] + i).map_err(|_| SystemError::Failed)
             })
             .collect::<Result<Vec<_>, _>>()?;
         let cholesky =
             factorize_symbolic_cholesky(symbolic.as_ref(), Side::Lower, SymmetricOrdering::Amd, Default::default())
-                .map_err(|_| SolveFailed)?;
+                .map_err(|_| SystemError::Failed)?;
         let par = FACTOR_PAR;
-        let scratch = MemBuffer::new(
-            cholesky
-                .factorize_numeric_llt_scratch::<f64>(par, Spec::default())
-                .or(cholesky.solve_in_place_scratch::<f64>(1, par)),
-        );
+        let scratch_layout = cholesky
+            .factorize_numeric_llt_scratch::<f64>(par, Spec::default())
+            .or(cholesky.solve_in_place_scratch::<f64>(1, par));
+        let bytes = (pattern.len() as u64 * BYTES_PER_PATTERN_ENTRY)
+            .saturating_add(8 * cholesky.len_val() as u64)
+            .saturating_add(scratch_layout.size_bytes() as u64);
+        if bytes > MAX_SYSTEM_BYTES {
+            return Err(SystemError::TooLarge(bytes));
+        }
+        let scratch = MemBuffer::new(scratch_layout);
         Ok(Self {
             n,
             cholesky_values: vec![0.0; cholesky.len_val()],
@@ -136,8 +172,13 @@ impl SparseSystem {
     }
 
     /// LU-factorise the (symmetric, perhaps indefinite) matrix.
+    /// Refused (as a failed factorisation) when its estimated size is over
+    /// [`MAX_SYSTEM_BYTES`], before anything is allocated.
     pub fn factorize_lu(&mut self) -> Result<(), SolveFailed> {
         self.factor = Factor::None;
+        if (8 * self.cholesky.len_val() as u64).saturating_mul(LU_OVER_CHOLESKY) > MAX_SYSTEM_BYTES {
+            return Err(SolveFailed);
+        }
         self.fill_matrix();
         let (n, lower) = (self.n, SparseColMatRef::new(self.symbolic.as_ref(), &self.matrix_values));
         // LU needs the whole matrix: the lower triangle plus its mirror.
