@@ -28,10 +28,16 @@ const FPS_RANGE: std::ops::RangeInclusive<f32> = 0.001..=1000.0;
 struct Cli {
     #[command(subcommand)]
     command: Command,
-    /// Let model files name assets outside their own folder (absolute paths,
-    /// `..`, file: URIs). Off by default, so a model cannot make glint read any file.
+    /// Let scenes and models name assets outside their asset roots (absolute
+    /// paths, `..`, symlinks out, file: URIs). Off by default, so a scene or model
+    /// from elsewhere cannot make glint read any file.
     #[arg(long, global = true)]
     allow_outside_assets: bool,
+    /// A folder scenes and models may read assets from, besides their own folder
+    /// (a scene's folder is widened to the current directory when the scene lies
+    /// inside it). Repeatable.
+    #[arg(long = "asset-root", value_name = "DIR", global = true)]
+    asset_roots: Vec<PathBuf>,
 }
 
 #[derive(Subcommand)]
@@ -408,7 +414,11 @@ fn main() -> ExitCode {
             return ExitCode::from(if e.use_stderr() || printed.is_err() { 1 } else { 0 });
         }
     };
-    let options = LoadOptions { allow_outside_assets: cli.allow_outside_assets };
+    let options = LoadOptions {
+        allow_outside_assets: cli.allow_outside_assets,
+        asset_roots: cli.asset_roots.clone(),
+        ..LoadOptions::default()
+    };
     let result = match &cli.command {
         Command::Render { scene, output, picture, stats, no_cull, time, frames, fps } => render(RenderArgs {
             scene,
@@ -425,7 +435,7 @@ fn main() -> ExitCode {
         }),
         Command::Check { scene } => check(scene, options),
         Command::Sim(SimCommand::Cloth(args)) => sim::cloth(args),
-        Command::View { scene, picture, frames, screenshot, at } => load(scene, options).and_then(|desc| {
+        Command::View { scene, picture, frames, screenshot, at } => load(scene, options.clone()).and_then(|desc| {
             let args = view::ViewArgs {
                 scene: scene.clone(),
                 size: picture.size,

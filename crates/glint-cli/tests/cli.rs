@@ -5,8 +5,15 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
+/// Run glint from the project root, as a user would (scenes there may then use
+/// `../assets`: the current directory is one of their asset roots).
 fn glint(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_glint")).args(args).env("NODEVICE_SELECT", "1").output().expect("run glint")
+    Command::new(env!("CARGO_BIN_EXE_glint"))
+        .args(args)
+        .current_dir(repo(""))
+        .env("NODEVICE_SELECT", "1")
+        .output()
+        .expect("run glint")
 }
 
 fn repo(path: &str) -> PathBuf {
@@ -397,6 +404,54 @@ fn outside_assets_are_read_only_when_allowed() {
     let allowed = glint(&["check", obj, "--allow-outside-assets"]);
     assert_eq!(allowed.status.code(), Some(0), "{}", stderr(&allowed));
     assert!(String::from_utf8_lossy(&allowed.stdout).contains("1 materials"), "{}", stderr(&allowed));
+}
+
+#[test]
+fn scenes_read_only_inside_their_asset_roots() {
+    // The scene's folder is its root (the tests run glint from the project root,
+    // which does not hold the temporary folder); --asset-root widens it.
+    let dir = tempfile::tempdir().expect("temp dir");
+    std::fs::create_dir(dir.path().join("scenes")).expect("mkdir");
+    std::fs::create_dir(dir.path().join("textures")).expect("mkdir");
+    let texture = dir.path().join("textures/t.png");
+    image::RgbaImage::from_pixel(2, 2, image::Rgba([9, 9, 9, 255])).save(&texture).expect("png");
+    let scene = dir.path().join("scenes/s.scn");
+    std::fs::write(&scene, "{\n\"classname\" \"material\"\n\"name\" \"m\"\n\"diffuse_map\" \"../textures/t.png\"\n}\n")
+        .expect("write");
+    let scene = scene.to_str().expect("path");
+    let refused = glint(&["check", scene]);
+    assert_eq!(refused.status.code(), Some(1), "{}", stderr(&refused));
+    let lines = error_lines(&refused);
+    assert_eq!(lines.len(), 1, "{lines:?}");
+    assert!(
+        lines[0].starts_with(&format!("error: {scene}:4: \"diffuse_map\": '../textures/t.png' points outside")),
+        "{lines:?}"
+    );
+    let root = dir.path().join("textures");
+    let widened = glint(&["check", scene, "--asset-root", root.to_str().expect("path")]);
+    assert_eq!(widened.status.code(), Some(0), "{}", stderr(&widened));
+    assert_eq!(glint(&["check", scene, "--allow-outside-assets"]).status.code(), Some(0));
+}
+
+#[test]
+fn check_refuses_shadow_maps_that_render_would_refuse() {
+    // Three suns at 8192² need 3 GiB of shadow maps: render panicked in wgpu while
+    // check said ok. Now both stop at the light that crosses the 1 GiB limit.
+    let dir = tempfile::tempdir().expect("temp dir");
+    let sun = "{\n\"classname\" \"light_directional\"\n\"direction\" \"0 -1 0\"\n\"shadows\" \"1\"\n\"shadow_map_size\" \"8192\"\n}\n";
+    let scene = dir.path().join("suns.scn");
+    std::fs::write(&scene, sun.repeat(3)).expect("write");
+    let scene = scene.to_str().expect("path");
+    for command in ["check", "render"] {
+        let out = glint(&[command, scene, "-o", "/dev/null"][..if command == "check" { 2 } else { 4 }]);
+        assert_eq!(out.status.code(), Some(1), "{command}: {}", stderr(&out));
+        let lines = error_lines(&out);
+        assert!(
+            lines.len() == 1
+                && lines[0].starts_with(&format!("error: {scene}:7: with this light the shadow maps need 2048 MiB")),
+            "{command}: {lines:?}"
+        );
+    }
 }
 
 /// The viewer under a virtual X display (`xvfb-run`): a few frames, a resize,

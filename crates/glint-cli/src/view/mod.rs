@@ -194,7 +194,7 @@ impl App {
             target,
             msaa,
             scene,
-            watch: SceneWatch::new(&self.args.scene, self.args.options),
+            watch: SceneWatch::new(&self.args.scene, self.args.options.clone()),
             last_watch: now,
             input: Input::default(),
             scene_time: 0.0,

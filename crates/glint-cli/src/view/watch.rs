@@ -33,7 +33,7 @@ impl SceneWatch {
             return None;
         }
         self.seen = Some(version);
-        Some(load_scene_with(&self.path, self.options))
+        Some(load_scene_with(&self.path, self.options.clone()))
     }
 }
 

@@ -20,6 +20,11 @@ mod scn_lights;
 mod scn_syntax;
 mod texture;
 
+pub(crate) use files::{read_file, AssetFolder};
+pub use files::{
+    MAX_BUFFER_BYTES, MAX_IMAGE_FILE_BYTES, MAX_MATERIAL_LIBRARY_BYTES, MAX_MODEL_BYTES, MAX_SCENE_BYTES,
+    MAX_SCENE_TOTAL_BYTES,
+};
 pub use model::{AddedModel, Model, ModelPart, Morph, Skin};
 pub use procedural::ShapeKind;
 pub use scn::{
@@ -27,11 +32,6 @@ pub use scn::{
     SceneDesc, TextureRef, MAX_INSTANCES,
 };
 pub use scn_cloth::{ClothDesc, ClothSetup, MAX_POSE_STEPS};
-pub use files::{
-    MAX_BUFFER_BYTES, MAX_IMAGE_FILE_BYTES, MAX_MATERIAL_LIBRARY_BYTES, MAX_MODEL_BYTES, MAX_SCENE_BYTES,
-    MAX_SCENE_TOTAL_BYTES,
-};
-pub(crate) use files::{read_file, AssetFolder};
 pub use texture::{load_texture, Texture, MAX_TEXTURE_MEMORY, MAX_TEXTURE_SIDE};
 
 use std::fmt;

@@ -9,8 +9,12 @@ use super::scn_cloth::{self, ClothDesc};
 use super::scn_fields::{numbers, Fields};
 use super::scn_lights;
 use super::scn_syntax::{decode_scene_text, parse_blocks, Block, Pair};
+use super::texture::read_texture;
 use super::texture::TextureCache;
-use super::{load_texture, Diagnostic, LoadOptions, Model, ShapeKind, Texture};
+use super::{
+    read_file, AssetFolder, Diagnostic, LoadOptions, Model, ShapeKind, Texture, MAX_SCENE_BYTES, MAX_SCENE_TOTAL_BYTES,
+};
+use crate::render::{ShadowLayout, MAX_CUBES, MAX_SHADOW_MAP_BYTES};
 use crate::scene::TextureId;
 use crate::scene::{
     AlphaMode, Background, BlendState, Camera, Compare, Cull, Entity, Environment, Fog, Light, Material, MaterialId,
@@ -22,9 +26,10 @@ use glam::{EulerRot, Mat4, Quat, Vec3, Vec4};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
-/// Most instances one scene file may place, over all blocks (10 million, 640 MB of
-/// transforms): counts above this are rejected rather than exhausting memory.
-pub const MAX_INSTANCES: u64 = 10_000_000;
+/// Most instances one scene file may place, over all blocks: 2 million 64-byte
+/// instance records fill 122 MiB, inside the 128 MiB storage binding every
+/// adapter offers (wgpu's default limit), so any adapter can draw them.
+pub const MAX_INSTANCES: u64 = 2_000_000;
 
 /// A texture a material uses: index into [`SceneDesc::textures`].
 pub type TextureRef = usize;
@@ -306,7 +311,7 @@ pub fn load_scene(path: &Path) -> Result<SceneDesc, Diagnostic> {
 
 /// [`load_scene`] with options for the models it names.
 pub fn load_scene_with(path: &Path, options: LoadOptions) -> Result<SceneDesc, Diagnostic> {
-    let bytes = std::fs::read(path).map_err(|e| Diagnostic::file(path, format!("cannot read scene: {e}")))?;
+    let bytes = read_file(path, MAX_SCENE_BYTES)?;
     let text = decode_scene_text(path, &bytes)?;
     parse_scene_with(path, &text, options)
 }
@@ -322,7 +327,7 @@ pub fn parse_scene_with(path: &Path, text: &str, options: LoadOptions) -> Result
     let blocks = parse_blocks(path, text)?;
     let mut loader = Loader {
         path,
-        dir: path.parent().unwrap_or(Path::new(".")).to_path_buf(),
+        assets: AssetFolder::for_scene(path, &options),
         scene: SceneDesc {
             path: path.to_path_buf(),
             environment: Environment::default(),
@@ -335,11 +340,13 @@ pub fn parse_scene_with(path: &Path, text: &str, options: LoadOptions) -> Result
             cloths: Vec::new(),
             warnings: Vec::new(),
         },
-        textures: TextureCache::default(),
+        textures: TextureCache::new(options.texture_memory),
         model_index: HashMap::new(),
         material_names: HashMap::new(),
         blobs: std::collections::HashSet::new(),
         blob_vertices: 0,
+        model_bytes: Vec::new(),
+        bytes_read: 0,
         options,
         placements: Vec::new(),
         cloths: Vec::new(),
@@ -361,7 +368,7 @@ struct Placement {
 
 struct Loader<'a> {
     path: &'a Path,
-    dir: PathBuf,
+    assets: AssetFolder,
     scene: SceneDesc,
     textures: TextureCache<PathBuf>,
     model_index: HashMap<PathBuf, usize>,
@@ -372,6 +379,10 @@ struct Loader<'a> {
     /// The distinct blob meshes named so far, (detail, seed), and their vertices.
     blobs: std::collections::HashSet<(u32, u32)>,
     blob_vertices: u64,
+    /// The file size of each of `scene.models` (an overridden copy counts as its
+    /// original), and their total against [`MAX_SCENE_TOTAL_BYTES`].
+    model_bytes: Vec<u64>,
+    bytes_read: u64,
     options: LoadOptions,
     placements: Vec<Placement>,
     /// Cloths with their material names, resolved in [`Loader::finish`].
@@ -546,7 +557,7 @@ impl Loader<'_> {
             "instances" => self.instances(&mut f)?,
             "cloth" => {
                 let nodes: u64 = self.cloths.iter().map(|(c, _)| c.setup.mesh.nodes.len() as u64).sum();
-                let mut cloth = scn_cloth::parse(&mut f, &self.dir, nodes)?;
+                let mut cloth = scn_cloth::parse(&mut f, &self.assets, nodes)?;
                 cloth.draw = Self::draw_options(&mut f)?;
                 let material = Self::material_ref(&mut f);
                 self.cloths.push((cloth, material));
@@ -635,6 +646,17 @@ impl Loader<'_> {
             ));
         }
         self.scene.lights.push(light);
+        // Checked here as the renderer will (it refuses such maps): `glint check`
+        // then says what `glint render` would.
+        let bytes = ShadowLayout::plan(&self.scene.lights, MAX_CUBES).bytes(1);
+        if bytes > MAX_SHADOW_MAP_BYTES {
+            let message = format!(
+                "with this light the shadow maps need {} MiB, more than the {} MiB limit: lower \"shadow_map_size\" (2D maps share the largest size, as do point lights' cubes)",
+                bytes >> 20,
+                MAX_SHADOW_MAP_BYTES >> 20
+            );
+            return Err(Diagnostic::at(self.path, f.block.line, message));
+        }
         Ok(())
     }
 
@@ -642,9 +664,12 @@ impl Loader<'_> {
         let Some(pair) = f.get(key) else {
             return Ok(None);
         };
-        let file = self.dir.join(pair.value.trim());
-        let fail = |e| Diagnostic::at(self.path, pair.line, format!("\"{key}\": {e}"));
-        self.textures.get_or_decode(file.clone(), srgb, || load_texture(&file, srgb).map_err(fail)).map(Some)
+        let fail = |e: Diagnostic| Diagnostic::at(self.path, pair.line, format!("\"{key}\": {e}"));
+        let file = self
+            .assets
+            .resolve(pair.value.trim(), self.path)
+            .map_err(|e| Diagnostic::at(self.path, pair.line, format!("\"{key}\": {}", e.message)))?;
+        self.textures.get_or_decode(file.clone(), srgb, |free| read_texture(&file, srgb, free).map_err(fail)).map(Some)
     }
 
     fn material(&mut self, f: &mut Fields) -> Result<(), Diagnostic> {
@@ -668,6 +693,18 @@ impl Loader<'_> {
         Ok(())
     }
 
+    /// Count a model file of `size` bytes (or a copy of one) against the scene's
+    /// [`MAX_SCENE_TOTAL_BYTES`], before it is loaded or copied.
+    fn charge_model_bytes(&mut self, size: u64) -> Result<(), String> {
+        self.bytes_read = self.bytes_read.saturating_add(size);
+        if self.bytes_read > MAX_SCENE_TOTAL_BYTES {
+            return Err(format!(
+                "the scene's models (and their overridden copies) add up to more than the {MAX_SCENE_TOTAL_BYTES}-byte limit"
+            ));
+        }
+        Ok(())
+    }
+
     /// The `mesh` key: a procedural shape, or a model file (`.obj`, `.gltf`, `.glb`, relative to the
     /// scene) whose materials `mtl.NAME.key` pairs may override for this block.
     fn mesh(&mut self, f: &mut Fields) -> Result<MeshRef, Diagnostic> {
@@ -680,13 +717,18 @@ impl Loader<'_> {
             }
             return Ok(MeshRef::Shape(kind));
         }
-        let file = self.dir.join(value);
+        let at = |m: String| Diagnostic::at(self.path, pair.line, format!("\"mesh\": {m}"));
+        let file = self.assets.resolve(value, self.path).map_err(|e| at(e.message))?;
         let index = match self.model_index.get(&file) {
             Some(&i) => i,
             None => {
-                let model = Model::load_with(&file, self.options)
-                    .map_err(|e| Diagnostic::at(self.path, pair.line, format!("\"mesh\": {e}")))?;
+                let size = std::fs::metadata(&file).map_or(0, |m| m.len());
+                self.charge_model_bytes(size).map_err(at)?;
+                let options = LoadOptions { texture_memory: self.textures.free(), ..self.options.clone() };
+                let model = Model::load_with(&file, options).map_err(|e| at(e.to_string()))?;
+                self.textures.charge(model.textures.iter().map(Texture::bytes).sum());
                 self.scene.warnings.extend(model.warnings.iter().cloned());
+                self.model_bytes.push(size);
                 self.scene.models.push(model);
                 self.model_index.insert(file, self.scene.models.len() - 1);
                 self.scene.models.len() - 1
@@ -719,6 +761,8 @@ impl Loader<'_> {
         if by_material.is_empty() {
             return Ok(index);
         }
+        let size = self.model_bytes[index];
+        self.charge_model_bytes(size).map_err(|m| Diagnostic::at(self.path, f.block.line, m))?;
         let mut model = self.scene.models[index].clone();
         let mut named: HashMap<String, usize> = HashMap::new();
         for (k, m) in model.materials.iter().enumerate() {
@@ -742,6 +786,7 @@ impl Loader<'_> {
             desc.material = material_fields(&mut fields, desc.material.clone())?;
             self.scene.warnings.extend(fields.leftovers());
         }
+        self.model_bytes.push(size);
         self.scene.models.push(model);
         Ok(self.scene.models.len() - 1)
     }
@@ -885,7 +930,7 @@ impl Loader<'_> {
 
     /// Resolve material names and gather placements into one task per (mesh, material, render order).
     fn finish(mut self) -> Result<SceneDesc, Diagnostic> {
-        self.scene.textures = std::mem::take(&mut self.textures).into_textures();
+        self.scene.textures = std::mem::replace(&mut self.textures, TextureCache::new(0)).into_textures();
         let mut tasks: HashMap<(MeshRef, Option<usize>, DrawOptions), usize> = HashMap::new();
         for placement in std::mem::take(&mut self.placements) {
             let material = self.material_index(placement.material)?;
@@ -1031,7 +1076,7 @@ mod tests {
             (
                 "{\n\"classname\" \"material\"\n\"name\" \"m\"\n\"diffuse_map\" \"nope.png\"\n}",
                 4,
-                "cannot open texture",
+                "nope.png: cannot read",
             ),
             (
                 "{\n\"classname\" \"material\"\n\"name\" \"m\"\n\"alpha_mode\" \"glass\"\n}",
@@ -1140,9 +1185,9 @@ mod tests {
     #[test]
     fn total_instances_are_capped_across_blocks() {
         let block =
-            "{\n\"classname\" \"instances\"\n\"mesh\" \"cube\"\n\"count\" \"6000000\"\n\"extent\" \"0 0 0\"\n}\n";
+            "{\n\"classname\" \"instances\"\n\"mesh\" \"cube\"\n\"count\" \"1500000\"\n\"extent\" \"0 0 0\"\n}\n";
         let err = parse(&format!("{block}{block}")).unwrap_err();
         assert_eq!(err.line, Some(10));
-        assert!(err.message.contains("12000000 instances"), "{err}");
+        assert!(err.message.contains("3000000 instances"), "{err}");
     }
 }

@@ -3,7 +3,7 @@
 //! requested time, deterministically (the same time always gives the same shape).
 
 use super::scn_fields::Fields;
-use super::Diagnostic;
+use super::{AssetFolder, Diagnostic};
 use crate::sim::cloth::{Cloth, ClothMesh, ClothParams, ClothView, Collider, Integrator, PinMotion, PinSelector};
 use glam::{DVec3, Vec3};
 use std::path::Path;
@@ -183,9 +183,9 @@ impl ClothDesc {
 /// loader reads as for entities); `dir` anchors a relative `mesh` path.
 /// `nodes_before` is how many cloth nodes the scene's earlier blocks have: the
 /// total is checked against [`MAX_SCENE_CLOTH_NODES`] before the solver is built.
-pub(crate) fn parse(f: &mut Fields, dir: &Path, nodes_before: u64) -> Result<ClothDesc, Diagnostic> {
+pub(crate) fn parse(f: &mut Fields, assets: &AssetFolder, nodes_before: u64) -> Result<ClothDesc, Diagnostic> {
     let at = |line: usize, m: String| Diagnostic::at(f.path, line, m);
-    let local = local_mesh(f, dir)?;
+    let local = local_mesh(f, assets)?;
     let nodes = nodes_before.saturating_add(local.nodes.len() as u64);
     if nodes > MAX_SCENE_CLOTH_NODES {
         let message = format!(
@@ -269,10 +269,11 @@ fn exact3(v: Vec3) -> DVec3 {
 /// The cloth's mesh in its own coordinates: a `mesh` file, or a `size` × `resolution`
 /// sheet in the XZ plane centred on the origin, facing +Y (x across its width,
 /// z across its depth; pin predicates read these coordinates).
-fn local_mesh(f: &mut Fields, dir: &Path) -> Result<ClothMesh, Diagnostic> {
+fn local_mesh(f: &mut Fields, assets: &AssetFolder) -> Result<ClothMesh, Diagnostic> {
     if let Some(pair) = f.get("mesh") {
-        return ClothMesh::load(&dir.join(pair.value.trim()))
-            .map_err(|e| Diagnostic::at(f.path, pair.line, format!("\"mesh\": {e}")));
+        let at = |e: Diagnostic| Diagnostic::at(f.path, pair.line, format!("\"mesh\": {}", e.message));
+        let file = assets.resolve(pair.value.trim(), f.path).map_err(at)?;
+        return ClothMesh::load(&file).map_err(|e| Diagnostic::at(f.path, pair.line, format!("\"mesh\": {e}")));
     }
     let [w, d] = f.numbers::<2>("size", "2 numbers (width depth)")?.unwrap_or([1.0, 1.0]);
     if w <= 0.0 || d <= 0.0 {
