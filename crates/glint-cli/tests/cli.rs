@@ -99,7 +99,7 @@ const MALFORMED: &[(&str, &str, usize, &str)] = &[
         "missing_texture",
         "{\n\"classname\" \"material\"\n\"name\" \"m\"\n\"diffuse_map\" \"no/such.png\"\n}\n",
         4,
-        "cannot open texture",
+        "no/such.png: cannot read: ",
     ),
     (
         "negative_count",
@@ -154,7 +154,7 @@ fn every_malformed_scene_is_one_error_line_with_file_and_line() {
 fn a_missing_scene_file_names_the_file() {
     let out = glint(&["check", "/no/such/scene.scn"]);
     assert_eq!(out.status.code(), Some(1));
-    assert!(error_lines(&out)[0].starts_with("error: /no/such/scene.scn: cannot read scene"), "{}", stderr(&out));
+    assert!(error_lines(&out)[0].starts_with("error: /no/such/scene.scn: cannot read: "), "{}", stderr(&out));
 }
 
 #[test]

@@ -1,4 +1,4 @@
-//! Limits on the GPU side: what the documented maxima let through must run or
+//! The GPU side of hostile input: what the documented maxima let through must run or
 //! fail with an error naming the limit, never a panic inside wgpu; and a scene
 //! check refuses what the renderer would refuse.
 
@@ -102,4 +102,16 @@ fn a_texture_wider_than_the_adapter_allows_is_an_error_not_a_panic() {
         matches!(&error, RenderError::TextureTooLarge { name, width, .. } if name == "wide" && *width == side + 1),
         "{error}"
     );
+}
+
+#[test]
+fn a_png_that_cannot_be_written_is_an_error() {
+    // image's own save dropped a failed final write of its buffer: /dev/full "succeeded".
+    let Some(gpu) = common::gpu() else { return };
+    if !Path::new("/dev/full").exists() {
+        return;
+    }
+    let target = OffscreenTarget::new(gpu, 8, 8, 1).expect("target");
+    let error = target.save_png(gpu, "/dev/full").expect_err("no space left on the device");
+    assert!(error.to_string().starts_with("/dev/full: cannot write PNG"), "{error}");
 }

@@ -166,11 +166,14 @@ impl OffscreenTarget {
             .ok_or_else(|| GpuError::Readback("pixel count does not match the size".into()))
     }
 
-    /// Read the frame back and write it to `path` as PNG.
+    /// Read the frame back and write it to `path` as PNG. A write that fails
+    /// (a full disk, `/dev/full`) is an error: the PNG is encoded in memory and
+    /// written whole, so no buffered bytes are dropped unchecked.
     pub fn save_png(&self, gpu: &Gpu, path: impl AsRef<std::path::Path>) -> Result<(), GpuError> {
         let path = path.as_ref();
-        self.read_rgba8(gpu)?
-            .save_with_format(path, image::ImageFormat::Png)
-            .map_err(|source| GpuError::Png { path: path.display().to_string(), source })
+        let fail = |source| GpuError::Png { path: path.display().to_string(), source };
+        let mut png = std::io::Cursor::new(Vec::new());
+        self.read_rgba8(gpu)?.write_to(&mut png, image::ImageFormat::Png).map_err(fail)?;
+        std::fs::write(path, png.into_inner()).map_err(|e| fail(image::ImageError::IoError(e)))
     }
 }

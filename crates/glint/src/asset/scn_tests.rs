@@ -1,0 +1,224 @@
+//! Tests of the `.scn` loader: every error class with its line, limits, and
+//! what a valid file becomes.
+
+use super::*;
+
+fn parse(text: &str) -> Result<SceneDesc, Diagnostic> {
+    parse_scene(Path::new("dir/t.scn"), text)
+}
+
+#[test]
+fn every_classname_parses() {
+    let scene = parse(
+        r#"
+{ "classname" "world"
+"sky_top" "0.2 0.4 0.8"
+"sky_bottom" "0.8 0.9 1"
+"ambient" "0.1 0.1 0.1" }
+{ "classname" "camera"
+"origin" "0 5 10"
+"target" "0 0 0"
+"fov" "50" }
+{ "classname" "light_directional"
+"direction" "-1 -1 -1" }
+{ "classname" "light_point"
+"origin" "0 2 0"
+"range" "5" }
+{ "classname" "material"
+"name" "red"
+"base_color" "1 0 0 0.5"
+"alpha_mode" "blend" }
+{ "classname" "entity"
+"mesh" "cube"
+"material" "red"
+"origin" "1 2 3"
+"scale" "2" }
+{ "classname" "entity"
+"mesh" "cube"
+"material" "red" }
+{ "classname" "instances"
+"mesh" "sphere"
+"count" "100"
+"layout" "random"
+"extent" "10 0 10"
+"seed" "7" }
+"#,
+    )
+    .unwrap();
+    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+    assert!(matches!(scene.environment.background, Background::Gradient { .. }));
+    assert_eq!(scene.cameras.len(), 1);
+    assert_eq!(scene.lights.len(), 2);
+    assert_eq!(scene.materials[0].material.alpha_mode, AlphaMode::Blend);
+    assert_eq!(scene.materials[0].material.base_color.w, 0.5);
+    // Two cube entities with one material gather into one task.
+    assert_eq!(scene.entities.len(), 2);
+    assert_eq!(scene.entities[0].transforms.len(), 2);
+    assert_eq!(scene.entities[0].transforms[0].w_axis.truncate(), Vec3::new(1.0, 2.0, 3.0));
+    assert_eq!(scene.entities[1].transforms.len(), 100);
+    assert_eq!(scene.instance_count(), 102);
+}
+
+#[test]
+fn angles_are_pitch_yaw_roll() {
+    // Yaw 90° turns −Z (forward) to −X; pitch 90° turns it up to +Y.
+    assert!((rotation(Vec3::new(0.0, 90.0, 0.0)) * Vec3::NEG_Z).abs_diff_eq(Vec3::NEG_X, 1e-6));
+    assert!((rotation(Vec3::new(90.0, 0.0, 0.0)) * Vec3::NEG_Z).abs_diff_eq(Vec3::Y, 1e-6));
+}
+
+#[test]
+fn material_states_shading_and_fog() {
+    let scene = parse(
+        "{ \"classname\" \"world\"\n\"fog_density\" \"0.1\" }\n{\n\"classname\" \"material\"\n\"name\" \"glow\"\n\"alpha_mode\" \"blend\"\n\"blend\" \"additive\"\n\"cull\" \"none\"\n\"stencil_compare\" \"equal\"\n\"stencil_ref\" \"3\"\n\"shading\" \"unlit\"\n\"fog\" \"0\"\n}\n{ \"classname\" \"material\"\n\"name\" \"plain\" }\n",
+    )
+    .unwrap();
+    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+    assert_eq!(scene.environment.fog.map(|f| f.density), Some(0.1));
+    let glow = &scene.materials[0].material;
+    let states = glow.states.expect("explicit states");
+    assert_eq!(states.blend, BlendState::Additive);
+    assert!(!states.depth.write, "derived from alpha_mode blend, not overridden");
+    assert_eq!((states.raster.cull, states.stencil.compare, states.stencil.reference), (Cull::None, Compare::Equal, 3));
+    assert_eq!((glow.shading, glow.fog), (ShadingModel::Unlit, false));
+    assert_eq!(scene.materials[1].material.states, None, "no state keys: derived at draw time");
+    let err = parse("{\n\"classname\" \"material\"\n\"name\" \"m\"\n\"stencil_ref\" \"300\"\n}\n").unwrap_err();
+    assert_eq!(err.line, Some(4));
+    assert!(err.message.contains("0..=255"), "{err}");
+}
+
+#[test]
+fn unknown_keys_warn_with_their_line() {
+    let scene = parse("{\n\"classname\" \"entity\"\n\"mesh\" \"cube\"\n\"colour\" \"1 0 0\"\n}\n").unwrap();
+    assert_eq!(scene.warnings.len(), 1);
+    assert_eq!(scene.warnings[0].line, Some(4));
+    assert!(scene.warnings[0].message.contains("unknown key \"colour\""));
+}
+
+#[test]
+fn semantic_errors_name_file_line_and_expectation() {
+    let cases = [
+        ("{\n\"classname\" \"spaceship\"\n}", 2, "unknown classname"),
+        ("{\n\"mesh\" \"cube\"\n}", 1, "no \"classname\""),
+        ("{\n\"classname\" \"entity\"\n}", 1, "missing the required key \"mesh\""),
+        ("{\n\"classname\" \"entity\"\n\"mesh\" \"cube\"\n\"origin\" \"1 x 3\"\n}", 4, "bad number 'x'"),
+        ("{\n\"classname\" \"entity\"\n\"mesh\" \"cube\"\n\"origin\" \"1 2\"\n}", 4, "found 2 numbers"),
+        ("{\n\"classname\" \"entity\"\n\"mesh\" \"blobby\"\n}", 3, "unknown mesh 'blobby'"),
+        ("{\n\"classname\" \"entity\"\n\"mesh\" \"cube\"\n\"material\" \"gold\"\n}", 4, "unknown material 'gold'"),
+        ("{\n\"classname\" \"instances\"\n\"mesh\" \"cube\"\n\"count\" \"-5\"\n}", 4, "expected 0 or more"),
+        (
+            "{\n\"classname\" \"instances\"\n\"mesh\" \"cube\"\n\"count\" \"99999999999\"\n}",
+            4,
+            "more than glint allows",
+        ),
+        ("{\n\"classname\" \"instances\"\n\"mesh\" \"cube\"\n\"count\" \"lots\"\n}", 4, "expected a whole number"),
+        ("{\n\"classname\" \"material\"\n\"name\" \"m\"\n\"diffuse_map\" \"nope.png\"\n}", 4, "nope.png: cannot read"),
+        (
+            "{\n\"classname\" \"material\"\n\"name\" \"m\"\n\"alpha_mode\" \"glass\"\n}",
+            4,
+            "expected one of: opaque, mask, blend",
+        ),
+        ("{\n\"classname\" \"material\"\n\"name\" \"m\"\n\"smoothness\" \"2\"\n}", 4, "expected a value in 0..=1"),
+        ("{\n\"classname\" \"camera\"\n\"near\" \"10\"\n\"far\" \"1\"\n}", 1, "must be greater than"),
+        ("{\n\"classname\" \"light_point\"\n\"origin\" \"0 0 inf\"\n}", 3, "not a finite number"),
+    ];
+    for (text, line, want) in cases {
+        let err = parse(text).unwrap_err();
+        assert_eq!(err.line, Some(line), "{text:?}: {err}");
+        assert!(err.message.contains(want), "{text:?}: {err}");
+        assert!(err.to_string().starts_with(&format!("dir/t.scn:{line}: ")), "{err}");
+    }
+}
+
+#[test]
+fn more_lights_than_a_frame_holds_is_an_error_at_the_extra_light() {
+    let light = "{\n\"classname\" \"light_point\"\n\"origin\" \"0 1 0\"\n}\n";
+    assert_eq!(parse(&light.repeat(MAX_LIGHTS)).unwrap().lights.len(), MAX_LIGHTS);
+    let err = parse(&light.repeat(MAX_LIGHTS + 1)).unwrap_err();
+    assert_eq!(err.line, Some(4 * MAX_LIGHTS + 1));
+    assert!(err.message.contains("more than 64 lights"), "{err}");
+}
+
+/// 10⁶ material blocks (and entities naming the last of them, and one block
+/// of 10⁵ repeated keys), timed and printed: a benchmark, not a timed test.
+/// `cargo test --release -p glint --lib scn::tests::load_benchmark -- --ignored --nocapture`
+#[test]
+#[ignore = "benchmark: run in release with --ignored --nocapture"]
+fn load_benchmark_materials_and_long_blocks() {
+    use std::fmt::Write;
+    for n in [100_000usize, 1_000_000] {
+        let mut text = String::with_capacity(n * 64);
+        for i in 0..n {
+            let _ = write!(text, "{{\n\"classname\" \"material\"\n\"name\" \"m{i}\"\n\"diffuse\" \"0.5\"\n}}\n");
+        }
+        for i in 0..1000 {
+            let _ =
+                write!(text, "{{\n\"classname\" \"entity\"\n\"mesh\" \"cube\"\n\"material\" \"m{}\"\n}}\n", n - 1 - i);
+        }
+        let start = std::time::Instant::now();
+        let scene = parse(&text).unwrap();
+        let elapsed = start.elapsed();
+        assert_eq!((scene.materials.len(), scene.entities.len()), (n, 1000));
+        eprintln!("{n} material blocks + 1000 entities ({} MB): {:.3} s", text.len() >> 20, elapsed.as_secs_f64());
+    }
+    let pairs = 100_000;
+    let text = format!("{{\n\"classname\" \"world\"\n{}}}\n", "\"ambient\" \"0.1 0.1 0.1\"\n".repeat(pairs));
+    let start = std::time::Instant::now();
+    let scene = parse(&text).unwrap();
+    let elapsed = start.elapsed();
+    assert_eq!(scene.warnings.len(), pairs - 1);
+    eprintln!("one block of {pairs} repeated keys: {:.3} s", elapsed.as_secs_f64());
+}
+
+#[test]
+fn names_resolve_through_the_map_and_repeats_are_reported() {
+    let mut text = String::new();
+    for i in 0..50 {
+        text.push_str(&format!(
+            "{{\n\"classname\" \"material\"\n\"name\" \"m{i}\"\n\"diffuse\" \"{}\"\n}}\n",
+            i as f32 / 100.0
+        ));
+    }
+    text.push_str("{\n\"classname\" \"entity\"\n\"mesh\" \"cube\"\n\"material\" \"m37\"\n}\n");
+    let scene = parse(&text).unwrap();
+    let task = scene.entities[0].material.expect("named");
+    assert_eq!((task, scene.materials[task].material.diffuse), (37, 0.37));
+    // The same name again is an error at its "name" line (after 255 lines of blocks).
+    let again = format!("{text}{{\n\"classname\" \"material\"\n\"name\" \"m12\"\n}}\n");
+    let err = parse(&again).unwrap_err();
+    assert_eq!(err.line, Some(258), "{err}");
+    assert!(err.message.contains("material 'm12' is defined twice"), "{err}");
+    // Repeated keys warn once per earlier copy, unknown ones once each.
+    let scene = parse("{\n\"classname\" \"world\"\n\"ambient\" \"1 1 1\"\n\"ambient\" \"0 0 0\"\n\"x\" \"1\"\n\"ambient\" \"0.5 0.5 0.5\"\n}\n").unwrap();
+    let lines: Vec<_> = scene.warnings.iter().map(|w| (w.line, w.message.contains("given again"))).collect();
+    assert_eq!(lines, [(Some(3), true), (Some(4), true), (Some(5), false)]);
+    assert_eq!(scene.environment.ambient, Vec3::splat(0.5));
+}
+
+#[test]
+fn distinct_blobs_are_capped_by_their_vertices_before_any_is_built() {
+    let blob = |detail: u32, seed: u32| {
+        format!(
+            "{{\n\"classname\" \"entity\"\n\"mesh\" \"blob\"\n\"detail\" \"{detail}\"\n\"mesh_seed\" \"{seed}\"\n}}\n"
+        )
+    };
+    let fits = (MAX_SCENE_BLOB_VERTICES / blob_vertex_count(1024)) as u32;
+    assert!(fits >= 1);
+    // The same blob a hundred times is one mesh.
+    assert!(parse(&blob(1024, 7).repeat(100)).is_ok());
+    let most: String = (0..fits).map(|seed| blob(1024, seed)).collect();
+    assert!(parse(&most).is_ok());
+    let err = parse(&format!("{most}{}", blob(1024, fits))).unwrap_err();
+    assert_eq!(err.line, Some(6 * fits as usize + 3), "{err}");
+    assert!(err.message.contains("distinct blobs"), "{err}");
+    // Small blobs fit by the thousand.
+    let small: String = (0..1000).map(|seed| blob(16, seed)).collect();
+    assert!(parse(&small).is_ok());
+}
+
+#[test]
+fn total_instances_are_capped_across_blocks() {
+    let block = "{\n\"classname\" \"instances\"\n\"mesh\" \"cube\"\n\"count\" \"1500000\"\n\"extent\" \"0 0 0\"\n}\n";
+    let err = parse(&format!("{block}{block}")).unwrap_err();
+    assert_eq!(err.line, Some(10));
+    assert!(err.message.contains("3000000 instances"), "{err}");
+}
