@@ -52,6 +52,7 @@ fn fifos_and_devices_are_refused_wherever_a_file_is_named() {
         (entity("pipe.obj"), "pipe.obj: not a regular file"),
         (entity("random.obj"), "random.obj: not a regular file"),
         (material("m", "pipe.png"), "pipe.png: not a regular file"),
+        ("{\n\"classname\" \"cloth\"\n\"mesh\" \"pipe.obj\"\n}\n".to_string(), "pipe.obj: not a regular file"),
     ];
     // Outside assets allowed, so that the link to a device is refused as a device
     // (the asset roots refuse it too: /dev is outside them).
@@ -60,7 +61,7 @@ fn fifos_and_devices_are_refused_wherever_a_file_is_named() {
         std::fs::write(dir.join("s.scn"), &text).expect("write");
         let error = load_scene_with(&dir.join("s.scn"), anywhere.clone()).expect_err(expected);
         let message = error.to_string();
-        let line = if text.contains("entity") { 3 } else { 4 }; // the key's line
+        let line = if text.contains("material") { 4 } else { 3 }; // the key's line
         assert!(message.starts_with(&format!("{}:{line}:", dir.join("s.scn").display())), "{message}");
         assert!(message.ends_with(expected), "{message}");
     }

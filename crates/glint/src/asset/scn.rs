@@ -648,7 +648,7 @@ impl Loader<'_> {
         self.scene.lights.push(light);
         // Checked here as the renderer will (it refuses such maps): `glint check`
         // then says what `glint render` would.
-        let bytes = ShadowLayout::plan(&self.scene.lights, MAX_CUBES).bytes(1);
+        let bytes = ShadowLayout::plan(&self.scene.lights, MAX_CUBES).bytes();
         if bytes > MAX_SHADOW_MAP_BYTES {
             let message = format!(
                 "with this light the shadow maps need {} MiB, more than the {} MiB limit: lower \"shadow_map_size\" (2D maps share the largest size, as do point lights' cubes)",

@@ -99,13 +99,11 @@ impl ShadowLayout {
         Self { size_2d, size_cube, layers, cubes, first }
     }
 
-    /// Bytes of depth the maps take (4 per texel), with at least `least` layers
-    /// and cubes as [`ShadowMaps::new`] allocates them; the 1-texel placeholders
-    /// kept for a kind no light uses count nothing.
-    pub fn bytes(&self, least: u32) -> u64 {
+    /// Bytes of depth the maps take (4 per texel); the 1-texel placeholders kept
+    /// for a kind no light uses count nothing.
+    pub fn bytes(&self) -> u64 {
         let texels = |size: u32| if size > 1 { u64::from(size) * u64::from(size) } else { 0 };
-        4 * (texels(self.size_2d) * u64::from(self.layers.max(least))
-            + texels(self.size_cube) * 6 * u64::from(self.cubes.max(least)))
+        4 * (texels(self.size_2d) * u64::from(self.layers) + texels(self.size_cube) * 6 * u64::from(self.cubes))
     }
 }
 
@@ -129,6 +127,14 @@ impl ShadowSupport {
         } else {
             1
         }
+    }
+
+    /// The 2D layers and cubes allocated for `layers` and `cubes` in use (see
+    /// [`ShadowMaps::new`]): at least one of each, two on GL, and one cube
+    /// without cube arrays.
+    pub(crate) fn allocated(self, layers: u32, cubes: u32) -> (u32, u32) {
+        let least = if self.gl { 2 } else { 1 };
+        (layers.max(least), if self.cube_arrays { cubes.max(least) } else { 1 })
     }
 
     /// How group 0 binds the point lights' maps.
@@ -200,9 +206,7 @@ impl ShadowMaps {
         size_cube: u32,
         cubes: u32,
     ) -> Self {
-        let least = if support.gl { 2 } else { 1 };
-        let layers = layers.max(least);
-        let cubes = if support.cube_arrays { cubes.max(least) } else { 1 };
+        let (layers, cubes) = support.allocated(layers, cubes);
         let maps = depth_texture(device, "shadow maps (2D array)", size_2d, layers);
         let cube_maps = depth_texture(device, "shadow maps (cube array)", size_cube, 6 * cubes);
         Self {
@@ -242,9 +246,8 @@ impl ShadowMaps {
         size_cube: u32,
         cubes: u32,
     ) -> Result<Self, RenderError> {
-        let least = if support.gl { 2 } else { 1 };
-        let cubes = if support.cube_arrays { cubes } else { 1 };
-        let bytes = ShadowLayout { size_2d, size_cube, layers, cubes, first: Vec::new() }.bytes(least);
+        let (layers, cubes) = support.allocated(layers, cubes);
+        let bytes = ShadowLayout { size_2d, size_cube, layers, cubes, first: Vec::new() }.bytes();
         if bytes > MAX_SHADOW_MAP_BYTES {
             let limit_name = "MAX_SHADOW_MAP_BYTES: lower the lights' shadow_map_size";
             return Err(RenderError::TooLarge {
