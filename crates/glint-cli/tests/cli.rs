@@ -263,6 +263,15 @@ fn bench_reports_both_modes_as_json() {
         }
         let gpu_ms = m.get("gpu_ms_median").expect("present, null where unsupported");
         assert!(gpu_ms.is_null() || gpu_ms.as_f64().expect("number") > 0.0, "{gpu_ms}");
+        // Each frame holds its GPU passes and its CPU work, so its median is never
+        // shorter than theirs.
+        let frame = m["frame_ms_median"].as_f64().expect("frame_ms_median");
+        for part in ["gpu_ms_median", "shadow_gpu_ms_median", "cpu_ms_median", "shadow_cpu_ms_median"] {
+            assert!(frame >= m[part].as_f64().unwrap_or(0.0), "{part}: {m}");
+        }
+        assert!(m["frame_ms_p95"].as_f64().expect("p95") >= frame, "{m}");
+        let fps = m["fps"].as_f64().expect("fps");
+        assert!((fps * frame - 1000.0).abs() < 1e-6 * 1000.0, "fps is 1000 / frame_ms_median: {m}");
         assert!(m["stats"].get("instances_culled").is_some() && m["stats"].get("pipelines_compiled").is_some());
     }
     // Ortho scene: plane + 9 cubes. Optimized: 2 draws; naive: one per instance.

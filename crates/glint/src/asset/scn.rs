@@ -620,10 +620,12 @@ impl Loader<'_> {
             Some((1, _)) => Camera::orthographic(f.number("size", 1e-4..=1e9)?.unwrap_or(10.0), near, far),
             _ => Camera::perspective(fov, near, far),
         };
-        let target = match (f.vec3("target")?, f.vec3("angles")?) {
-            (Some(t), _) => t,
-            (None, Some(a)) => origin + rotation(a) * Vec3::NEG_Z,
-            (None, None) => Vec3::ZERO,
+        let (target, up) = match (f.vec3("target")?, f.vec3("angles")?) {
+            (Some(t), _) => (t, None),
+            // The angles give the whole orientation, roll and the up of a camera
+            // looking straight down included.
+            (None, Some(a)) => (origin + rotation(a) * Vec3::NEG_Z, Some(rotation(a) * Vec3::Y)),
+            (None, None) => (Vec3::ZERO, None),
         };
         if target.distance_squared(origin) < 1e-12 {
             return Err(Diagnostic::at(
@@ -633,6 +635,7 @@ impl Loader<'_> {
             ));
         }
         camera = camera.looking_at(origin, target);
+        camera.up = up.unwrap_or(camera.up);
         self.scene.cameras.push(camera);
         Ok(())
     }
