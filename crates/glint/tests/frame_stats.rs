@@ -329,3 +329,20 @@ fn targets_reject_bad_sizes_and_sample_counts() {
     assert!(matches!(OffscreenTarget::new(gpu, 0, 10, 1), Err(glint::GpuError::TargetSize { .. })));
     assert!(matches!(OffscreenTarget::new(gpu, 10, 10, 3), Err(glint::GpuError::SampleCount(3))));
 }
+
+#[test]
+fn shadow_lookups_are_compiled_in_only_for_frames_that_draw_shadow_maps() {
+    // The SHADOWS variant: a frame without shadow maps shades without the lookups
+    // (untaken, they cost llvmpipe four times the rest of a simple frame).
+    let Some(gpu) = common::gpu() else { return };
+    let (mut r, cube, m) = renderer_with_cube(gpu);
+    let e = Entity::new(cube, m, Mat4::IDENTITY);
+    let shadowed: Vec<Light> = sun().into_iter().map(|l| l.with_shadows(glint::ShadowSettings::default())).collect();
+    assert!(frame(&mut r, gpu, &[&e], &sun()).pipelines_compiled >= 1);
+    assert_eq!(frame(&mut r, gpu, &[&e], &sun()).pipelines_compiled, 0);
+    let first_shadowed = frame(&mut r, gpu, &[&e], &shadowed);
+    assert_eq!(first_shadowed.shadow_views, 4);
+    assert_eq!(first_shadowed.pipelines_compiled, 2, "the SHADOWS forward variant and the depth pipeline");
+    assert_eq!(frame(&mut r, gpu, &[&e], &shadowed).pipelines_compiled, 0);
+    assert_eq!(frame(&mut r, gpu, &[&e], &sun()).pipelines_compiled, 0, "both variants stay cached");
+}

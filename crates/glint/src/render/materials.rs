@@ -19,7 +19,9 @@ impl Renderer {
     ) -> Result<(), RenderError> {
         let slot = self.materials.get(id.0 as usize).ok_or(RenderError::UnknownMaterial(id))?;
         let fog = self.environment.fog.is_some();
-        let current = slot.gpu.as_ref().filter(|g| !slot.dirty && g.samples == samples && g.fog == fog);
+        let shadows = self.shadows_sampled;
+        let current =
+            slot.gpu.as_ref().filter(|g| !slot.dirty && g.samples == samples && g.fog == fog && g.shadows == shadows);
         if current.is_some_and(|g| g.pipelines[layout.index()].is_some()) {
             return Ok(());
         }
@@ -77,9 +79,11 @@ impl Renderer {
                 shadow_pipelines: [[None; 2]; VertexLayout::COUNT],
                 samples,
                 fog,
+                shadows,
             });
         }
-        let features = ShaderFeatures::for_material(&material, &self.environment);
+        let mut features = ShaderFeatures::for_material(&material, &self.environment);
+        features.set(ShaderFeatures::SHADOWS, shadows);
         let key = Pipelines::key(features, layout, material.render_states(), samples);
         let (pipeline, built) = self.pipelines.forward_id(&self.device, key)?;
         stats.pipelines_compiled += u32::from(built);

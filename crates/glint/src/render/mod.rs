@@ -153,6 +153,8 @@ struct MaterialGpuTwin {
     samples: u32,
     /// Whether the environment had fog when the pipelines were chosen.
     fog: bool,
+    /// Whether the frame sampled shadow maps when the pipelines were chosen.
+    shadows: bool,
 }
 
 /// The maps of a material in texture-set binding order: diffuse, normal,
@@ -246,6 +248,10 @@ pub struct Renderer {
     shadow_list: DrawList,
     /// What this frame's shadow pass drew (cleared by flush).
     shadow_frame: Option<shadow_pass::ShadowFrame>,
+    /// Whether this frame's forward pipelines look up shadow maps (the `SHADOWS`
+    /// variant): set by `shadow_pass` when a light casts shadows, and by `flush`
+    /// when that pass drew maps for its lights.
+    shadows_sampled: bool,
     store: InstanceStore,
     culling: bool,
     mode: FrameMode,
@@ -357,6 +363,7 @@ impl Renderer {
             shadow_block,
             shadow_list,
             shadow_frame: None,
+            shadows_sampled: false,
             store: InstanceStore::default(),
             culling: true,
             mode: FrameMode::Optimized,
@@ -565,6 +572,7 @@ impl Renderer {
             ..Default::default()
         };
         let t = Instant::now();
+        self.shadows_sampled = self.shadow_frame.as_ref().is_some_and(|f| f.lights == lights && f.views > 0);
         self.prepare(target.samples(), &mut stats)?;
         stats.cpu_ms.prepare = ms_since(t);
 

@@ -62,6 +62,8 @@ impl Renderer {
             return Ok(());
         }
         let mut prepared = FrameStats::default();
+        // The flush after this pass samples the maps it draws: choose its pipelines now.
+        self.shadows_sampled = lights.iter().any(|l| l.shadows.is_some());
         self.prepare(target.samples(), &mut prepared)?;
         let aspect = target.width() as f32 / target.height() as f32;
         let (views, first_view) = self.plan_shadow_views(camera, aspect, lights)?;

@@ -175,9 +175,11 @@ struct Incoming {
 fn incoming(i: u32, p: vec3<f32>, ng: vec3<f32>, receive: bool) -> Incoming {
     let light = scene.lights[i];
     var lit = 1.0;
+#ifdef SHADOWS
     if receive && light.params.y >= 0.0 {
         lit = shadow(light, p, ng);
     }
+#endif
     if light.position.w == 0.0 {
         return Incoming(-normalize(light.position.xyz), light.color.rgb * lit);
     }

@@ -28,6 +28,7 @@ bitflags::bitflags! {
     /// | 11 | `EMISSIVE_MAP` | multiply the emissive colour by the map |
     /// | 12 | `UV1` | read the mesh's second uv set for the maps the material names (set by the mesh) |
     /// | 13 | `SKINNED` | move vertices by the weighted sum of four joint matrices (set by the mesh) |
+    /// | 14 | `SHADOWS` | look up the shadow maps (set by the frame, only when it has drawn some: untaken, the lookups still cost llvmpipe four times the rest of a simple frame) |
     ///
     /// Bits 14–31 are free for more (shadow receiving comes with shadow maps).
     #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -60,6 +61,8 @@ bitflags::bitflags! {
         const UV1 = 1 << 12;
         /// `SKINNED`.
         const SKINNED = 1 << 13;
+        /// `SHADOWS`.
+        const SHADOWS = 1 << 14;
     }
 }
 
