@@ -66,10 +66,22 @@ pub fn render_desc(
     size: u32,
     culling: bool,
 ) -> (image::RgbaImage, FrameStats) {
+    render_sized(gpu, desc, (size, size), 4, culling)
+}
+
+/// Render one frame of a loaded scene from its first camera at `width`×`height`
+/// with `samples` MSAA samples.
+pub fn render_sized(
+    gpu: &Gpu,
+    desc: &glint::asset::SceneDesc,
+    (width, height): (u32, u32),
+    samples: u32,
+    culling: bool,
+) -> (image::RgbaImage, FrameStats) {
     let mut renderer = Renderer::new(gpu);
     renderer.set_culling(culling);
     let entities = desc.instantiate(&mut renderer);
-    let mut target = OffscreenTarget::new(gpu, size, size, 4).expect("target");
+    let mut target = OffscreenTarget::new(gpu, width, height, samples).expect("target");
     let stats = renderer.render(&entities, &desc.cameras[0], &desc.lights, &mut target).expect("frame");
     (target.read_rgba8(gpu).expect("readback"), stats)
 }
