@@ -185,6 +185,9 @@ impl Gpu {
         };
         let (device, queue) = pollster::block_on(adapter.request_device(&desc))
             .map_err(|source| GpuError::Device { adapter: info.name.clone(), source })?;
+        if info.device_type == wgpu::DeviceType::Cpu {
+            super::keep_freed_heap_memory();
+        }
         let anisotropy = if flags.contains(wgpu::DownlevelFlags::ANISOTROPIC_FILTERING) { 16 } else { 1 };
         log::info!(
             "glint: adapter '{}' ({:?}, {:?}); features {:?}",

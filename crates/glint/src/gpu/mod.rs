@@ -8,10 +8,12 @@
 mod blit;
 mod context;
 mod errors;
+mod heap;
 mod target;
 mod window;
 
 pub use context::{Gpu, GpuError, WindowHandles};
+pub use heap::keep_freed_heap_memory;
 pub use target::OffscreenTarget;
 pub use window::WindowSurface;
 
