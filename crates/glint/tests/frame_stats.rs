@@ -207,8 +207,8 @@ fn precompile_leaves_the_first_frame_nothing_to_compile() {
     let glass = r.add_material(Material { alpha_mode: AlphaMode::Blend, ..Material::default() });
     let a = Entity::new(cube, plain, Mat4::IDENTITY);
     let b = Entity::new(cube, glass, Mat4::IDENTITY);
-    assert_eq!(r.precompile(&[&a, &b], 1).expect("precompile"), 2, "two variants");
-    assert_eq!(r.precompile(&[&a, &b], 1).expect("precompile"), 0, "already built");
+    assert_eq!(r.precompile(&[&a, &b], &sun(), 1).expect("precompile"), 2, "two variants");
+    assert_eq!(r.precompile(&[&a, &b], &sun(), 1).expect("precompile"), 0, "already built");
     let stats = frame(&mut r, gpu, &[&a, &b], &sun());
     assert_eq!(stats.pipelines_compiled, 0);
     assert_eq!((stats.draws, stats.draw_calls), (2, 2), "two pipelines: two calls");

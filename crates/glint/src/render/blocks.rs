@@ -59,14 +59,16 @@ pub(crate) struct SceneGpu {
     sky_top: [f32; 4],              // 16
     sky_bottom: [f32; 4],           // 16
     fog: [f32; 4],                  // 16: rgb colour, w density
-    counts: [u32; 4],               // 16: light count, 3 reserved
+    counts: [u32; 4],               // 16: lights, directional lights, 2 reserved
     lights: [LightGpu; MAX_LIGHTS], // 64 × 64
 }
 const _: () = assert!(std::mem::size_of::<SceneGpu>() == 80 + 64 * MAX_LIGHTS);
 
 impl SceneGpu {
     /// Pack the environment and up to [`MAX_LIGHTS`] lights (the caller checks the
-    /// count), with each light's first shadow view where it has shadow maps.
+    /// count), with each light's first shadow view where it has shadow maps. The
+    /// directional lights come first, then the point and spot lights, each kind in
+    /// the order given (the forward shader's light loops, `LightCounts`).
     pub(crate) fn new(env: &Environment, lights: &[Light], shadows: &[Option<u32>]) -> Self {
         let (top, bottom) = match env.background {
             Background::Color(c) => (c, c),
@@ -80,9 +82,13 @@ impl SceneGpu {
             counts: [lights.len().min(MAX_LIGHTS) as u32, 0, 0, 0],
             lights: [LightGpu::default(); MAX_LIGHTS],
         };
-        for (k, (slot, light)) in block.lights.iter_mut().zip(lights).enumerate() {
+        let directional = |l: &Light| matches!(l.kind, LightKind::Directional { .. });
+        let ordered = (lights.iter().enumerate().filter(|(_, l)| directional(l)))
+            .chain(lights.iter().enumerate().filter(|(_, l)| !directional(l)));
+        for (slot, (k, light)) in block.lights.iter_mut().zip(ordered) {
             *slot = light.to_gpu(shadows.get(k).copied().flatten());
         }
+        block.counts[1] = lights.iter().filter(|l| directional(l)).count() as u32;
         block
     }
 }
@@ -237,5 +243,29 @@ impl<T: bytemuck::Pod + PartialEq> UniformBlock<T> {
         queue.write_buffer(&self.buffer, 0, bytemuck::bytes_of(&value));
         self.last = Some(value);
         std::mem::size_of::<T>() as u64
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::Vec3;
+
+    #[test]
+    fn the_scene_block_holds_directional_lights_first_with_their_own_shadow_views() {
+        let lamp = Light::point(Vec3::Y, Vec3::ONE, 1.0, 5.0);
+        let sun = Light::directional(Vec3::NEG_Y, Vec3::ONE, 2.0);
+        let shadowed = |l: Light| Light { shadows: Some(crate::scene::ShadowSettings::default()), ..l };
+        let lights = [shadowed(lamp), sun, shadowed(Light { intensity: 3.0, ..sun })];
+        let block = SceneGpu::new(&Environment::default(), &lights, &[Some(7), None, Some(2)]);
+        assert_eq!(block.counts[..2], [3, 2], "three lights, two directional");
+        // Directional ones in the order given (intensity 2, then 3), then the lamp.
+        assert_eq!([block.lights[0].color[0], block.lights[1].color[0]], [2.0, 3.0]);
+        assert_eq!(
+            [block.lights[0].position[3], block.lights[1].position[3], block.lights[2].position[3]],
+            [0.0, 0.0, 1.0]
+        );
+        // Each keeps the shadow view of its place in the caller's list.
+        assert_eq!([block.lights[0].params[1], block.lights[1].params[1], block.lights[2].params[1]], [-1.0, 2.0, 7.0]);
     }
 }

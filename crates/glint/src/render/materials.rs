@@ -19,9 +19,10 @@ impl Renderer {
     ) -> Result<(), RenderError> {
         let slot = self.materials.get(id.0 as usize).ok_or(RenderError::UnknownMaterial(id))?;
         let fog = self.environment.fog.is_some();
-        let shadows = self.shadows_sampled;
-        let current =
-            slot.gpu.as_ref().filter(|g| !slot.dirty && g.samples == samples && g.fog == fog && g.shadows == shadows);
+        let (shadows, lights) = (self.shadows_sampled, self.frame_lights);
+        let current = slot.gpu.as_ref().filter(|g| {
+            !slot.dirty && g.samples == samples && g.fog == fog && g.shadows == shadows && g.lights == lights
+        });
         if current.is_some_and(|g| g.pipelines[layout.index()].is_some()) {
             return Ok(());
         }
@@ -80,11 +81,12 @@ impl Renderer {
                 samples,
                 fog,
                 shadows,
+                lights,
             });
         }
         let mut features = ShaderFeatures::for_material(&material, &self.environment);
         features.set(ShaderFeatures::SHADOWS, shadows);
-        let key = Pipelines::key(features, layout, material.render_states(), samples);
+        let key = Pipelines::key(features, lights, layout, material.render_states(), samples);
         let (pipeline, built) = self.pipelines.forward_id(&self.device, key)?;
         stats.pipelines_compiled += u32::from(built);
         let twin = self.materials[id.0 as usize].gpu.as_mut().expect("made above");

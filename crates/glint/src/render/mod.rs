@@ -44,6 +44,7 @@ use crate::gpu::{Gpu, OffscreenTarget};
 use crate::scene::{
     Background, Camera, Entity, Environment, Light, Material, MaterialId, Mesh, ShapeId, TextureId, MAX_LIGHTS,
 };
+use crate::shader::LightCounts;
 use batch::Batch;
 use blocks::{SceneGpu, UniformBlock};
 use cull::{Containment, Frustum};
@@ -155,6 +156,8 @@ struct MaterialGpuTwin {
     fog: bool,
     /// Whether the frame sampled shadow maps when the pipelines were chosen.
     shadows: bool,
+    /// The frame's lights when the pipelines were chosen.
+    lights: LightCounts,
 }
 
 /// The maps of a material in texture-set binding order: diffuse, normal,
@@ -252,6 +255,9 @@ pub struct Renderer {
     /// variant): set by `shadow_pass` when a light casts shadows, and by `flush`
     /// when that pass drew maps for its lights.
     shadows_sampled: bool,
+    /// This frame's lights by kind (the light loops of its forward variants): set by
+    /// `shadow_pass` and `flush` from their lights.
+    frame_lights: LightCounts,
     store: InstanceStore,
     culling: bool,
     mode: FrameMode,
@@ -364,6 +370,7 @@ impl Renderer {
             shadow_list,
             shadow_frame: None,
             shadows_sampled: false,
+            frame_lights: LightCounts::default(),
             store: InstanceStore::default(),
             culling: true,
             mode: FrameMode::Optimized,
@@ -573,6 +580,7 @@ impl Renderer {
         };
         let t = Instant::now();
         self.shadows_sampled = self.shadow_frame.as_ref().is_some_and(|f| f.lights == lights && f.views > 0);
+        self.frame_lights = LightCounts::of(lights);
         self.prepare(target.samples(), &mut stats)?;
         stats.cpu_ms.prepare = ms_since(t);
 
@@ -616,11 +624,17 @@ impl Renderer {
         Ok(stats)
     }
 
-    /// Build, before the first frame, everything drawing `entities` into a target of
-    /// `samples` samples needs: mesh buffers, textures, material blocks and every
-    /// pipeline variant, so that the first frame compiles nothing. Returns the number
-    /// of pipelines compiled.
-    pub fn precompile(&mut self, entities: &[&Entity], samples: u32) -> Result<u32, RenderError> {
+    /// Build, before the first frame, everything drawing `entities` lit by `lights`
+    /// into a target of `samples` samples needs: mesh buffers, textures, material
+    /// blocks and every pipeline variant (with shadow lookups where a light casts
+    /// shadows), so that the first frame compiles nothing. Returns the number of
+    /// pipelines compiled.
+    pub fn precompile(&mut self, entities: &[&Entity], lights: &[Light], samples: u32) -> Result<u32, RenderError> {
+        if lights.len() > MAX_LIGHTS {
+            return Err(RenderError::TooManyLights(lights.len()));
+        }
+        self.shadows_sampled = lights.iter().any(|l| l.shadows.is_some());
+        self.frame_lights = LightCounts::of(lights);
         let mut stats = FrameStats::default();
         let uses: Vec<_> = entities.iter().map(|e| (e.shape, e.material)).collect();
         self.prepare_uses(&uses, samples, &mut stats)?;

@@ -2,14 +2,14 @@
 //! `render/mod.rs`), the shared pipeline layout, and the pipeline cache.
 //!
 //! A forward pipeline is identified by its [`PipelineKey`]: the shader variant
-//! (macro set), the vertex layout, the four render-state objects and the target
-//! formats. Shader modules are cached per macro set, pipelines per key; a key's
+//! (macro set and light counts), the vertex layout, the four render-state objects and the target
+//! formats. Shader modules are cached per variant, pipelines per key; a key's
 //! index in the cache is its id in sort keys.
 
 use super::shadow_maps::ShadowSupport;
 use crate::gpu::{sampler_entry, texture_entry, DriverErrors, COLOR_FORMAT, DEPTH_FORMAT};
 use crate::scene::{BlendState, Compare, Cull, Mesh, RenderStates, SkinVertex, StencilOp, Vertex};
-use crate::shader::{ShaderError, ShaderFeatures, ShaderLibrary};
+use crate::shader::{LightCounts, ShaderError, ShaderFeatures, ShaderLibrary};
 use std::borrow::Cow;
 use std::collections::HashMap;
 
@@ -117,6 +117,7 @@ pub(crate) enum PassKind {
 pub(crate) struct PipelineKey {
     pub pass: PassKind,
     pub features: ShaderFeatures,
+    pub lights: LightCounts,
     pub vertex_layout: VertexLayout,
     pub states: RenderStates,
     pub color_format: wgpu::TextureFormat,
@@ -134,7 +135,7 @@ pub(crate) struct Pipelines {
     shadow_layout: wgpu::PipelineLayout,
     sky_layout: wgpu::PipelineLayout,
     library: ShaderLibrary,
-    modules: HashMap<ShaderFeatures, wgpu::ShaderModule>,
+    modules: HashMap<(ShaderFeatures, LightCounts), wgpu::ShaderModule>,
     sky_module: Option<wgpu::ShaderModule>,
     /// Forward and shadow pipelines; a key's index is its id in sort keys.
     forward_cache: Vec<(PipelineKey, wgpu::RenderPipeline)>,
@@ -318,10 +319,11 @@ impl Pipelines {
     }
 
     /// The key of the forward pipeline drawing meshes of `vertex_layout` with a
-    /// material of these features and states on a glint target. The layout adds its
-    /// own feature bits (vertex colours, second uv set, skinning).
+    /// material of these features and states, lit by `lights`, on a glint target.
+    /// The layout adds its own feature bits (vertex colours, second uv set, skinning).
     pub(crate) fn key(
         mut features: ShaderFeatures,
+        lights: LightCounts,
         vertex_layout: VertexLayout,
         states: RenderStates,
         samples: u32,
@@ -332,6 +334,7 @@ impl Pipelines {
         PipelineKey {
             pass: PassKind::Forward,
             features,
+            lights,
             vertex_layout,
             states,
             color_format: COLOR_FORMAT,
@@ -365,6 +368,8 @@ impl Pipelines {
         PipelineKey {
             pass,
             features,
+            // Shadow maps are drawn unlit.
+            lights: LightCounts::default(),
             vertex_layout: forward.vertex_layout,
             states,
             color_format: COLOR_FORMAT,
@@ -379,15 +384,16 @@ impl Pipelines {
         if let Some(&id) = self.forward_index.get(&key) {
             return Ok((id, false));
         }
-        let label = format!("renderer: forward shader {:?}", key.features);
+        let label = format!("renderer: forward shader {:?} {:?}", key.features, key.lights);
         let scope = DriverErrors::watch(device);
-        if !self.modules.contains_key(&key.features) {
-            let module = self.library.forward(key.features)?;
-            self.modules.insert(key.features, shader_module(device, &label, module));
+        let variant = (key.features, key.lights);
+        if !self.modules.contains_key(&variant) {
+            let module = self.library.forward(key.features, key.lights)?;
+            self.modules.insert(variant, shader_module(device, &label, module));
         }
         let pipeline = self.build_forward(device, key);
         if let Some(error) = scope.finish() {
-            self.modules.remove(&key.features);
+            self.modules.remove(&variant);
             return Err(ShaderError::refused(&label, &error));
         }
         let id = self.forward_cache.len() as u16;
@@ -471,7 +477,7 @@ impl Pipelines {
                 })
             })
             .collect();
-        let module = &self.modules[&key.features];
+        let module = &self.modules[&(key.features, key.lights)];
         let label =
             format!("renderer: {:?} pipeline {:?} {:?} {}x", key.pass, key.features, key.states.blend, key.samples);
         let targets = [Some(wgpu::ColorTargetState {

@@ -21,7 +21,7 @@ struct SceneBlock {
     sky_bottom: vec4<f32>,
     // rgb: fog colour; w: density (0: no fog).
     fog: vec4<f32>,
-    // x: number of lights; y, z, w: reserved.
+    // x: number of lights; y: directional lights (first in `lights`); z, w: reserved.
     counts: vec4<u32>,
     lights: array<Light, 64>,
 }

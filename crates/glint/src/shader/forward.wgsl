@@ -165,45 +165,57 @@ fn vs_main(v: VertexIn, @builtin(instance_index) draw_instance: u32) -> VertexOu
     return out;
 }
 
-// Direction to light `i` from `p`, and the light arriving there; `ng` is the
+// The lights this variant loops over (LightCounts, src/shader/mod.rs): the Scene
+// block holds the directional lights first, then the point and spot lights.
+// Counts fixed at compile time unroll the loops, so each light is read at a
+// constant index: a loop to a count read from the block cost llvmpipe about a
+// quarter of a simple frame (its lights were gathered lane by lane).
+const DIRECTIONAL_LIGHTS: u32 = #{DIRECTIONAL_LIGHTS}u;
+const LIGHTS: u32 = #{DIRECTIONAL_LIGHTS}u + #{POSITIONAL_LIGHTS}u;
+
+// Direction to a light from `p`, and the light arriving there; `ng` is the
 // geometric normal (facing the viewer), for the shadow lookup's normal offset.
 struct Incoming {
     l: vec3<f32>,
     radiance: vec3<f32>,
 }
 
-fn incoming(i: u32, p: vec3<f32>, ng: vec3<f32>, receive: bool) -> Incoming {
+// Directional light `i` (i < DIRECTIONAL_LIGHTS).
+fn directional(i: u32, p: vec3<f32>, ng: vec3<f32>, receive: bool) -> Incoming {
     let light = scene.lights[i];
     var lit = 1.0;
 #ifdef SHADOWS
     if receive && light.params.y >= 0.0 {
-        lit = shadow(light, p, ng);
+        lit = cascaded_shadow(u32(light.params.y), light, p, ng);
     }
 #endif
-    if light.position.w == 0.0 {
-        return Incoming(-normalize(light.position.xyz), light.color.rgb * lit);
-    }
+    return Incoming(-normalize(light.position.xyz), light.color.rgb * lit);
+}
+
+// Point or spot light `i` (DIRECTIONAL_LIGHTS <= i < LIGHTS).
+fn positional(i: u32, p: vec3<f32>, ng: vec3<f32>, receive: bool) -> Incoming {
+    let light = scene.lights[i];
     let to_light = light.position.xyz - p;
     let dist = length(to_light);
+    let l = to_light / max(dist, 1e-4);
+    var lit = 1.0;
+#ifdef SHADOWS
+    if receive && light.params.y >= 0.0 {
+        lit = positional_shadow(u32(light.params.y), light, p, ng, l, dist);
+    }
+#endif
     // Inverse square, windowed to reach exactly zero at the range.
     let x = dist / light.color.w;
     let window = saturate(1.0 - x * x * x * x);
-    let l = to_light / max(dist, 1e-4);
     let cone = saturate(dot(light.spot.xyz, -l) * light.spot.w + light.params.x);
     return Incoming(l, light.color.rgb * lit * window * window * cone * cone / max(dist * dist, 1e-4));
 }
 
-// How much of `light` reaches `p` past the shadow casters (0..1, filtered). The
-// lookup point moves `params.w` texels along the normal and `params.z` texels
-// towards the light first, so lit surfaces do not shadow themselves.
-fn shadow(light: Light, p: vec3<f32>, ng: vec3<f32>) -> f32 {
-    let first = u32(light.params.y);
-    if light.position.w == 0.0 {
-        return cascaded_shadow(first, light, p, ng);
-    }
-    let to_light = light.position.xyz - p;
-    let dist = length(to_light);
-    let l = to_light / max(dist, 1e-4);
+// How much of a point or spot light reaches `p` (towards it `l`, `dist` away) past
+// the shadow casters (0..1, filtered). The lookup point moves `params.w` texels
+// along the normal and `params.z` texels towards the light first, so lit surfaces
+// do not shadow themselves.
+fn positional_shadow(first: u32, light: Light, p: vec3<f32>, ng: vec3<f32>, l: vec3<f32>, dist: f32) -> f32 {
     if light.spot.w > 0.0 {
         let texel = shadows.info[first].x * dist;
         return map_shadow(first, p + ng * (light.params.w * texel) + l * (light.params.z * texel));
@@ -213,7 +225,8 @@ fn shadow(light: Light, p: vec3<f32>, ng: vec3<f32>) -> f32 {
 }
 
 // The cascade whose slice holds `p`, blended into the next over the last part of
-// its slice; past the last cascade, light.
+// its slice; past the last cascade, light. The offsets are those of
+// positional_shadow, in the cascade's texels.
 fn cascaded_shadow(first: u32, light: Light, p: vec3<f32>, ng: vec3<f32>) -> f32 {
     let depth = -(camera.view * vec4<f32>(p, 1.0)).z;
     var c = 0u;
@@ -304,17 +317,36 @@ fn shade(
     specular: f32,
     occlusion: f32,
 ) -> vec3<f32> {
-    let world_position = surface.position;
-    let view_dir = normalize(camera.position.xyz - world_position);
+    let p = surface.position;
+    let v = normalize(camera.position.xyz - p);
+    let ng = surface.normal;
+    let receive = surface.receive_shadows;
     var color = scene.ambient.rgb * material.coeffs.x * occlusion * base;
-    for (var i = 0u; i < scene.counts.x; i++) {
-        let light = incoming(i, world_position, surface.normal, surface.receive_shadows);
-        let n_dot_l = max(dot(n, light.l), 0.0);
-        let h = normalize(light.l + view_dir);
-        let highlight = pow(max(dot(n, h), 0.0), material.coeffs.w) * n_dot_l;
-        color += light.radiance * (material.coeffs.y * n_dot_l * base + material.coeffs.z * specular * highlight);
+    for (var i = 0u; i < DIRECTIONAL_LIGHTS; i++) {
+        color += blinn_phong(directional(i, p, ng, receive), material, n, v, base, specular);
+    }
+    for (var i = DIRECTIONAL_LIGHTS; i < LIGHTS; i++) {
+        color += blinn_phong(positional(i, p, ng, receive), material, n, v, base, specular);
     }
     return color;
+}
+
+// One light's Blinn-Phong diffuse and highlight, towards the viewer `v`.
+fn blinn_phong(light: Incoming, material: MaterialBlock, n: vec3<f32>, v: vec3<f32>, base: vec3<f32>, specular: f32) -> vec3<f32> {
+    let n_dot_l = max(dot(n, light.l), 0.0);
+    let h = normalize(light.l + v);
+    let highlight = pow(max(dot(n, h), 0.0), material.coeffs.w) * n_dot_l;
+    return light.radiance * (material.coeffs.y * n_dot_l * base + material.coeffs.z * specular * highlight);
+}
+
+// What glTF's BRDF needs of the surface besides the light, computed once per fragment.
+struct Brdf {
+    n: vec3<f32>,
+    v: vec3<f32>,
+    n_v: f32,
+    a2: f32,
+    f0: vec3<f32>,
+    c_diff: vec3<f32>,
 }
 
 // glTF 2.0 metallic-roughness (spec appendix B): GGX normal distribution,
@@ -329,28 +361,35 @@ fn shade_metallic_roughness(
     roughness: f32,
     occlusion: f32,
 ) -> vec3<f32> {
-    let world_position = surface.position;
-    let v = normalize(camera.position.xyz - world_position);
+    let p = surface.position;
+    let v = normalize(camera.position.xyz - p);
     let alpha = max(roughness * roughness, 1e-3);
-    let a2 = alpha * alpha;
     let f0 = mix(vec3<f32>(0.04), base, metallic);
-    let c_diff = base * (1.0 - metallic);
-    let n_v = max(dot(n, v), 1e-4);
-    var color = scene.ambient.rgb * occlusion * (c_diff + f0);
-    for (var i = 0u; i < scene.counts.x; i++) {
-        let light = incoming(i, world_position, surface.normal, surface.receive_shadows);
-        let n_l = max(dot(n, light.l), 0.0);
-        let h = normalize(light.l + v);
-        let n_h = max(dot(n, h), 0.0);
-        let v_h = max(dot(v, h), 0.0);
-        let f = f0 + (1.0 - f0) * pow(1.0 - v_h, 5.0);
-        let k = n_h * n_h * (a2 - 1.0) + 1.0;
-        let d = a2 / (PI * k * k);
-        let vis = 0.5 / max(n_l * sqrt(n_v * n_v * (1.0 - a2) + a2) + n_v * sqrt(n_l * n_l * (1.0 - a2) + a2), 1e-6);
-        let brdf = (1.0 - f) * c_diff / PI + f * d * vis;
-        color += PI * light.radiance * brdf * n_l;
+    let b = Brdf(n, v, max(dot(n, v), 1e-4), alpha * alpha, f0, base * (1.0 - metallic));
+    let ng = surface.normal;
+    let receive = surface.receive_shadows;
+    var color = scene.ambient.rgb * occlusion * (b.c_diff + f0);
+    for (var i = 0u; i < DIRECTIONAL_LIGHTS; i++) {
+        color += ggx(directional(i, p, ng, receive), b);
+    }
+    for (var i = DIRECTIONAL_LIGHTS; i < LIGHTS; i++) {
+        color += ggx(positional(i, p, ng, receive), b);
     }
     return color;
+}
+
+// One light through glTF's BRDF.
+fn ggx(light: Incoming, b: Brdf) -> vec3<f32> {
+    let n_l = max(dot(b.n, light.l), 0.0);
+    let h = normalize(light.l + b.v);
+    let n_h = max(dot(b.n, h), 0.0);
+    let v_h = max(dot(b.v, h), 0.0);
+    let f = b.f0 + (1.0 - b.f0) * pow(1.0 - v_h, 5.0);
+    let k = n_h * n_h * (b.a2 - 1.0) + 1.0;
+    let d = b.a2 / (PI * k * k);
+    let vis = 0.5 / max(n_l * sqrt(b.n_v * b.n_v * (1.0 - b.a2) + b.a2) + b.n_v * sqrt(n_l * n_l * (1.0 - b.a2) + b.a2), 1e-6);
+    let brdf = (1.0 - f) * b.c_diff / PI + f * d * vis;
+    return PI * light.radiance * brdf * n_l;
 }
 
 // The texture coordinates of the map in `slot`: the second set where the

@@ -5,7 +5,7 @@
 //! naga_oil shader def that `forward.wgsl` tests with `#ifdef`, so a material pays
 //! only for what it uses, and each set is compiled once.
 
-use crate::scene::{AlphaMode, Environment, Material, ShadingModel};
+use crate::scene::{AlphaMode, Environment, Light, LightKind, Material, ShadingModel};
 use naga_oil::compose::{ComposableModuleDescriptor, Composer, NagaModuleDescriptor, ShaderDefValue};
 use std::collections::HashMap;
 
@@ -91,6 +91,36 @@ impl ShaderFeatures {
     }
 }
 
+/// How many lights of each kind a forward variant loops over, compiled in as the
+/// defs `DIRECTIONAL_LIGHTS` and `POSITIONAL_LIGHTS` (point and spot lights) beside
+/// the [`ShaderFeatures`]: the loops unroll and read each light at a constant
+/// index, which made llvmpipe's fragment work on a one-light frame a quarter
+/// cheaper than a loop to a count read from the Scene block. A frame with another
+/// mix of lights gets (and caches) its own variants.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct LightCounts {
+    /// Directional lights (first in the Scene block).
+    pub directional: u8,
+    /// Point and spot lights (after the directional ones).
+    pub positional: u8,
+}
+
+impl LightCounts {
+    /// The counts of `lights` (at most [`MAX_LIGHTS`](crate::scene::MAX_LIGHTS)).
+    pub fn of(lights: &[Light]) -> Self {
+        let directional = lights.iter().filter(|l| matches!(l.kind, LightKind::Directional { .. })).count();
+        Self { directional: directional as u8, positional: (lights.len() - directional) as u8 }
+    }
+
+    fn shader_defs(self) -> impl Iterator<Item = (String, ShaderDefValue)> {
+        [
+            ("DIRECTIONAL_LIGHTS".to_string(), ShaderDefValue::UInt(self.directional.into())),
+            ("POSITIONAL_LIGHTS".to_string(), ShaderDefValue::UInt(self.positional.into())),
+        ]
+        .into_iter()
+    }
+}
+
 /// A shader that failed to compose (a bug in glint's own WGSL), or a pipeline
 /// the adapter's driver refused (for example a GLES driver that cannot
 /// translate it).
@@ -153,9 +183,16 @@ impl ShaderLibrary {
         self.composer.make_naga_module(desc).map_err(|e| fail(name, e, &self.composer))
     }
 
-    /// The forward shader for one feature set: `vs_main` / `fs_main`, groups 0–3.
-    pub(crate) fn forward(&mut self, features: ShaderFeatures) -> Result<wgpu::naga::Module, ShaderError> {
-        self.compose("glint/shader/forward.wgsl", include_str!("forward.wgsl"), features.shader_defs())
+    /// The forward shader for one feature set and mix of lights: `vs_main` /
+    /// `fs_main`, groups 0–3.
+    pub(crate) fn forward(
+        &mut self,
+        features: ShaderFeatures,
+        lights: LightCounts,
+    ) -> Result<wgpu::naga::Module, ShaderError> {
+        let mut defs = features.shader_defs();
+        defs.extend(lights.shader_defs());
+        self.compose("glint/shader/forward.wgsl", include_str!("forward.wgsl"), defs)
     }
 
     /// The gradient sky: `vs_sky` / `fs_sky`, groups 0–1.
@@ -184,9 +221,13 @@ mod tests {
                 sets.extend(bits.iter().skip(j).map(|c| a | b | c));
             }
         }
-        for set in sets {
+        // Each set with one of these light mixes in turn: no lights, each kind alone, both.
+        let mixes =
+            [(0, 0), (1, 0), (0, 1), (2, 3)].map(|(directional, positional)| LightCounts { directional, positional });
+        for (k, set) in sets.into_iter().enumerate() {
             let features = ShaderFeatures::from_bits_truncate(set);
-            let module = library.forward(features).unwrap_or_else(|e| panic!("{features:?}: {e}"));
+            let lights = mixes[k % mixes.len()];
+            let module = library.forward(features, lights).unwrap_or_else(|e| panic!("{features:?} {lights:?}: {e}"));
             let mut validator =
                 wgpu::naga::valid::Validator::new(Default::default(), wgpu::naga::valid::Capabilities::all());
             validator.validate(&module).unwrap_or_else(|e| panic!("{features:?}: {e:?}"));
@@ -203,12 +244,31 @@ mod tests {
         let validate = |module: &wgpu::naga::Module, capabilities| {
             wgpu::naga::valid::Validator::new(Default::default(), capabilities).validate(module).is_ok()
         };
-        let all = ShaderFeatures::all();
-        let downlevel = ShaderLibrary::new(false).forward(all).expect("composes");
+        let (all, lights) = (ShaderFeatures::all(), LightCounts { directional: 1, positional: 1 });
+        let downlevel = ShaderLibrary::new(false).forward(all, lights).expect("composes");
         assert!(validate(&downlevel, without), "valid without cube arrays");
-        let full = ShaderLibrary::new(true).forward(all).expect("composes");
+        let full = ShaderLibrary::new(true).forward(all, lights).expect("composes");
         assert!(!validate(&full, without), "the full shader samples a cube array");
         assert!(validate(&full, wgpu::naga::valid::Capabilities::all()), "valid with them");
+    }
+
+    #[test]
+    fn light_counts_split_directional_from_point_and_spot_lights() {
+        use crate::scene::{Light, LightKind};
+        let sun = Light::directional(glam::Vec3::NEG_Y, glam::Vec3::ONE, 1.0);
+        let lamp = Light { kind: LightKind::Point { position: glam::Vec3::Y, range: 5.0 }, ..sun };
+        let spot = Light {
+            kind: LightKind::Spot {
+                position: glam::Vec3::Y,
+                direction: glam::Vec3::NEG_Y,
+                range: 5.0,
+                inner_angle: 0.2,
+                outer_angle: 0.4,
+            },
+            ..sun
+        };
+        assert_eq!(LightCounts::of(&[]), LightCounts::default());
+        assert_eq!(LightCounts::of(&[lamp, sun, spot, sun]), LightCounts { directional: 2, positional: 2 });
     }
 
     #[test]
