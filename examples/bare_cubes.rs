@@ -6,6 +6,7 @@
 //! ```text
 //! cargo run --release -p glint --example bare_cubes -- [--n N] [--frames F] [--warmup W]
 //!     [--size WxH] [--instances vertex|storage] [--all] [--lambert] [--trim-heap]
+//!     [--depth-layers L] [--sample-layers]
 //! ```
 //! - `--instances vertex` (default): each cube's matrix rows are per-instance vertex
 //!   attributes, as three-d draws them; `storage`: instance records in a storage
@@ -14,9 +15,17 @@
 //! - `--lambert` shades with Lambert only, instead of glint's metallic-roughness BRDF.
 //! - `--trim-heap` leaves glibc's heap settings alone on a CPU rasterizer, instead of
 //!   keeping freed memory as glint does (`glint::gpu::keep_freed_heap_memory`).
+//! - `--depth-layers L` first draws the cubes depth-only into each of L layers of a
+//!   1024² depth array, one render pass a layer, as glint's shadow pass draws its
+//!   cascades (lavapipe's resident memory grows with these passes: see
+//!   `resident_mib_frame_100` and `resident_mib_end`); `--sample-layers` then shades
+//!   the cubes with a comparison lookup in layer 0, as glint's forward pass samples
+//!   its shadow maps.
 //!
 //! Prints one JSON line: `{"program":"bare_cubes","n":..,"drawn":..,"frames":..,
-//! "ms_median":..,"ms_p95":..}`; a frame runs from its first call until the GPU is done.
+//! "ms_median":..,"ms_p95":..,"resident_mib_frame_100":..,"resident_mib_end":..}`; a
+//! frame runs from its first call until the GPU is done. Resident memory is read
+//! after measured frame 100 (or the last) and at the end (Linux; null elsewhere).
 
 use glam::{Vec3, Vec3A};
 use glint::render::cull::Frustum;
@@ -93,6 +102,19 @@ fn vs_main(@location(0) position: vec3<f32>, @location(1) normal: vec3<f32>,
 
 "#;
 
+/// Lambert shading darkened by a comparison lookup in layer 0 of the depth layers
+/// (as glint's forward pass samples its shadow maps).
+const SAMPLED_LAYERS: &str = r#"
+@group(0) @binding(3) var layers: texture_depth_2d_array;
+@group(0) @binding(4) var compare: sampler_comparison;
+
+@fragment
+fn fs_sampled(in: Out) -> @location(0) vec4<f32> {
+    let lit = textureSampleCompareLevel(layers, compare, fract(in.world.xz * 0.01), 0, 0.5);
+    return vec4<f32>(BASE * RADIANCE * lit * max(dot(normalize(in.normal), LIGHT), 0.0), 1.0);
+}
+"#;
+
 struct Args {
     n: usize,
     frames: usize,
@@ -102,6 +124,8 @@ struct Args {
     all: bool,
     lambert: bool,
     trim_heap: bool,
+    depth_layers: u32,
+    sample_layers: bool,
 }
 
 fn parse_args() -> Result<Args, String> {
@@ -114,6 +138,8 @@ fn parse_args() -> Result<Args, String> {
         all: false,
         lambert: false,
         trim_heap: false,
+        depth_layers: 0,
+        sample_layers: false,
     };
     let mut it = std::env::args().skip(1);
     while let Some(arg) = it.next() {
@@ -137,6 +163,8 @@ fn parse_args() -> Result<Args, String> {
             "--all" => a.all = true,
             "--lambert" => a.lambert = true,
             "--trim-heap" => a.trim_heap = true,
+            "--depth-layers" => a.depth_layers = number(value()?)?.min(16) as u32,
+            "--sample-layers" => a.sample_layers = true,
             other => return Err(format!("unknown argument {other}")),
         }
     }
@@ -152,6 +180,12 @@ fn grid(n: usize) -> (usize, usize, Vec<Vec3>) {
         Vec3::new((c - (cols as f32 - 1.0) / 2.0) * 2.0, 0.0, (r - (rows as f32 - 1.0) / 2.0) * 2.0)
     };
     (rows, cols, (0..n).map(at).collect())
+}
+
+/// This process's resident memory, MiB (Linux's `/proc/self/statm`, 4 KiB pages).
+fn resident_mib() -> Option<f64> {
+    let statm = std::fs::read_to_string("/proc/self/statm").ok()?;
+    Some(statm.split_whitespace().nth(1)?.parse::<f64>().ok()? * 4096.0 / (1024.0 * 1024.0))
 }
 
 fn percentile(sorted: &[f64], p: f64) -> f64 {
@@ -239,6 +273,41 @@ fn main() {
         has_dynamic_offset: false,
         min_binding_size: None,
     };
+    let color_format = wgpu::TextureFormat::Rgba8UnormSrgb;
+    let depth_format = wgpu::TextureFormat::Depth32Float;
+    let layers_descriptor = |format| wgpu::TextureDescriptor {
+        label: Some("depth layers"),
+        size: wgpu::Extent3d { width: 1024, height: 1024, depth_or_array_layers: args.depth_layers.max(1) },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format,
+        usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
+        view_formats: &[],
+    };
+    let layers = device.create_texture(&layers_descriptor(depth_format));
+    let layers_sampled = layers.create_view(&wgpu::TextureViewDescriptor {
+        dimension: Some(wgpu::TextureViewDimension::D2Array),
+        ..Default::default()
+    });
+    // What the depth passes bind instead: a texture may not be drawn into and sampled in one pass.
+    let stand_in = device
+        .create_texture(&wgpu::TextureDescriptor {
+            label: Some("stand-in depth layer"),
+            size: wgpu::Extent3d { width: 1, height: 1, depth_or_array_layers: 1 },
+            usage: wgpu::TextureUsages::TEXTURE_BINDING,
+            ..layers_descriptor(depth_format)
+        })
+        .create_view(&wgpu::TextureViewDescriptor {
+            dimension: Some(wgpu::TextureViewDimension::D2Array),
+            ..Default::default()
+        });
+    let compare = device.create_sampler(&wgpu::SamplerDescriptor {
+        compare: Some(wgpu::CompareFunction::LessEqual),
+        mag_filter: wgpu::FilterMode::Linear,
+        min_filter: wgpu::FilterMode::Linear,
+        ..Default::default()
+    });
     let mut layout_entries = vec![entry(0, uniform)];
     let mut group_entries = vec![wgpu::BindGroupEntry { binding: 0, resource: camera.as_entire_binding() }];
     if args.storage {
@@ -248,6 +317,23 @@ fn main() {
             wgpu::BindGroupEntry { binding: 2, resource: draw_indices.as_entire_binding() },
         ]);
     }
+    if args.sample_layers {
+        layout_entries.extend([
+            entry(
+                3,
+                wgpu::BindingType::Texture {
+                    sample_type: wgpu::TextureSampleType::Depth,
+                    view_dimension: wgpu::TextureViewDimension::D2Array,
+                    multisampled: false,
+                },
+            ),
+            entry(4, wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Comparison)),
+        ]);
+        group_entries.extend([
+            wgpu::BindGroupEntry { binding: 3, resource: wgpu::BindingResource::TextureView(&layers_sampled) },
+            wgpu::BindGroupEntry { binding: 4, resource: wgpu::BindingResource::Sampler(&compare) },
+        ]);
+    }
     let group_layout =
         device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: None, entries: &layout_entries });
     let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -255,7 +341,16 @@ fn main() {
         layout: &group_layout,
         entries: &group_entries,
     });
-    let source = [COMMON, if args.storage { STORAGE_INSTANCES } else { VERTEX_INSTANCES }].concat();
+    for e in group_entries.iter_mut().filter(|e| e.binding == 3) {
+        e.resource = wgpu::BindingResource::TextureView(&stand_in);
+    }
+    let depth_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: None,
+        layout: &group_layout,
+        entries: &group_entries,
+    });
+    let instancing = if args.storage { STORAGE_INSTANCES } else { VERTEX_INSTANCES };
+    let source = [COMMON, instancing, if args.sample_layers { SAMPLED_LAYERS } else { "" }].concat();
     let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
         label: Some("bare_cubes"),
         source: wgpu::ShaderSource::Wgsl(source.into()),
@@ -277,35 +372,43 @@ fn main() {
             attributes: &wgpu::vertex_attr_array![4 => Float32x4, 5 => Float32x4, 6 => Float32x4],
         }),
     ];
-    let color_format = wgpu::TextureFormat::Rgba8UnormSrgb;
-    let depth_format = wgpu::TextureFormat::Depth32Float;
-    let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-        label: Some("bare_cubes"),
-        layout: Some(&pipeline_layout),
-        vertex: wgpu::VertexState {
-            module: &module,
-            entry_point: Some("vs_main"),
-            compilation_options: Default::default(),
-            buffers: if args.storage { &vertex_layouts[..1] } else { &vertex_layouts },
-        },
-        primitive: wgpu::PrimitiveState { cull_mode: Some(wgpu::Face::Back), ..Default::default() },
-        depth_stencil: Some(wgpu::DepthStencilState {
-            format: depth_format,
-            depth_write_enabled: Some(true),
-            depth_compare: Some(wgpu::CompareFunction::Less),
-            stencil: Default::default(),
-            bias: Default::default(),
-        }),
-        multisample: Default::default(),
-        fragment: Some(wgpu::FragmentState {
-            module: &module,
-            entry_point: Some(if args.lambert { "fs_lambert" } else { "fs_pbr" }),
-            compilation_options: Default::default(),
-            targets: &[Some(color_format.into())],
-        }),
-        multiview_mask: None,
-        cache: None,
-    });
+    let color_targets = [Some(color_format.into())];
+    // The colour pipeline, or (for the depth layers) the same vertices depth-only.
+    let make_pipeline = |shaded: bool| {
+        device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("bare_cubes"),
+            layout: Some(&pipeline_layout),
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("vs_main"),
+                compilation_options: Default::default(),
+                buffers: if args.storage { &vertex_layouts[..1] } else { &vertex_layouts },
+            },
+            primitive: wgpu::PrimitiveState { cull_mode: Some(wgpu::Face::Back), ..Default::default() },
+            depth_stencil: Some(wgpu::DepthStencilState {
+                format: depth_format,
+                depth_write_enabled: Some(true),
+                depth_compare: Some(wgpu::CompareFunction::Less),
+                stencil: Default::default(),
+                bias: Default::default(),
+            }),
+            multisample: Default::default(),
+            fragment: shaded.then(|| wgpu::FragmentState {
+                module: &module,
+                entry_point: Some(match (args.sample_layers, args.lambert) {
+                    (true, _) => "fs_sampled",
+                    (false, true) => "fs_lambert",
+                    (false, false) => "fs_pbr",
+                }),
+                compilation_options: Default::default(),
+                targets: &color_targets,
+            }),
+            multiview_mask: None,
+            cache: None,
+        })
+    };
+    let pipeline = make_pipeline(true);
+    let depth_only = make_pipeline(false);
     let texture = |format, label| {
         device
             .create_texture(&wgpu::TextureDescriptor {
@@ -322,11 +425,43 @@ fn main() {
     };
     let color = texture(color_format, "color");
     let depth = texture(depth_format, "depth");
+    let layer_views: Vec<_> = (0..args.depth_layers)
+        .map(|layer| {
+            layers.create_view(&wgpu::TextureViewDescriptor {
+                dimension: Some(wgpu::TextureViewDimension::D2),
+                base_array_layer: layer,
+                array_layer_count: Some(1),
+                ..Default::default()
+            })
+        })
+        .collect();
+    let draw_cubes = |pass: &mut wgpu::RenderPass<'_>, pipeline: &wgpu::RenderPipeline, group: &wgpu::BindGroup| {
+        pass.set_pipeline(pipeline);
+        pass.set_bind_group(0, group, &[]);
+        pass.set_vertex_buffer(0, vertices.slice(..));
+        if !args.storage {
+            pass.set_vertex_buffer(1, instances.slice(..));
+        }
+        pass.set_index_buffer(indices.slice(..), wgpu::IndexFormat::Uint32);
+        pass.draw_indexed(0..cube.indices().len() as u32, 0, 0..drawn.len() as u32);
+    };
 
     let mut times = Vec::with_capacity(args.frames);
+    let mut resident_frame_100 = None;
     for frame in 0..args.warmup + args.frames {
         let start = Instant::now();
         let mut encoder = device.create_command_encoder(&Default::default());
+        for view in &layer_views {
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view,
+                    depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(1.0), store: wgpu::StoreOp::Store }),
+                    stencil_ops: None,
+                }),
+                ..Default::default()
+            });
+            draw_cubes(&mut pass, &depth_only, &depth_group);
+        }
         {
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 color_attachments: &[Some(wgpu::RenderPassColorAttachment {
@@ -345,29 +480,28 @@ fn main() {
                 }),
                 ..Default::default()
             });
-            pass.set_pipeline(&pipeline);
-            pass.set_bind_group(0, &group, &[]);
-            pass.set_vertex_buffer(0, vertices.slice(..));
-            if !args.storage {
-                pass.set_vertex_buffer(1, instances.slice(..));
-            }
-            pass.set_index_buffer(indices.slice(..), wgpu::IndexFormat::Uint32);
-            pass.draw_indexed(0..cube.indices().len() as u32, 0, 0..drawn.len() as u32);
+            draw_cubes(&mut pass, &pipeline, &group);
         }
         queue.submit([encoder.finish()]);
         let _ = device.poll(wgpu::PollType::wait_indefinitely());
         if frame >= args.warmup {
             times.push(start.elapsed().as_secs_f64() * 1e3);
+            if times.len() == args.frames.min(100) {
+                resident_frame_100 = resident_mib();
+            }
         }
     }
+    let mib = |m: Option<f64>| m.map_or("null".to_string(), |m| format!("{m:.1}"));
     times.sort_by(f64::total_cmp);
     println!(
-        "{{\"program\":\"bare_cubes\",\"instances\":\"{}\",\"n\":{},\"drawn\":{},\"frames\":{},\"ms_median\":{:.3},\"ms_p95\":{:.3}}}",
+        "{{\"program\":\"bare_cubes\",\"instances\":\"{}\",\"n\":{},\"drawn\":{},\"frames\":{},\"ms_median\":{:.3},\"ms_p95\":{:.3},\"resident_mib_frame_100\":{},\"resident_mib_end\":{}}}",
         if args.storage { "storage" } else { "vertex" },
         args.n,
         drawn.len(),
         args.frames,
         percentile(&times, 0.5),
-        percentile(&times, 0.95)
+        percentile(&times, 0.95),
+        mib(resident_frame_100),
+        mib(resident_mib())
     );
 }

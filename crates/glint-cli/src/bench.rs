@@ -9,6 +9,8 @@ use serde::Serialize;
 pub struct ModeReport {
     /// `optimized` or `naive`.
     pub mode: &'static str,
+    /// Frames measured (after the warm-up).
+    pub frames: usize,
     /// Median of the whole frame, ms: from the frame's first call (`submit`)
     /// until the GPU has finished it, as a frame rate sees it.
     pub frame_ms_median: f64,
@@ -33,8 +35,25 @@ pub struct ModeReport {
     pub ns_per_instance_cull_sort_batch_upload: f64,
     /// Median CPU time of each stage, ms.
     pub stage_ms_median: glint::render::StageTimes,
+    /// Resident memory of the process after the 100th measured frame (or the last,
+    /// when fewer), MiB; null where the system does not say (Linux only).
+    pub resident_mib_frame_100: Option<f64>,
+    /// Resident memory after the last measured frame, MiB; null where unknown.
+    pub resident_mib_end: Option<f64>,
     /// The last frame's statistics (steady state).
     pub stats: FrameStats,
+}
+
+/// Frame after which `resident_mib_frame_100` is taken: past the warm-up's
+/// allocations, so what follows is growth.
+const RESIDENT_FRAME: usize = 100;
+
+/// This process's resident memory, MiB (Linux: `/proc/self/statm`'s second field,
+/// in pages of 4 KiB).
+fn resident_mib() -> Option<f64> {
+    let statm = std::fs::read_to_string("/proc/self/statm").ok()?;
+    let pages: f64 = statm.split_whitespace().nth(1)?.parse().ok()?;
+    Some(pages * 4096.0 / (1024.0 * 1024.0))
 }
 
 /// Settings of one bench run.
@@ -81,10 +100,11 @@ pub fn run_mode(gpu: &Gpu, desc: &SceneDesc, mode: FrameMode, config: &BenchConf
     let mut shadow_gpu_ms = Vec::new();
     let entities = desc.instantiate(&mut renderer);
     let refs: Vec<_> = entities.iter().collect();
-    renderer.precompile(&refs, config.msaa)?;
+    renderer.precompile(&refs, &desc.lights, config.msaa)?;
     let camera = desc.cameras[0];
     let mut frames = Vec::with_capacity(config.frames);
     let mut frame_ms = Vec::with_capacity(config.frames);
+    let mut resident_frame_100 = None;
     for i in 0..config.warmup + config.frames {
         let frame_start = std::time::Instant::now();
         // The frame's three calls, with the GPU let finish after the shadow pass and
@@ -106,8 +126,12 @@ pub fn run_mode(gpu: &Gpu, desc: &SceneDesc, mode: FrameMode, config: &BenchConf
             frame_ms.push(whole);
             gpu_ms.extend(frame_gpu.map(|t| t.forward_ms));
             shadow_gpu_ms.extend(frame_gpu.and_then(|t| t.shadow_ms));
+            if frames.len() == RESIDENT_FRAME.min(config.frames) {
+                resident_frame_100 = resident_mib();
+            }
         }
     }
+    let resident_end = resident_mib();
     frame_ms.sort_by(f64::total_cmp);
     let frame_ms_median = percentile(&frame_ms, 0.5);
     let mut totals: Vec<f64> = frames.iter().map(|f| f.cpu_ms.total).collect();
@@ -132,6 +156,7 @@ pub fn run_mode(gpu: &Gpu, desc: &SceneDesc, mode: FrameMode, config: &BenchConf
             FrameMode::Optimized => "optimized",
             FrameMode::Naive => "naive",
         },
+        frames: config.frames,
         frame_ms_median,
         frame_ms_p95: percentile(&frame_ms, 0.95),
         fps: 1e3 / frame_ms_median.max(1e-9),
@@ -143,6 +168,8 @@ pub fn run_mode(gpu: &Gpu, desc: &SceneDesc, mode: FrameMode, config: &BenchConf
         ns_per_instance: percentile(&totals, 0.5) * 1e6 / instances,
         ns_per_instance_cull_sort_batch_upload: median_of(&frames, per_instance_stages) * 1e6 / instances,
         stage_ms_median,
+        resident_mib_frame_100: resident_frame_100,
+        resident_mib_end: resident_end,
         stats: last,
     })
 }
@@ -176,6 +203,13 @@ pub fn format_mode(r: &ModeReport) -> String {
         st.instances_drawn,
         st.bytes_uploaded.total
     ));
+    if let (Some(at_100), Some(end)) = (r.resident_mib_frame_100, r.resident_mib_end) {
+        text.push_str(&format!(
+            "           resident memory: {at_100:.1} MiB after measured frame {}, {end:.1} MiB at the end ({:+.1} MiB)\n",
+            RESIDENT_FRAME.min(r.frames),
+            end - at_100
+        ));
+    }
     if st.shadow_views > 0 {
         let shadow = &st.passes.shadow;
         let gpu = r.shadow_gpu_ms_median.map_or_else(|| "n/a".to_string(), |ms| format!("{ms:.3} ms"));

@@ -273,6 +273,14 @@ fn bench_reports_both_modes_as_json() {
         let fps = m["fps"].as_f64().expect("fps");
         assert!((fps * frame - 1000.0).abs() < 1e-6 * 1000.0, "fps is 1000 / frame_ms_median: {m}");
         assert!(m["stats"].get("instances_culled").is_some() && m["stats"].get("pipelines_compiled").is_some());
+        // Resident memory after frame 100 (here the third and last) and at the end:
+        // a process holding a GPU device has far more than a megabyte resident.
+        assert_eq!(m["frames"], 3, "{m}");
+        if cfg!(target_os = "linux") {
+            for key in ["resident_mib_frame_100", "resident_mib_end"] {
+                assert!(m[key].as_f64().is_some_and(|mib| mib > 1.0), "{key}: {m}");
+            }
+        }
     }
     // Ortho scene: plane + 9 cubes. Optimized: 2 draws; naive: one per instance.
     assert_eq!(report["modes"]["optimized"]["stats"]["draws"], 2);
