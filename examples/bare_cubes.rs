@@ -6,7 +6,7 @@
 //! ```text
 //! cargo run --release -p glint --example bare_cubes -- [--n N] [--frames F] [--warmup W]
 //!     [--size WxH] [--instances vertex|storage] [--all] [--lambert] [--trim-heap]
-//!     [--depth-layers L] [--sample-layers]
+//!     [--depth-layers L] [--sample-layers] [--sample-cube]
 //! ```
 //! - `--instances vertex` (default): each cube's matrix rows are per-instance vertex
 //!   attributes, as three-d draws them; `storage`: instance records in a storage
@@ -21,6 +21,10 @@
 //!   `resident_mib_frame_100` and `resident_mib_end`); `--sample-layers` then shades
 //!   the cubes with a comparison lookup in layer 0, as glint's forward pass samples
 //!   its shadow maps.
+//! - `--sample-cube` shades with a comparison lookup in a depth cube map instead, as
+//!   glint samples point lights' shadow cubes. (glint's shadowed frames grow on
+//!   lavapipe only while its forward shader holds the cube lookup; this one lookup
+//!   alone does not make wgpu grow.)
 //!
 //! Prints one JSON line: `{"program":"bare_cubes","n":..,"drawn":..,"frames":..,
 //! "ms_median":..,"ms_p95":..,"resident_mib_frame_100":..,"resident_mib_end":..}`; a
@@ -115,6 +119,19 @@ fn fs_sampled(in: Out) -> @location(0) vec4<f32> {
 }
 "#;
 
+/// Lambert shading darkened by a comparison lookup in a depth cube map (as glint's
+/// forward pass samples point lights' shadow cubes).
+const SAMPLED_CUBE: &str = r#"
+@group(0) @binding(5) var cube: texture_depth_cube;
+@group(0) @binding(4) var compare: sampler_comparison;
+
+@fragment
+fn fs_sampled(in: Out) -> @location(0) vec4<f32> {
+    let lit = textureSampleCompareLevel(cube, compare, normalize(in.normal), 0.5);
+    return vec4<f32>(BASE * RADIANCE * lit * max(dot(normalize(in.normal), LIGHT), 0.0), 1.0);
+}
+"#;
+
 struct Args {
     n: usize,
     frames: usize,
@@ -126,6 +143,7 @@ struct Args {
     trim_heap: bool,
     depth_layers: u32,
     sample_layers: bool,
+    sample_cube: bool,
 }
 
 fn parse_args() -> Result<Args, String> {
@@ -140,6 +158,7 @@ fn parse_args() -> Result<Args, String> {
         trim_heap: false,
         depth_layers: 0,
         sample_layers: false,
+        sample_cube: false,
     };
     let mut it = std::env::args().skip(1);
     while let Some(arg) = it.next() {
@@ -165,6 +184,7 @@ fn parse_args() -> Result<Args, String> {
             "--trim-heap" => a.trim_heap = true,
             "--depth-layers" => a.depth_layers = number(value()?)?.min(16) as u32,
             "--sample-layers" => a.sample_layers = true,
+            "--sample-cube" => a.sample_cube = true,
             other => return Err(format!("unknown argument {other}")),
         }
     }
@@ -308,6 +328,17 @@ fn main() {
         min_filter: wgpu::FilterMode::Linear,
         ..Default::default()
     });
+    let cube_view = device
+        .create_texture(&wgpu::TextureDescriptor {
+            label: Some("depth cube"),
+            size: wgpu::Extent3d { width: 64, height: 64, depth_or_array_layers: 6 },
+            usage: wgpu::TextureUsages::TEXTURE_BINDING,
+            ..layers_descriptor(depth_format)
+        })
+        .create_view(&wgpu::TextureViewDescriptor {
+            dimension: Some(wgpu::TextureViewDimension::Cube),
+            ..Default::default()
+        });
     let mut layout_entries = vec![entry(0, uniform)];
     let mut group_entries = vec![wgpu::BindGroupEntry { binding: 0, resource: camera.as_entire_binding() }];
     if args.storage {
@@ -317,7 +348,23 @@ fn main() {
             wgpu::BindGroupEntry { binding: 2, resource: draw_indices.as_entire_binding() },
         ]);
     }
-    if args.sample_layers {
+    if args.sample_cube {
+        layout_entries.extend([
+            entry(
+                5,
+                wgpu::BindingType::Texture {
+                    sample_type: wgpu::TextureSampleType::Depth,
+                    view_dimension: wgpu::TextureViewDimension::Cube,
+                    multisampled: false,
+                },
+            ),
+            entry(4, wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Comparison)),
+        ]);
+        group_entries.extend([
+            wgpu::BindGroupEntry { binding: 5, resource: wgpu::BindingResource::TextureView(&cube_view) },
+            wgpu::BindGroupEntry { binding: 4, resource: wgpu::BindingResource::Sampler(&compare) },
+        ]);
+    } else if args.sample_layers {
         layout_entries.extend([
             entry(
                 3,
@@ -350,7 +397,12 @@ fn main() {
         entries: &group_entries,
     });
     let instancing = if args.storage { STORAGE_INSTANCES } else { VERTEX_INSTANCES };
-    let source = [COMMON, instancing, if args.sample_layers { SAMPLED_LAYERS } else { "" }].concat();
+    let sampled = match (args.sample_cube, args.sample_layers) {
+        (true, _) => SAMPLED_CUBE,
+        (false, true) => SAMPLED_LAYERS,
+        (false, false) => "",
+    };
+    let source = [COMMON, instancing, sampled].concat();
     let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
         label: Some("bare_cubes"),
         source: wgpu::ShaderSource::Wgsl(source.into()),
@@ -395,7 +447,7 @@ fn main() {
             multisample: Default::default(),
             fragment: shaded.then(|| wgpu::FragmentState {
                 module: &module,
-                entry_point: Some(match (args.sample_layers, args.lambert) {
+                entry_point: Some(match (args.sample_layers || args.sample_cube, args.lambert) {
                     (true, _) => "fs_sampled",
                     (false, true) => "fs_lambert",
                     (false, false) => "fs_pbr",
