@@ -19,10 +19,9 @@ impl Renderer {
     ) -> Result<(), RenderError> {
         let slot = self.materials.get(id.0 as usize).ok_or(RenderError::UnknownMaterial(id))?;
         let fog = self.environment.fog.is_some();
-        let (shadows, lights) = (self.shadows_sampled, self.frame_lights);
-        let current = slot.gpu.as_ref().filter(|g| {
-            !slot.dirty && g.samples == samples && g.fog == fog && g.shadows == shadows && g.lights == lights
-        });
+        let frame = self.frame_variant;
+        let current =
+            slot.gpu.as_ref().filter(|g| !slot.dirty && g.samples == samples && g.fog == fog && g.frame == frame);
         if current.is_some_and(|g| g.pipelines[layout.index()].is_some()) {
             return Ok(());
         }
@@ -80,13 +79,13 @@ impl Renderer {
                 shadow_pipelines: [[None; 2]; VertexLayout::COUNT],
                 samples,
                 fog,
-                shadows,
-                lights,
+                frame,
             });
         }
         let mut features = ShaderFeatures::for_material(&material, &self.environment);
-        features.set(ShaderFeatures::SHADOWS, shadows);
-        let key = Pipelines::key(features, lights, layout, material.render_states(), samples);
+        features.set(ShaderFeatures::SHADOWS, frame.shadows);
+        features.set(ShaderFeatures::SHADOW_CUBES, frame.shadow_cubes);
+        let key = Pipelines::key(features, frame.lights, layout, material.render_states(), samples);
         let (pipeline, built) = self.pipelines.forward_id(&self.device, key)?;
         stats.pipelines_compiled += u32::from(built);
         let twin = self.materials[id.0 as usize].gpu.as_mut().expect("made above");

@@ -21,6 +21,7 @@ mod blocks;
 pub mod cull;
 mod draw_list;
 mod encode;
+mod frame_variant;
 mod instances;
 mod materials;
 mod mesh_pool;
@@ -44,11 +45,11 @@ use crate::gpu::{Gpu, OffscreenTarget};
 use crate::scene::{
     Background, Camera, Entity, Environment, Light, Material, MaterialId, Mesh, ShapeId, TextureId, MAX_LIGHTS,
 };
-use crate::shader::LightCounts;
 use batch::Batch;
 use blocks::{SceneGpu, UniformBlock};
 use cull::{Containment, Frustum};
 use draw_list::DrawList;
+use frame_variant::FrameVariant;
 use glam::{Mat4, Vec3A};
 use instances::InstanceStore;
 use mesh_pool::{MeshPool, MeshRange};
@@ -154,10 +155,8 @@ struct MaterialGpuTwin {
     samples: u32,
     /// Whether the environment had fog when the pipelines were chosen.
     fog: bool,
-    /// Whether the frame sampled shadow maps when the pipelines were chosen.
-    shadows: bool,
-    /// The frame's lights when the pipelines were chosen.
-    lights: LightCounts,
+    /// What the frame added to the variant when the pipelines were chosen.
+    frame: FrameVariant,
 }
 
 /// The maps of a material in texture-set binding order: diffuse, normal,
@@ -254,10 +253,7 @@ pub struct Renderer {
     /// Whether this frame's forward pipelines look up shadow maps (the `SHADOWS`
     /// variant): set by `shadow_pass` when a light casts shadows, and by `flush`
     /// when that pass drew maps for its lights.
-    shadows_sampled: bool,
-    /// This frame's lights by kind (the light loops of its forward variants): set by
-    /// `shadow_pass` and `flush` from their lights.
-    frame_lights: LightCounts,
+    frame_variant: FrameVariant,
     store: InstanceStore,
     culling: bool,
     mode: FrameMode,
@@ -369,8 +365,7 @@ impl Renderer {
             shadow_block,
             shadow_list,
             shadow_frame: None,
-            shadows_sampled: false,
-            frame_lights: LightCounts::default(),
+            frame_variant: FrameVariant::default(),
             store: InstanceStore::default(),
             culling: true,
             mode: FrameMode::Optimized,
@@ -579,8 +574,7 @@ impl Renderer {
             ..Default::default()
         };
         let t = Instant::now();
-        self.shadows_sampled = self.shadow_frame.as_ref().is_some_and(|f| f.lights == lights && f.views > 0);
-        self.frame_lights = LightCounts::of(lights);
+        self.frame_variant = FrameVariant::after(self.shadow_frame.as_ref(), lights);
         self.prepare(target.samples(), &mut stats)?;
         stats.cpu_ms.prepare = ms_since(t);
 
@@ -633,8 +627,7 @@ impl Renderer {
         if lights.len() > MAX_LIGHTS {
             return Err(RenderError::TooManyLights(lights.len()));
         }
-        self.shadows_sampled = lights.iter().any(|l| l.shadows.is_some());
-        self.frame_lights = LightCounts::of(lights);
+        self.frame_variant = FrameVariant::expected(lights);
         let mut stats = FrameStats::default();
         let uses: Vec<_> = entities.iter().map(|e| (e.shape, e.material)).collect();
         self.prepare_uses(&uses, samples, &mut stats)?;

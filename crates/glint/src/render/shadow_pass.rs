@@ -19,7 +19,6 @@ use super::views::{ViewBlocks, MAX_SHADOW_VIEWS};
 use super::{ms_since, FrameStats, PassStats, RenderError, Renderer};
 use crate::gpu::OffscreenTarget;
 use crate::scene::{Aabb, AlphaMode, Camera, Light, LightKind, MAX_LIGHTS};
-use crate::shader::LightCounts;
 use glam::Vec3;
 use std::time::Instant;
 
@@ -64,8 +63,7 @@ impl Renderer {
         }
         let mut prepared = FrameStats::default();
         // The flush after this pass samples the maps it draws: choose its pipelines now.
-        self.shadows_sampled = lights.iter().any(|l| l.shadows.is_some());
-        self.frame_lights = LightCounts::of(lights);
+        self.frame_variant = super::FrameVariant::expected(lights);
         self.prepare(target.samples(), &mut prepared)?;
         let aspect = target.width() as f32 / target.height() as f32;
         let (views, first_view) = self.plan_shadow_views(camera, aspect, lights)?;

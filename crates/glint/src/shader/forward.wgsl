@@ -220,8 +220,13 @@ fn positional_shadow(first: u32, light: Light, p: vec3<f32>, ng: vec3<f32>, l: v
         let texel = shadows.info[first].x * dist;
         return map_shadow(first, p + ng * (light.params.w * texel) + l * (light.params.z * texel));
     }
+#ifdef SHADOW_CUBES
     let texel = 2.0 * shadows.params.y * dist;
     return cube_shadow(first, light, p + ng * (light.params.w * texel) + l * (light.params.z * texel));
+#else
+    // Only frames that drew point lights' cubes look them up (SHADOW_CUBES).
+    return 1.0;
+#endif
 }
 
 // The cascade whose slice holds `p`, blended into the next over the last part of
@@ -278,6 +283,7 @@ fn map_shadow(layer: u32, q: vec3<f32>) -> f32 {
     return lit / 9.0;
 }
 
+#ifdef SHADOW_CUBES
 // 3×3 taps across the cube face around the direction, a texel apart.
 fn cube_shadow(cube: u32, light: Light, q: vec3<f32>) -> f32 {
     let d = q - light.position.xyz;
@@ -300,6 +306,7 @@ fn cube_shadow(cube: u32, light: Light, q: vec3<f32>) -> f32 {
     }
     return lit / 9.0;
 }
+#endif
 
 // Where a fragment is, its geometric normal (facing the viewer), and whether
 // shadows darken it.

@@ -29,8 +29,9 @@ bitflags::bitflags! {
     /// | 12 | `UV1` | read the mesh's second uv set for the maps the material names (set by the mesh) |
     /// | 13 | `SKINNED` | move vertices by the weighted sum of four joint matrices (set by the mesh) |
     /// | 14 | `SHADOWS` | look up the shadow maps (set by the frame, only when it has drawn some: untaken, the lookups still cost llvmpipe four times the rest of a simple frame) |
+    /// | 15 | `SHADOW_CUBES` | look up point lights' shadow cubes too (set by the frame, only when it has drawn some: while a forward shader holding the cube lookup draws, lavapipe's resident memory grows every frame) |
     ///
-    /// Bits 14–31 are free for more (shadow receiving comes with shadow maps).
+    /// Bits 16–31 are free for more (shadow receiving comes with shadow maps).
     #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, PartialOrd, Ord)]
     pub struct ShaderFeatures: u32 {
         /// `DIFFUSE_MAP`.
@@ -63,6 +64,8 @@ bitflags::bitflags! {
         const SKINNED = 1 << 13;
         /// `SHADOWS`.
         const SHADOWS = 1 << 14;
+        /// `SHADOW_CUBES`.
+        const SHADOW_CUBES = 1 << 15;
     }
 }
 
