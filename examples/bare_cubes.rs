@@ -17,14 +17,13 @@
 //!   keeping freed memory as glint does (`glint::gpu::keep_freed_heap_memory`).
 //! - `--depth-layers L` first draws the cubes depth-only into each of L layers of a
 //!   1024² depth array, one render pass a layer, as glint's shadow pass draws its
-//!   cascades (lavapipe's resident memory grows with these passes: see
-//!   `resident_mib_frame_100` and `resident_mib_end`); `--sample-layers` then shades
-//!   the cubes with a comparison lookup in layer 0, as glint's forward pass samples
-//!   its shadow maps.
-//! - `--sample-cube` shades with a comparison lookup in a depth cube map instead, as
-//!   glint samples point lights' shadow cubes. (glint's shadowed frames grow on
-//!   lavapipe only while its forward shader holds the cube lookup; this one lookup
-//!   alone does not make wgpu grow.)
+//!   cascades.
+//! - `--sample-layers` and `--sample-cube` (either or both) shade the cubes with
+//!   comparison lookups in layer 0 of that array and in a depth cube map, through one
+//!   comparison sampler, as glint's forward pass samples its shadow maps and point
+//!   lights' cubes. (On lavapipe glint's shadowed frames grow while its forward shader
+//!   holds the cube lookup; these lookups alone do not make wgpu grow: compare
+//!   `resident_mib_frame_100` and `resident_mib_end`.)
 //!
 //! Prints one JSON line: `{"program":"bare_cubes","n":..,"drawn":..,"frames":..,
 //! "ms_median":..,"ms_p95":..,"resident_mib_frame_100":..,"resident_mib_end":..}`; a
@@ -106,28 +105,18 @@ fn vs_main(@location(0) position: vec3<f32>, @location(1) normal: vec3<f32>,
 
 "#;
 
-/// Lambert shading darkened by a comparison lookup in layer 0 of the depth layers
-/// (as glint's forward pass samples its shadow maps).
-const SAMPLED_LAYERS: &str = r#"
-@group(0) @binding(3) var layers: texture_depth_2d_array;
-@group(0) @binding(4) var compare: sampler_comparison;
+/// The depth textures the shadowed shading reads (`--sample-layers`, `--sample-cube`).
+const SAMPLER: &str = "@group(0) @binding(4) var compare: sampler_comparison;\n";
+const LAYERS: &str = "@group(0) @binding(3) var layers: texture_depth_2d_array;\n";
+const CUBE: &str = "@group(0) @binding(5) var cube: texture_depth_cube;\n";
 
+/// Lambert shading darkened by comparison lookups in layer 0 of the depth layers
+/// and in the depth cube (as glint's forward pass samples its shadow maps); `LIT`
+/// is replaced by the lookups asked for.
+const SAMPLED: &str = r#"
 @fragment
 fn fs_sampled(in: Out) -> @location(0) vec4<f32> {
-    let lit = textureSampleCompareLevel(layers, compare, fract(in.world.xz * 0.01), 0, 0.5);
-    return vec4<f32>(BASE * RADIANCE * lit * max(dot(normalize(in.normal), LIGHT), 0.0), 1.0);
-}
-"#;
-
-/// Lambert shading darkened by a comparison lookup in a depth cube map (as glint's
-/// forward pass samples point lights' shadow cubes).
-const SAMPLED_CUBE: &str = r#"
-@group(0) @binding(5) var cube: texture_depth_cube;
-@group(0) @binding(4) var compare: sampler_comparison;
-
-@fragment
-fn fs_sampled(in: Out) -> @location(0) vec4<f32> {
-    let lit = textureSampleCompareLevel(cube, compare, normalize(in.normal), 0.5);
+    let lit = LIT;
     return vec4<f32>(BASE * RADIANCE * lit * max(dot(normalize(in.normal), LIGHT), 0.0), 1.0);
 }
 "#;
@@ -348,38 +337,29 @@ fn main() {
             wgpu::BindGroupEntry { binding: 2, resource: draw_indices.as_entire_binding() },
         ]);
     }
+    if args.sample_layers || args.sample_cube {
+        layout_entries.push(entry(4, wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Comparison)));
+        group_entries.push(wgpu::BindGroupEntry { binding: 4, resource: wgpu::BindingResource::Sampler(&compare) });
+    }
+    let depth_entry = |binding, view_dimension| {
+        entry(
+            binding,
+            wgpu::BindingType::Texture {
+                sample_type: wgpu::TextureSampleType::Depth,
+                view_dimension,
+                multisampled: false,
+            },
+        )
+    };
+    if args.sample_layers {
+        layout_entries.push(depth_entry(3, wgpu::TextureViewDimension::D2Array));
+        group_entries
+            .push(wgpu::BindGroupEntry { binding: 3, resource: wgpu::BindingResource::TextureView(&layers_sampled) });
+    }
     if args.sample_cube {
-        layout_entries.extend([
-            entry(
-                5,
-                wgpu::BindingType::Texture {
-                    sample_type: wgpu::TextureSampleType::Depth,
-                    view_dimension: wgpu::TextureViewDimension::Cube,
-                    multisampled: false,
-                },
-            ),
-            entry(4, wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Comparison)),
-        ]);
-        group_entries.extend([
-            wgpu::BindGroupEntry { binding: 5, resource: wgpu::BindingResource::TextureView(&cube_view) },
-            wgpu::BindGroupEntry { binding: 4, resource: wgpu::BindingResource::Sampler(&compare) },
-        ]);
-    } else if args.sample_layers {
-        layout_entries.extend([
-            entry(
-                3,
-                wgpu::BindingType::Texture {
-                    sample_type: wgpu::TextureSampleType::Depth,
-                    view_dimension: wgpu::TextureViewDimension::D2Array,
-                    multisampled: false,
-                },
-            ),
-            entry(4, wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Comparison)),
-        ]);
-        group_entries.extend([
-            wgpu::BindGroupEntry { binding: 3, resource: wgpu::BindingResource::TextureView(&layers_sampled) },
-            wgpu::BindGroupEntry { binding: 4, resource: wgpu::BindingResource::Sampler(&compare) },
-        ]);
+        layout_entries.push(depth_entry(5, wgpu::TextureViewDimension::Cube));
+        group_entries
+            .push(wgpu::BindGroupEntry { binding: 5, resource: wgpu::BindingResource::TextureView(&cube_view) });
     }
     let group_layout =
         device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: None, entries: &layout_entries });
@@ -397,12 +377,25 @@ fn main() {
         entries: &group_entries,
     });
     let instancing = if args.storage { STORAGE_INSTANCES } else { VERTEX_INSTANCES };
-    let sampled = match (args.sample_cube, args.sample_layers) {
-        (true, _) => SAMPLED_CUBE,
-        (false, true) => SAMPLED_LAYERS,
-        (false, false) => "",
+    let mut lookups = vec!["1.0"];
+    let mut declarations = String::new();
+    if args.sample_layers || args.sample_cube {
+        declarations.push_str(SAMPLER);
+    }
+    if args.sample_layers {
+        declarations.push_str(LAYERS);
+        lookups.push("textureSampleCompareLevel(layers, compare, fract(in.world.xz * 0.01), 0, 0.5)");
+    }
+    if args.sample_cube {
+        declarations.push_str(CUBE);
+        lookups.push("textureSampleCompareLevel(cube, compare, normalize(in.normal), 0.5)");
+    }
+    let sampled = if declarations.is_empty() {
+        String::new()
+    } else {
+        declarations + &SAMPLED.replace("LIT", &lookups.join(" * "))
     };
-    let source = [COMMON, instancing, sampled].concat();
+    let source = [COMMON, instancing, &sampled].concat();
     let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
         label: Some("bare_cubes"),
         source: wgpu::ShaderSource::Wgsl(source.into()),
