@@ -297,7 +297,7 @@ impl Renderer {
             gl: gpu.info().backend == wgpu::Backend::Gl,
             cube_arrays: allowed && flags.contains(wgpu::DownlevelFlags::CUBE_ARRAY_TEXTURES),
         };
-        let pipelines = Pipelines::new(&device, shadows);
+        let pipelines = Pipelines::new(&device);
         let scene_block = UniformBlock::new(&device, "renderer: scene block");
         let shadow_block = UniformBlock::new(&device, "renderer: shadow block");
         let shadow_maps = ShadowMaps::new(&device, shadows, 1, 1, 1, 1);

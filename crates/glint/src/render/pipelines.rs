@@ -6,7 +6,6 @@
 //! formats. Shader modules are cached per variant, pipelines per key; a key's
 //! index in the cache is its id in sort keys.
 
-use super::shadow_maps::ShadowSupport;
 use crate::gpu::{sampler_entry, texture_entry, DriverErrors, COLOR_FORMAT, DEPTH_FORMAT};
 use crate::scene::{BlendState, Compare, Cull, Mesh, RenderStates, SkinVertex, StencilOp, Vertex};
 use crate::shader::{LightCounts, ShaderError, ShaderFeatures, ShaderLibrary};
@@ -219,7 +218,7 @@ fn depth_stencil(states: &RenderStates, format: wgpu::TextureFormat) -> wgpu::De
 }
 
 impl Pipelines {
-    pub(crate) fn new(device: &wgpu::Device, shadows: ShadowSupport) -> Self {
+    pub(crate) fn new(device: &wgpu::Device) -> Self {
         let all = wgpu::ShaderStages::VERTEX_FRAGMENT;
         let layout = |label, entries: &[wgpu::BindGroupLayoutEntry]| {
             device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some(label), entries })
@@ -241,7 +240,7 @@ impl Pipelines {
                 uniform_entry(0, all, false),
                 uniform_entry(1, fragment, false),
                 depth_texture(2, wgpu::TextureViewDimension::D2Array),
-                depth_texture(3, shadows.cube_dimension()),
+                depth_texture(3, wgpu::TextureViewDimension::D2Array),
                 wgpu::BindGroupLayoutEntry {
                     binding: 4,
                     visibility: fragment,
@@ -309,7 +308,7 @@ impl Pipelines {
             layout: pipeline_layout,
             shadow_layout,
             sky_layout,
-            library: ShaderLibrary::new(shadows.cube_arrays),
+            library: ShaderLibrary::new(),
             modules: HashMap::new(),
             sky_module: None,
             forward_cache: Vec::new(),

@@ -1,6 +1,6 @@
 //! Core layer: the shadow maps and what the Scene block (`@group(0)`) tells the
 //! shader about them: the 2D depth-map array (cascades and spot lights, binding
-//! 2), the cube-map array of point lights storing distance (binding 3), the
+//! 2), point lights' cube faces storing distance, six 2D layers a cube (binding 3), the
 //! comparison sampler (binding 4) and the Shadow block (binding 1) with each 2D
 //! view's matrix. Maps of one kind share the largest size any light asks for.
 
@@ -113,9 +113,9 @@ pub(crate) struct ShadowSupport {
     /// The device is on wgpu's GL backend (see [`ShadowMaps::new`]).
     pub gl: bool,
     /// Cube-map arrays can be sampled (`DownlevelFlags::CUBE_ARRAY_TEXTURES`).
-    /// Without them (some GLES drivers) the point lights' maps are one
-    /// cube, so only the first shadow-casting point light casts shadows, and
-    /// the shaders get the `SINGLE_SHADOW_CUBE` def.
+    /// Without them (some GLES drivers) only the first shadow-casting point
+    /// light casts shadows, as before the cubes were sampled as 2D layers (which
+    /// needs no cube-map support: the limit can go).
     pub cube_arrays: bool,
 }
 
@@ -130,20 +130,11 @@ impl ShadowSupport {
     }
 
     /// The 2D layers and cubes allocated for `layers` and `cubes` in use (see
-    /// [`ShadowMaps::new`]): at least one of each, two on GL, and one cube
-    /// without cube arrays.
+    /// [`ShadowMaps::new`]): at least one of each, two 2D layers on GL, and one
+    /// cube without cube arrays.
     pub(crate) fn allocated(self, layers: u32, cubes: u32) -> (u32, u32) {
         let least = if self.gl { 2 } else { 1 };
-        (layers.max(least), if self.cube_arrays { cubes.max(least) } else { 1 })
-    }
-
-    /// How group 0 binds the point lights' maps.
-    pub(crate) fn cube_dimension(self) -> wgpu::TextureViewDimension {
-        if self.cube_arrays {
-            wgpu::TextureViewDimension::CubeArray
-        } else {
-            wgpu::TextureViewDimension::Cube
-        }
+        (layers.max(least), if self.cube_arrays { cubes.max(1) } else { 1 })
     }
 }
 
@@ -193,11 +184,12 @@ impl ShadowMaps {
     /// Maps of at least `layers` 2D layers of `size_2d`² texels and `cubes` cubes
     /// of `size_cube`² (at least one of each, so the bind group always has them).
     ///
-    /// On wgpu's GL backend at least two of each (one cube without cube
-    /// arrays): GL fixes a texture's binding type when it is made, and wgpu
-    /// guesses it from the layer count, taking one layer for a plain 2D texture
-    /// and six for one cube. Bound as a 2D array or cube array, such a texture
-    /// samples wrongly (a lone spot light's shadow was lost).
+    /// On wgpu's GL backend at least two 2D layers, and one spare layer after
+    /// the cube faces: GL fixes a texture's binding type when it is made, and
+    /// wgpu guesses it from the layers, taking one layer for a plain 2D texture
+    /// and a square multiple of six for cubes. Bound as a 2D array, such a
+    /// texture samples wrongly (a lone spot light's shadow was lost; the cube
+    /// faces, sampled as 2D layers, shadowed the wrong side).
     pub(crate) fn new(
         device: &wgpu::Device,
         support: ShadowSupport,
@@ -208,7 +200,8 @@ impl ShadowMaps {
     ) -> Self {
         let (layers, cubes) = support.allocated(layers, cubes);
         let maps = depth_texture(device, "shadow maps (2D array)", size_2d, layers);
-        let cube_maps = depth_texture(device, "shadow maps (cube array)", size_cube, 6 * cubes);
+        let spare = u32::from(support.gl);
+        let cube_maps = depth_texture(device, "shadow maps (cube faces)", size_cube, 6 * cubes + spare);
         Self {
             support,
             size_2d,
@@ -220,7 +213,7 @@ impl ShadowMaps {
                 ..Default::default()
             }),
             cube_maps: cube_maps.create_view(&wgpu::TextureViewDescriptor {
-                dimension: Some(support.cube_dimension()),
+                dimension: Some(wgpu::TextureViewDimension::D2Array),
                 ..Default::default()
             }),
             layer_views: layer_views(&maps, layers),

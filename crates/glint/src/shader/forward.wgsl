@@ -284,7 +284,8 @@ fn map_shadow(layer: u32, q: vec3<f32>) -> f32 {
 }
 
 #ifdef SHADOW_CUBES
-// 3×3 taps across the cube face around the direction, a texel apart.
+// 3×3 taps across the cube face around the direction, a texel apart, each in
+// the face its direction falls on.
 fn cube_shadow(cube: u32, light: Light, q: vec3<f32>) -> f32 {
     let d = q - light.position.xyz;
     let depth = length(d) / light.color.w;
@@ -296,15 +297,42 @@ fn cube_shadow(cube: u32, light: Light, q: vec3<f32>) -> f32 {
     var lit = 0.0;
     for (var y = -1; y <= 1; y++) {
         for (var x = -1; x <= 1; x++) {
-            let dir = n + (t * f32(x) + b * f32(y)) * step;
-#ifdef SINGLE_SHADOW_CUBE
-            lit += textureSampleCompareLevel(shadow_cubes, shadow_sampler, dir, depth);
-#else
-            lit += textureSampleCompareLevel(shadow_cubes, shadow_sampler, dir, cube, depth);
-#endif
+            let at = cube_face(n + (t * f32(x) + b * f32(y)) * step);
+            lit += textureSampleCompareLevel(shadow_cubes, shadow_sampler, at.uv, 6u * cube + at.face, depth);
         }
     }
     return lit / 9.0;
+}
+#endif
+
+#ifdef SHADOW_CUBES
+// Where direction `d` meets a cube map: the face (+X −X +Y −Y +Z −Z) and the
+// texture coordinates on it, origin at the face's top-left, by the major axis as
+// the Vulkan specification's cube-map table has them.
+struct CubeTexel {
+    face: u32,
+    uv: vec2<f32>,
+}
+
+fn cube_face(d: vec3<f32>) -> CubeTexel {
+    let a = abs(d);
+    var face: u32;
+    var st: vec2<f32>;
+    var major: f32;
+    if a.x >= a.y && a.x >= a.z {
+        major = a.x;
+        face = select(1u, 0u, d.x > 0.0);
+        st = vec2<f32>(select(d.z, -d.z, d.x > 0.0), -d.y);
+    } else if a.y >= a.z {
+        major = a.y;
+        face = select(3u, 2u, d.y > 0.0);
+        st = vec2<f32>(d.x, select(-d.z, d.z, d.y > 0.0));
+    } else {
+        major = a.z;
+        face = select(5u, 4u, d.z > 0.0);
+        st = vec2<f32>(select(-d.x, d.x, d.z > 0.0), -d.y);
+    }
+    return CubeTexel(face, (st / max(major, 1e-6) + 1.0) * 0.5);
 }
 #endif
 
