@@ -34,6 +34,7 @@ mod shadow_views;
 mod stats;
 mod timer;
 mod views;
+mod visible;
 
 pub use mesh_pool::MeshTooLarge;
 pub use shadow_maps::{ShadowLayout, MAX_CUBES, MAX_SHADOW_MAP_BYTES};
@@ -47,7 +48,7 @@ use crate::scene::{
 };
 use batch::Batch;
 use blocks::{SceneGpu, UniformBlock};
-use cull::{Containment, Frustum};
+use cull::Frustum;
 use draw_list::DrawList;
 use frame_variant::FrameVariant;
 use glam::{Mat4, Vec3A};
@@ -55,7 +56,6 @@ use instances::InstanceStore;
 use mesh_pool::{MeshPool, MeshRange};
 use pipelines::{Pipelines, VertexLayout};
 use queue::{DrawItem, Queue};
-use rayon::prelude::*;
 use resources::{InstanceBuffer, MaterialTable, TextureUploader};
 use shadow_maps::{ShadowGpu, ShadowMaps, ShadowSupport};
 use std::time::Instant;
@@ -268,11 +268,6 @@ pub struct Renderer {
     visible: Vec<u32>,
     runs: Vec<VisibleRun>,
 }
-
-/// Submitted instances above which entities are culled on all cores. Tiles make
-/// culling cheap enough that threads rarely pay: on many.scn (100,000 instances in
-/// 100 entities, 2 cores) tiled culling took 0.32 ms serial and 0.45 ms on rayon.
-const PARALLEL_ENTITY_CULL_THRESHOLD: u64 = 1 << 20;
 
 fn ms_since(t: Instant) -> f64 {
     t.elapsed().as_secs_f64() * 1e3
@@ -685,64 +680,6 @@ impl Renderer {
         Ok(())
     }
 
-    /// Stage 2: find each submitted entity's visible instances. An entity whose
-    /// world box is wholly inside or outside the frustum is decided at once; only
-    /// boxes crossing a plane have their instances tested one by one.
-    fn cull(&mut self, camera: &Camera, aspect: f32, stats: &mut FrameStats) {
-        let key = ViewKey { camera: *camera, aspect };
-        if self.view.as_ref().is_none_or(|(k, _, _)| *k != key) {
-            let view = camera.view();
-            let frustum = Frustum::from_view_proj(camera.projection(aspect) * view);
-            self.view = Some((key, frustum, view));
-        }
-        let frustum = self.view.as_ref().expect("set above").1;
-        self.collect_visible(&frustum, |_| true);
-        let store = &self.store;
-        stats.instances_invalid = self.submitted.iter().map(|s| u64::from(store.slot(s.slot).invalid)).sum();
-        stats.instances_culled = stats.instances_submitted - stats.instances_invalid - self.visible.len() as u64;
-    }
-
-    /// Fill `visible` with the instances of the submitted entities `wanted` keeps
-    /// that `frustum` sees, and `runs` with each entity's part of it.
-    fn collect_visible(&mut self, frustum: &Frustum, wanted: impl Fn(&Submitted) -> bool + Sync) {
-        self.visible.clear();
-        self.runs.clear();
-        let (store, culling) = (&self.store, self.culling);
-        let mut push_run = |entry: usize, visible: &mut Vec<u32>, start: usize| {
-            let len = (visible.len() - start) as u32;
-            if len > 0 {
-                self.runs.push(VisibleRun { entry, start: start as u32, len });
-            }
-        };
-        if self.submitted.len() > 1 && self.instances_submitted >= PARALLEL_ENTITY_CULL_THRESHOLD {
-            // Many instances: entities culled on all cores, results kept in submission order.
-            let lists: Vec<Vec<u32>> = self
-                .submitted
-                .par_iter()
-                .map(|s| {
-                    let mut list = Vec::new();
-                    if wanted(s) {
-                        visible_instances(frustum, culling, store, s.slot, &mut list);
-                    }
-                    list
-                })
-                .collect();
-            for (entry, list) in lists.into_iter().enumerate() {
-                let start = self.visible.len();
-                self.visible.extend_from_slice(&list);
-                push_run(entry, &mut self.visible, start);
-            }
-        } else {
-            for (entry, s) in self.submitted.iter().enumerate() {
-                let start = self.visible.len();
-                if wanted(s) {
-                    visible_instances(frustum, culling, store, s.slot, &mut self.visible);
-                }
-                push_run(entry, &mut self.visible, start);
-            }
-        }
-    }
-
     /// Stage 3: one draw item per visible run, or per visible instance for blended
     /// materials so that they can be sorted far to near one by one. Depth is the
     /// view distance of the run's (or instance's) box centre over the far plane.
@@ -865,83 +802,11 @@ impl Renderer {
 /// Append the visible instances of the entity in `slot`. Its world box decides
 /// at once when wholly inside or outside; a box crossing a plane has its tiles
 /// decided the same way, and only tiles crossing a plane have their instances
-/// tested one by one. Invalid instances are stored last and never appended.
-fn visible_instances(frustum: &Frustum, culling: bool, store: &InstanceStore, slot: usize, out: &mut Vec<u32>) {
-    let slot = store.slot(slot);
-    let valid = slot.first..slot.first + slot.count - slot.invalid;
-    let containment = match slot.bounds {
-        None => Containment::Outside,
-        Some(_) if !culling => Containment::Inside,
-        Some((c, e)) => frustum.classify(c, e),
-    };
-    let test = |range: std::ops::Range<u32>, out: &mut Vec<u32>| {
-        cull::cull_boxes(frustum, &store.bounds, range.start as usize..range.end as usize, out);
-    };
-    match containment {
-        Containment::Outside => {}
-        Containment::Inside => out.extend(valid),
-        Containment::Intersecting if slot.clusters.is_empty() => test(valid, out),
-        Containment::Intersecting => {
-            for (k, &(c, e)) in slot.clusters.iter().enumerate() {
-                let start = slot.first + (k * instances::CLUSTER) as u32;
-                let tile = start..(start + instances::CLUSTER as u32).min(valid.end);
-                if tile.is_empty() {
-                    break;
-                }
-                match frustum.classify(c, e) {
-                    Containment::Outside => {}
-                    Containment::Inside => out.extend(tile),
-                    Containment::Intersecting => test(tile, out),
-                }
-            }
-        }
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::asset::ShapeKind;
     use glam::Vec3;
-
-    #[test]
-    fn tiled_culling_keeps_exactly_the_instances_a_per_instance_test_keeps() {
-        use rand::{Rng, SeedableRng};
-        let mut rng = rand_pcg::Pcg32::seed_from_u64(3);
-        let mut transforms: Vec<Mat4> = (0..5000)
-            .map(|_| {
-                let p = Vec3::new(
-                    rng.random_range(-60.0..60.0),
-                    rng.random_range(-5.0..5.0),
-                    rng.random_range(-60.0..60.0),
-                );
-                Mat4::from_scale_rotation_translation(Vec3::splat(rng.random_range(0.1..3.0)), glam::Quat::IDENTITY, p)
-            })
-            .collect();
-        for k in (0..5000).step_by(97) {
-            transforms[k] = Mat4::from_translation(Vec3::new(f32::NAN, 0.0, 0.0));
-        }
-        let e = Entity::instanced(ShapeId(0), MaterialId(0), transforms);
-        let cube = crate::scene::Aabb { min: Vec3::splat(-0.5), max: Vec3::splat(0.5) };
-        let mut store = InstanceStore::default();
-        let slot = store.submit(&e, cube, 0);
-        assert!(!store.slot(slot).clusters.is_empty());
-        for (eye, target) in
-            [(Vec3::new(0.0, 3.0, -70.0), Vec3::ZERO), (Vec3::new(10.0, 2.0, 5.0), Vec3::new(40.0, 0.0, 30.0))]
-        {
-            let camera = Camera::perspective(60.0, 0.5, 80.0).looking_at(eye, target);
-            let frustum = Frustum::from_view_proj(camera.projection(1.5) * camera.view());
-            let mut tiled = Vec::new();
-            visible_instances(&frustum, true, &store, slot, &mut tiled);
-            tiled.sort_unstable();
-            let each: Vec<u32> = (0..5000u32)
-                .filter(|&i| store.bounds.is_valid(i as usize))
-                .filter(|&i| frustum.intersects(store.bounds.center(i as usize), store.bounds.extent(i as usize)))
-                .collect();
-            assert!(!each.is_empty() && each.len() < 4900, "a partial view: {}", each.len());
-            assert_eq!(tiled, each);
-        }
-    }
 
     fn gpu() -> Option<Gpu> {
         match Gpu::headless() {

@@ -167,6 +167,14 @@ fn depth_texture(device: &wgpu::Device, label: &str, size: u32, layers: u32) -> 
     })
 }
 
+/// The view group 0 samples: every layer of `texture`, as a 2D array.
+fn array_view(texture: &wgpu::Texture) -> wgpu::TextureView {
+    texture.create_view(&wgpu::TextureViewDescriptor {
+        dimension: Some(wgpu::TextureViewDimension::D2Array),
+        ..Default::default()
+    })
+}
+
 fn layer_views(texture: &wgpu::Texture, layers: u32) -> Vec<wgpu::TextureView> {
     (0..layers)
         .map(|layer| {
@@ -208,14 +216,8 @@ impl ShadowMaps {
             layers,
             size_cube,
             cubes,
-            maps: maps.create_view(&wgpu::TextureViewDescriptor {
-                dimension: Some(wgpu::TextureViewDimension::D2Array),
-                ..Default::default()
-            }),
-            cube_maps: cube_maps.create_view(&wgpu::TextureViewDescriptor {
-                dimension: Some(wgpu::TextureViewDimension::D2Array),
-                ..Default::default()
-            }),
+            maps: array_view(&maps),
+            cube_maps: array_view(&cube_maps),
             layer_views: layer_views(&maps, layers),
             face_views: layer_views(&cube_maps, 6 * cubes),
             sampler: device.create_sampler(&wgpu::SamplerDescriptor {
