@@ -64,8 +64,12 @@ struct Instance {
 struct VertexIn {
     @location(0) position: vec3<f32>,
     @location(1) normal: vec3<f32>,
+#ifdef TEXCOORDS
     @location(2) uv: vec2<f32>,
+#endif
+#ifdef NORMAL_MAP
     @location(3) tangent: vec4<f32>,
+#endif
 #ifdef VERTEX_COLOR
     @location(4) color: vec4<f32>,
 #endif
@@ -82,12 +86,20 @@ struct VertexOut {
     @builtin(position) clip: vec4<f32>,
     @location(0) world_position: vec3<f32>,
     @location(1) normal: vec3<f32>,
+    // Texture coordinates and tangents only where a map reads them: for a
+    // material without maps they were a third of the vertex work and of what
+    // each triangle interpolates.
+#ifdef TEXCOORDS
     @location(2) uv: vec2<f32>,
+#endif
+#ifdef NORMAL_MAP
     @location(3) tangent: vec4<f32>,
+#endif
     @location(4) @interpolate(flat) material: u32,
 #ifdef VERTEX_COLOR
     @location(5) color: vec4<f32>,
 #endif
+#ifdef TEXCOORDS
 #ifdef UV1
     @location(6) uv1: vec2<f32>,
     // The material's uv1_maps, passed down rather than read per fragment: helper
@@ -95,7 +107,10 @@ struct VertexOut {
     // a uv choice that differs inside a 2×2 quad ruins its mip level.
     @location(7) @interpolate(flat) uv1_maps: u32,
 #endif
+#endif
+#ifdef SHADOWS
     @location(8) @interpolate(flat) receive_shadows: u32,
+#endif
 }
 
 fn record_matrix(r: Instance) -> mat4x4<f32> {
@@ -131,14 +146,18 @@ fn vs_main(v: VertexIn, @builtin(instance_index) draw_instance: u32) -> VertexOu
     let model = record_matrix(instance);
     var position = vec4<f32>(v.position, 1.0);
     var normal = v.normal;
+#ifdef NORMAL_MAP
     var tangent = v.tangent.xyz;
+#endif
 #ifdef SKINNED
     // Joint matrices are rigid or uniformly scaled: their 3×3 part moves normals.
     let skin = skin_matrix(at, instance, v.joints, v.weights);
     let skin3 = mat3x3<f32>(skin[0].xyz, skin[1].xyz, skin[2].xyz);
     position = skin * position;
     normal = skin3 * normal;
+#ifdef NORMAL_MAP
     tangent = skin3 * tangent;
+#endif
 #endif
     let world = model * position;
     // Normals transform by the inverse transpose, which is the cofactor matrix over
@@ -151,16 +170,24 @@ fn vs_main(v: VertexIn, @builtin(instance_index) draw_instance: u32) -> VertexOu
     out.clip = camera.view_proj * world;
     out.world_position = world.xyz;
     out.normal = cofactor * normal * det_sign;
+#ifdef TEXCOORDS
     out.uv = uv_transform(materials[instance.material], v.uv);
+#endif
+#ifdef NORMAL_MAP
     out.tangent = vec4<f32>(m * tangent, v.tangent.w * det_sign);
+#endif
     out.material = instance.material;
+#ifdef SHADOWS
     out.receive_shadows = instance.flags & 1u;
+#endif
 #ifdef VERTEX_COLOR
     out.color = v.color;
 #endif
+#ifdef TEXCOORDS
 #ifdef UV1
     out.uv1 = uv_transform(materials[instance.material], v.uv1);
     out.uv1_maps = materials[instance.material].uv1_maps;
+#endif
 #endif
     return out;
 }
@@ -429,6 +456,7 @@ fn ggx(light: Incoming, b: Brdf) -> vec3<f32> {
 
 // The texture coordinates of the map in `slot`: the second set where the
 // material asks for it and the mesh has one.
+#ifdef TEXCOORDS
 fn map_uv(in: VertexOut, slot: u32) -> vec2<f32> {
 #ifdef UV1
     return select(in.uv, in.uv1, (in.uv1_maps & slot) != 0u);
@@ -436,6 +464,7 @@ fn map_uv(in: VertexOut, slot: u32) -> vec2<f32> {
     return in.uv;
 #endif
 }
+#endif
 
 @fragment
 fn fs_main(in: VertexOut, @builtin(front_facing) front: bool) -> @location(0) vec4<f32> {
@@ -455,7 +484,11 @@ fn fs_main(in: VertexOut, @builtin(front_facing) front: bool) -> @location(0) ve
     // Double-sided materials light back faces with the flipped normal.
     let side = select(-1.0, 1.0, front);
     var n = normalize(in.normal) * side;
+#ifdef SHADOWS
     let surface = Surface(in.world_position, n, in.receive_shadows != 0u);
+#else
+    let surface = Surface(in.world_position, n, false);
+#endif
 #ifdef NORMAL_MAP
     let t = normalize(in.tangent.xyz - n * dot(n, in.tangent.xyz));
     let b = cross(n, t) * in.tangent.w * side;

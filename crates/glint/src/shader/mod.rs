@@ -32,6 +32,10 @@ bitflags::bitflags! {
     /// | 15 | `SHADOW_CUBES` | look up point lights' shadow cubes too (set by the frame, only when it has drawn some: while a forward shader holding the cube lookup draws, lavapipe's resident memory grows every frame) |
     ///
     /// Bits 16–31 are free for more (shadow receiving comes with shadow maps).
+    ///
+    /// One def follows from the bits rather than being one: `TEXCOORDS`, set with
+    /// any map ([`MAPS`](Self::MAPS)), passes texture coordinates to the fragment
+    /// shader (tangents come with `NORMAL_MAP`).
     #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, PartialOrd, Ord)]
     pub struct ShaderFeatures: u32 {
         /// `DIFFUSE_MAP`.
@@ -70,6 +74,14 @@ bitflags::bitflags! {
 }
 
 impl ShaderFeatures {
+    /// Every map bit: a variant with any of them reads texture coordinates.
+    pub const MAPS: Self = Self::DIFFUSE_MAP
+        .union(Self::NORMAL_MAP)
+        .union(Self::SPECULAR_MAP)
+        .union(Self::METALLIC_ROUGHNESS_MAP)
+        .union(Self::OCCLUSION_MAP)
+        .union(Self::EMISSIVE_MAP);
+
     /// The variant `material` needs in `environment`.
     pub fn for_material(material: &Material, environment: &Environment) -> Self {
         let mut f = Self::empty();
@@ -88,9 +100,15 @@ impl ShaderFeatures {
         f
     }
 
-    /// The naga_oil shader defs of this set: one boolean def per bit that is set.
+    /// The naga_oil shader defs of this set: one boolean def per bit that is set,
+    /// and `TEXCOORDS` with any map.
     fn shader_defs(self) -> HashMap<String, ShaderDefValue> {
-        self.iter_names().map(|(name, _)| (name.to_string(), ShaderDefValue::Bool(true))).collect()
+        let texcoords = self.intersects(Self::MAPS).then_some("TEXCOORDS");
+        self.iter_names()
+            .map(|(name, _)| name)
+            .chain(texcoords)
+            .map(|name| (name.to_string(), ShaderDefValue::Bool(true)))
+            .collect()
     }
 }
 
