@@ -26,9 +26,12 @@
 //!   `resident_mib_frame_100` and `resident_mib_end`.)
 //!
 //! Prints one JSON line: `{"program":"bare_cubes","n":..,"drawn":..,"frames":..,
-//! "ms_median":..,"ms_p95":..,"resident_mib_frame_100":..,"resident_mib_end":..}`; a
-//! frame runs from its first call until the GPU is done. Resident memory is read
-//! after measured frame 100 (or the last) and at the end (Linux; null elsewhere).
+//! "ms_median":..,"ms_p95":..,"cpu_encode_ms_median":..,"cpu_submit_ms_median":..,
+//! "resident_mib_frame_100":..,"resident_mib_end":..}`; a frame runs from its first
+//! call until the GPU is done; encode is the CPU time from creating the command
+//! encoder until it is finished (what `glint bench` calls encode), submit the call
+//! to `Queue::submit`. Resident memory is read after measured frame 100 (or the
+//! last) and at the end (Linux; null elsewhere).
 
 use glam::{Vec3, Vec3A};
 use glint::render::cull::Frustum;
@@ -492,6 +495,7 @@ fn main() {
     };
 
     let mut times = Vec::with_capacity(args.frames);
+    let (mut encode_ms, mut submit_ms) = (Vec::with_capacity(args.frames), Vec::with_capacity(args.frames));
     let mut resident_frame_100 = None;
     for frame in 0..args.warmup + args.frames {
         let start = Instant::now();
@@ -527,25 +531,34 @@ fn main() {
             });
             draw_cubes(&mut pass, &pipeline, &group);
         }
-        queue.submit([encoder.finish()]);
+        let commands = encoder.finish();
+        let encoded = start.elapsed();
+        queue.submit([commands]);
+        let submitted = start.elapsed();
         let _ = device.poll(wgpu::PollType::wait_indefinitely());
         if frame >= args.warmup {
             times.push(start.elapsed().as_secs_f64() * 1e3);
+            encode_ms.push(encoded.as_secs_f64() * 1e3);
+            submit_ms.push((submitted - encoded).as_secs_f64() * 1e3);
             if times.len() == args.frames.min(100) {
                 resident_frame_100 = resident_mib();
             }
         }
     }
     let mib = |m: Option<f64>| m.map_or("null".to_string(), |m| format!("{m:.1}"));
-    times.sort_by(f64::total_cmp);
+    for v in [&mut times, &mut encode_ms, &mut submit_ms] {
+        v.sort_by(f64::total_cmp);
+    }
     println!(
-        "{{\"program\":\"bare_cubes\",\"instances\":\"{}\",\"n\":{},\"drawn\":{},\"frames\":{},\"ms_median\":{:.3},\"ms_p95\":{:.3},\"resident_mib_frame_100\":{},\"resident_mib_end\":{}}}",
+        "{{\"program\":\"bare_cubes\",\"instances\":\"{}\",\"n\":{},\"drawn\":{},\"frames\":{},\"ms_median\":{:.3},\"ms_p95\":{:.3},\"cpu_encode_ms_median\":{:.4},\"cpu_submit_ms_median\":{:.4},\"resident_mib_frame_100\":{},\"resident_mib_end\":{}}}",
         if args.storage { "storage" } else { "vertex" },
         args.n,
         drawn.len(),
         args.frames,
         percentile(&times, 0.5),
         percentile(&times, 0.95),
+        percentile(&encode_ms, 0.5),
+        percentile(&submit_ms, 0.5),
         mib(resident_frame_100),
         mib(resident_mib())
     );
