@@ -15,7 +15,7 @@ fn grid(n: usize) -> (usize, usize) {
 
 #[test]
 fn the_peer_cube_scenes_place_the_peers_grid_camera_light_and_material() {
-    for (name, n) in [("peer_cubes_10k", 10_000), ("peer_cubes_100k", 100_000)] {
+    for (name, n) in [("peer_cubes_1", 1), ("peer_cubes_10k", 10_000), ("peer_cubes_100k", 100_000)] {
         let desc = load_scene(&common::repo_root().join(format!("scenes/bench/{name}.scn"))).expect(name);
         assert!(desc.warnings.is_empty(), "{:?}", desc.warnings);
         let (rows, cols) = grid(n);
@@ -58,7 +58,7 @@ fn the_peer_cube_scenes_place_the_peers_grid_camera_light_and_material() {
 fn the_peer_cube_scenes_render_their_reference_pictures() {
     // 640 × 360 without MSAA, as the peers draw them; about half the cubes in view.
     let Some(gpu) = common::gpu() else { return };
-    for (name, drawn) in [("peer_cubes_10k", 5_130), ("peer_cubes_100k", 50_232)] {
+    for (name, drawn) in [("peer_cubes_1", 1), ("peer_cubes_10k", 5_130), ("peer_cubes_100k", 50_232)] {
         let desc = load_scene(&common::repo_root().join(format!("scenes/bench/{name}.scn"))).expect(name);
         let (image, stats) = common::render_sized(gpu, &desc, (640, 360), 1, true);
         assert_eq!((stats.instances_drawn, stats.draw_calls), (drawn, 1), "{name}");
