@@ -14,7 +14,7 @@ use super::texture::TextureCache;
 use super::{
     read_file, AssetFolder, Diagnostic, LoadOptions, Model, ShapeKind, Texture, MAX_SCENE_BYTES, MAX_SCENE_TOTAL_BYTES,
 };
-use crate::render::{ShadowLayout, MAX_CUBES, MAX_SHADOW_MAP_BYTES};
+use crate::render::{ShadowLayout, MAX_SHADOW_MAP_BYTES};
 use crate::scene::TextureId;
 use crate::scene::{
     AlphaMode, Background, BlendState, Camera, Compare, Cull, Entity, Environment, Fog, Light, Material, MaterialId,
@@ -651,7 +651,7 @@ impl Loader<'_> {
         self.scene.lights.push(light);
         // Checked here as the renderer will (it refuses such maps): `glint check`
         // then says what `glint render` would.
-        let bytes = ShadowLayout::plan(&self.scene.lights, MAX_CUBES).bytes();
+        let bytes = ShadowLayout::plan(&self.scene.lights).bytes();
         if bytes > MAX_SHADOW_MAP_BYTES {
             let message = format!(
                 "with this light the shadow maps need {} MiB, more than the {} MiB limit: lower \"shadow_map_size\" (2D maps share the largest size, as do point lights' cubes)",

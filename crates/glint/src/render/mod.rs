@@ -276,22 +276,9 @@ fn ms_since(t: Instant) -> f64 {
 impl Renderer {
     /// Create a renderer on `gpu`'s device.
     pub fn new(gpu: &Gpu) -> Self {
-        Self::with_cube_array_shadows(gpu, true)
-    }
-
-    /// A renderer that keeps point lights' shadow maps in a cube-map array
-    /// only when `allowed` and the adapter can sample one; otherwise only the
-    /// first shadow-casting point light of a frame casts shadows.
-    /// [`Renderer::new`] allows them; disallowing shows on any adapter what
-    /// adapters without them (some GLES drivers) draw.
-    pub fn with_cube_array_shadows(gpu: &Gpu, allowed: bool) -> Self {
         let device = gpu.device.clone();
         let queue = gpu.queue.clone();
-        let flags = gpu.adapter.get_downlevel_capabilities().flags;
-        let shadows = ShadowSupport {
-            gl: gpu.info().backend == wgpu::Backend::Gl,
-            cube_arrays: allowed && flags.contains(wgpu::DownlevelFlags::CUBE_ARRAY_TEXTURES),
-        };
+        let shadows = ShadowSupport { gl: gpu.info().backend == wgpu::Backend::Gl };
         let pipelines = Pipelines::new(&device);
         let scene_block = UniformBlock::new(&device, "renderer: scene block");
         let shadow_block = UniformBlock::new(&device, "renderer: shadow block");

@@ -73,8 +73,8 @@ pub struct ShadowLayout {
 
 impl ShadowLayout {
     /// Place `lights` in order: four layers per directional light, one per spot
-    /// light (16 layers in all), a cube per point light (`max_cubes` in all).
-    pub fn plan(lights: &[Light], max_cubes: usize) -> Self {
+    /// light (16 layers in all), a cube per point light ([`MAX_CUBES`] in all).
+    pub fn plan(lights: &[Light]) -> Self {
         let size_of = |l: &Light| l.shadows.map_or(0, |s| s.map_size.clamp(16, 8192));
         let point = |l: &&Light| matches!(l.kind, LightKind::Point { .. });
         let size_2d = lights.iter().filter(|l| !point(l)).map(size_of).max().unwrap_or(0).max(1);
@@ -89,7 +89,7 @@ impl ShadowLayout {
                         (&mut layers, CASCADES as u32)
                     }
                     LightKind::Spot { .. } if (layers as usize) < MAX_2D_VIEWS => (&mut layers, 1),
-                    LightKind::Point { .. } if (cubes as usize) < max_cubes => (&mut cubes, 1),
+                    LightKind::Point { .. } if (cubes as usize) < MAX_CUBES => (&mut cubes, 1),
                     _ => return None,
                 };
                 *slot += count;
@@ -112,29 +112,14 @@ impl ShadowLayout {
 pub(crate) struct ShadowSupport {
     /// The device is on wgpu's GL backend (see [`ShadowMaps::new`]).
     pub gl: bool,
-    /// Cube-map arrays can be sampled (`DownlevelFlags::CUBE_ARRAY_TEXTURES`).
-    /// Without them (some GLES drivers) only the first shadow-casting point
-    /// light casts shadows, as before the cubes were sampled as 2D layers (which
-    /// needs no cube-map support: the limit can go).
-    pub cube_arrays: bool,
 }
 
 impl ShadowSupport {
-    /// How many point lights can cast shadows at once.
-    pub(crate) fn max_cubes(self) -> usize {
-        if self.cube_arrays {
-            MAX_CUBES
-        } else {
-            1
-        }
-    }
-
     /// The 2D layers and cubes allocated for `layers` and `cubes` in use (see
-    /// [`ShadowMaps::new`]): at least one of each, two 2D layers on GL, and one
-    /// cube without cube arrays.
+    /// [`ShadowMaps::new`]): at least one of each, and two 2D layers on GL.
     pub(crate) fn allocated(self, layers: u32, cubes: u32) -> (u32, u32) {
         let least = if self.gl { 2 } else { 1 };
-        (layers.max(least), if self.cube_arrays { cubes.max(1) } else { 1 })
+        (layers.max(least), cubes.max(1))
     }
 }
 

@@ -93,7 +93,7 @@ impl Renderer {
         aspect: f32,
         lights: &[Light],
     ) -> Result<(Vec<ShadowView>, Vec<Option<u32>>), RenderError> {
-        let layout = ShadowLayout::plan(lights, self.shadow_maps.support.max_cubes());
+        let layout = ShadowLayout::plan(lights);
         let casters = self.caster_bounds();
         let mut views = Vec::new();
         for (k, (light, first)) in lights.iter().zip(&layout.first).enumerate() {
