@@ -1,6 +1,6 @@
-//! Discrete Elastic Plates against published numbers and physical laws: the
-//! cantilever plate's tip deflection, pin reactions, energy behaviour of the
-//! integrators, and a large sheet under a huge time step.
+//! Discrete Elastic Plates against physical laws: plate rigidity on a cylinder,
+//! energy behaviour of the integrators, contact, pins, damping, and a large sheet
+//! under a huge time step (the published cantilever is in `cloth_published.rs`).
 
 use glam::DVec3;
 use glint::sim::cloth::{Cloth, ClothMesh, ClothParams, Collider, Integrator, PinMotion, PinSelector};
@@ -46,53 +46,6 @@ fn equilateral_plate(width: f64, height: f64, edge: f64) -> ClothMesh {
         }
     }
     ClothMesh::new(nodes, triangles).expect("a valid plate")
-}
-
-fn cantilever() -> (Cloth, ClothParams) {
-    let params = ClothParams {
-        thickness: 1e-3,
-        young: 2e8,
-        poisson: 0.5,
-        density: 1200.0,
-        gravity: DVec3::new(0.0, 0.0, -9.81),
-    };
-    // Ten rows 2.165 mm apart fill the 21.7 mm width; 41 nodes 2.5 mm apart the length.
-    let mesh = equilateral_plate(0.1, 0.0217, 2.5e-3);
-    let pinned: Vec<bool> = mesh.nodes.iter().map(|p| p.x <= 0.01 + 1e-9).collect();
-    (Cloth::new(mesh, params, &pinned).expect("cloth"), params)
-}
-
-#[test]
-fn cantilever_tip_deflection_matches_the_published_ratio_to_euler_bernoulli() {
-    let (mut cloth, params) = cantilever();
-    cloth.step(0.0, Integrator::Static).expect("equilibrium");
-    let tip = cloth.positions.iter().zip(&cloth.mesh().nodes).map(|(p, rest)| rest.z - p.z).fold(0.0, f64::max);
-    let length: f64 = 0.09;
-    let euler_bernoulli =
-        3.0 * params.density * 9.81 * length.powi(4) / (2.0 * params.young * params.thickness.powi(2));
-    assert!((euler_bernoulli - 5.79e-3).abs() < 1e-5, "{euler_bernoulli}");
-    let ratio = tip / euler_bernoulli;
-    eprintln!("tip deflection {:.4} mm, Euler-Bernoulli {:.4} mm, ratio {ratio:.4}", tip * 1e3, euler_bernoulli * 1e3);
-    // The hinge discretisation's constants differ from continuum plate theory, so
-    // the plate deflects more than the beam formula says: on this generated mesh
-    // 1.0675 times (issue 6 quotes 1.15–1.16 for the published mesh, which is not
-    // in the repository; see the closing note).
-    assert!((1.05..=1.09).contains(&ratio), "ratio {ratio}");
-
-    // At equilibrium the pins' reactions (the elastic forces ∇E at the pinned
-    // nodes, whose own weight rests directly on the clamp) hold up exactly the
-    // weight of the free nodes.
-    let gradient = cloth.elastic_gradient(&cloth.positions);
-    let (mut reactions, mut weight) = (DVec3::ZERO, DVec3::ZERO);
-    for (i, (g, m)) in gradient.iter().zip(cloth.masses()).enumerate() {
-        if cloth.is_pinned(i) {
-            reactions += *g;
-        } else {
-            weight += *m * params.gravity;
-        }
-    }
-    assert!(reactions.z > 0.0, "the pins push up: {reactions:?}");
-    assert!((reactions + weight).length() <= 1e-6 * weight.length(), "pins {reactions:?} against weight {weight:?}");
 }
 
 /// A 1 mm sheet of density 200 kg/m³ under gravity along −Z, Young's modulus `young`.
@@ -148,8 +101,8 @@ fn implicit_euler_loses_energy_every_step_and_newmark_keeps_it() {
 /// The hinge stiffness `k_b = (2/√3) E h³/12` is Seung and Nelson's constant
 /// for a triangular lattice: an equilateral sheet wrapped onto a cylinder of
 /// radius R stores the continuum plate energy ½ D/R² per area, D = E h³/12.
-/// This is why a ratio near 1 (not 2, nor √3) is the model's answer to the
-/// cantilever away from its clamped and free ends.
+/// This is why the published cantilever deflects near Euler–Bernoulli's beam
+/// (1.16 times, `cloth_published.rs`), not 2 or √3 times.
 #[test]
 fn hinge_stiffness_gives_the_plate_rigidity_on_a_cylinder() {
     use glint::sim::cloth::energy::{bend_energy, hinge_angle};
@@ -264,7 +217,9 @@ fn damping_brings_a_falling_sheet_to_its_terminal_velocity() {
         let terminal = 9.81 / 5.0;
         for v in &cloth.velocities {
             assert!((v.z + terminal).abs() < 1e-3 * terminal, "{integrator:?}: {v} against {terminal}");
-            assert!(v.x.abs() < 1e-9 && v.y.abs() < 1e-9, "{integrator:?}: falls straight: {v}");
+            // Straight down, to the solver's tolerance (residuals of 10⁻⁶ of the weight).
+            let sideways = v.truncate().length();
+            assert!(sideways < 1e-6 * terminal, "{integrator:?}: falls straight: {v}");
         }
     }
 }

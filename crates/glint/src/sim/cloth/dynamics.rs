@@ -141,10 +141,11 @@ impl Cloth {
         let n = mesh.nodes.len();
         let p = |i: u32| mesh.nodes[i as usize];
         let rest_lengths: Vec<f64> = topology.edges.iter().map(|e| (p(e[1]) - p(e[0])).length()).collect();
-        let stretch_k = rest_lengths.iter().map(|l| 3f64.sqrt() / 2.0 * params.young * params.thickness * l).collect();
+        // The edge's energy is ½ k_s l̄ ε²: stretch_energy's stiffness is k_s l̄.
+        let stretch_k: Vec<f64> =
+            rest_lengths.iter().map(|l| 3f64.sqrt() / 2.0 * params.young * params.thickness * l * l).collect();
         let rest_angles = topology.hinges.iter().map(|h| hinge_angle(&h.map(p))).collect();
-        let stiffest_edge =
-            rest_lengths.iter().map(|l| 3f64.sqrt() / 2.0 * params.young * params.thickness / l).fold(0.0f64, f64::max);
+        let stiffest_edge = stretch_k.iter().zip(&rest_lengths).map(|(k, l)| k / (l * l)).fold(0.0f64, f64::max);
         let bend_k = 2.0 / 3f64.sqrt() * params.young * params.thickness.powi(3) / 12.0;
         let mut mass = vec![0.0; n];
         let rest_areas: Vec<f64> =

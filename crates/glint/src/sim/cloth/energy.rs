@@ -278,6 +278,61 @@ mod tests {
     }
 
     #[test]
+    fn energies_gradients_and_hessians_do_not_change_under_rigid_motion() {
+        // E(Rx + t) = E(x), ∇E(Rx + t) = R ∇E(x) and ∇²E(Rx + t) = R ∇²E(x) Rᵀ,
+        // per node block, for both energies and both Hessians, to rounding.
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(11);
+        let unit = |rng: &mut rand_pcg::Pcg64| {
+            DVec3::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0))
+        };
+        for _ in 0..50 {
+            let rotation = glam::DMat3::from_axis_angle(unit(&mut rng).normalize(), rng.random_range(-3.0..3.0));
+            let shift = 10.0 * unit(&mut rng);
+            let x = random_hinge(&mut rng);
+            let y = x.map(|p| rotation * p + shift);
+            let (rest, k) = (rng.random_range(-0.3..0.3), rng.random_range(1.0..2.0));
+            let close =
+                |a: f64, b: f64, what: &str| assert!((a - b).abs() <= 1e-10 * b.abs().max(1.0), "{what}: {a} vs {b}");
+            close(bend_energy(&y, rest, k), bend_energy(&x, rest, k), "bending energy");
+            close(stretch_energy(y[0], y[1], 0.8, k), stretch_energy(x[0], x[1], 0.8, k), "stretching energy");
+            for (gy, gx) in bend_gradient(&y, rest, k).iter().zip(bend_gradient(&x, rest, k)) {
+                assert!(gy.distance(rotation * gx) <= 1e-10 * gx.length().max(1.0), "bending gradient");
+            }
+            let (sy, sx) = (stretch_gradient(y[0], y[1], 0.8, k), stretch_gradient(x[0], x[1], 0.8, k));
+            assert!(sy.distance(rotation * sx) <= 1e-10 * sx.length().max(1.0), "stretching gradient");
+            // R·H·Rᵀ per 3×3 block.
+            let rotated = |block: glam::DMat3| rotation * block * rotation.transpose();
+            let block_of = |h: &[[f64; 12]; 12], i: usize, j: usize| {
+                glam::DMat3::from_cols_array_2d(&std::array::from_fn(|c| {
+                    std::array::from_fn(|r| h[3 * i + r][3 * j + c])
+                }))
+            };
+            for kind in [Hessian::Exact, Hessian::Definite] {
+                let (hy, hx) = (bend_hessian(&y, rest, k, kind), bend_hessian(&x, rest, k, kind));
+                let scale = hx.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
+                for i in 0..4 {
+                    for j in 0..4 {
+                        let d = block_of(&hy, i, j) - rotated(block_of(&hx, i, j));
+                        assert!(
+                            d.to_cols_array().iter().all(|v| v.abs() <= 1e-10 * scale.max(1.0)),
+                            "{kind:?} bending Hessian ({i}, {j})"
+                        );
+                    }
+                }
+                let as_mat = |b: [[f64; 3]; 3]| {
+                    glam::DMat3::from_cols_array_2d(&std::array::from_fn(|c| std::array::from_fn(|r| b[r][c])))
+                };
+                let by = as_mat(stretch_hessian_block(y[0], y[1], 0.8, k, kind));
+                let bx = as_mat(stretch_hessian_block(x[0], x[1], 0.8, k, kind));
+                assert!(
+                    (by - rotated(bx)).to_cols_array().iter().all(|v| v.abs() <= 1e-10 * k),
+                    "{kind:?} stretching Hessian"
+                );
+            }
+        }
+    }
+
+    #[test]
     fn definite_hessians_have_no_negative_directions() {
         let mut rng = rand_pcg::Pcg64::seed_from_u64(5);
         let quadratic = |h: &dyn Fn(usize, usize) -> f64, v: &[f64]| -> f64 {
