@@ -3,7 +3,7 @@
 
 use clap::{Args, ValueEnum};
 use glam::DVec3;
-use glint::sim::cloth::{Cloth, ClothMesh, ClothParams, Collider, Integrator, PinSelector};
+use glint::sim::cloth::{Cloth, ClothMesh, ClothParams, Collider, Integrator, PinSelector, Solve};
 use glint::{Diagnostic, Error};
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -66,9 +66,42 @@ pub struct ClothArgs {
     /// Write `step,t,x1,y1,z1,…` (1-based node numbers), one row per step.
     #[arg(long, value_name = "traj.csv")]
     out: Option<PathBuf>,
+    /// How each time step is solved: Newton's method to convergence (the
+    /// reference) or on a fixed budget for interactive use.
+    #[arg(long, value_enum, default_value_t = SolveArg::Converged)]
+    solve: SolveArg,
     /// Print steps per second and Newton iterations per step.
     #[arg(long)]
     bench: bool,
+    /// With `--bench`: print one JSON object instead of text.
+    #[arg(long, requires = "bench")]
+    json: bool,
+}
+
+/// `--solve`.
+#[derive(Clone, Copy, ValueEnum)]
+enum SolveArg {
+    Converged,
+    Realtime,
+}
+
+/// What `--bench --json` prints: one object.
+#[derive(serde::Serialize)]
+struct BenchReport {
+    nodes: usize,
+    pinned: usize,
+    edges: usize,
+    hinges: usize,
+    threads: usize,
+    solve: &'static str,
+    dt: f64,
+    steps: u32,
+    seconds: f64,
+    steps_per_second: f64,
+    newton_iterations_per_step: f64,
+    factorizations_per_step: f64,
+    cg_iterations_per_step: f64,
+    substeps_per_step: f64,
 }
 
 /// `--integrator`.
@@ -107,13 +140,17 @@ pub fn cloth(args: &ClothArgs) -> Result<(), Error> {
     let mut cloth = Cloth::new(mesh, params, &pinned).map_err(|e| Diagnostic::file(&source, e.to_string()))?;
     cloth.set_colliders(args.collider.clone(), args.thickness.max(1e-3));
     cloth.set_damping(args.damping);
+    cloth.set_solve(match args.solve {
+        SolveArg::Converged => Solve::Converged,
+        SolveArg::Realtime => Solve::Realtime,
+    });
     let (integrator, steps) = match args.integrator {
         IntegratorArg::ImplicitEuler => (Integrator::ImplicitEuler, args.steps),
         IntegratorArg::Newmark => (Integrator::Newmark, args.steps),
         IntegratorArg::Static => (Integrator::Static, 1),
     };
     let mut out = args.out.as_deref().map(|path| Trajectory::create(path, nodes)).transpose()?;
-    let (mut stepping, mut iterations, mut factorizations, mut substeps) = (0.0, 0u64, 0u64, 0u64);
+    let (mut stepping, mut iterations, mut factorizations, mut substeps, mut cg) = (0.0, 0u64, 0u64, 0u64, 0u64);
     for step in 1..=steps {
         let start = Instant::now();
         let stats = cloth.step(args.dt, integrator)?;
@@ -121,6 +158,7 @@ pub fn cloth(args: &ClothArgs) -> Result<(), Error> {
         iterations += u64::from(stats.newton_iterations);
         factorizations += u64::from(stats.factorizations);
         substeps += u64::from(stats.substeps);
+        cg += u64::from(stats.linear_iterations);
         if let Some(out) = &mut out {
             out.row(step, cloth.time, &cloth.positions)?;
         }
@@ -129,20 +167,47 @@ pub fn cloth(args: &ClothArgs) -> Result<(), Error> {
         out.finish()?;
     }
     if args.bench {
-        let pinned = pinned.iter().filter(|p| **p).count();
-        let text = format!(
-            "cloth: {nodes} nodes ({pinned} pinned), {} edges, {} hinges, {} threads\n\
-             {steps} steps of {} s in {stepping:.3} s: {:.1} steps/s, {:.2} Newton iterations/step \
-             ({:.2} factorisations), {:.2} sub-steps/step\n",
-            cloth.topology().edges.len(),
-            cloth.topology().hinges.len(),
-            rayon::current_num_threads(),
-            args.dt,
-            f64::from(steps) / stepping,
-            iterations as f64 / f64::from(steps),
-            factorizations as f64 / f64::from(steps),
-            substeps as f64 / f64::from(steps)
-        );
+        let per_step = |n: u64| n as f64 / f64::from(steps);
+        let r = BenchReport {
+            nodes,
+            pinned: pinned.iter().filter(|p| **p).count(),
+            edges: cloth.topology().edges.len(),
+            hinges: cloth.topology().hinges.len(),
+            threads: rayon::current_num_threads(),
+            solve: match args.solve {
+                SolveArg::Converged => "converged",
+                SolveArg::Realtime => "realtime",
+            },
+            dt: args.dt,
+            steps,
+            seconds: stepping,
+            steps_per_second: f64::from(steps) / stepping,
+            newton_iterations_per_step: per_step(iterations),
+            factorizations_per_step: per_step(factorizations),
+            cg_iterations_per_step: per_step(cg),
+            substeps_per_step: per_step(substeps),
+        };
+        let text = if args.json {
+            format!("{}\n", serde_json::to_string(&r).expect("plain numbers serialise"))
+        } else {
+            format!(
+                "cloth: {} nodes ({} pinned), {} edges, {} hinges, {} threads, {} solve\n\
+                 {steps} steps of {} s in {stepping:.3} s: {:.1} steps/s, {:.2} Newton iterations/step \
+                 ({:.2} factorisations, {:.2} CG iterations), {:.2} sub-steps/step\n",
+                r.nodes,
+                r.pinned,
+                r.edges,
+                r.hinges,
+                r.threads,
+                r.solve,
+                r.dt,
+                r.steps_per_second,
+                r.newton_iterations_per_step,
+                r.factorizations_per_step,
+                r.cg_iterations_per_step,
+                r.substeps_per_step
+            )
+        };
         crate::output::print(&text)?;
     }
     Ok(())

@@ -527,6 +527,34 @@ fn read_trajectory(path: &Path) -> (Vec<String>, Vec<Vec<f64>>) {
 }
 
 #[test]
+fn sim_cloth_bench_prints_one_json_object_for_either_solve() {
+    for solve in ["converged", "realtime"] {
+        let args = ["sim", "cloth", "--sheet", "0.2,0.1", "--resolution", "9,5", "--fix", "x<=0.05", "--steps", "5"];
+        let out = glint(&[&args[..], &["--solve", solve, "--bench", "--json"]].concat());
+        assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+        let text = String::from_utf8(out.stdout).expect("utf-8");
+        assert_eq!(text.lines().count(), 1, "one object: {text}");
+        let report: serde_json::Value = serde_json::from_str(&text).expect("JSON");
+        assert_eq!(report["solve"], solve);
+        assert_eq!((report["nodes"].as_u64(), report["steps"].as_u64()), (Some(45), Some(5)), "{report}");
+        assert!(report["steps_per_second"].as_f64().is_some_and(|v| v > 0.0), "{report}");
+        let newton = report["newton_iterations_per_step"].as_f64().expect("newton iterations");
+        let factorizations = report["factorizations_per_step"].as_f64().expect("factorisations");
+        assert!(factorizations > 0.0 && factorizations <= newton, "{report}");
+        if solve == "realtime" {
+            // At most three iterations a step, unless a step was halved.
+            let substeps = report["substeps_per_step"].as_f64().expect("substeps");
+            assert!(newton <= 3.0 * substeps, "{report}");
+        }
+    }
+    assert_ne!(
+        glint(&["sim", "cloth", "--sheet", "1,1", "--resolution", "3,3", "--json"]).status.code(),
+        Some(0),
+        "--json needs --bench"
+    );
+}
+
+#[test]
 fn sim_cloth_writes_one_csv_row_per_step_and_benchmarks() {
     let dir = tempfile::tempdir().unwrap();
     let csv = dir.path().join("traj.csv");

@@ -4,7 +4,9 @@
 
 use super::scn_fields::Fields;
 use super::{AssetFolder, Diagnostic};
-use crate::sim::cloth::{Cloth, ClothMesh, ClothParams, ClothView, Collider, Integrator, PinMotion, PinSelector};
+use crate::sim::cloth::{
+    Cloth, ClothMesh, ClothParams, ClothView, Collider, Integrator, PinMotion, PinSelector, Solve,
+};
 use glam::{DVec3, Vec3};
 use std::path::Path;
 
@@ -73,6 +75,8 @@ pub struct ClothSetup {
     pub contact_distance: f64,
     /// Mass-proportional damping, 1/s (see [`Cloth::set_damping`]).
     pub damping: f64,
+    /// How each step is solved (`solve`: `converged` or `realtime`).
+    pub solve: Solve,
 }
 
 impl ClothSetup {
@@ -82,6 +86,7 @@ impl ClothSetup {
         cloth.set_pin_motion(self.pin_motion);
         cloth.set_colliders(self.colliders.clone(), self.contact_distance);
         cloth.set_damping(self.damping);
+        cloth.set_solve(self.solve);
         Ok(cloth)
     }
 }
@@ -238,8 +243,12 @@ pub(crate) fn parse(f: &mut Fields, assets: &AssetFolder, nodes_before: u64) -> 
     };
     let dt = exact(f.number("dt", 1e-5..=1.0)?.unwrap_or(0.01));
     let damping = exact(f.number("damping", 0.0..=1e6)?.unwrap_or(0.0));
+    let solve = match f.choice("solve", &["converged", "realtime"])? {
+        None | Some((0, _)) => Solve::Converged,
+        Some(_) => Solve::Realtime,
+    };
     let debug = f.flag("debug")?.unwrap_or(false);
-    let setup = ClothSetup { mesh, params, pinned, pin_motion, colliders, contact_distance, damping };
+    let setup = ClothSetup { mesh, params, pinned, pin_motion, colliders, contact_distance, damping, solve };
     let cloth = setup.start().map_err(|m| at(f.block.line, format!("cloth: {m}")))?;
     let view = ClothView::new(&cloth, debug).map_err(|e| at(f.block.line, format!("cloth: {e}")))?;
     Ok(ClothDesc {
@@ -321,6 +330,12 @@ mod tests {
         assert!(first.distance(DVec3::new(0.5, 1.0, 1.0)) < 1e-6, "{first}");
         assert_eq!(cloth.setup.pinned, [true, false, false, true, false, false], "the x = -1 edge, before placement");
         assert_eq!(cloth.integrator, Integrator::Newmark);
+        assert_eq!(cloth.setup.solve, Solve::Converged, "the default");
+        let realtime = parse("\"size\" \"2 1\"\n\"resolution\" \"3 2\"\n\"solve\" \"realtime\"\n").unwrap();
+        assert_eq!(realtime.cloths[0].setup.solve, Solve::Realtime);
+        assert_eq!(realtime.cloths[0].setup.start().unwrap().solve(), Solve::Realtime, "the simulation solves so");
+        let wrong = parse("\"size\" \"2 1\"\n\"resolution\" \"3 2\"\n\"solve\" \"fast\"\n").unwrap_err().to_string();
+        assert!(wrong.contains("t.scn:5") && wrong.contains("converged") && wrong.contains("realtime"), "{wrong}");
         assert_eq!(cloth.setup.colliders.len(), 2);
         assert_eq!(cloth.setup.contact_distance, 1e-3);
         assert_eq!(cloth.setup.params.gravity, DVec3::new(0.0, -9.81, 0.0));

@@ -108,6 +108,21 @@ pub struct Contact {
 }
 
 impl Contact {
+    /// `step` cut short where it would carry a node from outside every collider
+    /// into one: the realtime solve's single iterations cannot see a collider
+    /// the node is not yet near (its penalty starts δ off the surface), so a
+    /// falling node would pass into a table top and leave through the far side.
+    /// The motion is sampled at quarters; the node stops at the last sample
+    /// still outside.
+    pub fn clamp_motion(&self, from: DVec3, step: DVec3) -> DVec3 {
+        let inside = |x: DVec3| self.colliders.iter().any(|c| c.distance(x).0 < 0.0);
+        if self.colliders.is_empty() || inside(from) {
+            return step;
+        }
+        let safe = [0.25, 0.5, 0.75, 1.0].into_iter().take_while(|t| !inside(from + *t * step)).last();
+        step * safe.unwrap_or(0.0)
+    }
+
     /// Penalty energy of one node with stiffness `k`.
     pub fn energy(&self, x: DVec3, k: f64) -> f64 {
         self.colliders.iter().map(|c| self.gap(c, x).map_or(0.0, |(g, _)| 0.5 * k * g * g)).sum()

@@ -18,6 +18,9 @@
 //!
 //! A step that does not converge, or that produces a NaN or a collapsed
 //! triangle, is retried as two steps of half the size, down to dt / 2¹⁰.
+//!
+//! That is the converged solve ([`Solve::Converged`]); [`realtime`] is the other,
+//! on a fixed budget per step.
 
 use super::contact::{Collider, Contact};
 use super::energy::{
@@ -29,6 +32,9 @@ use super::system::{SparseSystem, SystemError, BYTES_PER_PATTERN_ENTRY, MAX_SYST
 use super::{ClothMesh, ClothMeshError, Topology};
 use glam::DVec3;
 use rayon::prelude::*;
+use realtime::RealtimeState;
+
+pub mod realtime;
 
 /// Newmark's β (average acceleration: unconditionally stable, no numerical damping).
 const NEWMARK_BETA: f64 = 0.25;
@@ -75,6 +81,20 @@ pub enum Integrator {
     Static,
 }
 
+/// How [`Cloth::step`] solves each time step's implicit equations (a static
+/// solve always converges).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Solve {
+    /// Newton's method to convergence every step: the reference.
+    #[default]
+    Converged,
+    /// A fixed budget per step for interactive use, with the same energies: one
+    /// Newton iteration solved by preconditioned conjugate gradients (see
+    /// [`realtime`]). Its error against the converged solve is measured in
+    /// `tests/cloth_realtime.rs` and `docs/cloth.md`.
+    Realtime,
+}
+
 /// Why a step could not be taken (the cloth is left as it was).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
 pub enum StepError {
@@ -93,6 +113,8 @@ pub struct StepStats {
     /// Sub-steps taken (1 unless the step was halved); for a static solve, the
     /// load increments.
     pub substeps: u32,
+    /// Conjugate-gradient iterations over all sub-steps (realtime solve only).
+    pub linear_iterations: u32,
 }
 
 /// A cloth: its mesh and elastic constants, pins, and positions and velocities.
@@ -132,6 +154,8 @@ pub struct Cloth {
     pub time: f64,
     /// What the last step took.
     pub last_step: StepStats,
+    solve: Solve,
+    realtime: RealtimeState,
 }
 
 impl Cloth {
@@ -221,7 +245,19 @@ impl Cloth {
             system,
             time: 0.0,
             last_step: StepStats::default(),
+            solve: Solve::Converged,
+            realtime: RealtimeState::default(),
         })
+    }
+
+    /// Solve each time step to convergence (the default) or on a fixed budget.
+    pub fn set_solve(&mut self, solve: Solve) {
+        self.solve = solve;
+    }
+
+    /// How time steps are solved.
+    pub fn solve(&self) -> Solve {
+        self.solve
     }
 
     /// Move the pinned nodes rigidly: at time t each is at `motion.at(rest, t)`.
@@ -546,9 +582,13 @@ impl Cloth {
         };
         let mut q: Vec<DVec3> = (0..self.positions.len()).map(q_start).collect();
         let (solve_scale, target) = self.damped(dt, integrator, scale, &predicted);
-        match self.newton(&mut q, solve_scale, &target, 1.0, stats).filter(|_| !self.broken(&q)) {
+        let solved = match self.solve {
+            Solve::Converged => self.newton(&mut q, solve_scale, &target, 1.0, stats),
+            Solve::Realtime => self.realtime_solve(&mut q, solve_scale, &target, stats),
+        };
+        let before = (self.solve == Solve::Realtime).then(|| self.snapshot());
+        match solved.filter(|_| !self.broken(&q)) {
             Some(()) => {
-                stats.substeps += 1;
                 for node in 0..q.len() {
                     if self.dof[node].is_none() {
                         self.velocities[node] = (q[node] - self.positions[node]) / dt;
@@ -569,16 +609,78 @@ impl Cloth {
                     }
                 }
                 self.positions = q;
+                // The realtime solve is inexact, and an inexact implicit step can
+                // gain energy (still pins cannot give it any): such a step is
+                // undone and halved, as a failed one is.
+                if let Some(before) = before.filter(|b| self.gained_energy(b)) {
+                    self.restore(before);
+                    self.realtime.refactor = true;
+                    return self.halve(dt, integrator, depth, stats);
+                }
+                stats.substeps += 1;
                 self.time += dt;
                 Ok(())
             }
-            None if depth < MAX_HALVINGS => {
+            None => self.halve(dt, integrator, depth, stats),
+        }
+    }
+
+    /// Take the sub-step `dt` as two of half its length (a failed or refused one).
+    fn halve(&mut self, dt: f64, integrator: Integrator, depth: u32, stats: &mut StepStats) -> Result<(), StepError> {
+        match depth {
+            depth if depth < MAX_HALVINGS => {
                 self.substep(dt / 2.0, integrator, depth + 1, stats)?;
                 self.substep(dt / 2.0, integrator, depth + 1, stats)
             }
-            None => Err(StepError::NotConverged),
+            _ => Err(StepError::NotConverged),
         }
     }
+
+    /// The state a step changes, to undo it.
+    fn snapshot(&self) -> Snapshot {
+        Snapshot {
+            positions: self.positions.clone(),
+            velocities: self.velocities.clone(),
+            accelerations: self.accelerations.clone(),
+            energy: self.mechanical_energy(),
+        }
+    }
+
+    fn restore(&mut self, s: Snapshot) {
+        (self.positions, self.velocities, self.accelerations) = (s.positions, s.velocities, s.accelerations);
+    }
+
+    /// Kinetic, elastic, gravitational and contact energy, joules.
+    fn mechanical_energy(&self) -> f64 {
+        let contact: f64 = (self.positions.iter().enumerate())
+            .filter(|(node, _)| self.dof[*node].is_some())
+            .map(|(node, x)| self.contact.energy(*x, self.contact_k(node)))
+            .sum();
+        self.total_energy() + contact
+    }
+
+    /// Whether the state has more energy than `before` (beyond rounding), with
+    /// pins that stand still.
+    fn gained_energy(&self, before: &Snapshot) -> bool {
+        let still = self.pin_motion.velocity == DVec3::ZERO && self.pin_motion.angular_velocity == DVec3::ZERO;
+        let weight: f64 = self.mass.iter().sum::<f64>() * self.params.gravity.length().max(1.0);
+        let extent = self.positions.iter().fold(0.0f64, |m, p| m.max(p.abs().max_element())).max(1.0);
+        still && self.mechanical_energy() > before.energy + ENERGY_SLACK * weight * extent
+    }
+}
+
+/// Energy a realtime step may gain before it is refused, as a fraction of the
+/// cloth's weight times its extent: far below the gains of a step going
+/// unstable (a 65 × 65 sheet swinging from two corners gained 0.5 J in one
+/// step from −0.18 J), above the noise of an inexact solve.
+const ENERGY_SLACK: f64 = 1e-4;
+
+/// What [`Cloth::snapshot`] keeps.
+struct Snapshot {
+    positions: Vec<DVec3>,
+    velocities: Vec<DVec3>,
+    accelerations: Vec<DVec3>,
+    energy: f64,
 }
 
 /// Contact stiffness of a node of `mass` (see [`CONTACT_STIFFNESS`]).

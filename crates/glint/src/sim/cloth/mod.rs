@@ -13,5 +13,5 @@ pub use view::ClothView;
 mod dynamics;
 mod system;
 
-pub use dynamics::{Cloth, ClothParams, Integrator, StepError, StepStats, MAX_HALVINGS};
+pub use dynamics::{realtime, Cloth, ClothParams, Integrator, Solve, StepError, StepStats, MAX_HALVINGS};
 pub use system::MAX_SYSTEM_BYTES;
