@@ -88,9 +88,9 @@ pub enum Solve {
     /// Newton's method to convergence every step: the reference.
     #[default]
     Converged,
-    /// A fixed budget per step for interactive use, with the same energies: one
-    /// Newton iteration solved by preconditioned conjugate gradients (see
-    /// [`realtime`]). Its error against the converged solve is measured in
+    /// A fixed budget per step for interactive use, with the same energies: at
+    /// most three Newton iterations, each solved by preconditioned conjugate
+    /// gradients (see [`realtime`]). Its error against the converged solve is measured in
     /// `tests/cloth_realtime.rs` and `docs/cloth.md`.
     Realtime,
 }
@@ -318,9 +318,14 @@ impl Cloth {
 
     /// Kinetic + elastic − gravity's work (potential relative to the origin), joules.
     pub fn total_energy(&self) -> f64 {
-        let kinetic: f64 = self.mass.iter().zip(&self.velocities).map(|(m, v)| 0.5 * m * v.length_squared()).sum();
-        let gravity: f64 = self.mass.iter().zip(&self.positions).map(|(m, x)| -m * self.params.gravity.dot(*x)).sum();
-        kinetic + self.elastic_energy(&self.positions) + gravity
+        self.energy_of(&self.positions, &self.velocities)
+    }
+
+    /// [`total_energy`](Self::total_energy) at `positions` moving at `velocities`.
+    fn energy_of(&self, positions: &[DVec3], velocities: &[DVec3]) -> f64 {
+        let kinetic: f64 = self.mass.iter().zip(velocities).map(|(m, v)| 0.5 * m * v.length_squared()).sum();
+        let gravity: f64 = self.mass.iter().zip(positions).map(|(m, x)| -m * self.params.gravity.dot(*x)).sum();
+        kinetic + self.elastic_energy(positions) + gravity
     }
 
     /// ∇E at `positions`, per node.
@@ -456,12 +461,7 @@ impl Cloth {
             let potential = self.potential(q, scale, predicted, load);
             let mut alpha = 1.0;
             let trial = loop {
-                let mut trial = q.to_vec();
-                for (node, first) in self.dof.iter().enumerate() {
-                    if let Some(first) = *first {
-                        trial[node] += alpha * DVec3::from_slice(&step[first..first + 3]);
-                    }
-                }
+                let trial = self.moved(q, &step, alpha);
                 let (tr, tn) = self.residual(&trial, scale, predicted, load);
                 let better = tn < norm || self.potential(&trial, scale, predicted, load) <= potential;
                 if tn.is_finite() && (better || alpha < 1.0 / 1024.0) {
@@ -586,37 +586,17 @@ impl Cloth {
             Solve::Converged => self.newton(&mut q, solve_scale, &target, 1.0, stats),
             Solve::Realtime => self.realtime_solve(&mut q, solve_scale, &target, stats),
         };
-        let before = (self.solve == Solve::Realtime).then(|| self.snapshot());
         match solved.filter(|_| !self.broken(&q)) {
             Some(()) => {
-                for node in 0..q.len() {
-                    if self.dof[node].is_none() {
-                        self.velocities[node] = (q[node] - self.positions[node]) / dt;
-                        continue;
-                    }
-                    let a1 = scale * (q[node] - predicted[node]);
-                    match integrator {
-                        Integrator::ImplicitEuler => {
-                            let v1 = (q[node] - self.positions[node]) / dt;
-                            self.accelerations[node] = (v1 - self.velocities[node]) / dt;
-                            self.velocities[node] = v1;
-                        }
-                        _ => {
-                            let a0 = self.accelerations[node];
-                            self.velocities[node] += dt * ((1.0 - NEWMARK_GAMMA) * a0 + NEWMARK_GAMMA * a1);
-                            self.accelerations[node] = a1;
-                        }
-                    }
-                }
-                self.positions = q;
+                let (velocities, accelerations) = self.end_motion(&q, dt, integrator, scale, &predicted);
                 // The realtime solve is inexact, and an inexact implicit step can
                 // gain energy (still pins cannot give it any): such a step is
-                // undone and halved, as a failed one is.
-                if let Some(before) = before.filter(|b| self.gained_energy(b)) {
-                    self.restore(before);
+                // refused and halved, as a failed one is.
+                if self.solve == Solve::Realtime && self.gains_energy(&q, &velocities) {
                     self.realtime.refactor = true;
                     return self.halve(dt, integrator, depth, stats);
                 }
+                (self.positions, self.velocities, self.accelerations) = (q, velocities, accelerations);
                 stats.substeps += 1;
                 self.time += dt;
                 Ok(())
@@ -636,51 +616,48 @@ impl Cloth {
         }
     }
 
-    /// The state a step changes, to undo it.
-    fn snapshot(&self) -> Snapshot {
-        Snapshot {
-            positions: self.positions.clone(),
-            velocities: self.velocities.clone(),
-            accelerations: self.accelerations.clone(),
-            energy: self.mechanical_energy(),
+    /// Velocities and accelerations at the end of a sub-step of `dt` that ends at `q`.
+    fn end_motion(
+        &self,
+        q: &[DVec3],
+        dt: f64,
+        integrator: Integrator,
+        scale: f64,
+        predicted: &[DVec3],
+    ) -> (Vec<DVec3>, Vec<DVec3>) {
+        let (mut velocities, mut accelerations) = (self.velocities.clone(), self.accelerations.clone());
+        for node in 0..q.len() {
+            if self.dof[node].is_none() {
+                velocities[node] = (q[node] - self.positions[node]) / dt;
+                continue;
+            }
+            let a1 = scale * (q[node] - predicted[node]);
+            match integrator {
+                Integrator::ImplicitEuler => {
+                    let v1 = (q[node] - self.positions[node]) / dt;
+                    accelerations[node] = (v1 - velocities[node]) / dt;
+                    velocities[node] = v1;
+                }
+                _ => {
+                    let a0 = accelerations[node];
+                    velocities[node] += dt * ((1.0 - NEWMARK_GAMMA) * a0 + NEWMARK_GAMMA * a1);
+                    accelerations[node] = a1;
+                }
+            }
         }
+        (velocities, accelerations)
     }
 
-    fn restore(&mut self, s: Snapshot) {
-        (self.positions, self.velocities, self.accelerations) = (s.positions, s.velocities, s.accelerations);
+    /// `q` moved by `alpha` times `step` (per free DOF); pinned nodes stay.
+    fn moved(&self, q: &[DVec3], step: &[f64], alpha: f64) -> Vec<DVec3> {
+        let mut moved = q.to_vec();
+        for (node, first) in self.dof.iter().enumerate() {
+            if let Some(first) = *first {
+                moved[node] += alpha * DVec3::from_slice(&step[first..first + 3]);
+            }
+        }
+        moved
     }
-
-    /// Kinetic, elastic, gravitational and contact energy, joules.
-    fn mechanical_energy(&self) -> f64 {
-        let contact: f64 = (self.positions.iter().enumerate())
-            .filter(|(node, _)| self.dof[*node].is_some())
-            .map(|(node, x)| self.contact.energy(*x, self.contact_k(node)))
-            .sum();
-        self.total_energy() + contact
-    }
-
-    /// Whether the state has more energy than `before` (beyond rounding), with
-    /// pins that stand still.
-    fn gained_energy(&self, before: &Snapshot) -> bool {
-        let still = self.pin_motion.velocity == DVec3::ZERO && self.pin_motion.angular_velocity == DVec3::ZERO;
-        let weight: f64 = self.mass.iter().sum::<f64>() * self.params.gravity.length().max(1.0);
-        let extent = self.positions.iter().fold(0.0f64, |m, p| m.max(p.abs().max_element())).max(1.0);
-        still && self.mechanical_energy() > before.energy + ENERGY_SLACK * weight * extent
-    }
-}
-
-/// Energy a realtime step may gain before it is refused, as a fraction of the
-/// cloth's weight times its extent: far below the gains of a step going
-/// unstable (a 65 × 65 sheet swinging from two corners gained 0.5 J in one
-/// step from −0.18 J), above the noise of an inexact solve.
-const ENERGY_SLACK: f64 = 1e-4;
-
-/// What [`Cloth::snapshot`] keeps.
-struct Snapshot {
-    positions: Vec<DVec3>,
-    velocities: Vec<DVec3>,
-    accelerations: Vec<DVec3>,
-    energy: f64,
 }
 
 /// Contact stiffness of a node of `mass` (see [`CONTACT_STIFFNESS`]).
