@@ -78,11 +78,30 @@ pub struct ClothArgs {
     json: bool,
 }
 
-/// `--solve`.
+/// `--solve` (here, and on `render` and `view`).
 #[derive(Clone, Copy, ValueEnum)]
-enum SolveArg {
+pub enum SolveArg {
     Converged,
     Realtime,
+}
+
+impl SolveArg {
+    /// The name `--solve` and `.scn` give it.
+    fn name(self) -> &'static str {
+        match self {
+            SolveArg::Converged => "converged",
+            SolveArg::Realtime => "realtime",
+        }
+    }
+}
+
+impl From<SolveArg> for Solve {
+    fn from(arg: SolveArg) -> Self {
+        match arg {
+            SolveArg::Converged => Solve::Converged,
+            SolveArg::Realtime => Solve::Realtime,
+        }
+    }
 }
 
 /// What `--bench --json` prints: one object.
@@ -100,7 +119,6 @@ struct BenchReport {
     steps_per_second: f64,
     newton_iterations_per_step: f64,
     factorizations_per_step: f64,
-    cg_iterations_per_step: f64,
     substeps_per_step: f64,
 }
 
@@ -140,17 +158,14 @@ pub fn cloth(args: &ClothArgs) -> Result<(), Error> {
     let mut cloth = Cloth::new(mesh, params, &pinned).map_err(|e| Diagnostic::file(&source, e.to_string()))?;
     cloth.set_colliders(args.collider.clone(), args.thickness.max(1e-3));
     cloth.set_damping(args.damping);
-    cloth.set_solve(match args.solve {
-        SolveArg::Converged => Solve::Converged,
-        SolveArg::Realtime => Solve::Realtime,
-    });
+    cloth.set_solve(args.solve.into());
     let (integrator, steps) = match args.integrator {
         IntegratorArg::ImplicitEuler => (Integrator::ImplicitEuler, args.steps),
         IntegratorArg::Newmark => (Integrator::Newmark, args.steps),
         IntegratorArg::Static => (Integrator::Static, 1),
     };
     let mut out = args.out.as_deref().map(|path| Trajectory::create(path, nodes)).transpose()?;
-    let (mut stepping, mut iterations, mut factorizations, mut substeps, mut cg) = (0.0, 0u64, 0u64, 0u64, 0u64);
+    let (mut stepping, mut iterations, mut factorizations, mut substeps) = (0.0, 0u64, 0u64, 0u64);
     for step in 1..=steps {
         let start = Instant::now();
         let stats = cloth.step(args.dt, integrator)?;
@@ -158,7 +173,6 @@ pub fn cloth(args: &ClothArgs) -> Result<(), Error> {
         iterations += u64::from(stats.newton_iterations);
         factorizations += u64::from(stats.factorizations);
         substeps += u64::from(stats.substeps);
-        cg += u64::from(stats.linear_iterations);
         if let Some(out) = &mut out {
             out.row(step, cloth.time, &cloth.positions)?;
         }
@@ -174,17 +188,13 @@ pub fn cloth(args: &ClothArgs) -> Result<(), Error> {
             edges: cloth.topology().edges.len(),
             hinges: cloth.topology().hinges.len(),
             threads: rayon::current_num_threads(),
-            solve: match args.solve {
-                SolveArg::Converged => "converged",
-                SolveArg::Realtime => "realtime",
-            },
+            solve: args.solve.name(),
             dt: args.dt,
             steps,
             seconds: stepping,
             steps_per_second: f64::from(steps) / stepping,
             newton_iterations_per_step: per_step(iterations),
             factorizations_per_step: per_step(factorizations),
-            cg_iterations_per_step: per_step(cg),
             substeps_per_step: per_step(substeps),
         };
         let text = if args.json {
@@ -193,7 +203,7 @@ pub fn cloth(args: &ClothArgs) -> Result<(), Error> {
             format!(
                 "cloth: {} nodes ({} pinned), {} edges, {} hinges, {} threads, {} solve\n\
                  {steps} steps of {} s in {stepping:.3} s: {:.1} steps/s, {:.2} Newton iterations/step \
-                 ({:.2} factorisations, {:.2} CG iterations), {:.2} sub-steps/step\n",
+                 ({:.2} factorisations), {:.2} sub-steps/step\n",
                 r.nodes,
                 r.pinned,
                 r.edges,
@@ -204,7 +214,6 @@ pub fn cloth(args: &ClothArgs) -> Result<(), Error> {
                 r.steps_per_second,
                 r.newton_iterations_per_step,
                 r.factorizations_per_step,
-                r.cg_iterations_per_step,
                 r.substeps_per_step
             )
         };

@@ -32,7 +32,6 @@ use super::system::{SparseSystem, SystemError, BYTES_PER_PATTERN_ENTRY, MAX_SYST
 use super::{ClothMesh, ClothMeshError, Topology};
 use glam::DVec3;
 use rayon::prelude::*;
-use realtime::RealtimeState;
 
 pub mod realtime;
 
@@ -89,8 +88,8 @@ pub enum Solve {
     #[default]
     Converged,
     /// A fixed budget per step for interactive use, with the same energies: at
-    /// most three Newton iterations, each solved by preconditioned conjugate
-    /// gradients (see [`realtime`]). Its error against the converged solve is measured in
+    /// most three Newton iterations on the definite Jacobian with a cut-short
+    /// line search (see [`realtime`]). Its error against the converged solve is measured in
     /// `tests/cloth_realtime.rs` and `docs/cloth.md`.
     Realtime,
 }
@@ -113,8 +112,6 @@ pub struct StepStats {
     /// Sub-steps taken (1 unless the step was halved); for a static solve, the
     /// load increments.
     pub substeps: u32,
-    /// Conjugate-gradient iterations over all sub-steps (realtime solve only).
-    pub linear_iterations: u32,
 }
 
 /// A cloth: its mesh and elastic constants, pins, and positions and velocities.
@@ -155,7 +152,6 @@ pub struct Cloth {
     /// What the last step took.
     pub last_step: StepStats,
     solve: Solve,
-    realtime: RealtimeState,
 }
 
 impl Cloth {
@@ -246,7 +242,6 @@ impl Cloth {
             time: 0.0,
             last_step: StepStats::default(),
             solve: Solve::Converged,
-            realtime: RealtimeState::default(),
         })
     }
 
@@ -593,7 +588,6 @@ impl Cloth {
                 // gain energy (still pins cannot give it any): such a step is
                 // refused and halved, as a failed one is.
                 if self.solve == Solve::Realtime && self.gains_energy(&q, &velocities) {
-                    self.realtime.refactor = true;
                     return self.halve(dt, integrator, depth, stats);
                 }
                 (self.positions, self.velocities, self.accelerations) = (q, velocities, accelerations);

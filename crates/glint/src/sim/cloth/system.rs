@@ -6,16 +6,12 @@
 //! computed once; the numeric factor lives in a buffer reused every time, so
 //! one factorisation can serve several solves.
 
-use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
+use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::solvers::Solve;
-use faer::matrix_free::conjugate_gradient::{conjugate_gradient, conjugate_gradient_scratch, CgError, CgParams};
-use faer::matrix_free::{InitialGuessStatus, LinOp, Precond};
-use faer::reborrow::ReborrowMut;
 use faer::sparse::linalg::cholesky::{factorize_symbolic_cholesky, LltRef, SymbolicCholesky, SymmetricOrdering};
-use faer::sparse::linalg::matmul::sparse_dense_matmul;
 use faer::sparse::linalg::solvers::{Lu, SymbolicLu};
 use faer::sparse::{Pair, SparseColMat, SparseColMatRef, SymbolicSparseColMat};
-use faer::{Accum, Conj, MatMut, MatRef, Par, Side, Spec};
+use faer::{Conj, Side, Spec};
 
 /// Factorisations run on one thread: on the 2-core reference machine faer's
 /// parallel supernodal Cholesky was slower (9.4 s against 8.2 s for 20 steps
@@ -205,63 +201,6 @@ impl SparseSystem {
         Ok(())
     }
 
-    /// Whether a Cholesky factor is kept (from the last successful
-    /// [`factorize_cholesky`](Self::factorize_cholesky)).
-    pub fn has_cholesky(&self) -> bool {
-        matches!(self.factor, Factor::Cholesky)
-    }
-
-    /// Solve `A x = rhs` for the matrix of the current [`values`](Self::values)
-    /// (which must be positive definite) by conjugate gradients from the guess in
-    /// `x`, preconditioned by the kept Cholesky factor of an earlier matrix, for
-    /// at most `max_iterations`, or until the residual is `tolerance` times
-    /// `rhs`'s norm. Returns the iterations taken; `x` holds the last iterate even
-    /// when the budget ran out first. Fails without a kept factor, or when the
-    /// matrix or the factor is found not to be positive definite.
-    pub fn solve_cg(
-        &mut self,
-        rhs: &[f64],
-        x: &mut [f64],
-        max_iterations: usize,
-        tolerance: f64,
-    ) -> Result<usize, SolveFailed> {
-        if !self.has_cholesky() {
-            return Err(SolveFailed);
-        }
-        self.fill_matrix();
-        let lower = SparseColMatRef::new(self.symbolic.as_ref(), &self.matrix_values);
-        let diagonal: Vec<f64> = (0..self.n)
-            .map(|c| {
-                let rows = lower.row_idx_of_col_raw(c);
-                rows.binary_search(&c).map_or(0.0, |i| lower.val_of_col(c)[i])
-            })
-            .collect();
-        let matrix = Mirrored { lower, diagonal };
-        let kept = KeptFactor { factor: LltRef::new(&self.cholesky, &self.cholesky_values) };
-        let par = FACTOR_PAR;
-        let mut scratch = MemBuffer::new(conjugate_gradient_scratch(&kept, &matrix, 1, par));
-        let params = CgParams {
-            initial_guess: InitialGuessStatus::MaybeNonZero,
-            abs_tolerance: 0.0,
-            rel_tolerance: tolerance,
-            max_iters: max_iterations,
-            ..Default::default()
-        };
-        let b = MatRef::from_column_major_slice(rhs, self.n, 1);
-        let out = MatMut::from_column_major_slice_mut(x, self.n, 1);
-        let stack = MemStack::new(&mut scratch);
-        let iterations = match conjugate_gradient(out, &kept, &matrix, b, params, |_| {}, par, stack) {
-            Ok(info) => info.iter_count,
-            Err(CgError::NoConvergence { .. }) => max_iterations,
-            Err(_) => return Err(SolveFailed),
-        };
-        if x.iter().all(|v| v.is_finite()) {
-            Ok(iterations)
-        } else {
-            Err(SolveFailed)
-        }
-    }
-
     /// Solve `A x = rhs` in place with the last factorisation.
     pub fn solve(&mut self, rhs: &mut [f64]) -> Result<(), SolveFailed> {
         let view = faer::MatMut::from_column_major_slice_mut(rhs, self.n, 1);
@@ -282,114 +221,9 @@ impl SparseSystem {
     }
 }
 
-/// The symmetric matrix whose lower triangle (diagonal included) is `lower`, as
-/// an operator: `A x = L x + Lᵀ x − D x`.
-#[derive(Debug)]
-struct Mirrored<'a> {
-    lower: SparseColMatRef<'a, usize, f64>,
-    diagonal: Vec<f64>,
-}
-
-impl LinOp<f64> for Mirrored<'_> {
-    fn apply_scratch(&self, _rhs_ncols: usize, _par: Par) -> StackReq {
-        StackReq::EMPTY
-    }
-
-    fn nrows(&self) -> usize {
-        self.diagonal.len()
-    }
-
-    fn ncols(&self) -> usize {
-        self.diagonal.len()
-    }
-
-    fn apply(&self, mut out: MatMut<'_, f64>, rhs: MatRef<'_, f64>, par: Par, _stack: &mut MemStack) {
-        sparse_dense_matmul(out.rb_mut(), Accum::Replace, self.lower, rhs, 1.0, par);
-        sparse_dense_matmul(out.rb_mut(), Accum::Add, self.lower.transpose(), rhs, 1.0, par);
-        for col in 0..rhs.ncols() {
-            for (row, d) in self.diagonal.iter().enumerate() {
-                out[(row, col)] -= d * rhs[(row, col)];
-            }
-        }
-    }
-
-    fn conj_apply(&self, out: MatMut<'_, f64>, rhs: MatRef<'_, f64>, par: Par, stack: &mut MemStack) {
-        self.apply(out, rhs, par, stack);
-    }
-}
-
-/// A Cholesky factor kept from an earlier matrix, applied as `(L Lᵀ)⁻¹`: the
-/// preconditioner of [`SparseSystem::solve_cg`].
-#[derive(Debug)]
-struct KeptFactor<'a> {
-    factor: LltRef<'a, usize, f64>,
-}
-
-impl LinOp<f64> for KeptFactor<'_> {
-    fn apply_scratch(&self, rhs_ncols: usize, par: Par) -> StackReq {
-        self.factor.symbolic().solve_in_place_scratch::<f64>(rhs_ncols, par)
-    }
-
-    fn nrows(&self) -> usize {
-        self.factor.symbolic().nrows()
-    }
-
-    fn ncols(&self) -> usize {
-        self.factor.symbolic().ncols()
-    }
-
-    fn apply(&self, mut out: MatMut<'_, f64>, rhs: MatRef<'_, f64>, par: Par, stack: &mut MemStack) {
-        out.copy_from(rhs);
-        self.apply_in_place(out, par, stack);
-    }
-
-    fn conj_apply(&self, out: MatMut<'_, f64>, rhs: MatRef<'_, f64>, par: Par, stack: &mut MemStack) {
-        self.apply(out, rhs, par, stack);
-    }
-}
-
-impl Precond<f64> for KeptFactor<'_> {
-    fn apply_in_place_scratch(&self, rhs_ncols: usize, par: Par) -> StackReq {
-        self.apply_scratch(rhs_ncols, par)
-    }
-
-    fn apply_in_place(&self, rhs: MatMut<'_, f64>, par: Par, stack: &mut MemStack) {
-        self.factor.solve_in_place_with_conj(Conj::No, rhs, par, stack);
-    }
-
-    fn conj_apply_in_place(&self, rhs: MatMut<'_, f64>, par: Par, stack: &mut MemStack) {
-        self.apply_in_place(rhs, par, stack);
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn conjugate_gradients_solve_a_changed_matrix_with_the_kept_factor() {
-        // A 3×3 tridiagonal SPD matrix, factorised, then changed: CG preconditioned
-        // by the old factor solves the new one.
-        let pattern = [(0, 0), (1, 0), (1, 1), (2, 1), (2, 2)];
-        let mut system = SparseSystem::new(3, &pattern).unwrap();
-        let mut x = [0.0; 3];
-        assert_eq!(system.solve_cg(&[1.0, 2.0, 3.0], &mut x, 10, 1e-12), Err(SolveFailed), "no kept factor");
-        system.values.copy_from_slice(&[4.0, 1.0, 4.0, 1.0, 4.0]);
-        assert!(system.factorize_cholesky());
-        system.values.copy_from_slice(&[5.0, -1.0, 3.0, 2.0, 6.0]);
-        let rhs = [1.0, 2.0, 3.0];
-        let iterations = system.solve_cg(&rhs, &mut x, 10, 1e-12).unwrap();
-        let dense = system.dense();
-        for (row, want) in dense.iter().zip(rhs) {
-            let got: f64 = row.iter().zip(&x).map(|(a, b)| a * b).sum();
-            assert!((got - want).abs() < 1e-10, "A x = {got}, want {want} ({x:?})");
-        }
-        assert!((1..=3).contains(&iterations), "{iterations} iterations for 3 unknowns");
-        // With the factor of this very matrix, one iteration.
-        assert!(system.factorize_cholesky());
-        let mut y = [0.0; 3];
-        assert_eq!(system.solve_cg(&rhs, &mut y, 10, 1e-12).unwrap(), 1);
-    }
 
     #[test]
     fn solves_positive_definite_and_indefinite_systems() {

@@ -6,12 +6,13 @@
 //!   (a falling sheet needs none). One, as in Baraff and Witkin's "large steps",
 //!   drifted too far: 1.7 cm on average from the converged tablecloth at 2 s,
 //!   and it halved a third of its steps.
-//! - Each iteration's system is the positive-definite Jacobian (Gauss–Newton
-//!   hinge and edge terms, so conjugate gradients apply), solved by at most
-//!   [`CG_ITERATIONS`] iterations warm-started from the last correction and
-//!   preconditioned by a Cholesky factor kept from an earlier iteration. The
-//!   factor is rebuilt only when CG ran out of iterations (the motion has moved
-//!   the Jacobian too far from it) or a step was refused.
+//! - Each iteration solves the positive semi-definite Jacobian (Gauss–Newton
+//!   hinge and edge terms, plus the mass) with a fresh Cholesky factor. Keeping
+//!   a factor across iterations and steps as the preconditioner of at most 12
+//!   conjugate-gradient iterations (tolerance 10⁻²) was slower at both sizes
+//!   measured, as the kept factor went stale within a step or two: 103 against
+//!   130 steps/s on the 33 × 33 tablecloth, 5.5 against 8.1 on a 65 × 65 one
+//!   (`glint sim cloth --bench`, the commands in `docs/cloth.md`).
 //! - A node's move is cut short where it would enter a collider (its penalty
 //!   starts only δ off the surface, so an iteration does not see a table top the
 //!   node is about to cross), then the move is taken as far as the incremental
@@ -22,12 +23,6 @@
 
 use super::{Cloth, Hessian, Solve, StepStats};
 use glam::DVec3;
-
-/// Most conjugate-gradient iterations a step's linear system gets.
-pub const CG_ITERATIONS: usize = 12;
-
-/// CG stops once the linear residual is this fraction of the right-hand side's.
-const CG_TOLERANCE: f64 = 1e-2;
 
 /// Most Newton iterations a step takes.
 pub const NEWTON_ITERATIONS: usize = 3;
@@ -43,15 +38,6 @@ const LINE_SEARCH_HALVINGS: u32 = 3;
 /// unstable (a 65 × 65 sheet swinging from two corners gained 0.5 J in one
 /// step from −0.18 J), above the noise of an inexact solve.
 const ENERGY_SLACK: f64 = 1e-4;
-
-/// What the realtime solve keeps between steps.
-#[derive(Default)]
-pub(super) struct RealtimeState {
-    /// The last accepted correction per free DOF: the next solve's first guess.
-    warm_start: Vec<f64>,
-    /// The kept factor is too far from the Jacobian: rebuild it before the next solve.
-    pub(super) refactor: bool,
-}
 
 impl Cloth {
     /// The realtime solve from `q` (moved in place) on the residual of
@@ -100,7 +86,10 @@ impl Cloth {
         still && self.mechanical_energy(positions, velocities) > before + ENERGY_SLACK * weight * extent
     }
 
-    /// One iteration from `q` with residual `r`.
+    /// One iteration from `q` with residual `r`: a fresh factor of the definite
+    /// Jacobian, its Newton step cut short at colliders and shortened until the
+    /// incremental potential falls; `None` when even an eighth of it raises the
+    /// potential.
     fn realtime_iteration(
         &mut self,
         q: &mut [DVec3],
@@ -110,24 +99,13 @@ impl Cloth {
         stats: &mut StepStats,
     ) -> Option<()> {
         self.assemble(q, scale, Hessian::Definite);
-        let state = &mut self.realtime;
-        if state.refactor || !self.system.has_cholesky() {
-            state.refactor = false;
-            stats.factorizations += 1;
-            if !self.system.factorize_cholesky() {
-                return None;
-            }
-        }
-        state.warm_start.resize(self.free_dofs, 0.0);
-        let rhs: Vec<f64> = r.iter().map(|v| -v).collect();
-        let mut step = state.warm_start.clone();
+        stats.factorizations += 1;
         stats.newton_iterations += 1;
-        let Ok(iterations) = self.system.solve_cg(&rhs, &mut step, CG_ITERATIONS, CG_TOLERANCE) else {
-            self.realtime.refactor = true;
+        if !self.system.factorize_cholesky() {
             return None;
-        };
-        stats.linear_iterations += iterations as u32;
-        self.realtime.refactor = iterations >= CG_ITERATIONS;
+        }
+        let mut step: Vec<f64> = r.iter().map(|v| -v).collect();
+        self.system.solve(&mut step).ok()?;
         for (node, first) in self.dof.iter().enumerate() {
             if let Some(first) = *first {
                 let wanted = DVec3::from_slice(&step[first..first + 3]);
@@ -142,14 +120,10 @@ impl Cloth {
             let after = self.potential(&trial, scale, predicted, 1.0);
             if after.is_finite() && after <= potential {
                 q.copy_from_slice(&trial);
-                self.realtime.warm_start = step.iter().map(|v| alpha * v).collect();
                 return Some(());
             }
             alpha *= 0.5;
         }
-        // Even an eighth of the step raised the potential: the factor was stale.
-        self.realtime.refactor = true;
-        self.realtime.warm_start.fill(0.0);
         None
     }
 }
