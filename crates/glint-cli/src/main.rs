@@ -144,6 +144,18 @@ struct Picture {
     /// Which camera of the scene to use (0 = the first).
     #[arg(long, default_value_t = 0)]
     camera: usize,
+    /// Solve every cloth this way, whatever its scene block says: Newton's
+    /// method to convergence (the reference) or on a fixed budget for
+    /// interactive use.
+    #[arg(long, value_enum)]
+    solve: Option<sim::SolveArg>,
+}
+
+impl Picture {
+    /// `options` with this picture's cloth solve.
+    fn load_options(&self, options: LoadOptions) -> LoadOptions {
+        LoadOptions { cloth_solve: self.solve.map(Into::into), ..options }
+    }
 }
 
 /// `glint bench --mode`.
@@ -431,23 +443,26 @@ fn main() -> ExitCode {
             time: *time,
             frames: *frames,
             fps: *fps,
-            options,
+            options: picture.load_options(options),
         }),
         Command::Check { scene } => check(scene, options),
         Command::Sim(SimCommand::Cloth(args)) => sim::cloth(args),
-        Command::View { scene, picture, frames, screenshot, at } => load(scene, options.clone()).and_then(|desc| {
-            let args = view::ViewArgs {
-                scene: scene.clone(),
-                size: picture.size,
-                msaa: picture.msaa,
-                camera: picture.camera,
-                frames: *frames,
-                screenshot: screenshot.clone(),
-                script: at.clone(),
-                options,
-            };
-            view::run(args, desc)
-        }),
+        Command::View { scene, picture, frames, screenshot, at } => {
+            let options = picture.load_options(options);
+            load(scene, options.clone()).and_then(|desc| {
+                let args = view::ViewArgs {
+                    scene: scene.clone(),
+                    size: picture.size,
+                    msaa: picture.msaa,
+                    camera: picture.camera,
+                    frames: *frames,
+                    screenshot: screenshot.clone(),
+                    script: at.clone(),
+                    options,
+                };
+                view::run(args, desc)
+            })
+        }
         Command::Bench { scene, frames, warmup, mode, size, msaa, json, plot } => {
             let config = bench::BenchConfig { frames: *frames, warmup: *warmup, size: *size, msaa: *msaa };
             run_bench(scene, &config, *mode, *json, plot.as_deref(), options)

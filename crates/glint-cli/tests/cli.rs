@@ -502,6 +502,17 @@ fn view_runs_under_xvfb_resizes_and_takes_screenshots() {
         return;
     }
     assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    // On quitting it says how fast the scene played: at most real time.
+    let summary = stderr(&out).lines().find(|l| l.contains("frames drawn in")).map(str::to_owned);
+    let summary = summary.unwrap_or_else(|| panic!("no summary: {}", stderr(&out)));
+    let speed: f64 = summary
+        .rsplit(", ")
+        .next()
+        .and_then(|s| s.strip_suffix("x real time"))
+        .expect(&summary)
+        .parse()
+        .expect(&summary);
+    assert!(summary.starts_with("glint view: ") && (0.0..=1.001).contains(&speed), "{summary}");
     for png in [&mid, &last] {
         let image = image::open(png).unwrap_or_else(|e| panic!("{}: {e}\n{}", png.display(), stderr(&out))).into_rgb8();
         assert_eq!(image.dimensions(), (120, 80), "{}: the frame follows the resized window", png.display());
@@ -542,9 +553,10 @@ fn sim_cloth_bench_prints_one_json_object_for_either_solve() {
         let factorizations = report["factorizations_per_step"].as_f64().expect("factorisations");
         assert!(factorizations > 0.0 && factorizations <= newton, "{report}");
         if solve == "realtime" {
-            // At most three iterations a step, unless a step was halved.
+            // At most three iterations a step, unless a step was halved, each
+            // on a fresh factor.
             let substeps = report["substeps_per_step"].as_f64().expect("substeps");
-            assert!(newton <= 3.0 * substeps, "{report}");
+            assert!(newton <= 3.0 * substeps && factorizations == newton, "{report}");
         }
     }
     assert_ne!(

@@ -2,11 +2,13 @@
 //! scene file and screenshots. Frames are drawn exactly as `glint render` draws
 //! them (into an offscreen target) and then shown in the window.
 
+mod clock;
 mod script;
 mod watch;
 
 pub use script::{parse_at, Action, Scripted};
 
+use clock::SceneClock;
 use glam::Vec2;
 use glint::asset::{LoadOptions, SceneDesc};
 use glint::scene::{FlyCamera, FlyInput};
@@ -36,17 +38,14 @@ Keys:
 
 The scene file is loaded again when it changes on disk; a file with errors is
 reported here and the last good scene stays on screen. The title bar shows the
-frame time and draw count.
+frame time, how fast the scene plays (a frame advances it at most 1/30 s, so a
+slow frame plays in slow motion) and the draw count; quitting prints the same.
 
 Exit codes: 0 ok, 1 bad input (file:line: message on stderr), 2 no GPU adapter,
 3 other failures (no display, GPU or render errors).";
 
 /// How often the scene file is checked for changes.
 const WATCH_INTERVAL: Duration = Duration::from_millis(300);
-/// Most scene time one frame advances, seconds. A cloth slower to simulate than
-/// real time then runs in slow motion instead of falling further behind every
-/// frame (each pose steps it all the way to the scene time).
-const MAX_FRAME_ADVANCE: f32 = 1.0 / 30.0;
 /// How often the title's frame time is refreshed (averaged over the interval).
 const TITLE_INTERVAL: Duration = Duration::from_millis(500);
 
@@ -107,14 +106,11 @@ struct View {
     last_watch: Instant,
     fly: FlyCamera,
     input: Input,
-    /// Animation and simulation time, seconds: real time, but at most
-    /// [`MAX_FRAME_ADVANCE`] per frame.
-    scene_time: f32,
+    /// Animation and simulation time, and how fast it played.
+    clock: SceneClock,
     last_frame: Instant,
     /// Frames counted so far (drawn or skipped while the window has no area).
     frames: u32,
-    /// Frame times since the title was last refreshed.
-    title_frames: (u32, Duration),
     last_title: Instant,
 }
 
@@ -197,10 +193,9 @@ impl App {
             watch: SceneWatch::new(&self.args.scene, self.args.options.clone()),
             last_watch: now,
             input: Input::default(),
-            scene_time: 0.0,
+            clock: SceneClock::default(),
             last_frame: now,
             frames: 0,
-            title_frames: (0, Duration::ZERO),
             last_title: now,
             gpu,
         })
@@ -237,7 +232,7 @@ impl View {
                 self.scene = Scene::new(&self.gpu, desc, camera);
                 // Animations and cloths start again from the beginning, rather
                 // than a new cloth stepping all the way to the old time at once.
-                self.scene_time = 0.0;
+                self.clock.restart();
                 eprintln!("reloaded {}", path.display());
             }
         }
@@ -253,18 +248,18 @@ impl View {
         }
         self.fly.update(dt.as_secs_f32().min(0.25), &self.input.take());
         let scene = &mut self.scene;
-        self.scene_time += dt.as_secs_f32().min(MAX_FRAME_ADVANCE);
-        scene.desc.pose(self.scene_time, &mut scene.entities, &mut scene.renderer)?;
+        let time = self.clock.tick(dt);
+        scene.desc.pose(time, &mut scene.entities, &mut scene.renderer)?;
         let camera = self.fly.apply(&scene.camera);
         let stats = scene.renderer.render(&scene.entities, &camera, &scene.desc.lights, &mut self.target)?;
         self.surface.present(&self.gpu, &self.target);
-        self.title_frames = (self.title_frames.0 + 1, self.title_frames.1 + dt);
         if self.last_title.elapsed() >= TITLE_INTERVAL {
-            let (n, total) = std::mem::take(&mut self.title_frames);
-            let ms = total.as_secs_f64() * 1e3 / f64::from(n.max(1));
+            let recent = self.clock.take_recent();
             self.window.set_title(&format!(
-                "glint: {} | {ms:.1} ms | {} draws, {} shadow draws",
+                "glint: {} | {:.1} ms | plays at {:.2}x | {} draws, {} shadow draws",
                 self.scene.desc.path.display(),
+                recent.frame_ms(),
+                recent.speed(),
                 stats.draws,
                 stats.passes.shadow.draws
             ));
@@ -394,6 +389,17 @@ impl ApplicationHandler for App {
     }
 
     fn exiting(&mut self, _event_loop: &ActiveEventLoop) {
+        if let Some(view) = &self.view {
+            let played = view.clock.total;
+            eprintln!(
+                "glint view: {} frames drawn in {:.2} s ({:.1} ms a frame); the scene played {:.2} s, {:.2}x real time",
+                played.frames,
+                played.real,
+                played.frame_ms(),
+                played.scene,
+                played.speed()
+            );
+        }
         if let (Some(view), Some(path), Ok(())) = (&self.view, &self.args.screenshot, &self.result) {
             if let Err(e) = view.screenshot(path) {
                 self.result = Err(e);

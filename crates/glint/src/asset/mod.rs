@@ -52,11 +52,18 @@ pub struct LoadOptions {
     /// Most bytes of decoded texture pixels the load may hold (default
     /// [`MAX_TEXTURE_MEMORY`]); a scene passes what it has left to its models.
     pub texture_memory: u64,
+    /// How every cloth is solved, whatever its scene block says (`None`: as it says).
+    pub cloth_solve: Option<crate::sim::cloth::Solve>,
 }
 
 impl Default for LoadOptions {
     fn default() -> Self {
-        Self { allow_outside_assets: false, asset_roots: Vec::new(), texture_memory: MAX_TEXTURE_MEMORY }
+        Self {
+            allow_outside_assets: false,
+            asset_roots: Vec::new(),
+            texture_memory: MAX_TEXTURE_MEMORY,
+            cloth_solve: None,
+        }
     }
 }
 

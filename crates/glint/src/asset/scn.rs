@@ -559,6 +559,9 @@ impl Loader<'_> {
                 let nodes: u64 = self.cloths.iter().map(|(c, _)| c.setup.mesh.nodes.len() as u64).sum();
                 let mut cloth = scn_cloth::parse(&mut f, &self.assets, nodes)?;
                 cloth.draw = Self::draw_options(&mut f)?;
+                if let Some(solve) = self.options.cloth_solve {
+                    cloth.setup.solve = solve;
+                }
                 let material = Self::material_ref(&mut f);
                 self.cloths.push((cloth, material));
             }

@@ -336,6 +336,11 @@ mod tests {
         assert_eq!(realtime.cloths[0].setup.start().unwrap().solve(), Solve::Realtime, "the simulation solves so");
         let wrong = parse("\"size\" \"2 1\"\n\"resolution\" \"3 2\"\n\"solve\" \"fast\"\n").unwrap_err().to_string();
         assert!(wrong.contains("t.scn:5") && wrong.contains("converged") && wrong.contains("realtime"), "{wrong}");
+        // `--solve` on `render` and `view`: every cloth, whatever its block says.
+        let text = "{\n\"classname\" \"cloth\"\n\"size\" \"2 1\"\n\"resolution\" \"3 2\"\n\"solve\" \"realtime\"\n}\n";
+        let options = crate::asset::LoadOptions { cloth_solve: Some(Solve::Converged), ..Default::default() };
+        let overridden = super::super::parse_scene_with(Path::new("dir/t.scn"), text, options).unwrap();
+        assert_eq!(overridden.cloths[0].setup.solve, Solve::Converged);
         assert_eq!(cloth.setup.colliders.len(), 2);
         assert_eq!(cloth.setup.contact_distance, 1e-3);
         assert_eq!(cloth.setup.params.gravity, DVec3::new(0.0, -9.81, 0.0));
