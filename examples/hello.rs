@@ -38,8 +38,8 @@ fn main() -> Result<(), glint::Error> {
         renderer.submit(&ground);
         renderer.submit(&ring);
         renderer.submit(&bouncer);
-        renderer.shadow_pass(&camera, &lights, &target)?;
-        let stats = renderer.flush(&camera, &lights, &mut target)?;
+        let shadows = renderer.shadow_pass(camera, &lights, &target)?;
+        let stats = renderer.flush(camera, &lights, &shadows, &mut target)?;
         println!(
             "frame {frame}: {} draws, {} instances, {} shadow views ({} draws), {} bytes uploaded",
             stats.draw_calls,

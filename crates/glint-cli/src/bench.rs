@@ -115,9 +115,9 @@ pub fn run_mode(gpu: &Gpu, desc: &SceneDesc, mode: FrameMode, config: &BenchConf
         for e in &entities {
             renderer.submit(e);
         }
-        renderer.shadow_pass(&camera, &desc.lights, &target)?;
+        let shadows = renderer.shadow_pass(camera, &desc.lights, &target)?;
         let _ = gpu.device.poll(wgpu::PollType::wait_indefinitely());
-        let stats = renderer.flush(&camera, &desc.lights, &mut target)?;
+        let stats = renderer.flush(camera, &desc.lights, &shadows, &mut target)?;
         let _ = gpu.device.poll(wgpu::PollType::wait_indefinitely());
         let whole = frame_start.elapsed().as_secs_f64() * 1e3;
         let frame_gpu = renderer.read_gpu_times();

@@ -141,14 +141,33 @@ struct Picture {
     /// Samples per pixel: 1 (no MSAA) or 4.
     #[arg(long, default_value_t = 4, value_parser = parse_msaa)]
     msaa: u32,
-    /// Which camera of the scene to use (0 = the first).
-    #[arg(long, default_value_t = 0)]
-    camera: usize,
+    /// Draw only this camera of the scene (0 = the first), over the whole image.
+    /// Without it, every camera with a "viewport" draws into its rectangle, or
+    /// the first camera alone when none has one.
+    #[arg(long)]
+    camera: Option<usize>,
     /// Solve every cloth this way, whatever its scene block says: Newton's
     /// method to convergence (the reference) or on a fixed budget for
     /// interactive use.
     #[arg(long, value_enum)]
     solve: Option<sim::SolveArg>,
+}
+
+/// The views a picture of `desc` draws: camera `camera` alone over the whole
+/// image, or [`SceneDesc::views`]; an error names the scene when there is no
+/// camera `camera`.
+pub(crate) fn views_of(desc: &SceneDesc, scene: &Path, camera: Option<usize>) -> Result<Vec<glint::View>, Error> {
+    match camera {
+        None => Ok(desc.views()),
+        Some(k) => match desc.cameras.get(k) {
+            Some(c) => Ok(vec![glint::View::new(*c)]),
+            None => Err(glint::Diagnostic::file(
+                scene,
+                format!("camera {k} requested, but the scene has {}", desc.cameras.len()),
+            )
+            .into()),
+        },
+    }
 }
 
 impl Picture {
@@ -278,7 +297,7 @@ struct RenderArgs<'a> {
     output: &'a Path,
     size: (u32, u32),
     msaa: u32,
-    camera: usize,
+    camera: Option<usize>,
     stats: bool,
     no_cull: bool,
     time: f32,
@@ -291,13 +310,8 @@ fn render(args: RenderArgs) -> Result<(), Error> {
     let RenderArgs { scene, output, size: (width, height), msaa, camera, stats, no_cull, time, frames, fps, options } =
         args;
     let mut desc = load(scene, options)?;
-    let Some(&cam) = desc.cameras.get(camera) else {
-        return Err(glint::Diagnostic::file(
-            scene,
-            format!("camera {camera} requested, but the scene has {}", desc.cameras.len()),
-        )
-        .into());
-    };
+    let views: Vec<glint::View> =
+        views_of(&desc, scene, camera)?.into_iter().map(|v| v.with_culling(!no_cull)).collect();
     if frames > 1 && !output.to_string_lossy().contains('%') {
         let message = "--frames needs a numbered output such as -o frames/%04d.png";
         return Err(glint::Diagnostic::file(output, message).into());
@@ -314,7 +328,6 @@ fn render(args: RenderArgs) -> Result<(), Error> {
     };
     let mut target = OffscreenTarget::new(&gpu, width, height, msaa)?;
     let mut renderer = Renderer::new(&gpu);
-    renderer.set_culling(!no_cull);
     let mut entities = desc.instantiate(&mut renderer);
     let progress = (frames > 1).then(|| {
         let bar = indicatif::ProgressBar::new(frames.into());
@@ -324,7 +337,7 @@ fn render(args: RenderArgs) -> Result<(), Error> {
     });
     for k in 0..frames {
         desc.pose(time + k as f32 / fps, &mut entities, &mut renderer)?;
-        let frame = renderer.render(&entities, &cam, &desc.lights, &mut target)?;
+        let frame = renderer.render_views(&entities, &views, &desc.lights, &mut target)?;
         let path = numbered(output, k).map_err(|m| glint::Diagnostic::file(output, m))?;
         if let Some(dir) = path.parent().filter(|d| frames > 1 && !d.as_os_str().is_empty()) {
             std::fs::create_dir_all(dir)
@@ -336,7 +349,12 @@ fn render(args: RenderArgs) -> Result<(), Error> {
         }
         if stats {
             let info = gpu.info();
-            let mut json = serde_json::to_value(frame).expect("FrameStats serialises");
+            // One view: its statistics; several: each view's, in order.
+            let mut json = match frame.as_slice() {
+                [one] => serde_json::to_value(one),
+                all => serde_json::to_value(serde_json::json!({ "views": all })),
+            }
+            .expect("FrameStats serialises");
             json["adapter"] = format!("{} ({:?})", info.name, info.backend).into();
             json["size"] = format!("{width}x{height}").into();
             json["msaa"] = msaa.into();

@@ -244,6 +244,37 @@ fn render_writes_the_png_and_prints_stats_json() {
 }
 
 #[test]
+fn render_draws_every_camera_with_a_viewport_unless_one_is_picked() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let (png, picked) = (dir.path().join("split.png"), dir.path().join("picked.png"));
+    let scene = repo("scenes/split.scn");
+    let args = ["render", scene.to_str().expect("path"), "--size", "64x32", "--msaa", "1", "--stats", "-o"];
+    let out = glint(&[&args[..], &[png.to_str().expect("path")]].concat());
+    if out.status.code() == Some(2) && std::env::var("GLINT_REQUIRE_ADAPTER").as_deref() != Ok("1") {
+        eprintln!("skipping: no GPU adapter ({})", stderr(&out));
+        return;
+    }
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let stats: serde_json::Value = serde_json::from_slice(&out.stdout).expect("one JSON object");
+    let views = stats["views"].as_array().expect("one statistics object per view");
+    assert_eq!(views.len(), 2, "{stats}");
+    assert!(views.iter().all(|v| v["draws"].as_u64().is_some_and(|d| d > 1)), "{stats}");
+    // `--camera 1`: that camera alone over the whole image, the stats one object.
+    let out = glint(&[&args[..], &[picked.to_str().expect("path"), "--camera", "1"]].concat());
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let one: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    assert!(one.get("views").is_none() && one["draws"] == views[1]["draws"], "{one}");
+    let (split, alone) = (image::open(&png).expect("png").into_rgb8(), image::open(&picked).expect("png").into_rgb8());
+    assert_ne!(split, alone, "two views, not the second camera alone");
+    // A viewport outside the image is the camera block's key, at its line.
+    let bad = dir.path().join("bad.scn");
+    std::fs::write(&bad, "{\n\"classname\" \"camera\"\n\"viewport\" \"0.5 0 1 1\"\n}\n").expect("write");
+    let out = glint(&["render", bad.to_str().expect("path"), "-o", png.to_str().expect("path")]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(stderr(&out).contains("bad.scn:3: \"viewport\""), "{}", stderr(&out));
+}
+
+#[test]
 fn bench_reports_both_modes_as_json() {
     let scene = repo("tests/scenes/ortho.scn");
     let args = ["bench", scene.to_str().expect("path"), "--frames", "3", "--warmup", "1", "--size", "64x64", "--json"];

@@ -24,7 +24,8 @@
 //! let mut target = OffscreenTarget::new(&gpu, 256, 256, 4)?;
 //!
 //! renderer.submit(&entity);
-//! let stats = renderer.flush(&camera, &lights, &mut target)?;
+//! let shadows = renderer.shadow_pass(&camera, &lights, &target)?;
+//! let stats = renderer.flush(&camera, &lights, &shadows, &mut target)?;
 //! assert_eq!(stats.draw_calls, 1);
 //! target.save_png(&gpu, "cube.png")?;
 //! # Ok::<(), glint::Error>(())
@@ -41,10 +42,10 @@ pub mod sim;
 
 pub use asset::{Diagnostic, Texture};
 pub use gpu::{Gpu, GpuError, OffscreenTarget, WindowSurface};
-pub use render::{FrameMode, FrameStats, RenderError, Renderer};
+pub use render::{FrameMode, FrameStats, RenderError, Renderer, Shadows};
 pub use scene::{
     AlphaMode, Background, Camera, Entity, Environment, Light, Material, MaterialId, Mesh, ShadowSettings, ShapeId,
-    TextureId,
+    TextureId, View, Viewport,
 };
 
 /// Any glint error, with the process exit code the CLI uses for it.

@@ -19,8 +19,14 @@ fn sun() -> Vec<Light> {
 }
 
 fn frame(renderer: &mut Renderer, gpu: &Gpu, entities: &[&Entity], lights: &[Light]) -> FrameStats {
+    frame_of(renderer, gpu, entities, lights, true)
+}
+
+/// [`frame`] with culling on or off.
+fn frame_of(renderer: &mut Renderer, gpu: &Gpu, entities: &[&Entity], lights: &[Light], culling: bool) -> FrameStats {
     let mut target = OffscreenTarget::new(gpu, 64, 64, 1).expect("target");
-    renderer.render(entities.iter().copied(), &camera(), lights, &mut target).expect("frame")
+    let view = glint::View::new(camera()).with_culling(culling);
+    renderer.render(entities.iter().copied(), view, lights, &mut target).expect("frame")
 }
 
 /// A renderer holding a cube shape and a default material.
@@ -49,8 +55,7 @@ fn ten_thousand_instances_of_one_entity_are_one_draw() {
     assert_eq!(stats.instances_drawn + stats.instances_culled, 10_000);
     assert_eq!(stats.bytes_uploaded.instances, 10_000 * 64, "every instance once, on first sight");
     assert_eq!(stats.bytes_uploaded.draw_indices, 4 * stats.instances_drawn, "one u32 per drawn instance");
-    r.set_culling(false);
-    let unculled = frame(&mut r, gpu, &[&e], &sun());
+    let unculled = frame_of(&mut r, gpu, &[&e], &sun(), false);
     assert_eq!((unculled.draw_calls, unculled.instances_drawn, unculled.instances_culled), (1, 10_000, 0));
 }
 
@@ -311,15 +316,24 @@ fn too_many_lights_and_foreign_ids_are_errors_not_panics() {
     let mut target = OffscreenTarget::new(gpu, 32, 32, 1).expect("target");
     let lights = vec![sun()[0]; MAX_LIGHTS + 1];
     r.submit(&e);
-    assert!(matches!(r.flush(&camera(), &lights, &mut target), Err(RenderError::TooManyLights(65))));
+    assert!(matches!(
+        r.flush(camera(), &lights, &glint::Shadows::none(), &mut target),
+        Err(RenderError::TooManyLights(65))
+    ));
     r.submit(&e);
-    assert!(r.flush(&camera(), &lights[..MAX_LIGHTS], &mut target).is_ok(), "exactly the limit is fine");
+    assert!(
+        r.flush(camera(), &lights[..MAX_LIGHTS], &glint::Shadows::none(), &mut target).is_ok(),
+        "exactly the limit is fine"
+    );
 
     let mut other = Renderer::new(gpu);
     other.submit(&e); // ids from `r`: `other` has no shapes
-    assert!(matches!(other.flush(&camera(), &sun(), &mut target), Err(RenderError::UnknownShape(_))));
+    assert!(matches!(
+        other.flush(camera(), &sun(), &glint::Shadows::none(), &mut target),
+        Err(RenderError::UnknownShape(_))
+    ));
     // The failed frame's entities are dropped: the next frame is empty.
-    let stats = other.flush(&camera(), &sun(), &mut target).expect("empty frame");
+    let stats = other.flush(camera(), &sun(), &glint::Shadows::none(), &mut target).expect("empty frame");
     assert_eq!((stats.draws, stats.draw_calls), (0, 0));
 }
 

@@ -15,7 +15,7 @@ fn render(r: &mut Renderer, gpu: &Gpu, entities: &[&Entity]) -> (image::RgbaImag
     for e in entities {
         r.submit(e);
     }
-    let stats = r.flush(&camera, &[], &mut target).expect("frame");
+    let stats = r.flush(camera, &[], &glint::Shadows::none(), &mut target).expect("frame");
     (target.read_rgba8(gpu).expect("readback"), stats)
 }
 

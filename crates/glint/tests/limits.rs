@@ -30,7 +30,7 @@ fn shadow_maps_past_the_memory_limit_are_an_error_not_a_panic() {
     let entity = Entity::new(cube, material, Mat4::IDENTITY);
     let target = OffscreenTarget::new(gpu, 32, 32, 1).expect("target");
     renderer.submit(&entity);
-    let error = renderer.shadow_pass(&camera(), &suns(3, 8192), &target).expect_err("3 GiB of shadow maps");
+    let error = renderer.shadow_pass(camera(), &suns(3, 8192), &target).expect_err("3 GiB of shadow maps");
     match &error {
         RenderError::TooLarge { what, bytes, limit, .. } => {
             assert_eq!(*what, "the shadow maps");
@@ -41,7 +41,7 @@ fn shadow_maps_past_the_memory_limit_are_an_error_not_a_panic() {
     }
     // The renderer is still usable: the same lights at a size that fits cast shadows.
     renderer.submit(&entity);
-    renderer.shadow_pass(&camera(), &suns(3, 1024), &target).expect("12 cascades of 4 MiB fit");
+    renderer.shadow_pass(camera(), &suns(3, 1024), &target).expect("12 cascades of 4 MiB fit");
 }
 
 #[test]
@@ -58,7 +58,9 @@ fn instances_past_the_storage_binding_are_an_error_not_a_panic() {
     let entity = Entity::instanced(cube, material, transforms);
     let mut target = OffscreenTarget::new(gpu, 32, 32, 1).expect("target");
     renderer.submit(&entity);
-    let error = renderer.flush(&camera(), &[], &mut target).expect_err("too many instances for one binding");
+    let error = renderer
+        .flush(camera(), &[], &glint::Shadows::none(), &mut target)
+        .expect_err("too many instances for one binding");
     match &error {
         RenderError::TooLarge { what, bytes, limit, limit_name } => {
             assert_eq!(*what, "renderer block: instances");
@@ -97,7 +99,8 @@ fn a_texture_wider_than_the_adapter_allows_is_an_error_not_a_panic() {
     let entity = Entity::new(cube, material, Mat4::IDENTITY);
     let mut target = OffscreenTarget::new(gpu, 32, 32, 1).expect("target");
     renderer.submit(&entity);
-    let error = renderer.flush(&camera(), &[], &mut target).expect_err("wider than the adapter allows");
+    let error =
+        renderer.flush(camera(), &[], &glint::Shadows::none(), &mut target).expect_err("wider than the adapter allows");
     assert!(
         matches!(&error, RenderError::TextureTooLarge { name, width, .. } if name == "wide" && *width == side + 1),
         "{error}"

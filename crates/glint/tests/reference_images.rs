@@ -82,7 +82,7 @@ fn a_reference_test_fails_on_a_visibly_different_image() {
     }
     let without_red: Vec<_> = desc.lights.iter().copied().filter(|l| l.color.x < 0.99 || l.color.y > 0.5).collect();
     assert_eq!(without_red.len(), desc.lights.len() - 1);
-    renderer.flush(&desc.cameras[0], &without_red, &mut target).expect("frame");
+    renderer.flush(desc.cameras[0], &without_red, &glint::Shadows::none(), &mut target).expect("frame");
     let image = target.read_rgba8(gpu).expect("readback");
     let result = std::panic::catch_unwind(|| common::assert_matches_reference("lights", &image));
     assert!(result.is_err(), "a frame without the red light must not match the reference");
@@ -112,7 +112,7 @@ fn cloth_swings_with_its_debug_view_one_vertex_write_per_frame() {
     let mut target = glint::OffscreenTarget::new(gpu, 256, 256, 4).expect("target");
     let mut frame = |desc: &mut glint::asset::SceneDesc, entities: &mut Vec<glint::Entity>, time: f32| {
         desc.pose(time, entities, &mut renderer).expect("the cloth steps");
-        let stats = renderer.render(entities.iter(), &desc.cameras[0], &desc.lights, &mut target).expect("frame");
+        let stats = renderer.render(entities.iter(), desc.cameras[0], &desc.lights, &mut target).expect("frame");
         (stats, target.read_rgba8(gpu).expect("readback"))
     };
     let (first, _) = frame(&mut desc, &mut entities, 0.0);

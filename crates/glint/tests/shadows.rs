@@ -39,8 +39,8 @@ fn render(
     for e in &scene.entities {
         scene.renderer.submit(e);
     }
-    scene.renderer.shadow_pass(&scene.camera, lights, &target).expect("shadow pass");
-    let stats = scene.renderer.flush(&scene.camera, lights, &mut target).expect("frame");
+    let shadows = scene.renderer.shadow_pass(scene.camera, lights, &target).expect("shadow pass");
+    let stats = scene.renderer.flush(scene.camera, lights, &shadows, &mut target).expect("frame");
     (target.read_rgba8(gpu).expect("readback"), stats)
 }
 
@@ -256,7 +256,7 @@ fn cascades_shadow_every_pillar_down_a_three_hundred_metre_field() {
     let size = 192;
     let mut frame = |lights: &[Light]| {
         let mut target = OffscreenTarget::new(gpu, size, size, 4).expect("target");
-        let stats = renderer.render(&entities, &camera, lights, &mut target).expect("frame");
+        let stats = renderer.render(&entities, camera, lights, &mut target).expect("frame");
         (target.read_rgba8(gpu).expect("readback"), stats)
     };
     let (image, stats) = frame(&[sun]);

@@ -57,8 +57,9 @@ pub struct ViewArgs {
     pub size: (u32, u32),
     /// MSAA samples.
     pub msaa: u32,
-    /// Which of the scene's cameras to start from.
-    pub camera: usize,
+    /// Which of the scene's cameras to show alone (`None`: every camera with a
+    /// viewport, or the first).
+    pub camera: Option<usize>,
     /// Quit after this many frames.
     pub frames: Option<u32>,
     /// Write the last frame here on quitting.
@@ -71,19 +72,12 @@ pub struct ViewArgs {
 
 /// Open the window and run until it is closed (or `--frames` are drawn).
 pub fn run(args: ViewArgs, desc: SceneDesc) -> Result<(), Error> {
-    camera_of(&desc, &args.scene, args.camera)?;
+    crate::views_of(&desc, &args.scene, args.camera)?;
     let event_loop = EventLoop::new().map_err(|e| GpuError::Surface(format!("cannot open a window: {e}")))?;
     event_loop.set_control_flow(ControlFlow::Poll);
     let mut app = App { args, desc: Some(desc), view: None, result: Ok(()) };
     event_loop.run_app(&mut app).map_err(|e| GpuError::Surface(format!("the window's event loop failed: {e}")))?;
     app.result
-}
-
-fn camera_of(desc: &SceneDesc, scene: &Path, index: usize) -> Result<Camera, Error> {
-    desc.cameras.get(index).copied().ok_or_else(|| {
-        glint::Diagnostic::file(scene, format!("camera {index} requested, but the scene has {}", desc.cameras.len()))
-            .into()
-    })
 }
 
 struct App {
@@ -114,19 +108,25 @@ struct View {
     last_title: Instant,
 }
 
-/// A loaded scene placed in its own renderer.
+/// A loaded scene placed in its own renderer, and the views it shows (the fly
+/// camera moves the first).
 struct Scene {
     desc: SceneDesc,
     renderer: Renderer,
     entities: Vec<Entity>,
-    camera: Camera,
+    views: Vec<glint::View>,
 }
 
 impl Scene {
-    fn new(gpu: &Gpu, desc: SceneDesc, camera: Camera) -> Self {
+    fn new(gpu: &Gpu, desc: SceneDesc, views: Vec<glint::View>) -> Self {
         let mut renderer = Renderer::new(gpu);
         let entities = desc.instantiate(&mut renderer);
-        Self { desc, renderer, entities, camera }
+        Self { desc, renderer, entities, views }
+    }
+
+    /// The first view's camera, where the fly camera starts.
+    fn camera(&self) -> Camera {
+        self.views[0].camera
     }
 }
 
@@ -179,8 +179,9 @@ impl App {
         let surface = WindowSurface::new(&gpu, surface, size.width, size.height)?;
         let msaa = if gpu.supports_msaa(self.args.msaa) { self.args.msaa } else { 1 };
         let target = OffscreenTarget::new(&gpu, size.width.max(1), size.height.max(1), msaa)?;
-        let camera = camera_of(&desc, &self.args.scene, self.args.camera)?;
-        let scene = Scene::new(&gpu, desc, camera);
+        let views = crate::views_of(&desc, &self.args.scene, self.args.camera)?;
+        let scene = Scene::new(&gpu, desc, views);
+        let camera = scene.camera();
         eprintln!("glint view: {} on {} ({:?})", self.args.scene.display(), gpu.info().name, gpu.info().backend);
         let now = Instant::now();
         Ok(View {
@@ -214,7 +215,7 @@ impl View {
 
     /// Load the scene again if its file changed; a bad file is reported and the
     /// current scene stays.
-    fn reload_if_changed(&mut self, path: &Path, camera_index: usize) {
+    fn reload_if_changed(&mut self, path: &Path, camera_index: Option<usize>) {
         if self.last_watch.elapsed() < WATCH_INTERVAL {
             return;
         }
@@ -226,10 +227,10 @@ impl View {
                 for warning in &desc.warnings {
                     eprintln!("warning: {warning}");
                 }
-                // The camera's projection comes from the new file; its place stays the viewer's.
-                let camera = desc.cameras.get(camera_index).or(desc.cameras.first()).copied();
-                let camera = camera.unwrap_or(self.scene.camera);
-                self.scene = Scene::new(&self.gpu, desc, camera);
+                // The views come from the new file (the chosen camera, or all
+                // views when it has no longer one); the fly camera's place stays.
+                let views = crate::views_of(&desc, path, camera_index).unwrap_or_else(|_| desc.views());
+                self.scene = Scene::new(&self.gpu, desc, views);
                 // Animations and cloths start again from the beginning, rather
                 // than a new cloth stepping all the way to the old time at once.
                 self.clock.restart();
@@ -250,18 +251,18 @@ impl View {
         let scene = &mut self.scene;
         let time = self.clock.tick(dt);
         scene.desc.pose(time, &mut scene.entities, &mut scene.renderer)?;
-        let camera = self.fly.apply(&scene.camera);
-        let stats = scene.renderer.render(&scene.entities, &camera, &scene.desc.lights, &mut self.target)?;
+        let mut views = scene.views.clone();
+        views[0].camera = self.fly.apply(&views[0].camera);
+        let stats = scene.renderer.render_views(&scene.entities, &views, &scene.desc.lights, &mut self.target)?;
         self.surface.present(&self.gpu, &self.target);
         if self.last_title.elapsed() >= TITLE_INTERVAL {
             let recent = self.clock.take_recent();
             self.window.set_title(&format!(
-                "glint: {} | {:.1} ms | plays at {:.2}x | {} draws, {} shadow draws",
+                "glint: {} | {:.1} ms | plays at {:.2}x | {}",
                 self.scene.desc.path.display(),
                 recent.frame_ms(),
                 recent.speed(),
-                stats.draws,
-                stats.passes.shadow.draws
+                view_counts(&stats)
             ));
             self.last_title = Instant::now();
         }
@@ -305,6 +306,16 @@ impl View {
         crate::output::save_png(&self.gpu, &self.target, path)?;
         eprintln!("wrote {} ({}x{})", path.display(), self.target.width(), self.target.height());
         Ok(())
+    }
+}
+
+/// Each view's draw counts for the title: "N draws, M shadow draws", named
+/// "view K: …" when there are several.
+fn view_counts(stats: &[glint::FrameStats]) -> String {
+    let counts = |s: &glint::FrameStats| format!("{} draws, {} shadow draws", s.draws, s.passes.shadow.draws);
+    match stats {
+        [one] => counts(one),
+        all => all.iter().enumerate().map(|(k, s)| format!("view {k}: {}", counts(s))).collect::<Vec<_>>().join(" | "),
     }
 }
 

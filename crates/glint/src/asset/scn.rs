@@ -18,7 +18,7 @@ use crate::render::{ShadowLayout, MAX_SHADOW_MAP_BYTES};
 use crate::scene::TextureId;
 use crate::scene::{
     AlphaMode, Background, BlendState, Camera, Compare, Cull, Entity, Environment, Fog, Light, Material, MaterialId,
-    RenderStates, ShadingModel, StencilOp, MAX_LIGHTS,
+    RenderStates, ShadingModel, StencilOp, View, Viewport, MAX_LIGHTS,
 };
 use crate::sim::cloth::ClothView;
 use crate::Renderer;
@@ -128,6 +128,8 @@ pub struct SceneDesc {
     pub environment: Environment,
     /// Cameras in file order (a default one when the file has none).
     pub cameras: Vec<Camera>,
+    /// Each camera's `viewport`, where it has one (the same order).
+    pub viewports: Vec<Option<Viewport>>,
     /// Lights in file order.
     pub lights: Vec<Light>,
     /// Materials in file order.
@@ -146,6 +148,19 @@ pub struct SceneDesc {
 }
 
 impl SceneDesc {
+    /// The views `glint render` draws into one image: every camera that has a
+    /// viewport, in file order, or the first camera alone when none has one.
+    pub fn views(&self) -> Vec<View> {
+        let placed: Vec<View> = (self.cameras.iter().zip(&self.viewports))
+            .filter_map(|(camera, viewport)| viewport.map(|v| View::new(*camera).with_viewport(v)))
+            .collect();
+        if placed.is_empty() {
+            self.cameras.first().map(|c| vec![View::new(*c)]).unwrap_or_default()
+        } else {
+            placed
+        }
+    }
+
     /// Total instances over all render tasks.
     pub fn instance_count(&self) -> usize {
         self.entities.iter().map(|e| e.transforms.len()).sum()
@@ -332,6 +347,7 @@ pub fn parse_scene_with(path: &Path, text: &str, options: LoadOptions) -> Result
             path: path.to_path_buf(),
             environment: Environment::default(),
             cameras: Vec::new(),
+            viewports: Vec::new(),
             lights: Vec::new(),
             materials: Vec::new(),
             textures: Vec::new(),
@@ -639,6 +655,7 @@ impl Loader<'_> {
         }
         camera = camera.looking_at(origin, target);
         camera.up = up.unwrap_or(camera.up);
+        self.scene.viewports.push(f.viewport("viewport")?);
         self.scene.cameras.push(camera);
         Ok(())
     }
@@ -959,6 +976,7 @@ impl Loader<'_> {
             self.scene
                 .cameras
                 .push(Camera::perspective(60.0, 0.1, 200.0).looking_at(Vec3::new(0.0, 2.0, 6.0), Vec3::ZERO));
+            self.scene.viewports.push(None);
         }
         Ok(self.scene)
     }

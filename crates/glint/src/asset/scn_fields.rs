@@ -40,6 +40,24 @@ impl<'b> Fields<'b> {
         Ok(self.numbers::<3>(key, "3 numbers (x y z)")?.map(Vec3::from))
     }
 
+    /// A rectangle "x y w h" of fractions of the image, inside 0..1 and not empty.
+    pub(crate) fn viewport(&mut self, key: &str) -> Result<Option<crate::scene::Viewport>, Diagnostic> {
+        let Some(pair) = self.get(key) else {
+            return Ok(None);
+        };
+        let [x, y, width, height] =
+            numbers::<4>(self.path, pair, "4 numbers (x y width height, fractions of the image)")?;
+        let viewport = crate::scene::Viewport { x, y, width, height };
+        if !viewport.is_valid() {
+            let message = format!(
+                "\"{key}\" \"{x} {y} {width} {height}\" is not a rectangle inside the image: x and y must be at least 0, \
+                 width and height more than 0, x + width and y + height at most 1"
+            );
+            return Err(Diagnostic::at(self.path, pair.line, message));
+        }
+        Ok(Some(viewport))
+    }
+
     pub(crate) fn color(&mut self, key: &str) -> Result<Option<Vec3>, Diagnostic> {
         let Some(pair) = self.get(key) else {
             return Ok(None);

@@ -119,6 +119,10 @@ fn semantic_errors_name_file_line_and_expectation() {
         ),
         ("{\n\"classname\" \"material\"\n\"name\" \"m\"\n\"smoothness\" \"2\"\n}", 4, "expected a value in 0..=1"),
         ("{\n\"classname\" \"camera\"\n\"near\" \"10\"\n\"far\" \"1\"\n}", 1, "must be greater than"),
+        ("{\n\"classname\" \"camera\"\n\"viewport\" \"0.5 0 0.6 1\"\n}", 3, "not a rectangle inside the image"),
+        ("{\n\"classname\" \"camera\"\n\"viewport\" \"-0.1 0 0.5 1\"\n}", 3, "x and y must be at least 0"),
+        ("{\n\"classname\" \"camera\"\n\"viewport\" \"0 0 0 1\"\n}", 3, "not a rectangle inside the image"),
+        ("{\n\"classname\" \"camera\"\n\"viewport\" \"0 0 1\"\n}", 3, "found 3 numbers"),
         ("{\n\"classname\" \"light_point\"\n\"origin\" \"0 0 inf\"\n}", 3, "not a finite number"),
     ];
     for (text, line, want) in cases {
@@ -127,6 +131,23 @@ fn semantic_errors_name_file_line_and_expectation() {
         assert!(err.message.contains(want), "{text:?}: {err}");
         assert!(err.to_string().starts_with(&format!("dir/t.scn:{line}: ")), "{err}");
     }
+}
+
+#[test]
+fn cameras_with_viewports_are_the_views_and_without_any_the_first_camera_is() {
+    let camera = |extra: &str| format!("{{\n\"classname\" \"camera\"\n\"origin\" \"0 1 5\"\n{extra}}}\n");
+    let none = parse(&format!("{}{}", camera(""), camera(""))).unwrap();
+    assert_eq!(none.viewports, [None, None]);
+    let views = none.views();
+    assert_eq!((views.len(), views[0].viewport), (1, crate::scene::Viewport::FULL), "the first camera alone");
+    let text =
+        format!("{}{}{}", camera(""), camera("\"viewport\" \"0.5 0 0.5 1\"\n"), camera("\"viewport\" \"0 0 0.5 1\"\n"));
+    let split = parse(&text).unwrap();
+    let views = split.views();
+    assert_eq!(views.len(), 2, "only the cameras with a viewport, in file order");
+    assert_eq!(views[0].viewport, crate::scene::Viewport { x: 0.5, y: 0.0, width: 0.5, height: 1.0 });
+    assert_eq!(views[1].viewport.x, 0.0);
+    assert!(views.iter().all(|v| v.culling));
 }
 
 #[test]

@@ -30,9 +30,15 @@ impl OffscreenTarget {
         if !(samples == 1 || samples == 4) || !gpu.supports_msaa(samples) {
             return Err(GpuError::SampleCount(samples));
         }
+        Ok(Self::on_device(&gpu.device, width, height, samples))
+    }
+
+    /// [`OffscreenTarget::new`] without its checks, for a target no larger and
+    /// with no more samples than one that passed them.
+    pub(crate) fn on_device(device: &wgpu::Device, width: u32, height: u32, samples: u32) -> Self {
         let size = wgpu::Extent3d { width, height, depth_or_array_layers: 1 };
         let texture = |label: &str, format, samples, usage| {
-            gpu.device.create_texture(&wgpu::TextureDescriptor {
+            device.create_texture(&wgpu::TextureDescriptor {
                 label: Some(label),
                 size,
                 mip_level_count: 1,
@@ -49,6 +55,7 @@ impl OffscreenTarget {
             1,
             wgpu::TextureUsages::RENDER_ATTACHMENT
                 | wgpu::TextureUsages::COPY_SRC
+                | wgpu::TextureUsages::COPY_DST
                 | wgpu::TextureUsages::TEXTURE_BINDING,
         );
         let msaa_view = (samples > 1).then(|| {
@@ -56,7 +63,7 @@ impl OffscreenTarget {
                 .create_view(&Default::default())
         });
         let depth = texture("offscreen target: depth", DEPTH_FORMAT, samples, wgpu::TextureUsages::RENDER_ATTACHMENT);
-        Ok(Self {
+        Self {
             width,
             height,
             samples,
@@ -64,7 +71,7 @@ impl OffscreenTarget {
             resolved,
             msaa_view,
             depth_view: depth.create_view(&Default::default()),
-        })
+        }
     }
 
     /// Width in pixels.
@@ -80,6 +87,11 @@ impl OffscreenTarget {
     /// Samples per pixel (1 or 4).
     pub fn samples(&self) -> u32 {
         self.samples
+    }
+
+    /// The single-sample colour texture holding the last frame (for copies).
+    pub(crate) fn color_texture(&self) -> &wgpu::Texture {
+        &self.resolved
     }
 
     /// The single-sample colour texture holding the last frame (for blits).

@@ -1,7 +1,7 @@
 //! Core layer: what a frame adds to its forward shader variants (shadow lookups,
 //! light counts), chosen before its pipelines are prepared.
 
-use super::shadow_pass::ShadowFrame;
+use super::shadow_pass::ShadowsDrawn;
 use crate::scene::{Light, LightKind};
 use crate::shader::LightCounts;
 
@@ -30,11 +30,10 @@ impl FrameVariant {
         }
     }
 
-    /// The variant of a frame lit by `lights` after `drawn`, the shadow pass that
-    /// ran before it (its maps count only when drawn for these lights).
-    pub(super) fn after(drawn: Option<&ShadowFrame>, lights: &[Light]) -> Self {
-        let drawn = drawn.filter(|f| f.lights == lights);
-        let point_cubes = |f: &ShadowFrame| {
+    /// The variant of a frame lit by `lights` after `drawn`, the shadow pass
+    /// that drew its maps for these lights (none: no shadows).
+    pub(super) fn after(drawn: Option<&ShadowsDrawn>, lights: &[Light]) -> Self {
+        let point_cubes = |f: &ShadowsDrawn| {
             lights.iter().zip(&f.first_view).any(|(l, v)| v.is_some() && matches!(l.kind, LightKind::Point { .. }))
         };
         Self {
@@ -63,7 +62,10 @@ mod tests {
         let unshadowed = Light { shadows: None, ..lamp };
         assert!(!FrameVariant::expected(&[sun, unshadowed]).shadow_cubes);
         // The pass found no room for the lamp's cube: the frame looks up 2D maps only.
-        let drawn = ShadowFrame {
+        let camera = crate::scene::Camera::perspective(60.0, 0.1, 10.0);
+        let drawn = ShadowsDrawn {
+            frame_index: 0,
+            view: camera.into(),
             lights: both.to_vec(),
             first_view: vec![Some(0), None],
             views: 4,
@@ -72,13 +74,9 @@ mod tests {
         };
         let after = FrameVariant::after(Some(&drawn), &both);
         assert!(after.shadows && !after.shadow_cubes);
-        let cubed = ShadowFrame { first_view: vec![Some(0), Some(0)], views: 10, ..drawn };
+        let cubed = ShadowsDrawn { first_view: vec![Some(0), Some(0)], views: 10, ..drawn };
         assert!(FrameVariant::after(Some(&cubed), &both).shadow_cubes);
-        // Maps drawn for other lights (or none at all) are not looked up.
-        assert_eq!(
-            FrameVariant::after(Some(&cubed), &[sun]),
-            FrameVariant { lights: LightCounts::of(&[sun]), ..Default::default() }
-        );
+        // No maps: no lookups.
         assert_eq!(FrameVariant::after(None, &both), FrameVariant { lights: expected.lights, ..Default::default() });
     }
 }

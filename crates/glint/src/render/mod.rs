@@ -33,33 +33,37 @@ mod shadow_pass;
 mod shadow_views;
 mod stats;
 mod timer;
+mod view;
 mod views;
 mod visible;
 
 pub use mesh_pool::MeshTooLarge;
 pub use shadow_maps::{ShadowLayout, MAX_CUBES, MAX_SHADOW_MAP_BYTES};
+pub use shadow_pass::Shadows;
 pub use stats::{FrameStats, PassStats, Passes, StageTimes, UploadStats};
 pub use timer::GpuTimes;
 
 use crate::asset::Texture;
 use crate::gpu::{Gpu, OffscreenTarget};
 use crate::scene::{
-    Background, Camera, Entity, Environment, Light, Material, MaterialId, Mesh, ShapeId, TextureId, MAX_LIGHTS,
+    Background, Entity, Environment, Light, Material, MaterialId, Mesh, ShapeId, TextureId, View, Viewport, MAX_LIGHTS,
 };
 use batch::Batch;
 use blocks::{SceneGpu, UniformBlock};
-use cull::Frustum;
 use draw_list::DrawList;
 use frame_variant::FrameVariant;
-use glam::{Mat4, Vec3A};
+use glam::Vec3A;
 use instances::InstanceStore;
 use mesh_pool::{MeshPool, MeshRange};
 use pipelines::{Pipelines, VertexLayout};
 use queue::{DrawItem, Queue};
 use resources::{InstanceBuffer, MaterialTable, TextureUploader};
 use shadow_maps::{ShadowGpu, ShadowMaps, ShadowSupport};
+use shadow_pass::ShadowsDrawn;
 use std::time::Instant;
+use view::ViewFrame;
 use views::ViewBlocks;
+use visible::Visible;
 
 /// Errors from [`Renderer::flush`].
 #[derive(Debug, thiserror::Error)]
@@ -117,6 +121,15 @@ pub enum RenderError {
         /// What wgpu said.
         message: String,
     },
+    /// A flush was given shadow maps drawn for an earlier frame.
+    #[error("the shadow maps given to flush were drawn for an earlier frame: call shadow_pass again each frame")]
+    StaleShadows,
+    /// A flush was given shadow maps drawn for another view or other lights.
+    #[error("the shadow maps given to flush were drawn for another view or other lights")]
+    ShadowsForOtherView,
+    /// A view's viewport is empty or reaches outside the target.
+    #[error("viewport {0:?} is not a non-empty rectangle inside 0..1")]
+    BadViewport(Viewport),
     /// A material names a texture this renderer never created.
     #[error("material '{material}' uses unknown texture id {texture:?}")]
     UnknownTexture {
@@ -184,13 +197,6 @@ struct Submitted {
     cast_shadows: bool,
 }
 
-/// A submitted entity's visible instances: a range of the frame's visible list.
-struct VisibleRun {
-    entry: usize,
-    start: u32,
-    len: u32,
-}
-
 /// How a frame is built.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum FrameMode {
@@ -204,13 +210,6 @@ pub enum FrameMode {
     Naive,
 }
 
-/// The view a frame is seen from, kept to rebuild the frustum only when it changes.
-#[derive(Clone, Copy, PartialEq)]
-struct ViewKey {
-    camera: Camera,
-    aspect: f32,
-}
-
 /// 1×1 textures bound where a material has no map.
 struct DefaultMaps {
     white_srgb: wgpu::TextureView,
@@ -222,8 +221,11 @@ struct DefaultMaps {
 /// the entities submitted each frame.
 ///
 /// Program structure (Tiny Graphics): create shapes, materials and entities once;
-/// each frame update them, [`submit`](Self::submit) every entity to draw, then
-/// [`flush`](Self::flush) with the camera and lights.
+/// each frame update them, [`submit`](Self::submit) every entity to draw, draw
+/// the shadow maps ([`shadow_pass`](Self::shadow_pass)), then
+/// [`flush`](Self::flush) with the view (or camera), lights and shadow maps.
+/// [`render`](Self::render) is those calls for one view,
+/// [`render_views`](Self::render_views) for several.
 pub struct Renderer {
     device: wgpu::Device,
     queue: wgpu::Queue,
@@ -248,25 +250,23 @@ pub struct Renderer {
     shadow_block: UniformBlock<ShadowGpu>,
     /// Every shadow view's draws.
     shadow_list: DrawList,
-    /// What this frame's shadow pass drew (cleared by flush).
-    shadow_frame: Option<shadow_pass::ShadowFrame>,
     /// Whether this frame's forward pipelines look up shadow maps (the `SHADOWS`
     /// variant): set by `shadow_pass` when a light casts shadows, and by `flush`
     /// when that pass drew maps for its lights.
     frame_variant: FrameVariant,
     store: InstanceStore,
-    culling: bool,
     mode: FrameMode,
     frame_index: u64,
     /// The first bad id submitted this frame, reported by `flush`.
     submit_error: Option<RenderError>,
-    view: Option<(ViewKey, Frustum, Mat4)>,
     gpu_timer: Option<timer::GpuTimer>,
     // Per-frame lists, kept to reuse their allocations.
     submitted: Vec<Submitted>,
     instances_submitted: u64,
-    visible: Vec<u32>,
-    runs: Vec<VisibleRun>,
+    visible: Visible,
+    /// Targets of views that draw into part of the output, by size and samples,
+    /// with the frame each was last used in.
+    view_targets: Vec<(OffscreenTarget, u64)>,
 }
 
 fn ms_since(t: Instant) -> f64 {
@@ -346,19 +346,16 @@ impl Renderer {
             shadow_maps,
             shadow_block,
             shadow_list,
-            shadow_frame: None,
             frame_variant: FrameVariant::default(),
             store: InstanceStore::default(),
-            culling: true,
             mode: FrameMode::Optimized,
             frame_index: 0,
             submit_error: None,
-            view: None,
             gpu_timer: None,
             submitted: Vec::new(),
             instances_submitted: 0,
-            visible: Vec::new(),
-            runs: Vec::new(),
+            visible: Visible::default(),
+            view_targets: Vec::new(),
         }
     }
 
@@ -432,11 +429,6 @@ impl Renderer {
         &self.environment
     }
 
-    /// Turn frustum culling on (the default) or off, e.g. to compare costs.
-    pub fn set_culling(&mut self, enabled: bool) {
-        self.culling = enabled;
-    }
-
     /// Time the shadow and forward passes on the GPU with timestamp queries, when
     /// the device has them; returns whether timing is on. Read each frame's times
     /// with [`Renderer::read_gpu_times`].
@@ -478,32 +470,71 @@ impl Renderer {
         });
     }
 
-    /// One whole frame of `entities`, the seed's three calls in order:
-    /// [`submit`](Self::submit) each, [`shadow_pass`](Self::shadow_pass), then
-    /// [`flush`](Self::flush). The statistics include the shadow pass's; the
-    /// shadow pass's error comes first.
+    /// One whole frame of `entities` seen by `view` (or a camera), the seed's
+    /// calls in order: [`submit`](Self::submit) each,
+    /// [`shadow_pass`](Self::shadow_pass), then [`flush`](Self::flush). The
+    /// statistics include the shadow pass's; the shadow pass's error comes first.
     pub fn render<'e>(
         &mut self,
         entities: impl IntoIterator<Item = &'e Entity>,
-        camera: &Camera,
+        view: impl Into<View>,
         lights: &[Light],
         target: &mut OffscreenTarget,
     ) -> Result<FrameStats, RenderError> {
+        let view = view.into();
         for entity in entities {
             self.submit(entity);
         }
         // Flush even after a failed shadow pass, so the submitted entities are dropped.
-        let shadows = self.shadow_pass(camera, lights, target);
-        let frame = self.flush(camera, lights, target);
+        let shadows = self.shadow_pass(view, lights, target);
+        let frame = self.flush(view, lights, shadows.as_ref().unwrap_or(&Shadows::none()), target);
         shadows.and(frame)
     }
 
-    /// Draw everything submitted since the last flush into `target`, seen by
-    /// `camera` and lit by `lights`, and return what the frame cost.
+    /// One frame of several `views` of `entities` into `target`, in order, each
+    /// culled, shadowed and drawn on its own ([`render`](Self::render) per view);
+    /// a later view draws over an earlier one where their viewports overlap.
+    /// When the first view does not cover the whole target, the target is
+    /// cleared to black first. Returns each view's statistics.
+    pub fn render_views<'e, E>(
+        &mut self,
+        entities: E,
+        views: &[View],
+        lights: &[Light],
+        target: &mut OffscreenTarget,
+    ) -> Result<Vec<FrameStats>, RenderError>
+    where
+        E: IntoIterator<Item = &'e Entity> + Clone,
+    {
+        if views.first().is_some_and(|v| {
+            v.viewport.pixels(target.width(), target.height())[2..] != [target.width(), target.height()]
+        }) {
+            self.clear(target);
+        }
+        views.iter().map(|view| self.render(entities.clone(), *view, lights, target)).collect()
+    }
+
+    /// Clear `target` to black.
+    fn clear(&self, target: &OffscreenTarget) {
+        let mut encoder =
+            self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("renderer: clear") });
+        encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("clear the target"),
+            color_attachments: &[Some(target.color_attachment(wgpu::Color::BLACK))],
+            ..Default::default()
+        });
+        self.queue.submit([encoder.finish()]);
+    }
+
+    /// Draw everything submitted since the last flush, seen by `view` (or a
+    /// camera, for the whole target), lit by `lights`, into its viewport of
+    /// `target`, and return what the frame cost. `shadows` are the maps this
+    /// frame's [`shadow_pass`](Self::shadow_pass) drew for the same view and
+    /// lights ([`Shadows::none`] draws without shadows).
     ///
-    /// The frame, one stage per line:
+    /// The frame of one view, one stage per line ([`Renderer::draw_view`]):
     /// 1. prepare — GPU twins for new shapes, textures, materials and pipelines; edited materials rewritten
-    /// 2. cull — each entity's world box, then its instances', against the camera frustum
+    /// 2. cull — each entity's world box, then its instances', against the view's frustum
     /// 3. queue — one draw item with a 64-bit sort key per visible run (per instance when blended)
     /// 4. sort — radix sort by key
     /// 5. batch — equal (stage, pipeline, material, shape) runs merged into instanced draws, one indirect command each
@@ -512,26 +543,31 @@ impl Renderer {
     ///    batches sharing pipeline, texture set and mesh page go in one multi-draw-indirect call
     /// 8. submit
     ///
-    /// Errors (the submitted entities are dropped): more than [`MAX_LIGHTS`] lights,
-    /// or an id that is not this renderer's.
+    /// A view of part of the target is drawn into a target of its own (kept for
+    /// the next frames) and copied into its rectangle.
+    ///
+    /// Errors (the submitted entities are dropped): more than [`MAX_LIGHTS`]
+    /// lights, an id that is not this renderer's, a viewport outside the
+    /// target, or shadow maps drawn for another frame, view or lights.
     pub fn flush(
         &mut self,
-        camera: &Camera,
+        view: impl Into<View>,
         lights: &[Light],
+        shadows: &Shadows,
         target: &mut OffscreenTarget,
     ) -> Result<FrameStats, RenderError> {
         let start = Instant::now();
+        let view = view.into();
         let result = match self.submit_error.take() {
             Some(e) => Err(e),
-            None => self.run_frame(camera, lights, target),
+            None => self.draw_view(&view, lights, shadows, target),
         };
         self.submitted.clear();
         self.instances_submitted = 0;
         self.frame_index += 1;
-        let shadow = self.shadow_frame.take();
         result.map(|mut stats| {
             stats.cpu_ms.total = ms_since(start);
-            if let Some(shadow) = shadow {
+            if let Some(shadow) = &shadows.drawn {
                 stats.shadow_views = shadow.views;
                 stats.passes.shadow = shadow.cost;
                 stats.pipelines_compiled += shadow.prepared.pipelines_compiled;
@@ -541,10 +577,63 @@ impl Renderer {
         })
     }
 
+    /// [`flush`](Self::flush)'s frame: into `target` itself when `view` covers
+    /// it, else into a view target of the viewport's size, then copied there.
+    fn draw_view(
+        &mut self,
+        view: &View,
+        lights: &[Light],
+        shadows: &Shadows,
+        target: &OffscreenTarget,
+    ) -> Result<FrameStats, RenderError> {
+        if !view.viewport.is_valid() {
+            return Err(RenderError::BadViewport(view.viewport));
+        }
+        let drawn = match &shadows.drawn {
+            Some(drawn) => drawn.first_views(self.frame_index, view, lights).map(|_| Some(drawn))?,
+            None => None,
+        };
+        let [x, y, width, height] = view.viewport.pixels(target.width(), target.height());
+        let frame = ViewFrame::new(view, width, height);
+        if (width, height) == (target.width(), target.height()) {
+            return self.run_frame(&frame, lights, drawn, target);
+        }
+        let own = self.take_view_target(width, height, target.samples());
+        let stats = self.run_frame(&frame, lights, drawn, &own);
+        let mut encoder = self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("renderer: view into its viewport"),
+        });
+        encoder.copy_texture_to_texture(
+            own.color_texture().as_image_copy(),
+            wgpu::TexelCopyTextureInfo {
+                origin: wgpu::Origin3d { x, y, z: 0 },
+                ..target.color_texture().as_image_copy()
+            },
+            wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
+        );
+        self.queue.submit([encoder.finish()]);
+        self.view_targets.push((own, self.frame_index));
+        stats
+    }
+
+    /// A view target of this size and sample count: one kept from an earlier
+    /// frame, or a new one. Targets unused for more than a frame are dropped.
+    fn take_view_target(&mut self, width: u32, height: u32, samples: u32) -> OffscreenTarget {
+        let now = self.frame_index;
+        let fits = |t: &OffscreenTarget| (t.width(), t.height(), t.samples()) == (width, height, samples);
+        if let Some(k) = self.view_targets.iter().position(|(t, _)| fits(t)) {
+            return self.view_targets.swap_remove(k).0;
+        }
+        // A window being resized asks for a new size every frame: keep only recent ones.
+        self.view_targets.retain(|(_, used)| used + 2 >= now);
+        OffscreenTarget::on_device(&self.device, width, height, samples)
+    }
+
     fn run_frame(
         &mut self,
-        camera: &Camera,
+        frame: &ViewFrame,
         lights: &[Light],
+        drawn: Option<&ShadowsDrawn>,
         target: &OffscreenTarget,
     ) -> Result<FrameStats, RenderError> {
         if lights.len() > MAX_LIGHTS {
@@ -556,23 +645,23 @@ impl Renderer {
             ..Default::default()
         };
         let t = Instant::now();
-        self.frame_variant = FrameVariant::after(self.shadow_frame.as_ref(), lights);
+        self.frame_variant = FrameVariant::after(drawn, lights);
         self.prepare(target.samples(), &mut stats)?;
         stats.cpu_ms.prepare = ms_since(t);
 
-        let aspect = target.width() as f32 / target.height() as f32;
+        let mut visible = std::mem::take(&mut self.visible);
         if self.mode == FrameMode::Naive {
             let t = Instant::now();
             self.naive_batches(&mut stats);
             stats.cpu_ms.batch = ms_since(t);
         } else {
             let t = Instant::now();
-            self.cull(camera, aspect, &mut stats);
+            self.cull(frame, &mut visible, &mut stats);
             stats.cpu_ms.cull = ms_since(t);
 
             let t = Instant::now();
             self.forward.clear();
-            self.build_queue(camera);
+            self.build_queue(frame, &visible);
             stats.cpu_ms.queue = ms_since(t);
 
             let t = Instant::now();
@@ -581,12 +670,14 @@ impl Renderer {
 
             let t = Instant::now();
             let shapes = &self.shapes;
-            self.forward.build(0, &self.visible, |b| shapes[b.shape.0 as usize].gpu.expect("prepared"));
+            self.forward.build(0, &visible.instances, |b| shapes[b.shape.0 as usize].gpu.expect("prepared"));
             stats.cpu_ms.batch = ms_since(t);
         }
+        self.visible = visible;
 
         let t = Instant::now();
-        self.upload(camera, lights, aspect, &mut stats)?;
+        let shadowed = drawn.map_or(&[][..], |d| d.first_view.as_slice());
+        self.upload(frame, lights, shadowed, &mut stats)?;
         stats.cpu_ms.upload = ms_since(t);
 
         let t = Instant::now();
@@ -670,11 +761,10 @@ impl Renderer {
     /// Stage 3: one draw item per visible run, or per visible instance for blended
     /// materials so that they can be sorted far to near one by one. Depth is the
     /// view distance of the run's (or instance's) box centre over the far plane.
-    fn build_queue(&mut self, camera: &Camera) {
-        let view = self.view.as_ref().expect("culled first").2;
-        let far = camera.far();
-        let depth = |center: Vec3A| -view.transform_point3a(center).z / far;
-        for run in &self.runs {
+    fn build_queue(&mut self, frame: &ViewFrame, visible: &Visible) {
+        let far = frame.camera.far();
+        let depth = |center: Vec3A| -frame.view.transform_point3a(center).z / far;
+        for run in &visible.runs {
             let s = &self.submitted[run.entry];
             let material = &self.materials[s.material.0 as usize];
             let pipeline = self.pipeline_of(s);
@@ -696,7 +786,7 @@ impl Renderer {
             };
             if blended {
                 for k in run.start..run.start + run.len {
-                    let instance = self.visible[k as usize] as usize;
+                    let instance = visible.instances[k as usize] as usize;
                     self.forward.items.push(item(k, 1, depth(self.store.bounds.center(instance))));
                 }
             } else {
@@ -740,19 +830,18 @@ impl Renderer {
 
     /// Stage 6: write the blocks that changed, the instances that changed, and this
     /// frame's draw indices and indirect commands where they differ from the last frame's.
+    /// `shadowed` is each light's first shadow view (empty: no shadows).
     fn upload(
         &mut self,
-        camera: &Camera,
+        frame: &ViewFrame,
         lights: &[Light],
-        aspect: f32,
+        shadowed: &[Option<u32>],
         stats: &mut FrameStats,
     ) -> Result<(), RenderError> {
         let bytes = &mut stats.bytes_uploaded;
-        // Shadows only for the lights this frame's shadow pass drew maps for.
-        let shadowed = self.shadow_frame.as_ref().filter(|f| f.lights == lights).map(|f| f.first_view.as_slice());
-        let scene = SceneGpu::new(&self.environment, lights, shadowed.unwrap_or(&[]));
+        let scene = SceneGpu::new(&self.environment, lights, shadowed);
         bytes.scene += self.scene_block.update(&self.queue, scene);
-        bytes.camera += self.views.update(&self.queue, 0, camera.to_gpu(aspect));
+        bytes.camera += self.views.update(&self.queue, 0, frame.camera.to_gpu(frame.aspect));
         self.upload_instances(bytes)?;
         let naive = self.mode == FrameMode::Naive;
         if naive {
@@ -793,7 +882,8 @@ impl Renderer {
 mod tests {
     use super::*;
     use crate::asset::ShapeKind;
-    use glam::Vec3;
+    use crate::scene::Camera;
+    use glam::{Mat4, Vec3};
 
     fn gpu() -> Option<Gpu> {
         match Gpu::headless() {
@@ -842,7 +932,7 @@ mod tests {
         r.submit(&ground);
         r.submit(&glass_entity);
         r.submit(&front);
-        let stats = r.flush(&camera, &[], &mut target).expect("frame");
+        let stats = r.flush(camera, &[], &Shadows::none(), &mut target).expect("frame");
         // Drawn order: `front` (opaque), sky, the five glass instances far to near, then the ground (200).
         let stages: Vec<u8> = r.forward.batches.iter().map(|b| b.stage).collect();
         assert_eq!(stages, vec![64, 192, 200]);

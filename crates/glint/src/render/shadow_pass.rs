@@ -15,15 +15,37 @@ use super::queue::{self, DrawItem, Queue};
 use super::shadow_maps::{ShadowGpu, ShadowLayout, ShadowMaps};
 use super::shadow_views::{self, ShadowView, ViewTarget};
 use super::timer::Timed;
+use super::view::ViewFrame;
 use super::views::{ViewBlocks, MAX_SHADOW_VIEWS};
+use super::visible::VisibleRun;
 use super::{ms_since, FrameStats, PassStats, RenderError, Renderer};
 use crate::gpu::OffscreenTarget;
-use crate::scene::{Aabb, AlphaMode, Camera, Light, LightKind, MAX_LIGHTS};
+use crate::scene::{Aabb, AlphaMode, Light, LightKind, View, MAX_LIGHTS};
 use glam::Vec3;
 use std::time::Instant;
 
-/// What a frame's shadow pass drew, kept for `flush` to shade with.
-pub(super) struct ShadowFrame {
+/// The shadow maps a view's shadow pass drew this frame: what the forward pass
+/// of the same view ([`Renderer::flush`]) samples. [`Shadows::none`] draws
+/// without shadows.
+#[derive(Clone, Debug, Default)]
+pub struct Shadows {
+    pub(super) drawn: Option<ShadowsDrawn>,
+}
+
+impl Shadows {
+    /// No shadow maps: every light is drawn without shadows.
+    pub fn none() -> Self {
+        Self::default()
+    }
+}
+
+/// What a shadow pass drew.
+#[derive(Clone, Debug)]
+pub(super) struct ShadowsDrawn {
+    /// The renderer's frame it was drawn for (the maps are redrawn every frame).
+    pub frame_index: u64,
+    /// The view it was drawn for (cascades follow the camera).
+    pub view: View,
     /// The lights the maps were drawn for.
     pub lights: Vec<Light>,
     /// Per light, its first shadow view (2D layer, or cube for point lights).
@@ -36,12 +58,27 @@ pub(super) struct ShadowFrame {
     pub prepared: FrameStats,
 }
 
+impl ShadowsDrawn {
+    /// Per light, its first shadow view, when these maps were drawn this frame
+    /// for `view` and exactly `lights`.
+    pub fn first_views(&self, frame_index: u64, view: &View, lights: &[Light]) -> Result<&[Option<u32>], RenderError> {
+        if self.frame_index != frame_index {
+            return Err(RenderError::StaleShadows);
+        }
+        if self.view != *view || self.lights != lights {
+            return Err(RenderError::ShadowsForOtherView);
+        }
+        Ok(&self.first_view)
+    }
+}
+
 impl Renderer {
     /// Draw the shadow maps of every light in `lights` that casts shadows (see
-    /// [`Light::with_shadows`]), from the entities submitted so far, for a frame
-    /// seen by `camera` into `target`. Call it between the frame's
-    /// [`submit`](Self::submit)s and its [`flush`](Self::flush); flush with the
-    /// same lights then darkens what they cannot reach.
+    /// [`Light::with_shadows`]), from the entities submitted so far, for `view`
+    /// of `target` (a camera is a view of the whole target). Call it between the
+    /// frame's [`submit`](Self::submit)s and its [`flush`](Self::flush), and give
+    /// what it returns to that flush, with the same view and lights: it darkens
+    /// what they cannot reach.
     ///
     /// Lights past the shadow maps' room (16 two-dimensional views: four per
     /// directional light, one per spot light; 4 point lights) are drawn without
@@ -49,25 +86,28 @@ impl Renderer {
     /// reported by `flush`.
     pub fn shadow_pass(
         &mut self,
-        camera: &Camera,
+        view: impl Into<View>,
         lights: &[Light],
         target: &OffscreenTarget,
-    ) -> Result<(), RenderError> {
+    ) -> Result<Shadows, RenderError> {
         let start = Instant::now();
+        let view = view.into();
         if lights.len() > MAX_LIGHTS {
             return Err(RenderError::TooManyLights(lights.len()));
         }
-        self.shadow_frame = None;
         if self.submit_error.is_some() {
-            return Ok(());
+            return Ok(Shadows::none());
         }
         let mut prepared = FrameStats::default();
         // The flush after this pass samples the maps it draws: choose its pipelines now.
         self.frame_variant = super::FrameVariant::expected(lights);
         self.prepare(target.samples(), &mut prepared)?;
-        let aspect = target.width() as f32 / target.height() as f32;
-        let (views, first_view) = self.plan_shadow_views(camera, aspect, lights)?;
-        let mut frame = ShadowFrame {
+        let [_, _, width, height] = view.viewport.pixels(target.width(), target.height());
+        let frame = ViewFrame::new(&view, width, height);
+        let (views, first_view) = self.plan_shadow_views(&frame, lights)?;
+        let mut drawn = ShadowsDrawn {
+            frame_index: self.frame_index,
+            view,
             lights: lights.to_vec(),
             first_view,
             views: views.len() as u32,
@@ -75,22 +115,20 @@ impl Renderer {
             prepared,
         };
         if !views.is_empty() {
-            let ranges = self.batch_shadow_views(&views, &mut frame.prepared)?;
-            self.upload_shadow_views(&views, &mut frame.prepared)?;
-            let commands = self.encode_shadow_views(&views, &ranges, &mut frame.cost);
+            let ranges = self.batch_shadow_views(&views, frame.culling, &mut drawn.prepared)?;
+            self.upload_shadow_views(&views, &mut drawn.prepared)?;
+            let commands = self.encode_shadow_views(&views, &ranges, &mut drawn.cost);
             self.queue.submit([commands]);
         }
-        frame.cost.cpu_ms = ms_since(start);
-        self.shadow_frame = Some(frame);
-        Ok(())
+        drawn.cost.cpu_ms = ms_since(start);
+        Ok(Shadows { drawn: Some(drawn) })
     }
 
     /// Every shadow view of `lights`, and each light's first view. Sizes the
     /// shadow maps for them (rebuilding the Scene bind group when they change).
     fn plan_shadow_views(
         &mut self,
-        camera: &Camera,
-        aspect: f32,
+        frame: &ViewFrame,
         lights: &[Light],
     ) -> Result<(Vec<ShadowView>, Vec<Option<u32>>), RenderError> {
         let layout = ShadowLayout::plan(lights);
@@ -105,8 +143,8 @@ impl Renderer {
             let shared = |size| crate::scene::ShadowSettings { map_size: size, ..settings };
             match light.kind {
                 LightKind::Directional { direction } => views.extend(shadow_views::cascades(
-                    camera,
-                    aspect,
+                    &frame.camera,
+                    frame.aspect,
                     direction,
                     &shared(layout.size_2d),
                     casters,
@@ -145,25 +183,31 @@ impl Renderer {
     fn batch_shadow_views(
         &mut self,
         views: &[ShadowView],
+        culling: bool,
         stats: &mut FrameStats,
     ) -> Result<Vec<std::ops::Range<usize>>, RenderError> {
         self.shadow_list.clear();
+        let mut visible = std::mem::take(&mut self.visible);
         let mut ranges = Vec::with_capacity(views.len());
         // Blended materials cast no shadow.
         let blended: Vec<bool> = self.materials.iter().map(|m| m.material.alpha_mode == AlphaMode::Blend).collect();
         for view in views {
             let view_proj = view.view_proj();
-            self.collect_visible(&Frustum::from_view_proj(view_proj), |s| {
-                s.cast_shadows && !blended[s.material.0 as usize]
-            });
+            let casts = |s: &super::Submitted| s.cast_shadows && !blended[s.material.0 as usize];
+            self.collect_visible(&Frustum::from_view_proj(view_proj), culling, casts, &mut visible);
             let pass = match view.target {
                 ViewTarget::Layer(_) => PassKind::ShadowDepth,
                 ViewTarget::CubeFace { .. } => PassKind::ShadowDistance,
             };
             let first_item = self.shadow_list.items.len();
-            for k in 0..self.runs.len() {
-                let (start, len, entry) = (self.runs[k].start, self.runs[k].len, self.runs[k].entry);
-                let pipeline = self.shadow_pipeline(entry, pass, stats)?;
+            for &VisibleRun { entry, start, len } in &visible.runs {
+                let pipeline = match self.shadow_pipeline(entry, pass, stats) {
+                    Ok(pipeline) => pipeline,
+                    Err(e) => {
+                        self.visible = visible;
+                        return Err(e);
+                    }
+                };
                 let s = &self.submitted[entry];
                 let (material, shape) = (s.material, s.shape);
                 let slot = &self.materials[material.0 as usize];
@@ -188,9 +232,10 @@ impl Renderer {
             let shapes = &self.shapes;
             let range = self
                 .shadow_list
-                .build(first_item, &self.visible, |b| shapes[b.shape.0 as usize].gpu.expect("prepared"));
+                .build(first_item, &visible.instances, |b| shapes[b.shape.0 as usize].gpu.expect("prepared"));
             ranges.push(range);
         }
+        self.visible = visible;
         Ok(ranges)
     }
 

@@ -5,8 +5,8 @@
 
 use super::cull::{self, Containment, Frustum};
 use super::instances::{self, InstanceStore};
-use super::{FrameStats, Renderer, Submitted, ViewKey, VisibleRun};
-use crate::scene::Camera;
+use super::view::ViewFrame;
+use super::{FrameStats, Renderer, Submitted};
 use rayon::prelude::*;
 
 /// Submitted instances above which entities are culled on all cores. Tiles make
@@ -14,34 +14,56 @@ use rayon::prelude::*;
 /// 100 entities, 2 cores) tiled culling took 0.32 ms serial and 0.45 ms on rayon.
 const PARALLEL_ENTITY_CULL_THRESHOLD: u64 = 1 << 20;
 
+/// A submitted entity's visible instances: a range of [`Visible::instances`].
+pub(super) struct VisibleRun {
+    /// The entity's index among the frame's submitted entities.
+    pub entry: usize,
+    /// Its first instance in the list.
+    pub start: u32,
+    /// How many.
+    pub len: u32,
+}
+
+/// What one view (or shadow view) sees: the visible instances of the submitted
+/// entities in submission order, and each entity's run of them. Kept by the
+/// renderer between frames only to reuse its allocations.
+#[derive(Default)]
+pub(super) struct Visible {
+    /// Instance slots in the instance store.
+    pub instances: Vec<u32>,
+    /// One run per entity with any instance visible.
+    pub runs: Vec<VisibleRun>,
+}
+
 impl Renderer {
-    /// Stage 2: find each submitted entity's visible instances. An entity whose
-    /// world box is wholly inside or outside the frustum is decided at once; only
-    /// boxes crossing a plane have their instances tested one by one.
-    pub(super) fn cull(&mut self, camera: &Camera, aspect: f32, stats: &mut FrameStats) {
-        let key = ViewKey { camera: *camera, aspect };
-        if self.view.as_ref().is_none_or(|(k, _, _)| *k != key) {
-            let view = camera.view();
-            let frustum = Frustum::from_view_proj(camera.projection(aspect) * view);
-            self.view = Some((key, frustum, view));
-        }
-        let frustum = self.view.as_ref().expect("set above").1;
-        self.collect_visible(&frustum, |_| true);
+    /// Stage 2: each submitted entity's instances that `frame` sees, into
+    /// `visible`. An entity whose world box is wholly inside or outside the
+    /// frustum is decided at once; only boxes crossing a plane have their
+    /// instances tested one by one.
+    pub(super) fn cull(&self, frame: &ViewFrame, visible: &mut Visible, stats: &mut FrameStats) {
+        self.collect_visible(&frame.frustum, frame.culling, |_| true, visible);
         let store = &self.store;
         stats.instances_invalid = self.submitted.iter().map(|s| u64::from(store.slot(s.slot).invalid)).sum();
-        stats.instances_culled = stats.instances_submitted - stats.instances_invalid - self.visible.len() as u64;
+        stats.instances_culled = stats.instances_submitted - stats.instances_invalid - visible.instances.len() as u64;
     }
 
-    /// Fill `visible` with the instances of the submitted entities `wanted` keeps
-    /// that `frustum` sees, and `runs` with each entity's part of it.
-    pub(super) fn collect_visible(&mut self, frustum: &Frustum, wanted: impl Fn(&Submitted) -> bool + Sync) {
-        self.visible.clear();
-        self.runs.clear();
-        let (store, culling) = (&self.store, self.culling);
+    /// Fill `out` with the instances of the submitted entities `wanted` keeps
+    /// that `frustum` sees (every valid one when not `culling`).
+    pub(super) fn collect_visible(
+        &self,
+        frustum: &Frustum,
+        culling: bool,
+        wanted: impl Fn(&Submitted) -> bool + Sync,
+        out: &mut Visible,
+    ) {
+        out.instances.clear();
+        out.runs.clear();
+        let store = &self.store;
+        let Visible { instances: visible, runs } = out;
         let mut push_run = |entry: usize, visible: &mut Vec<u32>, start: usize| {
             let len = (visible.len() - start) as u32;
             if len > 0 {
-                self.runs.push(VisibleRun { entry, start: start as u32, len });
+                runs.push(VisibleRun { entry, start: start as u32, len });
             }
         };
         if self.submitted.len() > 1 && self.instances_submitted >= PARALLEL_ENTITY_CULL_THRESHOLD {
@@ -58,17 +80,17 @@ impl Renderer {
                 })
                 .collect();
             for (entry, list) in lists.into_iter().enumerate() {
-                let start = self.visible.len();
-                self.visible.extend_from_slice(&list);
-                push_run(entry, &mut self.visible, start);
+                let start = visible.len();
+                visible.extend_from_slice(&list);
+                push_run(entry, visible, start);
             }
         } else {
             for (entry, s) in self.submitted.iter().enumerate() {
-                let start = self.visible.len();
+                let start = visible.len();
                 if wanted(s) {
-                    visible_instances(frustum, culling, store, s.slot, &mut self.visible);
+                    visible_instances(frustum, culling, store, s.slot, visible);
                 }
-                push_run(entry, &mut self.visible, start);
+                push_run(entry, visible, start);
             }
         }
     }
@@ -110,7 +132,7 @@ fn visible_instances(frustum: &Frustum, culling: bool, store: &InstanceStore, sl
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::{Entity, MaterialId, ShapeId};
+    use crate::scene::{Camera, Entity, MaterialId, ShapeId};
     use glam::{Mat4, Vec3};
 
     #[test]

@@ -13,6 +13,7 @@ mod light;
 mod material;
 mod mesh;
 mod states;
+mod view;
 
 pub use camera::{Camera, Projection};
 pub use entity::Entity;
@@ -22,6 +23,7 @@ pub use light::{Light, LightKind, ShadowSettings, CASCADES, MAX_LIGHTS};
 pub use material::{AlphaMode, MapSlots, Material, ShadingModel};
 pub use mesh::{smooth_normals, smooth_normals_in_groups, Aabb, BoundingSphere, Mesh, MeshError, SkinVertex, Vertex};
 pub use states::{BlendState, Compare, Cull, DepthState, RasterState, RenderStates, StencilOp, StencilState};
+pub use view::{View, Viewport};
 
 /// Handle to a shape (a mesh uploaded by the renderer), returned by
 /// [`Renderer::add_shape`](crate::Renderer::add_shape). The number is its index

@@ -1,0 +1,33 @@
+//! Core layer: [`ViewFrame`], what the frame's stages read of one
+//! [`View`](crate::scene::View).
+
+use super::cull::Frustum;
+use crate::scene::{Camera, View};
+use glam::Mat4;
+
+/// A view's camera matrices for one frame at its aspect ratio: what culling,
+/// queueing and the Camera block read.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct ViewFrame {
+    /// The camera.
+    pub camera: Camera,
+    /// Width over height of the rectangle it draws into.
+    pub aspect: f32,
+    /// World to view.
+    pub view: Mat4,
+    /// Its frustum in world space.
+    pub frustum: Frustum,
+    /// Whether it culls.
+    pub culling: bool,
+}
+
+impl ViewFrame {
+    /// `view` drawn into a rectangle `width` × `height` pixels.
+    pub fn new(view: &View, width: u32, height: u32) -> Self {
+        let aspect = width as f32 / height.max(1) as f32;
+        let camera = view.camera;
+        let matrix = camera.view();
+        let frustum = Frustum::from_view_proj(camera.projection(aspect) * matrix);
+        Self { camera, aspect, view: matrix, frustum, culling: view.culling }
+    }
+}

@@ -1,0 +1,121 @@
+//! [`View`], one camera's part of a frame: the camera, the rectangle of the
+//! target it draws into ([`Viewport`]) and its options. Plain data: a frame
+//! draws one or more views ([`Renderer::render_views`](crate::Renderer::render_views)),
+//! each culled, shadowed and drawn on its own.
+
+use super::Camera;
+
+/// A rectangle of a target as fractions of its width and height, from its top
+/// left corner: `x`, `y` at least 0, `x + width` and `y + height` at most 1.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Viewport {
+    /// Left edge.
+    pub x: f32,
+    /// Top edge.
+    pub y: f32,
+    /// Width.
+    pub width: f32,
+    /// Height.
+    pub height: f32,
+}
+
+impl Viewport {
+    /// The whole target.
+    pub const FULL: Self = Self { x: 0.0, y: 0.0, width: 1.0, height: 1.0 };
+
+    /// Whether this is a non-empty rectangle inside the target (0..1 on both axes).
+    pub fn is_valid(&self) -> bool {
+        let inside = |start: f32, size: f32| start >= 0.0 && size > 0.0 && start + size <= 1.0 + 1e-6;
+        inside(self.x, self.width) && inside(self.y, self.height)
+    }
+
+    /// The rectangle in pixels of a `width` × `height` target: (x, y, width,
+    /// height), edges rounded to the nearest pixel, at least one pixel a side.
+    /// Neighbouring viewports that share an edge share its pixel boundary.
+    pub fn pixels(&self, width: u32, height: u32) -> [u32; 4] {
+        let edge = |f: f32, size: u32| ((f.clamp(0.0, 1.0) * size as f32).round() as u32).min(size);
+        let (x0, y0) = (edge(self.x, width), edge(self.y, height));
+        let (x1, y1) = (edge(self.x + self.width, width), edge(self.y + self.height, height));
+        let (x0, y0) = (x0.min(width.saturating_sub(1)), y0.min(height.saturating_sub(1)));
+        [x0, y0, x1.max(x0 + 1) - x0, y1.max(y0 + 1) - y0]
+    }
+}
+
+impl Default for Viewport {
+    fn default() -> Self {
+        Self::FULL
+    }
+}
+
+/// One camera's part of a frame.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct View {
+    /// What it sees from where.
+    pub camera: Camera,
+    /// Where in the target it draws (the whole target by default).
+    pub viewport: Viewport,
+    /// Frustum culling (on by default; off draws everything, to compare costs).
+    pub culling: bool,
+}
+
+impl View {
+    /// The whole target seen by `camera`, culled.
+    pub fn new(camera: Camera) -> Self {
+        Self { camera, viewport: Viewport::FULL, culling: true }
+    }
+
+    /// This view drawing into `viewport`.
+    pub fn with_viewport(self, viewport: Viewport) -> Self {
+        Self { viewport, ..self }
+    }
+
+    /// This view with culling on or off.
+    pub fn with_culling(self, culling: bool) -> Self {
+        Self { culling, ..self }
+    }
+}
+
+impl From<Camera> for View {
+    fn from(camera: Camera) -> Self {
+        Self::new(camera)
+    }
+}
+
+impl From<&Camera> for View {
+    fn from(camera: &Camera) -> Self {
+        Self::new(*camera)
+    }
+}
+
+impl From<&View> for View {
+    fn from(view: &View) -> Self {
+        *view
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn viewports_are_checked_and_split_a_target_into_whole_pixels() {
+        assert!(Viewport::FULL.is_valid());
+        let left = Viewport { x: 0.0, y: 0.0, width: 0.5, height: 1.0 };
+        let right = Viewport { x: 0.5, ..left };
+        assert!(left.is_valid() && right.is_valid());
+        for bad in [
+            Viewport { x: -0.1, ..left },
+            Viewport { x: 0.6, ..left },
+            Viewport { width: 0.0, ..left },
+            Viewport { height: 1.5, ..left },
+            Viewport { y: f32::NAN, ..left },
+        ] {
+            assert!(!bad.is_valid(), "{bad:?}");
+        }
+        // An odd width: the halves meet at one pixel boundary and cover the target.
+        let (l, r) = (left.pixels(101, 40), right.pixels(101, 40));
+        assert_eq!(l, [0, 0, 51, 40]);
+        assert_eq!(r, [51, 0, 50, 40]);
+        assert_eq!(Viewport { x: 0.999, y: 0.999, width: 0.001, height: 0.001 }.pixels(10, 10), [9, 9, 1, 1]);
+    }
+}

@@ -1,0 +1,139 @@
+//! Several views in one frame: split screens and pictures in pictures, each view
+//! culled, shadowed and drawn on its own, with its own statistics; and the
+//! shadow maps a view's shadow pass returns, which only that view's flush takes.
+
+mod common;
+
+use glam::{Mat4, Vec3};
+use glint::asset::ShapeKind;
+use glint::{Camera, Entity, Gpu, Light, Material, OffscreenTarget, RenderError, Renderer, Shadows, View, Viewport};
+
+/// Draw `views` of `scenes/split.scn` into one `width` × `height` image.
+fn split_scene(gpu: &Gpu, views: &[View], (width, height): (u32, u32)) -> (image::RgbaImage, Vec<glint::FrameStats>) {
+    let desc = common::load_scene(&common::repo_root().join("scenes/split.scn"));
+    let mut renderer = Renderer::new(gpu);
+    let entities = desc.instantiate(&mut renderer);
+    let mut target = OffscreenTarget::new(gpu, width, height, 1).expect("target");
+    let stats = renderer.render_views(&entities, views, &desc.lights, &mut target).expect("frame");
+    (target.read_rgba8(gpu).expect("readback"), stats)
+}
+
+/// The part of `image` at (x, y) of size `width` × `height`.
+fn crop(image: &image::RgbaImage, x: u32, y: u32, width: u32, height: u32) -> image::RgbaImage {
+    image::imageops::crop_imm(image, x, y, width, height).to_image()
+}
+
+/// The largest difference of any channel of any pixel.
+fn max_difference(a: &image::RgbaImage, b: &image::RgbaImage) -> u8 {
+    assert_eq!(a.dimensions(), b.dimensions());
+    a.pixels().zip(b.pixels()).flat_map(|(p, q)| p.0.iter().zip(q.0).map(|(x, y)| x.abs_diff(y))).max().unwrap_or(0)
+}
+
+#[test]
+fn each_half_of_a_split_screen_is_its_camera_drawn_alone_at_that_size() {
+    let Some(gpu) = common::gpu() else { return };
+    split_screen_halves(gpu);
+}
+
+#[test]
+fn split_screens_work_on_gl_too() {
+    let Some(gpu) = common::gl_gpu() else { return };
+    split_screen_halves(gpu);
+}
+
+/// `scenes/split.scn` matches its reference, and each half its camera alone.
+fn split_screen_halves(gpu: &Gpu) {
+    let desc = common::load_scene(&common::repo_root().join("scenes/split.scn"));
+    let views = desc.views();
+    assert_eq!(views.len(), 2, "split.scn places two cameras");
+    let (split, stats) = split_scene(gpu, &views, (192, 96));
+    common::assert_matches_reference("split", &split);
+    assert_eq!(stats.len(), 2, "one FrameStats per view");
+    for (k, half) in [(0u32, 0u32), (1, 96)] {
+        let alone = View::new(desc.cameras[k as usize]);
+        let (image, single) = split_scene(gpu, &[alone], (96, 96));
+        let difference = max_difference(&crop(&split, half, 0, 96, 96), &image);
+        assert!(difference <= 2, "half {k} differs from its camera alone by {difference}");
+        assert_eq!(stats[k as usize].draws, single[0].draws, "half {k}'s draws are its camera's alone");
+        assert!(stats[k as usize].shadow_views > 0, "each view draws its own cascades");
+    }
+}
+
+#[test]
+fn a_picture_in_picture_covers_only_its_corner() {
+    let Some(gpu) = common::gpu() else { return };
+    let desc = common::load_scene(&common::repo_root().join("scenes/split.scn"));
+    let (front, above) = (View::new(desc.cameras[0]), View::new(desc.cameras[1]));
+    let corner = Viewport { x: 0.5, y: 0.5, width: 0.5, height: 0.5 };
+    let (picture, _) = split_scene(gpu, &[front, above.with_viewport(corner)], (64, 64));
+    let (front_alone, _) = split_scene(gpu, &[front], (64, 64));
+    let (above_alone, _) = split_scene(gpu, &[above], (32, 32));
+    assert!(max_difference(&crop(&picture, 32, 32, 32, 32), &above_alone) <= 2, "the corner is the second camera");
+    for (x, y) in [(0, 0), (32, 0), (0, 32)] {
+        let quarter = max_difference(&crop(&picture, x, y, 32, 32), &crop(&front_alone, x, y, 32, 32));
+        assert!(quarter <= 2, "quarter at ({x}, {y}) differs from the first camera by {quarter}");
+    }
+    // A first view that leaves part of the image uncovered: the rest is black.
+    let left = Viewport { width: 0.5, ..Viewport::FULL };
+    let (half, _) = split_scene(gpu, &[front.with_viewport(left)], (64, 64));
+    assert!(crop(&half, 32, 0, 32, 64).pixels().all(|p| p.0 == [0, 0, 0, 255]), "the right half is cleared");
+    assert!(crop(&half, 0, 0, 32, 64).pixels().any(|p| p.0[1] > 60), "the left half is drawn");
+}
+
+/// A renderer with one cube at the origin and a sun that casts shadows.
+fn cube_scene(gpu: &Gpu) -> (Renderer, Entity, [Light; 1]) {
+    let mut renderer = Renderer::new(gpu);
+    let cube = renderer.add_shape(ShapeKind::Cube.mesh());
+    let material = renderer.add_material(Material::default());
+    let sun =
+        Light::directional(Vec3::new(-1.0, -2.0, -1.0), Vec3::ONE, 1.0).with_shadows(glint::ShadowSettings::default());
+    (renderer, Entity::new(cube, material, Mat4::IDENTITY), [sun])
+}
+
+#[test]
+fn each_view_is_culled_on_its_own() {
+    let Some(gpu) = common::gpu() else { return };
+    let (mut renderer, cube, lights) = cube_scene(gpu);
+    let toward = Camera::perspective(60.0, 0.1, 100.0).looking_at(Vec3::new(0.0, 1.0, 4.0), Vec3::ZERO);
+    let away = Camera::perspective(60.0, 0.1, 100.0).looking_at(Vec3::new(0.0, 1.0, 4.0), Vec3::new(0.0, 1.0, 8.0));
+    let halves = [Viewport { width: 0.5, ..Viewport::FULL }, Viewport { x: 0.5, width: 0.5, ..Viewport::FULL }];
+    let views = [View::new(toward).with_viewport(halves[0]), View::new(away).with_viewport(halves[1])];
+    let mut target = OffscreenTarget::new(gpu, 64, 32, 1).expect("target");
+    let stats = renderer.render_views([&cube], &views, &lights, &mut target).expect("frame");
+    assert_eq!((stats[0].instances_drawn, stats[0].instances_culled), (1, 0), "the cube is in front of the first");
+    assert_eq!((stats[1].instances_drawn, stats[1].instances_culled), (0, 1), "and behind the second");
+    // Its shadow view still sees the cube (it casts into the second view's cascades).
+    assert!(stats[1].passes.shadow.draws > 0);
+}
+
+#[test]
+fn a_flush_takes_only_the_shadow_maps_drawn_for_its_view_this_frame() {
+    let Some(gpu) = common::gpu() else { return };
+    let (mut renderer, cube, lights) = cube_scene(gpu);
+    let camera = Camera::perspective(60.0, 0.1, 100.0).looking_at(Vec3::new(0.0, 1.0, 4.0), Vec3::ZERO);
+    let mut target = OffscreenTarget::new(gpu, 32, 32, 1).expect("target");
+    renderer.submit(&cube);
+    let shadows = renderer.shadow_pass(camera, &lights, &target).expect("shadow pass");
+    let stats = renderer.flush(camera, &lights, &shadows, &mut target).expect("frame");
+    assert_eq!(stats.shadow_views, 4, "one directional light: four cascades");
+    // The next frame, with last frame's maps.
+    renderer.submit(&cube);
+    let error = renderer.flush(camera, &lights, &shadows, &mut target).expect_err("stale maps");
+    assert!(matches!(error, RenderError::StaleShadows), "{error}");
+    // Maps drawn for other lights, or for another camera.
+    for (other_camera, other_lights) in [(camera, &[][..]), (camera.looking_at(Vec3::ONE, Vec3::ZERO), &lights[..])] {
+        renderer.submit(&cube);
+        let shadows = renderer.shadow_pass(other_camera, other_lights, &target).expect("shadow pass");
+        let error = renderer.flush(camera, &lights, &shadows, &mut target).expect_err("other maps");
+        assert!(matches!(error, RenderError::ShadowsForOtherView), "{error}");
+    }
+    // Without maps: no shadows, and no error.
+    renderer.submit(&cube);
+    let stats = renderer.flush(camera, &lights, &Shadows::none(), &mut target).expect("frame");
+    assert_eq!(stats.shadow_views, 0);
+    // A viewport outside the target.
+    renderer.submit(&cube);
+    let outside = View::new(camera).with_viewport(Viewport { x: 0.75, width: 0.5, ..Viewport::FULL });
+    let error = renderer.flush(outside, &lights, &Shadows::none(), &mut target).expect_err("outside");
+    assert!(matches!(error, RenderError::BadViewport(_)), "{error}");
+}
