@@ -1,0 +1,79 @@
+//! Core layer: [`RenderError`], what a frame can fail with.
+
+use super::mesh_pool::MeshTooLarge;
+use crate::scene::{MaterialId, ShapeId, TextureId, Viewport, MAX_LIGHTS};
+
+/// Errors from [`Renderer::flush`].
+#[derive(Debug, thiserror::Error)]
+pub enum RenderError {
+    /// More lights than the Scene block holds.
+    #[error("{0} lights given, but a frame can use at most {MAX_LIGHTS}")]
+    TooManyLights(usize),
+    /// An entity names a shape this renderer never created.
+    #[error("unknown shape id {0:?}: shapes come from this renderer's add_shape")]
+    UnknownShape(ShapeId),
+    /// An entity names a material this renderer never created.
+    #[error("unknown material id {0:?}: materials come from this renderer's add_material")]
+    UnknownMaterial(MaterialId),
+    /// One of glint's own shaders failed to compose (a bug in glint).
+    #[error(transparent)]
+    Shader(#[from] crate::shader::ShaderError),
+    /// A shape too large for one GPU buffer.
+    #[error("shape {shape:?}: {source}")]
+    MeshTooLarge {
+        /// The shape.
+        shape: ShapeId,
+        /// Its size and the limit.
+        source: MeshTooLarge,
+    },
+    /// A GPU resource the frame needs is larger than glint or the adapter allows.
+    #[error("{what} needs {bytes} bytes, more than the {limit}-byte limit ({limit_name})")]
+    TooLarge {
+        /// The resource.
+        what: &'static str,
+        /// What it needs.
+        bytes: u64,
+        /// The most allowed.
+        limit: u64,
+        /// Which limit that is.
+        limit_name: &'static str,
+    },
+    /// A texture wider or taller than the adapter allows.
+    #[error("texture '{name}' is {width} x {height}, larger than this adapter's {side} texels a side (max_texture_dimension_2d)")]
+    TextureTooLarge {
+        /// The texture's name.
+        name: String,
+        /// Its size.
+        width: u32,
+        /// Its size.
+        height: u32,
+        /// The adapter's largest side.
+        side: u32,
+    },
+    /// The device refused to create a resource (out of memory, or a limit). The
+    /// renderer may hold a broken resource afterwards: make a new one.
+    #[error("the GPU could not create {what}: {message}")]
+    Device {
+        /// The resource.
+        what: &'static str,
+        /// What wgpu said.
+        message: String,
+    },
+    /// A flush was given shadow maps drawn for an earlier frame.
+    #[error("the shadow maps given to flush were drawn for an earlier frame: call shadow_pass again each frame")]
+    StaleShadows,
+    /// A flush was given shadow maps drawn for another view or other lights.
+    #[error("the shadow maps given to flush were drawn for another view or other lights")]
+    ShadowsForOtherView,
+    /// A view's viewport is empty or reaches outside the target.
+    #[error("viewport {0:?} is not a non-empty rectangle inside 0..1")]
+    BadViewport(Viewport),
+    /// A material names a texture this renderer never created.
+    #[error("material '{material}' uses unknown texture id {texture:?}")]
+    UnknownTexture {
+        /// The material's name.
+        material: String,
+        /// The bad id.
+        texture: TextureId,
+    },
+}

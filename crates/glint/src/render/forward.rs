@@ -1,0 +1,200 @@
+//! Core layer: the forward view's stages 3 (queue) and 6 (upload), and the
+//! naive baseline's batches.
+
+use super::batch::Batch;
+use super::blocks::SceneGpu;
+use super::queue::{self, DrawItem, Queue};
+use super::view::ViewFrame;
+use super::visible::Visible;
+use super::{FrameMode, FrameStats, RenderError, Renderer, Submitted, UploadStats};
+use crate::scene::Light;
+use glam::Vec3A;
+
+impl Renderer {
+    /// Stage 3: one draw item per visible run, or per visible instance for blended
+    /// materials so that they can be sorted far to near one by one. Depth is the
+    /// view distance of the run's (or instance's) box centre over the far plane.
+    pub(super) fn build_queue(&mut self, frame: &ViewFrame, visible: &Visible) {
+        let far = frame.camera.far();
+        let depth = |center: Vec3A| -frame.view.transform_point3a(center).z / far;
+        for run in &visible.runs {
+            let s = &self.submitted[run.entry];
+            let material = &self.materials[s.material.0 as usize];
+            let pipeline = self.pipeline_of(s);
+            let texture_set = material.gpu.as_ref().expect("prepared").texture_set;
+            let queue = match material.material.alpha_mode {
+                crate::scene::AlphaMode::Opaque => Queue::Opaque,
+                crate::scene::AlphaMode::Mask { .. } => Queue::AlphaTest,
+                crate::scene::AlphaMode::Blend => Queue::Transparent,
+            };
+            let stage = s.render_order.unwrap_or(queue.stage());
+            let blended = queue == Queue::Transparent;
+            let item = |first, count, depth| DrawItem {
+                key: queue::sort_key(stage, blended, pipeline, texture_set, s.material, s.shape, depth),
+                pipeline,
+                material: s.material,
+                shape: s.shape,
+                first,
+                count,
+            };
+            if blended {
+                for k in run.start..run.start + run.len {
+                    let instance = visible.instances[k as usize] as usize;
+                    self.forward.items.push(item(k, 1, depth(self.store.bounds.center(instance))));
+                }
+            } else {
+                let center = self.store.slot(s.slot).bounds.map_or(Vec3A::ZERO, |(c, _)| c);
+                self.forward.items.push(item(run.start, run.len, depth(center)));
+            }
+        }
+    }
+
+    /// The naive baseline's batches: every valid instance of every submitted entity,
+    /// in submission order, one draw each, nothing culled or sorted.
+    pub(super) fn naive_batches(&mut self, stats: &mut FrameStats) {
+        self.forward.clear();
+        for s in &self.submitted {
+            let slot = self.store.slot(s.slot);
+            stats.instances_invalid += u64::from(slot.invalid);
+            let pipeline = self.pipeline_of(s);
+            let range = slot.first as usize..(slot.first + slot.count) as usize;
+            for i in range {
+                if self.store.bounds.is_valid(i) {
+                    self.forward.batches.push(Batch {
+                        stage: Queue::Opaque.stage(),
+                        pipeline,
+                        material: s.material,
+                        shape: s.shape,
+                        first_instance: self.forward.draw_indices.len() as u32,
+                        instance_count: 1,
+                    });
+                    self.forward.draw_indices.push(i as u32);
+                }
+            }
+        }
+    }
+
+    /// The forward pipeline a submitted entity draws with (prepared).
+    pub(super) fn pipeline_of(&self, s: &Submitted) -> u16 {
+        let layout = self.shapes[s.shape.0 as usize].layout;
+        let twin = self.materials[s.material.0 as usize].gpu.as_ref().expect("prepared");
+        twin.pipelines[layout.index()].expect("prepared")
+    }
+
+    /// Stage 6: write the blocks that changed, the instances that changed, and this
+    /// frame's draw indices and indirect commands where they differ from the last frame's.
+    /// `shadowed` is each light's first shadow view (empty: no shadows).
+    pub(super) fn upload(
+        &mut self,
+        frame: &ViewFrame,
+        lights: &[Light],
+        shadowed: &[Option<u32>],
+        stats: &mut FrameStats,
+    ) -> Result<(), RenderError> {
+        let bytes = &mut stats.bytes_uploaded;
+        let scene = SceneGpu::new(&self.environment, lights, shadowed);
+        bytes.scene += self.scene_block.update(&self.queue, scene);
+        bytes.camera += self.views.update(&self.queue, 0, frame.camera.to_gpu(frame.aspect));
+        self.upload_instances(bytes)?;
+        let naive = self.mode == FrameMode::Naive;
+        if naive {
+            // Every draw's material entry written before it, one small write each.
+            for b in &self.forward.batches {
+                let block = self.materials[b.material.0 as usize].material.to_gpu();
+                bytes.material += self.material_table.write(&self.queue, b.material.0, &block);
+            }
+        }
+        let layout = &self.pipelines.instance_layout;
+        let written = self.forward.upload(&self.device, &self.queue, (layout, self.instances.buffer()), naive)?;
+        bytes.draw_indices += written.draw_indices;
+        bytes.indirect += written.indirect;
+        stats.instances_drawn = self.forward.draw_indices.len() as u64;
+        Ok(())
+    }
+
+    /// Write the instances that changed (all of them when the buffer grew, and
+    /// then every draw list is bound to the new buffer).
+    pub(super) fn upload_instances(&mut self, bytes: &mut UploadStats) -> Result<(), RenderError> {
+        if self.instances.reserve(&self.device, self.store.len())? {
+            self.store.mark_all_dirty();
+            self.forward.rebind(&self.device, &self.pipelines.instance_layout, self.instances.buffer());
+            self.shadow_list.rebind(&self.device, &self.pipelines.instance_layout, self.instances.buffer());
+        }
+        for range in self.store.take_dirty() {
+            let data = &self.store.instances[range.start as usize..range.end as usize];
+            bytes.instances += self.instances.write(&self.queue, range.start, data);
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::asset::ShapeKind;
+    use crate::gpu::{Gpu, OffscreenTarget};
+    use crate::render::Shadows;
+    use crate::scene::{Background, Camera, Entity, Environment, Material};
+    use glam::{Mat4, Vec3};
+
+    fn gpu() -> Option<Gpu> {
+        match Gpu::headless() {
+            Ok(gpu) => Some(gpu),
+            Err(e) if std::env::var("GLINT_REQUIRE_ADAPTER").as_deref() == Ok("1") => panic!("{e}"),
+            Err(e) => {
+                eprintln!("skipping GPU test: {e}");
+                None
+            }
+        }
+    }
+
+    #[test]
+    fn errors_while_pipelines_are_made_are_caught_not_left_to_panic() {
+        let Some(gpu) = gpu() else { return };
+        let scope = crate::gpu::DriverErrors::watch(&gpu.device);
+        // Invalid on every adapter: anisotropy must be at least 1.
+        let _sampler =
+            gpu.device.create_sampler(&wgpu::SamplerDescriptor { anisotropy_clamp: 0, ..Default::default() });
+        let error = scope.finish().expect("the error is caught");
+        assert!(matches!(error, wgpu::Error::Validation { .. }), "{error}");
+        let clean = crate::gpu::DriverErrors::watch(&gpu.device);
+        let _sampler = gpu.device.create_sampler(&wgpu::SamplerDescriptor::default());
+        assert!(clean.finish().is_none(), "nothing to catch");
+    }
+
+    #[test]
+    fn blended_instances_are_drawn_far_to_near_and_render_order_overrides_queues() {
+        let Some(gpu) = gpu() else { return };
+        let mut r = Renderer::new(&gpu);
+        r.set_environment(Environment {
+            background: Background::Gradient { top: Vec3::Z, bottom: Vec3::ONE },
+            ..Environment::default()
+        });
+        let sphere = r.add_shape(ShapeKind::Sphere.mesh());
+        let glass = r.add_material(Material { alpha_mode: crate::AlphaMode::Blend, ..Material::default() });
+        let solid = r.add_material(Material::default());
+        // Instances at view distances 4, 10, 7, 12, 5 (camera at z = 10 looking down −z), scrambled.
+        let zs = [6.0, 0.0, 3.0, -2.0, 5.0];
+        let glass_entity =
+            Entity::instanced(sphere, glass, zs.iter().map(|&z| Mat4::from_translation(Vec3::Z * z)).collect());
+        let ground = Entity::new(sphere, solid, Mat4::from_translation(Vec3::Y * -2.0)).with_render_order(Some(200));
+        let front = Entity::new(sphere, solid, Mat4::from_translation(Vec3::X * 2.0));
+        let camera = Camera::perspective(60.0, 0.1, 100.0).looking_at(Vec3::Z * 10.0, Vec3::ZERO);
+        let mut target = OffscreenTarget::new(&gpu, 32, 32, 1).expect("target");
+        r.submit(&ground);
+        r.submit(&glass_entity);
+        r.submit(&front);
+        let stats = r.flush(camera, &[], &Shadows::none(), &mut target).expect("frame");
+        // Drawn order: `front` (opaque), sky, the five glass instances far to near, then the ground (200).
+        let stages: Vec<u8> = r.forward.batches.iter().map(|b| b.stage).collect();
+        assert_eq!(stages, vec![64, 192, 200]);
+        let glass_batch = r.forward.batches[1];
+        assert_eq!(glass_batch.instance_count, 5, "one entity's instances merge into one draw once sorted");
+        let order: Vec<f32> = r.forward.draw_indices[glass_batch.first_instance as usize..][..5]
+            .iter()
+            .map(|&i| r.store.instances[i as usize].transform().w_axis.z)
+            .collect();
+        assert_eq!(order, vec![-2.0, 0.0, 3.0, 5.0, 6.0], "far (low z) to near");
+        assert_eq!(stats.draws, 4, "front, sky, glass, ground");
+    }
+}

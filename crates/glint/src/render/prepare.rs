@@ -1,0 +1,75 @@
+//! Core layer: stage 1 of the frame, making sure everything the submitted
+//! entities use exists on the GPU (mesh buffers, textures, material blocks,
+//! pipelines), and [`Renderer::precompile`], which does it before the first frame.
+
+use super::{FrameStats, FrameVariant, RenderError, Renderer};
+use crate::scene::{Background, Entity, Light, MaterialId, ShapeId, MAX_LIGHTS};
+
+impl Renderer {
+    /// Build, before the first frame, everything drawing `entities` lit by `lights`
+    /// into a target of `samples` samples needs: mesh buffers, textures, material
+    /// blocks and every pipeline variant (with shadow lookups where a light casts
+    /// shadows), so that the first frame compiles nothing. Returns the number of
+    /// pipelines compiled.
+    pub fn precompile(&mut self, entities: &[&Entity], lights: &[Light], samples: u32) -> Result<u32, RenderError> {
+        if lights.len() > MAX_LIGHTS {
+            return Err(RenderError::TooManyLights(lights.len()));
+        }
+        self.frame_variant = FrameVariant::expected(lights);
+        let mut stats = FrameStats::default();
+        let uses: Vec<_> = entities.iter().map(|e| (e.shape, e.material)).collect();
+        self.prepare_uses(&uses, samples, &mut stats)?;
+        Ok(stats.pipelines_compiled)
+    }
+
+    /// Stage 1: make sure everything the submitted entities use exists on the GPU,
+    /// and compact the instance store when it holds more garbage than data.
+    pub(super) fn prepare(&mut self, samples: u32, stats: &mut FrameStats) -> Result<(), RenderError> {
+        if let Some(remap) = self.store.compact_if_wasteful(self.frame_index) {
+            for s in &mut self.submitted {
+                s.slot = remap[s.slot];
+            }
+        }
+        let uses: Vec<_> = self.submitted.iter().map(|s| (s.shape, s.material)).collect();
+        self.prepare_uses(&uses, samples, stats)
+    }
+
+    fn prepare_uses(
+        &mut self,
+        uses: &[(ShapeId, MaterialId)],
+        samples: u32,
+        stats: &mut FrameStats,
+    ) -> Result<(), RenderError> {
+        if self.material_table.reserve(&self.device, self.materials.len())? {
+            // A new table: every entry is written again, every texture set rebound to it.
+            for slot in &mut self.materials {
+                slot.dirty = true;
+            }
+            for k in 0..self.texture_sets.len() {
+                self.texture_sets[k].bind_group = self.texture_set_group(self.texture_sets[k].maps);
+            }
+        }
+        for &(shape, material) in uses {
+            let slot = self.shapes.get_mut(shape.0 as usize).ok_or(RenderError::UnknownShape(shape))?;
+            if slot.gpu.is_none() {
+                let scope = crate::gpu::DriverErrors::watch(&self.device);
+                let added = self.mesh_pool.add(&self.device, &self.queue, &slot.mesh);
+                if let Some(error) = scope.finish() {
+                    return Err(RenderError::Device { what: "the mesh pool", message: error.to_string() });
+                }
+                let (range, bytes) = added.map_err(|source| RenderError::MeshTooLarge { shape, source })?;
+                slot.gpu = Some(range);
+                stats.bytes_uploaded.meshes += bytes;
+            }
+            if let (true, Some(range)) = (std::mem::take(&mut slot.rewrite), slot.gpu) {
+                stats.bytes_uploaded.meshes += self.mesh_pool.rewrite_vertices(&self.queue, range, &slot.mesh);
+            }
+            let layout = slot.layout;
+            self.prepare_material(material, layout, samples, stats)?;
+        }
+        if matches!(self.environment.background, Background::Gradient { .. }) {
+            stats.pipelines_compiled += u32::from(self.pipelines.build_sky(&self.device, samples)?);
+        }
+        Ok(())
+    }
+}
