@@ -29,6 +29,10 @@ pub struct ModeReport {
     pub shadow_cpu_ms_median: f64,
     /// Median GPU time of the shadow pass; null where unsupported or without shadow views.
     pub shadow_gpu_ms_median: Option<f64>,
+    /// The view's post effects, in order (empty without a chain).
+    pub post: Vec<&'static str>,
+    /// Median GPU time of each post effect (the chain's order); empty where unsupported.
+    pub post_gpu_ms_median: Vec<f64>,
     /// Median CPU time per submitted instance, ns.
     pub ns_per_instance: f64,
     /// Median of cull + queue + sort + batch + upload per submitted instance, ns.
@@ -69,6 +73,16 @@ pub struct BenchConfig {
     pub msaa: u32,
 }
 
+/// The view a bench draws: the scene's first camera with its post chain, or
+/// with `post` instead when given.
+pub fn bench_view(desc: &SceneDesc, post: Option<Vec<glint::scene::PostEffect>>) -> glint::View {
+    let view = desc.camera_view(0);
+    match post {
+        Some(post) => view.with_post(post),
+        None => view,
+    }
+}
+
 fn percentile(sorted: &[f64], p: f64) -> f64 {
     if sorted.is_empty() {
         return 0.0;
@@ -90,7 +104,13 @@ fn median_of(frames: &[FrameStats], f: impl Fn(&FrameStats) -> f64) -> f64 {
 }
 
 /// Run `config.frames` frames of `desc` in `mode` and summarise them.
-pub fn run_mode(gpu: &Gpu, desc: &SceneDesc, mode: FrameMode, config: &BenchConfig) -> Result<ModeReport, Error> {
+pub fn run_mode(
+    gpu: &Gpu,
+    desc: &SceneDesc,
+    view: &glint::View,
+    mode: FrameMode,
+    config: &BenchConfig,
+) -> Result<ModeReport, Error> {
     let (width, height) = config.size;
     let mut target = OffscreenTarget::new(gpu, width, height, config.msaa)?;
     let mut renderer = Renderer::new(gpu);
@@ -101,7 +121,7 @@ pub fn run_mode(gpu: &Gpu, desc: &SceneDesc, mode: FrameMode, config: &BenchConf
     let entities = desc.instantiate(&mut renderer);
     let refs: Vec<_> = entities.iter().collect();
     renderer.precompile(&refs, &desc.lights, config.msaa)?;
-    let camera = desc.cameras[0];
+    let mut post_gpu_ms: Vec<Vec<f64>> = vec![Vec::new(); view.post.len()];
     let mut frames = Vec::with_capacity(config.frames);
     let mut frame_ms = Vec::with_capacity(config.frames);
     let mut resident_frame_100 = None;
@@ -115,17 +135,22 @@ pub fn run_mode(gpu: &Gpu, desc: &SceneDesc, mode: FrameMode, config: &BenchConf
         for e in &entities {
             renderer.submit(e);
         }
-        let shadows = renderer.shadow_pass(camera, &desc.lights, &target)?;
+        let shadows = renderer.shadow_pass(view, &desc.lights, &target)?;
         let _ = gpu.device.poll(wgpu::PollType::wait_indefinitely());
-        let stats = renderer.flush(camera, &desc.lights, &shadows, &mut target)?;
+        let stats = renderer.flush(view, &desc.lights, &shadows, &mut target)?;
         let _ = gpu.device.poll(wgpu::PollType::wait_indefinitely());
         let whole = frame_start.elapsed().as_secs_f64() * 1e3;
         let frame_gpu = renderer.read_gpu_times();
         if i >= config.warmup {
             frames.push(stats);
             frame_ms.push(whole);
-            gpu_ms.extend(frame_gpu.map(|t| t.forward_ms));
-            shadow_gpu_ms.extend(frame_gpu.and_then(|t| t.shadow_ms));
+            if let Some(times) = frame_gpu {
+                gpu_ms.push(times.forward_ms);
+                shadow_gpu_ms.extend(times.shadow_ms);
+                for (all, ms) in post_gpu_ms.iter_mut().zip(&times.post_ms) {
+                    all.push(*ms);
+                }
+            }
             if frames.len() == RESIDENT_FRAME.min(config.frames) {
                 resident_frame_100 = resident_mib();
             }
@@ -165,6 +190,8 @@ pub fn run_mode(gpu: &Gpu, desc: &SceneDesc, mode: FrameMode, config: &BenchConf
         gpu_ms_median: timed.then(|| median(&mut gpu_ms)).flatten(),
         shadow_cpu_ms_median: median_of(&frames, |f| f.passes.shadow.cpu_ms),
         shadow_gpu_ms_median: timed.then(|| median(&mut shadow_gpu_ms)).flatten(),
+        post: view.post.iter().map(|e| e.name()).collect(),
+        post_gpu_ms_median: post_gpu_ms.iter_mut().filter_map(|all| median(all)).collect(),
         ns_per_instance: percentile(&totals, 0.5) * 1e6 / instances,
         ns_per_instance_cull_sort_batch_upload: median_of(&frames, per_instance_stages) * 1e6 / instances,
         stage_ms_median,
@@ -216,6 +243,20 @@ pub fn format_mode(r: &ModeReport) -> String {
         text.push_str(&format!(
             "           shadow pass: {} views, {} draws in {} draw calls, {} instances | cpu {:.4} ms median | gpu {gpu} median\n",
             st.shadow_views, shadow.draws, shadow.draw_calls, shadow.instances, r.shadow_cpu_ms_median
+        ));
+    }
+    if !r.post.is_empty() {
+        let times: Vec<String> = (r.post.iter().enumerate())
+            .map(|(k, name)| match r.post_gpu_ms_median.get(k) {
+                Some(ms) => format!("{name} {ms:.3} ms"),
+                None => format!("{name} n/a"),
+            })
+            .collect();
+        let total: f64 = r.post_gpu_ms_median.iter().sum();
+        text.push_str(&format!(
+            "           post chain: {} draws | gpu (median): {} | {total:.3} ms in all\n",
+            st.passes.post.draws,
+            times.join(", ")
         ));
     }
     text

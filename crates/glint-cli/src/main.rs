@@ -94,6 +94,11 @@ enum Command {
         /// Also draw the per-stage CPU breakdown into this PNG.
         #[arg(long, value_name = "CHART.png")]
         plot: Option<PathBuf>,
+        /// Post-process the first camera with these effects (with their
+        /// defaults), e.g. "bloom tonemap fxaa", instead of its own "post"; ""
+        /// for none.
+        #[arg(long, value_parser = parse_post)]
+        post: Option<PostArg>,
     },
     /// Open a window onto a .scn scene (or a model file) and fly through it.
     #[command(after_help = view::KEYS)]
@@ -160,7 +165,7 @@ pub(crate) fn views_of(desc: &SceneDesc, scene: &Path, camera: Option<usize>) ->
     match camera {
         None => Ok(desc.views()),
         Some(k) => match desc.cameras.get(k) {
-            Some(c) => Ok(vec![glint::View::new(*c)]),
+            Some(_) => Ok(vec![desc.camera_view(k)]),
             None => Err(glint::Diagnostic::file(
                 scene,
                 format!("camera {k} requested, but the scene has {}", desc.cameras.len()),
@@ -191,6 +196,7 @@ fn run_bench(
     mode: BenchMode,
     json: bool,
     plot: Option<&Path>,
+    post: Option<Vec<glint::scene::PostEffect>>,
     options: LoadOptions,
 ) -> Result<(), Error> {
     let bench::BenchConfig { frames, warmup, size, msaa } = *config;
@@ -204,7 +210,9 @@ fn run_bench(
         BenchMode::Naive => vec![glint::FrameMode::Naive],
         BenchMode::Both => vec![glint::FrameMode::Optimized, glint::FrameMode::Naive],
     };
-    let reports = modes.into_iter().map(|m| bench::run_mode(&gpu, &desc, m, config)).collect::<Result<Vec<_>, _>>()?;
+    let view = bench::bench_view(&desc, post);
+    let reports =
+        modes.into_iter().map(|m| bench::run_mode(&gpu, &desc, &view, m, config)).collect::<Result<Vec<_>, _>>()?;
     let speedup = (reports.len() == 2).then(|| reports[1].cpu_ms_median / reports[0].cpu_ms_median);
     if json {
         let modes: serde_json::Map<String, serde_json::Value> =
@@ -268,6 +276,20 @@ fn parse_fps(s: &str) -> Result<f32, String> {
             Err(format!("'{s}' is not a frame rate: expected a number in {}..={}", FPS_RANGE.start(), FPS_RANGE.end()))
         }
     }
+}
+
+/// `--post`: the effects, in order.
+#[derive(Clone)]
+struct PostArg(Vec<glint::scene::PostEffect>);
+
+fn parse_post(s: &str) -> Result<PostArg, String> {
+    (s.split_whitespace())
+        .map(|name| {
+            glint::scene::PostEffect::named(name)
+                .ok_or_else(|| format!("'{name}': post effects are {}", glint::scene::PostEffect::NAMES.join(", ")))
+        })
+        .collect::<Result<_, _>>()
+        .map(PostArg)
 }
 
 fn parse_msaa(s: &str) -> Result<u32, String> {
@@ -481,9 +503,9 @@ fn main() -> ExitCode {
                 view::run(args, desc)
             })
         }
-        Command::Bench { scene, frames, warmup, mode, size, msaa, json, plot } => {
+        Command::Bench { scene, frames, warmup, mode, size, msaa, json, plot, post } => {
             let config = bench::BenchConfig { frames: *frames, warmup: *warmup, size: *size, msaa: *msaa };
-            run_bench(scene, &config, *mode, *json, plot.as_deref(), options)
+            run_bench(scene, &config, *mode, *json, plot.as_deref(), post.clone().map(|p| p.0), options)
         }
     };
     match result {

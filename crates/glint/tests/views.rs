@@ -6,6 +6,7 @@ mod common;
 
 use glam::{Mat4, Vec3};
 use glint::asset::ShapeKind;
+use glint::scene::PostEffect;
 use glint::{Camera, Entity, Gpu, Light, Material, OffscreenTarget, RenderError, Renderer, Shadows, View, Viewport};
 
 /// Draw `views` of `scenes/split.scn` into one `width` × `height` image.
@@ -50,7 +51,7 @@ fn split_screen_halves(gpu: &Gpu) {
     common::assert_matches_reference("split", &split);
     assert_eq!(stats.len(), 2, "one FrameStats per view");
     for (k, half) in [(0u32, 0u32), (1, 96)] {
-        let alone = View::new(desc.cameras[k as usize]);
+        let alone = desc.camera_view(k as usize);
         let (image, single) = split_scene(gpu, &[alone], (96, 96));
         let difference = max_difference(&crop(&split, half, 0, 96, 96), &image);
         assert!(difference <= 2, "half {k} differs from its camera alone by {difference}");
@@ -63,10 +64,11 @@ fn split_screen_halves(gpu: &Gpu) {
 fn a_picture_in_picture_covers_only_its_corner() {
     let Some(gpu) = common::gpu() else { return };
     let desc = common::load_scene(&common::repo_root().join("scenes/split.scn"));
-    let (front, above) = (View::new(desc.cameras[0]), View::new(desc.cameras[1]));
+    let (front, above) = (desc.camera_view(0), desc.camera_view(1));
+    assert_eq!(above.post, [PostEffect::Edges { color: glam::Vec3::new(0.02, 0.03, 0.12), threshold: 0.3 }]);
     let corner = Viewport { x: 0.5, y: 0.5, width: 0.5, height: 0.5 };
-    let (picture, _) = split_scene(gpu, &[front, above.with_viewport(corner)], (64, 64));
-    let (front_alone, _) = split_scene(gpu, &[front], (64, 64));
+    let (picture, _) = split_scene(gpu, &[front.clone(), above.clone().with_viewport(corner)], (64, 64));
+    let (front_alone, _) = split_scene(gpu, std::slice::from_ref(&front), (64, 64));
     let (above_alone, _) = split_scene(gpu, &[above], (32, 32));
     assert!(max_difference(&crop(&picture, 32, 32, 32, 32), &above_alone) <= 2, "the corner is the second camera");
     for (x, y) in [(0, 0), (32, 0), (0, 32)] {

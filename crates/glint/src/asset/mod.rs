@@ -17,6 +17,7 @@ mod scn;
 mod scn_cloth;
 mod scn_fields;
 mod scn_lights;
+mod scn_post;
 mod scn_syntax;
 mod texture;
 
@@ -28,8 +29,8 @@ pub use files::{
 pub use model::{AddedModel, Model, ModelPart, Morph, Skin};
 pub use procedural::ShapeKind;
 pub use scn::{
-    load_scene, load_scene_with, parse_scene, parse_scene_with, DrawOptions, EntityDesc, MaterialDesc, MeshRef,
-    SceneDesc, TextureRef, MAX_INSTANCES,
+    load_scene, load_scene_with, parse_scene, parse_scene_with, CameraView, DrawOptions, EntityDesc, MaterialDesc,
+    MeshRef, SceneDesc, TextureRef, MAX_INSTANCES,
 };
 pub use scn_cloth::{ClothDesc, ClothSetup, MAX_POSE_STEPS};
 pub use texture::{load_texture, Texture, MAX_TEXTURE_MEMORY, MAX_TEXTURE_SIDE};

@@ -285,7 +285,7 @@ impl Model {
             path: self.path.clone(),
             environment,
             cameras: std::iter::once(camera).chain(self.cameras.iter().copied()).collect(),
-            viewports: vec![None; 1 + self.cameras.len()],
+            camera_views: vec![Default::default(); 1 + self.cameras.len()],
             lights: if self.lights.is_empty() { vec![sun, fill] } else { self.lights.clone() },
             materials: Vec::new(),
             textures: Vec::new(),

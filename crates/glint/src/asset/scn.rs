@@ -18,7 +18,7 @@ use crate::render::{ShadowLayout, MAX_SHADOW_MAP_BYTES};
 use crate::scene::TextureId;
 use crate::scene::{
     AlphaMode, Background, BlendState, Camera, Compare, Cull, Entity, Environment, Fog, Light, Material, MaterialId,
-    RenderStates, ShadingModel, StencilOp, View, Viewport, MAX_LIGHTS,
+    PostEffect, RenderStates, ShadingModel, StencilOp, View, Viewport, MAX_LIGHTS,
 };
 use crate::sim::cloth::ClothView;
 use crate::Renderer;
@@ -128,8 +128,8 @@ pub struct SceneDesc {
     pub environment: Environment,
     /// Cameras in file order (a default one when the file has none).
     pub cameras: Vec<Camera>,
-    /// Each camera's `viewport`, where it has one (the same order).
-    pub viewports: Vec<Option<Viewport>>,
+    /// Each camera's `viewport` and post chain (the same order).
+    pub camera_views: Vec<CameraView>,
     /// Lights in file order.
     pub lights: Vec<Light>,
     /// Materials in file order.
@@ -147,18 +147,32 @@ pub struct SceneDesc {
     pub warnings: Vec<Diagnostic>,
 }
 
+/// How a camera of a scene draws: where in the image, and its post chain.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct CameraView {
+    /// `viewport`: its rectangle of the image (`None`: drawn only alone).
+    pub viewport: Option<Viewport>,
+    /// `post`: its effects, in order.
+    pub post: Vec<PostEffect>,
+}
+
 impl SceneDesc {
     /// The views `glint render` draws into one image: every camera that has a
     /// viewport, in file order, or the first camera alone when none has one.
     pub fn views(&self) -> Vec<View> {
-        let placed: Vec<View> = (self.cameras.iter().zip(&self.viewports))
-            .filter_map(|(camera, viewport)| viewport.map(|v| View::new(*camera).with_viewport(v)))
+        let placed: Vec<View> = (0..self.cameras.len())
+            .filter_map(|k| self.camera_views[k].viewport.map(|v| self.camera_view(k).with_viewport(v)))
             .collect();
-        if placed.is_empty() {
-            self.cameras.first().map(|c| vec![View::new(*c)]).unwrap_or_default()
+        if placed.is_empty() && !self.cameras.is_empty() {
+            vec![self.camera_view(0)]
         } else {
             placed
         }
+    }
+
+    /// Camera `index` over the whole image, with its post chain.
+    pub fn camera_view(&self, index: usize) -> View {
+        View::new(self.cameras[index]).with_post(self.camera_views[index].post.clone())
     }
 
     /// Total instances over all render tasks.
@@ -347,7 +361,7 @@ pub fn parse_scene_with(path: &Path, text: &str, options: LoadOptions) -> Result
             path: path.to_path_buf(),
             environment: Environment::default(),
             cameras: Vec::new(),
-            viewports: Vec::new(),
+            camera_views: Vec::new(),
             lights: Vec::new(),
             materials: Vec::new(),
             textures: Vec::new(),
@@ -655,7 +669,9 @@ impl Loader<'_> {
         }
         camera = camera.looking_at(origin, target);
         camera.up = up.unwrap_or(camera.up);
-        self.scene.viewports.push(f.viewport("viewport")?);
+        let viewport = f.viewport("viewport")?;
+        let post = super::scn_post::chain(f)?;
+        self.scene.camera_views.push(CameraView { viewport, post });
         self.scene.cameras.push(camera);
         Ok(())
     }
@@ -976,7 +992,7 @@ impl Loader<'_> {
             self.scene
                 .cameras
                 .push(Camera::perspective(60.0, 0.1, 200.0).looking_at(Vec3::new(0.0, 2.0, 6.0), Vec3::ZERO));
-            self.scene.viewports.push(None);
+            self.scene.camera_views.push(CameraView::default());
         }
         Ok(self.scene)
     }

@@ -123,6 +123,11 @@ fn semantic_errors_name_file_line_and_expectation() {
         ("{\n\"classname\" \"camera\"\n\"viewport\" \"-0.1 0 0.5 1\"\n}", 3, "x and y must be at least 0"),
         ("{\n\"classname\" \"camera\"\n\"viewport\" \"0 0 0 1\"\n}", 3, "not a rectangle inside the image"),
         ("{\n\"classname\" \"camera\"\n\"viewport\" \"0 0 1\"\n}", 3, "found 3 numbers"),
+        ("{\n\"classname\" \"camera\"\n\"post\" \"bloom glow\"\n}", 3, "names 'glow', expected effects among: bloom,"),
+        ("{\n\"classname\" \"camera\"\n\"post\" \"fxaa fxaa\"\n}", 3, "names 'fxaa' twice"),
+        ("{\n\"classname\" \"camera\"\n\"tonemap\" \"filmic\"\n}", 3, "expected one of: none, reinhard, aces, agx"),
+        ("{\n\"classname\" \"camera\"\n\"exposure\" \"40\"\n}", 3, "expected a value in -20..=20"),
+        ("{\n\"classname\" \"camera\"\n\"vignette\" \"2\"\n}", 3, "expected a value in 0..=1"),
         ("{\n\"classname\" \"light_point\"\n\"origin\" \"0 0 inf\"\n}", 3, "not a finite number"),
     ];
     for (text, line, want) in cases {
@@ -137,7 +142,7 @@ fn semantic_errors_name_file_line_and_expectation() {
 fn cameras_with_viewports_are_the_views_and_without_any_the_first_camera_is() {
     let camera = |extra: &str| format!("{{\n\"classname\" \"camera\"\n\"origin\" \"0 1 5\"\n{extra}}}\n");
     let none = parse(&format!("{}{}", camera(""), camera(""))).unwrap();
-    assert_eq!(none.viewports, [None, None]);
+    assert!(none.camera_views.iter().all(|c| c.viewport.is_none() && c.post.is_empty()));
     let views = none.views();
     assert_eq!((views.len(), views[0].viewport), (1, crate::scene::Viewport::FULL), "the first camera alone");
     let text =
@@ -148,6 +153,18 @@ fn cameras_with_viewports_are_the_views_and_without_any_the_first_camera_is() {
     assert_eq!(views[0].viewport, crate::scene::Viewport { x: 0.5, y: 0.0, width: 0.5, height: 1.0 });
     assert_eq!(views[1].viewport.x, 0.0);
     assert!(views.iter().all(|v| v.culling));
+    // A post chain, in the listed order, with each effect's settings.
+    let keys = "\"post\" \"tonemap bloom edges\"\n\"tonemap\" \"agx\"\n\"exposure\" \"1.5\"\n\"bloom_threshold\" \"2\"\n\"edge_color\" \"1 0 0\"\n";
+    let chain = parse(&camera(keys)).unwrap().camera_view(0).post;
+    use crate::scene::{PostEffect, Tonemap};
+    assert_eq!(
+        chain,
+        [
+            PostEffect::Tonemap { operator: Tonemap::Agx, exposure: 1.5 },
+            PostEffect::Bloom { threshold: 2.0, intensity: 0.5 },
+            PostEffect::Edges { color: glam::Vec3::X, threshold: 0.4 },
+        ]
+    );
 }
 
 #[test]

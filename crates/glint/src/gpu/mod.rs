@@ -14,7 +14,7 @@ mod window;
 
 pub use context::{Gpu, GpuError, WindowHandles};
 pub use heap::keep_freed_heap_memory;
-pub use target::OffscreenTarget;
+pub use target::{OffscreenTarget, TargetFormat};
 pub use window::WindowSurface;
 
 pub(crate) use blit::{sampler_entry, texture_entry, Blitter};
@@ -23,5 +23,8 @@ pub(crate) use errors::DriverErrors;
 /// Colour format of every glint target: 8-bit sRGB, so shaders write linear values
 /// and the hardware encodes them.
 pub const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
+/// Colour format of a view drawn for a post-processing chain: linear half floats,
+/// so light brighter than 1 survives until tonemapping.
+pub const HDR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
 /// Depth-stencil format of every glint target (stencil for materials' `StencilState`).
 pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth24PlusStencil8;

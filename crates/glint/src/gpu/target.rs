@@ -1,11 +1,21 @@
 use super::{Gpu, GpuError, COLOR_FORMAT, DEPTH_FORMAT};
 
+/// What pipelines drawing into a target depend on: its colour format and samples.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct TargetFormat {
+    /// Colour format ([`COLOR_FORMAT`] or [`HDR_FORMAT`](super::HDR_FORMAT)).
+    pub color: wgpu::TextureFormat,
+    /// Samples per pixel (1 or 4).
+    pub samples: u32,
+}
+
 /// An offscreen render target: sRGB colour plus depth, optionally multisampled,
 /// with a resolve texture that can be read back to RGBA8 and saved as PNG.
 pub struct OffscreenTarget {
     width: u32,
     height: u32,
     samples: u32,
+    format: wgpu::TextureFormat,
     /// Single-sample colour: the resolve target with MSAA, the render target without.
     resolved: wgpu::Texture,
     resolved_view: wgpu::TextureView,
@@ -30,12 +40,14 @@ impl OffscreenTarget {
         if !(samples == 1 || samples == 4) || !gpu.supports_msaa(samples) {
             return Err(GpuError::SampleCount(samples));
         }
-        Ok(Self::on_device(&gpu.device, width, height, samples))
+        Ok(Self::on_device(&gpu.device, width, height, TargetFormat { color: COLOR_FORMAT, samples }))
     }
 
     /// [`OffscreenTarget::new`] without its checks, for a target no larger and
     /// with no more samples than one that passed them.
-    pub(crate) fn on_device(device: &wgpu::Device, width: u32, height: u32, samples: u32) -> Self {
+    /// The colour format may be [`HDR_FORMAT`](super::HDR_FORMAT) (not readable back).
+    pub(crate) fn on_device(device: &wgpu::Device, width: u32, height: u32, format: TargetFormat) -> Self {
+        let TargetFormat { color: color_format, samples } = format;
         let size = wgpu::Extent3d { width, height, depth_or_array_layers: 1 };
         let texture = |label: &str, format, samples, usage| {
             device.create_texture(&wgpu::TextureDescriptor {
@@ -51,7 +63,7 @@ impl OffscreenTarget {
         };
         let resolved = texture(
             "offscreen target: colour",
-            COLOR_FORMAT,
+            color_format,
             1,
             wgpu::TextureUsages::RENDER_ATTACHMENT
                 | wgpu::TextureUsages::COPY_SRC
@@ -59,7 +71,7 @@ impl OffscreenTarget {
                 | wgpu::TextureUsages::TEXTURE_BINDING,
         );
         let msaa_view = (samples > 1).then(|| {
-            texture("offscreen target: msaa colour", COLOR_FORMAT, samples, wgpu::TextureUsages::RENDER_ATTACHMENT)
+            texture("offscreen target: msaa colour", color_format, samples, wgpu::TextureUsages::RENDER_ATTACHMENT)
                 .create_view(&Default::default())
         });
         let depth = texture("offscreen target: depth", DEPTH_FORMAT, samples, wgpu::TextureUsages::RENDER_ATTACHMENT);
@@ -67,6 +79,7 @@ impl OffscreenTarget {
             width,
             height,
             samples,
+            format: color_format,
             resolved_view: resolved.create_view(&Default::default()),
             resolved,
             msaa_view,
@@ -87,6 +100,11 @@ impl OffscreenTarget {
     /// Samples per pixel (1 or 4).
     pub fn samples(&self) -> u32 {
         self.samples
+    }
+
+    /// Its colour format and samples.
+    pub fn format(&self) -> TargetFormat {
+        TargetFormat { color: self.format, samples: self.samples }
     }
 
     /// The single-sample colour texture holding the last frame (for copies).

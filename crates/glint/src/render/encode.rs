@@ -66,7 +66,7 @@ impl Renderer {
             let mut bound = Bound::default();
             self.draw_stages(&self.forward, &mut pass, 0..sky_at, &mut bound, stats);
             let sky = match self.environment.background {
-                Background::Gradient { .. } => self.pipelines.sky_built(target.samples()),
+                Background::Gradient { .. } => self.pipelines.sky_built(target.format()),
                 Background::Color(_) => None,
             };
             if let Some(sky) = sky {

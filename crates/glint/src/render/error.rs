@@ -1,6 +1,7 @@
 //! Core layer: [`RenderError`], what a frame can fail with.
 
 use super::mesh_pool::MeshTooLarge;
+use super::post::MAX_POST_EFFECTS;
 use crate::scene::{MaterialId, ShapeId, TextureId, Viewport, MAX_LIGHTS};
 
 /// Errors from [`Renderer::flush`].
@@ -68,6 +69,9 @@ pub enum RenderError {
     /// A view's viewport is empty or reaches outside the target.
     #[error("viewport {0:?} is not a non-empty rectangle inside 0..1")]
     BadViewport(Viewport),
+    /// A view's post chain has more effects than glint runs.
+    #[error("a post chain of {0} effects; at most {MAX_POST_EFFECTS}")]
+    PostChainTooLong(usize),
     /// A material names a texture this renderer never created.
     #[error("material '{material}' uses unknown texture id {texture:?}")]
     UnknownTexture {

@@ -1,14 +1,26 @@
 //! Core layer: the frame. [`Renderer::render_views`] draws each view in turn;
 //! [`Renderer::flush`] is one view's frame, whose stages [`Renderer::run_frame`]
 //! calls in order (prepare → cull → queue → sort → batch → upload → encode →
-//! submit) after [`Renderer::shadow_pass`] has drawn that view's shadow maps.
+//! compose → submit) after [`Renderer::shadow_pass`] has drawn that view's
+//! shadow maps.
 
+use super::post::{ChainImages, MAX_POST_EFFECTS};
 use super::shadow_pass::{Shadows, ShadowsDrawn};
 use super::view::ViewFrame;
 use super::{ms_since, queue, FrameMode, FrameStats, FrameVariant, RenderError, Renderer};
-use crate::gpu::OffscreenTarget;
-use crate::scene::{Entity, Light, View, MAX_LIGHTS};
+use crate::gpu::{OffscreenTarget, TargetFormat, HDR_FORMAT};
+use crate::scene::{Entity, Light, PostEffect, View, MAX_LIGHTS};
 use std::time::Instant;
+
+/// How a view's picture reaches the output (stage 8 of [`Renderer::run_frame`]).
+enum Compose<'a> {
+    /// It was drawn into the output itself.
+    Direct,
+    /// Copied from its own target into the output at `origin`.
+    Copy { from: &'a OffscreenTarget, to: &'a OffscreenTarget, origin: [u32; 2] },
+    /// Its post chain, from its HDR target into its rectangle of the output.
+    Post { chain: &'a [PostEffect], images: &'a ChainImages<'a> },
+}
 
 impl Renderer {
     /// One whole frame of `entities` seen by `view` (or a camera), the seed's
@@ -27,7 +39,7 @@ impl Renderer {
             self.submit(entity);
         }
         // Flush even after a failed shadow pass, so the submitted entities are dropped.
-        let shadows = self.shadow_pass(view, lights, target);
+        let shadows = self.shadow_pass(&view, lights, target);
         let frame = self.flush(view, lights, shadows.as_ref().unwrap_or(&Shadows::none()), target);
         shadows.and(frame)
     }
@@ -52,7 +64,7 @@ impl Renderer {
         }) {
             self.clear(target);
         }
-        views.iter().map(|view| self.render(entities.clone(), *view, lights, target)).collect()
+        views.iter().map(|view| self.render(entities.clone(), view, lights, target)).collect()
     }
 
     /// Clear `target` to black.
@@ -82,10 +94,10 @@ impl Renderer {
     /// 6. upload — Scene and Camera blocks if changed, changed instances, draw indices and indirect commands if changed
     /// 7. encode — one pass: opaque → alpha-test → sky → transparent (or as `render_order` says);
     ///    batches sharing pipeline, texture set and mesh page go in one multi-draw-indirect call
-    /// 8. submit
-    ///
-    /// A view of part of the target is drawn into a target of its own (kept for
-    /// the next frames) and copied into its rectangle.
+    /// 8. compose — a view drawn into a target of its own (a view of part of the
+    ///    target, or one with a post chain: HDR) reaches its rectangle: copied, or
+    ///    through its post chain's full-screen passes ([`post`](super::post))
+    /// 9. submit — the frame's command buffers at once
     ///
     /// Errors (the submitted entities are dropped): more than [`MAX_LIGHTS`]
     /// lights, an id that is not this renderer's, a viewport outside the
@@ -119,7 +131,9 @@ impl Renderer {
     }
 
     /// [`flush`](Self::flush)'s frame: into `target` itself when `view` covers
-    /// it, else into a view target of the viewport's size, then copied there.
+    /// it and has no post chain; else into a view target of the viewport's size
+    /// (HDR for a post chain, whose last pass writes the rectangle), or copied
+    /// into the rectangle.
     fn draw_view(
         &mut self,
         view: &View,
@@ -130,44 +144,88 @@ impl Renderer {
         if !view.viewport.is_valid() {
             return Err(RenderError::BadViewport(view.viewport));
         }
+        if view.post.len() > MAX_POST_EFFECTS {
+            return Err(RenderError::PostChainTooLong(view.post.len()));
+        }
         let drawn = match &shadows.drawn {
             Some(drawn) => drawn.first_views(self.frame_index, view, lights).map(|_| Some(drawn))?,
             None => None,
         };
         let [x, y, width, height] = view.viewport.pixels(target.width(), target.height());
         let frame = ViewFrame::new(view, width, height);
-        if (width, height) == (target.width(), target.height()) {
-            return self.run_frame(&frame, lights, drawn, target);
+        let format = self.scene_format(view, target);
+        if (width, height, format) == (target.width(), target.height(), target.format()) {
+            return self.run_frame(&frame, lights, drawn, target, Compose::Direct);
         }
-        let own = self.take_view_target(width, height, target.samples());
-        let stats = self.run_frame(&frame, lights, drawn, &own);
-        let mut encoder = self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
-            label: Some("renderer: view into its viewport"),
-        });
-        encoder.copy_texture_to_texture(
-            own.color_texture().as_image_copy(),
-            wgpu::TexelCopyTextureInfo {
-                origin: wgpu::Origin3d { x, y, z: 0 },
-                ..target.color_texture().as_image_copy()
-            },
-            wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
-        );
-        self.queue.submit([encoder.finish()]);
+        let own = self.take_view_target(width, height, format);
+        let images = ChainImages {
+            scene: own.color_view(),
+            size: (width, height),
+            output: target.color_view(),
+            output_format: target.format().color,
+            rect: [x, y, width, height],
+        };
+        let compose = match view.post.is_empty() {
+            true => Compose::Copy { from: &own, to: target, origin: [x, y] },
+            false => Compose::Post { chain: &view.post, images: &images },
+        };
+        let result = self.run_frame(&frame, lights, drawn, &own, compose);
         self.view_targets.push((own, self.frame_index));
-        stats
+        result
+    }
+
+    /// Stage 8 of a view not drawn straight into the output: its picture copied,
+    /// or its post chain run, into its rectangle of the output.
+    fn compose(
+        &mut self,
+        compose: Compose,
+        stats: &mut FrameStats,
+    ) -> Result<Option<wgpu::CommandBuffer>, RenderError> {
+        let label = Some("renderer: view into its viewport");
+        let mut encoder = self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label });
+        match compose {
+            Compose::Direct => return Ok(None),
+            Compose::Copy { from, to, origin: [x, y] } => encoder.copy_texture_to_texture(
+                from.color_texture().as_image_copy(),
+                wgpu::TexelCopyTextureInfo {
+                    origin: wgpu::Origin3d { x, y, z: 0 },
+                    ..to.color_texture().as_image_copy()
+                },
+                wgpu::Extent3d { width: from.width(), height: from.height(), depth_or_array_layers: 1 },
+            ),
+            Compose::Post { chain, images } => {
+                let t = Instant::now();
+                let (device, queue, index, timer) =
+                    (&self.device, &self.queue, self.frame_index, self.gpu_timer.as_mut());
+                stats.passes.post = self.post.encode((device, queue), &mut encoder, chain, images, index, timer)?;
+                stats.draws += stats.passes.post.draws;
+                stats.draw_calls += stats.passes.post.draw_calls;
+                stats.passes.post.cpu_ms = ms_since(t);
+            }
+        }
+        Ok(Some(encoder.finish()))
+    }
+
+    /// The target a view's scene is drawn into: HDR (with the output's samples
+    /// where the adapter can) for a post chain, else the output's own format.
+    pub(super) fn scene_format(&self, view: &View, target: &OffscreenTarget) -> TargetFormat {
+        match view.post.is_empty() {
+            true => target.format(),
+            false => TargetFormat { color: HDR_FORMAT, samples: if self.hdr_msaa { target.samples() } else { 1 } },
+        }
     }
 
     /// A view target of this size and sample count: one kept from an earlier
     /// frame, or a new one. Targets unused for more than a frame are dropped.
-    fn take_view_target(&mut self, width: u32, height: u32, samples: u32) -> OffscreenTarget {
+    fn take_view_target(&mut self, width: u32, height: u32, format: TargetFormat) -> OffscreenTarget {
         let now = self.frame_index;
-        let fits = |t: &OffscreenTarget| (t.width(), t.height(), t.samples()) == (width, height, samples);
+        let fits = |t: &OffscreenTarget| (t.width(), t.height(), t.format()) == (width, height, format);
         if let Some(k) = self.view_targets.iter().position(|(t, _)| fits(t)) {
             return self.view_targets.swap_remove(k).0;
         }
         // A window being resized asks for a new size every frame: keep only recent ones.
         self.view_targets.retain(|(_, used)| used + 2 >= now);
-        OffscreenTarget::on_device(&self.device, width, height, samples)
+        OffscreenTarget::on_device(&self.device, width, height, format)
     }
 
     fn run_frame(
@@ -176,6 +234,7 @@ impl Renderer {
         lights: &[Light],
         drawn: Option<&ShadowsDrawn>,
         target: &OffscreenTarget,
+        compose: Compose,
     ) -> Result<FrameStats, RenderError> {
         if lights.len() > MAX_LIGHTS {
             return Err(RenderError::TooManyLights(lights.len()));
@@ -187,7 +246,7 @@ impl Renderer {
         };
         let t = Instant::now();
         self.frame_variant = FrameVariant::after(drawn, lights);
-        self.prepare(target.samples(), &mut stats)?;
+        self.prepare(target.format(), &mut stats)?;
         stats.cpu_ms.prepare = ms_since(t);
 
         let mut visible = std::mem::take(&mut self.visible);
@@ -225,8 +284,10 @@ impl Renderer {
         let commands = self.encode(target, &mut stats);
         stats.cpu_ms.encode = ms_since(t);
 
+        let composed = self.compose(compose, &mut stats)?;
+
         let t = Instant::now();
-        self.queue.submit([commands]);
+        self.queue.submit(std::iter::once(commands).chain(composed));
         stats.cpu_ms.submit = ms_since(t);
         stats.bytes_uploaded.finish();
         Ok(stats)

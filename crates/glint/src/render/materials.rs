@@ -4,6 +4,7 @@
 
 use super::pipelines::{Pipelines, VertexLayout};
 use super::{FrameStats, Maps, MaterialGpuTwin, RenderError, Renderer, TextureSet};
+use crate::gpu::TargetFormat;
 use crate::scene::MaterialId;
 use crate::shader::ShaderFeatures;
 
@@ -14,14 +15,14 @@ impl Renderer {
         &mut self,
         id: MaterialId,
         layout: VertexLayout,
-        samples: u32,
+        target: TargetFormat,
         stats: &mut FrameStats,
     ) -> Result<(), RenderError> {
         let slot = self.materials.get(id.0 as usize).ok_or(RenderError::UnknownMaterial(id))?;
         let fog = self.environment.fog.is_some();
         let frame = self.frame_variant;
         let current =
-            slot.gpu.as_ref().filter(|g| !slot.dirty && g.samples == samples && g.fog == fog && g.frame == frame);
+            slot.gpu.as_ref().filter(|g| !slot.dirty && g.target == target && g.fog == fog && g.frame == frame);
         if current.is_some_and(|g| g.pipelines[layout.index()].is_some()) {
             return Ok(());
         }
@@ -77,7 +78,7 @@ impl Renderer {
                 texture_set,
                 pipelines: [None; VertexLayout::COUNT],
                 shadow_pipelines: [[None; 2]; VertexLayout::COUNT],
-                samples,
+                target,
                 fog,
                 frame,
             });
@@ -85,7 +86,7 @@ impl Renderer {
         let mut features = ShaderFeatures::for_material(&material, &self.environment);
         features.set(ShaderFeatures::SHADOWS, frame.shadows);
         features.set(ShaderFeatures::SHADOW_CUBES, frame.shadow_cubes);
-        let key = Pipelines::key(features, frame.lights, layout, material.render_states(), samples);
+        let key = Pipelines::key(features, frame.lights, layout, material.render_states(), target);
         let (pipeline, built) = self.pipelines.forward_id(&self.device, key)?;
         stats.pipelines_compiled += u32::from(built);
         let twin = self.materials[id.0 as usize].gpu.as_mut().expect("made above");

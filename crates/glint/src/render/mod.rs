@@ -29,6 +29,7 @@ mod instances;
 mod materials;
 mod mesh_pool;
 mod pipelines;
+mod post;
 mod prepare;
 pub mod queue;
 mod resources;
@@ -43,6 +44,7 @@ mod visible;
 
 pub use error::RenderError;
 pub use mesh_pool::MeshTooLarge;
+pub use post::MAX_POST_EFFECTS;
 pub use shadow_maps::{ShadowLayout, MAX_CUBES, MAX_SHADOW_MAP_BYTES};
 pub use shadow_pass::Shadows;
 pub use stats::{FrameStats, PassStats, Passes, StageTimes, UploadStats};
@@ -88,7 +90,8 @@ struct MaterialGpuTwin {
     pipelines: [Option<u16>; VertexLayout::COUNT],
     /// Shadow pipeline ids per vertex layout: 2D depth maps, then cube distance maps.
     shadow_pipelines: [[Option<u16>; 2]; VertexLayout::COUNT],
-    samples: u32,
+    /// The target they draw into.
+    target: crate::gpu::TargetFormat,
     /// Whether the environment had fog when the pipelines were chosen.
     fog: bool,
     /// What the frame added to the variant when the pipelines were chosen.
@@ -190,6 +193,10 @@ pub struct Renderer {
     /// Targets of views that draw into part of the output, by size and samples,
     /// with the frame each was last used in.
     view_targets: Vec<(OffscreenTarget, u64)>,
+    post: post::PostChain,
+    /// Samples of a post-processed view's HDR target: the output's where the
+    /// adapter multisamples the HDR format, else 1.
+    hdr_msaa: bool,
 }
 
 fn ms_since(t: Instant) -> f64 {
@@ -279,6 +286,8 @@ impl Renderer {
             instances_submitted: 0,
             visible: Visible::default(),
             view_targets: Vec::new(),
+            post: post::PostChain::new(&gpu.device),
+            hdr_msaa: gpu.adapter.get_texture_format_features(crate::gpu::HDR_FORMAT).flags.sample_count_supported(4),
         }
     }
 

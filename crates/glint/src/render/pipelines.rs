@@ -6,7 +6,7 @@
 //! formats. Shader modules are cached per variant, pipelines per key; a key's
 //! index in the cache is its id in sort keys.
 
-use crate::gpu::{sampler_entry, texture_entry, DriverErrors, COLOR_FORMAT, DEPTH_FORMAT};
+use crate::gpu::{sampler_entry, texture_entry, DriverErrors, TargetFormat, COLOR_FORMAT, DEPTH_FORMAT};
 use crate::scene::{BlendState, Compare, Cull, Mesh, RenderStates, SkinVertex, StencilOp, Vertex};
 use crate::shader::{LightCounts, ShaderError, ShaderFeatures, ShaderLibrary};
 use std::borrow::Cow;
@@ -140,7 +140,7 @@ pub(crate) struct Pipelines {
     forward_cache: Vec<(PipelineKey, wgpu::RenderPipeline)>,
     forward_index: HashMap<PipelineKey, u16>,
     /// Sky pipelines by sample count.
-    sky_cache: HashMap<u32, wgpu::RenderPipeline>,
+    sky_cache: HashMap<TargetFormat, wgpu::RenderPipeline>,
 }
 
 fn uniform_entry(binding: u32, visibility: wgpu::ShaderStages, dynamic: bool) -> wgpu::BindGroupLayoutEntry {
@@ -325,7 +325,7 @@ impl Pipelines {
         lights: LightCounts,
         vertex_layout: VertexLayout,
         states: RenderStates,
-        samples: u32,
+        target: TargetFormat,
     ) -> PipelineKey {
         features.set(ShaderFeatures::VERTEX_COLOR, vertex_layout.colors);
         features.set(ShaderFeatures::UV1, vertex_layout.uv1);
@@ -336,9 +336,9 @@ impl Pipelines {
             lights,
             vertex_layout,
             states,
-            color_format: COLOR_FORMAT,
+            color_format: target.color,
             depth_format: DEPTH_FORMAT,
-            samples,
+            samples: target.samples,
         }
     }
 
@@ -415,14 +415,14 @@ impl Pipelines {
         self.forward_cache[id as usize].0.states.stencil.reference.into()
     }
 
-    /// The sky pipeline for `samples`, if [`Self::build_sky`] built it.
-    pub(crate) fn sky_built(&self, samples: u32) -> Option<&wgpu::RenderPipeline> {
-        self.sky_cache.get(&samples)
+    /// The sky pipeline for `target`, if [`Self::build_sky`] built it.
+    pub(crate) fn sky_built(&self, target: TargetFormat) -> Option<&wgpu::RenderPipeline> {
+        self.sky_cache.get(&target)
     }
 
-    /// Build the sky pipeline for `samples` unless it exists; returns whether it was built now.
-    pub(crate) fn build_sky(&mut self, device: &wgpu::Device, samples: u32) -> Result<bool, ShaderError> {
-        if self.sky_cache.contains_key(&samples) {
+    /// Build the sky pipeline for `target` unless it exists; returns whether it was built now.
+    pub(crate) fn build_sky(&mut self, device: &wgpu::Device, target: TargetFormat) -> Result<bool, ShaderError> {
+        if self.sky_cache.contains_key(&target) {
             return Ok(false);
         }
         let scope = DriverErrors::watch(device);
@@ -446,12 +446,12 @@ impl Pipelines {
             },
             primitive: wgpu::PrimitiveState::default(),
             depth_stencil: Some(depth_stencil(&states, DEPTH_FORMAT)),
-            multisample: wgpu::MultisampleState { count: samples, ..Default::default() },
+            multisample: wgpu::MultisampleState { count: target.samples, ..Default::default() },
             fragment: Some(wgpu::FragmentState {
                 module,
                 entry_point: Some("fs_sky"),
                 compilation_options: Default::default(),
-                targets: &[Some(COLOR_FORMAT.into())],
+                targets: &[Some(target.color.into())],
             }),
             multiview_mask: None,
             cache: None,
@@ -460,7 +460,7 @@ impl Pipelines {
             self.sky_module = None;
             return Err(ShaderError::refused("renderer: sky shader", &error));
         }
-        self.sky_cache.insert(samples, pipeline);
+        self.sky_cache.insert(target, pipeline);
         Ok(true)
     }
 

@@ -3,11 +3,12 @@
 //! pipelines), and [`Renderer::precompile`], which does it before the first frame.
 
 use super::{FrameStats, FrameVariant, RenderError, Renderer};
+use crate::gpu::TargetFormat;
 use crate::scene::{Background, Entity, Light, MaterialId, ShapeId, MAX_LIGHTS};
 
 impl Renderer {
     /// Build, before the first frame, everything drawing `entities` lit by `lights`
-    /// into a target of `samples` samples needs: mesh buffers, textures, material
+    /// into a glint target (not a post-processed view) of `samples` samples needs: mesh buffers, textures, material
     /// blocks and every pipeline variant (with shadow lookups where a light casts
     /// shadows), so that the first frame compiles nothing. Returns the number of
     /// pipelines compiled.
@@ -18,26 +19,27 @@ impl Renderer {
         self.frame_variant = FrameVariant::expected(lights);
         let mut stats = FrameStats::default();
         let uses: Vec<_> = entities.iter().map(|e| (e.shape, e.material)).collect();
-        self.prepare_uses(&uses, samples, &mut stats)?;
+        let target = TargetFormat { color: crate::gpu::COLOR_FORMAT, samples };
+        self.prepare_uses(&uses, target, &mut stats)?;
         Ok(stats.pipelines_compiled)
     }
 
     /// Stage 1: make sure everything the submitted entities use exists on the GPU,
     /// and compact the instance store when it holds more garbage than data.
-    pub(super) fn prepare(&mut self, samples: u32, stats: &mut FrameStats) -> Result<(), RenderError> {
+    pub(super) fn prepare(&mut self, target: TargetFormat, stats: &mut FrameStats) -> Result<(), RenderError> {
         if let Some(remap) = self.store.compact_if_wasteful(self.frame_index) {
             for s in &mut self.submitted {
                 s.slot = remap[s.slot];
             }
         }
         let uses: Vec<_> = self.submitted.iter().map(|s| (s.shape, s.material)).collect();
-        self.prepare_uses(&uses, samples, stats)
+        self.prepare_uses(&uses, target, stats)
     }
 
     fn prepare_uses(
         &mut self,
         uses: &[(ShapeId, MaterialId)],
-        samples: u32,
+        target: TargetFormat,
         stats: &mut FrameStats,
     ) -> Result<(), RenderError> {
         if self.material_table.reserve(&self.device, self.materials.len())? {
@@ -65,10 +67,10 @@ impl Renderer {
                 stats.bytes_uploaded.meshes += self.mesh_pool.rewrite_vertices(&self.queue, range, &slot.mesh);
             }
             let layout = slot.layout;
-            self.prepare_material(material, layout, samples, stats)?;
+            self.prepare_material(material, layout, target, stats)?;
         }
         if matches!(self.environment.background, Background::Gradient { .. }) {
-            stats.pipelines_compiled += u32::from(self.pipelines.build_sky(&self.device, samples)?);
+            stats.pipelines_compiled += u32::from(self.pipelines.build_sky(&self.device, target)?);
         }
         Ok(())
     }

@@ -44,7 +44,7 @@ impl Shadows {
 pub(super) struct ShadowsDrawn {
     /// The renderer's frame it was drawn for (the maps are redrawn every frame).
     pub frame_index: u64,
-    /// The view it was drawn for (cascades follow the camera).
+    /// The view it was drawn for (cascades follow the camera and its aspect).
     pub view: View,
     /// The lights the maps were drawn for.
     pub lights: Vec<Light>,
@@ -65,7 +65,9 @@ impl ShadowsDrawn {
         if self.frame_index != frame_index {
             return Err(RenderError::StaleShadows);
         }
-        if self.view != *view || self.lights != lights {
+        // The maps follow the camera and the rectangle's shape, not the post chain.
+        let same = self.view.camera == view.camera && self.view.viewport == view.viewport;
+        if !same || self.lights != lights {
             return Err(RenderError::ShadowsForOtherView);
         }
         Ok(&self.first_view)
@@ -101,7 +103,7 @@ impl Renderer {
         let mut prepared = FrameStats::default();
         // The flush after this pass samples the maps it draws: choose its pipelines now.
         self.frame_variant = super::FrameVariant::expected(lights);
-        self.prepare(target.samples(), &mut prepared)?;
+        self.prepare(self.scene_format(&view, target), &mut prepared)?;
         let [_, _, width, height] = view.viewport.pixels(target.width(), target.height());
         let frame = ViewFrame::new(&view, width, height);
         let (views, first_view) = self.plan_shadow_views(&frame, lights)?;

@@ -99,6 +99,8 @@ pub struct Passes {
     pub sky: PassStats,
     /// Blended materials, far to near.
     pub transparent: PassStats,
+    /// The view's post chain: one draw per full-screen pass (bloom takes four).
+    pub post: PassStats,
 }
 
 /// What one frame cost: returned by [`Renderer::flush`](crate::Renderer::flush).

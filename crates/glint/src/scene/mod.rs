@@ -12,6 +12,7 @@ mod fly;
 mod light;
 mod material;
 mod mesh;
+mod post;
 mod states;
 mod view;
 
@@ -22,6 +23,7 @@ pub use fly::{FlyCamera, FlyInput};
 pub use light::{Light, LightKind, ShadowSettings, CASCADES, MAX_LIGHTS};
 pub use material::{AlphaMode, MapSlots, Material, ShadingModel};
 pub use mesh::{smooth_normals, smooth_normals_in_groups, Aabb, BoundingSphere, Mesh, MeshError, SkinVertex, Vertex};
+pub use post::{PostEffect, Tonemap};
 pub use states::{BlendState, Compare, Cull, DepthState, RasterState, RenderStates, StencilOp, StencilState};
 pub use view::{View, Viewport};
 

@@ -3,7 +3,7 @@
 //! draws one or more views ([`Renderer::render_views`](crate::Renderer::render_views)),
 //! each culled, shadowed and drawn on its own.
 
-use super::Camera;
+use super::{Camera, PostEffect};
 
 /// A rectangle of a target as fractions of its width and height, from its top
 /// left corner: `x`, `y` at least 0, `x + width` and `y + height` at most 1.
@@ -48,7 +48,7 @@ impl Default for Viewport {
 }
 
 /// One camera's part of a frame.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct View {
     /// What it sees from where.
     pub camera: Camera,
@@ -56,17 +56,25 @@ pub struct View {
     pub viewport: Viewport,
     /// Frustum culling (on by default; off draws everything, to compare costs).
     pub culling: bool,
+    /// Post-processing passes, in order (none by default: the view is drawn
+    /// straight into the target, and the chain costs nothing).
+    pub post: Vec<PostEffect>,
 }
 
 impl View {
     /// The whole target seen by `camera`, culled.
     pub fn new(camera: Camera) -> Self {
-        Self { camera, viewport: Viewport::FULL, culling: true }
+        Self { camera, viewport: Viewport::FULL, culling: true, post: Vec::new() }
     }
 
     /// This view drawing into `viewport`.
     pub fn with_viewport(self, viewport: Viewport) -> Self {
         Self { viewport, ..self }
+    }
+
+    /// This view with `post` as its post-processing chain.
+    pub fn with_post(self, post: Vec<PostEffect>) -> Self {
+        Self { post, ..self }
     }
 
     /// This view with culling on or off.
@@ -89,7 +97,7 @@ impl From<&Camera> for View {
 
 impl From<&View> for View {
     fn from(view: &View) -> Self {
-        *view
+        view.clone()
     }
 }
 

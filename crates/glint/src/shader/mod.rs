@@ -216,6 +216,8 @@ impl ShaderLibrary {
 
 /// Mip blit shader: `vs_blit` / `fs_blit`, its own group 0.
 pub(crate) const BLIT: &str = include_str!("blit.wgsl");
+/// The post-processing passes (render/post.rs).
+pub(crate) const POST: &str = include_str!("post.wgsl");
 
 #[cfg(test)]
 mod tests {

@@ -1,0 +1,84 @@
+//! [`PostEffect`]: the passes of a view's post-processing chain, as plain data.
+//! A view with effects is drawn into a floating-point (HDR) target and each
+//! effect runs in order on a full-screen triangle; the last writes the view's
+//! rectangle of the output (see `render/post.rs`).
+
+use glam::Vec3;
+
+/// How tonemapping maps linear HDR light to the displayable 0..1.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Tonemap {
+    /// Clamped at 1.
+    None,
+    /// `c / (1 + c)`.
+    Reinhard,
+    /// Narkowicz's fit of the ACES filmic curve.
+    Aces,
+    /// AgX (Sobotka), in Wrensch's minimal form.
+    Agx,
+}
+
+/// One pass of a post chain.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum PostEffect {
+    /// Light above `threshold` (luminance) blurred and added back, times `intensity`.
+    Bloom {
+        /// Luminance where bloom starts.
+        threshold: f32,
+        /// How much of the blurred light is added.
+        intensity: f32,
+    },
+    /// Exposure then a tonemapping operator.
+    Tonemap {
+        /// The operator.
+        operator: Tonemap,
+        /// Exposure in EV: light is scaled by 2^exposure first.
+        exposure: f32,
+    },
+    /// Fast approximate anti-aliasing: only pixels on contrast edges change.
+    Fxaa,
+    /// Sobel edge detection: pixels whose luma gradient is above `threshold` take `color`.
+    Edges {
+        /// Colour of the edges (linear).
+        color: Vec3,
+        /// Gradient magnitude (of perceived luma, 0..1 per pixel) where an edge starts.
+        threshold: f32,
+    },
+    /// Darker corners, by up to `strength` (0..1).
+    Vignette {
+        /// How much the corners darken.
+        strength: f32,
+    },
+}
+
+impl PostEffect {
+    /// Bloom with glint's defaults (threshold 1, intensity 0.5).
+    pub const BLOOM: Self = Self::Bloom { threshold: 1.0, intensity: 0.5 };
+    /// ACES tonemapping at exposure 0.
+    pub const TONEMAP: Self = Self::Tonemap { operator: Tonemap::Aces, exposure: 0.0 };
+    /// Black edges at threshold 0.4.
+    pub const EDGES: Self = Self::Edges { color: Vec3::ZERO, threshold: 0.4 };
+    /// A vignette of strength 0.4.
+    pub const VIGNETTE: Self = Self::Vignette { strength: 0.4 };
+
+    /// The effects, with their defaults, in the order of [`PostEffect::NAMES`].
+    pub const ALL: [Self; 5] = [Self::BLOOM, Self::TONEMAP, Self::Fxaa, Self::EDGES, Self::VIGNETTE];
+    /// Their names.
+    pub const NAMES: [&'static str; 5] = ["bloom", "tonemap", "fxaa", "edges", "vignette"];
+
+    /// The effect called `name`, with its defaults.
+    pub fn named(name: &str) -> Option<Self> {
+        Self::NAMES.iter().position(|n| *n == name).map(|k| Self::ALL[k])
+    }
+
+    /// Its name in `.scn` `post` lists and in statistics.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Self::Bloom { .. } => "bloom",
+            Self::Tonemap { .. } => "tonemap",
+            Self::Fxaa => "fxaa",
+            Self::Edges { .. } => "edges",
+            Self::Vignette { .. } => "vignette",
+        }
+    }
+}
