@@ -228,6 +228,7 @@ impl Renderer {
         OffscreenTarget::on_device(&self.device, width, height, format)
     }
 
+    /// One view's frame into `target`, stage by stage (the list at [`flush`](Self::flush)).
     fn run_frame(
         &mut self,
         frame: &ViewFrame,
