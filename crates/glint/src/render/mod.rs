@@ -287,7 +287,10 @@ impl Renderer {
             visible: Visible::default(),
             view_targets: Vec::new(),
             post: post::PostChain::new(&gpu.device),
-            hdr_msaa: gpu.adapter.get_texture_format_features(crate::gpu::HDR_FORMAT).flags.sample_count_supported(4),
+            hdr_msaa: {
+                let flags = gpu.adapter.get_texture_format_features(crate::gpu::HDR_FORMAT).flags;
+                flags.sample_count_supported(4) && flags.contains(wgpu::TextureFormatFeatureFlags::MULTISAMPLE_RESOLVE)
+            },
         }
     }
 
