@@ -159,13 +159,14 @@ struct Picture {
 }
 
 /// The views a picture of `desc` draws: camera `camera` alone over the whole
-/// image, or [`SceneDesc::views`]; an error names the scene when there is no
+/// image (after the cameras drawing render targets), or [`SceneDesc::views`]; an error names the scene when there is no
 /// camera `camera`.
 pub(crate) fn views_of(desc: &SceneDesc, scene: &Path, camera: Option<usize>) -> Result<Vec<glint::View>, Error> {
     match camera {
         None => Ok(desc.views()),
         Some(k) => match desc.cameras.get(k) {
-            Some(_) => Ok(vec![desc.camera_view(k)]),
+            // The render targets it may show are drawn first.
+            Some(_) => Ok(desc.target_views().into_iter().chain([desc.camera_view(k)]).collect()),
             None => Err(glint::Diagnostic::file(
                 scene,
                 format!("camera {k} requested, but the scene has {}", desc.cameras.len()),

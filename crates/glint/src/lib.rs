@@ -44,8 +44,8 @@ pub use asset::{Diagnostic, Texture};
 pub use gpu::{Gpu, GpuError, OffscreenTarget, WindowSurface};
 pub use render::{FrameMode, FrameStats, RenderError, Renderer, Shadows};
 pub use scene::{
-    AlphaMode, Background, Camera, Entity, Environment, Light, Material, MaterialId, Mesh, ShadowSettings, ShapeId,
-    TextureId, View, Viewport,
+    AlphaMode, Background, Camera, Entity, Environment, Light, Material, MaterialId, Mesh, RenderTargetId,
+    ShadowSettings, ShapeId, TextureId, View, Viewport,
 };
 
 /// Any glint error, with the process exit code the CLI uses for it.

@@ -139,3 +139,65 @@ fn a_flush_takes_only_the_shadow_maps_drawn_for_its_view_this_frame() {
     let error = renderer.flush(outside, &lights, &Shadows::none(), &mut target).expect_err("outside");
     assert!(matches!(error, RenderError::BadViewport(_)), "{error}");
 }
+
+#[test]
+fn a_material_shows_a_render_target_drawn_earlier_in_the_same_frame() {
+    let Some(gpu) = common::gpu() else { return };
+    let mut renderer = Renderer::new(gpu);
+    let (monitor, screen) = renderer.add_render_target(16, 16, false).expect("render target");
+    let cube = renderer.add_shape(ShapeKind::Cube.mesh());
+    let unlit = |r: &mut Renderer, material: Material| {
+        r.add_material(Material { shading: glint::scene::ShadingModel::Unlit, ..material })
+    };
+    let red = unlit(&mut renderer, Material::color("red", 1.0, 0.0, 0.0));
+    let shown = unlit(&mut renderer, Material { diffuse_map: Some(screen), ..Material::default() });
+    // A red cube far to the left, seen by the security camera; a screen at the origin.
+    let thing = Entity::new(cube, red, Mat4::from_translation(Vec3::new(-20.0, 0.0, 0.0)));
+    let panel = Entity::new(cube, shown, Mat4::from_scale(Vec3::new(2.0, 2.0, 0.1)));
+    let security =
+        Camera::perspective(40.0, 0.1, 100.0).looking_at(Vec3::new(-20.0, 0.0, 3.0), Vec3::new(-20.0, 0.0, 0.0));
+    let main = Camera::perspective(60.0, 0.1, 100.0).looking_at(Vec3::new(0.0, 0.0, 3.0), Vec3::ZERO);
+    let mut target = OffscreenTarget::new(gpu, 32, 32, 1).expect("target");
+    // Given main first: the security view is still drawn before it.
+    let views = [View::new(main), View::new(security).with_output(monitor)];
+    let stats = renderer.render_views([&thing, &panel], &views, &[], &mut target).expect("frame");
+    assert_eq!(stats.len(), 2);
+    assert_eq!(stats[1].instances_submitted, 1, "the screen is not drawn into its own target");
+    let image = target.read_rgba8(gpu).expect("readback");
+    let centre = image.get_pixel(16, 16).0;
+    assert!(centre[0] > 200 && centre[1] < 40 && centre[2] < 40, "the screen shows the red cube: {centre:?}");
+    // Two views each showing the other's target: a cycle.
+    let (other, other_screen) = renderer.add_render_target(8, 8, true).expect("render target");
+    let shows_other = unlit(&mut renderer, Material { diffuse_map: Some(other_screen), ..Material::default() });
+    let second_panel = Entity::new(cube, shows_other, Mat4::IDENTITY);
+    let views = [View::new(main).with_output(monitor), View::new(security).with_output(other)];
+    let error = renderer.render_views([&panel, &second_panel], &views, &[], &mut target).expect_err("cycle");
+    assert!(matches!(error, RenderError::RenderTargetCycle), "{error}");
+    let unknown = [View::new(main).with_output(glint::RenderTargetId(9))];
+    let error = renderer.render_views([&panel], &unknown, &[], &mut target).expect_err("unknown");
+    assert!(matches!(error, RenderError::UnknownRenderTarget(_)), "{error}");
+}
+
+#[test]
+fn the_monitor_shows_the_security_cameras_picture() {
+    let Some(gpu) = common::gpu() else { return };
+    let desc = common::load_scene(&common::repo_root().join("scenes/monitor.scn"));
+    let views = desc.views();
+    assert_eq!(views.len(), 2, "the security camera into its target, the room into the image");
+    let draw = |views: &[View]| {
+        let mut renderer = Renderer::new(gpu);
+        let entities = desc.instantiate(&mut renderer);
+        let mut target = OffscreenTarget::new(gpu, 160, 90, 4).expect("target");
+        renderer.render_views(&entities, views, &desc.lights, &mut target).expect("frame");
+        target.read_rgba8(gpu).expect("readback")
+    };
+    let image = draw(&views);
+    common::assert_matches_reference("monitor", &image);
+    // The screen's middle (x 71..96, y 33..48 of 160 × 90) shows
+    // the room; without the security camera it shows a black, never-drawn target.
+    let screen = |image: &image::RgbaImage| crop(image, 76, 36, 14, 10);
+    let lit = |image: &image::RgbaImage| screen(image).pixels().filter(|p| p.0[..3].iter().any(|&c| c > 60)).count();
+    let unfed = draw(&views[1..]);
+    assert!(lit(&image) > 60, "the feed is on the screen: {} bright pixels", lit(&image));
+    assert_eq!(lit(&unfed), 0, "no security camera, no picture");
+}

@@ -109,7 +109,7 @@ struct View {
 }
 
 /// A loaded scene placed in its own renderer, and the views it shows (the fly
-/// camera moves the first).
+/// camera moves the first one into the window).
 struct Scene {
     desc: SceneDesc,
     renderer: Renderer,
@@ -124,9 +124,14 @@ impl Scene {
         Self { desc, renderer, entities, views }
     }
 
-    /// The first view's camera, where the fly camera starts.
+    /// The view the fly camera moves: the first into the window.
+    fn flown(&self) -> usize {
+        self.views.iter().position(|v| v.output.is_none()).unwrap_or(0)
+    }
+
+    /// Its camera, where the fly camera starts.
     fn camera(&self) -> Camera {
-        self.views[0].camera
+        self.views[self.flown()].camera
     }
 }
 
@@ -252,7 +257,8 @@ impl View {
         let time = self.clock.tick(dt);
         scene.desc.pose(time, &mut scene.entities, &mut scene.renderer)?;
         let mut views = scene.views.clone();
-        views[0].camera = self.fly.apply(&views[0].camera);
+        let flown = scene.flown();
+        views[flown].camera = self.fly.apply(&views[flown].camera);
         let stats = scene.renderer.render_views(&scene.entities, &views, &scene.desc.lights, &mut self.target)?;
         self.surface.present(&self.gpu, &self.target);
         if self.last_title.elapsed() >= TITLE_INTERVAL {

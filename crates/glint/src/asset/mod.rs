@@ -19,6 +19,7 @@ mod scn_fields;
 mod scn_lights;
 mod scn_post;
 mod scn_syntax;
+mod scn_targets;
 mod texture;
 
 pub(crate) use files::{read_file, AssetFolder};
@@ -33,6 +34,7 @@ pub use scn::{
     MeshRef, SceneDesc, TextureRef, MAX_INSTANCES,
 };
 pub use scn_cloth::{ClothDesc, ClothSetup, MAX_POSE_STEPS};
+pub use scn_targets::{RenderTargetDesc, MAX_RENDER_TARGET_SIDE};
 pub use texture::{load_texture, Texture, MAX_TEXTURE_MEMORY, MAX_TEXTURE_SIDE};
 
 use std::fmt;

@@ -286,6 +286,7 @@ impl Model {
             environment,
             cameras: std::iter::once(camera).chain(self.cameras.iter().copied()).collect(),
             camera_views: vec![Default::default(); 1 + self.cameras.len()],
+            render_targets: Vec::new(),
             lights: if self.lights.is_empty() { vec![sun, fill] } else { self.lights.clone() },
             materials: Vec::new(),
             textures: Vec::new(),

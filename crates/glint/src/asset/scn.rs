@@ -9,6 +9,7 @@ use super::scn_cloth::{self, ClothDesc};
 use super::scn_fields::{numbers, Fields};
 use super::scn_lights;
 use super::scn_syntax::{decode_scene_text, parse_blocks, Block, Pair};
+use super::scn_targets::{self, RenderTargetDesc};
 use super::texture::read_texture;
 use super::texture::TextureCache;
 use super::{
@@ -128,8 +129,12 @@ pub struct SceneDesc {
     pub environment: Environment,
     /// Cameras in file order (a default one when the file has none).
     pub cameras: Vec<Camera>,
-    /// Each camera's `viewport` and post chain (the same order).
+    /// Each camera's `viewport`, post chain and `output` (the same order).
     pub camera_views: Vec<CameraView>,
+    /// `render_target` blocks in file order: the scene's render target k is
+    /// `RenderTargetId(k)` in a renderer it is instantiated into first, and its
+    /// texture comes after the file textures in material maps.
+    pub render_targets: Vec<RenderTargetDesc>,
     /// Lights in file order.
     pub lights: Vec<Light>,
     /// Materials in file order.
@@ -154,20 +159,37 @@ pub struct CameraView {
     pub viewport: Option<Viewport>,
     /// `post`: its effects, in order.
     pub post: Vec<PostEffect>,
+    /// `output`: the render target it draws into (an index of
+    /// [`SceneDesc::render_targets`]), rather than the image.
+    pub output: Option<usize>,
 }
 
 impl SceneDesc {
-    /// The views `glint render` draws into one image: every camera that has a
-    /// viewport, in file order, or the first camera alone when none has one.
+    /// The views `glint render` draws: the cameras that draw into render
+    /// targets ([`SceneDesc::target_views`]), then every other camera that has a
+    /// viewport, in file order, or else the first other camera alone over the image.
     pub fn views(&self) -> Vec<View> {
-        let placed: Vec<View> = (0..self.cameras.len())
-            .filter_map(|k| self.camera_views[k].viewport.map(|v| self.camera_view(k).with_viewport(v)))
+        let into_image: Vec<usize> =
+            (0..self.cameras.len()).filter(|&k| self.camera_views[k].output.is_none()).collect();
+        let placed: Vec<View> = (into_image.iter())
+            .filter_map(|&k| self.camera_views[k].viewport.map(|v| self.camera_view(k).with_viewport(v)))
             .collect();
-        if placed.is_empty() && !self.cameras.is_empty() {
-            vec![self.camera_view(0)]
-        } else {
-            placed
-        }
+        let image = match (placed.is_empty(), into_image.first()) {
+            (true, Some(&first)) => vec![self.camera_view(first)],
+            _ => placed,
+        };
+        self.target_views().into_iter().chain(image).collect()
+    }
+
+    /// The cameras that draw into render targets, as views into them.
+    pub fn target_views(&self) -> Vec<View> {
+        (0..self.cameras.len())
+            .filter_map(|k| {
+                let c = &self.camera_views[k];
+                let view = self.camera_view(k).with_viewport(c.viewport.unwrap_or_default());
+                c.output.map(|t| view.with_output(crate::scene::RenderTargetId(t as u32)))
+            })
+            .collect()
     }
 
     /// Camera `index` over the whole image, with its post chain.
@@ -253,7 +275,14 @@ impl SceneDesc {
     /// model meshes), ready to submit.
     pub fn instantiate(&self, renderer: &mut Renderer) -> Vec<Entity> {
         renderer.set_environment(self.environment);
-        let textures: Vec<_> = self.textures.iter().map(|t| renderer.add_texture(t.clone())).collect();
+        let mut textures: Vec<_> = self.textures.iter().map(|t| renderer.add_texture(t.clone())).collect();
+        // Render target k's texture follows the file textures (see `render_targets`).
+        for t in &self.render_targets {
+            match renderer.add_render_target(t.size.0, t.size.1, t.hdr) {
+                Ok((_, texture)) => textures.push(texture),
+                Err(e) => log::warn!("render target '{}': {e}", t.name),
+            }
+        }
         let materials: Vec<MaterialId> =
             self.materials.iter().map(|m| renderer.add_material(m.resolve(&textures))).collect();
         // Added on first use, so scenes that name every material do not get one.
@@ -362,6 +391,7 @@ pub fn parse_scene_with(path: &Path, text: &str, options: LoadOptions) -> Result
             environment: Environment::default(),
             cameras: Vec::new(),
             camera_views: Vec::new(),
+            render_targets: Vec::new(),
             lights: Vec::new(),
             materials: Vec::new(),
             textures: Vec::new(),
@@ -381,6 +411,7 @@ pub fn parse_scene_with(path: &Path, text: &str, options: LoadOptions) -> Result
         placements: Vec::new(),
         cloths: Vec::new(),
         instances: 0,
+        camera_lines: Vec::new(),
     };
     for block in &blocks {
         loader.block(block)?;
@@ -418,6 +449,8 @@ struct Loader<'a> {
     /// Cloths with their material names, resolved in [`Loader::finish`].
     cloths: Vec<(ClothDesc, Option<(String, usize)>)>,
     instances: u64,
+    /// Each camera's block line, for errors found once the file is read.
+    camera_lines: Vec<usize>,
 }
 
 const COMPARES: [&str; 8] = ["never", "less", "less_equal", "equal", "greater_equal", "greater", "not_equal", "always"];
@@ -578,6 +611,10 @@ impl Loader<'_> {
         match class {
             "world" => self.world(&mut f)?,
             "camera" => self.camera(&mut f)?,
+            "render_target" => {
+                let target = scn_targets::parse(&mut f, &self.scene.render_targets)?;
+                self.scene.render_targets.push(target);
+            }
             "light_directional" | "light_point" | "light_spot" => {
                 let light = scn_lights::light(class, &mut f, &mut self.scene.warnings)?;
                 self.add_light(&f, light)?
@@ -671,7 +708,9 @@ impl Loader<'_> {
         camera.up = up.unwrap_or(camera.up);
         let viewport = f.viewport("viewport")?;
         let post = super::scn_post::chain(f)?;
-        self.scene.camera_views.push(CameraView { viewport, post });
+        let output = scn_targets::named(f, "output", &self.scene.render_targets)?;
+        self.scene.camera_views.push(CameraView { viewport, post, output });
+        self.camera_lines.push(f.block.line);
         self.scene.cameras.push(camera);
         Ok(())
     }
@@ -703,6 +742,9 @@ impl Loader<'_> {
         let Some(pair) = f.get(key) else {
             return Ok(None);
         };
+        if let Some(target) = scn_targets::map(self.path, pair.line, &pair.value, &self.scene.render_targets) {
+            return target.map(Some);
+        }
         let fail = |e: Diagnostic| Diagnostic::at(self.path, pair.line, format!("\"{key}\": {e}"));
         let file = self
             .assets
@@ -993,7 +1035,12 @@ impl Loader<'_> {
                 .cameras
                 .push(Camera::perspective(60.0, 0.1, 200.0).looking_at(Vec3::new(0.0, 2.0, 6.0), Vec3::ZERO));
             self.scene.camera_views.push(CameraView::default());
+            self.camera_lines.push(0);
         }
+        let files = self.scene.textures.len();
+        scn_targets::finish_maps(&mut self.scene.materials, files);
+        let scene = &self.scene;
+        scn_targets::check_order(self.path, &scene.camera_views, &self.camera_lines, &scene.materials, files)?;
         Ok(self.scene)
     }
 }

@@ -124,6 +124,20 @@ fn semantic_errors_name_file_line_and_expectation() {
         ("{\n\"classname\" \"camera\"\n\"viewport\" \"0 0 0 1\"\n}", 3, "not a rectangle inside the image"),
         ("{\n\"classname\" \"camera\"\n\"viewport\" \"0 0 1\"\n}", 3, "found 3 numbers"),
         ("{\n\"classname\" \"camera\"\n\"post\" \"bloom glow\"\n}", 3, "names 'glow', expected effects among: bloom,"),
+        ("{\n\"classname\" \"camera\"\n\"output\" \"tv\"\n}", 3, "unknown render target 'tv'"),
+        (
+            "{\n\"classname\" \"material\"\n\"name\" \"m\"\n\"diffuse_map\" \"target:tv\"\n}",
+            4,
+            "unknown render target 'tv'",
+        ),
+        ("{\n\"classname\" \"render_target\"\n\"name\" \"tv\"\n\"size\" \"0 10\"\n}", 4, "expected two whole numbers"),
+        ("{\n\"classname\" \"render_target\"\n\"name\" \"tv\"\n\"size\" \"4096 10\"\n}", 4, "in 1..=2048"),
+        ("{\n\"classname\" \"render_target\"\n\"size\" \"8 8\"\n}", 1, "missing the required key \"name\""),
+        (
+            "{\n\"classname\" \"render_target\"\n\"name\" \"tv\"\n\"size\" \"8 8\"\n\"format\" \"float\"\n}",
+            5,
+            "expected one of: ldr, hdr",
+        ),
         ("{\n\"classname\" \"camera\"\n\"post\" \"fxaa fxaa\"\n}", 3, "names 'fxaa' twice"),
         ("{\n\"classname\" \"camera\"\n\"tonemap\" \"filmic\"\n}", 3, "expected one of: none, reinhard, aces, agx"),
         ("{\n\"classname\" \"camera\"\n\"exposure\" \"40\"\n}", 3, "expected a value in -20..=20"),
@@ -165,6 +179,46 @@ fn cameras_with_viewports_are_the_views_and_without_any_the_first_camera_is() {
             PostEffect::Edges { color: glam::Vec3::X, threshold: 0.4 },
         ]
     );
+}
+
+#[test]
+fn render_targets_are_drawn_by_their_cameras_and_shown_by_materials() {
+    let target =
+        |name: &str| format!("{{\n\"classname\" \"render_target\"\n\"name\" \"{name}\"\n\"size\" \"64 32\"\n}}\n");
+    let camera = |extra: &str| format!("{{\n\"classname\" \"camera\"\n\"origin\" \"0 1 5\"\n{extra}}}\n");
+    let shows = |name: &str, target: &str| {
+        format!("{{\n\"classname\" \"material\"\n\"name\" \"{name}\"\n\"diffuse_map\" \"target:{target}\"\n}}\n")
+    };
+    let text = [target("a"), target("b"), camera(""), camera("\"output\" \"b\"\n"), shows("screen", "b")].concat();
+    let scene = parse(&text).unwrap();
+    assert_eq!(scene.render_targets.len(), 2);
+    assert_eq!((scene.render_targets[1].size, scene.render_targets[1].hdr), ((64, 32), false));
+    assert_eq!(scene.camera_views[1].output, Some(1));
+    // No file textures: target b's texture is the second after them.
+    assert_eq!(scene.materials[0].diffuse_map, Some(1));
+    let views = scene.views();
+    assert_eq!(views.len(), 2, "the target's camera, then the first camera into the image");
+    assert_eq!((views[0].output, views[1].output), (Some(glint_id(1)), None));
+    // Cameras that each show the other's target: a cycle, at a camera's line.
+    let cycle = [
+        target("a"),
+        target("b"),
+        camera("\"output\" \"a\"\n"),
+        camera("\"output\" \"b\"\n"),
+        shows("m1", "a"),
+        shows("m2", "b"),
+    ]
+    .concat();
+    let err = parse(&cycle).unwrap_err();
+    assert!(err.message.contains("a cycle of render targets"), "{err}");
+    assert!(matches!(err.line, Some(11) | Some(16)), "at a camera block: {err}");
+    // A camera showing only its own target is no cycle: it leaves the screen out.
+    let own = [target("a"), camera("\"output\" \"a\"\n"), shows("m1", "a")].concat();
+    assert!(parse(&own).is_ok());
+}
+
+fn glint_id(k: u32) -> crate::scene::RenderTargetId {
+    crate::scene::RenderTargetId(k)
 }
 
 #[test]

@@ -2,7 +2,7 @@
 
 use super::mesh_pool::MeshTooLarge;
 use super::post::MAX_POST_EFFECTS;
-use crate::scene::{MaterialId, ShapeId, TextureId, Viewport, MAX_LIGHTS};
+use crate::scene::{MaterialId, RenderTargetId, ShapeId, TextureId, Viewport, MAX_LIGHTS};
 
 /// Errors from [`Renderer::flush`].
 #[derive(Debug, thiserror::Error)]
@@ -69,6 +69,12 @@ pub enum RenderError {
     /// A view's viewport is empty or reaches outside the target.
     #[error("viewport {0:?} is not a non-empty rectangle inside 0..1")]
     BadViewport(Viewport),
+    /// A view draws into a render target this renderer never created.
+    #[error("unknown render target {0:?}: render targets come from this renderer's add_render_target")]
+    UnknownRenderTarget(RenderTargetId),
+    /// Views that each show another's render target, round in a circle.
+    #[error("views draw render targets that each need another's first: a cycle")]
+    RenderTargetCycle,
     /// A view's post chain has more effects than glint runs.
     #[error("a post chain of {0} effects; at most {MAX_POST_EFFECTS}")]
     PostChainTooLong(usize),

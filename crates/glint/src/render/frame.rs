@@ -44,11 +44,16 @@ impl Renderer {
         shadows.and(frame)
     }
 
-    /// One frame of several `views` of `entities` into `target`, in order, each
-    /// culled, shadowed and drawn on its own ([`render`](Self::render) per view);
-    /// a later view draws over an earlier one where their viewports overlap.
-    /// When the first view does not cover the whole target, the target is
-    /// cleared to black first. Returns each view's statistics.
+    /// One frame of several `views` of `entities` into `target`, each culled,
+    /// shadowed and drawn on its own ([`render`](Self::render) per view); a later
+    /// view draws over an earlier one where their viewports overlap.
+    ///
+    /// A view with an [`output`](View::output) draws into that render target,
+    /// before every view that draws a material showing it (the views are taken
+    /// in their order otherwise), and without the entities whose materials show
+    /// its own target. Views that need each other's targets are an error.
+    /// When the first view into `target` does not cover it, it is cleared to
+    /// black first. Returns each view's statistics, in the order given.
     pub fn render_views<'e, E>(
         &mut self,
         entities: E,
@@ -59,12 +64,72 @@ impl Renderer {
     where
         E: IntoIterator<Item = &'e Entity> + Clone,
     {
-        if views.first().is_some_and(|v| {
+        let drawn: Vec<Vec<&Entity>> = (views.iter())
+            .map(|v| {
+                let own = v.output.and_then(|id| self.render_targets.get(id.0 as usize)).map(|t| t.1);
+                entities.clone().into_iter().filter(|e| own.is_none_or(|t| !self.shows(e.material, t))).collect()
+            })
+            .collect();
+        let order = self.view_order(views, &drawn)?;
+        let into_target = order.iter().map(|&k| &views[k]).find(|v| v.output.is_none());
+        if into_target.is_some_and(|v| {
             v.viewport.pixels(target.width(), target.height())[2..] != [target.width(), target.height()]
         }) {
             self.clear(target);
         }
-        views.iter().map(|view| self.render(entities.clone(), view, lights, target)).collect()
+        let mut stats = vec![FrameStats::default(); views.len()];
+        for k in order {
+            let (view, entities) = (&views[k], drawn[k].iter().copied());
+            stats[k] = match view.output {
+                None => self.render(entities, view, lights, target)?,
+                Some(id) => {
+                    let index = id.0 as usize;
+                    let (mut own, texture) = self.render_targets.swap_remove(index);
+                    let result = self.render(entities, view, lights, &mut own);
+                    self.render_targets.push((own, texture));
+                    let last = self.render_targets.len() - 1;
+                    self.render_targets.swap(index, last);
+                    result?
+                }
+            };
+        }
+        Ok(stats)
+    }
+
+    /// Whether material `id` shows `texture` in one of its maps.
+    fn shows(&self, id: crate::scene::MaterialId, texture: crate::scene::TextureId) -> bool {
+        self.materials.get(id.0 as usize).is_some_and(|m| {
+            let m = &m.material;
+            [m.diffuse_map, m.normal_map, m.specular_map, m.metallic_roughness_map, m.occlusion_map, m.emissive_map]
+                .contains(&Some(texture))
+        })
+    }
+
+    /// The order to draw `views` in: a view into a render target before every
+    /// view whose entities (`drawn`) show that target, the given order otherwise.
+    fn view_order(&self, views: &[View], drawn: &[Vec<&Entity>]) -> Result<Vec<usize>, RenderError> {
+        let texture_of = |v: &View| match v.output {
+            None => Ok(None),
+            Some(id) => {
+                self.render_targets.get(id.0 as usize).map(|t| Some(t.1)).ok_or(RenderError::UnknownRenderTarget(id))
+            }
+        };
+        let textures = views.iter().map(texture_of).collect::<Result<Vec<_>, _>>()?;
+        // needs[b] holds each view a whose target view b shows.
+        let needs: Vec<Vec<usize>> = (0..views.len())
+            .map(|b| {
+                (0..views.len())
+                    .filter(|&a| a != b)
+                    .filter(|&a| textures[a].is_some_and(|t| drawn[b].iter().any(|e| self.shows(e.material, t))))
+                    .collect()
+            })
+            .collect();
+        let mut order = Vec::with_capacity(views.len());
+        while order.len() < views.len() {
+            let ready = (0..views.len()).find(|b| !order.contains(b) && needs[*b].iter().all(|a| order.contains(a)));
+            order.push(ready.ok_or(RenderError::RenderTargetCycle)?);
+        }
+        Ok(order)
     }
 
     /// Clear `target` to black.

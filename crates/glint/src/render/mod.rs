@@ -51,8 +51,8 @@ pub use stats::{FrameStats, PassStats, Passes, StageTimes, UploadStats};
 pub use timer::GpuTimes;
 
 use crate::asset::Texture;
-use crate::gpu::{Gpu, OffscreenTarget};
-use crate::scene::{Entity, Environment, Material, MaterialId, Mesh, ShapeId, TextureId};
+use crate::gpu::{Gpu, OffscreenTarget, TargetFormat};
+use crate::scene::{Entity, Environment, Material, MaterialId, Mesh, RenderTargetId, ShapeId, TextureId};
 use blocks::{SceneGpu, UniformBlock};
 use draw_list::DrawList;
 use frame_variant::FrameVariant;
@@ -193,6 +193,8 @@ pub struct Renderer {
     /// Targets of views that draw into part of the output, by size and samples,
     /// with the frame each was last used in.
     view_targets: Vec<(OffscreenTarget, u64)>,
+    /// Render targets (`add_render_target`), each with the texture that shows it.
+    render_targets: Vec<(OffscreenTarget, TextureId)>,
     post: post::PostChain,
     /// Samples of a post-processed view's HDR target: the output's where the
     /// adapter multisamples the HDR format, else 1.
@@ -286,6 +288,7 @@ impl Renderer {
             instances_submitted: 0,
             visible: Visible::default(),
             view_targets: Vec::new(),
+            render_targets: Vec::new(),
             post: post::PostChain::new(&gpu.device),
             hdr_msaa: {
                 let flags = gpu.adapter.get_texture_format_features(crate::gpu::HDR_FORMAT).flags;
@@ -333,6 +336,31 @@ impl Renderer {
         }
         self.textures.push(TextureSlot { pending: Some(texture), view: None });
         TextureId(self.textures.len() as u32 - 1)
+    }
+
+    /// Add a `width` × `height` render target (half floats when `hdr`, else
+    /// 8-bit sRGB), and the texture that shows it: a view with
+    /// [`View::output`](crate::View::output) draws into it, a material map with the
+    /// texture samples it, in the same frame after that view (see
+    /// [`render_views`](Self::render_views)). Fails when a side is 0 or above
+    /// the adapter's texture limit.
+    pub fn add_render_target(
+        &mut self,
+        width: u32,
+        height: u32,
+        hdr: bool,
+    ) -> Result<(RenderTargetId, TextureId), RenderError> {
+        let side = self.device.limits().max_texture_dimension_2d;
+        if width == 0 || height == 0 || width.max(height) > side {
+            let name = format!("render target {}", self.render_targets.len());
+            return Err(RenderError::TextureTooLarge { name, width, height, side });
+        }
+        let color = if hdr { crate::gpu::HDR_FORMAT } else { crate::gpu::COLOR_FORMAT };
+        let target = OffscreenTarget::on_device(&self.device, width, height, TargetFormat { color, samples: 1 });
+        self.textures.push(TextureSlot { pending: None, view: Some(target.color_view().clone()) });
+        let texture = TextureId(self.textures.len() as u32 - 1);
+        self.render_targets.push((target, texture));
+        Ok((RenderTargetId(self.render_targets.len() as u32 - 1), texture))
     }
 
     /// Add a material; its material-table entry is written on first use.

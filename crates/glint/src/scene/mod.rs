@@ -41,3 +41,8 @@ pub struct MaterialId(pub u32);
 /// Handle to a texture, returned by [`Renderer::add_texture`](crate::Renderer::add_texture).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub struct TextureId(pub(crate) u32);
+
+/// Handle to a render target, returned by [`Renderer::add_render_target`](crate::Renderer::add_render_target):
+/// a view can draw into it ([`View::output`]) and a material map can show it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct RenderTargetId(pub u32);

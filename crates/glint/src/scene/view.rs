@@ -3,7 +3,7 @@
 //! draws one or more views ([`Renderer::render_views`](crate::Renderer::render_views)),
 //! each culled, shadowed and drawn on its own.
 
-use super::{Camera, PostEffect};
+use super::{Camera, PostEffect, RenderTargetId};
 
 /// A rectangle of a target as fractions of its width and height, from its top
 /// left corner: `x`, `y` at least 0, `x + width` and `y + height` at most 1.
@@ -59,12 +59,15 @@ pub struct View {
     /// Post-processing passes, in order (none by default: the view is drawn
     /// straight into the target, and the chain costs nothing).
     pub post: Vec<PostEffect>,
+    /// The render target it draws into instead of the frame's target (`None`,
+    /// the default: the frame's). Its viewport is then a rectangle of that target.
+    pub output: Option<RenderTargetId>,
 }
 
 impl View {
     /// The whole target seen by `camera`, culled.
     pub fn new(camera: Camera) -> Self {
-        Self { camera, viewport: Viewport::FULL, culling: true, post: Vec::new() }
+        Self { camera, viewport: Viewport::FULL, culling: true, post: Vec::new(), output: None }
     }
 
     /// This view drawing into `viewport`.
@@ -75,6 +78,11 @@ impl View {
     /// This view with `post` as its post-processing chain.
     pub fn with_post(self, post: Vec<PostEffect>) -> Self {
         Self { post, ..self }
+    }
+
+    /// This view drawing into render target `output`.
+    pub fn with_output(self, output: RenderTargetId) -> Self {
+        Self { output: Some(output), ..self }
     }
 
     /// This view with culling on or off.
