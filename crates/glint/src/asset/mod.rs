@@ -17,6 +17,8 @@ mod scn;
 mod scn_cloth;
 mod scn_fields;
 mod scn_lights;
+mod scn_material;
+mod scn_place;
 mod scn_post;
 mod scn_syntax;
 mod scn_targets;

@@ -1,13 +1,13 @@
 //! Meaning of `.scn` files: classnames and keys (see `docs/scn.md` for the full
 //! reference) turned into a [`SceneDesc`], checked without a GPU, and placed into
-//! a [`Renderer`] with [`SceneDesc::instantiate`].
+//! a [`Renderer`](crate::Renderer) with [`SceneDesc::instantiate`] (`scn_place.rs`).
 
-use super::model::AddedModel;
 use super::placement::place_instances;
 use super::procedural::{blob_vertex_count, MAX_SCENE_BLOB_VERTICES};
 use super::scn_cloth::{self, ClothDesc};
 use super::scn_fields::{numbers, Fields};
 use super::scn_lights;
+use super::scn_material::material_fields;
 use super::scn_syntax::{decode_scene_text, parse_blocks, Block, Pair};
 use super::scn_targets::{self, RenderTargetDesc};
 use super::texture::read_texture;
@@ -18,12 +18,9 @@ use super::{
 use crate::render::{ShadowLayout, MAX_SHADOW_MAP_BYTES};
 use crate::scene::TextureId;
 use crate::scene::{
-    AlphaMode, Background, BlendState, Camera, Compare, Cull, Entity, Environment, Fog, Light, Material, MaterialId,
-    PostEffect, RenderStates, ShadingModel, StencilOp, View, Viewport, MAX_LIGHTS,
+    Background, Camera, Entity, Environment, Fog, Light, Material, PostEffect, View, Viewport, MAX_LIGHTS,
 };
-use crate::sim::cloth::ClothView;
-use crate::Renderer;
-use glam::{EulerRot, Mat4, Quat, Vec3, Vec4};
+use glam::{EulerRot, Mat4, Quat, Vec3};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
@@ -67,6 +64,30 @@ impl MaterialDesc {
             emissive_map: self.emissive_map.map(|i| textures[i]),
             ..self.material.clone()
         }
+    }
+
+    /// Its maps, in [`Material::maps`]' order.
+    pub fn maps(&self) -> [Option<TextureRef>; 6] {
+        [
+            self.diffuse_map,
+            self.normal_map,
+            self.specular_map,
+            self.metallic_roughness_map,
+            self.occlusion_map,
+            self.emissive_map,
+        ]
+    }
+
+    /// The same, to change.
+    pub fn maps_mut(&mut self) -> [&mut Option<TextureRef>; 6] {
+        [
+            &mut self.diffuse_map,
+            &mut self.normal_map,
+            &mut self.specular_map,
+            &mut self.metallic_roughness_map,
+            &mut self.occlusion_map,
+            &mut self.emissive_map,
+        ]
     }
 }
 
@@ -214,152 +235,6 @@ impl SceneDesc {
         }
         Ok(())
     }
-
-    /// Pose every model at `time` seconds (see [`Model::pose`]), advance every
-    /// cloth to `time` (see [`ClothDesc::pose`]), and move the matching `entities`
-    /// (as [`SceneDesc::instantiate`] returned them into `renderer`) along: only
-    /// entities of animated models and moved cloths change, so only they are
-    /// uploaded again; morphed meshes and cloth surfaces replace their shapes in
-    /// `renderer` (one vertex-buffer write each). Fails when a cloth cannot reach
-    /// `time` (too many steps, or a step that does not converge).
-    pub fn pose(&mut self, time: f32, entities: &mut [Entity], renderer: &mut Renderer) -> Result<(), crate::Error> {
-        self.check_pose(time)?;
-        let mut moved = vec![false; self.models.len()];
-        let mut morphed = vec![Vec::new(); self.models.len()];
-        for ((model, moved), morphed) in self.models.iter_mut().zip(&mut moved).zip(&mut morphed) {
-            *moved = !model.animations.is_empty();
-            *morphed = model.pose(time);
-        }
-        let mut next = 0;
-        for e in &self.entities {
-            match e.mesh {
-                MeshRef::Shape(_) => next += 1,
-                MeshRef::Model(i) => {
-                    let model = &self.models[i];
-                    for (k, (part, entity)) in model.parts.iter().zip(entities[next..].iter_mut()).enumerate() {
-                        if moved[i] {
-                            *entity.transforms_mut() = part.placed(&e.transforms);
-                            entity.joints_mut().clone_from(&part.joints);
-                        }
-                        if morphed[i].contains(&k) {
-                            renderer.update_shape(entity.shape, part.mesh.clone());
-                        }
-                    }
-                    next += model.parts.len();
-                }
-            }
-        }
-        for cloth in &mut self.cloths {
-            let count = cloth_entity_count(cloth);
-            if cloth.pose(time, &self.path)? {
-                let view = &cloth.view;
-                let meshes = std::iter::once(&view.surface).chain(&view.edges);
-                for (entity, mesh) in entities[next..].iter().zip(meshes) {
-                    renderer.update_shape(entity.shape, mesh.clone());
-                }
-                // Pins that did not move are not uploaded again.
-                if count == 3 {
-                    let (moved, pins) = (pin_transforms(view), &mut entities[next + 2]);
-                    if pins.transforms() != moved {
-                        *pins.transforms_mut() = moved;
-                    }
-                }
-            }
-            next += count;
-        }
-        Ok(())
-    }
-
-    /// Add this scene's shapes, textures and materials to `renderer`, set its
-    /// environment, and return one entity per render task (per model part for
-    /// model meshes), ready to submit.
-    pub fn instantiate(&self, renderer: &mut Renderer) -> Vec<Entity> {
-        renderer.set_environment(self.environment);
-        let mut textures: Vec<_> = self.textures.iter().map(|t| renderer.add_texture(t.clone())).collect();
-        // Render target k's texture follows the file textures (see `render_targets`).
-        for t in &self.render_targets {
-            match renderer.add_render_target(t.size.0, t.size.1, t.hdr) {
-                Ok((_, texture)) => textures.push(texture),
-                Err(e) => log::warn!("render target '{}': {e}", t.name),
-            }
-        }
-        let materials: Vec<MaterialId> =
-            self.materials.iter().map(|m| renderer.add_material(m.resolve(&textures))).collect();
-        // Added on first use, so scenes that name every material do not get one.
-        let mut default_material = None;
-        let mut shapes = HashMap::new();
-        let mut models = vec![None; self.models.len()];
-        let mut entities = Vec::new();
-        for e in &self.entities {
-            let first = entities.len();
-            match e.mesh {
-                MeshRef::Shape(kind) => {
-                    let shape = *shapes.entry(kind).or_insert_with(|| renderer.add_shape(kind.mesh()));
-                    let material = match e.material {
-                        Some(i) => materials[i],
-                        None => *default_material.get_or_insert_with(|| renderer.add_material(Material::default())),
-                    };
-                    entities.push(Entity::instanced(shape, material, e.transforms.clone()));
-                }
-                MeshRef::Model(i) => {
-                    let model = &self.models[i];
-                    let added: &AddedModel = models[i].get_or_insert_with(|| model.add_to(renderer));
-                    entities.extend(model.entities(added, &e.transforms));
-                }
-            }
-            for entity in &mut entities[first..] {
-                e.draw.apply(entity);
-            }
-        }
-        for cloth in &self.cloths {
-            let first = entities.len();
-            // Cloth is thin: both sides show, whatever the named material says.
-            let look = cloth.material.map_or_else(Material::default, |i| self.materials[i].resolve(&textures));
-            let material = renderer.add_material(Material { double_sided: true, ..look });
-            let surface = renderer.add_shape(cloth.view.surface.clone());
-            entities.push(Entity::new(surface, material, Mat4::IDENTITY));
-            if let Some(edges) = &cloth.view.edges {
-                let ink = Material {
-                    shading: ShadingModel::Unlit,
-                    double_sided: true,
-                    ..Material::color("cloth edges", 0.02, 0.02, 0.03)
-                };
-                let (ink, edges) = (renderer.add_material(ink), renderer.add_shape(edges.clone()));
-                entities.push(Entity::new(edges, ink, Mat4::IDENTITY));
-                if !cloth.view.pins.is_empty() {
-                    let red =
-                        Material { shading: ShadingModel::Unlit, ..Material::color("cloth pins", 1.0, 0.1, 0.05) };
-                    let red = renderer.add_material(red);
-                    let ball = *shapes
-                        .entry(ShapeKind::Sphere)
-                        .or_insert_with(|| renderer.add_shape(ShapeKind::Sphere.mesh()));
-                    entities.push(Entity::instanced(ball, red, pin_transforms(&cloth.view)));
-                }
-            }
-            for entity in &mut entities[first..] {
-                cloth.draw.apply(entity);
-            }
-        }
-        entities
-    }
-}
-
-/// Entities [`SceneDesc::instantiate`] makes for a cloth: its surface, and with
-/// the debug view its edge ribbons and (when it has pins) its pin markers.
-fn cloth_entity_count(cloth: &ClothDesc) -> usize {
-    match (&cloth.view.edges, cloth.view.pins.is_empty()) {
-        (None, _) => 1,
-        (Some(_), true) => 2,
-        (Some(_), false) => 3,
-    }
-}
-
-/// One sphere per pinned node, as big as the view's pin markers.
-fn pin_transforms(view: &ClothView) -> Vec<Mat4> {
-    view.pins
-        .iter()
-        .map(|&p| Mat4::from_scale_rotation_translation(Vec3::splat(view.pin_size), Quat::IDENTITY, p))
-        .collect()
 }
 
 /// Read, parse and validate a `.scn` file, decoding the textures it names.
@@ -451,146 +326,6 @@ struct Loader<'a> {
     instances: u64,
     /// Each camera's block line, for errors found once the file is read.
     camera_lines: Vec<usize>,
-}
-
-const COMPARES: [&str; 8] = ["never", "less", "less_equal", "equal", "greater_equal", "greater", "not_equal", "always"];
-const COMPARE_VALUES: [Compare; 8] = [
-    Compare::Never,
-    Compare::Less,
-    Compare::LessEqual,
-    Compare::Equal,
-    Compare::GreaterEqual,
-    Compare::Greater,
-    Compare::NotEqual,
-    Compare::Always,
-];
-const STENCIL_OPS: [&str; 6] = ["keep", "zero", "replace", "increment", "decrement", "invert"];
-const STENCIL_OP_VALUES: [StencilOp; 6] = [
-    StencilOp::Keep,
-    StencilOp::Zero,
-    StencilOp::Replace,
-    StencilOp::IncrementClamp,
-    StencilOp::DecrementClamp,
-    StencilOp::Invert,
-];
-
-/// The material keys of a `material` block (or of `mtl.NAME.` overrides) applied
-/// over `base`: keys that are absent keep `base`'s values. Texture keys are the
-/// caller's.
-fn material_fields(f: &mut Fields, base: Material) -> Result<Material, Diagnostic> {
-    let base_color = match f.get("base_color") {
-        None => base.base_color,
-        Some(pair) => {
-            let words = pair.value.split_whitespace().count();
-            let c = if words == 3 {
-                Vec3::from(numbers::<3>(f.path, pair, "3 or 4 numbers (r g b [a])")?).extend(1.0)
-            } else {
-                Vec4::from(numbers::<4>(f.path, pair, "3 or 4 numbers (r g b [a])")?)
-            };
-            if c.min_element() < 0.0 || c.w > 1.0 {
-                return Err(Diagnostic::at(
-                    f.path,
-                    pair.line,
-                    "\"base_color\" must be non-negative with alpha at most 1",
-                ));
-            }
-            c
-        }
-    };
-    let base_cutoff = match base.alpha_mode {
-        AlphaMode::Mask { cutoff } => cutoff,
-        _ => 0.5,
-    };
-    let cutoff = f.number("alpha_cutoff", 0.0..=1.0)?.unwrap_or(base_cutoff);
-    let alpha_mode = match f.choice("alpha_mode", &["opaque", "mask", "blend"])? {
-        None if matches!(base.alpha_mode, AlphaMode::Mask { .. }) => AlphaMode::Mask { cutoff },
-        None => base.alpha_mode,
-        Some((0, _)) => AlphaMode::Opaque,
-        Some((1, _)) => AlphaMode::Mask { cutoff },
-        Some(_) => AlphaMode::Blend,
-    };
-    let material = Material {
-        base_color,
-        ambient: f.number("ambient", 0.0..=100.0)?.unwrap_or(base.ambient),
-        diffuse: f.number("diffuse", 0.0..=100.0)?.unwrap_or(base.diffuse),
-        specular: f.number("specular", 0.0..=100.0)?.unwrap_or(base.specular),
-        smoothness: f.number("smoothness", 0.0..=1.0)?.unwrap_or(base.smoothness),
-        alpha_mode,
-        double_sided: f.flag("double_sided")?.unwrap_or(base.double_sided),
-        uv_scale: f.numbers::<2>("uv_scale", "2 numbers (u v)")?.map_or(base.uv_scale, glam::Vec2::from),
-        uv_offset: f.numbers::<2>("uv_offset", "2 numbers (u v)")?.map_or(base.uv_offset, glam::Vec2::from),
-        uv_rotation: f.number("uv_rotation", -360.0..=360.0)?.map_or(base.uv_rotation, f32::to_radians),
-        shading: match f.choice("shading", &["blinn_phong", "unlit", "metallic_roughness"])? {
-            None => base.shading,
-            Some((0, _)) => ShadingModel::BlinnPhong,
-            Some((1, _)) => ShadingModel::Unlit,
-            Some(_) => ShadingModel::MetallicRoughness,
-        },
-        metallic: f.number("metallic", 0.0..=1.0)?.unwrap_or(base.metallic),
-        roughness: f.number("roughness", 0.0..=1.0)?.unwrap_or(base.roughness),
-        emissive: f.color("emissive")?.unwrap_or(base.emissive),
-        fog: f.flag("fog")?.unwrap_or(base.fog),
-        ..base.clone()
-    };
-    let states = render_states(f, material.render_states())?.or(base.states);
-    Ok(Material { states, ..material })
-}
-
-/// A material's explicit render states: `None` when no state key is given, else
-/// `derived` (what its alpha mode and sidedness imply) with the given keys applied.
-fn render_states(f: &mut Fields, derived: RenderStates) -> Result<Option<RenderStates>, Diagnostic> {
-    let mut s = derived;
-    let mut any = false;
-    let mut pick = |v: Option<(usize, &_)>| {
-        v.map(|(i, _)| {
-            any = true;
-            i
-        })
-    };
-    if let Some(i) = pick(f.choice("blend", &["replace", "alpha", "additive", "multiply"])?) {
-        s.blend = [BlendState::Replace, BlendState::Alpha, BlendState::Additive, BlendState::Multiply][i];
-    }
-    if let Some(i) = pick(f.choice("depth_compare", &COMPARES)?) {
-        s.depth.compare = COMPARE_VALUES[i];
-    }
-    if let Some(i) = pick(f.choice("cull", &["back", "front", "none"])?) {
-        s.raster.cull = [Cull::Back, Cull::Front, Cull::None][i];
-    }
-    if let Some(i) = pick(f.choice("stencil_compare", &COMPARES)?) {
-        s.stencil.compare = COMPARE_VALUES[i];
-    }
-    for (key, op) in [
-        ("stencil_pass", &mut s.stencil.pass),
-        ("stencil_fail", &mut s.stencil.fail),
-        ("stencil_depth_fail", &mut s.stencil.depth_fail),
-    ] {
-        if let Some(i) = pick(f.choice(key, &STENCIL_OPS)?) {
-            *op = STENCIL_OP_VALUES[i];
-        }
-    }
-    if let Some(write) = f.flag("depth_write")? {
-        s.depth.write = write;
-        any = true;
-    }
-    for (key, field) in [
-        ("stencil_ref", &mut s.stencil.reference),
-        ("stencil_read_mask", &mut s.stencil.read_mask),
-        ("stencil_write_mask", &mut s.stencil.write_mask),
-    ] {
-        if let Some(v) = f.integer(key, 0..=255)? {
-            *field = v as u8;
-            any = true;
-        }
-    }
-    if let Some(bias) = f.integer("depth_bias", -65536..=65536)? {
-        s.raster.depth_bias = bias as i32;
-        any = true;
-    }
-    if let Some(slope) = f.number("slope_bias", -100.0..=100.0)? {
-        s.raster.slope_bias_bits = slope.to_bits();
-        any = true;
-    }
-    Ok(any.then_some(s))
 }
 
 /// Rotation from Quake-style angles in degrees: pitch about X, yaw about Y, roll about Z.

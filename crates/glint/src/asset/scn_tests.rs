@@ -2,6 +2,7 @@
 //! what a valid file becomes.
 
 use super::*;
+use crate::scene::{AlphaMode, BlendState, Compare, Cull, ShadingModel};
 
 fn parse(text: &str) -> Result<SceneDesc, Diagnostic> {
     parse_scene(Path::new("dir/t.scn"), text)

@@ -1,0 +1,147 @@
+//! The material keys of `.scn` `material` blocks and `mtl.NAME.` overrides:
+//! shading, colours and the explicit render states (see `docs/scn.md`).
+
+use super::scn_fields::{numbers, Fields};
+use super::Diagnostic;
+use crate::scene::{AlphaMode, BlendState, Compare, Cull, Material, RenderStates, ShadingModel, StencilOp};
+use glam::{Vec3, Vec4};
+
+const COMPARES: [&str; 8] = ["never", "less", "less_equal", "equal", "greater_equal", "greater", "not_equal", "always"];
+const COMPARE_VALUES: [Compare; 8] = [
+    Compare::Never,
+    Compare::Less,
+    Compare::LessEqual,
+    Compare::Equal,
+    Compare::GreaterEqual,
+    Compare::Greater,
+    Compare::NotEqual,
+    Compare::Always,
+];
+const STENCIL_OPS: [&str; 6] = ["keep", "zero", "replace", "increment", "decrement", "invert"];
+const STENCIL_OP_VALUES: [StencilOp; 6] = [
+    StencilOp::Keep,
+    StencilOp::Zero,
+    StencilOp::Replace,
+    StencilOp::IncrementClamp,
+    StencilOp::DecrementClamp,
+    StencilOp::Invert,
+];
+
+/// The material keys of a `material` block (or of `mtl.NAME.` overrides) applied
+/// over `base`: keys that are absent keep `base`'s values. Texture keys are the
+/// caller's.
+pub(crate) fn material_fields(f: &mut Fields, base: Material) -> Result<Material, Diagnostic> {
+    let base_color = match f.get("base_color") {
+        None => base.base_color,
+        Some(pair) => {
+            let words = pair.value.split_whitespace().count();
+            let c = if words == 3 {
+                Vec3::from(numbers::<3>(f.path, pair, "3 or 4 numbers (r g b [a])")?).extend(1.0)
+            } else {
+                Vec4::from(numbers::<4>(f.path, pair, "3 or 4 numbers (r g b [a])")?)
+            };
+            if c.min_element() < 0.0 || c.w > 1.0 {
+                return Err(Diagnostic::at(
+                    f.path,
+                    pair.line,
+                    "\"base_color\" must be non-negative with alpha at most 1",
+                ));
+            }
+            c
+        }
+    };
+    let base_cutoff = match base.alpha_mode {
+        AlphaMode::Mask { cutoff } => cutoff,
+        _ => 0.5,
+    };
+    let cutoff = f.number("alpha_cutoff", 0.0..=1.0)?.unwrap_or(base_cutoff);
+    let alpha_mode = match f.choice("alpha_mode", &["opaque", "mask", "blend"])? {
+        None if matches!(base.alpha_mode, AlphaMode::Mask { .. }) => AlphaMode::Mask { cutoff },
+        None => base.alpha_mode,
+        Some((0, _)) => AlphaMode::Opaque,
+        Some((1, _)) => AlphaMode::Mask { cutoff },
+        Some(_) => AlphaMode::Blend,
+    };
+    let material = Material {
+        base_color,
+        ambient: f.number("ambient", 0.0..=100.0)?.unwrap_or(base.ambient),
+        diffuse: f.number("diffuse", 0.0..=100.0)?.unwrap_or(base.diffuse),
+        specular: f.number("specular", 0.0..=100.0)?.unwrap_or(base.specular),
+        smoothness: f.number("smoothness", 0.0..=1.0)?.unwrap_or(base.smoothness),
+        alpha_mode,
+        double_sided: f.flag("double_sided")?.unwrap_or(base.double_sided),
+        uv_scale: f.numbers::<2>("uv_scale", "2 numbers (u v)")?.map_or(base.uv_scale, glam::Vec2::from),
+        uv_offset: f.numbers::<2>("uv_offset", "2 numbers (u v)")?.map_or(base.uv_offset, glam::Vec2::from),
+        uv_rotation: f.number("uv_rotation", -360.0..=360.0)?.map_or(base.uv_rotation, f32::to_radians),
+        shading: match f.choice("shading", &["blinn_phong", "unlit", "metallic_roughness"])? {
+            None => base.shading,
+            Some((0, _)) => ShadingModel::BlinnPhong,
+            Some((1, _)) => ShadingModel::Unlit,
+            Some(_) => ShadingModel::MetallicRoughness,
+        },
+        metallic: f.number("metallic", 0.0..=1.0)?.unwrap_or(base.metallic),
+        roughness: f.number("roughness", 0.0..=1.0)?.unwrap_or(base.roughness),
+        emissive: f.color("emissive")?.unwrap_or(base.emissive),
+        fog: f.flag("fog")?.unwrap_or(base.fog),
+        ..base.clone()
+    };
+    let states = render_states(f, material.render_states())?.or(base.states);
+    Ok(Material { states, ..material })
+}
+
+/// A material's explicit render states: `None` when no state key is given, else
+/// `derived` (what its alpha mode and sidedness imply) with the given keys applied.
+fn render_states(f: &mut Fields, derived: RenderStates) -> Result<Option<RenderStates>, Diagnostic> {
+    let mut s = derived;
+    let mut any = false;
+    let mut pick = |v: Option<(usize, &_)>| {
+        v.map(|(i, _)| {
+            any = true;
+            i
+        })
+    };
+    if let Some(i) = pick(f.choice("blend", &["replace", "alpha", "additive", "multiply"])?) {
+        s.blend = [BlendState::Replace, BlendState::Alpha, BlendState::Additive, BlendState::Multiply][i];
+    }
+    if let Some(i) = pick(f.choice("depth_compare", &COMPARES)?) {
+        s.depth.compare = COMPARE_VALUES[i];
+    }
+    if let Some(i) = pick(f.choice("cull", &["back", "front", "none"])?) {
+        s.raster.cull = [Cull::Back, Cull::Front, Cull::None][i];
+    }
+    if let Some(i) = pick(f.choice("stencil_compare", &COMPARES)?) {
+        s.stencil.compare = COMPARE_VALUES[i];
+    }
+    for (key, op) in [
+        ("stencil_pass", &mut s.stencil.pass),
+        ("stencil_fail", &mut s.stencil.fail),
+        ("stencil_depth_fail", &mut s.stencil.depth_fail),
+    ] {
+        if let Some(i) = pick(f.choice(key, &STENCIL_OPS)?) {
+            *op = STENCIL_OP_VALUES[i];
+        }
+    }
+    if let Some(write) = f.flag("depth_write")? {
+        s.depth.write = write;
+        any = true;
+    }
+    for (key, field) in [
+        ("stencil_ref", &mut s.stencil.reference),
+        ("stencil_read_mask", &mut s.stencil.read_mask),
+        ("stencil_write_mask", &mut s.stencil.write_mask),
+    ] {
+        if let Some(v) = f.integer(key, 0..=255)? {
+            *field = v as u8;
+            any = true;
+        }
+    }
+    if let Some(bias) = f.integer("depth_bias", -65536..=65536)? {
+        s.raster.depth_bias = bias as i32;
+        any = true;
+    }
+    if let Some(slope) = f.number("slope_bias", -100.0..=100.0)? {
+        s.raster.slope_bias_bits = slope.to_bits();
+        any = true;
+    }
+    Ok(any.then_some(s))
+}
