@@ -82,18 +82,9 @@ pub(crate) fn map(
 /// Give `target:NAME` maps their final references: the scene's `files` file
 /// textures come first, then one per render target in file order.
 pub(crate) fn finish_maps(materials: &mut [MaterialDesc], files: usize) {
-    for m in materials {
-        for map in [
-            &mut m.diffuse_map,
-            &mut m.normal_map,
-            &mut m.specular_map,
-            &mut m.metallic_roughness_map,
-            &mut m.occlusion_map,
-            &mut m.emissive_map,
-        ] {
-            if let Some(r) = map.as_mut().filter(|r| **r >= PENDING) {
-                *r = files + (*r - PENDING);
-            }
+    for map in materials.iter_mut().flat_map(MaterialDesc::maps_mut) {
+        if let Some(r) = map.as_mut().filter(|r| **r >= PENDING) {
+            *r = files + (*r - PENDING);
         }
     }
 }
@@ -110,10 +101,7 @@ pub(crate) fn check_order(
     materials: &[MaterialDesc],
     textures: usize,
 ) -> Result<(), Diagnostic> {
-    let shows = |m: &MaterialDesc, target: usize| {
-        [m.diffuse_map, m.normal_map, m.specular_map, m.metallic_roughness_map, m.occlusion_map, m.emissive_map]
-            .contains(&Some(textures + target))
-    };
+    let shows = |m: &MaterialDesc, target: usize| m.maps().contains(&Some(textures + target));
     // Camera b needs camera a first when a draws target T and b draws a material
     // showing T (one that does not also show b's own target).
     let needs = |b: usize, a: usize| {
@@ -122,20 +110,19 @@ pub(crate) fn check_order(
     };
     let drawing: Vec<usize> = (0..cameras.len()).filter(|&k| cameras[k].output.is_some()).collect();
     let mut done: Vec<usize> = Vec::new();
-    while done.len() < drawing.len() {
-        let ready = drawing
-            .iter()
-            .copied()
-            .find(|b| !done.contains(b) && drawing.iter().all(|&a| !needs(*b, a) || done.contains(&a)));
-        match ready {
-            Some(b) => done.push(b),
-            None => {
-                let stuck = drawing.iter().copied().find(|b| !done.contains(b)).expect("one is left");
-                let message = "camera: its render target and another camera's each show the other's picture, \
-                               so neither can be drawn first (a cycle of render targets)";
-                return Err(Diagnostic::at(path, lines[stuck], message));
-            }
-        }
+    let ready = |done: &[usize]| {
+        let waits = |b: usize| drawing.iter().any(|&a| needs(b, a) && !done.contains(&a));
+        drawing.iter().copied().find(|&b| !done.contains(&b) && !waits(b))
+    };
+    while let Some(b) = ready(&done) {
+        done.push(b);
     }
-    Ok(())
+    match drawing.iter().find(|b| !done.contains(b)) {
+        Some(&stuck) => {
+            let message = "camera: its render target and another camera's each show the other's picture, \
+                           so neither can be drawn first (a cycle of render targets)";
+            Err(Diagnostic::at(path, lines.get(stuck).copied().unwrap_or(0), message))
+        }
+        None => Ok(()),
+    }
 }

@@ -98,11 +98,7 @@ impl Renderer {
 
     /// Whether material `id` shows `texture` in one of its maps.
     fn shows(&self, id: crate::scene::MaterialId, texture: crate::scene::TextureId) -> bool {
-        self.materials.get(id.0 as usize).is_some_and(|m| {
-            let m = &m.material;
-            [m.diffuse_map, m.normal_map, m.specular_map, m.metallic_roughness_map, m.occlusion_map, m.emissive_map]
-                .contains(&Some(texture))
-        })
+        self.materials.get(id.0 as usize).is_some_and(|m| m.material.maps().contains(&Some(texture)))
     }
 
     /// The order to draw `views` in: a view into a render target before every

@@ -28,14 +28,7 @@ impl Renderer {
         }
         let material = slot.material.clone();
         if current.is_none() {
-            let maps: Maps = [
-                material.diffuse_map,
-                material.normal_map,
-                material.specular_map,
-                material.metallic_roughness_map,
-                material.occlusion_map,
-                material.emissive_map,
-            ];
+            let maps: Maps = material.maps();
             for texture in maps.into_iter().flatten() {
                 let tex = self
                     .textures

@@ -152,6 +152,19 @@ impl Material {
         Self { name: name.into(), base_color: Vec4::new(r, g, b, 1.0), ..Self::default() }
     }
 
+    /// Its maps in texture-set binding order: diffuse, normal, specular,
+    /// metallic-roughness, occlusion, emissive.
+    pub fn maps(&self) -> [Option<TextureId>; 6] {
+        [
+            self.diffuse_map,
+            self.normal_map,
+            self.specular_map,
+            self.metallic_roughness_map,
+            self.occlusion_map,
+            self.emissive_map,
+        ]
+    }
+
     /// The render states this material draws with: `states` if set, else blending
     /// and no depth writes for [`AlphaMode::Blend`], and no culling when double-sided.
     pub fn render_states(&self) -> RenderStates {
