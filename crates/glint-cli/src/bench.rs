@@ -118,9 +118,9 @@ pub fn run_mode(
     let timed = renderer.enable_gpu_timing();
     let mut gpu_ms = Vec::new();
     let mut shadow_gpu_ms = Vec::new();
-    let entities = desc.instantiate(&mut renderer);
+    let entities = renderer.place_scene(desc).entities;
     let refs: Vec<_> = entities.iter().collect();
-    renderer.precompile(&refs, &desc.lights, config.msaa)?;
+    renderer.precompile(&refs, desc.lighting(), config.msaa)?;
     let mut post_gpu_ms: Vec<Vec<f64>> = vec![Vec::new(); view.post.len()];
     let mut frames = Vec::with_capacity(config.frames);
     let mut frame_ms = Vec::with_capacity(config.frames);
@@ -135,9 +135,9 @@ pub fn run_mode(
         for e in &entities {
             renderer.submit(e);
         }
-        let shadows = renderer.shadow_pass(view, &desc.lights, &target)?;
+        let shadows = renderer.shadow_pass(view, desc.lighting(), &target)?;
         let _ = gpu.device.poll(wgpu::PollType::wait_indefinitely());
-        let stats = renderer.flush(view, &desc.lights, &shadows, &mut target)?;
+        let stats = renderer.flush(view, desc.lighting(), &shadows, &mut target)?;
         let _ = gpu.device.poll(wgpu::PollType::wait_indefinitely());
         let whole = frame_start.elapsed().as_secs_f64() * 1e3;
         let frame_gpu = renderer.read_gpu_times();
@@ -161,7 +161,7 @@ pub fn run_mode(
     let frame_ms_median = percentile(&frame_ms, 0.5);
     let mut totals: Vec<f64> = frames.iter().map(|f| f.cpu_ms.total).collect();
     totals.sort_by(f64::total_cmp);
-    let last = *frames.last().expect("at least one frame");
+    let last = frames.last().expect("at least one frame").clone();
     let instances = last.instances_submitted.max(1) as f64;
     let per_instance_stages =
         |f: &FrameStats| f.cpu_ms.cull + f.cpu_ms.queue + f.cpu_ms.sort + f.cpu_ms.batch + f.cpu_ms.upload;

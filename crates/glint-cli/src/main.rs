@@ -158,21 +158,30 @@ struct Picture {
     solve: Option<sim::SolveArg>,
 }
 
-/// The views a picture of `desc` draws: camera `camera` alone over the whole
-/// image (after the cameras drawing render targets), or [`SceneDesc::views`]; an error names the scene when there is no
-/// camera `camera`.
-pub(crate) fn views_of(desc: &SceneDesc, scene: &Path, camera: Option<usize>) -> Result<Vec<glint::View>, Error> {
+/// The views a picture of `desc`, placed as `placed`, draws: camera `camera`
+/// alone over the whole image (after the cameras drawing render targets, which
+/// it may show), or [`SceneDesc::views`]. A camera the scene lacks counts as none.
+pub(crate) fn views_of(
+    desc: &SceneDesc,
+    camera: Option<usize>,
+    placed: &glint::render::PlacedScene,
+) -> Vec<glint::View> {
+    let targets = &placed.render_targets;
+    match camera.filter(|&k| k < desc.cameras.len()) {
+        None => desc.views(targets),
+        Some(k) => desc.target_views(targets).into_iter().chain([desc.camera_view(k)]).collect(),
+    }
+}
+
+/// An error naming the scene when it has no camera `camera`.
+pub(crate) fn check_camera(desc: &SceneDesc, scene: &Path, camera: Option<usize>) -> Result<(), Error> {
     match camera {
-        None => Ok(desc.views()),
-        Some(k) => match desc.cameras.get(k) {
-            // The render targets it may show are drawn first.
-            Some(_) => Ok(desc.target_views().into_iter().chain([desc.camera_view(k)]).collect()),
-            None => Err(glint::Diagnostic::file(
-                scene,
-                format!("camera {k} requested, but the scene has {}", desc.cameras.len()),
-            )
-            .into()),
-        },
+        Some(k) if k >= desc.cameras.len() => Err(glint::Diagnostic::file(
+            scene,
+            format!("camera {k} requested, but the scene has {}", desc.cameras.len()),
+        )
+        .into()),
+        _ => Ok(()),
     }
 }
 
@@ -333,8 +342,7 @@ fn render(args: RenderArgs) -> Result<(), Error> {
     let RenderArgs { scene, output, size: (width, height), msaa, camera, stats, no_cull, time, frames, fps, options } =
         args;
     let mut desc = load(scene, options)?;
-    let views: Vec<glint::View> =
-        views_of(&desc, scene, camera)?.into_iter().map(|v| v.with_culling(!no_cull)).collect();
+    check_camera(&desc, scene, camera)?;
     if frames > 1 && !output.to_string_lossy().contains('%') {
         let message = "--frames needs a numbered output such as -o frames/%04d.png";
         return Err(glint::Diagnostic::file(output, message).into());
@@ -351,7 +359,9 @@ fn render(args: RenderArgs) -> Result<(), Error> {
     };
     let mut target = OffscreenTarget::new(&gpu, width, height, msaa)?;
     let mut renderer = Renderer::new(&gpu);
-    let mut entities = desc.instantiate(&mut renderer);
+    let mut placed = renderer.place_scene(&desc);
+    let views: Vec<glint::View> =
+        views_of(&desc, camera, &placed).into_iter().map(|v| v.with_culling(!no_cull)).collect();
     let progress = (frames > 1).then(|| {
         let bar = indicatif::ProgressBar::new(frames.into());
         let style = indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} frames, {elapsed} ({eta} left)");
@@ -359,8 +369,8 @@ fn render(args: RenderArgs) -> Result<(), Error> {
         bar
     });
     for k in 0..frames {
-        desc.pose(time + k as f32 / fps, &mut entities, &mut renderer)?;
-        let frame = renderer.render_views(&entities, &views, &desc.lights, &mut target)?;
+        placed.pose(&mut desc, time + k as f32 / fps, &mut renderer)?;
+        let frame = renderer.render_views(&placed.entities, &views, desc.lighting(), &mut target)?;
         let path = numbered(output, k).map_err(|m| glint::Diagnostic::file(output, m))?;
         if let Some(dir) = path.parent().filter(|d| frames > 1 && !d.as_os_str().is_empty()) {
             std::fs::create_dir_all(dir)

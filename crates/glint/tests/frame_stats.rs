@@ -7,7 +7,8 @@ use glam::{Mat4, Vec3};
 use glint::asset::ShapeKind;
 use glint::scene::MAX_LIGHTS;
 use glint::{
-    AlphaMode, Camera, Entity, FrameStats, Gpu, Light, Material, OffscreenTarget, RenderError, Renderer, Texture,
+    AlphaMode, Camera, Entity, FrameStats, Gpu, Light, Lighting, Material, OffscreenTarget, RenderError, Renderer,
+    Texture,
 };
 
 fn camera() -> Camera {
@@ -18,12 +19,18 @@ fn sun() -> Vec<Light> {
     vec![Light::directional(Vec3::new(-1.0, -1.0, -1.0), Vec3::ONE, 1.0)]
 }
 
-fn frame(renderer: &mut Renderer, gpu: &Gpu, entities: &[&Entity], lights: &[Light]) -> FrameStats {
+fn frame<'l>(renderer: &mut Renderer, gpu: &Gpu, entities: &[&Entity], lights: impl Into<Lighting<'l>>) -> FrameStats {
     frame_of(renderer, gpu, entities, lights, true)
 }
 
 /// [`frame`] with culling on or off.
-fn frame_of(renderer: &mut Renderer, gpu: &Gpu, entities: &[&Entity], lights: &[Light], culling: bool) -> FrameStats {
+fn frame_of<'l>(
+    renderer: &mut Renderer,
+    gpu: &Gpu,
+    entities: &[&Entity],
+    lights: impl Into<Lighting<'l>>,
+    culling: bool,
+) -> FrameStats {
     let mut target = OffscreenTarget::new(gpu, 64, 64, 1).expect("target");
     let view = glint::View::new(camera()).with_culling(culling);
     renderer.render(entities.iter().copied(), view, lights, &mut target).expect("frame")
@@ -238,17 +245,19 @@ fn adding_a_map_compiles_exactly_one_new_variant() {
 fn a_sky_with_only_blended_entities_and_the_naive_mode_draw() {
     let Some(gpu) = common::gpu() else { return };
     let mut r = Renderer::new(gpu);
-    r.set_environment(glint::Environment {
+    let sky = glint::Environment {
         background: glint::Background::Gradient { top: Vec3::Z, bottom: Vec3::ONE },
         ..Default::default()
-    });
+    };
+    let lights = sun();
+    let sky = Lighting::new(&lights, sky);
     let cube = r.add_shape(ShapeKind::Cube.mesh());
     let glass = r.add_material(Material { alpha_mode: AlphaMode::Blend, ..Material::default() });
     let e = Entity::instanced(cube, glass, grid(3));
-    assert_eq!(frame(&mut r, gpu, &[&e], &sun()).draw_calls, 2, "sky first (no opaque before it), then the glass");
+    assert_eq!(frame(&mut r, gpu, &[&e], sky).draw_calls, 2, "sky first (no opaque before it), then the glass");
     // Naive: one draw per instance, the sky first, everything bound per draw.
     r.set_mode(glint::FrameMode::Naive);
-    let naive = frame(&mut r, gpu, &[&e], &sun());
+    let naive = frame(&mut r, gpu, &[&e], sky);
     assert_eq!((naive.draw_calls, naive.draws), (1 + 3, 1 + 3));
     assert_eq!(naive.instances_culled, 0);
     assert_eq!(naive.bytes_uploaded.material, 3 * 96, "the material block before every draw");
@@ -275,6 +284,22 @@ fn gpu_timing_reads_the_last_frames_pass_time() {
     let times = r.read_gpu_times().expect("timed frame");
     let shadow_ms = times.shadow_ms.expect("the shadow pass is timed");
     assert!(shadow_ms > 0.0 && shadow_ms < 60_000.0, "{times:?}");
+
+    // Each frame's statistics carry the newest finished frame's times, read
+    // without waiting: here the frame before, which `read_gpu_times` waited for.
+    let mut target = OffscreenTarget::new(gpu, 64, 64, 1).expect("target");
+    let post = vec![glint::scene::PostEffect::Vignette { strength: 0.5 }, glint::scene::PostEffect::Fxaa];
+    let view = glint::View::new(camera()).with_post(post);
+    let first = r.render([&e], view.clone(), &sun(), &mut target).expect("frame");
+    assert!(first.gpu.as_ref().is_none_or(|g| g.frame < first.frame), "never this frame's own: {first:?}");
+    let finished = r.read_gpu_times().expect("timed frame");
+    let next = r.render([&e], view, &sun(), &mut target).expect("frame");
+    assert_eq!(next.frame, first.frame + 1);
+    let carried = next.gpu.expect("the finished frame's times");
+    assert_eq!((carried.frame, &carried), (first.frame, &finished));
+    assert!(carried.forward_ms > 0.0 && carried.shadow_ms.is_none(), "{carried:?}");
+    assert_eq!(carried.post_ms.len(), 2, "one time per post effect: {carried:?}");
+    assert!(carried.post_ms.iter().all(|&ms| ms > 0.0 && ms < 60_000.0), "{carried:?}");
 }
 
 #[test]

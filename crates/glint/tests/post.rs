@@ -10,7 +10,7 @@ mod common;
 use glam::{Mat4, Quat, Vec3, Vec4};
 use glint::asset::ShapeKind;
 use glint::scene::{Background, PostEffect, ShadingModel, Tonemap};
-use glint::{Camera, Entity, Environment, Gpu, Material, OffscreenTarget, Renderer, View};
+use glint::{Camera, Entity, Environment, Gpu, Lighting, Material, OffscreenTarget, Renderer, View};
 
 /// `boxes` (centre x, y; size; rotation about z; linear colour), unlit, on a
 /// `background`, seen face on by an orthographic camera 2 units high, through
@@ -23,8 +23,6 @@ fn draw(
     (width, height): (u32, u32),
 ) -> (image::RgbaImage, glint::FrameStats) {
     let mut renderer = Renderer::new(gpu);
-    renderer
-        .set_environment(Environment { background: Background::Color(Vec3::splat(background)), ..Default::default() });
     let cube = renderer.add_shape(ShapeKind::Cube.mesh());
     let entities: Vec<Entity> = boxes
         .iter()
@@ -45,7 +43,8 @@ fn draw(
     let camera = Camera::orthographic(2.0, 0.1, 20.0).looking_at(Vec3::new(0.0, 0.0, 5.0), Vec3::ZERO);
     let mut target = OffscreenTarget::new(gpu, width, height, 1).expect("target");
     let view = View::new(camera).with_post(post);
-    let stats = renderer.render(&entities, view, &[], &mut target).expect("frame");
+    let environment = Environment { background: Background::Color(Vec3::splat(background)), ..Default::default() };
+    let stats = renderer.render(&entities, view, Lighting::new(&[], environment), &mut target).expect("frame");
     (target.read_rgba8(gpu).expect("readback"), stats)
 }
 

@@ -75,14 +75,15 @@ fn a_reference_test_fails_on_a_visibly_different_image() {
     let path = common::repo_root().join("tests/scenes/lights.scn");
     let desc = common::load_scene(&path);
     let mut renderer = glint::Renderer::new(gpu);
-    let entities = desc.instantiate(&mut renderer);
+    let entities = renderer.place_scene(&desc).entities;
     let mut target = glint::OffscreenTarget::new(gpu, 256, 256, 4).expect("target");
     for e in &entities {
         renderer.submit(e);
     }
     let without_red: Vec<_> = desc.lights.iter().copied().filter(|l| l.color.x < 0.99 || l.color.y > 0.5).collect();
     assert_eq!(without_red.len(), desc.lights.len() - 1);
-    renderer.flush(desc.cameras[0], &without_red, &glint::Shadows::none(), &mut target).expect("frame");
+    let lighting = glint::Lighting::new(&without_red, desc.environment);
+    renderer.flush(desc.cameras[0], lighting, &glint::Shadows::none(), &mut target).expect("frame");
     let image = target.read_rgba8(gpu).expect("readback");
     let result = std::panic::catch_unwind(|| common::assert_matches_reference("lights", &image));
     assert!(result.is_err(), "a frame without the red light must not match the reference");
@@ -106,20 +107,21 @@ fn cloth_swings_with_its_debug_view_one_vertex_write_per_frame() {
     let mut desc = common::load_scene(&path);
     assert!(desc.warnings.is_empty(), "{:?}", desc.warnings);
     let mut renderer = glint::Renderer::new(gpu);
-    let mut entities = desc.instantiate(&mut renderer);
+    let mut placed = renderer.place_scene(&desc);
+    let entities = &placed.entities;
     assert_eq!(entities.len(), 4, "floor, cloth, ribbons, pins");
     assert_eq!(entities[3].transforms().len(), 2, "two pinned corners");
     let mut target = glint::OffscreenTarget::new(gpu, 256, 256, 4).expect("target");
-    let mut frame = |desc: &mut glint::asset::SceneDesc, entities: &mut Vec<glint::Entity>, time: f32| {
-        desc.pose(time, entities, &mut renderer).expect("the cloth steps");
-        let stats = renderer.render(entities.iter(), desc.cameras[0], &desc.lights, &mut target).expect("frame");
+    let mut frame = |desc: &mut glint::asset::SceneDesc, placed: &mut glint::render::PlacedScene, time: f32| {
+        placed.pose(desc, time, &mut renderer).expect("the cloth steps");
+        let stats = renderer.render(&placed.entities, desc.cameras[0], desc.lighting(), &mut target).expect("frame");
         (stats, target.read_rgba8(gpu).expect("readback"))
     };
-    let (first, _) = frame(&mut desc, &mut entities, 0.0);
+    let (first, _) = frame(&mut desc, &mut placed, 0.0);
     assert_eq!(first.draws, 4, "floor, cloth, ribbons, one instanced draw of both pins");
     let edges = desc.cloths[0].view.edges.as_ref().expect("debug view").vertices().len();
     let rest_bottom = desc.cloths[0].view.surface.aabb().min.y;
-    let (swung, image) = frame(&mut desc, &mut entities, 0.6);
+    let (swung, image) = frame(&mut desc, &mut placed, 0.6);
     let vertex_bytes = (81 + edges) as u64 * std::mem::size_of::<glint::scene::Vertex>() as u64;
     assert_eq!(swung.bytes_uploaded.meshes, vertex_bytes, "one write of the surface's and the ribbons' vertices");
     // The surface's and the ribbons' bounds moved, so their one instance record
@@ -132,10 +134,10 @@ fn cloth_swings_with_its_debug_view_one_vertex_write_per_frame() {
 
     // Deterministic: going back to 0 restarts from rest, and 0.6 s again is the same shape.
     let before: Vec<_> = desc.cloths[0].view.surface.vertices().to_vec();
-    frame(&mut desc, &mut entities, 0.0);
+    frame(&mut desc, &mut placed, 0.0);
     assert_eq!(desc.cloths[0].view.surface.aabb().min.y, rest_bottom, "back at rest");
-    frame(&mut desc, &mut entities, 0.6);
+    frame(&mut desc, &mut placed, 0.6);
     assert!(desc.cloths[0].view.surface.vertices() == before.as_slice(), "the same time gives the same shape");
-    let (still, _) = frame(&mut desc, &mut entities, 0.6);
+    let (still, _) = frame(&mut desc, &mut placed, 0.6);
     assert_eq!(still.bytes_uploaded.meshes, 0, "posing at the same time uploads nothing");
 }

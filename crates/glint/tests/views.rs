@@ -13,9 +13,9 @@ use glint::{Camera, Entity, Gpu, Light, Material, OffscreenTarget, RenderError, 
 fn split_scene(gpu: &Gpu, views: &[View], (width, height): (u32, u32)) -> (image::RgbaImage, Vec<glint::FrameStats>) {
     let desc = common::load_scene(&common::repo_root().join("scenes/split.scn"));
     let mut renderer = Renderer::new(gpu);
-    let entities = desc.instantiate(&mut renderer);
+    let entities = renderer.place_scene(&desc).entities;
     let mut target = OffscreenTarget::new(gpu, width, height, 1).expect("target");
-    let stats = renderer.render_views(&entities, views, &desc.lights, &mut target).expect("frame");
+    let stats = renderer.render_views(&entities, views, desc.lighting(), &mut target).expect("frame");
     (target.read_rgba8(gpu).expect("readback"), stats)
 }
 
@@ -45,7 +45,7 @@ fn split_screens_work_on_gl_too() {
 /// `scenes/split.scn` matches its reference, and each half its camera alone.
 fn split_screen_halves(gpu: &Gpu) {
     let desc = common::load_scene(&common::repo_root().join("scenes/split.scn"));
-    let views = desc.views();
+    let views = desc.views(&[]);
     assert_eq!(views.len(), 2, "split.scn places two cameras");
     let (split, stats) = split_scene(gpu, &views, (192, 96));
     common::assert_matches_reference("split", &split);
@@ -182,22 +182,24 @@ fn a_material_shows_a_render_target_drawn_earlier_in_the_same_frame() {
 fn the_monitor_shows_the_security_cameras_picture() {
     let Some(gpu) = common::gpu() else { return };
     let desc = common::load_scene(&common::repo_root().join("scenes/monitor.scn"));
-    let views = desc.views();
-    assert_eq!(views.len(), 2, "the security camera into its target, the room into the image");
-    let draw = |views: &[View]| {
+    // Draws the views after the first `skip` of the scene's.
+    let draw = |skip: usize| {
         let mut renderer = Renderer::new(gpu);
-        let entities = desc.instantiate(&mut renderer);
+        let placed = renderer.place_scene(&desc);
+        let views = desc.views(&placed.render_targets);
+        assert_eq!(views.len(), 2, "the security camera into its target, the room into the image");
+        assert_eq!(views[0].output, Some(placed.render_targets[0]));
         let mut target = OffscreenTarget::new(gpu, 160, 90, 4).expect("target");
-        renderer.render_views(&entities, views, &desc.lights, &mut target).expect("frame");
+        renderer.render_views(&placed.entities, &views[skip..], desc.lighting(), &mut target).expect("frame");
         target.read_rgba8(gpu).expect("readback")
     };
-    let image = draw(&views);
+    let image = draw(0);
     common::assert_matches_reference("monitor", &image);
     // The screen's middle (x 71..96, y 33..48 of 160 × 90) shows
     // the room; without the security camera it shows a black, never-drawn target.
     let screen = |image: &image::RgbaImage| crop(image, 76, 36, 14, 10);
     let lit = |image: &image::RgbaImage| screen(image).pixels().filter(|p| p.0[..3].iter().any(|&c| c > 60)).count();
-    let unfed = draw(&views[1..]);
+    let unfed = draw(1);
     assert!(lit(&image) > 60, "the feed is on the screen: {} bright pixels", lit(&image));
     assert_eq!(lit(&unfed), 0, "no security camera, no picture");
 }

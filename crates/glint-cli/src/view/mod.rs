@@ -11,8 +11,9 @@ pub use script::{parse_at, Action, Scripted};
 use clock::SceneClock;
 use glam::Vec2;
 use glint::asset::{LoadOptions, SceneDesc};
+use glint::render::PlacedScene;
 use glint::scene::{FlyCamera, FlyInput};
-use glint::{Camera, Entity, Error, Gpu, GpuError, OffscreenTarget, Renderer, WindowSurface};
+use glint::{Camera, Error, Gpu, GpuError, OffscreenTarget, Renderer, WindowSurface};
 use std::collections::HashSet;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -72,7 +73,7 @@ pub struct ViewArgs {
 
 /// Open the window and run until it is closed (or `--frames` are drawn).
 pub fn run(args: ViewArgs, desc: SceneDesc) -> Result<(), Error> {
-    crate::views_of(&desc, &args.scene, args.camera)?;
+    crate::check_camera(&desc, &args.scene, args.camera)?;
     let event_loop = EventLoop::new().map_err(|e| GpuError::Surface(format!("cannot open a window: {e}")))?;
     event_loop.set_control_flow(ControlFlow::Poll);
     let mut app = App { args, desc: Some(desc), view: None, result: Ok(()) };
@@ -113,15 +114,17 @@ struct View {
 struct Scene {
     desc: SceneDesc,
     renderer: Renderer,
-    entities: Vec<Entity>,
+    placed: PlacedScene,
     views: Vec<glint::View>,
 }
 
 impl Scene {
-    fn new(gpu: &Gpu, desc: SceneDesc, views: Vec<glint::View>) -> Self {
+    /// `desc` placed in a new renderer, showing camera `camera` (see [`crate::views_of`]).
+    fn new(gpu: &Gpu, desc: SceneDesc, camera: Option<usize>) -> Self {
         let mut renderer = Renderer::new(gpu);
-        let entities = desc.instantiate(&mut renderer);
-        Self { desc, renderer, entities, views }
+        let placed = renderer.place_scene(&desc);
+        let views = crate::views_of(&desc, camera, &placed);
+        Self { desc, renderer, placed, views }
     }
 
     /// The view the fly camera moves: the first into the window.
@@ -184,8 +187,7 @@ impl App {
         let surface = WindowSurface::new(&gpu, surface, size.width, size.height)?;
         let msaa = if gpu.supports_msaa(self.args.msaa) { self.args.msaa } else { 1 };
         let target = OffscreenTarget::new(&gpu, size.width.max(1), size.height.max(1), msaa)?;
-        let views = crate::views_of(&desc, &self.args.scene, self.args.camera)?;
-        let scene = Scene::new(&gpu, desc, views);
+        let scene = Scene::new(&gpu, desc, self.args.camera);
         let camera = scene.camera();
         eprintln!("glint view: {} on {} ({:?})", self.args.scene.display(), gpu.info().name, gpu.info().backend);
         let now = Instant::now();
@@ -234,8 +236,7 @@ impl View {
                 }
                 // The views come from the new file (the chosen camera, or all
                 // views when it has no longer one); the fly camera's place stays.
-                let views = crate::views_of(&desc, path, camera_index).unwrap_or_else(|_| desc.views());
-                self.scene = Scene::new(&self.gpu, desc, views);
+                self.scene = Scene::new(&self.gpu, desc, camera_index);
                 // Animations and cloths start again from the beginning, rather
                 // than a new cloth stepping all the way to the old time at once.
                 self.clock.restart();
@@ -255,11 +256,12 @@ impl View {
         self.fly.update(dt.as_secs_f32().min(0.25), &self.input.take());
         let scene = &mut self.scene;
         let time = self.clock.tick(dt);
-        scene.desc.pose(time, &mut scene.entities, &mut scene.renderer)?;
+        scene.placed.pose(&mut scene.desc, time, &mut scene.renderer)?;
         let mut views = scene.views.clone();
         let flown = scene.flown();
         views[flown].camera = self.fly.apply(&views[flown].camera);
-        let stats = scene.renderer.render_views(&scene.entities, &views, &scene.desc.lights, &mut self.target)?;
+        let stats =
+            scene.renderer.render_views(&scene.placed.entities, &views, scene.desc.lighting(), &mut self.target)?;
         self.surface.present(&self.gpu, &self.target);
         if self.last_title.elapsed() >= TITLE_INTERVAL {
             let recent = self.clock.take_recent();

@@ -18,7 +18,6 @@ mod scn_cloth;
 mod scn_fields;
 mod scn_lights;
 mod scn_material;
-mod scn_place;
 mod scn_post;
 mod scn_syntax;
 mod scn_targets;
@@ -29,7 +28,7 @@ pub use files::{
     MAX_BUFFER_BYTES, MAX_IMAGE_FILE_BYTES, MAX_MATERIAL_LIBRARY_BYTES, MAX_MODEL_BYTES, MAX_SCENE_BYTES,
     MAX_SCENE_TOTAL_BYTES,
 };
-pub use model::{AddedModel, Model, ModelPart, Morph, Skin};
+pub use model::{Model, ModelPart, Morph, Skin};
 pub use procedural::ShapeKind;
 pub use scn::{
     load_scene, load_scene_with, parse_scene, parse_scene_with, CameraView, DrawOptions, EntityDesc, MaterialDesc,

@@ -4,8 +4,7 @@
 
 use super::animation::{Animation, ModelNode};
 use super::{Diagnostic, EntityDesc, LoadOptions, MaterialDesc, MeshRef, SceneDesc, Texture};
-use crate::scene::{Aabb, Background, Camera, Entity, Environment, Light, Material, MaterialId, Mesh, ShapeId};
-use crate::Renderer;
+use crate::scene::{Aabb, Background, Camera, Environment, Light, Material, Mesh};
 use glam::{Mat4, Vec3};
 use std::path::{Path, PathBuf};
 
@@ -25,7 +24,7 @@ pub struct ModelPart {
     /// The skin ([`Model::skins`] index) moving a skinned part's vertices.
     pub skin: Option<usize>,
     /// A skinned part's joint matrices in the current pose (model space, inverse
-    /// bind matrices applied), for [`Entity::with_joints`].
+    /// bind matrices applied), for [`Entity::with_joints`](crate::Entity::with_joints).
     pub joints: Vec<Mat4>,
     /// Morph targets, when the mesh has them; `mesh` holds them blended.
     pub morph: Option<Morph>,
@@ -218,47 +217,6 @@ impl Model {
         });
         Aabb::from_points(corners)
     }
-
-    /// Add the model's shapes, textures and materials to `renderer` and return one
-    /// entity per part, instanced at every transform of `placements` (model to world).
-    pub fn instantiate(&self, renderer: &mut Renderer, placements: &[Mat4]) -> Vec<Entity> {
-        let added = self.add_to(renderer);
-        self.entities(&added, placements)
-    }
-
-    /// Add the model's shapes, textures and materials to `renderer`, once; place it
-    /// any number of times with [`Model::entities`].
-    pub fn add_to(&self, renderer: &mut Renderer) -> AddedModel {
-        let textures: Vec<_> = self.textures.iter().map(|t| renderer.add_texture(t.clone())).collect();
-        let materials: Vec<MaterialId> =
-            self.materials.iter().map(|m| renderer.add_material(m.resolve(&textures))).collect();
-        // Added on first use; also stands in for a material index the model lacks.
-        let mut default_material = None;
-        let parts = self
-            .parts
-            .iter()
-            .map(|part| {
-                let material = match part.material.and_then(|i| materials.get(i)) {
-                    Some(&m) => m,
-                    None => *default_material.get_or_insert_with(|| renderer.add_material(Material::default())),
-                };
-                (renderer.add_shape(part.mesh.clone()), material)
-            })
-            .collect();
-        AddedModel { parts }
-    }
-
-    /// One entity per part of a model added with [`Model::add_to`], instanced at
-    /// every transform of `placements`.
-    pub fn entities(&self, added: &AddedModel, placements: &[Mat4]) -> Vec<Entity> {
-        self.parts
-            .iter()
-            .zip(&added.parts)
-            .map(|(part, &(shape, material))| {
-                Entity::instanced(shape, material, part.placed(placements)).with_joints(part.joints.clone())
-            })
-            .collect()
-    }
 }
 
 impl Model {
@@ -301,10 +259,4 @@ impl Model {
             models: vec![self],
         }
     }
-}
-
-/// A model's ids in one renderer: shape and material per part.
-#[derive(Clone, Debug)]
-pub struct AddedModel {
-    parts: Vec<(ShapeId, MaterialId)>,
 }

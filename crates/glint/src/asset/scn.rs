@@ -1,6 +1,6 @@
 //! Meaning of `.scn` files: classnames and keys (see `docs/scn.md` for the full
 //! reference) turned into a [`SceneDesc`], checked without a GPU, and placed into
-//! a [`Renderer`](crate::Renderer) with [`SceneDesc::instantiate`] (`scn_place.rs`).
+//! a [`Renderer`](crate::Renderer) with [`Renderer::place_scene`](crate::Renderer::place_scene).
 
 use super::placement::place_instances;
 use super::procedural::{blob_vertex_count, MAX_SCENE_BLOB_VERTICES};
@@ -16,9 +16,9 @@ use super::{
     read_file, AssetFolder, Diagnostic, LoadOptions, Model, ShapeKind, Texture, MAX_SCENE_BYTES, MAX_SCENE_TOTAL_BYTES,
 };
 use crate::render::{ShadowLayout, MAX_SHADOW_MAP_BYTES};
-use crate::scene::TextureId;
 use crate::scene::{
-    Background, Camera, Entity, Environment, Fog, Light, Material, PostEffect, View, Viewport, MAX_LIGHTS,
+    Background, Camera, Entity, Environment, Fog, Light, Lighting, Material, PostEffect, RenderTargetId, TextureId,
+    View, Viewport, MAX_LIGHTS,
 };
 use glam::{EulerRot, Mat4, Quat, Vec3};
 use std::collections::HashMap;
@@ -141,7 +141,7 @@ pub enum MeshRef {
     Model(usize),
 }
 
-/// A parsed and validated scene file, ready to instantiate.
+/// A parsed and validated scene file, ready to place into a renderer.
 #[derive(Clone, Debug)]
 pub struct SceneDesc {
     /// The file it came from.
@@ -152,9 +152,9 @@ pub struct SceneDesc {
     pub cameras: Vec<Camera>,
     /// Each camera's `viewport`, post chain and `output` (the same order).
     pub camera_views: Vec<CameraView>,
-    /// `render_target` blocks in file order: the scene's render target k is
-    /// `RenderTargetId(k)` in a renderer it is instantiated into first, and its
-    /// texture comes after the file textures in material maps.
+    /// `render_target` blocks in file order: render target k's texture comes
+    /// after the file textures in material maps, and placing the scene gives
+    /// its id ([`PlacedScene::render_targets`](crate::render::PlacedScene::render_targets)).
     pub render_targets: Vec<RenderTargetDesc>,
     /// Lights in file order.
     pub lights: Vec<Light>,
@@ -189,7 +189,7 @@ impl SceneDesc {
     /// The views `glint render` draws: the cameras that draw into render
     /// targets ([`SceneDesc::target_views`]), then every other camera that has a
     /// viewport, in file order, or else the first other camera alone over the image.
-    pub fn views(&self) -> Vec<View> {
+    pub fn views(&self, targets: &[RenderTargetId]) -> Vec<View> {
         let into_image: Vec<usize> =
             (0..self.cameras.len()).filter(|&k| self.camera_views[k].output.is_none()).collect();
         let placed: Vec<View> = (into_image.iter())
@@ -199,18 +199,25 @@ impl SceneDesc {
             (true, Some(&first)) => vec![self.camera_view(first)],
             _ => placed,
         };
-        self.target_views().into_iter().chain(image).collect()
+        self.target_views(targets).into_iter().chain(image).collect()
     }
 
-    /// The cameras that draw into render targets, as views into them.
-    pub fn target_views(&self) -> Vec<View> {
+    /// The cameras that draw into render targets, as views into them;
+    /// `targets` is each render target's id in the renderer the scene was
+    /// placed into (a camera whose target has none is left out).
+    pub fn target_views(&self, targets: &[RenderTargetId]) -> Vec<View> {
         (0..self.cameras.len())
             .filter_map(|k| {
                 let c = &self.camera_views[k];
                 let view = self.camera_view(k).with_viewport(c.viewport.unwrap_or_default());
-                c.output.map(|t| view.with_output(crate::scene::RenderTargetId(t as u32)))
+                c.output.and_then(|t| targets.get(t)).map(|&id| view.with_output(id))
             })
             .collect()
+    }
+
+    /// The scene's lights under its environment, for each frame.
+    pub fn lighting(&self) -> Lighting<'_> {
+        Lighting::new(&self.lights, self.environment)
     }
 
     /// Camera `index` over the whole image, with its post chain.

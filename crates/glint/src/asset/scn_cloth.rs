@@ -120,7 +120,7 @@ impl ClothDesc {
         }
     }
 
-    /// The work of posing at `time` in node²-steps (see [`MAX_POSE_NODE_STEPS`]).
+    /// The work of posing at `time` in node²-steps (see `MAX_POSE_NODE_STEPS`).
     pub fn pose_work(&self, time: f32) -> u64 {
         let steps = match self.integrator {
             Integrator::Static => STATIC_STEPS,
@@ -132,7 +132,7 @@ impl ClothDesc {
 
     /// Check that posing at `time`, after `others` node²-steps spent on the
     /// scene's other cloths, stays within [`MAX_POSE_STEPS`] and
-    /// [`MAX_POSE_NODE_STEPS`], without stepping; returns the steps it takes.
+    /// `MAX_POSE_NODE_STEPS`, without stepping; returns the steps it takes.
     pub fn check_pose(&self, time: f32, others: u64, scene: &Path) -> Result<u64, Diagnostic> {
         let target = self.steps_to(time);
         if target > MAX_POSE_STEPS {

@@ -158,12 +158,12 @@ fn cameras_with_viewports_are_the_views_and_without_any_the_first_camera_is() {
     let camera = |extra: &str| format!("{{\n\"classname\" \"camera\"\n\"origin\" \"0 1 5\"\n{extra}}}\n");
     let none = parse(&format!("{}{}", camera(""), camera(""))).unwrap();
     assert!(none.camera_views.iter().all(|c| c.viewport.is_none() && c.post.is_empty()));
-    let views = none.views();
+    let views = none.views(&[]);
     assert_eq!((views.len(), views[0].viewport), (1, crate::scene::Viewport::FULL), "the first camera alone");
     let text =
         format!("{}{}{}", camera(""), camera("\"viewport\" \"0.5 0 0.5 1\"\n"), camera("\"viewport\" \"0 0 0.5 1\"\n"));
     let split = parse(&text).unwrap();
-    let views = split.views();
+    let views = split.views(&[]);
     assert_eq!(views.len(), 2, "only the cameras with a viewport, in file order");
     assert_eq!(views[0].viewport, crate::scene::Viewport { x: 0.5, y: 0.0, width: 0.5, height: 1.0 });
     assert_eq!(views[1].viewport.x, 0.0);
@@ -197,9 +197,12 @@ fn render_targets_are_drawn_by_their_cameras_and_shown_by_materials() {
     assert_eq!(scene.camera_views[1].output, Some(1));
     // No file textures: target b's texture is the second after them.
     assert_eq!(scene.materials[0].diffuse_map, Some(1));
-    let views = scene.views();
+    // Placed, the targets got ids 7 and 9: camera 1 draws into target b's.
+    let ids = [crate::scene::RenderTargetId(7), crate::scene::RenderTargetId(9)];
+    let views = scene.views(&ids);
     assert_eq!(views.len(), 2, "the target's camera, then the first camera into the image");
-    assert_eq!((views[0].output, views[1].output), (Some(glint_id(1)), None));
+    assert_eq!((views[0].output, views[1].output), (Some(ids[1]), None));
+    assert_eq!(scene.views(&ids[..1]).len(), 1, "a target without an id: its camera is left out");
     // Cameras that each show the other's target: a cycle, at a camera's line.
     let cycle = [
         target("a"),
@@ -216,10 +219,6 @@ fn render_targets_are_drawn_by_their_cameras_and_shown_by_materials() {
     // A camera showing only its own target is no cycle: it leaves the screen out.
     let own = [target("a"), camera("\"output\" \"a\"\n"), shows("m1", "a")].concat();
     assert!(parse(&own).is_ok());
-}
-
-fn glint_id(k: u32) -> crate::scene::RenderTargetId {
-    crate::scene::RenderTargetId(k)
 }
 
 #[test]

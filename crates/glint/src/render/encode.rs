@@ -36,15 +36,20 @@ struct RunKey {
 }
 
 impl Renderer {
-    /// Stage 7: record the forward pass: opaque → alpha-test → sky → transparent
-    /// (or as `render_order` stages say).
-    pub(super) fn encode(&mut self, target: &OffscreenTarget, stats: &mut FrameStats) -> wgpu::CommandBuffer {
+    /// Stage 7: record the forward pass, cleared to `background`: opaque →
+    /// alpha-test → sky → transparent (or as `render_order` stages say).
+    pub(super) fn encode(
+        &mut self,
+        target: &OffscreenTarget,
+        background: Background,
+        stats: &mut FrameStats,
+    ) -> wgpu::CommandBuffer {
         let sky_at = match self.mode {
             // Naive frames are in submission order: the sky goes first, under everything.
             FrameMode::Naive => 0,
             FrameMode::Optimized => self.forward.batches.partition_point(|b| b.stage < SKY_STAGE),
         };
-        let clear = match self.environment.background {
+        let clear = match background {
             Background::Color(c) | Background::Gradient { bottom: c, .. } => {
                 wgpu::Color { r: c.x.into(), g: c.y.into(), b: c.z.into(), a: 1.0 }
             }
@@ -65,8 +70,8 @@ impl Renderer {
             stats.bind_groups_set += 3;
             let mut bound = Bound::default();
             self.draw_stages(&self.forward, &mut pass, 0..sky_at, &mut bound, stats);
-            let sky = match self.environment.background {
-                Background::Gradient { .. } => self.pipelines.sky_built(target.format()),
+            let sky = match background {
+                Background::Gradient { .. } => self.registry.pipelines.sky_built(target.format()),
                 Background::Color(_) => None,
             };
             if let Some(sky) = sky {
@@ -86,7 +91,7 @@ impl Renderer {
             self.draw_stages(&self.forward, &mut pass, sky_at..self.forward.batches.len(), &mut bound, stats);
         }
         if let Some(timer) = &mut self.gpu_timer {
-            timer.resolve(&mut encoder, Timed::Forward);
+            timer.resolve(&mut encoder, Timed::Forward, self.frame_index);
         }
         encoder.finish()
     }
@@ -138,23 +143,23 @@ impl Renderer {
             *bound = Bound::default();
         }
         let key = self.run_key(&run[0]);
-        let reference = self.pipelines.stencil_reference(key.pipeline);
+        let reference = self.registry.pipelines.stencil_reference(key.pipeline);
         if bound.stencil_reference != reference || self.mode == FrameMode::Naive {
             pass.set_stencil_reference(reference);
             bound.stencil_reference = reference;
         }
         if bound.pipeline != Some(key.pipeline) {
-            pass.set_pipeline(self.pipelines.forward(key.pipeline));
+            pass.set_pipeline(self.registry.pipelines.forward(key.pipeline));
             bound.pipeline = Some(key.pipeline);
             stats.pipelines_bound += 1;
         }
         if bound.texture_set != Some(key.texture_set) {
-            pass.set_bind_group(2, &self.texture_sets[key.texture_set as usize].bind_group, &[]);
+            pass.set_bind_group(2, &self.registry.texture_sets[key.texture_set as usize].bind_group, &[]);
             bound.texture_set = Some(key.texture_set);
             stats.bind_groups_set += 1;
         }
         if bound.page != Some(key.page) {
-            self.mesh_pool.bind(pass, key.page);
+            self.registry.mesh_pool.bind(pass, key.page);
             bound.page = Some(key.page);
         }
         stats.draws += run.len() as u32;
@@ -165,7 +170,7 @@ impl Renderer {
             }
             _ => {
                 for b in run {
-                    let mesh = self.shapes[b.shape.0 as usize].gpu.expect("prepared");
+                    let mesh = self.registry.shapes[b.shape.0 as usize].gpu.expect("prepared");
                     let indices = mesh.first_index..mesh.first_index + mesh.index_count;
                     pass.draw_indexed(indices, mesh.base_vertex, b.first_instance..b.first_instance + b.instance_count);
                 }
@@ -175,8 +180,8 @@ impl Renderer {
     }
 
     fn run_key(&self, b: &Batch) -> RunKey {
-        let material = self.materials[b.material.0 as usize].gpu.as_ref().expect("prepared");
-        let mesh = self.shapes[b.shape.0 as usize].gpu.expect("prepared");
+        let material = self.registry.materials[b.material.0 as usize].gpu.as_ref().expect("prepared");
+        let mesh = self.registry.shapes[b.shape.0 as usize].gpu.expect("prepared");
         RunKey { pipeline: b.pipeline, texture_set: material.texture_set, page: mesh.page }
     }
 }

@@ -4,7 +4,7 @@ use super::mesh_pool::MeshTooLarge;
 use super::post::MAX_POST_EFFECTS;
 use crate::scene::{MaterialId, RenderTargetId, ShapeId, TextureId, Viewport, MAX_LIGHTS};
 
-/// Errors from [`Renderer::flush`].
+/// Errors from [`Renderer::flush`](crate::Renderer::flush).
 #[derive(Debug, thiserror::Error)]
 pub enum RenderError {
     /// More lights than the Scene block holds.

@@ -7,7 +7,7 @@ use super::queue::{self, DrawItem, Queue};
 use super::view::ViewFrame;
 use super::visible::Visible;
 use super::{FrameMode, FrameStats, RenderError, Renderer, Submitted, UploadStats};
-use crate::scene::Light;
+use crate::scene::Lighting;
 use glam::Vec3A;
 
 impl Renderer {
@@ -19,7 +19,7 @@ impl Renderer {
         let depth = |center: Vec3A| -frame.view.transform_point3a(center).z / far;
         for run in &visible.runs {
             let s = &self.submitted[run.entry];
-            let material = &self.materials[s.material.0 as usize];
+            let material = &self.registry.materials[s.material.0 as usize];
             let pipeline = self.pipeline_of(s);
             let texture_set = material.gpu.as_ref().expect("prepared").texture_set;
             let queue = match material.material.alpha_mode {
@@ -76,8 +76,8 @@ impl Renderer {
 
     /// The forward pipeline a submitted entity draws with (prepared).
     pub(super) fn pipeline_of(&self, s: &Submitted) -> u16 {
-        let layout = self.shapes[s.shape.0 as usize].layout;
-        let twin = self.materials[s.material.0 as usize].gpu.as_ref().expect("prepared");
+        let layout = self.registry.shapes[s.shape.0 as usize].layout;
+        let twin = self.registry.materials[s.material.0 as usize].gpu.as_ref().expect("prepared");
         twin.pipelines[layout.index()].expect("prepared")
     }
 
@@ -87,12 +87,12 @@ impl Renderer {
     pub(super) fn upload(
         &mut self,
         frame: &ViewFrame,
-        lights: &[Light],
+        lighting: &Lighting,
         shadowed: &[Option<u32>],
         stats: &mut FrameStats,
     ) -> Result<(), RenderError> {
         let bytes = &mut stats.bytes_uploaded;
-        let scene = SceneGpu::new(&self.environment, lights, shadowed);
+        let scene = SceneGpu::new(&lighting.environment, lighting.lights, shadowed);
         bytes.scene += self.scene_block.update(&self.queue, scene);
         bytes.camera += self.views.update(&self.queue, 0, frame.camera.to_gpu(frame.aspect));
         self.upload_instances(bytes)?;
@@ -100,11 +100,11 @@ impl Renderer {
         if naive {
             // Every draw's material entry written before it, one small write each.
             for b in &self.forward.batches {
-                let block = self.materials[b.material.0 as usize].material.to_gpu();
-                bytes.material += self.material_table.write(&self.queue, b.material.0, &block);
+                let block = self.registry.materials[b.material.0 as usize].material.to_gpu();
+                bytes.material += self.registry.material_table.write(&self.queue, b.material.0, &block);
             }
         }
-        let layout = &self.pipelines.instance_layout;
+        let layout = &self.registry.pipelines.instance_layout;
         let written = self.forward.upload(&self.device, &self.queue, (layout, self.instances.buffer()), naive)?;
         bytes.draw_indices += written.draw_indices;
         bytes.indirect += written.indirect;
@@ -117,8 +117,8 @@ impl Renderer {
     pub(super) fn upload_instances(&mut self, bytes: &mut UploadStats) -> Result<(), RenderError> {
         if self.instances.reserve(&self.device, self.store.len())? {
             self.store.mark_all_dirty();
-            self.forward.rebind(&self.device, &self.pipelines.instance_layout, self.instances.buffer());
-            self.shadow_list.rebind(&self.device, &self.pipelines.instance_layout, self.instances.buffer());
+            self.forward.rebind(&self.device, &self.registry.pipelines.instance_layout, self.instances.buffer());
+            self.shadow_list.rebind(&self.device, &self.registry.pipelines.instance_layout, self.instances.buffer());
         }
         for range in self.store.take_dirty() {
             let data = &self.store.instances[range.start as usize..range.end as usize];
@@ -134,7 +134,7 @@ mod tests {
     use crate::asset::ShapeKind;
     use crate::gpu::{Gpu, OffscreenTarget};
     use crate::render::Shadows;
-    use crate::scene::{Background, Camera, Entity, Environment, Material};
+    use crate::scene::{Background, Camera, Entity, Environment, Lighting, Material};
     use glam::{Mat4, Vec3};
 
     fn gpu() -> Option<Gpu> {
@@ -166,10 +166,6 @@ mod tests {
     fn blended_instances_are_drawn_far_to_near_and_render_order_overrides_queues() {
         let Some(gpu) = gpu() else { return };
         let mut r = Renderer::new(&gpu);
-        r.set_environment(Environment {
-            background: Background::Gradient { top: Vec3::Z, bottom: Vec3::ONE },
-            ..Environment::default()
-        });
         let sphere = r.add_shape(ShapeKind::Sphere.mesh());
         let glass = r.add_material(Material { alpha_mode: crate::AlphaMode::Blend, ..Material::default() });
         let solid = r.add_material(Material::default());
@@ -184,7 +180,11 @@ mod tests {
         r.submit(&ground);
         r.submit(&glass_entity);
         r.submit(&front);
-        let stats = r.flush(camera, &[], &Shadows::none(), &mut target).expect("frame");
+        let sky = Environment {
+            background: Background::Gradient { top: Vec3::Z, bottom: Vec3::ONE },
+            ..Environment::default()
+        };
+        let stats = r.flush(camera, Lighting::new(&[], sky), &Shadows::none(), &mut target).expect("frame");
         // Drawn order: `front` (opaque), sky, the five glass instances far to near, then the ground (200).
         let stages: Vec<u8> = r.forward.batches.iter().map(|b| b.stage).collect();
         assert_eq!(stages, vec![64, 192, 200]);

@@ -9,7 +9,7 @@ use super::shadow_pass::{Shadows, ShadowsDrawn};
 use super::view::ViewFrame;
 use super::{ms_since, queue, FrameMode, FrameStats, FrameVariant, RenderError, Renderer};
 use crate::gpu::{OffscreenTarget, TargetFormat, HDR_FORMAT};
-use crate::scene::{Entity, Light, PostEffect, View, MAX_LIGHTS};
+use crate::scene::{Entity, Lighting, PostEffect, View, MAX_LIGHTS};
 use std::time::Instant;
 
 /// How a view's picture reaches the output (stage 8 of [`Renderer::run_frame`]).
@@ -27,20 +27,20 @@ impl Renderer {
     /// calls in order: [`submit`](Self::submit) each,
     /// [`shadow_pass`](Self::shadow_pass), then [`flush`](Self::flush). The
     /// statistics include the shadow pass's; the shadow pass's error comes first.
-    pub fn render<'e>(
+    pub fn render<'e, 'l>(
         &mut self,
         entities: impl IntoIterator<Item = &'e Entity>,
         view: impl Into<View>,
-        lights: &[Light],
+        lighting: impl Into<Lighting<'l>>,
         target: &mut OffscreenTarget,
     ) -> Result<FrameStats, RenderError> {
-        let view = view.into();
+        let (view, lighting) = (view.into(), lighting.into());
         for entity in entities {
             self.submit(entity);
         }
         // Flush even after a failed shadow pass, so the submitted entities are dropped.
-        let shadows = self.shadow_pass(&view, lights, target);
-        let frame = self.flush(view, lights, shadows.as_ref().unwrap_or(&Shadows::none()), target);
+        let shadows = self.shadow_pass(&view, lighting, target);
+        let frame = self.flush(view, lighting, shadows.as_ref().unwrap_or(&Shadows::none()), target);
         shadows.and(frame)
     }
 
@@ -54,20 +54,25 @@ impl Renderer {
     /// its own target. Views that need each other's targets are an error.
     /// When the first view into `target` does not cover it, it is cleared to
     /// black first. Returns each view's statistics, in the order given.
-    pub fn render_views<'e, E>(
+    pub fn render_views<'e, 'l, E>(
         &mut self,
         entities: E,
         views: &[View],
-        lights: &[Light],
+        lighting: impl Into<Lighting<'l>>,
         target: &mut OffscreenTarget,
     ) -> Result<Vec<FrameStats>, RenderError>
     where
         E: IntoIterator<Item = &'e Entity> + Clone,
     {
+        let lighting = lighting.into();
         let drawn: Vec<Vec<&Entity>> = (views.iter())
             .map(|v| {
-                let own = v.output.and_then(|id| self.render_targets.get(id.0 as usize)).map(|t| t.1);
-                entities.clone().into_iter().filter(|e| own.is_none_or(|t| !self.shows(e.material, t))).collect()
+                let own = v.output.and_then(|id| self.registry.render_targets.get(id.0 as usize)).map(|t| t.1);
+                entities
+                    .clone()
+                    .into_iter()
+                    .filter(|e| own.is_none_or(|t| !self.registry.shows(e.material, t)))
+                    .collect()
             })
             .collect();
         let order = self.view_order(views, &drawn)?;
@@ -81,14 +86,14 @@ impl Renderer {
         for k in order {
             let (view, entities) = (&views[k], drawn[k].iter().copied());
             stats[k] = match view.output {
-                None => self.render(entities, view, lights, target)?,
+                None => self.render(entities, view, lighting, target)?,
                 Some(id) => {
                     let index = id.0 as usize;
-                    let (mut own, texture) = self.render_targets.swap_remove(index);
-                    let result = self.render(entities, view, lights, &mut own);
-                    self.render_targets.push((own, texture));
-                    let last = self.render_targets.len() - 1;
-                    self.render_targets.swap(index, last);
+                    let (mut own, texture) = self.registry.render_targets.swap_remove(index);
+                    let result = self.render(entities, view, lighting, &mut own);
+                    self.registry.render_targets.push((own, texture));
+                    let last = self.registry.render_targets.len() - 1;
+                    self.registry.render_targets.swap(index, last);
                     result?
                 }
             };
@@ -96,19 +101,17 @@ impl Renderer {
         Ok(stats)
     }
 
-    /// Whether material `id` shows `texture` in one of its maps.
-    fn shows(&self, id: crate::scene::MaterialId, texture: crate::scene::TextureId) -> bool {
-        self.materials.get(id.0 as usize).is_some_and(|m| m.material.maps().contains(&Some(texture)))
-    }
-
     /// The order to draw `views` in: a view into a render target before every
     /// view whose entities (`drawn`) show that target, the given order otherwise.
     fn view_order(&self, views: &[View], drawn: &[Vec<&Entity>]) -> Result<Vec<usize>, RenderError> {
         let texture_of = |v: &View| match v.output {
             None => Ok(None),
-            Some(id) => {
-                self.render_targets.get(id.0 as usize).map(|t| Some(t.1)).ok_or(RenderError::UnknownRenderTarget(id))
-            }
+            Some(id) => self
+                .registry
+                .render_targets
+                .get(id.0 as usize)
+                .map(|t| Some(t.1))
+                .ok_or(RenderError::UnknownRenderTarget(id)),
         };
         let textures = views.iter().map(texture_of).collect::<Result<Vec<_>, _>>()?;
         // needs[b] holds each view a whose target view b shows.
@@ -116,7 +119,9 @@ impl Renderer {
             .map(|b| {
                 (0..views.len())
                     .filter(|&a| a != b)
-                    .filter(|&a| textures[a].is_some_and(|t| drawn[b].iter().any(|e| self.shows(e.material, t))))
+                    .filter(|&a| {
+                        textures[a].is_some_and(|t| drawn[b].iter().any(|e| self.registry.shows(e.material, t)))
+                    })
                     .collect()
             })
             .collect();
@@ -141,12 +146,12 @@ impl Renderer {
     }
 
     /// Draw everything submitted since the last flush, seen by `view` (or a
-    /// camera, for the whole target), lit by `lights`, into its viewport of
+    /// camera, for the whole target), under `lighting` (or a list of lights), into its viewport of
     /// `target`, and return what the frame cost. `shadows` are the maps this
     /// frame's [`shadow_pass`](Self::shadow_pass) drew for the same view and
     /// lights ([`Shadows::none`] draws without shadows).
     ///
-    /// The frame of one view, one stage per line ([`Renderer::draw_view`]):
+    /// The frame of one view, one stage per line (`Renderer::draw_view`):
     /// 1. prepare — GPU twins for new shapes, textures, materials and pipelines; edited materials rewritten
     /// 2. cull — each entity's world box, then its instances', against the view's frustum
     /// 3. queue — one draw item with a 64-bit sort key per visible run (per instance when blended)
@@ -157,29 +162,32 @@ impl Renderer {
     ///    batches sharing pipeline, texture set and mesh page go in one multi-draw-indirect call
     /// 8. compose — a view drawn into a target of its own (a view of part of the
     ///    target, or one with a post chain: HDR) reaches its rectangle: copied, or
-    ///    through its post chain's full-screen passes ([`post`](super::post))
+    ///    through its post chain's full-screen passes (`render/post.rs`)
     /// 9. submit — the frame's command buffers at once
     ///
     /// Errors (the submitted entities are dropped): more than [`MAX_LIGHTS`]
     /// lights, an id that is not this renderer's, a viewport outside the
     /// target, or shadow maps drawn for another frame, view or lights.
-    pub fn flush(
+    pub fn flush<'l>(
         &mut self,
         view: impl Into<View>,
-        lights: &[Light],
+        lighting: impl Into<Lighting<'l>>,
         shadows: &Shadows,
         target: &mut OffscreenTarget,
     ) -> Result<FrameStats, RenderError> {
         let start = Instant::now();
-        let view = view.into();
+        let (view, lighting) = (view.into(), lighting.into());
+        let gpu = self.gpu_timer.as_mut().and_then(|t| t.collect(&self.device));
+        let frame = self.frame_index;
         let result = match self.submit_error.take() {
             Some(e) => Err(e),
-            None => self.draw_view(&view, lights, shadows, target),
+            None => self.draw_view(&view, &lighting, shadows, target),
         };
         self.submitted.clear();
         self.instances_submitted = 0;
         self.frame_index += 1;
         result.map(|mut stats| {
+            (stats.frame, stats.gpu) = (frame, gpu);
             stats.cpu_ms.total = ms_since(start);
             if let Some(shadow) = &shadows.drawn {
                 stats.shadow_views = shadow.views;
@@ -198,7 +206,7 @@ impl Renderer {
     fn draw_view(
         &mut self,
         view: &View,
-        lights: &[Light],
+        lighting: &Lighting,
         shadows: &Shadows,
         target: &OffscreenTarget,
     ) -> Result<FrameStats, RenderError> {
@@ -209,14 +217,14 @@ impl Renderer {
             return Err(RenderError::PostChainTooLong(view.post.len()));
         }
         let drawn = match &shadows.drawn {
-            Some(drawn) => drawn.first_views(self.frame_index, view, lights).map(|_| Some(drawn))?,
+            Some(drawn) => drawn.first_views(self.frame_index, view, lighting.lights).map(|_| Some(drawn))?,
             None => None,
         };
         let [x, y, width, height] = view.viewport.pixels(target.width(), target.height());
         let frame = ViewFrame::new(view, width, height);
         let format = self.scene_format(view, target);
         if (width, height, format) == (target.width(), target.height(), target.format()) {
-            return self.run_frame(&frame, lights, drawn, target, Compose::Direct);
+            return self.run_frame(&frame, lighting, drawn, target, Compose::Direct);
         }
         let own = self.take_view_target(width, height, format);
         let images = ChainImages {
@@ -230,7 +238,7 @@ impl Renderer {
             true => Compose::Copy { from: &own, to: target, origin: [x, y] },
             false => Compose::Post { chain: &view.post, images: &images },
         };
-        let result = self.run_frame(&frame, lights, drawn, &own, compose);
+        let result = self.run_frame(&frame, lighting, drawn, &own, compose);
         self.view_targets.push((own, self.frame_index));
         result
     }
@@ -293,13 +301,13 @@ impl Renderer {
     fn run_frame(
         &mut self,
         frame: &ViewFrame,
-        lights: &[Light],
+        lighting: &Lighting,
         drawn: Option<&ShadowsDrawn>,
         target: &OffscreenTarget,
         compose: Compose,
     ) -> Result<FrameStats, RenderError> {
-        if lights.len() > MAX_LIGHTS {
-            return Err(RenderError::TooManyLights(lights.len()));
+        if lighting.lights.len() > MAX_LIGHTS {
+            return Err(RenderError::TooManyLights(lighting.lights.len()));
         }
         let mut stats = FrameStats {
             entities_submitted: self.submitted.len() as u32,
@@ -307,8 +315,8 @@ impl Renderer {
             ..Default::default()
         };
         let t = Instant::now();
-        self.frame_variant = FrameVariant::after(drawn, lights);
-        self.prepare(target.format(), &mut stats)?;
+        self.frame_variant = FrameVariant::after(drawn, lighting.lights);
+        self.prepare(target.format(), &lighting.environment, &mut stats)?;
         stats.cpu_ms.prepare = ms_since(t);
 
         let mut visible = std::mem::take(&mut self.visible);
@@ -331,7 +339,7 @@ impl Renderer {
             stats.cpu_ms.sort = ms_since(t);
 
             let t = Instant::now();
-            let shapes = &self.shapes;
+            let shapes = &self.registry.shapes;
             self.forward.build(0, &visible.instances, |b| shapes[b.shape.0 as usize].gpu.expect("prepared"));
             stats.cpu_ms.batch = ms_since(t);
         }
@@ -339,17 +347,20 @@ impl Renderer {
 
         let t = Instant::now();
         let shadowed = drawn.map_or(&[][..], |d| d.first_view.as_slice());
-        self.upload(frame, lights, shadowed, &mut stats)?;
+        self.upload(frame, lighting, shadowed, &mut stats)?;
         stats.cpu_ms.upload = ms_since(t);
 
         let t = Instant::now();
-        let commands = self.encode(target, &mut stats);
+        let commands = self.encode(target, lighting.environment.background, &mut stats);
         stats.cpu_ms.encode = ms_since(t);
 
         let composed = self.compose(compose, &mut stats)?;
 
         let t = Instant::now();
         self.queue.submit(std::iter::once(commands).chain(composed));
+        if let Some(timer) = &mut self.gpu_timer {
+            timer.submitted();
+        }
         stats.cpu_ms.submit = ms_since(t);
         stats.bytes_uploaded.finish();
         Ok(stats)

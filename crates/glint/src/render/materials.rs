@@ -3,24 +3,26 @@
 //! their pipelines, made ready in stage 1 of the frame.
 
 use super::pipelines::{Pipelines, VertexLayout};
-use super::{FrameStats, Maps, MaterialGpuTwin, RenderError, Renderer, TextureSet};
+use super::registry::{Maps, MaterialGpuTwin, Registry, TextureSet};
+use super::{FrameStats, FrameVariant, RenderError};
 use crate::gpu::TargetFormat;
-use crate::scene::MaterialId;
+use crate::scene::{Environment, MaterialId};
 use crate::shader::ShaderFeatures;
 
-impl Renderer {
-    /// Make material `id` ready to draw meshes of `layout`: its textures uploaded,
-    /// its texture set, its table entry written if edited, its pipeline built.
+impl Registry {
+    /// Make material `id` ready to draw meshes of `layout` into `target` under
+    /// `environment` (its fog) in a frame of variant `frame`: its textures
+    /// uploaded, its texture set, its table entry written if edited, its pipeline built.
     pub(super) fn prepare_material(
         &mut self,
         id: MaterialId,
         layout: VertexLayout,
         target: TargetFormat,
+        (environment, frame): (&Environment, FrameVariant),
         stats: &mut FrameStats,
     ) -> Result<(), RenderError> {
         let slot = self.materials.get(id.0 as usize).ok_or(RenderError::UnknownMaterial(id))?;
-        let fog = self.environment.fog.is_some();
-        let frame = self.frame_variant;
+        let fog = environment.fog.is_some();
         let current =
             slot.gpu.as_ref().filter(|g| !slot.dirty && g.target == target && g.fog == fog && g.frame == frame);
         if current.is_some_and(|g| g.pipelines[layout.index()].is_some()) {
@@ -76,7 +78,7 @@ impl Renderer {
                 frame,
             });
         }
-        let mut features = ShaderFeatures::for_material(&material, &self.environment);
+        let mut features = ShaderFeatures::for_material(&material, environment);
         features.set(ShaderFeatures::SHADOWS, frame.shadows);
         features.set(ShaderFeatures::SHADOW_CUBES, frame.shadow_cubes);
         let key = Pipelines::key(features, frame.lights, layout, material.render_states(), target);

@@ -284,7 +284,7 @@ impl PostChain {
             drop(pass);
             if last {
                 if let Some(timer) = timer.as_deref_mut() {
-                    timer.resolve(encoder, Timed::Post(*effect as u8));
+                    timer.resolve(encoder, Timed::Post(*effect as u8), frame_index);
                 }
             }
             stats.draw_calls += 1;

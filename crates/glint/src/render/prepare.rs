@@ -2,44 +2,62 @@
 //! entities use exists on the GPU (mesh buffers, textures, material blocks,
 //! pipelines), and [`Renderer::precompile`], which does it before the first frame.
 
-use super::{FrameStats, FrameVariant, RenderError, Renderer};
+use super::{FrameStats, FrameVariant, Registry, RenderError, Renderer};
 use crate::gpu::TargetFormat;
-use crate::scene::{Background, Entity, Light, MaterialId, ShapeId, MAX_LIGHTS};
+use crate::scene::{Background, Entity, Environment, Lighting, MaterialId, ShapeId, MAX_LIGHTS};
 
 impl Renderer {
-    /// Build, before the first frame, everything drawing `entities` lit by `lights`
+    /// Build, before the first frame, everything drawing `entities` under `lighting`
     /// into a glint target (not a post-processed view) of `samples` samples needs: mesh buffers, textures, material
     /// blocks and every pipeline variant (with shadow lookups where a light casts
     /// shadows), so that the first frame compiles nothing. Returns the number of
     /// pipelines compiled.
-    pub fn precompile(&mut self, entities: &[&Entity], lights: &[Light], samples: u32) -> Result<u32, RenderError> {
-        if lights.len() > MAX_LIGHTS {
-            return Err(RenderError::TooManyLights(lights.len()));
+    pub fn precompile<'l>(
+        &mut self,
+        entities: &[&Entity],
+        lighting: impl Into<Lighting<'l>>,
+        samples: u32,
+    ) -> Result<u32, RenderError> {
+        let lighting = lighting.into();
+        if lighting.lights.len() > MAX_LIGHTS {
+            return Err(RenderError::TooManyLights(lighting.lights.len()));
         }
-        self.frame_variant = FrameVariant::expected(lights);
+        self.frame_variant = FrameVariant::expected(lighting.lights);
         let mut stats = FrameStats::default();
         let uses: Vec<_> = entities.iter().map(|e| (e.shape, e.material)).collect();
         let target = TargetFormat { color: crate::gpu::COLOR_FORMAT, samples };
-        self.prepare_uses(&uses, target, &mut stats)?;
+        self.registry.prepare_uses(&uses, target, (&lighting.environment, self.frame_variant), &mut stats)?;
         Ok(stats.pipelines_compiled)
     }
 
-    /// Stage 1: make sure everything the submitted entities use exists on the GPU,
+    /// Stage 1: make sure everything the submitted entities use exists on the GPU
+    /// (for `target`, under `environment`),
     /// and compact the instance store when it holds more garbage than data.
-    pub(super) fn prepare(&mut self, target: TargetFormat, stats: &mut FrameStats) -> Result<(), RenderError> {
+    pub(super) fn prepare(
+        &mut self,
+        target: TargetFormat,
+        environment: &Environment,
+        stats: &mut FrameStats,
+    ) -> Result<(), RenderError> {
         if let Some(remap) = self.store.compact_if_wasteful(self.frame_index) {
             for s in &mut self.submitted {
                 s.slot = remap[s.slot];
             }
         }
         let uses: Vec<_> = self.submitted.iter().map(|s| (s.shape, s.material)).collect();
-        self.prepare_uses(&uses, target, stats)
+        self.registry.prepare_uses(&uses, target, (environment, self.frame_variant), stats)
     }
+}
 
-    fn prepare_uses(
+impl Registry {
+    /// Stage 1 for the registry: mesh buffers, textures, material blocks and
+    /// pipelines for each (shape, material) in `uses`, drawn into `target` under
+    /// `environment` in a frame of variant `frame`.
+    pub(super) fn prepare_uses(
         &mut self,
         uses: &[(ShapeId, MaterialId)],
         target: TargetFormat,
+        (environment, frame): (&Environment, FrameVariant),
         stats: &mut FrameStats,
     ) -> Result<(), RenderError> {
         if self.material_table.reserve(&self.device, self.materials.len())? {
@@ -67,9 +85,9 @@ impl Renderer {
                 stats.bytes_uploaded.meshes += self.mesh_pool.rewrite_vertices(&self.queue, range, &slot.mesh);
             }
             let layout = slot.layout;
-            self.prepare_material(material, layout, target, stats)?;
+            self.prepare_material(material, layout, target, (environment, frame), stats)?;
         }
-        if matches!(self.environment.background, Background::Gradient { .. }) {
+        if matches!(environment.background, Background::Gradient { .. }) {
             stats.pipelines_compiled += u32::from(self.pipelines.build_sky(&self.device, target)?);
         }
         Ok(())

@@ -20,7 +20,7 @@ use super::views::{ViewBlocks, MAX_SHADOW_VIEWS};
 use super::visible::VisibleRun;
 use super::{ms_since, FrameStats, PassStats, RenderError, Renderer};
 use crate::gpu::OffscreenTarget;
-use crate::scene::{Aabb, AlphaMode, Light, LightKind, View, MAX_LIGHTS};
+use crate::scene::{Aabb, AlphaMode, Light, LightKind, Lighting, View, MAX_LIGHTS};
 use glam::Vec3;
 use std::time::Instant;
 
@@ -75,7 +75,7 @@ impl ShadowsDrawn {
 }
 
 impl Renderer {
-    /// Draw the shadow maps of every light in `lights` that casts shadows (see
+    /// Draw the shadow maps of every light in `lighting` that casts shadows (see
     /// [`Light::with_shadows`]), from the entities submitted so far, for `view`
     /// of `target` (a camera is a view of the whole target). Call it between the
     /// frame's [`submit`](Self::submit)s and its [`flush`](Self::flush), and give
@@ -86,14 +86,15 @@ impl Renderer {
     /// directional light, one per spot light; 4 point lights) are drawn without
     /// shadows, with a warning in the log. A bad id submitted this frame is
     /// reported by `flush`.
-    pub fn shadow_pass(
+    pub fn shadow_pass<'l>(
         &mut self,
         view: impl Into<View>,
-        lights: &[Light],
+        lighting: impl Into<Lighting<'l>>,
         target: &OffscreenTarget,
     ) -> Result<Shadows, RenderError> {
         let start = Instant::now();
-        let view = view.into();
+        let (view, lighting) = (view.into(), lighting.into());
+        let lights = lighting.lights;
         if lights.len() > MAX_LIGHTS {
             return Err(RenderError::TooManyLights(lights.len()));
         }
@@ -103,7 +104,7 @@ impl Renderer {
         let mut prepared = FrameStats::default();
         // The flush after this pass samples the maps it draws: choose its pipelines now.
         self.frame_variant = super::FrameVariant::expected(lights);
-        self.prepare(self.scene_format(&view, target), &mut prepared)?;
+        self.prepare(self.scene_format(&view, target), &lighting.environment, &mut prepared)?;
         let [_, _, width, height] = view.viewport.pixels(target.width(), target.height());
         let frame = ViewFrame::new(&view, width, height);
         let (views, first_view) = self.plan_shadow_views(&frame, lights)?;
@@ -166,7 +167,7 @@ impl Renderer {
                 ShadowMaps::checked(&self.device, self.shadow_maps.support, size_2d, layers, size_cube, cubes)?;
             self.scene_group = self.shadow_maps.scene_group(
                 &self.device,
-                &self.pipelines.scene_layout,
+                &self.registry.pipelines.scene_layout,
                 &self.scene_block.buffer,
                 &self.shadow_block.buffer,
             );
@@ -192,7 +193,8 @@ impl Renderer {
         let mut visible = std::mem::take(&mut self.visible);
         let mut ranges = Vec::with_capacity(views.len());
         // Blended materials cast no shadow.
-        let blended: Vec<bool> = self.materials.iter().map(|m| m.material.alpha_mode == AlphaMode::Blend).collect();
+        let blended: Vec<bool> =
+            self.registry.materials.iter().map(|m| m.material.alpha_mode == AlphaMode::Blend).collect();
         for view in views {
             let view_proj = view.view_proj();
             let casts = |s: &super::Submitted| s.cast_shadows && !blended[s.material.0 as usize];
@@ -212,7 +214,7 @@ impl Renderer {
                 };
                 let s = &self.submitted[entry];
                 let (material, shape) = (s.material, s.shape);
-                let slot = &self.materials[material.0 as usize];
+                let slot = &self.registry.materials[material.0 as usize];
                 let queue = match slot.material.alpha_mode {
                     AlphaMode::Mask { .. } => Queue::AlphaTest,
                     _ => Queue::Opaque,
@@ -231,7 +233,7 @@ impl Renderer {
                 });
             }
             queue::sort(&mut self.shadow_list.items[first_item..]);
-            let shapes = &self.shapes;
+            let shapes = &self.registry.shapes;
             let range = self
                 .shadow_list
                 .build(first_item, &visible.instances, |b| shapes[b.shape.0 as usize].gpu.expect("prepared"));
@@ -246,17 +248,17 @@ impl Renderer {
     /// variant) on first use.
     fn shadow_pipeline(&mut self, entry: usize, pass: PassKind, stats: &mut FrameStats) -> Result<u16, RenderError> {
         let s = &self.submitted[entry];
-        let layout = self.shapes[s.shape.0 as usize].layout.index();
+        let layout = self.registry.shapes[s.shape.0 as usize].layout.index();
         let kind = usize::from(pass == PassKind::ShadowDistance);
-        let twin = self.materials[s.material.0 as usize].gpu.as_ref().expect("prepared");
+        let twin = self.registry.materials[s.material.0 as usize].gpu.as_ref().expect("prepared");
         if let Some(id) = twin.shadow_pipelines[layout][kind] {
             return Ok(id);
         }
         let forward = twin.pipelines[layout].expect("prepared");
-        let key = Pipelines::shadow_key(self.pipelines.key_of(forward), pass);
-        let (id, built) = self.pipelines.forward_id(&self.device, key)?;
+        let key = Pipelines::shadow_key(self.registry.pipelines.key_of(forward), pass);
+        let (id, built) = self.registry.pipelines.forward_id(&self.device, key)?;
         stats.pipelines_compiled += u32::from(built);
-        let twin = self.materials[s.material.0 as usize].gpu.as_mut().expect("prepared");
+        let twin = self.registry.materials[s.material.0 as usize].gpu.as_mut().expect("prepared");
         twin.shadow_pipelines[layout][kind] = Some(id);
         Ok(id)
     }
@@ -271,7 +273,7 @@ impl Renderer {
         }
         let block = ShadowGpu::new(views, self.shadow_maps.size_2d, self.shadow_maps.size_cube);
         bytes.scene += self.shadow_block.update(&self.queue, block);
-        let layout = &self.pipelines.instance_layout;
+        let layout = &self.registry.pipelines.instance_layout;
         let written = self.shadow_list.upload(&self.device, &self.queue, (layout, self.instances.buffer()), false)?;
         bytes.draw_indices += written.draw_indices;
         bytes.indirect += written.indirect;
@@ -314,7 +316,7 @@ impl Renderer {
             self.draw_stages(&self.shadow_list, &mut pass, range.clone(), &mut Bound::default(), &mut stats);
         }
         if let Some(timer) = &mut self.gpu_timer {
-            timer.resolve(&mut encoder, Timed::Shadow);
+            timer.resolve(&mut encoder, Timed::Shadow, self.frame_index);
         }
         cost.draw_calls = stats.draw_calls;
         cost.draws = stats.draws;

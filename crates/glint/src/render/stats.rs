@@ -1,5 +1,6 @@
 //! Core layer: [`FrameStats`], the cost of one frame in numbers.
 
+use super::GpuTimes;
 use serde::Serialize;
 
 /// Bytes written to the GPU during a frame, per shader data block and kind.
@@ -104,8 +105,11 @@ pub struct Passes {
 }
 
 /// What one frame cost: returned by [`Renderer::flush`](crate::Renderer::flush).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct FrameStats {
+    /// This frame's number: the renderer's flushes counted from 0 (each view
+    /// of [`Renderer::render_views`](crate::Renderer::render_views) is one).
+    pub frame: u64,
     /// Draw commands recorded into the pass: a multi-draw-indirect call counts
     /// one however many draws it holds; the sky counts one.
     pub draw_calls: u32,
@@ -136,4 +140,10 @@ pub struct FrameStats {
     pub shadow_views: u32,
     /// Draws and time per pass (the totals above are the forward passes').
     pub passes: Passes,
+    /// GPU time per pass of the newest earlier frame the GPU has finished
+    /// (its [`GpuTimes::frame`] says which; usually one or two before this
+    /// one), read without waiting. `None` until timing is on
+    /// ([`Renderer::enable_gpu_timing`](crate::Renderer::enable_gpu_timing))
+    /// and a timed frame has come back, or where the device has no timestamp queries.
+    pub gpu: Option<GpuTimes>,
 }

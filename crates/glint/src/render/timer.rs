@@ -1,7 +1,15 @@
 //! Core layer: GPU time of the shadow pass, the forward pass and each post effect
 //! from timestamp queries, where the device supports them (`Features::TIMESTAMP_QUERY`).
+//!
+//! Each timed frame's timestamps are copied into one of [`SLOTS`] readback
+//! buffers and mapped after its submission; a later frame picks up the ones the
+//! GPU has finished without waiting ([`GpuTimer::collect`]), so
+//! [`FrameStats::gpu`](super::FrameStats::gpu) trails the frame by a frame or two.
+//! A frame that finds every buffer still in flight is not timed.
 
 use super::post::MAX_POST_EFFECTS;
+use std::sync::atomic::{AtomicU8, Ordering};
+use std::sync::Arc;
 
 /// A pass the timer brackets with a pair of timestamps.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -27,9 +35,11 @@ impl Timed {
     }
 }
 
-/// GPU time of the last frame's passes, from [`Renderer::read_gpu_times`](crate::Renderer::read_gpu_times).
+/// GPU time of one frame's passes (one view's: a shadow pass and the flush after it).
 #[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
 pub struct GpuTimes {
+    /// The frame timed: its [`FrameStats::frame`](super::FrameStats::frame).
+    pub frame: u64,
     /// Every shadow view of the frame's shadow pass; `None` when it drew none.
     pub shadow_ms: Option<f64>,
     /// The forward pass: opaque, alpha-test, sky and transparent.
@@ -38,15 +48,35 @@ pub struct GpuTimes {
     pub post_ms: Vec<f64>,
 }
 
-/// Two timestamps per [`Timed`] pass, each pair resolved into a buffer and copied
-/// to one the CPU can map. Reading waits for the GPU, so only benchmarks ask.
+/// Readback buffers in the ring: frames in flight that can be timed at once.
+const SLOTS: usize = 3;
+
+/// A readback buffer's state, shared with its map callback.
+const FREE: u8 = 0;
+const MAPPING: u8 = 1;
+const MAPPED: u8 = 2;
+const FAILED: u8 = 3;
+
+/// One frame's timestamps on their way back to the CPU.
+struct Slot {
+    buffer: wgpu::Buffer,
+    state: Arc<AtomicU8>,
+    /// Which pairs its frame wrote.
+    written: [bool; PAIRS],
+    frame: u64,
+}
+
+/// Two timestamps per [`Timed`] pass, each pair resolved into a buffer and
+/// copied into the frame's readback slot.
 pub(crate) struct GpuTimer {
     queries: wgpu::QuerySet,
     resolved: wgpu::Buffer,
-    readback: wgpu::Buffer,
+    slots: Vec<Slot>,
+    /// The slot this frame's timestamps go to, once its first pass resolved.
+    current: Option<usize>,
     period_ns: f64,
-    /// Which pairs the last frame wrote.
-    written: [bool; PAIRS],
+    /// The newest frame's times collected so far, and whether `read` returned them.
+    latest: Option<(GpuTimes, bool)>,
 }
 
 const PAIR_BYTES: u64 = 2 * std::mem::size_of::<u64>() as u64;
@@ -62,6 +92,16 @@ impl GpuTimer {
         let buffer = |label, size, usage| {
             device.create_buffer(&wgpu::BufferDescriptor { label: Some(label), size, usage, mapped_at_creation: false })
         };
+        let slot = |_| Slot {
+            buffer: buffer(
+                "gpu timer: readback",
+                PAIRS as u64 * PAIR_BYTES,
+                wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+            ),
+            state: Arc::new(AtomicU8::new(FREE)),
+            written: [false; PAIRS],
+            frame: 0,
+        };
         Some(Self {
             queries: device.create_query_set(&wgpu::QuerySetDescriptor {
                 label: Some("gpu timer: shadow, forward and post pass timestamps"),
@@ -73,13 +113,10 @@ impl GpuTimer {
                 (PAIRS as u64 - 1) * RESOLVE_STRIDE + PAIR_BYTES,
                 wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
             ),
-            readback: buffer(
-                "gpu timer: readback",
-                PAIRS as u64 * PAIR_BYTES,
-                wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-            ),
+            slots: (0..SLOTS).map(slot).collect(),
+            current: None,
             period_ns: f64::from(queue.get_timestamp_period()),
-            written: [false; PAIRS],
+            latest: None,
         })
     }
 
@@ -99,40 +136,89 @@ impl GpuTimer {
         })
     }
 
-    /// After the last pass of `which`: resolve its timestamps and copy them where
-    /// the CPU can read them.
-    pub(crate) fn resolve(&mut self, encoder: &mut wgpu::CommandEncoder, which: Timed) {
+    /// After the last pass of `which` in frame `frame`: resolve its timestamps
+    /// and copy them into the frame's readback slot (none free: not timed).
+    pub(crate) fn resolve(&mut self, encoder: &mut wgpu::CommandEncoder, which: Timed, frame: u64) {
+        if self.current.is_none_or(|k| self.slots[k].frame != frame) {
+            self.current = self.slots.iter().position(|s| s.state.load(Ordering::Acquire) == FREE);
+            let Some(k) = self.current else { return };
+            (self.slots[k].frame, self.slots[k].written) = (frame, [false; PAIRS]);
+        }
+        let Some(k) = self.current else { return };
         let pair = which.pair();
         let first = 2 * pair as u32;
         let at = pair as u64 * RESOLVE_STRIDE;
         encoder.resolve_query_set(&self.queries, first..first + 2, &self.resolved, at);
-        encoder.copy_buffer_to_buffer(&self.resolved, at, &self.readback, pair as u64 * PAIR_BYTES, PAIR_BYTES);
-        self.written[pair] = true;
+        let slot = &mut self.slots[k];
+        encoder.copy_buffer_to_buffer(&self.resolved, at, &slot.buffer, pair as u64 * PAIR_BYTES, PAIR_BYTES);
+        slot.written[pair] = true;
     }
 
-    /// The last frame's pass times, waiting for it; `None` when it drew no
-    /// timed forward pass since the last read.
-    pub(crate) fn read(&mut self, device: &wgpu::Device) -> Option<GpuTimes> {
-        let written = std::mem::take(&mut self.written);
-        if !written[Timed::Forward.pair()] {
-            return None;
+    /// After the submission holding the frame's forward pass: map its slot, to
+    /// be read once the GPU has finished it.
+    pub(crate) fn submitted(&mut self) {
+        let Some(slot) = self.current.take().map(|k| &self.slots[k]) else { return };
+        if !slot.written[Timed::Forward.pair()] {
+            return;
         }
-        let (tx, rx) = std::sync::mpsc::channel();
-        self.readback.map_async(wgpu::MapMode::Read, .., move |r| {
-            let _ = tx.send(r);
+        slot.state.store(MAPPING, Ordering::Release);
+        let state = Arc::clone(&slot.state);
+        slot.buffer.map_async(wgpu::MapMode::Read, .., move |r| {
+            state.store(if r.is_ok() { MAPPED } else { FAILED }, Ordering::Release);
         });
-        device.poll(wgpu::PollType::wait_indefinitely()).ok()?;
-        rx.recv().ok()?.ok()?;
-        let ticks: [u64; 2 * PAIRS] = {
-            let view = self.readback.get_mapped_range(..).ok()?;
-            bytemuck::pod_read_unaligned(&view[..PAIRS * PAIR_BYTES as usize])
-        };
-        self.readback.unmap();
+    }
+
+    /// The newest frame's times that have come back, without waiting for the GPU.
+    pub(crate) fn collect(&mut self, device: &wgpu::Device) -> Option<GpuTimes> {
+        let _ = device.poll(wgpu::PollType::Poll);
+        for k in 0..SLOTS {
+            let times = match self.slots[k].state.load(Ordering::Acquire) {
+                MAPPED => self.take(k),
+                FAILED => None,
+                _ => continue,
+            };
+            self.slots[k].state.store(FREE, Ordering::Release);
+            if let Some(t) = times.filter(|t| self.latest.as_ref().is_none_or(|(l, _)| t.frame > l.frame)) {
+                self.latest = Some((t, false));
+            }
+        }
+        self.latest.as_ref().map(|(t, _)| t.clone())
+    }
+
+    /// The times of the newest frame timed, waiting for the GPU to finish it;
+    /// `None` when it drew no timed forward pass or `read` already returned it.
+    pub(crate) fn read(&mut self, device: &wgpu::Device) -> Option<GpuTimes> {
+        // Another thread polling the same device may be the one that runs a map
+        // callback, just after this thread's wait returns: wait for the callbacks too.
+        let start = std::time::Instant::now();
+        while self.slots.iter().any(|s| s.state.load(Ordering::Acquire) == MAPPING) {
+            device.poll(wgpu::PollType::wait_indefinitely()).ok()?;
+            if start.elapsed() > std::time::Duration::from_secs(10) {
+                return None;
+            }
+            std::thread::yield_now();
+        }
+        self.collect(device);
+        let (times, read) = self.latest.as_mut()?;
+        (!std::mem::replace(read, true)).then(|| times.clone())
+    }
+
+    /// Slot `k`'s times, read from its mapped buffer (then unmapped).
+    fn take(&self, k: usize) -> Option<GpuTimes> {
+        let slot = &self.slots[k];
+        let ticks: Option<[u64; 2 * PAIRS]> = slot
+            .buffer
+            .get_mapped_range(..)
+            .ok()
+            .map(|view| bytemuck::pod_read_unaligned(&view[..PAIRS * PAIR_BYTES as usize]));
+        slot.buffer.unmap();
+        let ticks = ticks?;
         let ms = |pair: usize| ticks[2 * pair + 1].saturating_sub(ticks[2 * pair]) as f64 * self.period_ns / 1e6;
         // Post effects are timed in order: the chain is the written pairs after the forward pass.
-        let post = (0..MAX_POST_EFFECTS as u8).map(Timed::Post).take_while(|t| written[t.pair()]);
+        let post = (0..MAX_POST_EFFECTS as u8).map(Timed::Post).take_while(|t| slot.written[t.pair()]);
         Some(GpuTimes {
-            shadow_ms: written[Timed::Shadow.pair()].then(|| ms(Timed::Shadow.pair())),
+            frame: slot.frame,
+            shadow_ms: slot.written[Timed::Shadow.pair()].then(|| ms(Timed::Shadow.pair())),
             forward_ms: ms(Timed::Forward.pair()),
             post_ms: post.map(|t| ms(t.pair())).collect(),
         })

@@ -79,10 +79,10 @@ pub fn render_sized(
     culling: bool,
 ) -> (image::RgbaImage, FrameStats) {
     let mut renderer = Renderer::new(gpu);
-    let entities = desc.instantiate(&mut renderer);
+    let entities = renderer.place_scene(desc).entities;
     let mut target = OffscreenTarget::new(gpu, width, height, samples).expect("target");
     let view = glint::View::new(desc.cameras[0]).with_culling(culling);
-    let stats = renderer.render(&entities, view, &desc.lights, &mut target).expect("frame");
+    let stats = renderer.render(&entities, view, desc.lighting(), &mut target).expect("frame");
     (target.read_rgba8(gpu).expect("readback"), stats)
 }
 

@@ -1,0 +1,226 @@
+//! Core layer: placing loaded assets into a renderer. A [`Model`] or a
+//! [`SceneDesc`] is plain data read from a file; placing it adds its textures,
+//! render targets, materials and shapes to the renderer's [`Registry`] and
+//! returns the entities that draw them ([`PlacedScene`]).
+//! [`PlacedScene::pose`] moves them along as the scene's animations and cloths
+//! advance.
+
+use super::{Registry, Renderer};
+use crate::asset::{ClothDesc, MeshRef, Model, SceneDesc, ShapeKind, Texture};
+use crate::scene::{Entity, Material, MaterialId, RenderTargetId, ShadingModel, ShapeId, TextureId};
+use crate::sim::cloth::ClothView;
+use glam::{Mat4, Quat, Vec3};
+use std::collections::HashMap;
+
+/// A scene placed into a renderer by [`Renderer::place_scene`].
+#[derive(Clone, Debug)]
+pub struct PlacedScene {
+    /// One entity per render task (per part for model meshes), then each
+    /// cloth's surface (with the debug view, its edge ribbons and pin markers),
+    /// ready to submit.
+    pub entities: Vec<Entity>,
+    /// The renderer's id of each of the scene's render targets, in file order
+    /// (for [`SceneDesc::views`]).
+    pub render_targets: Vec<RenderTargetId>,
+}
+
+/// A model's ids in one registry: shape and material per part.
+struct ModelIds {
+    parts: Vec<(ShapeId, MaterialId)>,
+}
+
+impl Renderer {
+    /// Add `model`'s shapes, textures and materials, and return one entity per
+    /// part, instanced at every transform of `placements` (model to world).
+    pub fn place_model(&mut self, model: &Model, placements: &[Mat4]) -> Vec<Entity> {
+        let ids = self.registry.add_model(model);
+        model_entities(model, &ids, placements)
+    }
+
+    /// Add the scene's textures, render targets, materials, shapes and models,
+    /// and return its entities with the ids of its render targets. Its lights
+    /// and environment are not the renderer's: give [`SceneDesc::lighting`] to
+    /// each frame.
+    pub fn place_scene(&mut self, desc: &SceneDesc) -> PlacedScene {
+        let registry = &mut self.registry;
+        let mut textures: Vec<TextureId> = desc.textures.iter().map(|t| registry.add_texture(t.clone())).collect();
+        // Render target k's texture follows the file textures (see `SceneDesc::render_targets`).
+        let mut render_targets = Vec::new();
+        for t in &desc.render_targets {
+            match registry.add_render_target(t.size.0, t.size.1, t.hdr) {
+                Ok((id, texture)) => {
+                    render_targets.push(id);
+                    textures.push(texture);
+                }
+                Err(e) => {
+                    // The maps that show it keep their places: a white pixel stands in.
+                    log::warn!("render target '{}': {e}; shown as white", t.name);
+                    let white = image::RgbaImage::from_pixel(1, 1, image::Rgba([255; 4]));
+                    textures.push(registry.add_texture(Texture::new(&t.name, white, true)));
+                }
+            }
+        }
+        let materials: Vec<MaterialId> =
+            desc.materials.iter().map(|m| registry.add_material(m.resolve(&textures))).collect();
+        // Added on first use, so scenes that name every material do not get one.
+        let mut default_material = None;
+        let mut shapes = HashMap::new();
+        let mut models: Vec<Option<ModelIds>> = (0..desc.models.len()).map(|_| None).collect();
+        let mut entities = Vec::new();
+        for e in &desc.entities {
+            let first = entities.len();
+            match e.mesh {
+                MeshRef::Shape(kind) => {
+                    let shape = *shapes.entry(kind).or_insert_with(|| registry.add_shape(kind.mesh()));
+                    let material = match e.material {
+                        Some(i) => materials[i],
+                        None => *default_material.get_or_insert_with(|| registry.add_material(Material::default())),
+                    };
+                    entities.push(Entity::instanced(shape, material, e.transforms.clone()));
+                }
+                MeshRef::Model(i) => {
+                    let model = &desc.models[i];
+                    let ids = models[i].get_or_insert_with(|| registry.add_model(model));
+                    entities.extend(model_entities(model, ids, &e.transforms));
+                }
+            }
+            for entity in &mut entities[first..] {
+                e.draw.apply(entity);
+            }
+        }
+        for cloth in &desc.cloths {
+            let first = entities.len();
+            // Cloth is thin: both sides show, whatever the named material says.
+            let look = cloth.material.map_or_else(Material::default, |i| desc.materials[i].resolve(&textures));
+            let material = registry.add_material(Material { double_sided: true, ..look });
+            let surface = registry.add_shape(cloth.view.surface.clone());
+            entities.push(Entity::new(surface, material, Mat4::IDENTITY));
+            if let Some(edges) = &cloth.view.edges {
+                let ink = Material {
+                    shading: ShadingModel::Unlit,
+                    double_sided: true,
+                    ..Material::color("cloth edges", 0.02, 0.02, 0.03)
+                };
+                let (ink, edges) = (registry.add_material(ink), registry.add_shape(edges.clone()));
+                entities.push(Entity::new(edges, ink, Mat4::IDENTITY));
+                if !cloth.view.pins.is_empty() {
+                    let red =
+                        Material { shading: ShadingModel::Unlit, ..Material::color("cloth pins", 1.0, 0.1, 0.05) };
+                    let red = registry.add_material(red);
+                    let ball = *shapes
+                        .entry(ShapeKind::Sphere)
+                        .or_insert_with(|| registry.add_shape(ShapeKind::Sphere.mesh()));
+                    entities.push(Entity::instanced(ball, red, pin_transforms(&cloth.view)));
+                }
+            }
+            for entity in &mut entities[first..] {
+                cloth.draw.apply(entity);
+            }
+        }
+        PlacedScene { entities, render_targets }
+    }
+}
+
+impl PlacedScene {
+    /// Pose every model of `desc` (the scene this was placed from) at `time`
+    /// seconds ([`Model::pose`]), advance every cloth to `time`
+    /// ([`ClothDesc::pose`]), and move the matching entities along: only
+    /// entities of animated models and moved cloths change, so only they are
+    /// uploaded again; morphed meshes and cloth surfaces replace their shapes in
+    /// `renderer` (one vertex-buffer write each). Fails when a cloth cannot reach
+    /// `time` (too many steps, or a step that does not converge).
+    pub fn pose(&mut self, desc: &mut SceneDesc, time: f32, renderer: &mut Renderer) -> Result<(), crate::Error> {
+        desc.check_pose(time)?;
+        let entities = &mut self.entities;
+        let mut next = 0;
+        let mut posed: Vec<Option<(bool, Vec<usize>)>> = vec![None; desc.models.len()];
+        for e in &desc.entities {
+            let MeshRef::Model(i) = e.mesh else {
+                next += 1;
+                continue;
+            };
+            let (moved, morphed) = posed[i].get_or_insert_with(|| {
+                let model = &mut desc.models[i];
+                (!model.animations.is_empty(), model.pose(time))
+            });
+            let model = &desc.models[i];
+            for (k, (part, entity)) in model.parts.iter().zip(entities[next..].iter_mut()).enumerate() {
+                if *moved {
+                    *entity.transforms_mut() = part.placed(&e.transforms);
+                    entity.joints_mut().clone_from(&part.joints);
+                }
+                if morphed.contains(&k) {
+                    renderer.update_shape(entity.shape, part.mesh.clone());
+                }
+            }
+            next += model.parts.len();
+        }
+        for cloth in &mut desc.cloths {
+            let count = cloth_entity_count(cloth);
+            if cloth.pose(time, &desc.path)? {
+                let view = &cloth.view;
+                let meshes = std::iter::once(&view.surface).chain(&view.edges);
+                for (entity, mesh) in entities[next..].iter().zip(meshes) {
+                    renderer.update_shape(entity.shape, mesh.clone());
+                }
+                // Pins that did not move are not uploaded again.
+                if count == 3 {
+                    let (moved, pins) = (pin_transforms(view), &mut entities[next + 2]);
+                    if pins.transforms() != moved {
+                        *pins.transforms_mut() = moved;
+                    }
+                }
+            }
+            next += count;
+        }
+        Ok(())
+    }
+}
+
+impl Registry {
+    /// Add a model's textures, materials and one shape per part.
+    fn add_model(&mut self, model: &Model) -> ModelIds {
+        let textures: Vec<_> = model.textures.iter().map(|t| self.add_texture(t.clone())).collect();
+        let materials: Vec<MaterialId> =
+            model.materials.iter().map(|m| self.add_material(m.resolve(&textures))).collect();
+        // Added on first use; also stands in for a material index the model lacks.
+        let mut default_material = None;
+        let parts = (model.parts.iter())
+            .map(|part| {
+                let material = match part.material.and_then(|i| materials.get(i)) {
+                    Some(&m) => m,
+                    None => *default_material.get_or_insert_with(|| self.add_material(Material::default())),
+                };
+                (self.add_shape(part.mesh.clone()), material)
+            })
+            .collect();
+        ModelIds { parts }
+    }
+}
+
+/// One entity per part of a model added as `ids`, instanced at every transform of `placements`.
+fn model_entities(model: &Model, ids: &ModelIds, placements: &[Mat4]) -> Vec<Entity> {
+    (model.parts.iter().zip(&ids.parts))
+        .map(|(part, &(shape, material))| {
+            Entity::instanced(shape, material, part.placed(placements)).with_joints(part.joints.clone())
+        })
+        .collect()
+}
+
+/// Entities [`Renderer::place_scene`] makes for a cloth: its surface, and with
+/// the debug view its edge ribbons and (when it has pins) its pin markers.
+fn cloth_entity_count(cloth: &ClothDesc) -> usize {
+    match (&cloth.view.edges, cloth.view.pins.is_empty()) {
+        (None, _) => 1,
+        (Some(_), true) => 2,
+        (Some(_), false) => 3,
+    }
+}
+
+/// One sphere per pinned node, as big as the view's pin markers.
+fn pin_transforms(view: &ClothView) -> Vec<Mat4> {
+    view.pins
+        .iter()
+        .map(|&p| Mat4::from_scale_rotation_translation(Vec3::splat(view.pin_size), Quat::IDENTITY, p))
+        .collect()
+}

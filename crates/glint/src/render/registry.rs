@@ -1,0 +1,225 @@
+//! Core layer: the [`Registry`], the GPU resources a renderer keeps between
+//! frames: shapes and the mesh pool they live in, materials and their table,
+//! textures and render targets, texture sets and pipelines. Resources are added
+//! here as plain data and get their GPU twins on first use (stage 1 of the frame,
+//! [`Registry::prepare_uses`]).
+
+use super::frame_variant::FrameVariant;
+use super::mesh_pool::{MeshPool, MeshRange};
+use super::pipelines::{Pipelines, VertexLayout};
+use super::resources::{MaterialTable, TextureUploader};
+use super::RenderError;
+use crate::asset::Texture;
+use crate::gpu::{Gpu, OffscreenTarget, TargetFormat};
+use crate::scene::{Material, MaterialId, Mesh, RenderTargetId, ShapeId, TextureId};
+
+pub(super) struct ShapeSlot {
+    pub(super) mesh: Mesh,
+    pub(super) layout: VertexLayout,
+    /// Where the mesh lives in the pool, once uploaded.
+    pub(super) gpu: Option<MeshRange>,
+    /// The vertices changed in place since they were uploaded.
+    pub(super) rewrite: bool,
+}
+
+pub(super) struct MaterialSlot {
+    pub(super) material: Material,
+    /// Set by `add_material` / `material_mut`; cleared when the block is written.
+    pub(super) dirty: bool,
+    pub(super) gpu: Option<MaterialGpuTwin>,
+}
+
+/// What a material uses on the GPU, and what that was chosen for.
+pub(super) struct MaterialGpuTwin {
+    /// Index of its texture set (`Registry::texture_sets`).
+    pub(super) texture_set: u16,
+    /// Forward pipeline id per vertex layout (by `VertexLayout as usize`), built on
+    /// first use with a mesh of that layout.
+    pub(super) pipelines: [Option<u16>; VertexLayout::COUNT],
+    /// Shadow pipeline ids per vertex layout: 2D depth maps, then cube distance maps.
+    pub(super) shadow_pipelines: [[Option<u16>; 2]; VertexLayout::COUNT],
+    /// The target they draw into.
+    pub(super) target: crate::gpu::TargetFormat,
+    /// Whether the environment had fog when the pipelines were chosen.
+    pub(super) fog: bool,
+    /// What the frame added to the variant when the pipelines were chosen.
+    pub(super) frame: FrameVariant,
+}
+
+/// The maps of a material in texture-set binding order: diffuse, normal,
+/// specular, metallic-roughness, occlusion, emissive.
+pub(super) type Maps = [Option<TextureId>; 6];
+
+/// A bind group of the Material block for one combination of maps.
+pub(super) struct TextureSet {
+    pub(super) maps: Maps,
+    pub(super) bind_group: wgpu::BindGroup,
+}
+
+pub(super) struct TextureSlot {
+    /// Pixels waiting for their first use; dropped once uploaded.
+    pub(super) pending: Option<Texture>,
+    pub(super) view: Option<wgpu::TextureView>,
+}
+
+/// 1×1 textures bound where a material has no map.
+pub(super) struct DefaultMaps {
+    pub(super) white_srgb: wgpu::TextureView,
+    pub(super) flat_normal: wgpu::TextureView,
+    pub(super) white_linear: wgpu::TextureView,
+}
+
+/// The GPU resources of a [`Renderer`](super::Renderer), by id: what
+/// [`add_shape`](Self::add_shape), [`add_material`](Self::add_material),
+/// [`add_texture`](Self::add_texture) and
+/// [`add_render_target`](Self::add_render_target) return indexes these lists.
+/// It holds no scene (entities, lights, environment) and no view.
+pub struct Registry {
+    pub(super) device: wgpu::Device,
+    pub(super) queue: wgpu::Queue,
+    pub(super) pipelines: Pipelines,
+    pub(super) uploader: TextureUploader,
+    pub(super) sampler: wgpu::Sampler,
+    pub(super) defaults: DefaultMaps,
+    pub(super) shapes: Vec<ShapeSlot>,
+    pub(super) mesh_pool: MeshPool,
+    pub(super) materials: Vec<MaterialSlot>,
+    pub(super) material_table: MaterialTable,
+    pub(super) texture_sets: Vec<TextureSet>,
+    pub(super) textures: Vec<TextureSlot>,
+    /// Render targets (`add_render_target`), each with the texture that shows it.
+    pub(super) render_targets: Vec<(OffscreenTarget, TextureId)>,
+}
+
+impl Registry {
+    /// An empty registry on `gpu`'s device, with its 1×1 default maps.
+    pub(super) fn new(gpu: &Gpu) -> Self {
+        let (device, queue) = (gpu.device.clone(), gpu.queue.clone());
+        let uploader = TextureUploader::new(&device);
+        let pixel = |name: &str, rgba: [u8; 4], srgb| {
+            let texture = Texture::new(name, image::RgbaImage::from_pixel(1, 1, image::Rgba(rgba)), srgb);
+            uploader.upload(&device, &queue, &texture).0
+        };
+        let defaults = DefaultMaps {
+            white_srgb: pixel("default diffuse (white)", [255; 4], true),
+            flat_normal: pixel("default normal (flat)", [128, 128, 255, 255], false),
+            white_linear: pixel("default specular (white)", [255; 4], false),
+        };
+        let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
+            label: Some("renderer: material sampler (repeat, trilinear)"),
+            address_mode_u: wgpu::AddressMode::Repeat,
+            address_mode_v: wgpu::AddressMode::Repeat,
+            address_mode_w: wgpu::AddressMode::Repeat,
+            mag_filter: wgpu::FilterMode::Linear,
+            min_filter: wgpu::FilterMode::Linear,
+            mipmap_filter: wgpu::MipmapFilterMode::Linear,
+            anisotropy_clamp: gpu.max_anisotropy(),
+            ..Default::default()
+        });
+        Self {
+            pipelines: Pipelines::new(&device),
+            mesh_pool: MeshPool::new(&device),
+            material_table: MaterialTable::new(&device),
+            uploader,
+            sampler,
+            defaults,
+            shapes: Vec::new(),
+            materials: Vec::new(),
+            texture_sets: Vec::new(),
+            textures: Vec::new(),
+            render_targets: Vec::new(),
+            device,
+            queue,
+        }
+    }
+
+    /// Add a shape; its buffers are created the first time an entity using it is drawn.
+    pub fn add_shape(&mut self, mesh: Mesh) -> ShapeId {
+        self.shapes.push(ShapeSlot { layout: VertexLayout::of(&mesh), mesh, gpu: None, rewrite: false });
+        ShapeId(self.shapes.len() as u32 - 1)
+    }
+
+    /// Replace a shape's mesh (e.g. with morph targets applied). A mesh with the
+    /// same streams, vertex count and indices as the old one is written over it
+    /// (only the base vertex stream is uploaded); any other goes to a new place in
+    /// the mesh pool. Entities drawing the shape pick up its new bounds. Returns
+    /// false (and changes nothing) when `id` is not this renderer's.
+    pub fn update_shape(&mut self, id: ShapeId, mesh: Mesh) -> bool {
+        let Some(slot) = self.shapes.get_mut(id.0 as usize) else { return false };
+        let same = VertexLayout::of(&mesh) == slot.layout
+            && mesh.vertices().len() == slot.mesh.vertices().len()
+            && mesh.indices() == slot.mesh.indices();
+        if same {
+            slot.rewrite = slot.gpu.is_some();
+        } else {
+            (slot.layout, slot.gpu, slot.rewrite) = (VertexLayout::of(&mesh), None, false);
+        }
+        slot.mesh = mesh;
+        true
+    }
+
+    /// The mesh of a shape (for its bounds), if `id` is this renderer's.
+    pub fn shape(&self, id: ShapeId) -> Option<&Mesh> {
+        self.shapes.get(id.0 as usize).map(|s| &s.mesh)
+    }
+
+    /// Add a texture; it is uploaded (and its mipmaps made) on first use.
+    /// An empty (0-pixel) image is replaced by one white pixel.
+    pub fn add_texture(&mut self, mut texture: Texture) -> TextureId {
+        if texture.image.width() == 0 || texture.image.height() == 0 {
+            log::warn!("texture '{}' is empty; using one white pixel", texture.name);
+            texture.image = image::RgbaImage::from_pixel(1, 1, image::Rgba([255; 4]));
+        }
+        self.textures.push(TextureSlot { pending: Some(texture), view: None });
+        TextureId(self.textures.len() as u32 - 1)
+    }
+
+    /// Add a `width` × `height` render target (half floats when `hdr`, else
+    /// 8-bit sRGB), and the texture that shows it: a view with
+    /// [`View::output`](crate::View::output) draws into it, a material map with the
+    /// texture samples it, in the same frame after that view (see
+    /// [`Renderer::render_views`](super::Renderer::render_views)). Fails when a side is 0 or above
+    /// the adapter's texture limit.
+    pub fn add_render_target(
+        &mut self,
+        width: u32,
+        height: u32,
+        hdr: bool,
+    ) -> Result<(RenderTargetId, TextureId), RenderError> {
+        let side = self.device.limits().max_texture_dimension_2d;
+        if width == 0 || height == 0 || width.max(height) > side {
+            let name = format!("render target {}", self.render_targets.len());
+            return Err(RenderError::TextureTooLarge { name, width, height, side });
+        }
+        let color = if hdr { crate::gpu::HDR_FORMAT } else { crate::gpu::COLOR_FORMAT };
+        let target = OffscreenTarget::on_device(&self.device, width, height, TargetFormat { color, samples: 1 });
+        self.textures.push(TextureSlot { pending: None, view: Some(target.color_view().clone()) });
+        let texture = TextureId(self.textures.len() as u32 - 1);
+        self.render_targets.push((target, texture));
+        Ok((RenderTargetId(self.render_targets.len() as u32 - 1), texture))
+    }
+
+    /// Add a material; its material-table entry is written on first use.
+    pub fn add_material(&mut self, material: Material) -> MaterialId {
+        self.materials.push(MaterialSlot { material, dirty: true, gpu: None });
+        MaterialId(self.materials.len() as u32 - 1)
+    }
+
+    /// Read a material.
+    pub fn material(&self, id: MaterialId) -> Option<&Material> {
+        self.materials.get(id.0 as usize).map(|s| &s.material)
+    }
+
+    /// Edit a material: marks it dirty, so its table entry is rewritten before the next frame.
+    pub fn material_mut(&mut self, id: MaterialId) -> Option<&mut Material> {
+        self.materials.get_mut(id.0 as usize).map(|s| {
+            s.dirty = true;
+            &mut s.material
+        })
+    }
+
+    /// Whether material `id` shows `texture` in one of its maps.
+    pub(super) fn shows(&self, id: MaterialId, texture: TextureId) -> bool {
+        self.materials.get(id.0 as usize).is_some_and(|m| m.material.maps().contains(&Some(texture)))
+    }
+}
