@@ -4,7 +4,7 @@
 
 use super::scn_fields::Fields;
 use super::Diagnostic;
-use crate::render::MAX_POST_EFFECTS;
+use crate::scene::MAX_POST_EFFECTS;
 use crate::scene::{PostEffect, Tonemap};
 
 /// The camera's post chain (empty without a `post` key). An effect named twice,

@@ -1,7 +1,7 @@
 //! Core layer: [`RenderError`], what a frame can fail with.
 
 use super::mesh_pool::MeshTooLarge;
-use super::post::MAX_POST_EFFECTS;
+use crate::scene::MAX_POST_EFFECTS;
 use crate::scene::{MaterialId, RenderTargetId, ShapeId, TextureId, Viewport, MAX_LIGHTS};
 
 /// Errors from [`Renderer::flush`](crate::Renderer::flush).

@@ -4,12 +4,12 @@
 //! compose → submit) after [`Renderer::shadow_pass`] has drawn that view's
 //! shadow maps.
 
-use super::post::{ChainImages, MAX_POST_EFFECTS};
+use super::post::ChainImages;
 use super::shadow_pass::{Shadows, ShadowsDrawn};
 use super::view::ViewFrame;
 use super::{ms_since, queue, FrameMode, FrameStats, FrameVariant, RenderError, Renderer};
 use crate::gpu::{OffscreenTarget, TargetFormat, HDR_FORMAT};
-use crate::scene::{Entity, Lighting, PostEffect, View, MAX_LIGHTS};
+use crate::scene::{Entity, Lighting, PostEffect, View, MAX_LIGHTS, MAX_POST_EFFECTS};
 use std::time::Instant;
 
 /// How a view's picture reaches the output (stage 8 of [`Renderer::run_frame`]).

@@ -47,7 +47,6 @@ mod visible;
 pub use error::RenderError;
 pub use mesh_pool::MeshTooLarge;
 pub use place::PlacedScene;
-pub use post::MAX_POST_EFFECTS;
 pub use registry::Registry;
 pub use shadow_maps::{ShadowLayout, MAX_CUBES, MAX_SHADOW_MAP_BYTES};
 pub use shadow_pass::Shadows;

@@ -8,11 +8,9 @@
 use super::timer::{GpuTimer, Timed};
 use super::{PassStats, RenderError};
 use crate::gpu::{sampler_entry, texture_entry, HDR_FORMAT};
-use crate::scene::{PostEffect, Tonemap};
+use crate::scene::{PostEffect, Tonemap, MAX_POST_EFFECTS};
 use std::collections::HashMap;
 
-/// Most effects one view's chain may hold.
-pub const MAX_POST_EFFECTS: usize = 8;
 /// Full-screen passes one chain may take (bloom takes four).
 const MAX_PASSES: usize = 4 * MAX_POST_EFFECTS;
 /// Bytes between pass parameter records: the dynamic-offset alignment every device accepts.

@@ -7,7 +7,7 @@
 //! [`FrameStats::gpu`](super::FrameStats::gpu) trails the frame by a frame or two.
 //! A frame that finds every buffer still in flight is not timed.
 
-use super::post::MAX_POST_EFFECTS;
+use crate::scene::MAX_POST_EFFECTS;
 use std::sync::atomic::{AtomicU8, Ordering};
 use std::sync::Arc;
 

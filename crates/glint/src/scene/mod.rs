@@ -25,7 +25,7 @@ pub use light::{Light, LightKind, ShadowSettings, CASCADES, MAX_LIGHTS};
 pub use lighting::Lighting;
 pub use material::{AlphaMode, MapSlots, Material, ShadingModel};
 pub use mesh::{smooth_normals, smooth_normals_in_groups, Aabb, BoundingSphere, Mesh, MeshError, SkinVertex, Vertex};
-pub use post::{PostEffect, Tonemap};
+pub use post::{PostEffect, Tonemap, MAX_POST_EFFECTS};
 pub use states::{BlendState, Compare, Cull, DepthState, RasterState, RenderStates, StencilOp, StencilState};
 pub use view::{View, Viewport};
 

@@ -5,6 +5,9 @@
 
 use glam::Vec3;
 
+/// Most effects one view's chain may hold.
+pub const MAX_POST_EFFECTS: usize = 8;
+
 /// How tonemapping maps linear HDR light to the displayable 0..1.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Tonemap {
