@@ -70,7 +70,7 @@ impl Error {
     pub fn exit_code(&self) -> u8 {
         match self {
             Error::Asset(_) => 1,
-            Error::Gpu(GpuError::NoAdapter(_) | GpuError::Device { .. } | GpuError::Unsupported { .. }) => 2,
+            Error::Gpu(GpuError::NoAdapter(_) | GpuError::Device { .. }) => 2,
             Error::Gpu(_) | Error::Render(_) | Error::Sim(_) => 3,
         }
     }

@@ -24,12 +24,6 @@ fn crop(image: &image::RgbaImage, x: u32, y: u32, width: u32, height: u32) -> im
     image::imageops::crop_imm(image, x, y, width, height).to_image()
 }
 
-/// The largest difference of any channel of any pixel.
-fn max_difference(a: &image::RgbaImage, b: &image::RgbaImage) -> u8 {
-    assert_eq!(a.dimensions(), b.dimensions());
-    a.pixels().zip(b.pixels()).flat_map(|(p, q)| p.0.iter().zip(q.0).map(|(x, y)| x.abs_diff(y))).max().unwrap_or(0)
-}
-
 #[test]
 fn each_half_of_a_split_screen_is_its_camera_drawn_alone_at_that_size() {
     let Some(gpu) = common::gpu() else { return };
@@ -53,7 +47,7 @@ fn split_screen_halves(gpu: &Gpu) {
     for (k, half) in [(0u32, 0u32), (1, 96)] {
         let alone = desc.camera_view(k as usize);
         let (image, single) = split_scene(gpu, &[alone], (96, 96));
-        let difference = max_difference(&crop(&split, half, 0, 96, 96), &image);
+        let difference = common::max_difference(&crop(&split, half, 0, 96, 96), &image);
         assert!(difference <= 2, "half {k} differs from its camera alone by {difference}");
         assert_eq!(stats[k as usize].draws, single[0].draws, "half {k}'s draws are its camera's alone");
         assert!(stats[k as usize].shadow_views > 0, "each view draws its own cascades");
@@ -70,9 +64,12 @@ fn a_picture_in_picture_covers_only_its_corner() {
     let (picture, _) = split_scene(gpu, &[front.clone(), above.clone().with_viewport(corner)], (64, 64));
     let (front_alone, _) = split_scene(gpu, std::slice::from_ref(&front), (64, 64));
     let (above_alone, _) = split_scene(gpu, &[above], (32, 32));
-    assert!(max_difference(&crop(&picture, 32, 32, 32, 32), &above_alone) <= 2, "the corner is the second camera");
+    assert!(
+        common::max_difference(&crop(&picture, 32, 32, 32, 32), &above_alone) <= 2,
+        "the corner is the second camera"
+    );
     for (x, y) in [(0, 0), (32, 0), (0, 32)] {
-        let quarter = max_difference(&crop(&picture, x, y, 32, 32), &crop(&front_alone, x, y, 32, 32));
+        let quarter = common::max_difference(&crop(&picture, x, y, 32, 32), &crop(&front_alone, x, y, 32, 32));
         assert!(quarter <= 2, "quarter at ({x}, {y}) differs from the first camera by {quarter}");
     }
     // A first view that leaves part of the image uncovered: the rest is black.

@@ -27,16 +27,6 @@ pub enum GpuError {
         /// What wgpu said.
         source: wgpu::RequestDeviceError,
     },
-    /// The adapter lacks something the renderer cannot do without.
-    #[error("GPU adapter '{adapter}' ({backend:?}) cannot run glint: it has no {missing}; try another backend (WGPU_BACKEND=vulkan, or leave it unset)")]
-    Unsupported {
-        /// Adapter name.
-        adapter: String,
-        /// Its backend.
-        backend: wgpu::Backend,
-        /// What it lacks.
-        missing: &'static str,
-    },
     /// A target size was zero or beyond the device limits.
     #[error("target size {width}x{height} is not supported (1..={max} per side)")]
     TargetSize {
@@ -85,6 +75,20 @@ pub struct Gpu {
     pub queue: wgpu::Queue,
     info: wgpu::AdapterInfo,
     anisotropy: u16,
+    /// How the renderer may feed its shaders here.
+    paths: DrawPaths,
+}
+
+/// What the renderer's draws may rely on, from the adapter's capabilities
+/// ([`Gpu::with_webgl2_limits`] turns all three off).
+#[derive(Clone, Copy, Debug)]
+struct DrawPaths {
+    /// Vertex shaders read storage buffers (else data textures).
+    vertex_storage: bool,
+    /// Indexed draws take a base vertex (else vertex buffers are bound at each mesh).
+    base_vertex: bool,
+    /// Multi-draw-indirect with a first instance.
+    indirect: bool,
 }
 
 impl fmt::Debug for Gpu {
@@ -161,26 +165,40 @@ impl Gpu {
 
     /// Create the device and queue on a chosen adapter.
     pub fn from_adapter(adapter: wgpu::Adapter) -> Result<Self, GpuError> {
+        Self::on_adapter(adapter, false)
+    }
+
+    /// A new context on this one's adapter that draws as it must on WebGL2,
+    /// whatever the adapter can do: a device with WebGL2's limits (no storage
+    /// buffers at all), instance and material data in data textures, vertex
+    /// buffers bound at each mesh, one draw call per batch. For testing that
+    /// path natively.
+    pub fn with_webgl2_limits(self) -> Result<Self, GpuError> {
+        Self::on_adapter(self.adapter, true)
+    }
+
+    /// The device and queue on `adapter`, with WebGL2's limits and draw paths
+    /// where the adapter needs them or `webgl2` asks for them.
+    fn on_adapter(adapter: wgpu::Adapter, webgl2: bool) -> Result<Self, GpuError> {
         let info = adapter.get_info();
         let features = adapter.features();
-        // Vertex shaders read every instance's record from a storage buffer.
-        // WebGL2 and some GLES drivers have none there; say so before anything
-        // is built. (NVIDIA's GLES claims them but cannot translate the shader:
-        // that is caught when the pipeline is made, see render::pipelines.)
+        // Vertex shaders read every instance's record from a storage buffer
+        // where they can; WebGL2 and some GLES drivers have none there, and get
+        // data textures and WebGL2's limits instead.
         let flags = adapter.get_downlevel_capabilities().flags;
-        if !flags.contains(wgpu::DownlevelFlags::VERTEX_STORAGE) {
-            return Err(GpuError::Unsupported {
-                adapter: info.name,
-                backend: info.backend,
-                missing: "storage buffers in vertex shaders (DownlevelFlags::VERTEX_STORAGE), where instances live",
-            });
-        }
+        let vertex_storage = !webgl2
+            && flags.contains(wgpu::DownlevelFlags::VERTEX_STORAGE)
+            && adapter.limits().max_storage_buffers_per_shader_stage >= 3;
+        let limits = match vertex_storage {
+            true => wgpu::Limits::downlevel_defaults(),
+            false => wgpu::Limits::downlevel_webgl2_defaults(),
+        };
         let desc = wgpu::DeviceDescriptor {
             label: Some("glint device"),
             // Timestamps let benchmarks report GPU time; a first instance in indirect
             // commands lets batches share one multi-draw-indirect call.
             required_features: features & (wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::INDIRECT_FIRST_INSTANCE),
-            required_limits: wgpu::Limits::downlevel_defaults().using_resolution(adapter.limits()),
+            required_limits: limits.using_resolution(adapter.limits()),
             ..Default::default()
         };
         let (device, queue) = pollster::block_on(adapter.request_device(&desc))
@@ -196,7 +214,12 @@ impl Gpu {
             info.device_type,
             features
         );
-        Ok(Self { adapter, device, queue, info, anisotropy })
+        let indirect = device.features().contains(wgpu::Features::INDIRECT_FIRST_INSTANCE)
+            && flags.contains(wgpu::DownlevelFlags::INDIRECT_EXECUTION);
+        let base_vertex = !webgl2 && flags.contains(wgpu::DownlevelFlags::BASE_VERTEX);
+        // Indirect commands carry base vertices.
+        let paths = DrawPaths { vertex_storage, base_vertex, indirect: indirect && base_vertex };
+        Ok(Self { adapter, device, queue, info, anisotropy, paths })
     }
 
     /// Adapter name, backend and driver, for logs and benchmark reports.
@@ -213,8 +236,19 @@ impl Gpu {
     /// Whether the device draws from indirect commands with a first instance, so
     /// the renderer can merge batches into multi-draw-indirect calls.
     pub fn draws_indirect(&self) -> bool {
-        self.device.features().contains(wgpu::Features::INDIRECT_FIRST_INSTANCE)
-            && self.adapter.get_downlevel_capabilities().flags.contains(wgpu::DownlevelFlags::INDIRECT_EXECUTION)
+        self.paths.indirect
+    }
+
+    /// Whether vertex shaders read instances and materials from storage
+    /// buffers; where not (WebGL2, some GLES drivers) they read data textures.
+    pub fn vertex_storage(&self) -> bool {
+        self.paths.vertex_storage
+    }
+
+    /// Whether indexed draws take a base vertex; where not (WebGL2), each
+    /// draw binds its mesh's vertex buffers at the mesh.
+    pub fn base_vertex(&self) -> bool {
+        self.paths.base_vertex
     }
 
     /// Largest anisotropy the samplers use (1 when unsupported).

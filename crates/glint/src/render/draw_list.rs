@@ -4,6 +4,7 @@
 //! buffers those live in. Each list uploads only what differs from its last frame.
 
 use super::batch::{self, Batch};
+use super::gpu_array::GpuArray;
 use super::mesh_pool::MeshRange;
 use super::queue::DrawItem;
 use super::resources::GrowBuffer;
@@ -22,7 +23,7 @@ pub(crate) struct DrawList {
     pub indirect_args: Vec<wgpu::util::DrawIndexedIndirectArgs>,
     uploaded_draw_indices: Vec<u32>,
     uploaded_indirect_args: Vec<wgpu::util::DrawIndexedIndirectArgs>,
-    draw_index_buffer: GrowBuffer,
+    draw_index_buffer: GpuArray,
     /// `None` where the device cannot draw indirect with a first instance.
     pub indirect: Option<GrowBuffer>,
     /// The Renderer block for this list: the instances and this list's draw indices.
@@ -40,11 +41,10 @@ impl DrawList {
         device: &wgpu::Device,
         label: &'static str,
         layout: &wgpu::BindGroupLayout,
-        instances: &wgpu::Buffer,
-        indirect: bool,
+        instances: &GpuArray,
+        (indirect, storage): (bool, bool),
     ) -> Self {
-        let storage = wgpu::BufferUsages::STORAGE;
-        let draw_index_buffer = GrowBuffer::new(device, label, storage, 1024 * 4);
+        let draw_index_buffer = GpuArray::new(device, label, 4, 1024, storage);
         let indirect = indirect.then(|| GrowBuffer::new(device, label, wgpu::BufferUsages::INDIRECT, 1024 * 20));
         let bind_group = bind(device, label, layout, instances, &draw_index_buffer);
         Self {
@@ -96,7 +96,7 @@ impl DrawList {
     }
 
     /// Point the bind group at a new instance buffer.
-    pub(crate) fn rebind(&mut self, device: &wgpu::Device, layout: &wgpu::BindGroupLayout, instances: &wgpu::Buffer) {
+    pub(crate) fn rebind(&mut self, device: &wgpu::Device, layout: &wgpu::BindGroupLayout, instances: &GpuArray) {
         self.bind_group = bind(device, self.label, layout, instances, &self.draw_index_buffer);
     }
 
@@ -107,11 +107,11 @@ impl DrawList {
         &mut self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
-        (layout, instances): (&wgpu::BindGroupLayout, &wgpu::Buffer),
+        (layout, instances): (&wgpu::BindGroupLayout, &GpuArray),
         one_by_one: bool,
     ) -> Result<ListUpload, RenderError> {
         let mut written = ListUpload { draw_indices: 0, indirect: 0 };
-        if self.draw_index_buffer.reserve(device, std::mem::size_of_val(self.draw_indices.as_slice()) as u64)? {
+        if self.draw_index_buffer.reserve(device, 4, self.draw_indices.len())? {
             self.uploaded_draw_indices.clear();
             self.rebind(device, layout, instances);
         }
@@ -143,15 +143,15 @@ fn bind(
     device: &wgpu::Device,
     label: &str,
     layout: &wgpu::BindGroupLayout,
-    instances: &wgpu::Buffer,
-    draw_indices: &GrowBuffer,
+    instances: &GpuArray,
+    draw_indices: &GpuArray,
 ) -> wgpu::BindGroup {
     device.create_bind_group(&wgpu::BindGroupDescriptor {
         label: Some(label),
         layout,
         entries: &[
-            wgpu::BindGroupEntry { binding: 0, resource: instances.as_entire_binding() },
-            wgpu::BindGroupEntry { binding: 1, resource: draw_indices.buffer.as_entire_binding() },
+            wgpu::BindGroupEntry { binding: 0, resource: instances.binding() },
+            wgpu::BindGroupEntry { binding: 1, resource: draw_indices.binding() },
         ],
     })
 }

@@ -158,7 +158,7 @@ impl Renderer {
             bound.texture_set = Some(key.texture_set);
             stats.bind_groups_set += 1;
         }
-        if bound.page != Some(key.page) {
+        if bound.page != Some(key.page) && self.base_vertex {
             self.registry.mesh_pool.bind(pass, key.page);
             bound.page = Some(key.page);
         }
@@ -172,7 +172,14 @@ impl Renderer {
                 for b in run {
                     let mesh = self.registry.shapes[b.shape.0 as usize].gpu.expect("prepared");
                     let indices = mesh.first_index..mesh.first_index + mesh.index_count;
-                    pass.draw_indexed(indices, mesh.base_vertex, b.first_instance..b.first_instance + b.instance_count);
+                    let base_vertex = match self.base_vertex {
+                        true => mesh.base_vertex,
+                        false => {
+                            self.registry.mesh_pool.bind_from(pass, key.page, mesh.base_vertex as u64);
+                            0
+                        }
+                    };
+                    pass.draw_indexed(indices, base_vertex, b.first_instance..b.first_instance + b.instance_count);
                 }
                 stats.draw_calls += run.len() as u32;
             }

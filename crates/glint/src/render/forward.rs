@@ -105,7 +105,7 @@ impl Renderer {
             }
         }
         let layout = &self.registry.pipelines.instance_layout;
-        let written = self.forward.upload(&self.device, &self.queue, (layout, self.instances.buffer()), naive)?;
+        let written = self.forward.upload(&self.device, &self.queue, (layout, self.instances.array()), naive)?;
         bytes.draw_indices += written.draw_indices;
         bytes.indirect += written.indirect;
         stats.instances_drawn = self.forward.draw_indices.len() as u64;
@@ -117,8 +117,8 @@ impl Renderer {
     pub(super) fn upload_instances(&mut self, bytes: &mut UploadStats) -> Result<(), RenderError> {
         if self.instances.reserve(&self.device, self.store.len())? {
             self.store.mark_all_dirty();
-            self.forward.rebind(&self.device, &self.registry.pipelines.instance_layout, self.instances.buffer());
-            self.shadow_list.rebind(&self.device, &self.registry.pipelines.instance_layout, self.instances.buffer());
+            self.forward.rebind(&self.device, &self.registry.pipelines.instance_layout, self.instances.array());
+            self.shadow_list.rebind(&self.device, &self.registry.pipelines.instance_layout, self.instances.array());
         }
         for range in self.store.take_dirty() {
             let data = &self.store.instances[range.start as usize..range.end as usize];

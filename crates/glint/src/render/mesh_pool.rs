@@ -119,10 +119,18 @@ impl MeshPool {
 
     /// Bind page `page`'s vertex streams and index buffer.
     pub(crate) fn bind(&self, pass: &mut wgpu::RenderPass<'_>, page: u16) {
+        self.bind_from(pass, page, 0);
+    }
+
+    /// Bind page `page`'s buffers with the vertex streams starting at vertex
+    /// `first`, for devices whose indexed draws take no base vertex (WebGL2):
+    /// a mesh's draw then gives base vertex 0.
+    pub(crate) fn bind_from(&self, pass: &mut wgpu::RenderPass<'_>, page: u16, first: u64) {
         let page = &self.pages[page as usize];
         // Only the filled part: the rest was never written.
         for ((slot, buffer), stream) in page.streams.iter().enumerate().zip(page.layout.streams()) {
-            pass.set_vertex_buffer(slot as u32, buffer.slice(..page.vertices_used * u64::from(stream.stride())));
+            let stride = u64::from(stream.stride());
+            pass.set_vertex_buffer(slot as u32, buffer.slice(first * stride..page.vertices_used * stride));
         }
         pass.set_index_buffer(page.indices.slice(..page.indices_used * 4), wgpu::IndexFormat::Uint32);
     }

@@ -9,6 +9,12 @@
 //! | 2 | Material | a material is added or edited | `materials: array<MaterialBlock>` (the table, indexed by material id), one texture set: diffuse / normal / specular maps, sampler, metallic-roughness / occlusion / emissive maps |
 //! | 3 | Renderer | instances: where entities changed; draw indices: when the visible set changed, one write | `instances: array<Instance>` (transform rows + material index, persistent), `draw_indices: array<u32>` (visible instances in draw order) |
 //!
+//! Where vertex shaders cannot read storage buffers (WebGL2, some GLES drivers;
+//! [`Gpu::vertex_storage`](crate::Gpu::vertex_storage)), the material table and
+//! both Renderer-block arrays are data textures instead (`gpu_array.rs`), read
+//! record by record in `forward.wgsl`'s `DATA_TEXTURES` variant; everything else
+//! is the same.
+//!
 //! Every pipeline shares one layout with these four groups, so groups 0, 1 and 3
 //! are bound once per pass and group 2 changes only between texture sets (materials
 //! with the same maps share a bind group; untextured materials all share one).
@@ -25,6 +31,7 @@ mod error;
 mod forward;
 mod frame;
 mod frame_variant;
+mod gpu_array;
 mod instances;
 mod materials;
 mod mesh_pool;
@@ -136,6 +143,8 @@ pub struct Renderer {
     /// Samples of a post-processed view's HDR target: the output's where the
     /// adapter multisamples the HDR format, else 1.
     hdr_msaa: bool,
+    /// Whether indexed draws take a base vertex ([`Gpu::base_vertex`]).
+    base_vertex: bool,
 }
 
 fn ms_since(t: Instant) -> f64 {
@@ -156,20 +165,20 @@ impl Renderer {
         let scene_group =
             shadow_maps.scene_group(&device, &pipelines.scene_layout, &scene_block.buffer, &shadow_block.buffer);
         let views = ViewBlocks::new(&device, &pipelines.camera_layout);
-        let instances = InstanceBuffer::new(&device);
+        let instances = InstanceBuffer::new(&device, gpu.vertex_storage());
         let forward = DrawList::new(
             &device,
             "renderer block: forward draw indices",
             &pipelines.instance_layout,
-            instances.buffer(),
-            gpu.draws_indirect(),
+            instances.array(),
+            (gpu.draws_indirect(), gpu.vertex_storage()),
         );
         let shadow_list = DrawList::new(
             &device,
             "renderer block: shadow draw indices",
             &pipelines.instance_layout,
-            instances.buffer(),
-            gpu.draws_indirect(),
+            instances.array(),
+            (gpu.draws_indirect(), gpu.vertex_storage()),
         );
         Self {
             device,
@@ -194,6 +203,7 @@ impl Renderer {
             visible: Visible::default(),
             view_targets: Vec::new(),
             post: post::PostChain::new(&gpu.device),
+            base_vertex: gpu.base_vertex(),
             hdr_msaa: {
                 let flags = gpu.adapter.get_texture_format_features(crate::gpu::HDR_FORMAT).flags;
                 flags.sample_count_supported(4) && flags.contains(wgpu::TextureFormatFeatureFlags::MULTISAMPLE_RESOLVE)

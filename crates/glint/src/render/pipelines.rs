@@ -6,6 +6,7 @@
 //! formats. Shader modules are cached per variant, pipelines per key; a key's
 //! index in the cache is its id in sort keys.
 
+use super::gpu_array;
 use crate::gpu::{sampler_entry, texture_entry, DriverErrors, TargetFormat, COLOR_FORMAT, DEPTH_FORMAT};
 use crate::scene::{BlendState, Compare, Cull, Mesh, RenderStates, SkinVertex, StencilOp, Vertex};
 use crate::shader::{LightCounts, ShaderError, ShaderFeatures, ShaderLibrary};
@@ -218,7 +219,10 @@ fn depth_stencil(states: &RenderStates, format: wgpu::TextureFormat) -> wgpu::De
 }
 
 impl Pipelines {
-    pub(crate) fn new(device: &wgpu::Device) -> Self {
+    /// The layouts and an empty cache; the material table and the Renderer
+    /// block are storage buffers when `vertex_storage`, else data textures
+    /// (`render/gpu_array.rs`), in the layouts and in the shaders.
+    pub(crate) fn new(device: &wgpu::Device, vertex_storage: bool) -> Self {
         let all = wgpu::ShaderStages::VERTEX_FRAGMENT;
         let layout = |label, entries: &[wgpu::BindGroupLayoutEntry]| {
             device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some(label), entries })
@@ -251,20 +255,11 @@ impl Pipelines {
         );
         // One record per view, picked by a dynamic offset (render/views.rs).
         let camera_layout = layout("renderer: camera block layout (group 1)", &[uniform_entry(0, all, true)]);
-        let storage = |binding, visibility| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility,
-            ty: wgpu::BindingType::Buffer {
-                ty: wgpu::BufferBindingType::Storage { read_only: true },
-                has_dynamic_offset: false,
-                min_binding_size: None,
-            },
-            count: None,
-        };
+        let array = |binding, visibility| gpu_array::layout_entry(binding, visibility, vertex_storage);
         let material_layout = layout(
             "renderer: material block layout (group 2)",
             &[
-                storage(0, all),
+                array(0, all),
                 texture_entry(1),
                 texture_entry(2),
                 texture_entry(3),
@@ -276,7 +271,7 @@ impl Pipelines {
         );
         let vertex = wgpu::ShaderStages::VERTEX;
         let instance_layout =
-            layout("renderer: renderer block layout (group 3)", &[storage(0, vertex), storage(1, vertex)]);
+            layout("renderer: renderer block layout (group 3)", &[array(0, vertex), array(1, vertex)]);
         // The sky reads groups 0–1 only and gets a layout of just those, so it can be
         // drawn before any material is bound; the forward groups 2–3 are set again after it.
         let sky_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -308,7 +303,7 @@ impl Pipelines {
             layout: pipeline_layout,
             shadow_layout,
             sky_layout,
-            library: ShaderLibrary::new(),
+            library: ShaderLibrary::new(vertex_storage),
             modules: HashMap::new(),
             sky_module: None,
             forward_cache: Vec::new(),

@@ -117,9 +117,9 @@ impl Registry {
             ..Default::default()
         });
         Self {
-            pipelines: Pipelines::new(&device),
+            pipelines: Pipelines::new(&device, gpu.vertex_storage()),
             mesh_pool: MeshPool::new(&device),
-            material_table: MaterialTable::new(&device),
+            material_table: MaterialTable::new(&device, gpu.vertex_storage()),
             uploader,
             sampler,
             defaults,

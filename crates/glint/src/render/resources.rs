@@ -1,7 +1,8 @@
 //! Core layer: GPU twins of scene data — textures (with mipmaps made on the GPU),
-//! the material table — and the Renderer block's instance buffers.
+//! the material table — and the Renderer block's instance records.
 
 use super::blocks::{InstanceGpu, MaterialGpu};
+use super::gpu_array::GpuArray;
 use super::RenderError;
 use crate::asset::Texture;
 use crate::gpu::{Blitter, DriverErrors};
@@ -135,20 +136,26 @@ impl GrowBuffer {
     }
 }
 
+/// Bytes of one record of `T` (records are small: a few dozen bytes).
+fn record_bytes<T>() -> u32 {
+    std::mem::size_of::<T>() as u32
+}
+
 /// The material table of the Material block (`@group(2) @binding(0)`): one
 /// [`MaterialGpu`] per material id.
-pub(crate) struct MaterialTable(GrowBuffer);
+pub(crate) struct MaterialTable(GpuArray);
 
 impl MaterialTable {
-    pub(crate) fn new(device: &wgpu::Device) -> Self {
-        let bytes = 64 * std::mem::size_of::<MaterialGpu>() as u64;
-        Self(GrowBuffer::new(device, "material block: material table", wgpu::BufferUsages::STORAGE, bytes))
+    /// A table with room for 64 materials: a storage buffer when `storage`, else a data texture.
+    pub(crate) fn new(device: &wgpu::Device, storage: bool) -> Self {
+        let label = "material block: material table";
+        Self(GpuArray::new(device, label, record_bytes::<MaterialGpu>(), 64, storage))
     }
 
     /// Make room for `materials`; returns whether the table was replaced (every
     /// material must be written again and every material bind group rebuilt).
     pub(crate) fn reserve(&mut self, device: &wgpu::Device, materials: usize) -> Result<bool, RenderError> {
-        self.0.reserve(device, (materials * std::mem::size_of::<MaterialGpu>()) as u64)
+        self.0.reserve(device, record_bytes::<MaterialGpu>(), materials)
     }
 
     /// Write material `id`'s entry; returns bytes written.
@@ -157,24 +164,25 @@ impl MaterialTable {
     }
 
     pub(crate) fn binding(&self) -> wgpu::BindingResource<'_> {
-        self.0.buffer.as_entire_binding()
+        self.0.binding()
     }
 }
 
 /// The instances of the Renderer block (`@group(3) @binding(0)`): every stored
 /// instance record, persistent between frames (each [`DrawList`](super::draw_list::DrawList)
 /// binds it beside its own draw indices).
-pub(crate) struct InstanceBuffer(GrowBuffer);
+pub(crate) struct InstanceBuffer(GpuArray);
 
 impl InstanceBuffer {
-    pub(crate) fn new(device: &wgpu::Device) -> Self {
-        Self(GrowBuffer::new(device, "renderer block: instances", wgpu::BufferUsages::STORAGE, 1024 * 64))
+    /// Room for 1,024 records: a storage buffer when `storage`, else a data texture.
+    pub(crate) fn new(device: &wgpu::Device, storage: bool) -> Self {
+        Self(GpuArray::new(device, "renderer block: instances", record_bytes::<InstanceGpu>(), 1024, storage))
     }
 
     /// Make room for `instances` records. Returns whether the buffer was replaced
     /// (its contents must be written again and its bind groups rebuilt).
     pub(crate) fn reserve(&mut self, device: &wgpu::Device, instances: usize) -> Result<bool, RenderError> {
-        self.0.reserve(device, (instances * std::mem::size_of::<InstanceGpu>()) as u64)
+        self.0.reserve(device, record_bytes::<InstanceGpu>(), instances)
     }
 
     /// Write `data` at record `first`; returns bytes written.
@@ -182,7 +190,7 @@ impl InstanceBuffer {
         self.0.write(queue, first.into(), data)
     }
 
-    pub(crate) fn buffer(&self) -> &wgpu::Buffer {
-        &self.0.buffer
+    pub(crate) fn array(&self) -> &GpuArray {
+        &self.0
     }
 }

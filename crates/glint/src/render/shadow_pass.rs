@@ -274,7 +274,7 @@ impl Renderer {
         let block = ShadowGpu::new(views, self.shadow_maps.size_2d, self.shadow_maps.size_cube);
         bytes.scene += self.shadow_block.update(&self.queue, block);
         let layout = &self.registry.pipelines.instance_layout;
-        let written = self.shadow_list.upload(&self.device, &self.queue, (layout, self.instances.buffer()), false)?;
+        let written = self.shadow_list.upload(&self.device, &self.queue, (layout, self.instances.array()), false)?;
         bytes.draw_indices += written.draw_indices;
         bytes.indirect += written.indirect;
         Ok(())

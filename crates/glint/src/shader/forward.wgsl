@@ -27,9 +27,13 @@ const SLOT_METALLIC_ROUGHNESS: u32 = 8u;
 const SLOT_OCCLUSION: u32 = 16u;
 const SLOT_EMISSIVE: u32 = 32u;
 
-// Material block: the table of every material, indexed by the instance's material,
-// and this draw's texture set (materials with the same maps share one).
+// Material block: the table of every material, indexed by the instance's material
+// (`material_at`), and this draw's texture set (materials with the same maps share one).
+#ifdef DATA_TEXTURES
+@group(2) @binding(0) var material_texels: texture_2d<u32>;
+#else
 @group(2) @binding(0) var<storage, read> materials: array<MaterialBlock>;
+#endif
 @group(2) @binding(1) var diffuse_map: texture_2d<f32>;
 @group(2) @binding(2) var normal_map: texture_2d<f32>;
 @group(2) @binding(3) var specular_map: texture_2d<f32>;
@@ -56,10 +60,67 @@ struct Instance {
 }
 
 // Renderer block: every stored instance (persistent, rewritten only where entities
-// changed), and this frame's visible instances in draw order; a draw's
-// first_instance points at its run of indices.
+// changed; `instance_at`), and this frame's visible instances in draw order
+// (`draw_index_at`); a draw's first_instance points at its run of indices.
+#ifdef DATA_TEXTURES
+// Where vertex shaders have no storage buffers (WebGL2), the three arrays are
+// data textures of DATA_WIDTH texels a row, a record's 16-byte pieces in
+// consecutive texels (render/gpu_array.rs).
+@group(3) @binding(0) var instance_texels: texture_2d<u32>;
+@group(3) @binding(1) var draw_index_texels: texture_2d<u32>;
+
+fn texel(array: texture_2d<u32>, i: u32) -> vec4<u32> {
+    return textureLoad(array, vec2<u32>(i % #{DATA_WIDTH}u, i / #{DATA_WIDTH}u), 0);
+}
+
+fn material_at(i: u32) -> MaterialBlock {
+    let at = 6u * i;
+    let uv_x = texel(material_texels, at + 4u);
+    let uv_y = texel(material_texels, at + 5u);
+    var m: MaterialBlock;
+    m.base_color = bitcast<vec4<f32>>(texel(material_texels, at));
+    m.coeffs = bitcast<vec4<f32>>(texel(material_texels, at + 1u));
+    m.pbr = bitcast<vec4<f32>>(texel(material_texels, at + 2u));
+    m.emissive = bitcast<vec4<f32>>(texel(material_texels, at + 3u));
+    m.uv_x = bitcast<vec3<f32>>(uv_x.xyz);
+    m.alpha_cutoff = bitcast<f32>(uv_x.w);
+    m.uv_y = bitcast<vec3<f32>>(uv_y.xyz);
+    m.uv1_maps = uv_y.w;
+    return m;
+}
+
+fn instance_at(i: u32) -> Instance {
+    let ids = texel(instance_texels, 4u * i + 3u);
+    return Instance(
+        bitcast<vec4<f32>>(texel(instance_texels, 4u * i)),
+        bitcast<vec4<f32>>(texel(instance_texels, 4u * i + 1u)),
+        bitcast<vec4<f32>>(texel(instance_texels, 4u * i + 2u)),
+        ids.x,
+        ids.y,
+        ids.z,
+        ids.w,
+    );
+}
+
+fn draw_index_at(i: u32) -> u32 {
+    return texel(draw_index_texels, i).x;
+}
+#else
 @group(3) @binding(0) var<storage, read> instances: array<Instance>;
 @group(3) @binding(1) var<storage, read> draw_indices: array<u32>;
+
+fn material_at(i: u32) -> MaterialBlock {
+    return materials[i];
+}
+
+fn instance_at(i: u32) -> Instance {
+    return instances[i];
+}
+
+fn draw_index_at(i: u32) -> u32 {
+    return draw_indices[i];
+}
+#endif
 
 struct VertexIn {
     @location(0) position: vec3<f32>,
@@ -131,18 +192,18 @@ fn skin_matrix(at: u32, instance: Instance, joints: vec4<u32>, weights: vec4<f32
     }
     let first = at + instance.joints;
     let last = instance.joint_count - 1u;
-    var m = record_matrix(instances[first + min(joints.x, last)]) * weights.x;
-    m += record_matrix(instances[first + min(joints.y, last)]) * weights.y;
-    m += record_matrix(instances[first + min(joints.z, last)]) * weights.z;
-    m += record_matrix(instances[first + min(joints.w, last)]) * weights.w;
+    var m = record_matrix(instance_at(first + min(joints.x, last))) * weights.x;
+    m += record_matrix(instance_at(first + min(joints.y, last))) * weights.y;
+    m += record_matrix(instance_at(first + min(joints.z, last))) * weights.z;
+    m += record_matrix(instance_at(first + min(joints.w, last))) * weights.w;
     return m;
 }
 #endif
 
 @vertex
 fn vs_main(v: VertexIn, @builtin(instance_index) draw_instance: u32) -> VertexOut {
-    let at = draw_indices[draw_instance];
-    let instance = instances[at];
+    let at = draw_index_at(draw_instance);
+    let instance = instance_at(at);
     let model = record_matrix(instance);
     var position = vec4<f32>(v.position, 1.0);
     var normal = v.normal;
@@ -171,7 +232,7 @@ fn vs_main(v: VertexIn, @builtin(instance_index) draw_instance: u32) -> VertexOu
     out.world_position = world.xyz;
     out.normal = cofactor * normal * det_sign;
 #ifdef TEXCOORDS
-    out.uv = uv_transform(materials[instance.material], v.uv);
+    out.uv = uv_transform(material_at(instance.material), v.uv);
 #endif
 #ifdef NORMAL_MAP
     out.tangent = vec4<f32>(m * tangent, v.tangent.w * det_sign);
@@ -185,8 +246,8 @@ fn vs_main(v: VertexIn, @builtin(instance_index) draw_instance: u32) -> VertexOu
 #endif
 #ifdef TEXCOORDS
 #ifdef UV1
-    out.uv1 = uv_transform(materials[instance.material], v.uv1);
-    out.uv1_maps = materials[instance.material].uv1_maps;
+    out.uv1 = uv_transform(material_at(instance.material), v.uv1);
+    out.uv1_maps = material_at(instance.material).uv1_maps;
 #endif
 #endif
     return out;
@@ -468,7 +529,7 @@ fn map_uv(in: VertexOut, slot: u32) -> vec2<f32> {
 
 @fragment
 fn fs_main(in: VertexOut, @builtin(front_facing) front: bool) -> @location(0) vec4<f32> {
-    let material = materials[in.material];
+    let material = material_at(in.material);
     var base = material.base_color;
 #ifdef VERTEX_COLOR
     base *= in.color;
@@ -538,14 +599,14 @@ fn fs_main(in: VertexOut, @builtin(front_facing) front: bool) -> @location(0) ve
 // Shadow maps: alpha-tested casters drop their cut-away fragments.
 fn shadow_alpha_test(in: VertexOut) {
 #ifdef ALPHA_MASK
-    var alpha = materials[in.material].base_color.a;
+    var alpha = material_at(in.material).base_color.a;
 #ifdef VERTEX_COLOR
     alpha *= in.color.a;
 #endif
 #ifdef DIFFUSE_MAP
     alpha *= textureSampleLevel(diffuse_map, material_sampler, map_uv(in, SLOT_DIFFUSE), 0.0).a;
 #endif
-    if alpha < materials[in.material].alpha_cutoff {
+    if alpha < material_at(in.material).alpha_cutoff {
         discard;
     }
 #endif

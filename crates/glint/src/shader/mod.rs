@@ -159,16 +159,24 @@ impl ShaderError {
     }
 }
 
+/// Texels in a row of the data textures that stand in for storage buffers
+/// where vertex shaders cannot read those (`DATA_WIDTH` in `forward.wgsl`, see
+/// `render/gpu_array.rs`): WebGL2's guaranteed smallest texture limit.
+pub(crate) const DATA_TEXTURE_WIDTH: u32 = 2048;
+
 /// Composes glint's shaders with naga_oil.
 pub(crate) struct ShaderLibrary {
     composer: Composer,
     blocks_added: bool,
+    /// Whether the forward shader reads its arrays from storage buffers (else
+    /// from data textures: the `DATA_TEXTURES` variant).
+    vertex_storage: bool,
 }
 
 impl ShaderLibrary {
-    /// A library with nothing composed yet.
-    pub(crate) fn new() -> Self {
-        Self { composer: Composer::default(), blocks_added: false }
+    /// A library with nothing composed yet, reading storage buffers when `vertex_storage`.
+    pub(crate) fn new(vertex_storage: bool) -> Self {
+        Self { composer: Composer::default(), blocks_added: false, vertex_storage }
     }
 
     fn compose(
@@ -205,6 +213,10 @@ impl ShaderLibrary {
     ) -> Result<wgpu::naga::Module, ShaderError> {
         let mut defs = features.shader_defs();
         defs.extend(lights.shader_defs());
+        if !self.vertex_storage {
+            defs.insert("DATA_TEXTURES".into(), ShaderDefValue::Bool(true));
+        }
+        defs.insert("DATA_WIDTH".into(), ShaderDefValue::UInt(DATA_TEXTURE_WIDTH));
         self.compose("glint/shader/forward.wgsl", include_str!("forward.wgsl"), defs)
     }
 
@@ -228,7 +240,6 @@ mod tests {
         // Every #ifdef region and every interaction of up to three of them (the
         // nesting is at most three deep), plus everything at once: exhaustive
         // would be 2^bits, which grows too fast to keep.
-        let mut library = ShaderLibrary::new();
         let bits: Vec<u32> = ShaderFeatures::all().iter().map(|f| f.bits()).collect();
         let mut sets = vec![0, ShaderFeatures::all().bits()];
         for (i, a) in bits.iter().enumerate() {
@@ -239,15 +250,24 @@ mod tests {
         // Each set with one of these light mixes in turn: no lights, each kind alone, both.
         let mixes =
             [(0, 0), (1, 0), (0, 1), (2, 3)].map(|(directional, positional)| LightCounts { directional, positional });
-        for (k, set) in sets.into_iter().enumerate() {
-            let features = ShaderFeatures::from_bits_truncate(set);
-            let lights = mixes[k % mixes.len()];
-            let module = library.forward(features, lights).unwrap_or_else(|e| panic!("{features:?} {lights:?}: {e}"));
-            let mut validator =
-                wgpu::naga::valid::Validator::new(Default::default(), wgpu::naga::valid::Capabilities::all());
-            validator.validate(&module).unwrap_or_else(|e| panic!("{features:?}: {e:?}"));
+        // Both ways of reading the arrays: storage buffers and data textures.
+        for storage in [true, false] {
+            let mut library = ShaderLibrary::new(storage);
+            for (k, &set) in sets.iter().enumerate() {
+                let features = ShaderFeatures::from_bits_truncate(set);
+                let lights = mixes[k % mixes.len()];
+                let module =
+                    library.forward(features, lights).unwrap_or_else(|e| panic!("{features:?} {lights:?}: {e}"));
+                let mut validator =
+                    wgpu::naga::valid::Validator::new(Default::default(), wgpu::naga::valid::Capabilities::all());
+                validator.validate(&module).unwrap_or_else(|e| panic!("{features:?} storage {storage}: {e:?}"));
+                let stored = (module.global_variables.iter())
+                    .filter(|(_, v)| matches!(v.space, wgpu::naga::AddressSpace::Storage { .. }))
+                    .count();
+                assert_eq!(stored == 0, !storage, "{features:?}: {stored} storage buffers");
+            }
+            library.sky().expect("sky composes");
         }
-        library.sky().expect("sky composes");
     }
 
     #[test]
@@ -256,7 +276,7 @@ mod tests {
         // arrays (NVIDIA's GL driver, WebGL2) take the same shader.
         let without = wgpu::naga::valid::Capabilities::all() - wgpu::naga::valid::Capabilities::CUBE_ARRAY_TEXTURES;
         let lights = LightCounts { directional: 1, positional: 1 };
-        let module = ShaderLibrary::new().forward(ShaderFeatures::all(), lights).expect("composes");
+        let module = ShaderLibrary::new(true).forward(ShaderFeatures::all(), lights).expect("composes");
         wgpu::naga::valid::Validator::new(Default::default(), without).validate(&module).expect("valid");
         let cubes = module.global_variables.iter().filter(|(_, v)| {
             matches!(

@@ -24,6 +24,24 @@ pub fn gl_gpu() -> Option<&'static Gpu> {
     shared(&GPU, || Gpu::headless_on(wgpu::Backends::GL))
 }
 
+/// The default GPU drawing as on WebGL2 ([`Gpu::with_webgl2_limits`]), like [`gpu`].
+pub fn webgl2_gpu() -> Option<&'static Gpu> {
+    static GPU: OnceLock<Result<Gpu, String>> = OnceLock::new();
+    shared(&GPU, || Gpu::headless().and_then(Gpu::with_webgl2_limits))
+}
+
+/// The GL backend's GPU drawing as on WebGL2, like [`gpu`].
+pub fn gl_webgl2_gpu() -> Option<&'static Gpu> {
+    static GPU: OnceLock<Result<Gpu, String>> = OnceLock::new();
+    shared(&GPU, || Gpu::headless_on(wgpu::Backends::GL).and_then(Gpu::with_webgl2_limits))
+}
+
+/// The largest difference of any channel of any pixel.
+pub fn max_difference(a: &image::RgbaImage, b: &image::RgbaImage) -> u8 {
+    assert_eq!(a.dimensions(), b.dimensions());
+    a.pixels().zip(b.pixels()).flat_map(|(p, q)| p.0.iter().zip(q.0).map(|(x, y)| x.abs_diff(y))).max().unwrap_or(0)
+}
+
 fn shared(
     cell: &'static OnceLock<Result<Gpu, String>>,
     create: impl FnOnce() -> Result<Gpu, glint::GpuError>,
