@@ -756,7 +756,7 @@ mod tests {
             ("one convex face of N distinct corners", format!("{circle}f{fan}\n")),
         ];
         for (name, text) in cases {
-            let start = std::time::Instant::now();
+            let start = web_time::Instant::now();
             let loaded = parse_obj(Path::new("bench.obj"), text.as_bytes(), LoadOptions::default());
             let seconds = start.elapsed().as_secs_f64();
             let outcome = match loaded {

@@ -107,7 +107,7 @@ impl Renderer {
     ) {
         let mut at = range.start;
         for stage in list.batches[range].chunk_by(|a, b| a.stage == b.stage) {
-            let (start, calls, draws) = (std::time::Instant::now(), stats.draw_calls, stats.draws);
+            let (start, calls, draws) = (web_time::Instant::now(), stats.draw_calls, stats.draws);
             pass.push_debug_group(&stage_name(stage[0].stage));
             let naive = self.mode == FrameMode::Naive;
             for run in stage.chunk_by(|a, b| !naive && self.run_key(a) == self.run_key(b)) {

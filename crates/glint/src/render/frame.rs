@@ -10,7 +10,7 @@ use super::view::ViewFrame;
 use super::{ms_since, queue, FrameMode, FrameStats, FrameVariant, RenderError, Renderer};
 use crate::gpu::{OffscreenTarget, TargetFormat, HDR_FORMAT};
 use crate::scene::{Entity, Lighting, PostEffect, View, MAX_LIGHTS, MAX_POST_EFFECTS};
-use std::time::Instant;
+use web_time::Instant;
 
 /// How a view's picture reaches the output (stage 8 of [`Renderer::run_frame`]).
 enum Compose<'a> {

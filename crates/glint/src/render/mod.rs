@@ -69,9 +69,9 @@ use frame_variant::FrameVariant;
 use instances::InstanceStore;
 use resources::InstanceBuffer;
 use shadow_maps::{ShadowGpu, ShadowMaps, ShadowSupport};
-use std::time::Instant;
 use views::ViewBlocks;
 use visible::Visible;
+use web_time::Instant;
 
 /// An entity as submitted this frame: its store slot and what it draws with.
 struct Submitted {

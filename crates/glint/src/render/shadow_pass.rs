@@ -22,7 +22,7 @@ use super::{ms_since, FrameStats, PassStats, RenderError, Renderer};
 use crate::gpu::OffscreenTarget;
 use crate::scene::{Aabb, AlphaMode, Light, LightKind, Lighting, View, MAX_LIGHTS};
 use glam::Vec3;
-use std::time::Instant;
+use web_time::Instant;
 
 /// The shadow maps a view's shadow pass drew this frame: what the forward pass
 /// of the same view ([`Renderer::flush`]) samples. [`Shadows::none`] draws

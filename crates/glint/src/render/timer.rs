@@ -190,7 +190,7 @@ impl GpuTimer {
     pub(crate) fn read(&mut self, device: &wgpu::Device) -> Option<GpuTimes> {
         // Another thread polling the same device may be the one that runs a map
         // callback, just after this thread's wait returns: wait for the callbacks too.
-        let start = std::time::Instant::now();
+        let start = web_time::Instant::now();
         while self.slots.iter().any(|s| s.state.load(Ordering::Acquire) == MAPPING) {
             device.poll(wgpu::PollType::wait_indefinitely()).ok()?;
             if start.elapsed() > std::time::Duration::from_secs(10) {
