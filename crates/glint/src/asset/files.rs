@@ -1,12 +1,15 @@
 //! Core layer: opening files glint did not write. Every file is read through
-//! [`read_file`] (regular files only, size checked from metadata before a byte is
-//! read) and every path a file names goes through [`AssetFolder::resolve`]
+//! [`Files::read`] (from disk: regular files only, size checked from metadata
+//! before a byte is read; or from a [`FileSet`] in memory, as the web viewer
+//! fetches them) and every path a file names goes through [`AssetFolder::resolve`]
 //! (inside the asset roots after resolving symlinks). The numbers are the policy
 //! in `docs/limits.md`.
 
 use super::{Diagnostic, LoadOptions};
+use std::collections::{BTreeSet, HashMap};
 use std::io::Read;
 use std::path::{Component, Path, PathBuf};
+use std::sync::{Arc, Mutex};
 
 /// Largest `.scn` file read, in bytes.
 pub const MAX_SCENE_BYTES: u64 = 64 << 20;
@@ -23,6 +26,122 @@ pub const MAX_IMAGE_FILE_BYTES: u64 = 256 << 20;
 /// their buffers and every texture.
 pub const MAX_SCENE_TOTAL_BYTES: u64 = 4 << 30;
 
+/// Where a load reads its files: the file system, or files held in memory.
+#[derive(Clone, Debug, Default)]
+pub enum Files {
+    /// The file system (the default).
+    #[default]
+    Disk,
+    /// Only the files of this set, by path relative to its root (a web page's
+    /// site): paths are checked as written, never against a real folder.
+    Memory(Arc<FileSet>),
+}
+
+/// Two sources are equal when they are the disk, or the same set.
+impl PartialEq for Files {
+    fn eq(&self, other: &Self) -> bool {
+        match (self, other) {
+            (Files::Disk, Files::Disk) => true,
+            (Files::Memory(a), Files::Memory(b)) => Arc::ptr_eq(a, b),
+            _ => false,
+        }
+    }
+}
+
+impl Eq for Files {}
+
+impl Files {
+    /// The whole file at `path`, at most `limit` bytes (see [`read_file`]);
+    /// from memory, a file the set lacks is noted as missing ([`FileSet::take_missing`]).
+    pub(crate) fn read(&self, path: &Path, limit: u64) -> Result<Vec<u8>, Diagnostic> {
+        match self {
+            Files::Disk => read_file(path, limit),
+            Files::Memory(set) => set.read(path, limit),
+        }
+    }
+
+    /// The size of the file at `path`, 0 when it cannot be had.
+    pub(crate) fn size(&self, path: &Path) -> u64 {
+        match self {
+            Files::Disk => std::fs::metadata(path).map_or(0, |m| m.len()),
+            Files::Memory(set) => set.lock().get(&normal(path)).map_or(0, |b| b.len() as u64),
+        }
+    }
+}
+
+/// Files held in memory by path (relative, `/`-separated, `.` and `..` applied),
+/// for loading without a file system: the web viewer fetches a scene, loads it
+/// from the set, fetches what the load found missing, and loads again.
+#[derive(Debug, Default)]
+pub struct FileSet {
+    files: Mutex<HashMap<PathBuf, Arc<[u8]>>>,
+    missing: Mutex<BTreeSet<PathBuf>>,
+}
+
+impl FileSet {
+    /// Add (or replace) the file at `path`.
+    pub fn insert(&self, path: &Path, bytes: Vec<u8>) {
+        self.lock().insert(normal(path), bytes.into());
+    }
+
+    /// The paths reads asked for that the set lacked, since the last call.
+    pub fn take_missing(&self) -> Vec<PathBuf> {
+        std::mem::take(&mut *self.missing.lock().unwrap_or_else(|e| e.into_inner())).into_iter().collect()
+    }
+
+    /// Total bytes held.
+    pub fn bytes(&self) -> u64 {
+        self.lock().values().map(|b| b.len() as u64).sum()
+    }
+
+    fn lock(&self) -> std::sync::MutexGuard<'_, HashMap<PathBuf, Arc<[u8]>>> {
+        self.files.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    fn read(&self, path: &Path, limit: u64) -> Result<Vec<u8>, Diagnostic> {
+        let key = normal(path);
+        let Some(bytes) = self.lock().get(&key).cloned() else {
+            self.missing.lock().unwrap_or_else(|e| e.into_inner()).insert(key);
+            return Err(Diagnostic::file(path, "cannot read: not found"));
+        };
+        if bytes.len() as u64 > limit {
+            return Err(over_limit(path, bytes.len() as u64, limit));
+        }
+        Ok(bytes.to_vec())
+    }
+}
+
+/// `path` relative to a set's root with `.` and `..` applied (a `..` above
+/// the root is dropped: [`AssetFolder::resolve`] refuses such paths first).
+fn normal(path: &Path) -> PathBuf {
+    let mut out = PathBuf::new();
+    for c in path.components() {
+        match c {
+            Component::ParentDir => {
+                out.pop();
+            }
+            Component::Normal(part) => out.push(part),
+            Component::CurDir | Component::RootDir | Component::Prefix(_) => {}
+        }
+    }
+    out
+}
+
+/// Whether `path` (relative) stays inside its root when `..` is applied as written.
+fn stays_inside(path: &Path) -> bool {
+    let mut depth = 0usize;
+    for c in path.components() {
+        match c {
+            Component::ParentDir if depth == 0 => return false,
+            Component::ParentDir => depth -= 1,
+            Component::Normal(_) => depth += 1,
+            Component::CurDir => {}
+            Component::RootDir | Component::Prefix(_) => return false,
+        }
+    }
+    true
+}
+
 /// Read the whole file at `path`, refusing anything but a regular file (FIFOs,
 /// devices and directories would block or never end) and files over `limit`
 /// bytes.
@@ -30,7 +149,7 @@ pub const MAX_SCENE_TOTAL_BYTES: u64 = 4 << 30;
 /// The size comes from the file's metadata before anything is read, and the read
 /// itself stops one byte past `limit`, so a file that grows meanwhile is refused
 /// too. Errors name `path`.
-pub(crate) fn read_file(path: &Path, limit: u64) -> Result<Vec<u8>, Diagnostic> {
+fn read_file(path: &Path, limit: u64) -> Result<Vec<u8>, Diagnostic> {
     let fail = |e: std::io::Error| Diagnostic::file(path, format!("cannot read: {e}"));
     // Checked before opening: opening a FIFO for reading blocks until a writer comes.
     let size = regular_size(path, std::fs::metadata(path).map_err(fail)?, limit)?;
@@ -69,6 +188,8 @@ pub(crate) struct AssetFolder {
     allow_outside: bool,
     /// What `roots` are called in messages ("the model's folder").
     roots_name: &'static str,
+    /// Where its files are read.
+    pub(crate) files: Files,
 }
 
 impl AssetFolder {
@@ -78,7 +199,8 @@ impl AssetFolder {
         let mut roots = vec![canonical(&folder)];
         roots.extend(options.asset_roots.iter().map(|r| canonical(r)));
         let roots_name = if options.asset_roots.is_empty() { "the model's folder" } else { "the asset roots" };
-        Self { folder, roots, allow_outside: options.allow_outside_assets, roots_name }
+        let (allow_outside, files) = (options.allow_outside_assets, options.files.clone());
+        Self { folder, roots, allow_outside, roots_name, files }
     }
 
     /// For a scene file `path`: its own folder, widened to the current directory
@@ -94,7 +216,8 @@ impl AssetFolder {
             }
         }
         roots.extend(options.asset_roots.iter().map(|r| canonical(r)));
-        Self { folder, roots, allow_outside: options.allow_outside_assets, roots_name: "the scene's asset roots" }
+        let (allow_outside, files) = (options.allow_outside_assets, options.files.clone());
+        Self { folder, roots, allow_outside, roots_name: "the scene's asset roots", files }
     }
 
     /// Resolve `relative` (as written in `file`): the path to read, which after
@@ -116,6 +239,10 @@ impl AssetFolder {
         let scheme = relative.split_once(':').is_some_and(|(s, _)| s.len() > 1 && !s.contains(['/', '\\']));
         if scheme {
             return Err(outside());
+        }
+        if let Files::Memory(_) = self.files {
+            // In memory the root is the set's: the path as written must stay under it.
+            return if stays_inside(&path) { Ok(path) } else { Err(outside()) };
         }
         let real = std::fs::canonicalize(&path).unwrap_or_else(|_| lexical(&canonical(&self.folder).join(relative)));
         if self.roots.iter().any(|root| real.starts_with(root)) {

@@ -3,12 +3,12 @@
 //! of any size whole and decode every image, used or not).
 //!
 //! Buffers come from the GLB binary chunk, from `data:` URIs (their decoded size
-//! checked before decoding) or from files read through [`read_file`] with
+//! checked before decoding) or from files read through [`Files::read`](super::Files::read) with
 //! [`MAX_BUFFER_BYTES`]; together one model's buffers may declare at most
 //! [`MAX_BUFFER_BYTES`]. Images are read only when a material uses them, files
-//! through [`read_file`] with [`MAX_IMAGE_FILE_BYTES`].
+//! through [`Files::read`](super::Files::read) with [`MAX_IMAGE_FILE_BYTES`].
 
-use super::{read_file, AssetFolder, Diagnostic, MAX_BUFFER_BYTES, MAX_IMAGE_FILE_BYTES};
+use super::{AssetFolder, Diagnostic, MAX_BUFFER_BYTES, MAX_IMAGE_FILE_BYTES};
 use gltf::json;
 use std::borrow::Cow;
 use std::path::{Path, PathBuf};
@@ -94,7 +94,7 @@ pub(super) fn read_buffers(
             Some(uri) if uri.starts_with("data:") => {
                 decode_data_uri(uri, MAX_BUFFER_BYTES).map_err(|e| fail(format!("buffer {i}: {e}")))?
             }
-            Some(uri) => read_file(&base.file(uri)?, MAX_BUFFER_BYTES)?,
+            Some(uri) => base.assets.files.read(&base.file(uri)?, MAX_BUFFER_BYTES)?,
         };
         let length = usize::try_from(buffer.byte_length.0).unwrap_or(usize::MAX);
         bytes.truncate(length);
@@ -117,7 +117,7 @@ pub(super) fn read_image<'b>(
             return decode_data_uri(uri, MAX_IMAGE_FILE_BYTES).map(Cow::Owned);
         }
         let file = base.file(uri).map_err(|e| e.message)?;
-        return read_file(&file, MAX_IMAGE_FILE_BYTES).map(Cow::Owned).map_err(|e| e.to_string());
+        return base.assets.files.read(&file, MAX_IMAGE_FILE_BYTES).map(Cow::Owned).map_err(|e| e.to_string());
     }
     let outside = || "its bufferView lies outside the buffers".to_string();
     let view = image.buffer_view.and_then(|v| root.buffer_views.get(v.value())).ok_or_else(outside)?;

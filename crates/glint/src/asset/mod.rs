@@ -23,7 +23,8 @@ mod scn_syntax;
 mod scn_targets;
 mod texture;
 
-pub(crate) use files::{read_file, AssetFolder};
+pub(crate) use files::AssetFolder;
+pub use files::{FileSet, Files};
 pub use files::{
     MAX_BUFFER_BYTES, MAX_IMAGE_FILE_BYTES, MAX_MATERIAL_LIBRARY_BYTES, MAX_MODEL_BYTES, MAX_SCENE_BYTES,
     MAX_SCENE_TOTAL_BYTES,
@@ -58,6 +59,8 @@ pub struct LoadOptions {
     pub texture_memory: u64,
     /// How every cloth is solved, whatever its scene block says (`None`: as it says).
     pub cloth_solve: Option<crate::sim::cloth::Solve>,
+    /// Where the files are read (default: the file system).
+    pub files: Files,
 }
 
 impl Default for LoadOptions {
@@ -67,6 +70,7 @@ impl Default for LoadOptions {
             asset_roots: Vec::new(),
             texture_memory: MAX_TEXTURE_MEMORY,
             cloth_solve: None,
+            files: Files::Disk,
         }
     }
 }

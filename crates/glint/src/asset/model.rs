@@ -124,7 +124,8 @@ impl Model {
         if !Self::is_model_path(path) {
             return Self::parse(path, &[], options); // the "not a model file" error, without reading it
         }
-        Self::parse(path, &super::read_file(path, super::MAX_MODEL_BYTES)?, options)
+        let bytes = options.files.read(path, super::MAX_MODEL_BYTES)?;
+        Self::parse(path, &bytes, options)
     }
 
     /// Move the parts to where the first animation puts them at `time` seconds

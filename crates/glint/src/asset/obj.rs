@@ -12,7 +12,7 @@
 use super::model::{Model, ModelPart};
 use super::texture::read_texture;
 use super::texture::TextureCache;
-use super::{read_file, AssetFolder, Diagnostic, LoadOptions, MaterialDesc};
+use super::{AssetFolder, Diagnostic, LoadOptions, MaterialDesc};
 use crate::scene::{smooth_normals_in_groups, AlphaMode, Material, Mesh, MeshError};
 use glam::{Mat4, Vec2, Vec3};
 use std::cell::{Cell, RefCell};
@@ -169,7 +169,7 @@ fn load_mtl(
 ) -> Result<(Vec<tobj::Material>, HashMap<String, usize>), MtlProblem> {
     let name = mtl.to_string_lossy();
     let path = folder.resolve(&name, obj).map_err(MtlProblem::Unread)?;
-    let bytes = read_file(&path, super::MAX_MATERIAL_LIBRARY_BYTES)
+    let bytes = (folder.files.read(&path, super::MAX_MATERIAL_LIBRARY_BYTES))
         .map_err(|d| MtlProblem::Unread(Diagnostic::file(obj, format!("material library {d}"))))?;
     let text = checked_mtl(&path, &bytes).map_err(MtlProblem::Invalid)?;
     let consumed = Cell::new(0);
@@ -364,7 +364,7 @@ fn convert_material(
                 return None;
             }
         };
-        let decoded = cache.get_or_decode(path.clone(), srgb, |free| read_texture(&path, srgb, free));
+        let decoded = cache.get_or_decode(path.clone(), srgb, |free| read_texture(&path, srgb, free, &folder.files));
         let drawn_without = |d| Diagnostic::file(obj, format!("material '{}': {what}: {d}; drawn without it", m.name));
         decoded.map_err(|d| warnings.push(drawn_without(d))).ok()
     };

@@ -12,9 +12,7 @@ use super::scn_syntax::{decode_scene_text, parse_blocks, Block, Pair};
 use super::scn_targets::{self, RenderTargetDesc};
 use super::texture::read_texture;
 use super::texture::TextureCache;
-use super::{
-    read_file, AssetFolder, Diagnostic, LoadOptions, Model, ShapeKind, Texture, MAX_SCENE_BYTES, MAX_SCENE_TOTAL_BYTES,
-};
+use super::{AssetFolder, Diagnostic, LoadOptions, Model, ShapeKind, Texture, MAX_SCENE_BYTES, MAX_SCENE_TOTAL_BYTES};
 use crate::render::{ShadowLayout, MAX_SHADOW_MAP_BYTES};
 use crate::scene::{
     Background, Camera, Entity, Environment, Fog, Light, Lighting, Material, PostEffect, RenderTargetId, TextureId,
@@ -251,7 +249,7 @@ pub fn load_scene(path: &Path) -> Result<SceneDesc, Diagnostic> {
 
 /// [`load_scene`] with options for the models it names.
 pub fn load_scene_with(path: &Path, options: LoadOptions) -> Result<SceneDesc, Diagnostic> {
-    let bytes = read_file(path, MAX_SCENE_BYTES)?;
+    let bytes = options.files.read(path, MAX_SCENE_BYTES)?;
     let text = decode_scene_text(path, &bytes)?;
     parse_scene_with(path, &text, options)
 }
@@ -492,7 +490,9 @@ impl Loader<'_> {
             .assets
             .resolve(pair.value.trim(), self.path)
             .map_err(|e| Diagnostic::at(self.path, pair.line, format!("\"{key}\": {}", e.message)))?;
-        self.textures.get_or_decode(file.clone(), srgb, |free| read_texture(&file, srgb, free).map_err(fail)).map(Some)
+        self.textures
+            .get_or_decode(file.clone(), srgb, |free| read_texture(&file, srgb, free, &self.assets.files).map_err(fail))
+            .map(Some)
     }
 
     fn material(&mut self, f: &mut Fields) -> Result<(), Diagnostic> {
@@ -545,7 +545,7 @@ impl Loader<'_> {
         let index = match self.model_index.get(&file) {
             Some(&i) => i,
             None => {
-                let size = std::fs::metadata(&file).map_or(0, |m| m.len());
+                let size = self.assets.files.size(&file);
                 self.charge_model_bytes(size).map_err(at)?;
                 let options = LoadOptions { texture_memory: self.textures.free(), ..self.options.clone() };
                 let model = Model::load_with(&file, options).map_err(|e| at(e.to_string()))?;

@@ -282,7 +282,8 @@ fn local_mesh(f: &mut Fields, assets: &AssetFolder) -> Result<ClothMesh, Diagnos
     if let Some(pair) = f.get("mesh") {
         let at = |e: Diagnostic| Diagnostic::at(f.path, pair.line, format!("\"mesh\": {}", e.message));
         let file = assets.resolve(pair.value.trim(), f.path).map_err(at)?;
-        return ClothMesh::load(&file).map_err(|e| Diagnostic::at(f.path, pair.line, format!("\"mesh\": {e}")));
+        return ClothMesh::read(&file, &assets.files)
+            .map_err(|e| Diagnostic::at(f.path, pair.line, format!("\"mesh\": {e}")));
     }
     let [w, d] = f.numbers::<2>("size", "2 numbers (width depth)")?.unwrap_or([1.0, 1.0]);
     if w <= 0.0 || d <= 0.0 {

@@ -1,4 +1,4 @@
-use super::{read_file, Diagnostic, TextureRef, MAX_IMAGE_FILE_BYTES};
+use super::{Diagnostic, TextureRef, MAX_IMAGE_FILE_BYTES};
 use std::collections::HashMap;
 use std::hash::Hash;
 use std::io::Cursor;
@@ -123,12 +123,12 @@ pub(crate) fn with_dissolve(color: Option<&Texture>, dissolve: &Texture) -> Text
 /// [`MAX_TEXTURE_MEMORY`] (both before decoding their pixels), and any file that
 /// is missing, unreadable or not a supported image.
 pub fn load_texture(path: &Path, srgb: bool) -> Result<Texture, Diagnostic> {
-    read_texture(path, srgb, MAX_TEXTURE_MEMORY)
+    read_texture(path, srgb, MAX_TEXTURE_MEMORY, &super::Files::Disk)
 }
 
-/// [`load_texture`] with at most `free` bytes of decoded pixels to spend.
-pub(crate) fn read_texture(path: &Path, srgb: bool, free: u64) -> Result<Texture, Diagnostic> {
-    let bytes = read_file(path, MAX_IMAGE_FILE_BYTES)?;
+/// [`load_texture`] from `files`, with at most `free` bytes of decoded pixels to spend.
+pub(crate) fn read_texture(path: &Path, srgb: bool, free: u64, files: &super::Files) -> Result<Texture, Diagnostic> {
+    let bytes = files.read(path, MAX_IMAGE_FILE_BYTES)?;
     let name = path.file_name().map_or_else(|| "texture".into(), |n| n.to_string_lossy().into_owned());
     decode_texture(&bytes, name, srgb, free).map_err(|m| Diagnostic::file(path, m))
 }

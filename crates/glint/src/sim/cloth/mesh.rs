@@ -2,7 +2,7 @@
 //! the plain-text `*Nodes` / `*Triangles` format of published DEP benchmarks;
 //! and its topology: unique edges and the hinges of interior edges.
 
-use crate::asset::{read_file, Diagnostic, MAX_MODEL_BYTES};
+use crate::asset::{Diagnostic, MAX_MODEL_BYTES};
 use glam::DVec3;
 use std::collections::HashMap;
 use std::path::Path;
@@ -106,7 +106,12 @@ impl ClothMesh {
     /// Read a mesh: `.obj` through tobj (positions and faces, triangulated; other
     /// data ignored), anything else as the `*Nodes` / `*Triangles` text format.
     pub fn load(path: &Path) -> Result<Self, Diagnostic> {
-        let bytes = read_file(path, MAX_MODEL_BYTES)?;
+        Self::read(path, &crate::asset::Files::Disk)
+    }
+
+    /// [`ClothMesh::load`] from `files`.
+    pub fn read(path: &Path, files: &crate::asset::Files) -> Result<Self, Diagnostic> {
+        let bytes = files.read(path, MAX_MODEL_BYTES)?;
         let mesh = if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("obj")) {
             Self::parse_obj(path, &bytes)?
         } else {
