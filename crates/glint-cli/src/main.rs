@@ -1,6 +1,7 @@
 //! The `glint` command-line tool.
 
 mod bench;
+mod compare;
 mod output;
 mod plot;
 mod sim;
@@ -126,6 +127,17 @@ enum Command {
     Check {
         /// The scene file.
         scene: PathBuf,
+    },
+    /// Say whether two images match within the reference-image tolerance.
+    #[command(after_help = "Exit codes: 0 they match, 4 they differ, 1 an image that cannot be read or written.")]
+    Compare {
+        /// The reference image.
+        expected: PathBuf,
+        /// The image to check.
+        actual: PathBuf,
+        /// Write the difference map here (PNG).
+        #[arg(long)]
+        diff: Option<PathBuf>,
     },
 }
 
@@ -497,6 +509,11 @@ fn main() -> ExitCode {
             options: picture.load_options(options),
         }),
         Command::Check { scene } => check(scene, options),
+        Command::Compare { expected, actual, diff } => match compare::run(expected, actual, diff.as_deref()) {
+            Ok(true) => Ok(()),
+            Ok(false) => return ExitCode::from(4),
+            Err(e) => Err(e),
+        },
         Command::Sim(SimCommand::Cloth(args)) => sim::cloth(args),
         Command::View { scene, picture, frames, screenshot, at } => {
             let options = picture.load_options(options);

@@ -839,3 +839,28 @@ fn a_scene_in_utf16_or_invalid_utf8_is_an_error_with_its_line() {
     let want = format!("error: {}:3: invalid UTF-8 at column 12", latin1.display());
     assert!(stderr(&out).contains(&want), "{}", stderr(&out));
 }
+
+#[test]
+fn compare_says_whether_two_images_match_within_the_reference_tolerance() {
+    let same = glint(&["compare", "tests/reference/split.png", "tests/reference/split.png"]);
+    assert_eq!(same.status.code(), Some(0), "{}", stderr(&same));
+    assert!(String::from_utf8_lossy(&same.stdout).starts_with("match: similarity 1.0000"));
+    let diff = std::env::temp_dir().join(format!("glint-compare-{}.png", std::process::id()));
+    let other = glint(&[
+        "compare",
+        "tests/reference/lights.png",
+        "tests/reference/shapes.png",
+        "--diff",
+        diff.to_str().unwrap(),
+    ]);
+    assert_eq!(other.status.code(), Some(4), "{}", stderr(&other));
+    assert!(String::from_utf8_lossy(&other.stdout).starts_with("differ: "));
+    assert_eq!(image::image_dimensions(&diff).expect("the difference map"), (256, 256));
+    let _ = std::fs::remove_file(&diff);
+    let sizes = glint(&["compare", "tests/reference/split.png", "tests/reference/monitor.png"]);
+    assert_eq!(sizes.status.code(), Some(1));
+    assert_eq!(
+        error_lines(&sizes),
+        ["error: tests/reference/monitor.png: 160x90, but tests/reference/split.png is 192x96"]
+    );
+}

@@ -34,6 +34,8 @@
 #![warn(missing_docs)]
 
 pub mod asset;
+#[cfg(not(target_arch = "wasm32"))]
+pub mod compare;
 pub mod gpu;
 pub mod render;
 pub mod scene;

@@ -165,7 +165,13 @@ impl Gpu {
 
     /// Create the device and queue on a chosen adapter.
     pub fn from_adapter(adapter: wgpu::Adapter) -> Result<Self, GpuError> {
-        Self::on_adapter(adapter, false)
+        pollster::block_on(Self::on_adapter(adapter, false))
+    }
+
+    /// [`Gpu::from_adapter`] without blocking, for the browser (where nothing
+    /// may block the page's thread).
+    pub async fn from_adapter_async(adapter: wgpu::Adapter) -> Result<Self, GpuError> {
+        Self::on_adapter(adapter, false).await
     }
 
     /// A new context on this one's adapter that draws as it must on WebGL2,
@@ -174,12 +180,12 @@ impl Gpu {
     /// buffers bound at each mesh, one draw call per batch. For testing that
     /// path natively.
     pub fn with_webgl2_limits(self) -> Result<Self, GpuError> {
-        Self::on_adapter(self.adapter, true)
+        pollster::block_on(Self::on_adapter(self.adapter, true))
     }
 
     /// The device and queue on `adapter`, with WebGL2's limits and draw paths
     /// where the adapter needs them or `webgl2` asks for them.
-    fn on_adapter(adapter: wgpu::Adapter, webgl2: bool) -> Result<Self, GpuError> {
+    async fn on_adapter(adapter: wgpu::Adapter, webgl2: bool) -> Result<Self, GpuError> {
         let info = adapter.get_info();
         let features = adapter.features();
         // Vertex shaders read every instance's record from a storage buffer
@@ -201,7 +207,7 @@ impl Gpu {
             required_limits: limits.using_resolution(adapter.limits()),
             ..Default::default()
         };
-        let (device, queue) = pollster::block_on(adapter.request_device(&desc))
+        let (device, queue) = (adapter.request_device(&desc).await)
             .map_err(|source| GpuError::Device { adapter: info.name.clone(), source })?;
         if info.device_type == wgpu::DeviceType::Cpu {
             super::keep_freed_heap_memory();

@@ -21,10 +21,22 @@ impl DriverErrors {
         Self { memory: device.push_error_scope(wgpu::ErrorFilter::OutOfMemory), internal, validation }
     }
 
-    /// The first error caught, if any.
+    /// The first error caught, if any. Natively (and on WebGL) the scopes answer
+    /// at once; the browser's WebGPU answers later, and there the errors are
+    /// left to its console rather than block the page's thread.
     pub(crate) fn finish(self) -> Option<wgpu::Error> {
-        let memory = pollster::block_on(self.memory.pop());
-        let internal = pollster::block_on(self.internal.pop());
-        pollster::block_on(self.validation.pop()).or(internal).or(memory)
+        let memory = at_once(self.memory.pop()).flatten();
+        let internal = at_once(self.internal.pop()).flatten();
+        at_once(self.validation.pop()).flatten().or(internal).or(memory)
+    }
+}
+
+/// What `future` gives when polled once, or `None` if it is not ready yet.
+fn at_once<F: std::future::Future>(future: F) -> Option<F::Output> {
+    let mut future = std::pin::pin!(future);
+    let mut context = std::task::Context::from_waker(std::task::Waker::noop());
+    match future.as_mut().poll(&mut context) {
+        std::task::Poll::Ready(value) => Some(value),
+        std::task::Poll::Pending => None,
     }
 }

@@ -14,7 +14,7 @@ mod window;
 
 pub use context::{Gpu, GpuError, WindowHandles};
 pub use heap::keep_freed_heap_memory;
-pub use target::{OffscreenTarget, TargetFormat};
+pub use target::{OffscreenTarget, Readback, TargetFormat};
 pub use window::WindowSurface;
 
 pub(crate) use blit::{sampler_entry, texture_entry, Blitter};

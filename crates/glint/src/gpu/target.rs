@@ -154,6 +154,20 @@ impl OffscreenTarget {
     ///
     /// Blocks until the GPU has finished the frame.
     pub fn read_rgba8(&self, gpu: &Gpu) -> Result<image::RgbaImage, GpuError> {
+        let readback = self.start_readback(gpu);
+        gpu.device.poll(wgpu::PollType::wait_indefinitely()).map_err(|e| GpuError::Readback(e.to_string()))?;
+        // Another thread polling the same device may run the map's callback
+        // just after this thread's wait returns.
+        while !readback.poll(gpu) {
+            std::thread::yield_now();
+        }
+        readback.finish()
+    }
+
+    /// Start copying the last rendered frame back to the CPU without waiting:
+    /// poll the [`Readback`] until it is ready (the browser's way, where nothing
+    /// may block), then finish it.
+    pub fn start_readback(&self, gpu: &Gpu) -> Readback {
         // Rows of a texture-to-buffer copy must be 256-byte aligned: pad, then strip.
         let unpadded = self.width * BYTES_PER_PIXEL;
         let padded = unpadded.div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
@@ -179,21 +193,12 @@ impl OffscreenTarget {
             self.resolved.size(),
         );
         gpu.queue.submit([encoder.finish()]);
-        let (tx, rx) = std::sync::mpsc::channel();
+        let mapped = std::sync::Arc::new(std::sync::Mutex::new(None));
+        let answer = mapped.clone();
         buffer.map_async(wgpu::MapMode::Read, .., move |r| {
-            let _ = tx.send(r);
+            *answer.lock().unwrap_or_else(|e| e.into_inner()) = Some(r.map_err(|e| e.to_string()));
         });
-        gpu.device.poll(wgpu::PollType::wait_indefinitely()).map_err(|e| GpuError::Readback(e.to_string()))?;
-        rx.recv().map_err(|e| GpuError::Readback(e.to_string()))?.map_err(|e| GpuError::Readback(e.to_string()))?;
-        let view = buffer.get_mapped_range(..).map_err(|e| GpuError::Readback(e.to_string()))?;
-        let mut pixels = Vec::with_capacity((unpadded * self.height) as usize);
-        for row in view.chunks_exact(padded as usize) {
-            pixels.extend_from_slice(&row[..unpadded as usize]);
-        }
-        drop(view);
-        buffer.unmap();
-        image::RgbaImage::from_raw(self.width, self.height, pixels)
-            .ok_or_else(|| GpuError::Readback("pixel count does not match the size".into()))
+        Readback { buffer, width: self.width, height: self.height, padded, mapped }
     }
 
     /// Read the frame back and write it to `path` as PNG. A write that fails
@@ -205,5 +210,40 @@ impl OffscreenTarget {
         let mut png = std::io::Cursor::new(Vec::new());
         self.read_rgba8(gpu)?.write_to(&mut png, image::ImageFormat::Png).map_err(fail)?;
         std::fs::write(path, png.into_inner()).map_err(|e| fail(image::ImageError::IoError(e)))
+    }
+}
+
+/// A frame being copied back to the CPU ([`OffscreenTarget::start_readback`]).
+pub struct Readback {
+    buffer: wgpu::Buffer,
+    width: u32,
+    height: u32,
+    /// Bytes per row in the buffer (rows are 256-byte aligned).
+    padded: u32,
+    /// The map's outcome, once the GPU has answered.
+    mapped: std::sync::Arc<std::sync::Mutex<Option<Result<(), String>>>>,
+}
+
+impl Readback {
+    /// Let the device make progress without waiting; returns whether the copy has arrived.
+    pub fn poll(&self, gpu: &Gpu) -> bool {
+        let _ = gpu.device.poll(wgpu::PollType::Poll);
+        self.mapped.lock().unwrap_or_else(|e| e.into_inner()).is_some()
+    }
+
+    /// The image, once [`Readback::poll`] says it has arrived (an error before).
+    pub fn finish(self) -> Result<image::RgbaImage, GpuError> {
+        let answer = self.mapped.lock().unwrap_or_else(|e| e.into_inner()).take();
+        answer.ok_or_else(|| GpuError::Readback("the copy has not arrived yet".into()))?.map_err(GpuError::Readback)?;
+        let unpadded = (self.width * BYTES_PER_PIXEL) as usize;
+        let view = self.buffer.get_mapped_range(..).map_err(|e| GpuError::Readback(e.to_string()))?;
+        let mut pixels = Vec::with_capacity(unpadded * self.height as usize);
+        for row in view.chunks_exact(self.padded as usize) {
+            pixels.extend_from_slice(&row[..unpadded]);
+        }
+        drop(view);
+        self.buffer.unmap();
+        image::RgbaImage::from_raw(self.width, self.height, pixels)
+            .ok_or_else(|| GpuError::Readback("pixel count does not match the size".into()))
     }
 }

@@ -80,6 +80,15 @@ impl FlyCamera {
         self.speed = (self.speed * WHEEL_STEP.powf(steps)).clamp(0.01, 10_000.0);
     }
 
+    /// Turn by `look` (pixels, as [`FlyInput::look`]) around `center`, keeping
+    /// the distance to it: a touch-drag orbit.
+    pub fn orbit(&mut self, center: Vec3, look: Vec2) {
+        let distance = center.distance(self.position);
+        self.yaw -= look.x * LOOK_RADIANS_PER_PIXEL;
+        self.pitch = (self.pitch - look.y * LOOK_RADIANS_PER_PIXEL).clamp(-MAX_PITCH, MAX_PITCH);
+        self.position = center - self.forward() * distance;
+    }
+
     /// `camera`'s projection seen from this camera's position and direction.
     pub fn apply(&self, camera: &Camera) -> Camera {
         camera.looking_at(self.position, self.position + self.forward())
@@ -89,6 +98,19 @@ impl FlyCamera {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn an_orbit_keeps_the_centre_in_view_at_its_distance() {
+        let camera = Camera::perspective(60.0, 0.1, 100.0).looking_at(Vec3::new(0.0, 0.0, 5.0), Vec3::ZERO);
+        let mut fly = FlyCamera::from_camera(&camera, 1.0);
+        // A quarter turn to the right at 0.003 rad a pixel.
+        fly.orbit(Vec3::ZERO, Vec2::new(std::f32::consts::FRAC_PI_2 / LOOK_RADIANS_PER_PIXEL, 0.0));
+        assert!(close(fly.position, Vec3::new(-5.0, 0.0, 0.0)), "{:?}", fly.position);
+        assert!(close(fly.forward(), Vec3::X), "faces the centre: {:?}", fly.forward());
+        // Dragging down looks down from above, and never past the pole.
+        fly.orbit(Vec3::ZERO, Vec2::new(0.0, 10_000.0));
+        assert!((fly.position.length() - 5.0).abs() < 1e-4 && fly.position.y > 4.9, "{:?}", fly.position);
+    }
 
     fn close(a: Vec3, b: Vec3) -> bool {
         a.abs_diff_eq(b, 1e-5)

@@ -2,6 +2,7 @@
 //! rendering a `.scn` file, and reference-image comparison.
 #![allow(dead_code)] // each test binary uses its own subset
 
+use glint::compare::{BAD_PIXEL_DELTA, MAX_BAD_PIXELS, MIN_SIMILARITY};
 use glint::{FrameStats, Gpu, OffscreenTarget, Renderer};
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
@@ -104,16 +105,6 @@ pub fn render_sized(
     (target.read_rgba8(gpu).expect("readback"), stats)
 }
 
-/// Reference tolerance. Both must hold:
-/// - image-compare's hybrid similarity (MSSIM on luma, RMS on chroma) ≥ `MIN_SIMILARITY`;
-/// - at most `MAX_BAD_PIXELS` of the pixels differ by more than `BAD_PIXEL_DELTA`
-///   (of 255) in any channel, so a small missing detail cannot hide in the mean.
-pub const MIN_SIMILARITY: f64 = 0.97;
-/// Fraction of pixels allowed past [`BAD_PIXEL_DELTA`].
-pub const MAX_BAD_PIXELS: f64 = 0.005;
-/// Per-channel difference that makes a pixel "bad".
-pub const BAD_PIXEL_DELTA: u8 = 40;
-
 /// Compare `actual` with `tests/reference/NAME.png`.
 ///
 /// `GLINT_BLESS=1` writes `actual` as the new reference instead. On mismatch the
@@ -131,25 +122,19 @@ pub fn assert_matches_reference(name: &str, actual: &image::RgbaImage) {
         .into_rgb8();
     let actual_rgb = image::DynamicImage::ImageRgba8(actual.clone()).into_rgb8();
     assert_eq!(expected.dimensions(), actual_rgb.dimensions(), "{name}: size differs from the reference");
-    let similarity = image_compare::rgb_hybrid_compare(&expected, &actual_rgb).expect("same size");
-    let bad = expected
-        .pixels()
-        .zip(actual_rgb.pixels())
-        .filter(|(a, b)| a.0.iter().zip(b.0.iter()).any(|(x, y)| x.abs_diff(*y) > BAD_PIXEL_DELTA))
-        .count() as f64
-        / f64::from(expected.width() * expected.height());
-    if similarity.score < MIN_SIMILARITY || bad > MAX_BAD_PIXELS {
+    let comparison = glint::compare::compare(&expected, &actual_rgb).expect("same size");
+    if !comparison.matches() {
         let out = root.join("tests/output");
         std::fs::create_dir_all(&out).expect("create tests/output");
         let actual_path = out.join(format!("{name}.actual.png"));
         let diff_path = out.join(format!("{name}.diff.png"));
         actual.save(&actual_path).expect("write actual");
-        similarity.image.to_color_map().save(&diff_path).expect("write diff");
+        comparison.diff.save(&diff_path).expect("write diff");
         panic!(
             "{name}: differs from {} (similarity {:.4} < {MIN_SIMILARITY} or {:.3}% pixels off by >{BAD_PIXEL_DELTA} > {:.3}%)\n  actual: {}\n  diff:   {}",
             reference_path.display(),
-            similarity.score,
-            bad * 100.0,
+            comparison.similarity,
+            comparison.bad_pixels * 100.0,
             MAX_BAD_PIXELS * 100.0,
             actual_path.display(),
             diff_path.display()

@@ -1,0 +1,67 @@
+//! Loading a scene over HTTP: the scene is loaded from a [`FileSet`] in memory,
+//! and whatever the load asked for and the set lacked is fetched (relative to
+//! the page) before loading again, round by round, as the loader's own checks
+//! allow: paths stay under the page's folder, each file within its kind's size
+//! limit, the whole within one scene's total. A file the server does not have
+//! stays missing and is reported by the loader with its `file:line`.
+
+use glint::asset::{load_scene_with, FileSet, Files, LoadOptions, Model, SceneDesc, MAX_SCENE_TOTAL_BYTES};
+use std::collections::HashSet;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use wasm_bindgen::JsCast;
+use wasm_bindgen_futures::JsFuture;
+
+/// Rounds of fetching: a scene, its models and textures, the models' own files,
+/// their material libraries' textures. More is a loop.
+const MAX_ROUNDS: usize = 8;
+
+/// Largest file fetched at all (the loader's largest limit, a model or buffer).
+const MAX_FETCH_BYTES: f64 = (1u64 << 30) as f64;
+
+/// Load the scene (or model, shown alone) at `path`, relative to the page.
+pub async fn load(path: &str) -> Result<SceneDesc, String> {
+    let set = Arc::new(FileSet::default());
+    let options = LoadOptions { files: Files::Memory(set.clone()), ..Default::default() };
+    let path = Path::new(path);
+    let mut asked = HashSet::new();
+    for _ in 0..MAX_ROUNDS {
+        let result = match Model::is_model_path(path) {
+            true => Model::load_with(path, options.clone()).map(Model::into_scene),
+            false => load_scene_with(path, options.clone()),
+        };
+        let missing: Vec<PathBuf> = set.take_missing().into_iter().filter(|p| asked.insert(p.clone())).collect();
+        if missing.is_empty() {
+            return result.map_err(|e| e.to_string());
+        }
+        for file in missing {
+            if let Some(bytes) = fetch(&file).await? {
+                set.insert(&file, bytes);
+            }
+        }
+        if set.bytes() > MAX_SCENE_TOTAL_BYTES {
+            let limit = MAX_SCENE_TOTAL_BYTES;
+            return Err(format!("{}: its files are over the {limit}-byte limit for one scene", path.display()));
+        }
+    }
+    Err(format!("{}: still naming new files after {MAX_ROUNDS} rounds of fetching", path.display()))
+}
+
+/// The file at `path` under the page, or `None` when the server has none.
+async fn fetch(path: &Path) -> Result<Option<Vec<u8>>, String> {
+    let url: Vec<String> = path.components().map(|c| c.as_os_str().to_string_lossy().into_owned()).collect();
+    let url = url.join("/");
+    let window = web_sys::window().ok_or("no window")?;
+    let failed = |e: wasm_bindgen::JsValue| format!("{url}: cannot fetch: {e:?}");
+    let response: web_sys::Response =
+        JsFuture::from(window.fetch_with_str(&url)).await.map_err(failed)?.dyn_into().map_err(failed)?;
+    if !response.ok() {
+        return Ok(None);
+    }
+    let length = response.headers().get("content-length").ok().flatten().and_then(|l| l.parse::<f64>().ok());
+    if length.is_some_and(|l| l > MAX_FETCH_BYTES) {
+        return Err(format!("{url}: larger than the {MAX_FETCH_BYTES}-byte limit for any file"));
+    }
+    let body = JsFuture::from(response.array_buffer().map_err(failed)?).await.map_err(failed)?;
+    Ok(Some(js_sys::Uint8Array::new(&body).to_vec()))
+}

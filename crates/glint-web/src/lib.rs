@@ -1,0 +1,408 @@
+//! glint in the browser: the page `web/index.html` loads this wasm module,
+//! which draws `.scn` scenes fetched over HTTP into its canvas, on WebGPU where
+//! the browser has it and WebGL2 otherwise (the renderer's WebGL2 path, chosen
+//! from the adapter's capabilities), with the viewer's fly camera.
+//!
+//! The page's query string may name `scene=PATH` (a demo scene by default),
+//! `backend=webgpu|webgl2` (default: WebGPU when there is an adapter), and
+//! `size=WxH` (a fixed canvas size in pixels, for tests; default: the window
+//! at its device pixel ratio). The page shows the backend, frame time and draw
+//! counts, and a broken scene's `file:line` message; the canvas carries
+//! `data-frames` (frames drawn) and `data-error` for scripts.
+#![cfg(target_arch = "wasm32")]
+
+mod fetch;
+mod input;
+
+use glam::Vec2;
+use glint::asset::SceneDesc;
+use glint::render::PlacedScene;
+use glint::scene::FlyCamera;
+use glint::{Gpu, OffscreenTarget, Renderer, View, WindowSurface};
+use input::Input;
+use std::cell::RefCell;
+use std::rc::Rc;
+use wasm_bindgen::prelude::*;
+use wasm_bindgen::JsCast;
+
+/// The demo scenes the picker offers, under the page.
+const SCENES: [&str; 4] = ["scenes/showcase.scn", "scenes/split.scn", "scenes/monitor.scn", "scenes/tablecloth.scn"];
+
+thread_local! {
+    /// The page's one viewer, for [`read_frame`].
+    static VIEWER: RefCell<Option<Rc<RefCell<Viewer>>>> = const { RefCell::new(None) };
+}
+
+/// The last frame drawn, as `{ width, height, data }` with `data` its RGBA8
+/// pixels, rows top to bottom (for the browser test: a WebGPU canvas cannot
+/// always be read back by the page, the renderer's own target can).
+#[wasm_bindgen]
+pub async fn read_frame() -> Result<JsValue, JsValue> {
+    let viewer = VIEWER.with(|v| v.borrow().clone()).ok_or("the viewer has not started")?;
+    let readback = {
+        let v = viewer.borrow();
+        v.target.start_readback(&v.gpu)
+    };
+    // The browser answers between tasks: poll, and give it a turn, until it has.
+    while !{
+        let v = viewer.borrow();
+        readback.poll(&v.gpu)
+    } {
+        let wait = js_sys::Promise::new(&mut |resolve, _| {
+            if let Some(window) = web_sys::window() {
+                let _ = window.set_timeout_with_callback_and_timeout_and_arguments_0(&resolve, 1);
+            }
+        });
+        wasm_bindgen_futures::JsFuture::from(wait).await?;
+    }
+    let image = readback.finish().map_err(|e| e.to_string())?;
+    let frame = js_sys::Object::new();
+    js_sys::Reflect::set(&frame, &"width".into(), &image.width().into())?;
+    js_sys::Reflect::set(&frame, &"height".into(), &image.height().into())?;
+    js_sys::Reflect::set(&frame, &"data".into(), &js_sys::Uint8Array::from(image.as_raw().as_slice()))?;
+    Ok(frame.into())
+}
+
+/// Start the viewer on the page's `#glint` canvas.
+#[wasm_bindgen(start)]
+pub fn start() {
+    std::panic::set_hook(Box::new(|info| show_error(&format!("glint panicked: {info}"))));
+    wasm_bindgen_futures::spawn_local(async {
+        if let Err(e) = run().await {
+            show_error(&e);
+        }
+    });
+}
+
+/// What the page asked for in its query string.
+struct Query {
+    scene: String,
+    backend: Option<String>,
+    size: Option<(u32, u32)>,
+}
+
+impl Query {
+    fn read() -> Self {
+        let search = web_sys::window().and_then(|w| w.location().search().ok()).unwrap_or_default();
+        let params = web_sys::UrlSearchParams::new_with_str(&search).ok();
+        let get = |key: &str| params.as_ref().and_then(|p| p.get(key));
+        let size = get("size").and_then(|s| {
+            let (w, h) = s.split_once('x')?;
+            Some((w.parse().ok()?, h.parse().ok()?))
+                .filter(|&(w, h): &(u32, u32)| (1..=4096).contains(&w) && (1..=4096).contains(&h))
+        });
+        Self { scene: get("scene").unwrap_or_else(|| SCENES[0].into()), backend: get("backend"), size }
+    }
+}
+
+/// A loaded scene placed in its renderer.
+struct Shown {
+    desc: SceneDesc,
+    renderer: Renderer,
+    placed: PlacedScene,
+    views: Vec<View>,
+    fly: FlyCamera,
+    /// What a touch drag orbits: the first view's target.
+    centre: glam::Vec3,
+    /// Page time (ms) at its first frame.
+    start: Option<f64>,
+}
+
+/// Everything the frame loop needs.
+struct Viewer {
+    /// Kept alive with the device: on WebGPU, buffer maps fail once it is gone.
+    _instance: wgpu::Instance,
+    canvas: web_sys::HtmlCanvasElement,
+    gpu: Gpu,
+    surface: WindowSurface,
+    target: OffscreenTarget,
+    msaa: u32,
+    backend: &'static str,
+    fixed_size: Option<(u32, u32)>,
+    shown: Option<Shown>,
+    input: Input,
+    frames: u64,
+    last: Option<f64>,
+    frame_ms: f64,
+}
+
+async fn run() -> Result<(), String> {
+    let query = Query::read();
+    let document = web_sys::window().and_then(|w| w.document()).ok_or("no document")?;
+    let canvas: web_sys::HtmlCanvasElement = (document.get_element_by_id("glint"))
+        .ok_or("the page has no #glint canvas")?
+        .dyn_into()
+        .map_err(|_| "#glint is not a canvas")?;
+    let (width, height) = query.size.unwrap_or_else(|| canvas_size(&canvas));
+    canvas.set_width(width);
+    canvas.set_height(height);
+    let (gpu, surface, instance, backend) = open_gpu(&canvas, query.backend.as_deref()).await?;
+    let surface = WindowSurface::new(&gpu, surface, width, height).map_err(|e| e.to_string())?;
+    let msaa = if gpu.supports_msaa(4) { 4 } else { 1 };
+    let target = OffscreenTarget::new(&gpu, width, height, msaa).map_err(|e| e.to_string())?;
+    let viewer = Rc::new(RefCell::new(Viewer {
+        _instance: instance,
+        canvas: canvas.clone(),
+        gpu,
+        surface,
+        target,
+        msaa,
+        backend,
+        fixed_size: query.size,
+        shown: None,
+        input: Input::default(),
+        frames: 0,
+        last: None,
+        frame_ms: 0.0,
+    }));
+    VIEWER.with(|v| *v.borrow_mut() = Some(viewer.clone()));
+    listen(&canvas, &viewer)?;
+    picker(&document, &viewer, &query.scene)?;
+    show(&viewer, &query.scene).await;
+    animate(viewer);
+    Ok(())
+}
+
+/// A GPU on the canvas: WebGPU unless `backend` says `webgl2` or the browser has
+/// no WebGPU adapter, else WebGL2.
+async fn open_gpu(
+    canvas: &web_sys::HtmlCanvasElement,
+    backend: Option<&str>,
+) -> Result<(Gpu, wgpu::Surface<'static>, wgpu::Instance, &'static str), String> {
+    let tries: &[(wgpu::Backends, &'static str)] = match backend {
+        Some("webgl2") => &[(wgpu::Backends::GL, "WebGL2")],
+        Some("webgpu") => &[(wgpu::Backends::BROWSER_WEBGPU, "WebGPU")],
+        _ => &[(wgpu::Backends::BROWSER_WEBGPU, "WebGPU"), (wgpu::Backends::GL, "WebGL2")],
+    };
+    let mut why = Vec::new();
+    for &(backends, name) in tries {
+        let has_webgpu = js_sys::Reflect::has(&web_sys::window().ok_or("no window")?.navigator(), &"gpu".into());
+        if backends == wgpu::Backends::BROWSER_WEBGPU && !has_webgpu.unwrap_or(false) {
+            why.push(format!("{name}: the browser has none"));
+            continue;
+        }
+        let instance = wgpu::Instance::new(wgpu::InstanceDescriptor {
+            backends,
+            ..wgpu::InstanceDescriptor::new_without_display_handle()
+        });
+        let surface = match instance.create_surface(wgpu::SurfaceTarget::Canvas(canvas.clone())) {
+            Ok(s) => s,
+            Err(e) => {
+                why.push(format!("{name}: {e}"));
+                continue;
+            }
+        };
+        let options = wgpu::RequestAdapterOptions { compatible_surface: Some(&surface), ..Default::default() };
+        match instance.request_adapter(&options).await {
+            Ok(adapter) => {
+                let gpu = Gpu::from_adapter_async(adapter).await.map_err(|e| e.to_string())?;
+                return Ok((gpu, surface, instance, name));
+            }
+            Err(e) => why.push(format!("{name}: {e}")),
+        }
+    }
+    Err(format!("no GPU for the canvas ({})", why.join("; ")))
+}
+
+/// Fetch and show `scene`, or put its error on the page (keeping the last scene).
+async fn show(viewer: &Rc<RefCell<Viewer>>, scene: &str) {
+    set_text("status", &format!("loading {scene} ..."));
+    let desc = match fetch::load(scene).await {
+        Ok(desc) => desc,
+        Err(e) => return show_error(&e),
+    };
+    for warning in &desc.warnings {
+        web_sys::console::warn_1(&warning.to_string().into());
+    }
+    clear_error();
+    let mut v = viewer.borrow_mut();
+    let mut renderer = Renderer::new(&v.gpu);
+    let placed = renderer.place_scene(&desc);
+    let views = desc.views(&placed.render_targets);
+    let Some(flown) = views.iter().find(|view| view.output.is_none()) else {
+        return show_error(&format!("{scene}: no camera draws into the page"));
+    };
+    let camera = flown.camera;
+    let fly = FlyCamera::from_camera(&camera, 0.5 * (camera.target - camera.eye).length().max(1.0));
+    v.shown = Some(Shown { desc, renderer, placed, views, fly, centre: camera.target, start: None });
+}
+
+/// The frame callback, which schedules itself again (so it holds a handle on itself).
+type FrameCallback = Rc<RefCell<Option<Closure<dyn FnMut(f64)>>>>;
+
+/// Draw a frame on every animation frame of the page.
+fn animate(viewer: Rc<RefCell<Viewer>>) {
+    let tick: FrameCallback = Rc::new(RefCell::new(None));
+    let next = tick.clone();
+    *tick.borrow_mut() = Some(Closure::new(move |now: f64| {
+        if let Err(e) = viewer.borrow_mut().frame(now) {
+            show_error(&e);
+        }
+        request_frame(next.borrow().as_ref().expect("set before the first frame"));
+    }));
+    request_frame(tick.borrow().as_ref().expect("just set"));
+}
+
+fn request_frame(callback: &Closure<dyn FnMut(f64)>) {
+    if let Some(window) = web_sys::window() {
+        let _ = window.request_animation_frame(callback.as_ref().unchecked_ref());
+    }
+}
+
+impl Viewer {
+    /// One frame at page time `now` (ms): follow the canvas's size, move the
+    /// camera, pose and draw the scene, show it, and report on the page.
+    fn frame(&mut self, now: f64) -> Result<(), String> {
+        let dt = self.last.map_or(0.0, |last| (now - last) / 1e3);
+        self.last = Some(now);
+        self.follow_size()?;
+        let (fly_input, wheel, orbit) = self.input.take();
+        let Some(shown) = &mut self.shown else { return Ok(()) };
+        if wheel != 0.0 {
+            shown.fly.change_speed(wheel);
+        }
+        shown.fly.update(dt.min(0.25) as f32, &fly_input);
+        if orbit != Vec2::ZERO {
+            shown.fly.orbit(shown.centre, orbit);
+        }
+        let start = *shown.start.get_or_insert(now);
+        let time = ((now - start) / 1e3) as f32;
+        shown.placed.pose(&mut shown.desc, time, &mut shown.renderer).map_err(|e| e.to_string())?;
+        let mut views = shown.views.clone();
+        if let Some(flown) = views.iter_mut().find(|v| v.output.is_none()) {
+            flown.camera = shown.fly.apply(&flown.camera);
+        }
+        let stats =
+            (shown.renderer.render_views(&shown.placed.entities, &views, shown.desc.lighting(), &mut self.target))
+                .map_err(|e| e.to_string())?;
+        self.surface.present(&self.gpu, &self.target);
+        self.frames += 1;
+        self.frame_ms = if self.frames == 1 { dt * 1e3 } else { 0.9 * self.frame_ms + 0.1 * dt * 1e3 };
+        let draws: u32 = stats.iter().map(|s| s.draws).sum();
+        let calls: u32 = stats.iter().map(|s| s.draw_calls).sum();
+        let drawn: u64 = stats.iter().map(|s| s.instances_drawn).sum();
+        let (w, h) = (self.target.width(), self.target.height());
+        set_text(
+            "status",
+            &format!(
+                "{} | {} | {w}x{h} | {:.1} ms a frame | {draws} draws in {calls} calls | {drawn} instances | {} views",
+                self.backend,
+                shown.desc.path.display(),
+                self.frame_ms,
+                stats.len()
+            ),
+        );
+        let _ = self.canvas.set_attribute("data-frames", &self.frames.to_string());
+        let _ = self.canvas.set_attribute("data-backend", self.backend);
+        Ok(())
+    }
+
+    /// Resize the surface and target to the canvas's displayed size (unless fixed).
+    fn follow_size(&mut self) -> Result<(), String> {
+        let (width, height) = self.fixed_size.unwrap_or_else(|| canvas_size(&self.canvas));
+        if (width, height) == (self.target.width(), self.target.height()) {
+            return Ok(());
+        }
+        self.canvas.set_width(width);
+        self.canvas.set_height(height);
+        self.surface.resize(&self.gpu, width, height);
+        self.target = OffscreenTarget::new(&self.gpu, width, height, self.msaa).map_err(|e| e.to_string())?;
+        Ok(())
+    }
+}
+
+/// The canvas's displayed size in device pixels (at least one a side).
+fn canvas_size(canvas: &web_sys::HtmlCanvasElement) -> (u32, u32) {
+    let ratio = web_sys::window().map_or(1.0, |w| w.device_pixel_ratio());
+    let side = |css: i32| ((f64::from(css.max(1)) * ratio).round() as u32).clamp(1, 4096);
+    (side(canvas.client_width()), side(canvas.client_height()))
+}
+
+/// The scene picker `#scene`: the demo scenes, `current` chosen; choosing one shows it.
+fn picker(document: &web_sys::Document, viewer: &Rc<RefCell<Viewer>>, current: &str) -> Result<(), String> {
+    let Some(select) = document.get_element_by_id("scene") else { return Ok(()) };
+    let select: web_sys::HtmlSelectElement = select.dyn_into().map_err(|_| "#scene is not a select")?;
+    let mut names: Vec<&str> = SCENES.to_vec();
+    if !names.contains(&current) {
+        names.push(current);
+    }
+    for name in names {
+        let option = web_sys::HtmlOptionElement::new_with_text_and_value(name, name).map_err(|e| format!("{e:?}"))?;
+        option.set_selected(name == current);
+        select.add_with_html_option_element(&option).map_err(|e| format!("{e:?}"))?;
+    }
+    let viewer = viewer.clone();
+    let chosen = select.clone();
+    let on_change = Closure::<dyn FnMut(web_sys::Event)>::new(move |_| {
+        let (viewer, scene) = (viewer.clone(), chosen.value());
+        wasm_bindgen_futures::spawn_local(async move { show(&viewer, &scene).await });
+    });
+    select
+        .add_event_listener_with_callback("change", on_change.as_ref().unchecked_ref())
+        .map_err(|e| format!("{e:?}"))?;
+    on_change.forget();
+    Ok(())
+}
+
+/// Keyboard on the window; mouse, wheel and touch on the canvas.
+fn listen(canvas: &web_sys::HtmlCanvasElement, viewer: &Rc<RefCell<Viewer>>) -> Result<(), String> {
+    let window = web_sys::window().ok_or("no window")?;
+    fn on<E: JsCast + 'static>(
+        target: &web_sys::EventTarget,
+        kind: &str,
+        viewer: &Rc<RefCell<Viewer>>,
+        mut handle: impl FnMut(&mut Input, &E) + 'static,
+    ) -> Result<(), String> {
+        let viewer = viewer.clone();
+        let closure = Closure::<dyn FnMut(web_sys::Event)>::new(move |event: web_sys::Event| {
+            if let Some(event) = event.dyn_ref::<E>() {
+                handle(&mut viewer.borrow_mut().input, event);
+            }
+        });
+        let added = target.add_event_listener_with_callback(kind, closure.as_ref().unchecked_ref());
+        closure.forget();
+        added.map_err(|e| format!("{e:?}"))
+    }
+    on(&window, "keydown", viewer, |input, e: &web_sys::KeyboardEvent| input.key(e.code(), true))?;
+    on(&window, "keyup", viewer, |input, e: &web_sys::KeyboardEvent| input.key(e.code(), false))?;
+    on(canvas, "mousedown", viewer, |input, e: &web_sys::MouseEvent| input.button(e.button(), true))?;
+    on(&window, "mouseup", viewer, |input, e: &web_sys::MouseEvent| input.button(e.button(), false))?;
+    on(&window, "mousemove", viewer, |input, e: &web_sys::MouseEvent| {
+        input.mouse_moved(Vec2::new(e.movement_x() as f32, e.movement_y() as f32))
+    })?;
+    on(canvas, "contextmenu", viewer, |_, e: &web_sys::MouseEvent| e.prevent_default())?;
+    on(canvas, "wheel", viewer, |input, e: &web_sys::WheelEvent| {
+        e.prevent_default();
+        input.wheel(e.delta_y());
+    })?;
+    let first_touch = |e: &web_sys::TouchEvent| {
+        e.prevent_default();
+        e.touches().get(0).map(|t| Vec2::new(t.client_x() as f32, t.client_y() as f32))
+    };
+    on(canvas, "touchstart", viewer, move |input, e: &web_sys::TouchEvent| input.touch(first_touch(e)))?;
+    on(canvas, "touchmove", viewer, move |input, e: &web_sys::TouchEvent| input.touch(first_touch(e)))?;
+    on(canvas, "touchend", viewer, |input, _: &web_sys::TouchEvent| input.touch(None))?;
+    Ok(())
+}
+
+fn set_text(id: &str, text: &str) {
+    if let Some(element) = web_sys::window().and_then(|w| w.document()).and_then(|d| d.get_element_by_id(id)) {
+        element.set_text_content(Some(text));
+    }
+}
+
+/// Put `message` on the page (`#error`, and the canvas's `data-error`) and in the console.
+fn show_error(message: &str) {
+    web_sys::console::error_1(&message.into());
+    set_text("error", message);
+    if let Some(canvas) = web_sys::window().and_then(|w| w.document()).and_then(|d| d.get_element_by_id("glint")) {
+        let _ = canvas.set_attribute("data-error", message);
+    }
+}
+
+fn clear_error() {
+    set_text("error", "");
+    if let Some(canvas) = web_sys::window().and_then(|w| w.document()).and_then(|d| d.get_element_by_id("glint")) {
+        let _ = canvas.remove_attribute("data-error");
+    }
+}

@@ -1,0 +1,122 @@
+// The web page's browser test (run by web/test.sh): Debian's Chromium, headless
+// on SwiftShader, loads the page for each demo scene on WebGL2 and on WebGPU,
+// waits for frames, reads the renderer's frame back, and compares it with
+// `glint render` of the same scene and camera (glint compare: the
+// reference-image tolerance). A broken scene must show its file:line error.
+// Prints one line per case and "N passed, M failed"; exits non-zero on a failure.
+import { chromium } from "playwright-core";
+import { execFileSync } from "node:child_process";
+import { mkdirSync, writeFileSync } from "node:fs";
+
+const [base, glint, out] = process.argv.slice(2);
+const size = [256, 160];
+const scenes = ["scenes/showcase.scn", "scenes/split.scn", "scenes/monitor.scn"];
+const backends = ["webgl2", "webgpu"];
+mkdirSync(out, { recursive: true });
+
+const browser = await chromium.launch({
+  executablePath: "/usr/bin/chromium",
+  args: [
+    "--no-sandbox", "--use-angle=swiftshader", "--enable-unsafe-swiftshader", "--enable-unsafe-webgpu",
+    "--disable-background-networking", "--disable-component-update", "--disable-sync", "--no-first-run",
+  ],
+});
+let passed = 0, failed = 0;
+const skipped = [];
+const report = (ok, name, detail) => {
+  ok ? passed++ : failed++;
+  console.log(`${ok ? "ok  " : "FAIL"} ${name}: ${detail}`);
+};
+
+/** Open the page on `scene` and `backend`; wait for 3 frames or an error. */
+async function open(scene, backend) {
+  const page = await browser.newPage({ viewport: { width: size[0] + 40, height: size[1] + 120 } });
+  const logs = [];
+  page.on("console", (m) => logs.push(`${m.type()}: ${m.text()}`));
+  page.on("pageerror", (e) => logs.push(`pageerror: ${e.message}`));
+  const start = Date.now();
+  await page.goto(`${base}/index.html?scene=${scene}&backend=${backend}&size=${size[0]}x${size[1]}`);
+  const state = await page
+    .waitForFunction(() => {
+      const c = document.getElementById("glint");
+      return c.dataset.error ? { error: c.dataset.error } : +c.dataset.frames >= 1 && { first: performance.now() };
+    }, null, { timeout: 90_000 })
+    .then((h) => h.jsonValue())
+    .catch((e) => ({ error: `no frame: ${e.message.split("\n")[0]}` }));
+  if (!state.error) {
+    await page.waitForFunction(() => +document.getElementById("glint").dataset.frames >= 3, null, { timeout: 90_000 });
+  }
+  return { page, state, logs, wall: Date.now() - start };
+}
+
+for (const backend of backends) {
+  for (const scene of scenes) {
+    const name = `${scene} on ${backend}`;
+    const { page, state, logs } = await open(scene, backend);
+    try {
+      if (state.error) {
+        report(false, name, `${state.error}\n  ${logs.join("\n  ")}`);
+        continue;
+      }
+      const shown = await page.evaluate(() => document.getElementById("glint").dataset.backend);
+      // The frame as the renderer drew it, encoded as PNG by the browser.
+      const png = await page.evaluate(async () => {
+        try {
+        const f = await window.glintReadFrame();
+        const canvas = new OffscreenCanvas(f.width, f.height);
+        canvas.getContext("2d").putImageData(new ImageData(new Uint8ClampedArray(f.data), f.width, f.height), 0, 0);
+        const bytes = new Uint8Array(await (await canvas.convertToBlob({ type: "image/png" })).arrayBuffer());
+        let text = "";
+        for (const b of bytes) text += String.fromCharCode(b);
+        return btoa(text);
+        } catch (e) {
+          return { unread: String(e) };
+        }
+      });
+      const expected = backend === "webgpu" ? "WebGPU" : "WebGL2";
+      if (png.unread) {
+        // Headless Chromium's SwiftShader WebGPU aborts buffer maps ("A valid external
+        // Instance reference no longer exists"): the frames are drawn but cannot be read.
+        const frames = await page.evaluate(() => +document.getElementById("glint").dataset.frames);
+        report(shown === expected && frames >= 3, `${name} (drawn)`, `${shown}, ${frames} frames, first ${Math.round(state.first)} ms after navigation`);
+        skipped.push(`${name} compared: ${png.unread}`);
+        continue;
+      }
+      const stem = `${out}/${scene.replace(/[\/.]/g, "_")}_${backend}`;
+      writeFileSync(`${stem}.page.png`, Buffer.from(png, "base64"));
+      execFileSync(glint, ["render", scene, "--size", `${size[0]}x${size[1]}`, "--msaa", "4", "-o", `${stem}.glint.png`]);
+      let verdict, ok = true;
+      try {
+        verdict = execFileSync(glint, ["compare", `${stem}.glint.png`, `${stem}.page.png`, "--diff", `${stem}.diff.png`])
+          .toString().trim();
+      } catch (e) {
+        ok = false;
+        verdict = `${e.stdout}${e.stderr}`.trim();
+      }
+      if (shown !== expected) ok = false;
+      report(ok, name, `${shown}, first frame ${Math.round(state.first)} ms after navigation; ${verdict}`);
+    } finally {
+      await page.close();
+    }
+  }
+}
+
+// A broken scene shows its error, with the file and line, on the page.
+for (const backend of backends) {
+  const { page, state } = await open("scenes/broken.scn", backend);
+  const text = await page.evaluate(() => document.getElementById("error").textContent);
+  const ok = !!state.error && text.startsWith("scenes/broken.scn:3:");
+  report(ok, `a broken scene on ${backend}`, JSON.stringify(text));
+  await page.close();
+}
+// A missing scene says so too.
+{
+  const { page, state } = await open("scenes/missing.scn", "webgl2");
+  const text = await page.evaluate(() => document.getElementById("error").textContent);
+  report(!!state.error && text.includes("scenes/missing.scn") && text.includes("not found"), "a missing scene", JSON.stringify(text));
+  await page.close();
+}
+await browser.close();
+for (const s of skipped) console.log(`skip ${s}`);
+console.log(`${passed} passed, ${failed} failed` + (skipped.length ? `, ${skipped.length} skipped` : ""));
+process.exit(failed === 0 ? 0 : 1);

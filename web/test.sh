@@ -1,0 +1,35 @@
+#!/usr/bin/env bash
+# The web page's browser test: build web/dist when it is older than the sources,
+# serve it, and drive Debian's Chromium (headless, SwiftShader's WebGL2 and
+# WebGPU) through web/test.mjs, which prints "N passed, M failed". Installs
+# what it needs (idempotent): chromium, node's playwright-core (no browser
+# download: it drives the system one).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+as_root() { if [ "$(id -u)" = 0 ]; then "$@"; else sudo "$@"; fi; }
+missing=()
+dpkg -s chromium >/dev/null 2>&1 || missing+=(chromium)
+command -v npm >/dev/null || missing+=(nodejs npm)
+if [ ${#missing[@]} -gt 0 ]; then
+  export DEBIAN_FRONTEND=noninteractive
+  as_root apt-get update -qq
+  as_root apt-get install -y -qq "${missing[@]}"
+fi
+(cd web && npm ci --no-audit --no-fund --silent)
+
+stale=$(find crates/glint/src crates/glint-web web/index.html web/build.sh scenes assets Cargo.lock \
+  -newer web/dist/glint_web_bg.wasm 2>/dev/null | head -1 || true)
+if [ ! -f web/dist/glint_web_bg.wasm ] || [ -n "$stale" ]; then
+  bash web/build.sh
+fi
+# A broken scene the page must report (line 3: a camera origin of two numbers).
+printf '{\n"classname" "camera"\n"origin" "0 1"\n}\n' > web/dist/scenes/broken.scn
+
+cargo build -q -p glint-cli
+port=$(python3 -c 'import socket; s = socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])')
+python3 -m http.server "$port" --bind 127.0.0.1 -d web/dist >/dev/null 2>&1 &
+server=$!
+trap 'kill $server 2>/dev/null || true' EXIT
+for _ in $(seq 50); do curl -sf "http://127.0.0.1:$port/index.html" >/dev/null && break; sleep 0.1; done
+node web/test.mjs "http://127.0.0.1:$port" "$PWD/target/debug/glint" "$PWD/web/output"
