@@ -174,10 +174,11 @@ async fn open_gpu(
         Some("webgpu") => &[(wgpu::Backends::BROWSER_WEBGPU, "WebGPU")],
         _ => &[(wgpu::Backends::BROWSER_WEBGPU, "WebGPU"), (wgpu::Backends::GL, "WebGL2")],
     };
+    let navigator = web_sys::window().ok_or("no window")?.navigator();
+    let has_webgpu = js_sys::Reflect::has(&navigator, &"gpu".into()).unwrap_or(false);
     let mut why = Vec::new();
     for &(backends, name) in tries {
-        let has_webgpu = js_sys::Reflect::has(&web_sys::window().ok_or("no window")?.navigator(), &"gpu".into());
-        if backends == wgpu::Backends::BROWSER_WEBGPU && !has_webgpu.unwrap_or(false) {
+        if backends == wgpu::Backends::BROWSER_WEBGPU && !has_webgpu {
             why.push(format!("{name}: the browser has none"));
             continue;
         }

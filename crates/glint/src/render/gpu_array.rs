@@ -90,8 +90,8 @@ impl GpuArray {
         };
         let bytes: &[u8] = bytemuck::cast_slice(data);
         let texel_bytes = t.texel_bytes as usize;
-        let (mut at, end) =
-            (first * u64::from(t.texels), (first * u64::from(t.texels)) + (bytes.len() / texel_bytes) as u64);
+        let mut at = first * u64::from(t.texels);
+        let end = at + (bytes.len() / texel_bytes) as u64;
         let width = u64::from(DATA_TEXTURE_WIDTH);
         let mut written = 0;
         while at < end {
