@@ -32,9 +32,11 @@ const report = (ok, name, detail) => {
   console.log(`${ok ? "ok  " : "FAIL"} ${name}: ${detail}`);
 };
 
-/** Open the page on `scene` and `backend`; wait for 3 frames or an error. */
-async function open(scene, backend) {
+/** Open the page on `scene` and `backend` (running `init` before the page's own scripts);
+ * wait for 3 frames or an error. */
+async function open(scene, backend, init) {
   const page = await browser.newPage({ viewport: { width: size[0] + 40, height: size[1] + 120 } });
+  if (init) await page.addInitScript(init);
   const logs = [];
   page.on("console", (m) => logs.push(`${m.type()}: ${m.text()}`));
   page.on("pageerror", (e) => logs.push(`pageerror: ${e.message}`));
@@ -110,6 +112,23 @@ for (const backend of backends) {
   const { page, state } = await open("scenes/missing.scn", "webgl2");
   const text = await page.evaluate(() => document.getElementById("error").textContent);
   report(!!state.error && text.includes("scenes/missing.scn") && text.includes("not found"), "a missing scene", JSON.stringify(text));
+  await page.close();
+}
+// A lost WebGPU device is reported on the page, not left as a frozen frame.
+{
+  const keepDevice = () => {
+    const request = GPUAdapter.prototype.requestDevice;
+    GPUAdapter.prototype.requestDevice = async function (...args) {
+      return (window.glintTestDevice = await request.apply(this, args));
+    };
+  };
+  const { page, state } = await open("scenes/split.scn", "webgpu", keepDevice);
+  await page.evaluate(() => window.glintTestDevice.destroy());
+  const text = await page
+    .waitForFunction(() => document.getElementById("glint").dataset.error, null, { timeout: 30_000 })
+    .then(() => page.evaluate(() => document.getElementById("error").textContent))
+    .catch(() => "no error shown");
+  report(!state.error && text.startsWith("the WebGPU device was lost"), "a lost device on webgpu", JSON.stringify(text));
   await page.close();
 }
 await browser.close();

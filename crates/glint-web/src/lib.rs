@@ -137,6 +137,10 @@ async fn run() -> Result<(), String> {
     canvas.set_width(width);
     canvas.set_height(height);
     let (gpu, surface, instance, backend) = open_gpu(&canvas, query.backend.as_deref()).await?;
+    // A lost device draws nothing more: say so instead of leaving the last frame up.
+    gpu.device.set_device_lost_callback(move |reason, message| {
+        show_error(&format!("the {backend} device was lost ({reason:?}): {message}; reload the page"))
+    });
     let surface = WindowSurface::new(&gpu, surface, width, height).map_err(|e| e.to_string())?;
     let msaa = if gpu.supports_msaa(4) { 4 } else { 1 };
     let target = OffscreenTarget::new(&gpu, width, height, msaa).map_err(|e| e.to_string())?;
