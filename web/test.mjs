@@ -2,7 +2,8 @@
 // on SwiftShader, loads the page for each demo scene on WebGL2 and on WebGPU,
 // waits for frames, reads the renderer's frame back, and compares it with
 // `glint render` of the same scene and camera (glint compare: the
-// reference-image tolerance). A broken scene must show its file:line error.
+// reference-image tolerance). A broken scene must show its file:line error, and
+// a lost device its message.
 // Prints one line per case and "N passed, M failed"; exits non-zero on a failure.
 import { chromium } from "playwright-core";
 import { execFileSync } from "node:child_process";

@@ -110,8 +110,6 @@ struct Shown {
 
 /// Everything the frame loop needs.
 struct Viewer {
-    /// Kept alive with the device: on WebGPU, buffer maps fail once it is gone.
-    _instance: wgpu::Instance,
     canvas: web_sys::HtmlCanvasElement,
     gpu: Gpu,
     surface: WindowSurface,
@@ -136,7 +134,7 @@ async fn run() -> Result<(), String> {
     let (width, height) = query.size.unwrap_or_else(|| canvas_size(&canvas));
     canvas.set_width(width);
     canvas.set_height(height);
-    let (gpu, surface, instance, backend) = open_gpu(&canvas, query.backend.as_deref()).await?;
+    let (gpu, surface, backend) = open_gpu(&canvas, query.backend.as_deref()).await?;
     // A lost device draws nothing more: say so instead of leaving the last frame up.
     gpu.device.set_device_lost_callback(move |reason, message| {
         show_error(&format!("the {backend} device was lost ({reason:?}): {message}; reload the page"))
@@ -145,7 +143,6 @@ async fn run() -> Result<(), String> {
     let msaa = if gpu.supports_msaa(4) { 4 } else { 1 };
     let target = OffscreenTarget::new(&gpu, width, height, msaa).map_err(|e| e.to_string())?;
     let viewer = Rc::new(RefCell::new(Viewer {
-        _instance: instance,
         canvas: canvas.clone(),
         gpu,
         surface,
@@ -172,7 +169,7 @@ async fn run() -> Result<(), String> {
 async fn open_gpu(
     canvas: &web_sys::HtmlCanvasElement,
     backend: Option<&str>,
-) -> Result<(Gpu, wgpu::Surface<'static>, wgpu::Instance, &'static str), String> {
+) -> Result<(Gpu, wgpu::Surface<'static>, &'static str), String> {
     let tries: &[(wgpu::Backends, &'static str)] = match backend {
         Some("webgl2") => &[(wgpu::Backends::GL, "WebGL2")],
         Some("webgpu") => &[(wgpu::Backends::BROWSER_WEBGPU, "WebGPU")],
@@ -201,7 +198,7 @@ async fn open_gpu(
         match instance.request_adapter(&options).await {
             Ok(adapter) => {
                 let gpu = Gpu::from_adapter_async(adapter).await.map_err(|e| e.to_string())?;
-                return Ok((gpu, surface, instance, name));
+                return Ok((gpu, surface, name));
             }
             Err(e) => why.push(format!("{name}: {e}")),
         }
