@@ -43,6 +43,9 @@ pub enum GpuError {
     /// The window's surface could not be created or has no format to show frames in.
     #[error("cannot show frames in the window: {0}")]
     Surface(String),
+    /// The device failed: out of memory, or an error no scope caught.
+    #[error("{0}")]
+    Failed(String),
     /// Reading a frame back from the GPU failed.
     #[error("reading the frame back failed: {0}")]
     Readback(String),
@@ -77,6 +80,8 @@ pub struct Gpu {
     anisotropy: u16,
     /// How the renderer may feed its shaders here.
     paths: DrawPaths,
+    /// Errors no scope caught, kept instead of panicking.
+    uncaptured: super::errors::UncapturedErrors,
 }
 
 /// What the renderer's draws may rely on, from the adapter's capabilities
@@ -209,6 +214,7 @@ impl Gpu {
         };
         let (device, queue) = (adapter.request_device(&desc).await)
             .map_err(|source| GpuError::Device { adapter: info.name.clone(), source })?;
+        let uncaptured = super::errors::UncapturedErrors::install(&device);
         if info.device_type == wgpu::DeviceType::Cpu {
             super::keep_freed_heap_memory();
         }
@@ -225,7 +231,18 @@ impl Gpu {
         let base_vertex = !webgl2 && flags.contains(wgpu::DownlevelFlags::BASE_VERTEX);
         // Indirect commands carry base vertices.
         let paths = DrawPaths { vertex_storage, base_vertex, indirect: indirect && base_vertex };
-        Ok(Self { adapter, device, queue, info, anisotropy, paths })
+        Ok(Self { adapter, device, queue, info, anisotropy, paths, uncaptured })
+    }
+
+    /// The first error the device reported outside glint's error scopes since
+    /// the last call (out of memory, say), as [`GpuError::Failed`]; `Ok` when none.
+    pub fn check(&self) -> Result<(), GpuError> {
+        self.uncaptured.take().map_or(Ok(()), |m| Err(GpuError::Failed(m)))
+    }
+
+    /// The handle the renderer checks after each frame.
+    pub(crate) fn uncaptured(&self) -> super::errors::UncapturedErrors {
+        self.uncaptured.clone()
     }
 
     /// Adapter name, backend and driver, for logs and benchmark reports.

@@ -31,6 +31,38 @@ impl DriverErrors {
     }
 }
 
+/// Errors no scope caught: wgpu's default handler panics on them (a device out
+/// of memory for a huge target, say); glint keeps the first instead, and the
+/// renderer returns it from the frame it happened in (exit code 3), never a panic.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct UncapturedErrors(std::sync::Arc<std::sync::Mutex<Option<String>>>);
+
+impl UncapturedErrors {
+    /// Catch `device`'s uncaptured errors from now on.
+    pub(crate) fn install(device: &wgpu::Device) -> Self {
+        let errors = Self::default();
+        let sink = errors.0.clone();
+        device.on_uncaptured_error(std::sync::Arc::new(move |e: wgpu::Error| {
+            let mut first = sink.lock().unwrap_or_else(|e| e.into_inner());
+            first.get_or_insert_with(|| describe(&e));
+        }));
+        errors
+    }
+
+    /// The first error caught since the last call, if any.
+    pub(crate) fn take(&self) -> Option<String> {
+        self.0.lock().unwrap_or_else(|e| e.into_inner()).take()
+    }
+}
+
+/// `e` in one short line: out of memory said plainly, anything else shortened.
+pub(crate) fn describe(e: &wgpu::Error) -> String {
+    match e {
+        wgpu::Error::OutOfMemory { .. } => "the GPU is out of memory".into(),
+        other => crate::text::shorten(&other.to_string().replace('\n', " "), crate::text::MAX_MESSAGE_CHARS / 2),
+    }
+}
+
 /// What `future` gives when polled once, or `None` if it is not ready yet.
 fn at_once<F: std::future::Future>(future: F) -> Option<F::Output> {
     let mut future = std::pin::pin!(future);

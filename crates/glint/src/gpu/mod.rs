@@ -18,7 +18,7 @@ pub use target::{OffscreenTarget, Readback, TargetFormat};
 pub use window::WindowSurface;
 
 pub(crate) use blit::{sampler_entry, texture_entry, Blitter};
-pub(crate) use errors::DriverErrors;
+pub(crate) use errors::{DriverErrors, UncapturedErrors};
 
 /// Colour format of every glint target: 8-bit sRGB, so shaders write linear values
 /// and the hardware encodes them.

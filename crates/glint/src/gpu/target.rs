@@ -30,8 +30,9 @@ const BYTES_PER_PIXEL: u32 = 4;
 impl OffscreenTarget {
     /// Create a `width` x `height` target with `samples` (1 or 4) samples per pixel.
     ///
-    /// Errors when a side is 0 or above the device's 2D texture limit, or when the
-    /// adapter cannot multisample the colour format.
+    /// Errors when a side is 0 or above the device's 2D texture limit, when the
+    /// adapter cannot multisample the colour format, or when the device cannot
+    /// hold the textures ([`GpuError::Failed`]: out of memory).
     pub fn new(gpu: &Gpu, width: u32, height: u32, samples: u32) -> Result<Self, GpuError> {
         let max = gpu.device.limits().max_texture_dimension_2d;
         if width == 0 || height == 0 || width > max || height > max {
@@ -40,7 +41,15 @@ impl OffscreenTarget {
         if !(samples == 1 || samples == 4) || !gpu.supports_msaa(samples) {
             return Err(GpuError::SampleCount(samples));
         }
-        Ok(Self::on_device(&gpu.device, width, height, TargetFormat { color: COLOR_FORMAT, samples }))
+        let scope = super::DriverErrors::watch(&gpu.device);
+        let target = Self::on_device(&gpu.device, width, height, TargetFormat { color: COLOR_FORMAT, samples });
+        match scope.finish() {
+            None => Ok(target),
+            Some(e) => Err(GpuError::Failed(format!(
+                "cannot make a {width}x{height} target with {samples} samples: {}",
+                super::errors::describe(&e)
+            ))),
+        }
     }
 
     /// [`OffscreenTarget::new`] without its checks, for a target no larger and
@@ -152,7 +161,8 @@ impl OffscreenTarget {
 
     /// Copy the last rendered frame back to the CPU as an RGBA8 (sRGB) image.
     ///
-    /// Blocks until the GPU has finished the frame.
+    /// Blocks until the GPU has finished the frame. Errors when the device
+    /// cannot hold the copy or the map fails.
     pub fn read_rgba8(&self, gpu: &Gpu) -> Result<image::RgbaImage, GpuError> {
         let readback = self.start_readback(gpu);
         gpu.device.poll(wgpu::PollType::wait_indefinitely()).map_err(|e| GpuError::Readback(e.to_string()))?;
@@ -166,39 +176,62 @@ impl OffscreenTarget {
 
     /// Start copying the last rendered frame back to the CPU without waiting:
     /// poll the [`Readback`] until it is ready (the browser's way, where nothing
-    /// may block), then finish it.
+    /// may block), then finish it. The frame comes back in bands of rows, each
+    /// buffer within the device's `max_buffer_size` (a 16384² frame is 1 GiB;
+    /// the limit is usually 256 MiB).
     pub fn start_readback(&self, gpu: &Gpu) -> Readback {
         // Rows of a texture-to-buffer copy must be 256-byte aligned: pad, then strip.
         let unpadded = self.width * BYTES_PER_PIXEL;
         let padded = unpadded.div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
-        let buffer = gpu.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("offscreen target: readback"),
-            size: u64::from(padded) * u64::from(self.height),
-            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-            mapped_at_creation: false,
-        });
+        let band_rows =
+            (gpu.device.limits().max_buffer_size / u64::from(padded)).clamp(1, u64::from(self.height)) as u32;
         let mut encoder = gpu
             .device
             .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("offscreen target: readback") });
-        encoder.copy_texture_to_buffer(
-            self.resolved.as_image_copy(),
-            wgpu::TexelCopyBufferInfo {
-                buffer: &buffer,
-                layout: wgpu::TexelCopyBufferLayout {
-                    offset: 0,
-                    bytes_per_row: Some(padded),
-                    rows_per_image: Some(self.height),
-                },
-            },
-            self.resolved.size(),
-        );
-        gpu.queue.submit([encoder.finish()]);
-        let mapped = std::sync::Arc::new(std::sync::Mutex::new(None));
-        let answer = mapped.clone();
-        buffer.map_async(wgpu::MapMode::Read, .., move |r| {
-            *answer.lock().unwrap_or_else(|e| e.into_inner()) = Some(r.map_err(|e| e.to_string()));
-        });
-        Readback { buffer, width: self.width, height: self.height, padded, mapped }
+        let scope = super::DriverErrors::watch(&gpu.device);
+        let bands: Vec<(wgpu::Buffer, u32)> = (0..self.height)
+            .step_by(band_rows as usize)
+            .map(|first| {
+                let rows = band_rows.min(self.height - first);
+                let buffer = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("offscreen target: readback band"),
+                    size: u64::from(padded) * u64::from(rows),
+                    usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+                    mapped_at_creation: false,
+                });
+                encoder.copy_texture_to_buffer(
+                    wgpu::TexelCopyTextureInfo {
+                        texture: &self.resolved,
+                        mip_level: 0,
+                        origin: wgpu::Origin3d { x: 0, y: first, z: 0 },
+                        aspect: wgpu::TextureAspect::All,
+                    },
+                    wgpu::TexelCopyBufferInfo {
+                        buffer: &buffer,
+                        layout: wgpu::TexelCopyBufferLayout {
+                            offset: 0,
+                            bytes_per_row: Some(padded),
+                            rows_per_image: Some(rows),
+                        },
+                    },
+                    wgpu::Extent3d { width: self.width, height: rows, depth_or_array_layers: 1 },
+                );
+                (buffer, rows)
+            })
+            .collect();
+        let failed =
+            scope.finish().map(|e| format!("cannot make the readback buffers: {}", super::errors::describe(&e)));
+        let mapped = std::sync::Arc::new(std::sync::Mutex::new(Vec::new()));
+        if failed.is_none() {
+            gpu.queue.submit([encoder.finish()]);
+            for (buffer, _) in &bands {
+                let answer = mapped.clone();
+                buffer.map_async(wgpu::MapMode::Read, .., move |r| {
+                    answer.lock().unwrap_or_else(|e| e.into_inner()).push(r.map_err(|e| e.to_string()));
+                });
+            }
+        }
+        Readback { bands, width: self.width, height: self.height, padded, mapped, failed }
     }
 
     /// Read the frame back and write it to `path` as PNG. A write that fails
@@ -215,34 +248,47 @@ impl OffscreenTarget {
 
 /// A frame being copied back to the CPU ([`OffscreenTarget::start_readback`]).
 pub struct Readback {
-    buffer: wgpu::Buffer,
+    /// Each band's buffer and rows, top to bottom.
+    bands: Vec<(wgpu::Buffer, u32)>,
     width: u32,
     height: u32,
-    /// Bytes per row in the buffer (rows are 256-byte aligned).
+    /// Bytes per row in the buffers (rows are 256-byte aligned).
     padded: u32,
-    /// The map's outcome, once the GPU has answered.
-    mapped: std::sync::Arc<std::sync::Mutex<Option<Result<(), String>>>>,
+    /// Each band's map outcome, as the GPU answers.
+    mapped: std::sync::Arc<std::sync::Mutex<Vec<Result<(), String>>>>,
+    /// Why the copy could not start, if it could not.
+    failed: Option<String>,
 }
 
 impl Readback {
-    /// Let the device make progress without waiting; returns whether the copy has arrived.
+    /// Let the device make progress without waiting; returns whether the copy
+    /// has arrived (or failed to start).
     pub fn poll(&self, gpu: &Gpu) -> bool {
         let _ = gpu.device.poll(wgpu::PollType::Poll);
-        self.mapped.lock().unwrap_or_else(|e| e.into_inner()).is_some()
+        self.failed.is_some() || self.mapped.lock().unwrap_or_else(|e| e.into_inner()).len() == self.bands.len()
     }
 
     /// The image, once [`Readback::poll`] says it has arrived (an error before).
     pub fn finish(self) -> Result<image::RgbaImage, GpuError> {
-        let answer = self.mapped.lock().unwrap_or_else(|e| e.into_inner()).take();
-        answer.ok_or_else(|| GpuError::Readback("the copy has not arrived yet".into()))?.map_err(GpuError::Readback)?;
-        let unpadded = (self.width * BYTES_PER_PIXEL) as usize;
-        let view = self.buffer.get_mapped_range(..).map_err(|e| GpuError::Readback(e.to_string()))?;
-        let mut pixels = Vec::with_capacity(unpadded * self.height as usize);
-        for row in view.chunks_exact(self.padded as usize) {
-            pixels.extend_from_slice(&row[..unpadded]);
+        if let Some(message) = self.failed {
+            return Err(GpuError::Failed(message));
         }
-        drop(view);
-        self.buffer.unmap();
+        let answers = std::mem::take(&mut *self.mapped.lock().unwrap_or_else(|e| e.into_inner()));
+        if answers.len() < self.bands.len() {
+            return Err(GpuError::Readback("the copy has not arrived yet".into()));
+        }
+        answers.into_iter().collect::<Result<Vec<()>, _>>().map_err(GpuError::Readback)?;
+        let unpadded = (self.width * BYTES_PER_PIXEL) as usize;
+        let mut pixels = Vec::new();
+        pixels.try_reserve_exact(unpadded * self.height as usize).map_err(|e| GpuError::Readback(e.to_string()))?;
+        for (buffer, _) in &self.bands {
+            let view = buffer.get_mapped_range(..).map_err(|e| GpuError::Readback(e.to_string()))?;
+            for row in view.chunks_exact(self.padded as usize) {
+                pixels.extend_from_slice(&row[..unpadded]);
+            }
+            drop(view);
+            buffer.unmap();
+        }
         image::RgbaImage::from_raw(self.width, self.height, pixels)
             .ok_or_else(|| GpuError::Readback("pixel count does not match the size".into()))
     }

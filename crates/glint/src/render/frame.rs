@@ -9,7 +9,8 @@ use super::shadow_pass::{Shadows, ShadowsDrawn};
 use super::view::ViewFrame;
 use super::{ms_since, queue, FrameMode, FrameStats, FrameVariant, RenderError, Renderer};
 use crate::gpu::{OffscreenTarget, TargetFormat, HDR_FORMAT};
-use crate::scene::{Entity, Lighting, PostEffect, View, MAX_LIGHTS, MAX_POST_EFFECTS};
+use crate::scene::{Entity, Lighting, MaterialId, PostEffect, TextureId, View, MAX_LIGHTS, MAX_POST_EFFECTS};
+use std::collections::HashMap;
 use web_time::Instant;
 
 /// How a view's picture reaches the output (stage 8 of [`Renderer::run_frame`]).
@@ -98,39 +99,51 @@ impl Renderer {
                 }
             };
         }
+        self.check_device()?;
         Ok(stats)
     }
 
+    /// The first error the device reported outside glint's scopes (out of
+    /// memory while drawing, say), as [`RenderError::Device`].
+    fn check_device(&self) -> Result<(), RenderError> {
+        match self.uncaptured.take() {
+            None => Ok(()),
+            Some(message) => Err(RenderError::Device { what: "the frame", message }),
+        }
+    }
+
     /// The order to draw `views` in: a view into a render target before every
-    /// view whose entities (`drawn`) show that target, the given order otherwise.
+    /// view whose entities (`drawn`) show that target, the given order otherwise
+    /// ([`draw_order`](crate::scene::draw_order): linear in views and entities).
     fn view_order(&self, views: &[View], drawn: &[Vec<&Entity>]) -> Result<Vec<usize>, RenderError> {
-        let texture_of = |v: &View| match v.output {
-            None => Ok(None),
-            Some(id) => self
-                .registry
-                .render_targets
-                .get(id.0 as usize)
-                .map(|t| Some(t.1))
-                .ok_or(RenderError::UnknownRenderTarget(id)),
-        };
-        let textures = views.iter().map(texture_of).collect::<Result<Vec<_>, _>>()?;
-        // needs[b] holds each view a whose target view b shows.
-        let needs: Vec<Vec<usize>> = (0..views.len())
-            .map(|b| {
-                (0..views.len())
-                    .filter(|&a| a != b)
-                    .filter(|&a| {
-                        textures[a].is_some_and(|t| drawn[b].iter().any(|e| self.registry.shows(e.material, t)))
-                    })
-                    .collect()
+        let targets = &self.registry.render_targets;
+        let outputs = (views.iter())
+            .map(|v| match v.output {
+                None => Ok(None),
+                Some(id) => {
+                    targets.get(id.0 as usize).map(|_| Some(id.0 as usize)).ok_or(RenderError::UnknownRenderTarget(id))
+                }
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        let target_of: HashMap<TextureId, usize> = targets.iter().enumerate().map(|(k, t)| (t.1, k)).collect();
+        // The targets each material drawn shows, found once per material.
+        let mut shows: HashMap<MaterialId, Vec<usize>> = HashMap::new();
+        let shown: Vec<Vec<usize>> = (drawn.iter())
+            .map(|entities| {
+                let mut all: Vec<usize> = Vec::new();
+                for e in entities {
+                    let of = shows.entry(e.material).or_insert_with(|| {
+                        let maps = self.registry.material(e.material).map(|m| m.maps()).unwrap_or_default();
+                        maps.iter().flatten().filter_map(|t| target_of.get(t).copied()).collect()
+                    });
+                    all.extend_from_slice(of);
+                }
+                all.sort_unstable();
+                all.dedup();
+                all
             })
             .collect();
-        let mut order = Vec::with_capacity(views.len());
-        while order.len() < views.len() {
-            let ready = (0..views.len()).find(|b| !order.contains(b) && needs[*b].iter().all(|a| order.contains(a)));
-            order.push(ready.ok_or(RenderError::RenderTargetCycle)?);
-        }
-        Ok(order)
+        crate::scene::draw_order(&outputs, &shown, targets.len()).map_err(|_| RenderError::RenderTargetCycle)
     }
 
     /// Clear `target` to black.
@@ -186,6 +199,7 @@ impl Renderer {
         self.submitted.clear();
         self.instances_submitted = 0;
         self.frame_index += 1;
+        let result = result.and_then(|stats| self.check_device().map(|()| stats));
         result.map(|mut stats| {
             (stats.frame, stats.gpu) = (frame, gpu);
             stats.cpu_ms.total = ms_since(start);

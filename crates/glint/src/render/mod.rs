@@ -108,6 +108,8 @@ pub enum FrameMode {
 /// [`render`](Self::render) is those calls for one view,
 /// [`render_views`](Self::render_views) for several.
 pub struct Renderer {
+    /// Errors the device reported outside glint's scopes, returned by the frame.
+    uncaptured: crate::gpu::UncapturedErrors,
     device: wgpu::Device,
     queue: wgpu::Queue,
     /// The shapes, materials, textures, render targets and pipelines.
@@ -181,6 +183,7 @@ impl Renderer {
             (gpu.draws_indirect(), gpu.vertex_storage()),
         );
         Self {
+            uncaptured: gpu.uncaptured(),
             device,
             queue,
             registry,
