@@ -41,6 +41,7 @@ pub mod render;
 pub mod scene;
 mod shader;
 pub mod sim;
+pub mod text;
 
 pub use asset::{Diagnostic, Texture};
 pub use gpu::{Gpu, GpuError, OffscreenTarget, WindowSurface};
@@ -65,6 +66,15 @@ pub enum Error {
     /// A simulation step failed (exit code 3).
     #[error(transparent)]
     Sim(#[from] sim::cloth::StepError),
+    /// A scene's simulation failed while it was posed (exit code 3): where in
+    /// the scene, and why.
+    #[error("{place}: {source}")]
+    Posing {
+        /// The scene, the block's line and what it was doing.
+        place: Diagnostic,
+        /// Why the step failed.
+        source: sim::cloth::StepError,
+    },
 }
 
 impl Error {
@@ -73,7 +83,7 @@ impl Error {
         match self {
             Error::Asset(_) => 1,
             Error::Gpu(GpuError::NoAdapter(_) | GpuError::Device { .. }) => 2,
-            Error::Gpu(_) | Error::Render(_) | Error::Sim(_) => 3,
+            Error::Gpu(_) | Error::Render(_) | Error::Sim(_) | Error::Posing { .. } => 3,
         }
     }
 }

@@ -33,11 +33,11 @@ pub use model::{Model, ModelPart, Morph, Skin};
 pub use procedural::ShapeKind;
 pub use scn::{
     load_scene, load_scene_with, parse_scene, parse_scene_with, CameraView, DrawOptions, EntityDesc, MaterialDesc,
-    MeshRef, SceneDesc, TextureRef, MAX_INSTANCES,
+    MeshRef, SceneDesc, TextureRef, MAX_CAMERAS, MAX_INSTANCES,
 };
 pub use scn_cloth::{ClothDesc, ClothSetup, MAX_POSE_STEPS};
-pub use scn_targets::{RenderTargetDesc, MAX_RENDER_TARGET_SIDE};
-pub use texture::{load_texture, Texture, MAX_TEXTURE_MEMORY, MAX_TEXTURE_SIDE};
+pub use scn_targets::{RenderTargetDesc, MAX_RENDER_TARGETS, MAX_RENDER_TARGET_BYTES, MAX_RENDER_TARGET_SIDE};
+pub use texture::{load_image, load_texture, Texture, MAX_TEXTURE_MEMORY, MAX_TEXTURE_SIDE};
 
 use std::fmt;
 use std::path::{Path, PathBuf};
@@ -99,11 +99,16 @@ impl Diagnostic {
     }
 }
 
+/// Shown within the message policy of [`crate::text`]: the path and the message
+/// cut to their most characters, however long the input that made them.
 impl fmt::Display for Diagnostic {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        use crate::text::{shorten, MAX_MESSAGE_CHARS, MAX_PATH_CHARS};
+        let path = shorten(&self.path.display().to_string(), MAX_PATH_CHARS);
+        let message = shorten(&self.message, MAX_MESSAGE_CHARS);
         match self.line {
-            Some(line) => write!(f, "{}:{}: {}", self.path.display(), line, self.message),
-            None => write!(f, "{}: {}", self.path.display(), self.message),
+            Some(line) => write!(f, "{path}:{line}: {message}"),
+            None => write!(f, "{path}: {message}"),
         }
     }
 }

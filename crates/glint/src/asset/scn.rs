@@ -18,6 +18,7 @@ use crate::scene::{
     Background, Camera, Entity, Environment, Fog, Light, Lighting, Material, PostEffect, RenderTargetId, TextureId,
     View, Viewport, MAX_LIGHTS,
 };
+use crate::text::{list, quote};
 use glam::{EulerRot, Mat4, Quat, Vec3};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -26,6 +27,10 @@ use std::path::{Path, PathBuf};
 /// instance records fill 122 MiB, inside the 128 MiB storage binding every
 /// adapter offers (wgpu's default limit), so any adapter can draw them.
 pub const MAX_INSTANCES: u64 = 2_000_000;
+
+/// Most cameras (each a view of the frame) one scene may have: each is a pass
+/// over the scene every frame.
+pub const MAX_CAMERAS: usize = 16_384;
 
 /// A texture a material uses: index into [`SceneDesc::textures`].
 pub type TextureRef = usize;
@@ -292,6 +297,7 @@ pub fn parse_scene_with(path: &Path, text: &str, options: LoadOptions) -> Result
         cloths: Vec::new(),
         instances: 0,
         camera_lines: Vec::new(),
+        targets: scn_targets::Targets::default(),
     };
     for block in &blocks {
         loader.block(block)?;
@@ -331,6 +337,8 @@ struct Loader<'a> {
     instances: u64,
     /// Each camera's block line, for errors found once the file is read.
     camera_lines: Vec<usize>,
+    /// The `render_target` blocks so far, by name.
+    targets: scn_targets::Targets,
 }
 
 /// Rotation from Quake-style angles in degrees: pitch about X, yaw about Y, roll about Z.
@@ -352,8 +360,7 @@ impl Loader<'_> {
             "world" => self.world(&mut f)?,
             "camera" => self.camera(&mut f)?,
             "render_target" => {
-                let target = scn_targets::parse(&mut f, &self.scene.render_targets)?;
-                self.scene.render_targets.push(target);
+                self.targets.parse(&mut f)?;
             }
             "light_directional" | "light_point" | "light_spot" => {
                 let light = scn_lights::light(class, &mut f, &mut self.scene.warnings)?;
@@ -376,7 +383,7 @@ impl Loader<'_> {
                 return Err(Diagnostic::at(
                     self.path,
                     class_pair.line,
-                    format!("unknown classname '{other}', expected one of: world, camera, light_directional, light_point, light_spot, material, entity, instances, cloth"),
+                    format!("unknown classname {}, expected one of: world, camera, light_directional, light_point, light_spot, material, entity, instances, cloth, render_target", quote(other)),
                 ))
             }
         }
@@ -415,6 +422,10 @@ impl Loader<'_> {
     }
 
     fn camera(&mut self, f: &mut Fields) -> Result<(), Diagnostic> {
+        if self.scene.cameras.len() == MAX_CAMERAS {
+            let message = format!("more than {MAX_CAMERAS} cameras: a scene may have at most that many views");
+            return Err(Diagnostic::at(self.path, f.block.line, message));
+        }
         let origin = f.vec3("origin")?.unwrap_or(Vec3::new(0.0, 2.0, 6.0));
         let near = f.number("near", 1e-4..=1e6)?.unwrap_or(0.1);
         let far = f.number("far", 1e-3..=1e9)?.unwrap_or(200.0);
@@ -448,7 +459,7 @@ impl Loader<'_> {
         camera.up = up.unwrap_or(camera.up);
         let viewport = f.viewport("viewport")?;
         let post = super::scn_post::chain(f)?;
-        let output = scn_targets::named(f, "output", &self.scene.render_targets)?;
+        let output = self.targets.named(f, "output")?;
         self.scene.camera_views.push(CameraView { viewport, post, output });
         self.camera_lines.push(f.block.line);
         self.scene.cameras.push(camera);
@@ -482,7 +493,7 @@ impl Loader<'_> {
         let Some(pair) = f.get(key) else {
             return Ok(None);
         };
-        if let Some(target) = scn_targets::map(self.path, pair.line, &pair.value, &self.scene.render_targets) {
+        if let Some(target) = self.targets.map(self.path, pair.line, &pair.value) {
             return target.map(Some);
         }
         let fail = |e: Diagnostic| Diagnostic::at(self.path, pair.line, format!("\"{key}\": {e}"));
@@ -499,7 +510,11 @@ impl Loader<'_> {
         let name_pair = f.require("name")?;
         let name = name_pair.value.trim().to_string();
         if self.material_names.contains_key(&name) {
-            return Err(Diagnostic::at(self.path, name_pair.line, format!("material '{name}' is defined twice")));
+            return Err(Diagnostic::at(
+                self.path,
+                name_pair.line,
+                format!("material {} is defined twice", quote(&name)),
+            ));
         }
         let material = material_fields(f, Material { name, ..Material::default() })?;
         let desc = MaterialDesc {
@@ -594,13 +609,8 @@ impl Loader<'_> {
         for (name, pairs) in by_material {
             let line = pairs[0].line;
             let Some(desc) = named.get(&name).map(|&k| &mut model.materials[k]) else {
-                const SHOWN: usize = 20;
-                let mut names: Vec<&str> =
-                    model.materials.iter().take(SHOWN).map(|m| m.material.name.as_str()).collect();
-                if model.materials.len() > SHOWN {
-                    names.push("…");
-                }
-                let message = format!("the model has no material '{name}' (it has: {})", names.join(", "));
+                let names: Vec<&str> = model.materials.iter().map(|m| m.material.name.as_str()).collect();
+                let message = format!("the model has no material {} (it has: {})", quote(&name), list(&names));
                 return Err(Diagnostic::at(self.path, line, message));
             };
             let block = Block { line, pairs };
@@ -697,7 +707,7 @@ impl Loader<'_> {
             Diagnostic::at(
                 self.path,
                 count_pair.line,
-                format!("\"count\" is '{}', expected a whole number", count_pair.value),
+                format!("\"count\" is {}, expected a whole number", quote(&count_pair.value)),
             )
         })?;
         if count < 0 {
@@ -728,7 +738,7 @@ impl Loader<'_> {
                 Diagnostic::at(
                     self.path,
                     p.line,
-                    format!("\"seed\" is '{}', expected a whole number 0 or more", p.value),
+                    format!("\"seed\" is {}, expected a whole number 0 or more", quote(&p.value)),
                 )
             })?,
         };
@@ -747,7 +757,7 @@ impl Loader<'_> {
     fn material_index(&self, name: Option<(String, usize)>) -> Result<Option<usize>, Diagnostic> {
         let Some((name, line)) = name else { return Ok(None) };
         let index = self.material_names.get(&name).copied();
-        let message = || format!("unknown material '{name}' (define it in a material block)");
+        let message = || format!("unknown material {} (define it in a material block)", quote(&name));
         index.map(Some).ok_or_else(|| Diagnostic::at(self.path, line, message()))
     }
 
@@ -781,8 +791,10 @@ impl Loader<'_> {
         }
         let files = self.scene.textures.len();
         scn_targets::finish_maps(&mut self.scene.materials, files);
+        self.scene.render_targets = std::mem::take(&mut self.targets.list);
         let scene = &self.scene;
-        scn_targets::check_order(self.path, &scene.camera_views, &self.camera_lines, &scene.materials, files)?;
+        let targets = scene.render_targets.len();
+        scn_targets::check_order(self.path, &scene.camera_views, &self.camera_lines, &scene.materials, files, targets)?;
         Ok(self.scene)
     }
 }
@@ -790,3 +802,7 @@ impl Loader<'_> {
 #[cfg(test)]
 #[path = "scn_tests.rs"]
 mod tests;
+
+#[cfg(test)]
+#[path = "scn_hostile_tests.rs"]
+mod hostile_tests;

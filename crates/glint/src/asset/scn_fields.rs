@@ -3,6 +3,7 @@
 
 use super::scn_syntax::{Block, Pair};
 use super::{Diagnostic, ShapeKind};
+use crate::text::quote;
 use glam::Vec3;
 use std::collections::HashMap;
 use std::path::Path;
@@ -38,6 +39,18 @@ impl<'b> Fields<'b> {
 
     pub(crate) fn vec3(&mut self, key: &str) -> Result<Option<Vec3>, Diagnostic> {
         Ok(self.numbers::<3>(key, "3 numbers (x y z)")?.map(Vec3::from))
+    }
+
+    /// A vector of three numbers no longer than `most`.
+    pub(crate) fn bounded_vec3(&mut self, key: &str, most: f32) -> Result<Option<Vec3>, Diagnostic> {
+        let line = self.get(key).map_or(self.block.line, |p| p.line);
+        match self.vec3(key)? {
+            Some(v) if v.length() > most => {
+                let message = format!("\"{key}\" is {} long, expected at most {most}", v.length());
+                Err(Diagnostic::at(self.path, line, message))
+            }
+            v => Ok(v),
+        }
     }
 
     /// A rectangle "x y w h" of fractions of the image, inside 0..1 and not empty.
@@ -101,8 +114,8 @@ impl<'b> Fields<'b> {
                 self.path,
                 pair.line,
                 format!(
-                    "\"{key}\" is '{}', expected a whole number in {}..={}",
-                    pair.value,
+                    "\"{key}\" is {}, expected a whole number in {}..={}",
+                    quote(&pair.value),
                     range.start(),
                     range.end()
                 ),
@@ -117,7 +130,7 @@ impl<'b> Fields<'b> {
         match pair.value.trim() {
             "0" => Ok(Some(false)),
             "1" => Ok(Some(true)),
-            v => Err(Diagnostic::at(self.path, pair.line, format!("\"{key}\" is '{v}', expected 0 or 1"))),
+            v => Err(Diagnostic::at(self.path, pair.line, format!("\"{key}\" is {}, expected 0 or 1", quote(v)))),
         }
     }
 
@@ -130,7 +143,7 @@ impl<'b> Fields<'b> {
             None => Err(Diagnostic::at(
                 self.path,
                 pair.line,
-                format!("\"{key}\" is '{}', expected one of: {}", pair.value, options.join(", ")),
+                format!("\"{key}\" is {}, expected one of: {}", quote(&pair.value), options.join(", ")),
             )),
         }
     }
@@ -147,7 +160,7 @@ impl<'b> Fields<'b> {
             Diagnostic::at(
                 self.path,
                 pair.line,
-                format!("unknown mesh '{}', expected one of: {}, blob", pair.value, names.join(", ")),
+                format!("unknown mesh {}, expected one of: {}, blob", quote(&pair.value), names.join(", ")),
             )
         })
     }
@@ -190,9 +203,9 @@ pub(crate) fn numbers<const N: usize>(path: &Path, pair: &Pair, what: &str) -> R
     let mut out = [0.0; N];
     let mut count = 0;
     for word in pair.value.split_whitespace() {
-        let v: f32 = word.parse().map_err(|_| bad(format!("bad number '{word}'")))?;
+        let v: f32 = word.parse().map_err(|_| bad(format!("bad number {}", quote(word))))?;
         if !v.is_finite() {
-            return Err(bad(format!("'{word}' is not a finite number")));
+            return Err(bad(format!("{} is not a finite number", quote(word))));
         }
         if count < N {
             out[count] = v;

@@ -4,11 +4,10 @@
 
 use super::scn_fields::Fields;
 use super::Diagnostic;
-use crate::scene::MAX_POST_EFFECTS;
 use crate::scene::{PostEffect, Tonemap};
 
 /// The camera's post chain (empty without a `post` key). An effect named twice,
-/// an unknown name, more than [`MAX_POST_EFFECTS`] effects or a setting out of
+/// an unknown name, more than [`MAX_POST_EFFECTS`](crate::scene::MAX_POST_EFFECTS) effects or a setting out of
 /// range is an error at its line.
 pub(crate) fn chain(f: &mut Fields) -> Result<Vec<PostEffect>, Diagnostic> {
     let mut defaults = PostEffect::ALL;
@@ -32,20 +31,5 @@ pub(crate) fn chain(f: &mut Fields) -> Result<Vec<PostEffect>, Diagnostic> {
     let Some(pair) = f.get("post") else {
         return Ok(Vec::new());
     };
-    let at = |message: String| Diagnostic::at(f.path, pair.line, message);
-    let mut chain = Vec::new();
-    for name in pair.value.split_whitespace() {
-        let Some(k) = PostEffect::NAMES.iter().position(|e| *e == name) else {
-            let names = PostEffect::NAMES.join(", ");
-            return Err(at(format!("\"post\" names '{name}', expected effects among: {names}")));
-        };
-        if chain.iter().any(|e: &PostEffect| e.name() == name) {
-            return Err(at(format!("\"post\" names '{name}' twice")));
-        }
-        chain.push(defaults[k]);
-    }
-    if chain.len() > MAX_POST_EFFECTS {
-        return Err(at(format!("\"post\" has {} effects, at most {MAX_POST_EFFECTS}", chain.len())));
-    }
-    Ok(chain)
+    PostEffect::chain(&pair.value, &defaults).map_err(|m| Diagnostic::at(f.path, pair.line, format!("\"post\": {m}")))
 }

@@ -3,6 +3,7 @@
 //! splits a file into blocks; `scn` gives them meaning.
 
 use super::Diagnostic;
+use crate::text::quote;
 use std::path::Path;
 
 /// One `"key" "value"` pair and the line it is on.
@@ -57,7 +58,10 @@ fn tokenize(path: &Path, line_no: usize, line: &str) -> Result<Vec<Token>, Diagn
                 return Err(Diagnostic::at(
                     path,
                     line_no,
-                    format!("unexpected '{other}': expected '{{', '}}' or a quoted \"key\" \"value\" pair"),
+                    format!(
+                        "unexpected {}: expected '{{', '}}' or a quoted \"key\" \"value\" pair",
+                        quote(&other.to_string())
+                    ),
                 ))
             }
         }

@@ -124,7 +124,11 @@ fn semantic_errors_name_file_line_and_expectation() {
         ("{\n\"classname\" \"camera\"\n\"viewport\" \"-0.1 0 0.5 1\"\n}", 3, "x and y must be at least 0"),
         ("{\n\"classname\" \"camera\"\n\"viewport\" \"0 0 0 1\"\n}", 3, "not a rectangle inside the image"),
         ("{\n\"classname\" \"camera\"\n\"viewport\" \"0 0 1\"\n}", 3, "found 3 numbers"),
-        ("{\n\"classname\" \"camera\"\n\"post\" \"bloom glow\"\n}", 3, "names 'glow', expected effects among: bloom,"),
+        (
+            "{\n\"classname\" \"camera\"\n\"post\" \"bloom glow\"\n}",
+            3,
+            "'glow' is not a post effect, expected effects among: bloom,",
+        ),
         ("{\n\"classname\" \"camera\"\n\"output\" \"tv\"\n}", 3, "unknown render target 'tv'"),
         (
             "{\n\"classname\" \"material\"\n\"name\" \"m\"\n\"diffuse_map\" \"target:tv\"\n}",
@@ -139,7 +143,7 @@ fn semantic_errors_name_file_line_and_expectation() {
             5,
             "expected one of: ldr, hdr",
         ),
-        ("{\n\"classname\" \"camera\"\n\"post\" \"fxaa fxaa\"\n}", 3, "names 'fxaa' twice"),
+        ("{\n\"classname\" \"camera\"\n\"post\" \"fxaa fxaa\"\n}", 3, "'fxaa' is named twice"),
         ("{\n\"classname\" \"camera\"\n\"tonemap\" \"filmic\"\n}", 3, "expected one of: none, reinhard, aces, agx"),
         ("{\n\"classname\" \"camera\"\n\"exposure\" \"40\"\n}", 3, "expected a value in -20..=20"),
         ("{\n\"classname\" \"camera\"\n\"vignette\" \"2\"\n}", 3, "expected a value in 0..=1"),

@@ -16,6 +16,7 @@ mod mesh;
 mod post;
 mod states;
 mod view;
+mod view_order;
 
 pub use camera::{Camera, Projection};
 pub use entity::Entity;
@@ -28,6 +29,7 @@ pub use mesh::{smooth_normals, smooth_normals_in_groups, Aabb, BoundingSphere, M
 pub use post::{PostEffect, Tonemap, MAX_POST_EFFECTS};
 pub use states::{BlendState, Compare, Cull, DepthState, RasterState, RenderStates, StencilOp, StencilState};
 pub use view::{View, Viewport};
+pub use view_order::draw_order;
 
 /// Handle to a shape (a mesh uploaded by the renderer), returned by
 /// [`Renderer::add_shape`](crate::Renderer::add_shape). The number is its index

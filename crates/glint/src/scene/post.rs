@@ -74,6 +74,33 @@ impl PostEffect {
         Self::NAMES.iter().position(|n| *n == name).map(|k| Self::ALL[k])
     }
 
+    /// The chain a list of effect names (separated by white space) describes,
+    /// each effect with its settings from `settings` (in the order of
+    /// [`PostEffect::NAMES`]; [`PostEffect::ALL`] for the defaults). The one rule
+    /// for `.scn` `post` keys and `glint bench --post`: an unknown name, a name
+    /// given twice or more than [`MAX_POST_EFFECTS`] effects is an error saying
+    /// what was expected.
+    pub fn chain(names: &str, settings: &[Self; 5]) -> Result<Vec<Self>, String> {
+        let mut chain: Vec<Self> = Vec::new();
+        for name in names.split_whitespace() {
+            let Some(k) = Self::NAMES.iter().position(|e| *e == name) else {
+                let known = Self::NAMES.join(", ");
+                return Err(format!(
+                    "{} is not a post effect, expected effects among: {known}",
+                    crate::text::quote(name)
+                ));
+            };
+            if chain.iter().any(|e| e.name() == name) {
+                return Err(format!("{} is named twice", crate::text::quote(name)));
+            }
+            if chain.len() == MAX_POST_EFFECTS {
+                return Err(format!("more than {MAX_POST_EFFECTS} effects"));
+            }
+            chain.push(settings[k]);
+        }
+        Ok(chain)
+    }
+
     /// Its name in `.scn` `post` lists and in statistics.
     pub fn name(&self) -> &'static str {
         match self {

@@ -1,0 +1,170 @@
+//! Hostile `.scn` input, round two: render targets, cameras, cloth work and
+//! message lengths, each refused at its line before the work or memory it
+//! would take (`docs/limits.md`).
+
+use super::scn_targets::MAX_RENDER_TARGETS;
+use super::*;
+use std::fmt::Write;
+
+fn parse(text: &str) -> Result<SceneDesc, Diagnostic> {
+    parse_scene(Path::new("dir/t.scn"), text)
+}
+
+fn target(name: &str, size: &str, format: &str) -> String {
+    format!(
+        "{{\n\"classname\" \"render_target\"\n\"name\" \"{name}\"\n\"size\" \"{size}\"\n\"format\" \"{format}\"\n}}\n"
+    )
+}
+
+#[test]
+fn render_targets_past_the_memory_limit_are_refused_at_their_block() {
+    // 120 HDR targets of 2048² ran a lavapipe device out of memory; 12 bytes a
+    // pixel, the limit takes 21 of them.
+    let text: String = (0..120).map(|k| target(&format!("t{k}"), "2048 2048", "hdr")).collect();
+    let err = parse(&text).unwrap_err();
+    let per_block = 6;
+    assert_eq!(err.line, Some(21 * per_block + 1), "{err}");
+    assert!(err.message.contains("more than the 1024 MiB limit"), "{err}");
+    let fits: String = (0..21).map(|k| target(&format!("t{k}"), "2048 2048", "hdr")).collect();
+    assert_eq!(parse(&fits).unwrap().render_targets.len(), 21);
+}
+
+#[test]
+fn render_targets_past_the_count_limit_are_refused_at_their_block() {
+    let text: String = (0..MAX_RENDER_TARGETS + 1).map(|k| target(&format!("t{k}"), "1 1", "ldr")).collect();
+    let err = parse(&text).unwrap_err();
+    assert_eq!(err.line, Some(MAX_RENDER_TARGETS * 6 + 1), "{err}");
+    assert!(err.message.contains("more than 1024 render targets"), "{err}");
+}
+
+#[test]
+fn cameras_past_the_limit_are_refused_at_their_block() {
+    let camera = "{\n\"classname\" \"camera\"\n}\n";
+    let err = parse(&camera.repeat(MAX_CAMERAS + 1)).unwrap_err();
+    assert_eq!(err.line, Some(MAX_CAMERAS * 3 + 1), "{err}");
+    assert!(err.message.contains("more than 16384 cameras"), "{err}");
+}
+
+#[test]
+fn messages_never_echo_long_input() {
+    let long = "x".repeat(1 << 20);
+    for (text, what) in [
+        (format!("{{\n\"classname\" \"render_target\"\n\"name\" \"t\"\n\"size\" \"{long}\"\n}}\n"), "size"),
+        (format!("{{\n\"classname\" \"camera\"\n\"output\" \"{long}\"\n}}\n"), "output"),
+        (format!("{{\n\"classname\" \"{long}\"\n}}\n"), "classname"),
+        (format!("{{\n\"classname\" \"material\"\n\"name\" \"m\"\n\"diffuse_map\" \"target:{long}\"\n}}\n"), "map"),
+    ] {
+        let err = parse(&text).unwrap_err().to_string();
+        assert!(err.len() < 600, "{what}: {} characters", err.len());
+        assert!(err.contains("characters)"), "{what}: the length is said: {err}");
+    }
+    // An unknown target names a few of the defined ones and counts the rest.
+    let mut text: String = (0..1000).map(|k| target(&format!("target{k}"), "1 1", "ldr")).collect();
+    text.push_str("{\n\"classname\" \"camera\"\n\"output\" \"nowhere\"\n}\n");
+    let err = parse(&text).unwrap_err().to_string();
+    assert!(err.contains("'target0'") && err.contains("and 992 more"), "{err}");
+    assert!(err.len() < 400, "{err}");
+}
+
+fn cloth(body: &str) -> Result<SceneDesc, Diagnostic> {
+    parse(&format!("{{\n\"classname\" \"cloth\"\n{body}}}\n"))
+}
+
+#[test]
+fn cloth_work_outside_the_posing_budget_is_refused_at_load() {
+    let sphere = "sphere 0 -1 0 0.5";
+    let colliders = vec![sphere; scn_cloth::MAX_COLLIDERS + 1].join("; ");
+    let err = cloth(&format!("\"colliders\" \"{colliders}\"\n")).unwrap_err();
+    assert_eq!(err.line, Some(3), "{err}");
+    assert!(err.message.contains("65 colliders, at most 64"), "{err}");
+    let fits = vec![sphere; scn_cloth::MAX_COLLIDERS].join("; ");
+    assert_eq!(cloth(&format!("\"colliders\" \"{fits}\"\n")).unwrap().cloths[0].setup.colliders.len(), 64);
+
+    let terms = vec!["x<0"; crate::sim::cloth::pins::MAX_PIN_TERMS + 1].join(" || ");
+    let err = cloth(&format!("\"resolution\" \"129 129\"\n\"pins\" \"{terms}\"\n")).unwrap_err();
+    assert_eq!(err.line, Some(4), "{err}");
+    assert!(err.message.contains("65 comparisons, at most 64"), "{err}");
+
+    // A static solve counts as its iteration budget: a 65 × 65 static sheet
+    // (25–30 s before it failed) no longer fits, a 33 × 33 one does.
+    let statics = |n: u32| {
+        cloth(&format!("\"resolution\" \"{n} {n}\"\n\"pins\" \"z<=-0.49\"\n\"integrator\" \"static\"\n")).unwrap()
+    };
+    let err = statics(65).check_pose(0.0).unwrap_err();
+    assert!(err.message.contains("a static solve of 4225 nodes counts as 100 steps"), "{err}");
+    assert!(statics(33).check_pose(0.0).is_ok());
+}
+
+#[test]
+fn cloth_accelerations_no_step_can_resolve_are_refused_at_their_line() {
+    for key in ["gravity", "pin_velocity", "pin_spin"] {
+        let err = cloth(&format!("\"{key}\" \"3e38 0 0\"\n")).unwrap_err();
+        assert_eq!(err.line, Some(3), "{key}: {err}");
+        assert!(err.message.contains("expected at most 10000"), "{key}: {err}");
+    }
+    assert!(cloth("\"gravity\" \"0 -9810 0\"\n").is_ok(), "a thousand g is still allowed");
+}
+
+#[test]
+fn a_cloth_that_cannot_be_solved_names_its_scene_block_and_time() {
+    // No pins and no floor: a static sheet under gravity has no equilibrium.
+    let mut scene = cloth("\"resolution\" \"3 3\"\n\"integrator\" \"static\"\n").unwrap();
+    let err = scene.cloths[0].pose(0.0, Path::new("dir/t.scn")).unwrap_err();
+    assert_eq!(err.exit_code(), 3);
+    let text = err.to_string();
+    assert!(text.starts_with("dir/t.scn:1: cloth, stepping from 0 s: "), "{text}");
+}
+
+#[test]
+fn a_cloth_mesh_error_never_quotes_the_file() {
+    let dir = std::env::temp_dir().join(format!("glint-cloth-quote-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("plate.txt"), "*Nodes\n0,0,0\n1,0,SECRETMARKER\n").unwrap();
+    let scene = dir.join("t.scn");
+    std::fs::write(&scene, "{\n\"classname\" \"cloth\"\n\"mesh\" \"plate.txt\"\n}\n").unwrap();
+    let err = load_scene(&scene).unwrap_err().to_string();
+    std::fs::remove_dir_all(&dir).unwrap();
+    assert!(!err.contains("SECRETMARKER"), "{err}");
+    assert!(err.contains("t.scn:3: \"mesh\": ") && err.contains("plate.txt:3: value 3 of 3 is bad"), "{err}");
+}
+
+/// `cargo test --release -p glint --lib scn::hostile_tests::load_benchmark_targets_and_cameras -- --ignored --nocapture`
+#[test]
+#[ignore = "a benchmark: run with --ignored --nocapture"]
+fn load_benchmark_targets_and_cameras() {
+    // 10,000 cameras drawing into 1,024 targets, each shown by a material that
+    // the next target's cameras draw: every camera orders against the others.
+    let (targets, cameras) = (MAX_RENDER_TARGETS, 10_000);
+    let mut text: String = (0..targets).map(|k| target(&format!("t{k}"), "1 1", "ldr")).collect();
+    for k in 0..targets {
+        let _ =
+            write!(text, "{{\n\"classname\" \"material\"\n\"name\" \"m{k}\"\n\"diffuse_map\" \"target:t{k}\"\n}}\n");
+        let _ = write!(text, "{{\n\"classname\" \"entity\"\n\"mesh\" \"cube\"\n\"material\" \"m{k}\"\n}}\n");
+    }
+    for k in 0..cameras {
+        let _ = write!(text, "{{\n\"classname\" \"camera\"\n\"output\" \"t{}\"\n}}\n", k % targets);
+    }
+    let start = std::time::Instant::now();
+    let scene = parse(&text).unwrap();
+    let elapsed = start.elapsed();
+    assert_eq!((scene.render_targets.len(), scene.cameras.len()), (targets, cameras));
+    eprintln!("{targets} render targets, {cameras} cameras with outputs: {:.3} s", elapsed.as_secs_f64());
+    // 100,000 render_target blocks stop at the limit's line.
+    let text: String = (0..100_000).map(|k| target(&format!("t{k}"), "1 1", "ldr")).collect();
+    let start = std::time::Instant::now();
+    let err = parse(&text).unwrap_err();
+    eprintln!("100000 render_target blocks: refused at line {:?} in {:.3} s", err.line, start.elapsed().as_secs_f64());
+    // 100,000 materials each showing one of the targets by name.
+    let mut text: String = (0..targets).map(|k| target(&format!("t{k}"), "1 1", "ldr")).collect();
+    for k in 0..100_000 {
+        let _ = write!(
+            text,
+            "{{\n\"classname\" \"material\"\n\"name\" \"m{k}\"\n\"diffuse_map\" \"target:t{}\"\n}}\n",
+            k % targets
+        );
+    }
+    let start = std::time::Instant::now();
+    let scene = parse(&text).unwrap();
+    assert_eq!(scene.materials.len(), 100_000);
+    eprintln!("100000 target:NAME lookups: {:.3} s", start.elapsed().as_secs_f64());
+}
