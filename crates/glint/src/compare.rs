@@ -13,6 +13,10 @@ pub const MIN_SIMILARITY: f64 = 0.97;
 pub const MAX_BAD_PIXELS: f64 = 0.005;
 /// Per-channel difference that makes a pixel "bad".
 pub const BAD_PIXEL_DELTA: u8 = 40;
+/// Most decoded bytes (RGBA8) of the two images `glint compare` reads
+/// together: the comparison itself takes about five times as much again
+/// (two 8192² images took 2.6 GB).
+pub const MAX_COMPARE_BYTES: u64 = 256 << 20;
 
 /// How two images of one size compare.
 pub struct Comparison {

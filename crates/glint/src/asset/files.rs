@@ -231,7 +231,8 @@ impl AssetFolder {
         }
         let outside = || {
             let message = format!(
-                "'{relative}' points outside {}; only paths inside it are read (--asset-root DIR widens it, --allow-outside-assets lifts it)",
+                "{} points outside {}; only paths inside it are read (--asset-root DIR widens it, --allow-outside-assets lifts it)",
+                crate::text::quote(relative),
                 self.roots_name
             );
             Diagnostic::file(file, message)

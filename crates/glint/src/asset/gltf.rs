@@ -28,11 +28,25 @@ use glam::{Mat4, Quat, Vec2, Vec3, Vec4};
 use std::collections::HashMap;
 use std::path::Path;
 
+/// A GLB's header must give the file's own length (the gltf crate reads the
+/// chunks without comparing it).
+fn check_glb_length(bytes: &[u8]) -> Result<(), String> {
+    let Some(header) = bytes.strip_prefix(b"glTF") else { return Ok(()) };
+    let Some(length) = header.get(4..8).map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]])) else {
+        return Err("GLB header is cut short: expected 12 bytes".into());
+    };
+    if u64::from(length) != bytes.len() as u64 {
+        return Err(format!("GLB header says the file is {length} bytes, but it is {}", bytes.len()));
+    }
+    Ok(())
+}
+
 /// Parse glTF JSON or GLB bytes read from `path` (which names it in messages
 /// and anchors the files it names).
 pub(crate) fn parse_gltf(path: &Path, bytes: &[u8], options: LoadOptions) -> Result<Model, Diagnostic> {
     let fail = |m: String| Diagnostic::file(path, m);
     let invalid = |e: gltf::Error| fail(format!("invalid glTF: {e}"));
+    check_glb_length(bytes).map_err(fail)?;
     let gltf::Gltf { document, blob } = gltf::Gltf::from_slice_without_validation(bytes).map_err(invalid)?;
     // Checks the gltf crate (1.4) panics on instead of reporting (found by fuzzing):
     // reading an image unwraps its URI, or its MIME type when it lives in a
@@ -106,8 +120,9 @@ pub(crate) fn parse_gltf(path: &Path, bytes: &[u8], options: LoadOptions) -> Res
                 (Vec2::new(ox, oy), rotation, Vec2::new(sx, sy));
             if let Some((other, _)) = transforms.iter().find(|(_, t)| *t != transforms[0].1) {
                 let message = format!(
-                    "material '{}': {other} has its own texture transform; the {} one is used for every map",
-                    material.name, transforms[0].0
+                    "material {}: {other} has its own texture transform; the {} one is used for every map",
+                    crate::text::quote(&material.name),
+                    transforms[0].0
                 );
                 warnings.push(fail(message));
             }
@@ -131,7 +146,10 @@ pub(crate) fn parse_gltf(path: &Path, bytes: &[u8], options: LoadOptions) -> Res
         for (set, slot) in sets {
             material.uv1_maps.set(slot, set >= 1);
             if set > 1 {
-                warnings.push(fail(format!("material '{}': TEXCOORD_{set} is read as TEXCOORD_1", material.name)));
+                warnings.push(fail(format!(
+                    "material {}: TEXCOORD_{set} is read as TEXCOORD_1",
+                    crate::text::quote(&material.name)
+                )));
             }
         }
         let diffuse_map = texture(base.map(|i| image_of(i.texture())), true, &mut warnings);
@@ -307,8 +325,8 @@ fn read_skins(
         let joint_count = skin.joints().len();
         if usize::from(part.mesh.max_joint()) >= joint_count {
             return Err(format!(
-                "part '{}': a vertex names joint {} but skin {index} has {joint_count}",
-                part.name,
+                "part {}: a vertex names joint {} but skin {index} has {joint_count}",
+                crate::text::quote(&part.name),
                 part.mesh.max_joint()
             ));
         }
@@ -371,7 +389,13 @@ fn read_primitive(primitive: &gltf::Primitive, buffers: &[Vec<u8>]) -> Result<Op
     let colors: Option<Vec<[f32; 4]>> = reader.read_colors(0).map(|c| c.into_rgba_f32().collect());
     let skin: Option<Vec<SkinVertex>> = match (reader.read_joints(0), reader.read_weights(0)) {
         (Some(j), Some(w)) => {
-            Some(j.into_u16().zip(w.into_f32()).map(|(joints, weights)| SkinVertex { joints, weights }).collect())
+            let skin: Vec<SkinVertex> =
+                j.into_u16().zip(w.into_f32()).map(|(joints, weights)| SkinVertex { joints, weights }).collect();
+            // The specification's weights are 0 or more (and sum to 1, which glint does not need).
+            if let Some(v) = skin.iter().position(|s| s.weights.iter().any(|w| !w.is_finite() || *w < 0.0)) {
+                return Err(format!("WEIGHTS_0: vertex {v} has a weight that is negative, NaN or infinite"));
+            }
+            Some(skin)
         }
         (None, None) => None,
         _ => return Err("JOINTS_0 and WEIGHTS_0 must come together".into()),

@@ -22,6 +22,7 @@ use ComponentType::{F32, I16, I8, U16, U32, U8};
 /// Check everything that needs only the JSON: `Err` with the first thing the
 /// specification forbids, warnings pushed to `warnings`.
 pub(super) fn check_json(root: &json::Root, warnings: &mut Vec<String>) -> Result<(), String> {
+    check_version(&root.asset)?;
     check_indices(root)?;
     // Types first: an accessor of the wrong type usually does not fit its view
     // either, and the type is the clearer message.
@@ -37,6 +38,21 @@ pub(super) fn check_json(root: &json::Root, warnings: &mut Vec<String>) -> Resul
     check_cameras(root, warnings)?;
     check_lights(root, warnings)?;
     check_materials(root, warnings)
+}
+
+/// glTF 2.x only: a file of another major version (`"version": "3.0"`, or a
+/// `minVersion` above 2.0) may mean something else by the same fields.
+fn check_version(asset: &json::Asset) -> Result<(), String> {
+    let major = |v: &str| v.split('.').next().and_then(|m| m.parse::<u32>().ok());
+    if major(&asset.version) != Some(2) {
+        return Err("asset: version must be 2.x".into());
+    }
+    if let Some(min) = &asset.min_version {
+        if major(min) != Some(2) || min.split('.').nth(1).and_then(|m| m.parse::<u32>().ok()) != Some(0) {
+            return Err("asset: minVersion must be 2.0, the version glint reads".into());
+        }
+    }
+    Ok(())
 }
 
 /// Check what needs the buffers' bytes, once read (`buffers[i]` is buffer i):

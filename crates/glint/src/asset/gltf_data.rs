@@ -26,7 +26,10 @@ impl UriBase<'_> {
     pub(super) fn file(&self, uri: &str) -> Result<PathBuf, Diagnostic> {
         let decode = |s: &str| {
             urlencoding::decode(s).map(|d| d.into_owned()).map_err(|_| {
-                Diagnostic::file(self.path, format!("uri '{uri}': percent-encoding does not decode to UTF-8"))
+                Diagnostic::file(
+                    self.path,
+                    format!("uri {}: percent-encoding does not decode to UTF-8", crate::text::quote(uri)),
+                )
             })
         };
         if !uri.contains(':') {

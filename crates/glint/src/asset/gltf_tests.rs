@@ -560,3 +560,71 @@ fn what_a_model_builds_is_bounded() {
         &format!("the animations would read {} keys, more than the 16777216 limit", MAX_ANIMATION_KEYS + 2),
     );
 }
+
+/// A skinned triangle whose first vertex has the weights `first` (the others
+/// weigh 1 on joint 0).
+fn skinned(first: [f32; 4]) -> Value {
+    let floats = |v: &[f32]| v.iter().flat_map(|f| f.to_le_bytes()).collect::<Vec<u8>>();
+    let mut bytes = floats(&[0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0]);
+    bytes.extend([0u16, 1, 2].iter().flat_map(|i| i.to_le_bytes()));
+    bytes.extend([0, 0]);
+    bytes.extend([0u8; 12]);
+    bytes.extend(floats(&first));
+    bytes.extend(floats(&[1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0]));
+    let view = |offset: usize, length: usize| json!({"buffer": 0, "byteOffset": offset, "byteLength": length});
+    json!({
+        "asset": {"version": "2.0"},
+        "scene": 0,
+        "scenes": [{"nodes": [0, 1]}],
+        "nodes": [{"mesh": 0, "skin": 0}, {}],
+        "skins": [{"joints": [1]}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0, "JOINTS_0": 2, "WEIGHTS_0": 3}, "indices": 1}]}],
+        "buffers": [{"uri": data_uri(&bytes), "byteLength": bytes.len()}],
+        "bufferViews": [view(0, 36), view(36, 6), view(44, 12), view(56, 48)],
+        "accessors": [
+            {"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0]},
+            {"bufferView": 1, "componentType": 5123, "count": 3, "type": "SCALAR"},
+            {"bufferView": 2, "componentType": 5121, "count": 3, "type": "VEC4"},
+            {"bufferView": 3, "componentType": 5126, "count": 3, "type": "VEC4"}
+        ]
+    })
+}
+
+#[test]
+fn skin_weights_must_be_finite_and_not_negative() {
+    assert!(parse(&skinned([1.0, 0.0, 0.0, 0.0])).is_ok());
+    for bad in [f32::NAN, f32::INFINITY, -1e30] {
+        assert_error(
+            &skinned([bad, 0.0, 0.0, 0.0]),
+            "WEIGHTS_0: vertex 0 has a weight that is negative, NaN or infinite",
+        );
+    }
+}
+
+#[test]
+fn only_gltf_2_is_read() {
+    assert_error(&with(triangle(), "/asset/version", json!("3.0")), "asset: version must be 2.x");
+    assert_error(&with(triangle(), "/asset/minVersion", json!("2.1")), "asset: minVersion must be 2.0");
+    assert!(parse(&with(triangle(), "/asset/version", json!("2.1"))).is_ok(), "minor versions stay readable");
+}
+
+#[test]
+fn a_glb_header_must_give_the_files_length() {
+    let json = triangle().to_string();
+    let padded = json.len().div_ceil(4) * 4;
+    let total = 12 + 8 + padded;
+    let glb = |length: u32| {
+        let mut glb = b"glTF".to_vec();
+        glb.extend(2u32.to_le_bytes());
+        glb.extend(length.to_le_bytes());
+        glb.extend((padded as u32).to_le_bytes());
+        glb.extend(b"JSON");
+        glb.extend(format!("{json:<padded$}").bytes());
+        glb
+    };
+    let load = |bytes: &[u8]| Model::parse(Path::new("m/test.glb"), bytes, LoadOptions::default());
+    assert!(load(&glb(total as u32)).is_ok());
+    let err = load(&glb(20)).err().expect("a header length of 20 is an error").message;
+    assert!(err.contains(&format!("GLB header says the file is 20 bytes, but it is {total}")), "{err}");
+    assert!(load(b"glTF\x02\x00").is_err(), "a header cut short");
+}

@@ -87,8 +87,10 @@ pub(crate) fn parse_obj(path: &Path, bytes: &[u8], options: LoadOptions) -> Resu
             Ok(Some(mesh)) => {
                 let material = model.mesh.material_id.filter(|&i| i < materials.len());
                 if model.mesh.material_id.is_some() && material.is_none() {
-                    let message =
-                        format!("object '{part_name}' uses a material no library defines; drawn with the default");
+                    let message = format!(
+                        "object {} uses a material no library defines; drawn with the default",
+                        crate::text::quote(&part_name)
+                    );
                     warnings.push(at(message));
                 }
                 parts.push(ModelPart::new(part_name, mesh, material, vec![Mat4::IDENTITY]));
@@ -96,11 +98,12 @@ pub(crate) fn parse_obj(path: &Path, bytes: &[u8], options: LoadOptions) -> Resu
             Ok(None) => {}
             Err(MeshError::Empty) => {
                 let message = format!(
-                    "object '{part_name}' has no triangles: its faces are points, lines or name one corner twice"
+                    "object {} has no triangles: its faces are points, lines or name one corner twice",
+                    crate::text::quote(&part_name)
                 );
                 return Err(at(message));
             }
-            Err(e) => return Err(at(format!("object '{part_name}': {e}"))),
+            Err(e) => return Err(at(format!("object {}: {e}", crate::text::quote(&part_name)))),
         }
     }
     if parts.is_empty() {
@@ -312,7 +315,7 @@ fn parse_texture_statement(text: &str) -> Result<TextureStatement, TextureError>
             "-mm" => drop(numbers(&mut at, 2)?),
             "-bm" | "-boost" | "-texres" => drop(numbers(&mut at, 1)?),
             "-blendu" | "-blendv" | "-cc" | "-clamp" | "-imfchan" | "-type" => at += 1,
-            other => return Err(TextureError::Other(format!("unknown texture option '{other}'"))),
+            other => return Err(TextureError::Other(format!("unknown texture option {}", crate::text::quote(other)))),
         }
     }
     let Some(first) = tokens.get(at) else {
@@ -350,7 +353,10 @@ fn convert_material(
         let parsed = match parse_texture_statement(text) {
             Ok(p) => p,
             Err(e) => {
-                warnings.push(Diagnostic::file(obj, format!("material '{}': {what}: {e}; ignored", m.name)));
+                warnings.push(Diagnostic::file(
+                    obj,
+                    format!("material {}: {what}: {e}; ignored", crate::text::quote(&m.name)),
+                ));
                 return None;
             }
         };
@@ -365,7 +371,9 @@ fn convert_material(
             }
         };
         let decoded = cache.get_or_decode(path.clone(), srgb, |free| read_texture(&path, srgb, free, &folder.files));
-        let drawn_without = |d| Diagnostic::file(obj, format!("material '{}': {what}: {d}; drawn without it", m.name));
+        let drawn_without = |d| {
+            Diagnostic::file(obj, format!("material {}: {what}: {d}; drawn without it", crate::text::quote(&m.name)))
+        };
         decoded.map_err(|d| warnings.push(drawn_without(d))).ok()
     };
     let mut diffuse_map = texture(&m.diffuse_texture, true, "map_Kd", &mut material);
@@ -440,9 +448,8 @@ fn scan_obj(path: &Path, bytes: &[u8], warnings: &mut Vec<Diagnostic>) -> Result
                 current = match words.next().map(|w| (w, w.parse::<u32>())) {
                     Some((_, Ok(0))) | Some(("off", _)) => None,
                     Some((_, Ok(group))) => Some(u64::from(group)),
-                    other => {
-                        let found = other.map_or("nothing", |(w, _)| w);
-                        let message = format!("expected a smoothing group number or 'off', found '{found}'; off");
+                    _ => {
+                        let message = "expected a smoothing group number or 'off'; read as off";
                         warnings.push(Diagnostic::at(path, number + 1, message));
                         None
                     }

@@ -7,6 +7,7 @@ use super::{AssetFolder, Diagnostic};
 use crate::sim::cloth::{
     Cloth, ClothMesh, ClothParams, ClothView, Collider, Integrator, PinMotion, PinSelector, Solve,
 };
+use crate::text::quote;
 use glam::{DVec3, Vec3};
 use std::path::Path;
 
@@ -29,8 +30,21 @@ pub const MAX_POSE_NODE_STEPS: u64 = 1_000_000_000;
 pub const MAX_SCENE_CLOTH_NODES: u64 = 4 * 129 * 129;
 
 /// Steps a static cloth's equilibrium counts as against [`MAX_POSE_NODE_STEPS`]:
-/// its load is applied in ten increments, each a Newton solve like a step's.
-pub const STATIC_STEPS: u64 = 10;
+/// its load is applied in increments, each a Newton solve like a step's, and
+/// it may take [`MAX_STATIC_ITERATIONS`](crate::sim::cloth::MAX_STATIC_ITERATIONS)
+/// Newton iterations in all, about four to a step's solve. (Counted as ten
+/// steps before, a 65 × 65 static sheet that did not converge ran 25–30 s.)
+pub const STATIC_STEPS: u64 = 100;
+
+/// Most colliders one cloth may have: each node is tested against each in every
+/// Newton iteration (10,000 colliders on a 17 × 17 cloth took over 30 s to
+/// pose a second), and 64 stay below the cost of the solve itself.
+pub const MAX_COLLIDERS: usize = 64;
+
+/// Longest `gravity`, m/s² (a thousand g), and fastest `pin_velocity` (m/s) and
+/// `pin_spin` (rad/s): beyond them no time step resolves the motion, and
+/// Newton's method fails at run time instead of the scene at its line.
+pub const MAX_CLOTH_ACCELERATION: f32 = 1e4;
 
 /// Most nodes a `resolution` may give a side of a cloth sheet (one step of a
 /// 257 × 257 sheet took two minutes: see [`MAX_POSE_NODE_STEPS`]).
@@ -161,7 +175,9 @@ impl ClothDesc {
 
     /// Advance (or restart and advance) the simulation to `time` seconds and
     /// update [`ClothDesc::view`]. Returns whether the view changed. A static
-    /// cloth takes its one equilibrium step whatever the time.
+    /// cloth takes its one equilibrium step whatever the time. A step that
+    /// fails is [`Error::Posing`](crate::Error::Posing), naming the scene, the
+    /// cloth block's line and the time it stepped from.
     pub fn pose(&mut self, time: f32, scene: &Path) -> Result<bool, crate::Error> {
         let target = self.check_pose(time, 0, scene)?;
         let (run, restart) = match self.run.0.take() {
@@ -174,7 +190,12 @@ impl ClothDesc {
         let (cloth, steps) = self.run.0.insert(run);
         let moved = restart || *steps < target;
         while *steps < target {
-            cloth.step(self.dt, self.integrator)?;
+            let from = cloth.time;
+            let failed = |source| {
+                let place = Diagnostic::at(scene, self.line, format!("cloth, stepping from {from} s"));
+                crate::Error::Posing { place, source }
+            };
+            cloth.step(self.dt, self.integrator).map_err(failed)?;
             *steps += 1;
         }
         if moved {
@@ -219,21 +240,25 @@ pub(crate) fn parse(f: &mut Fields, assets: &AssetFolder, nodes_before: u64) -> 
         young: exact(f.number("young", 1.0..=1e13)?.unwrap_or(1e7)),
         poisson: exact(f.number("poisson", 0.0..=0.5)?.unwrap_or(0.3)),
         density: exact(f.number("density", 1e-3..=1e5)?.unwrap_or(200.0)),
-        gravity: exact3(f.vec3("gravity")?.unwrap_or(Vec3::new(0.0, -9.81, 0.0))),
+        gravity: exact3(f.bounded_vec3("gravity", MAX_CLOTH_ACCELERATION)?.unwrap_or(Vec3::new(0.0, -9.81, 0.0))),
     };
     let pin_motion = PinMotion {
-        velocity: exact3(f.vec3("pin_velocity")?.unwrap_or(Vec3::ZERO)),
-        angular_velocity: exact3(f.vec3("pin_spin")?.unwrap_or(Vec3::ZERO)),
+        velocity: exact3(f.bounded_vec3("pin_velocity", MAX_CLOTH_ACCELERATION)?.unwrap_or(Vec3::ZERO)),
+        angular_velocity: exact3(f.bounded_vec3("pin_spin", MAX_CLOTH_ACCELERATION)?.unwrap_or(Vec3::ZERO)),
         centre: origin,
     };
     let colliders = match f.get("colliders") {
         None => Vec::new(),
-        Some(p) => p
-            .value
-            .split(';')
-            .filter(|c| !c.trim().is_empty())
-            .map(|c| Collider::parse(c.trim()).map_err(|m| at(p.line, format!("\"colliders\": {m}"))))
-            .collect::<Result<_, _>>()?,
+        Some(p) => {
+            let texts: Vec<&str> = p.value.split(';').map(str::trim).filter(|c| !c.is_empty()).collect();
+            if texts.len() > MAX_COLLIDERS {
+                let message = format!("\"colliders\": {} colliders, at most {MAX_COLLIDERS}", texts.len());
+                return Err(at(p.line, message));
+            }
+            (texts.into_iter())
+                .map(|c| Collider::parse(c).map_err(|m| at(p.line, format!("\"colliders\": {m}"))))
+                .collect::<Result<_, _>>()?
+        }
     };
     let contact_distance = f.number("contact_distance", 1e-6..=1.0)?.map_or(thickness.max(1e-3), exact);
     let integrator = match f.choice("integrator", &["implicit_euler", "newmark", "static"])? {
@@ -297,7 +322,7 @@ fn local_mesh(f: &mut Fields, assets: &AssetFolder) -> Result<ClothMesh, Diagnos
                 [Some(n), Some(m)] if (2..=MAX_SIDE).contains(&n) && (2..=MAX_SIDE).contains(&m) => [n, m],
                 _ => {
                     let message =
-                        format!("\"resolution\" is '{}', expected 2 whole numbers in 2..={MAX_SIDE}", p.value);
+                        format!("\"resolution\" is {}, expected 2 whole numbers in 2..={MAX_SIDE}", quote(&p.value));
                     return Err(Diagnostic::at(f.path, p.line, message));
                 }
             }

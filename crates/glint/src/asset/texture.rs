@@ -126,6 +126,13 @@ pub fn load_texture(path: &Path, srgb: bool) -> Result<Texture, Diagnostic> {
     read_texture(path, srgb, MAX_TEXTURE_MEMORY, &super::Files::Disk)
 }
 
+/// Decode a PNG or JPEG file as [`load_texture`] does, with at most `free`
+/// bytes of decoded RGBA pixels to spend (for images that are not a scene's
+/// textures: `glint compare` reads its two through here).
+pub fn load_image(path: &Path, free: u64) -> Result<image::RgbaImage, Diagnostic> {
+    read_texture(path, true, free, &super::Files::Disk).map(|t| t.image)
+}
+
 /// [`load_texture`] from `files`, with at most `free` bytes of decoded pixels to spend.
 pub(crate) fn read_texture(path: &Path, srgb: bool, free: u64, files: &super::Files) -> Result<Texture, Diagnostic> {
     let bytes = files.read(path, MAX_IMAGE_FILE_BYTES)?;

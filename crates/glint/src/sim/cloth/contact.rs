@@ -44,18 +44,20 @@ impl Collider {
     pub fn parse(text: &str) -> Result<Self, String> {
         let mut words = text.split_whitespace();
         let kind = words.next().unwrap_or("");
-        let numbers: Vec<f64> = words
-            .map(|w| w.parse::<f64>().ok().filter(|v| v.is_finite()))
-            .collect::<Option<_>>()
-            .ok_or_else(|| format!("'{text}': collider values must be finite numbers"))?;
+        let numbers: Vec<f64> =
+            words
+                .map(|w| w.parse::<f64>().ok().filter(|v| v.is_finite()))
+                .collect::<Option<_>>()
+                .ok_or_else(|| format!("{}: collider values must be finite numbers", crate::text::quote(text)))?;
         let v = |i: usize| DVec3::new(numbers[i], numbers[i + 1], numbers[i + 2]);
         match (kind, numbers.len()) {
             ("plane", 6) if v(3).length() > 0.0 => Ok(Self::Plane { point: v(0), normal: v(3).normalize() }),
             ("sphere", 4) if numbers[3] > 0.0 => Ok(Self::Sphere { centre: v(0), radius: numbers[3] }),
             ("box", 6) if v(0).cmplt(v(3)).all() => Ok(Self::Box { min: v(0), max: v(3) }),
             _ => Err(format!(
-                "'{text}' is not a collider: expected 'plane PX PY PZ NX NY NZ' (normal not zero), \
-                 'sphere CX CY CZ R' (R > 0) or 'box MINX MINY MINZ MAXX MAXY MAXZ' (min below max)"
+                "{} is not a collider: expected 'plane PX PY PZ NX NY NZ' (normal not zero), \
+                 'sphere CX CY CZ R' (R > 0) or 'box MINX MINY MINZ MAXX MAXY MAXZ' (min below max)",
+                crate::text::quote(text)
             )),
         }
     }

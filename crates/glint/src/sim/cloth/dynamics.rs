@@ -47,6 +47,11 @@ pub const MAX_HALVINGS: u32 = 10;
 /// 1/`LOAD_STEPS` of the full load at a time, and by half as much again after a
 /// failed increment (down to 2^-[`MAX_HALVINGS`] of that).
 const LOAD_STEPS: usize = 10;
+/// Most Newton iterations a static solve may take over all its load
+/// increments before it is refused as not converging: what
+/// `STATIC_STEPS` in the posing budget pays for (a 65 × 65 sheet
+/// that would not converge ran 25–30 s before; now it is refused by the budget).
+pub const MAX_STATIC_ITERATIONS: u32 = 400;
 /// A triangle whose area falls below this fraction of its rest area has collapsed.
 const COLLAPSED_AREA: f64 = 1e-3;
 /// Contact stiffness per node, in units of the node's weight over the contact
@@ -100,6 +105,9 @@ pub enum StepError {
     /// Newton's method did not converge even at the smallest step (or load increment).
     #[error("Newton's method did not converge, even with the time step (or static load increment) halved {MAX_HALVINGS} times")]
     NotConverged,
+    /// A static solve took more Newton iterations than it may.
+    #[error("the static solve did not converge within {MAX_STATIC_ITERATIONS} Newton iterations")]
+    StaticBudget,
 }
 
 /// What the last [`Cloth::step`] took.
@@ -509,6 +517,7 @@ impl Cloth {
                 let next = if next > 1.0 - 1e-9 { 1.0 } else { next };
                 let mut trial = q.clone();
                 match self.newton(&mut trial, 0.0, &unused, next, &mut stats).filter(|_| !self.broken(&trial)) {
+                    _ if stats.newton_iterations > MAX_STATIC_ITERATIONS => return Err(StepError::StaticBudget),
                     Some(()) => (q, load, stats.substeps) = (trial, next, stats.substeps + 1),
                     None if halvings < MAX_HALVINGS => halvings += 1,
                     None => return Err(StepError::NotConverged),

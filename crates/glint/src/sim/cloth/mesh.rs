@@ -42,9 +42,9 @@ pub enum ClothMeshError {
     /// A triangle with a repeated node or no area.
     #[error("triangle {0} is degenerate (a repeated node or no area)")]
     Degenerate(usize),
-    /// An edge shared by more than two triangles.
+    /// An edge shared by more than two triangles (the third is the last number).
     #[error("edge {0}-{1} is shared by more than two triangles")]
-    NonManifold(u32, u32),
+    NonManifold(u32, u32, usize),
     /// No triangles at all.
     #[error("the mesh has no triangles")]
     Empty,
@@ -66,6 +66,27 @@ pub enum ClothMeshError {
     /// A position is NaN or infinite.
     #[error("node {0} is not a finite position")]
     NotFinite(usize),
+}
+
+impl ClothMeshError {
+    /// The line of a file that holds what is wrong: `triangle_lines` and
+    /// `node_lines` give each triangle's and node's line, as read.
+    fn line(&self, node_lines: &[usize], triangle_lines: &[usize]) -> Option<usize> {
+        match *self {
+            Self::NodeOutOfRange { triangle, .. } | Self::Degenerate(triangle) | Self::NonManifold(_, _, triangle) => {
+                triangle_lines.get(triangle).copied()
+            }
+            Self::NotFinite(node) => node_lines.get(node).copied(),
+            Self::Empty | Self::TooLarge { .. } => None,
+        }
+    }
+}
+
+/// Where each node and triangle of a mesh file was read, for errors found after reading.
+#[derive(Default)]
+struct Lines {
+    nodes: Vec<usize>,
+    triangles: Vec<usize>,
 }
 
 impl ClothMesh {
@@ -109,22 +130,56 @@ impl ClothMesh {
         Self::read(path, &crate::asset::Files::Disk)
     }
 
-    /// [`ClothMesh::load`] from `files`.
+    /// [`ClothMesh::load`] from `files`. Errors name the line of the node or
+    /// triangle at fault, and never quote the file.
     pub fn read(path: &Path, files: &crate::asset::Files) -> Result<Self, Diagnostic> {
         let bytes = files.read(path, MAX_MODEL_BYTES)?;
-        let mesh = if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("obj")) {
-            Self::parse_obj(path, &bytes)?
+        let text = std::str::from_utf8(&bytes).map_err(|e| Diagnostic::file(path, format!("not UTF-8 text: {e}")))?;
+        let (mesh, lines) = if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("obj")) {
+            Self::parse_obj(path, text)?
         } else {
-            let text =
-                std::str::from_utf8(&bytes).map_err(|e| Diagnostic::file(path, format!("not UTF-8 text: {e}")))?;
-            Self::parse_nodes_triangles(path, text)?
+            Self::parse_text(path, text)?
         };
-        mesh.topology().map_err(|e| Diagnostic::file(path, e.to_string()))?;
+        mesh.topology().map_err(|e| match e.line(&lines.nodes, &lines.triangles) {
+            Some(line) => Diagnostic::at(path, line, e.to_string()),
+            None => Diagnostic::file(path, e.to_string()),
+        })?;
         Ok(mesh)
     }
 
-    fn parse_obj(path: &Path, bytes: &[u8]) -> Result<Self, Diagnostic> {
+    /// Positions and faces of an OBJ, triangulated as fans (other data
+    /// ignored). `v` and `f` lines are checked first, so that every problem
+    /// tobj would report without a line has one.
+    fn parse_obj(path: &Path, text: &str) -> Result<(Self, Lines), Diagnostic> {
+        let mut lines = Lines::default();
+        for (k, raw) in text.lines().enumerate() {
+            let at = |m: &str| Diagnostic::at(path, k + 1, m);
+            let mut words = raw.split_whitespace();
+            match words.next() {
+                Some("v") => {
+                    let xyz: Vec<Option<f64>> = words.take(3).map(|w| w.parse::<f64>().ok()).collect();
+                    if xyz.len() < 3 || xyz.iter().any(|v| !v.is_some_and(f64::is_finite)) {
+                        return Err(at("expected a vertex of three finite numbers: v x y z"));
+                    }
+                    lines.nodes.push(k + 1);
+                }
+                Some("f") => {
+                    let corners: Vec<&str> = words.collect();
+                    let valid = |c: &&str| {
+                        let index = c.split('/').next().and_then(|i| i.parse::<i64>().ok());
+                        let count = lines.nodes.len() as i64;
+                        index.is_some_and(|i| (1..=count).contains(&i) || (-count..=-1).contains(&i))
+                    };
+                    if corners.len() < 3 || !corners.iter().all(valid) {
+                        return Err(at("expected a face of three or more vertex numbers of vertices read so far"));
+                    }
+                    lines.triangles.extend(std::iter::repeat_n(k + 1, corners.len() - 2));
+                }
+                _ => {}
+            }
+        }
         let options = tobj::LoadOptions { triangulate: true, ..Default::default() };
+        let bytes = text.as_bytes();
         let (models, _) =
             tobj::load_obj_buf(&mut std::io::Cursor::new(bytes), &options, |_| Err(tobj::LoadError::OpenFileFailed))
                 .map_err(|e| Diagnostic::file(path, format!("cannot read OBJ: {e}")))?;
@@ -135,7 +190,10 @@ impl ClothMesh {
             mesh.nodes.extend(m.positions.chunks_exact(3).map(|p| DVec3::new(p[0].into(), p[1].into(), p[2].into())));
             mesh.triangles.extend(m.indices.chunks_exact(3).map(|t| [first + t[0], first + t[1], first + t[2]]));
         }
-        Ok(mesh)
+        if mesh.triangles.len() != lines.triangles.len() {
+            lines.triangles.clear(); // tobj ordered the faces its own way: no lines to give
+        }
+        Ok((mesh, lines))
     }
 
     /// Parse the text format of published DEP benchmarks: a `*Nodes` section of
@@ -143,6 +201,11 @@ impl ClothMesh {
     /// `*Triangles` section of `i,j,k` lines (1-based node ids). Headers are
     /// case-insensitive; `#` comment lines and blank lines are skipped.
     pub fn parse_nodes_triangles(path: &Path, text: &str) -> Result<Self, Diagnostic> {
+        Self::parse_text(path, text).map(|(mesh, _)| mesh)
+    }
+
+    /// [`ClothMesh::parse_nodes_triangles`], with each node's and triangle's line.
+    fn parse_text(path: &Path, text: &str) -> Result<(Self, Lines), Diagnostic> {
         #[derive(PartialEq)]
         enum Section {
             None,
@@ -151,6 +214,7 @@ impl ClothMesh {
         }
         let mut section = Section::None;
         let mut nodes = Vec::new();
+        let mut lines = Lines::default();
         let mut triangles: Vec<([u32; 3], usize)> = Vec::new();
         for (i, raw) in text.lines().enumerate() {
             let line = i + 1;
@@ -162,12 +226,8 @@ impl ClothMesh {
                 section = match header.trim().to_ascii_lowercase().as_str() {
                     "nodes" => Section::Nodes,
                     "triangles" => Section::Triangles,
-                    other => {
-                        return Err(Diagnostic::at(
-                            path,
-                            line,
-                            format!("unknown section '*{other}', expected *Nodes or *Triangles"),
-                        ))
+                    _ => {
+                        return Err(Diagnostic::at(path, line, "unknown section, expected *Nodes or *Triangles"));
                     }
                 };
                 continue;
@@ -181,6 +241,7 @@ impl ClothMesh {
                     let xyz = numbers::<f64>(&fields, "x,y,z", |v: &f64| v.is_finite())
                         .map_err(|m| Diagnostic::at(path, line, m))?;
                     nodes.push(DVec3::from(xyz));
+                    lines.nodes.push(line);
                 }
                 Section::Triangles => {
                     let ids = numbers::<u32>(&fields, "i,j,k (1-based node ids)", |&v| v >= 1)
@@ -201,7 +262,8 @@ impl ClothMesh {
                 return Err(Diagnostic::at(path, *line, message));
             }
         }
-        Ok(Self { nodes, triangles: triangles.into_iter().map(|(t, _)| t).collect() })
+        lines.triangles = triangles.iter().map(|(_, line)| *line).collect();
+        Ok((Self { nodes, triangles: triangles.into_iter().map(|(t, _)| t).collect() }, lines))
     }
 
     /// Unique edges and the hinges of edges shared by two triangles.
@@ -231,7 +293,7 @@ impl ClothMesh {
                     Vec::new()
                 });
                 if list.len() == 2 {
-                    return Err(ClothMeshError::NonManifold(key[0], key[1]));
+                    return Err(ClothMeshError::NonManifold(key[0], key[1], t));
                 }
                 list.push((w, u < v));
             }
@@ -258,9 +320,13 @@ fn numbers<T: std::str::FromStr + Copy + Default>(
         return Err(format!("found {} values, expected {what}", fields.len()));
     }
     let mut out = [T::default(); 3];
-    for (slot, field) in out.iter_mut().zip(fields) {
-        *slot =
-            field.parse::<T>().ok().filter(|v| ok(v)).ok_or_else(|| format!("bad value '{field}', expected {what}"))?;
+    for (k, (slot, field)) in out.iter_mut().zip(fields).enumerate() {
+        // The value itself is not quoted: messages never echo a file's bytes.
+        *slot = field
+            .parse::<T>()
+            .ok()
+            .filter(|v| ok(v))
+            .ok_or_else(|| format!("value {} of 3 is bad, expected {what}", k + 1))?;
     }
     Ok(out)
 }
@@ -296,19 +362,44 @@ mod tests {
         for (text, expected) in [
             ("0,0,0\n", "plate.txt:1: data before any section"),
             ("*Nodes\n0,0\n", "plate.txt:2: found 2 values, expected x,y,z"),
-            ("*Nodes\n0,x,0\n", "plate.txt:2: bad value 'x', expected x,y,z"),
-            ("*Nodes\n0,inf,0\n", "plate.txt:2: bad value 'inf'"),
-            ("*Edges\n", "plate.txt:1: unknown section '*edges'"),
+            ("*Nodes\n0,x,0\n", "plate.txt:2: value 2 of 3 is bad, expected x,y,z"),
+            ("*Nodes\n0,inf,0\n", "plate.txt:2: value 2 of 3 is bad"),
+            ("*Edges\n", "plate.txt:1: unknown section, expected *Nodes or *Triangles"),
             (
                 "*Nodes\n0,0,0\n1,0,0\n0,1,0\n*Triangles\n1,2,4\n",
                 "plate.txt:6: node 4 does not exist (there are 3 nodes)",
             ),
-            ("*Nodes\n0,0,0\n*Triangles\n0,1,1\n", "plate.txt:4: bad value '0', expected i,j,k"),
+            ("*Nodes\n0,0,0\n*Triangles\n0,1,1\n", "plate.txt:4: value 1 of 3 is bad, expected i,j,k"),
             ("*Nodes\n0,0,0\n", "plate.txt: no triangles"),
         ] {
             let err = ClothMesh::parse_nodes_triangles(path, text).unwrap_err().to_string();
             assert!(err.starts_with(expected), "{text:?}: {err}");
         }
+    }
+
+    #[test]
+    fn obj_and_topology_errors_name_their_line() {
+        let dir = std::env::temp_dir().join(format!("glint-cloth-obj-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let read = |name: &str, text: &str| {
+            let path = dir.join(name);
+            std::fs::write(&path, text).unwrap();
+            ClothMesh::load(&path).map(|_| ()).unwrap_err()
+        };
+        let square = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\n";
+        for (text, line, expected) in [
+            (format!("{square}f 1 2 3\nf 2 4 9\n"), 6, "expected a face of three or more vertex numbers"),
+            (format!("{square}v nan 0 0\n"), 5, "expected a vertex of three finite numbers"),
+            (format!("{square}f 1 2 3\nf 1 2 2\n"), 6, "is degenerate"),
+            (format!("{square}v 0 -1 0\nf 1 2 3\nf 2 1 4\nf 1 2 5\n"), 8, "shared by more than two triangles"),
+        ] {
+            let err = read("m.obj", &text);
+            assert_eq!(err.line, Some(line), "{text:?}: {err}");
+            assert!(err.message.contains(expected), "{text:?}: {err}");
+        }
+        let err = read("m.txt", "*Nodes\n0,0,0\n1,0,0\n0,1,0\n*Triangles\n1,2,3\n2,1,3\n1,3,2\n");
+        assert_eq!(err.line, Some(8), "the third triangle on edge 1-2: {err}");
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]
@@ -318,6 +409,6 @@ mod tests {
         assert_eq!(ClothMesh::new(nodes.clone(), vec![[0, 1, 1]]), Err(ClothMeshError::Degenerate(0)));
         assert!(matches!(ClothMesh::new(nodes.clone(), vec![[0, 1, 9]]), Err(ClothMeshError::NodeOutOfRange { .. })));
         let fan = vec![[0, 1, 2], [1, 0, 3], [0, 1, 4]];
-        assert_eq!(ClothMesh::new(nodes, fan), Err(ClothMeshError::NonManifold(0, 1)));
+        assert_eq!(ClothMesh::new(nodes, fan), Err(ClothMeshError::NonManifold(0, 1, 2)));
     }
 }

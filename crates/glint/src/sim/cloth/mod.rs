@@ -13,5 +13,7 @@ pub use view::ClothView;
 mod dynamics;
 mod system;
 
-pub use dynamics::{realtime, Cloth, ClothParams, Integrator, Solve, StepError, StepStats, MAX_HALVINGS};
+pub use dynamics::{
+    realtime, Cloth, ClothParams, Integrator, Solve, StepError, StepStats, MAX_HALVINGS, MAX_STATIC_ITERATIONS,
+};
 pub use system::MAX_SYSTEM_BYTES;

@@ -13,6 +13,10 @@ use glam::{DQuat, DVec3};
 /// `==` in a pin predicate holds within this distance, metres.
 const EQUAL_WITHIN: f64 = 1e-6;
 
+/// Most comparisons one predicate may hold: each is tested at every node
+/// (120,001 of them on a 129 × 129 sheet took 14–24 s to select).
+pub const MAX_PIN_TERMS: usize = 64;
+
 /// A parsed pin selector.
 #[derive(Clone, Debug, PartialEq)]
 pub enum PinSelector {
@@ -63,13 +67,17 @@ impl PinSelector {
                 .filter(|s| !s.is_empty())
                 .map(|s| match s.parse::<usize>() {
                     Ok(n) if n >= 1 => Ok(n - 1),
-                    _ => Err(format!("'{s}' is not a node number (1-based)")),
+                    _ => Err(format!("{} is not a node number (1-based)", crate::text::quote(s))),
                 })
                 .collect::<Result<Vec<_>, _>>()?;
             if nodes.is_empty() {
                 return Err("'nodes' needs at least one node number".into());
             }
             return Ok(Self::Nodes(nodes));
+        }
+        let terms = text.split("||").map(|g| g.split("&&").count()).sum::<usize>();
+        if terms > MAX_PIN_TERMS {
+            return Err(format!("{terms} comparisons, at most {MAX_PIN_TERMS}"));
         }
         let groups = text
             .split("||")
@@ -102,7 +110,8 @@ impl PinSelector {
 impl Comparison {
     fn parse(text: &str) -> Result<Self, String> {
         let text = text.trim();
-        let expected = || format!("'{text}' is not a pin condition: expected AXIS OP NUMBER, e.g. x<=0.01");
+        let expected =
+            || format!("{} is not a pin condition: expected AXIS OP NUMBER, e.g. x<=0.01", crate::text::quote(text));
         let axis = match text.chars().next() {
             Some('x') => 0,
             Some('y') => 1,
