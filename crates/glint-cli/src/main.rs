@@ -305,13 +305,8 @@ fn parse_fps(s: &str) -> Result<f32, String> {
 struct PostArg(Vec<glint::scene::PostEffect>);
 
 fn parse_post(s: &str) -> Result<PostArg, String> {
-    (s.split_whitespace())
-        .map(|name| {
-            glint::scene::PostEffect::named(name)
-                .ok_or_else(|| format!("'{name}': post effects are {}", glint::scene::PostEffect::NAMES.join(", ")))
-        })
-        .collect::<Result<_, _>>()
-        .map(PostArg)
+    let all = glint::scene::PostEffect::ALL;
+    glint::scene::PostEffect::chain(s, &all).map(PostArg)
 }
 
 fn parse_msaa(s: &str) -> Result<u32, String> {
@@ -323,6 +318,8 @@ fn parse_msaa(s: &str) -> Result<u32, String> {
 }
 
 /// A scene file, or a model file shown alone with a framing camera and lights.
+/// More lights than a frame can use (a glTF's `KHR_lights_punctual` may hold
+/// any number) is an error naming the file, for `check` as for `render`.
 fn load(scene: &Path, options: LoadOptions) -> Result<SceneDesc, Error> {
     let desc = if Model::is_model_path(scene) {
         Model::load_with(scene, options)?.into_scene()
@@ -331,6 +328,10 @@ fn load(scene: &Path, options: LoadOptions) -> Result<SceneDesc, Error> {
     };
     for warning in &desc.warnings {
         eprintln!("warning: {warning}");
+    }
+    if desc.lights.len() > glint::scene::MAX_LIGHTS {
+        let message = format!("{} lights, but a frame can use at most {}", desc.lights.len(), glint::scene::MAX_LIGHTS);
+        return Err(glint::Diagnostic::file(scene, message).into());
     }
     Ok(desc)
 }
@@ -359,6 +360,7 @@ fn render(args: RenderArgs) -> Result<(), Error> {
         let message = "--frames needs a numbered output such as -o frames/%04d.png";
         return Err(glint::Diagnostic::file(output, message).into());
     }
+    numbered(output, 0).map_err(|m| glint::Diagnostic::file(output, m))?;
     // Refuse cloth work over the limits before starting a GPU: posing at the
     // last frame's time is the most work any frame takes.
     desc.check_pose(time + (frames - 1) as f32 / fps)?;
@@ -389,6 +391,7 @@ fn render(args: RenderArgs) -> Result<(), Error> {
                 .map_err(|e| glint::Diagnostic::file(dir, format!("cannot create the frames folder: {e}")))?;
         }
         output::save_png(&gpu, &target, &path)?;
+        gpu.check()?;
         if let Some(bar) = &progress {
             bar.inc(1);
         }
@@ -412,16 +415,24 @@ fn render(args: RenderArgs) -> Result<(), Error> {
     Ok(())
 }
 
+/// Widest frame number `%0Nd` may ask for: more digits than any frame count
+/// needs, and far below what a file name can hold.
+const MAX_FRAME_DIGITS: usize = 32;
+
 /// `pattern` with its `%d` or `%0Nd` replaced by `k` (the pattern itself when it has none).
 fn numbered(pattern: &Path, k: u32) -> Result<PathBuf, String> {
     let text = pattern.to_string_lossy();
     let Some(at) = text.find('%') else { return Ok(pattern.to_path_buf()) };
     let rest = &text[at + 1..];
     let Some(end) = rest.find('d') else { return Err("expected %d or %0Nd in the output name".into()) };
+    let expected = format!("expected %d or %0Nd with N at most {MAX_FRAME_DIGITS}");
     let width = match &rest[..end] {
         "" => 0,
-        w if w.starts_with('0') => w[1..].parse::<usize>().map_err(|_| format!("bad frame-number width '%{w}d'"))?,
-        w => return Err(format!("bad frame-number format '%{w}d': expected %d or %0Nd")),
+        w if w.starts_with('0') => match w[1..].parse::<usize>() {
+            Ok(n) if n <= MAX_FRAME_DIGITS => n,
+            _ => return Err(format!("bad frame-number format: {expected}")),
+        },
+        _ => return Err(format!("bad frame-number format: {expected}")),
     };
     Ok(PathBuf::from(format!("{}{k:0width$}{}", &text[..at], &rest[end + 1..])))
 }
@@ -462,13 +473,6 @@ fn check(scene: &Path, options: LoadOptions) -> Result<(), Error> {
     line(format!("  instances:  {}", desc.instance_count()));
     line(format!("  warnings:   {}", desc.warnings.len()));
     output::print(&text)?;
-    if desc.lights.len() > glint::scene::MAX_LIGHTS {
-        return Err(glint::Diagnostic::file(
-            scene,
-            format!("{} lights, but a frame can use at most {}", desc.lights.len(), glint::scene::MAX_LIGHTS),
-        )
-        .into());
-    }
     Ok(())
 }
 

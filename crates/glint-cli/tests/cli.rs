@@ -2,32 +2,11 @@
 //! file:line for every class of malformed scene, `check` without a GPU, and
 //! `render --stats`.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod common;
 
-/// Run glint from the project root, as a user would (scenes there may then use
-/// `../assets`: the current directory is one of their asset roots).
-fn glint(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_glint"))
-        .args(args)
-        .current_dir(repo(""))
-        .env("NODEVICE_SELECT", "1")
-        .output()
-        .expect("run glint")
-}
-
-fn repo(path: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..").join(path)
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-/// Lines glint itself printed (Mesa and wgpu log lines filtered out).
-fn error_lines(o: &Output) -> Vec<String> {
-    stderr(o).lines().filter(|l| l.starts_with("error:")).map(str::to_owned).collect()
-}
+use common::*;
+use std::path::Path;
+use std::process::Command;
 
 #[test]
 fn help_lists_every_subcommand_and_the_exit_codes() {
@@ -682,39 +661,6 @@ fn sim_cloth_reads_the_published_mesh_format_and_rejects_bad_input() {
         assert_eq!(out.status.code(), Some(1), "{args:?}");
         assert!(stderr(&out).contains(says), "{args:?}: {}", stderr(&out));
     }
-}
-
-/// Run glint with its standard output on `/dev/full`, where every write fails
-/// with ENOSPC (`None` where the device is missing).
-fn glint_to_full_stdout(args: &[&str]) -> Option<Output> {
-    let full = std::fs::OpenOptions::new().write(true).open("/dev/full").ok()?;
-    let out = Command::new(env!("CARGO_BIN_EXE_glint"))
-        .args(args)
-        .env("NODEVICE_SELECT", "1")
-        .stdout(full)
-        .output()
-        .expect("run glint");
-    Some(out)
-}
-
-/// No adapter (exit 2) skips a GPU test unless CI requires one.
-fn no_adapter(out: &Output) -> bool {
-    let skip = out.status.code() == Some(2) && std::env::var("GLINT_REQUIRE_ADAPTER").as_deref() != Ok("1");
-    if skip {
-        eprintln!("skipping: no GPU adapter ({})", stderr(out));
-    }
-    skip
-}
-
-/// A failed write is exit 1 with one error line naming what could not be
-/// written, never a panic.
-fn assert_write_failed(out: &Output, what: &str) {
-    let text = stderr(out);
-    assert_eq!(out.status.code(), Some(1), "{text}");
-    assert!(!text.contains("panicked"), "{text}");
-    let errors = error_lines(out);
-    assert_eq!(errors.len(), 1, "{text}");
-    assert!(errors[0].starts_with(&format!("error: {what}: cannot write: ")), "{errors:?}");
 }
 
 #[test]

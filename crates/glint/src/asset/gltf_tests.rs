@@ -624,7 +624,7 @@ fn a_glb_header_must_give_the_files_length() {
     };
     let load = |bytes: &[u8]| Model::parse(Path::new("m/test.glb"), bytes, LoadOptions::default());
     assert!(load(&glb(total as u32)).is_ok());
-    let err = load(&glb(20)).err().expect("a header length of 20 is an error").message;
+    let err = load(&glb(20)).map(|_| ()).expect_err("a header length of 20 is an error").message;
     assert!(err.contains(&format!("GLB header says the file is 20 bytes, but it is {total}")), "{err}");
     assert!(load(b"glTF\x02\x00").is_err(), "a header cut short");
 }

@@ -21,13 +21,16 @@ impl DriverErrors {
         Self { memory: device.push_error_scope(wgpu::ErrorFilter::OutOfMemory), internal, validation }
     }
 
-    /// The first error caught, if any. Natively (and on WebGL) the scopes answer
+    /// The error caught, if any: out of memory before internal and validation
+    /// errors. Natively (and on WebGL) the scopes answer
     /// at once; the browser's WebGPU answers later, and there the errors are
     /// left to its console rather than block the page's thread.
     pub(crate) fn finish(self) -> Option<wgpu::Error> {
+        // Out of memory first: a texture the device could not hold makes every
+        // later use of it a validation error too, and the memory is the cause.
         let memory = at_once(self.memory.pop()).flatten();
         let internal = at_once(self.internal.pop()).flatten();
-        at_once(self.validation.pop()).flatten().or(internal).or(memory)
+        memory.or(internal).or(at_once(self.validation.pop()).flatten())
     }
 }
 

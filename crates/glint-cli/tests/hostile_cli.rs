@@ -1,0 +1,185 @@
+//! Hostile input, round two, as a user meets it on the command line: every
+//! case is one error line and its exit code, never a panic, a hang or an
+//! allocation past the limits of `docs/limits.md`.
+
+mod common;
+
+use common::*;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+/// A fresh folder for one test's files.
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("glint-hostile-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn path(p: &Path) -> &str {
+    p.to_str().expect("a UTF-8 path")
+}
+
+/// Exit 1 and one error line containing `expected`, no panic.
+#[track_caller]
+fn assert_bad_input(out: &std::process::Output, expected: &str) {
+    let text = stderr(out);
+    assert_eq!(out.status.code(), Some(1), "{text}");
+    assert!(!text.contains("panicked"), "{text}");
+    let errors = error_lines(out);
+    assert_eq!(errors.len(), 1, "{text}");
+    assert!(errors[0].contains(expected), "expected {expected:?} in {errors:?}");
+}
+
+#[test]
+fn check_refuses_render_targets_render_could_not_hold() {
+    let dir = scratch("targets");
+    let block = |k: usize| {
+        format!(
+            "{{\n\"classname\" \"render_target\"\n\"name\" \"t{k}\"\n\"size\" \"2048 2048\"\n\"format\" \"hdr\"\n}}\n"
+        )
+    };
+    let scene = dir.join("targets.scn");
+    std::fs::write(&scene, (0..120).map(block).collect::<String>()).unwrap();
+    for command in ["check", "render"] {
+        let out =
+            glint(&[command, path(&scene), "-o", path(&dir.join("out.png"))][..if command == "check" { 2 } else { 4 }]);
+        assert_bad_input(&out, "targets.scn:127: with this render target the scene's targets need 1056 MiB");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn frame_number_formats_are_bounded_and_checked_before_drawing() {
+    let out = glint(&["render", "tests/scenes/shapes.scn", "--size", "8x8", "-o", "x%065536d.png"]);
+    assert_bad_input(&out, "x%065536d.png: bad frame-number format: expected %d or %0Nd with N at most 32");
+    let out = glint(&["render", "tests/scenes/shapes.scn", "--size", "8x8", "-o", "x%-5d.png"]);
+    assert_bad_input(&out, "bad frame-number format");
+}
+
+#[test]
+fn compare_reads_through_the_common_reader_and_limits() {
+    let dir = scratch("compare");
+    let reference = "tests/reference/split.png";
+    // A FIFO would block image::open for ever; a device named like an image
+    // would be read without end.
+    let fifo = dir.join("pipe.png");
+    assert!(Command::new("mkfifo").arg(&fifo).status().unwrap().success());
+    let zero = dir.join("zero.jpg");
+    std::os::unix::fs::symlink("/dev/zero", &zero).unwrap();
+    for special in [&fifo, &zero] {
+        let out = glint(&["compare", reference, path(special)]);
+        assert_bad_input(&out, "not a regular file");
+    }
+    // Images past the side limit, or two that together need more than the
+    // comparison's memory, are refused from their headers.
+    let wide = dir.join("wide.png");
+    image::GrayImage::new(8193, 1).save(&wide).unwrap();
+    assert_bad_input(&glint(&["compare", path(&wide), reference]), "at most 8192 pixels a side");
+    let big = dir.join("big.png");
+    image::GrayImage::new(8192, 8192).save(&big).unwrap();
+    assert_bad_input(&glint(&["compare", path(&big), reference]), "MiB decoded, but only 0.0 MiB");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn compare_writes_and_prints_through_the_checked_output() {
+    let reference = "tests/reference/split.png";
+    if let Some(out) = glint_to_full_stdout(&["compare", path(&repo(reference)), path(&repo(reference))]) {
+        assert_write_failed(&out, "standard output");
+    }
+    if Path::new("/dev/full").exists() {
+        let dir = scratch("compare-diff");
+        let full = dir.join("full.png");
+        std::os::unix::fs::symlink("/dev/full", &full).unwrap();
+        let out = glint(&["compare", reference, "tests/reference/monitor.png", "--diff", path(&full)]);
+        assert_eq!(out.status.code(), Some(1), "the sizes differ first: {}", stderr(&out));
+        let out =
+            glint(&["compare", "tests/reference/lights.png", "tests/reference/shapes.png", "--diff", path(&full)]);
+        assert_write_failed(&out, path(&full));
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}
+
+#[test]
+fn bench_post_follows_the_scene_files_rules_at_parse() {
+    for (post, expected) in [
+        ("bloom bloom", "'bloom' is named twice"),
+        ("bloom tonemap fxaa edges vignette glow", "'glow' is not a post effect"),
+    ] {
+        let out = glint(&["bench", "tests/scenes/shapes.scn", "--frames", "1", "--post", post]);
+        let text = stderr(&out);
+        assert_eq!(out.status.code(), Some(1), "{text}");
+        assert!(text.contains(expected) && !text.contains("adapter"), "{text}");
+    }
+}
+
+#[test]
+fn a_model_with_more_lights_than_a_frame_holds_is_bad_input_for_render_too() {
+    let dir = scratch("lights");
+    let lights: Vec<serde_json::Value> =
+        (0..100).map(|_| serde_json::json!({"type": "point", "intensity": 1.0})).collect();
+    let mut nodes: Vec<serde_json::Value> =
+        (0..100).map(|k| serde_json::json!({"extensions": {"KHR_lights_punctual": {"light": k}}})).collect();
+    nodes.push(serde_json::json!({"mesh": 0}));
+    // One triangle: three VEC3 positions, 36 bytes.
+    let positions: Vec<u8> = [0f32, 0., 0., 1., 0., 0., 0., 1., 0.].iter().flat_map(|f| f.to_le_bytes()).collect();
+    std::fs::write(dir.join("tri.bin"), &positions).unwrap();
+    let doc = serde_json::json!({
+        "asset": {"version": "2.0"},
+        "extensionsUsed": ["KHR_lights_punctual"],
+        "extensions": {"KHR_lights_punctual": {"lights": lights}},
+        "scene": 0,
+        "scenes": [{"nodes": (0..101).collect::<Vec<_>>()}],
+        "nodes": nodes,
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}],
+        "buffers": [{"uri": "tri.bin", "byteLength": 36}],
+        "bufferViews": [{"buffer": 0, "byteLength": 36}],
+        "accessors": [{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0]}]
+    });
+    let model = dir.join("lamps.gltf");
+    std::fs::write(&model, doc.to_string()).unwrap();
+    for args in [&["check", path(&model)][..], &["render", path(&model), "-o", path(&dir.join("o.png"))]] {
+        assert_bad_input(&glint(args), "lamps.gltf: 100 lights, but a frame can use at most 64");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn sim_cloth_mesh_errors_name_their_line() {
+    let dir = scratch("cloth-obj");
+    let mesh = dir.join("sheet.obj");
+    std::fs::write(&mesh, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 2 7\n").unwrap();
+    let out = glint(&["sim", "cloth", "--mesh", path(&mesh), "--steps", "1"]);
+    assert_bad_input(&out, "sheet.obj:5: expected a face of three or more vertex numbers");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn a_cloth_no_step_can_resolve_is_refused_by_check() {
+    let dir = scratch("cloth-gravity");
+    let scene = dir.join("fall.scn");
+    std::fs::write(&scene, "{\n\"classname\" \"cloth\"\n\"gravity\" \"3e38 0 0\"\n}\n").unwrap();
+    assert_bad_input(&glint(&["check", path(&scene)]), "fall.scn:3: \"gravity\" is");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn frames_larger_than_one_buffer_are_read_back_in_bands() {
+    // 8193 × 8192 RGBA is 268 MB, past the 256 MiB max_buffer_size: it used to
+    // panic when saving. Drawn without MSAA, it is a few seconds on lavapipe.
+    let dir = scratch("big-frame");
+    let png = dir.join("big.png");
+    let out = glint(&["render", "tests/scenes/shapes.scn", "--size", "8193x8192", "--msaa", "1", "-o", path(&png)]);
+    if no_adapter(&out) {
+        return;
+    }
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let image = image::open(&png).unwrap().into_rgba8();
+    assert_eq!(image.dimensions(), (8193, 8192));
+    // The bands meet: the rows either side of the first band's end are not blank.
+    let band = (256u64 << 20) / u64::from((8193 * 4u32).div_ceil(256) * 256);
+    let row_sum = |y: u32| (0..8193).map(|x| u64::from(image.get_pixel(x, y)[1])).sum::<u64>();
+    assert!(row_sum(band as u32 - 1) > 0 && row_sum(band as u32) > 0);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
