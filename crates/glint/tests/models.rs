@@ -108,7 +108,7 @@ fn scenes_place_models_and_override_their_materials_per_entity() {
     };
     let e = bad("\"mtl.Wood.base_color\" \"1 0 0\"");
     assert!(
-        e.contains("inline.scn:4:") && e.contains("no material 'Wood'") && e.contains("tiled, red, painted"),
+        e.contains("inline.scn:4:") && e.contains("no material 'Wood'") && e.contains("'tiled', 'red', 'painted'"),
         "{e}"
     );
     assert!(bad("\"mtl.red.smoothness\" \"2\"").contains("smoothness"));

@@ -34,7 +34,7 @@ pub const MAX_SCENE_CLOTH_NODES: u64 = 4 * 129 * 129;
 /// it may take [`MAX_STATIC_ITERATIONS`](crate::sim::cloth::MAX_STATIC_ITERATIONS)
 /// Newton iterations in all, about four to a step's solve. (Counted as ten
 /// steps before, a 65 × 65 static sheet that did not converge ran 25–30 s.)
-pub const STATIC_STEPS: u64 = 100;
+pub const STATIC_STEPS: u64 = 500;
 
 /// Most colliders one cloth may have: each node is tested against each in every
 /// Newton iteration (10,000 colliders on a 17 × 17 cloth took over 30 s to
