@@ -543,7 +543,9 @@ fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {e}");
+            // Every error within the message policy, whatever a file named (a
+            // texture's name in a render error is not a Diagnostic).
+            eprintln!("error: {}", glint::text::shorten(&e.to_string(), 2 * glint::text::MAX_MESSAGE_CHARS));
             ExitCode::from(e.exit_code())
         }
     }

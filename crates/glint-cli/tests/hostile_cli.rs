@@ -183,3 +183,26 @@ fn frames_larger_than_one_buffer_are_read_back_in_bands() {
     assert!(row_sum(band as u32 - 1) > 0 && row_sum(band as u32) > 0);
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn a_target_the_device_cannot_hold_is_exit_3_never_a_panic() {
+    // 16384² with 4× MSAA is 9 GiB of textures: lavapipe runs out of memory,
+    // which wgpu's default handler turned into a panic.
+    let dir = scratch("oom");
+    let out = glint(&["render", "tests/scenes/shapes.scn", "--size", "16384x16384", "-o", path(&dir.join("o.png"))]);
+    if no_adapter(&out) {
+        return;
+    }
+    let text = stderr(&out);
+    assert!(!text.contains("panicked"), "{text}");
+    match out.status.code() {
+        // A device that holds it draws it.
+        Some(0) => assert_eq!(image::image_dimensions(dir.join("o.png")).unwrap(), (16384, 16384)),
+        Some(3) => assert_eq!(
+            error_lines(&out),
+            ["error: cannot make a 16384x16384 target with 4 samples: the GPU is out of memory"]
+        ),
+        other => panic!("exit {other:?}: {text}"),
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}

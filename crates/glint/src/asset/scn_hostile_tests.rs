@@ -138,8 +138,7 @@ fn load_benchmark_targets_and_cameras() {
     let (targets, cameras) = (MAX_RENDER_TARGETS, 10_000);
     let mut text: String = (0..targets).map(|k| target(&format!("t{k}"), "1 1", "ldr")).collect();
     for k in 0..targets {
-        let _ =
-            write!(text, "{{\n\"classname\" \"material\"\n\"name\" \"m{k}\"\n\"diffuse_map\" \"target:t0\"\n}}\n");
+        let _ = write!(text, "{{\n\"classname\" \"material\"\n\"name\" \"m{k}\"\n\"diffuse_map\" \"target:t0\"\n}}\n");
         let _ = write!(text, "{{\n\"classname\" \"entity\"\n\"mesh\" \"cube\"\n\"material\" \"m{k}\"\n}}\n");
     }
     for k in 0..cameras {
