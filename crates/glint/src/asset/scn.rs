@@ -299,7 +299,10 @@ pub fn parse_scene_with(path: &Path, text: &str, options: LoadOptions) -> Result
         camera_lines: Vec::new(),
         targets: scn_targets::Targets::default(),
     };
-    for block in &blocks {
+    // Render targets first, so cameras and materials may name one defined
+    // anywhere in the file (as materials are named by entities).
+    let is_target = |b: &&Block| b.pairs.iter().any(|p| p.key == "classname" && p.value.trim() == "render_target");
+    for block in blocks.iter().filter(is_target).chain(blocks.iter().filter(|b| !is_target(b))) {
         loader.block(block)?;
     }
     loader.finish()

@@ -168,3 +168,14 @@ fn load_benchmark_targets_and_cameras() {
     assert_eq!(scene.materials.len(), 100_000);
     eprintln!("100000 target:NAME lookups: {:.3} s", start.elapsed().as_secs_f64());
 }
+
+#[test]
+fn a_render_target_may_be_named_above_its_block() {
+    let text = format!(
+        "{{\n\"classname\" \"camera\"\n\"output\" \"tv\"\n}}\n{{\n\"classname\" \"material\"\n\"name\" \"screen\"\n\"diffuse_map\" \"target:tv\"\n}}\n{}",
+        target("tv", "64 32", "ldr")
+    );
+    let scene = parse(&text).unwrap();
+    assert_eq!(scene.camera_views[0].output, Some(0));
+    assert_eq!(scene.materials[0].diffuse_map, Some(scene.textures.len()), "the target's texture follows the files");
+}

@@ -102,11 +102,7 @@ impl Targets {
     fn find(&self, path: &Path, line: usize, name: &str) -> Result<usize, Diagnostic> {
         self.names.get(name).copied().ok_or_else(|| {
             let known: Vec<&str> = self.list.iter().map(|t| t.name.as_str()).collect();
-            let message = format!(
-                "unknown render target {} (render_target blocks come before the cameras and materials that name them; defined: {})",
-                quote(name),
-                list(&known)
-            );
+            let message = format!("unknown render target {} (defined: {})", quote(name), list(&known));
             Diagnostic::at(path, line, message)
         })
     }
