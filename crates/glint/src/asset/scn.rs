@@ -13,10 +13,9 @@ use super::scn_targets::{self, RenderTargetDesc};
 use super::texture::read_texture;
 use super::texture::TextureCache;
 use super::{AssetFolder, Diagnostic, LoadOptions, Model, ShapeKind, Texture, MAX_SCENE_BYTES, MAX_SCENE_TOTAL_BYTES};
-use crate::render::{ShadowLayout, MAX_SHADOW_MAP_BYTES};
 use crate::scene::{
-    Background, Camera, Entity, Environment, Fog, Light, Lighting, Material, PostEffect, RenderTargetId, TextureId,
-    View, Viewport, MAX_LIGHTS,
+    Background, Camera, Entity, Environment, Fog, Light, Lighting, Material, PostEffect, RenderTargetId, ShadowLayout,
+    TextureId, View, Viewport, MAX_LIGHTS, MAX_SHADOW_MAP_BYTES,
 };
 use crate::text::{list, quote};
 use glam::{EulerRot, Mat4, Quat, Vec3};

@@ -51,11 +51,11 @@ mod view;
 mod views;
 mod visible;
 
+pub use crate::scene::{ShadowLayout, MAX_CUBES, MAX_SHADOW_MAP_BYTES};
 pub use error::RenderError;
 pub use mesh_pool::MeshTooLarge;
 pub use place::PlacedScene;
 pub use registry::Registry;
-pub use shadow_maps::{ShadowLayout, MAX_CUBES, MAX_SHADOW_MAP_BYTES};
 pub use shadow_pass::Shadows;
 pub use stats::{FrameStats, PassStats, Passes, StageTimes, UploadStats};
 pub use timer::GpuTimes;

@@ -12,7 +12,7 @@ use super::cull::Frustum;
 use super::encode::Bound;
 use super::pipelines::{PassKind, Pipelines};
 use super::queue::{self, DrawItem, Queue};
-use super::shadow_maps::{ShadowGpu, ShadowLayout, ShadowMaps};
+use super::shadow_maps::{ShadowGpu, ShadowMaps};
 use super::shadow_views::{self, ShadowView, ViewTarget};
 use super::timer::Timed;
 use super::view::ViewFrame;
@@ -20,7 +20,7 @@ use super::views::{ViewBlocks, MAX_SHADOW_VIEWS};
 use super::visible::VisibleRun;
 use super::{ms_since, FrameStats, PassStats, RenderError, Renderer};
 use crate::gpu::OffscreenTarget;
-use crate::scene::{Aabb, AlphaMode, Light, LightKind, Lighting, View, MAX_LIGHTS};
+use crate::scene::{Aabb, AlphaMode, Light, LightKind, Lighting, ShadowLayout, View, MAX_LIGHTS};
 use glam::Vec3;
 use web_time::Instant;
 
