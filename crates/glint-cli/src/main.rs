@@ -9,7 +9,7 @@ mod view;
 
 use clap::{Parser, Subcommand, ValueEnum};
 use glint::asset::{load_scene_with, LoadOptions, Model, SceneDesc};
-use glint::{Error, Gpu, OffscreenTarget, Renderer};
+use glint::{Error, Gpu, OffscreenTarget, Renderer, World};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -168,21 +168,6 @@ struct Picture {
     /// interactive use.
     #[arg(long, value_enum)]
     solve: Option<sim::SolveArg>,
-}
-
-/// The views a picture of `desc`, placed as `placed`, draws: camera `camera`
-/// alone over the whole image (after the cameras drawing render targets, which
-/// it may show), or [`SceneDesc::views`]. A camera the scene lacks counts as none.
-pub(crate) fn views_of(
-    desc: &SceneDesc,
-    camera: Option<usize>,
-    placed: &glint::render::PlacedScene,
-) -> Vec<glint::View> {
-    let targets = &placed.render_targets;
-    match camera.filter(|&k| k < desc.cameras.len()) {
-        None => desc.views(targets),
-        Some(k) => desc.target_views(targets).into_iter().chain([desc.camera_view(k)]).collect(),
-    }
 }
 
 /// An error naming the scene when it has no camera `camera`.
@@ -354,7 +339,7 @@ struct RenderArgs<'a> {
 fn render(args: RenderArgs) -> Result<(), Error> {
     let RenderArgs { scene, output, size: (width, height), msaa, camera, stats, no_cull, time, frames, fps, options } =
         args;
-    let mut desc = load(scene, options)?;
+    let desc = load(scene, options)?;
     check_camera(&desc, scene, camera)?;
     if frames > 1 && !output.to_string_lossy().contains('%') {
         let message = "--frames needs a numbered output such as -o frames/%04d.png";
@@ -373,9 +358,8 @@ fn render(args: RenderArgs) -> Result<(), Error> {
     };
     let mut target = OffscreenTarget::new(&gpu, width, height, msaa)?;
     let mut renderer = Renderer::new(&gpu);
-    let mut placed = renderer.place_scene(&desc);
-    let views: Vec<glint::View> =
-        views_of(&desc, camera, &placed).into_iter().map(|v| v.with_culling(!no_cull)).collect();
+    let mut world = World::place(desc, &mut renderer);
+    let views: Vec<glint::View> = world.views(camera).into_iter().map(|v| v.with_culling(!no_cull)).collect();
     let progress = (frames > 1).then(|| {
         let bar = indicatif::ProgressBar::new(frames.into());
         let style = indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} frames, {elapsed} ({eta} left)");
@@ -383,8 +367,8 @@ fn render(args: RenderArgs) -> Result<(), Error> {
         bar
     });
     for k in 0..frames {
-        placed.pose(&mut desc, time + k as f32 / fps, &mut renderer)?;
-        let frame = renderer.render_views(&placed.entities, &views, desc.lighting(), &mut target)?;
+        world.pose(time + k as f32 / fps, &mut renderer)?;
+        let frame = world.draw(&mut renderer, &views, &mut target)?;
         let path = numbered(output, k).map_err(|m| glint::Diagnostic::file(output, m))?;
         if let Some(dir) = path.parent().filter(|d| frames > 1 && !d.as_os_str().is_empty()) {
             std::fs::create_dir_all(dir)

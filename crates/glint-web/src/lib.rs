@@ -15,10 +15,8 @@ mod fetch;
 mod input;
 
 use glam::Vec2;
-use glint::asset::SceneDesc;
-use glint::render::PlacedScene;
 use glint::scene::FlyCamera;
-use glint::{Gpu, OffscreenTarget, Renderer, View, WindowSurface};
+use glint::{Gpu, OffscreenTarget, Renderer, View, WindowSurface, World};
 use input::Input;
 use std::cell::RefCell;
 use std::rc::Rc;
@@ -97,9 +95,8 @@ impl Query {
 
 /// A loaded scene placed in its renderer.
 struct Shown {
-    desc: SceneDesc,
+    world: World,
     renderer: Renderer,
-    placed: PlacedScene,
     views: Vec<View>,
     fly: FlyCamera,
     /// What a touch drag orbits: the first view's target.
@@ -219,14 +216,14 @@ async fn show(viewer: &Rc<RefCell<Viewer>>, scene: &str) {
     clear_error();
     let mut v = viewer.borrow_mut();
     let mut renderer = Renderer::new(&v.gpu);
-    let placed = renderer.place_scene(&desc);
-    let views = desc.views(&placed.render_targets);
+    let world = World::place(desc, &mut renderer);
+    let views = world.views(None);
     let Some(flown) = views.iter().find(|view| view.output.is_none()) else {
         return show_error(&format!("{scene}: no camera draws into the page"));
     };
     let camera = flown.camera;
     let fly = FlyCamera::from_camera(&camera, 0.5 * (camera.target - camera.eye).length().max(1.0));
-    v.shown = Some(Shown { desc, renderer, placed, views, fly, centre: camera.target, start: None });
+    v.shown = Some(Shown { world, renderer, views, fly, centre: camera.target, start: None });
 }
 
 /// The frame callback, which schedules itself again (so it holds a handle on itself).
@@ -269,14 +266,12 @@ impl Viewer {
         }
         let start = *shown.start.get_or_insert(now);
         let time = ((now - start) / 1e3) as f32;
-        shown.placed.pose(&mut shown.desc, time, &mut shown.renderer).map_err(|e| e.to_string())?;
+        shown.world.pose(time, &mut shown.renderer).map_err(|e| e.to_string())?;
         let mut views = shown.views.clone();
         if let Some(flown) = views.iter_mut().find(|v| v.output.is_none()) {
             flown.camera = shown.fly.apply(&flown.camera);
         }
-        let stats =
-            (shown.renderer.render_views(&shown.placed.entities, &views, shown.desc.lighting(), &mut self.target))
-                .map_err(|e| e.to_string())?;
+        let stats = shown.world.draw(&mut shown.renderer, &views, &mut self.target).map_err(|e| e.to_string())?;
         self.surface.present(&self.gpu, &self.target);
         self.frames += 1;
         self.frame_ms = if self.frames == 1 { dt * 1e3 } else { 0.9 * self.frame_ms + 0.1 * dt * 1e3 };
@@ -289,7 +284,7 @@ impl Viewer {
             &format!(
                 "{} | {} | {w}x{h} | {:.1} ms a frame | {draws} draws in {calls} calls | {drawn} instances | {} views",
                 self.backend,
-                shown.desc.path.display(),
+                shown.world.desc().path.display(),
                 self.frame_ms,
                 stats.len()
             ),

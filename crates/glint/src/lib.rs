@@ -42,6 +42,7 @@ pub mod scene;
 mod shader;
 pub mod sim;
 pub mod text;
+pub mod world;
 
 pub use asset::{Diagnostic, Texture};
 pub use gpu::{Gpu, GpuError, OffscreenTarget, WindowSurface};
@@ -50,6 +51,7 @@ pub use scene::{
     AlphaMode, Background, Camera, Entity, Environment, Light, Lighting, Material, MaterialId, Mesh, RenderTargetId,
     ShadowSettings, ShapeId, TextureId, View, Viewport,
 };
+pub use world::World;
 
 /// Any glint error, with the process exit code the CLI uses for it.
 #[derive(Debug, thiserror::Error)]

@@ -131,14 +131,13 @@ fn skinned_and_morphed_models_render_at_two_times() {
     ];
     for (file, name, eye, target) in cases {
         // One renderer across both times: the second frame re-uploads only what moved.
-        let mut desc = scene(file, eye, target);
         let mut renderer = Renderer::new(gpu);
-        let mut placed = renderer.place_scene(&desc);
+        let mut world = glint::World::place(scene(file, eye, target), &mut renderer);
         let mut target_image = OffscreenTarget::new(gpu, 96, 96, 4).expect("target");
         for (time, suffix) in [(0.0, "t0"), (1.0, "t1")] {
-            placed.pose(&mut desc, time, &mut renderer).expect("no cloth to fail");
-            let stats =
-                renderer.render(&placed.entities, desc.cameras[0], desc.lighting(), &mut target_image).expect("frame");
+            world.pose(time, &mut renderer).expect("no cloth to fail");
+            let camera = world.desc().cameras[0];
+            let stats = renderer.render(world.entities(), camera, world.lighting(), &mut target_image).expect("frame");
             assert_eq!(stats.instances_drawn, 1, "{name} {suffix}: in view");
             if time > 0.0 && file == "morph.gltf" {
                 assert_eq!(stats.bytes_uploaded.meshes, 81 * 48, "only the 81 morphed vertices, written in place");

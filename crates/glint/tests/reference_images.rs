@@ -104,40 +104,41 @@ fn cloth_swings_with_its_debug_view_one_vertex_write_per_frame() {
     // rewriting the vertex buffers of the surface and the ribbons, nothing else.
     let Some(gpu) = common::gpu() else { return };
     let path = common::repo_root().join("tests/scenes/cloth_debug.scn");
-    let mut desc = common::load_scene(&path);
-    assert!(desc.warnings.is_empty(), "{:?}", desc.warnings);
     let mut renderer = glint::Renderer::new(gpu);
-    let mut placed = renderer.place_scene(&desc);
-    let entities = &placed.entities;
+    let mut world = glint::World::place(common::load_scene(&path), &mut renderer);
+    assert!(world.desc().warnings.is_empty(), "{:?}", world.desc().warnings);
+    let entities = world.entities();
     assert_eq!(entities.len(), 4, "floor, cloth, ribbons, pins");
     assert_eq!(entities[3].transforms().len(), 2, "two pinned corners");
     let mut target = glint::OffscreenTarget::new(gpu, 256, 256, 4).expect("target");
-    let mut frame = |desc: &mut glint::asset::SceneDesc, placed: &mut glint::render::PlacedScene, time: f32| {
-        placed.pose(desc, time, &mut renderer).expect("the cloth steps");
-        let stats = renderer.render(&placed.entities, desc.cameras[0], desc.lighting(), &mut target).expect("frame");
+    let mut frame = |world: &mut glint::World, time: f32| {
+        world.pose(time, &mut renderer).expect("the cloth steps");
+        let camera = world.desc().cameras[0];
+        let stats = renderer.render(world.entities(), camera, world.lighting(), &mut target).expect("frame");
         (stats, target.read_rgba8(gpu).expect("readback"))
     };
-    let (first, _) = frame(&mut desc, &mut placed, 0.0);
+    let cloth = |world: &glint::World| world.cloth_view(0).expect("a cloth").clone();
+    let (first, _) = frame(&mut world, 0.0);
     assert_eq!(first.draws, 4, "floor, cloth, ribbons, one instanced draw of both pins");
-    let edges = desc.cloths[0].view.edges.as_ref().expect("debug view").vertices().len();
-    let rest_bottom = desc.cloths[0].view.surface.aabb().min.y;
-    let (swung, image) = frame(&mut desc, &mut placed, 0.6);
+    let edges = cloth(&world).edges.as_ref().expect("debug view").vertices().len();
+    let rest_bottom = cloth(&world).surface.aabb().min.y;
+    let (swung, image) = frame(&mut world, 0.6);
     let vertex_bytes = (81 + edges) as u64 * std::mem::size_of::<glint::scene::Vertex>() as u64;
     assert_eq!(swung.bytes_uploaded.meshes, vertex_bytes, "one write of the surface's and the ribbons' vertices");
     // The surface's and the ribbons' bounds moved, so their one instance record
     // each (64 bytes: transform and material) is rewritten for culling; the
     // pins did not move and are not.
     assert_eq!(swung.bytes_uploaded.instances, 2 * 64, "two instance records, not the pins'");
-    let bottom = desc.cloths[0].view.surface.aabb().min.y;
+    let bottom = cloth(&world).surface.aabb().min.y;
     assert!(bottom < rest_bottom - 0.3, "the free edge swung down: lowest point {bottom} (was {rest_bottom})");
     common::assert_matches_reference("cloth_debug", &image);
 
     // Deterministic: going back to 0 restarts from rest, and 0.6 s again is the same shape.
-    let before: Vec<_> = desc.cloths[0].view.surface.vertices().to_vec();
-    frame(&mut desc, &mut placed, 0.0);
-    assert_eq!(desc.cloths[0].view.surface.aabb().min.y, rest_bottom, "back at rest");
-    frame(&mut desc, &mut placed, 0.6);
-    assert!(desc.cloths[0].view.surface.vertices() == before.as_slice(), "the same time gives the same shape");
-    let (still, _) = frame(&mut desc, &mut placed, 0.6);
+    let before: Vec<_> = cloth(&world).surface.vertices().to_vec();
+    frame(&mut world, 0.0);
+    assert_eq!(cloth(&world).surface.aabb().min.y, rest_bottom, "back at rest");
+    frame(&mut world, 0.6);
+    assert!(cloth(&world).surface.vertices() == before.as_slice(), "the same time gives the same shape");
+    let (still, _) = frame(&mut world, 0.6);
     assert_eq!(still.bytes_uploaded.meshes, 0, "posing at the same time uploads nothing");
 }

@@ -11,9 +11,8 @@ pub use script::{parse_at, Action, Scripted};
 use clock::SceneClock;
 use glam::Vec2;
 use glint::asset::{LoadOptions, SceneDesc};
-use glint::render::PlacedScene;
 use glint::scene::{FlyCamera, FlyInput};
-use glint::{Camera, Error, Gpu, GpuError, OffscreenTarget, Renderer, WindowSurface};
+use glint::{Camera, Error, Gpu, GpuError, OffscreenTarget, Renderer, WindowSurface, World};
 use std::collections::HashSet;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -112,19 +111,18 @@ struct View {
 /// A loaded scene placed in its own renderer, and the views it shows (the fly
 /// camera moves the first one into the window).
 struct Scene {
-    desc: SceneDesc,
+    world: World,
     renderer: Renderer,
-    placed: PlacedScene,
     views: Vec<glint::View>,
 }
 
 impl Scene {
-    /// `desc` placed in a new renderer, showing camera `camera` (see [`crate::views_of`]).
+    /// `desc` placed in a new renderer, showing camera `camera` (see [`World::views`]).
     fn new(gpu: &Gpu, desc: SceneDesc, camera: Option<usize>) -> Self {
         let mut renderer = Renderer::new(gpu);
-        let placed = renderer.place_scene(&desc);
-        let views = crate::views_of(&desc, camera, &placed);
-        Self { desc, renderer, placed, views }
+        let world = World::place(desc, &mut renderer);
+        let views = world.views(camera);
+        Self { world, renderer, views }
     }
 
     /// The view the fly camera moves: the first into the window.
@@ -256,18 +254,17 @@ impl View {
         self.fly.update(dt.as_secs_f32().min(0.25), &self.input.take());
         let scene = &mut self.scene;
         let time = self.clock.tick(dt);
-        scene.placed.pose(&mut scene.desc, time, &mut scene.renderer)?;
+        scene.world.pose(time, &mut scene.renderer)?;
         let mut views = scene.views.clone();
         let flown = scene.flown();
         views[flown].camera = self.fly.apply(&views[flown].camera);
-        let stats =
-            scene.renderer.render_views(&scene.placed.entities, &views, scene.desc.lighting(), &mut self.target)?;
+        let stats = scene.world.draw(&mut scene.renderer, &views, &mut self.target)?;
         self.surface.present(&self.gpu, &self.target);
         if self.last_title.elapsed() >= TITLE_INTERVAL {
             let recent = self.clock.take_recent();
             self.window.set_title(&format!(
                 "glint: {} | {:.1} ms | plays at {:.2}x | {}",
-                self.scene.desc.path.display(),
+                self.scene.world.desc().path.display(),
                 recent.frame_ms(),
                 recent.speed(),
                 view_counts(&stats)

@@ -1,6 +1,7 @@
 //! The `.scn` `cloth` class: a Discrete Elastic Plates sheet simulated in world
-//! space and advanced by [`SceneDesc::pose`](super::SceneDesc::pose) to the
-//! requested time, deterministically (the same time always gives the same shape).
+//! space. This is what the block says, with the sheet at rest; a
+//! [`World`](crate::World) runs it to the requested time, deterministically (the
+//! same time always gives the same shape).
 
 use super::scn_fields::Fields;
 use super::{AssetFolder, Diagnostic};
@@ -67,9 +68,8 @@ pub struct ClothDesc {
     pub debug: bool,
     /// The block's line, for errors while posing.
     pub line: usize,
-    /// Its meshes as of the last pose.
+    /// Its meshes at rest.
     pub view: ClothView,
-    run: Run,
 }
 
 /// What a cloth starts from.
@@ -102,26 +102,6 @@ impl ClothSetup {
         cloth.set_damping(self.damping);
         cloth.set_solve(self.solve);
         Ok(cloth)
-    }
-}
-
-/// The running simulation and how many steps it has taken. Cloning a scene does
-/// not clone a simulation: the copy restarts from rest when it is next posed.
-#[derive(Default)]
-struct Run(Option<(Box<Cloth>, u64)>);
-
-impl Clone for Run {
-    fn clone(&self) -> Self {
-        Self(None)
-    }
-}
-
-impl std::fmt::Debug for Run {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match &self.0 {
-            Some((cloth, steps)) => write!(f, "Run {{ steps: {steps}, time: {} }}", cloth.time),
-            None => write!(f, "Run(at rest)"),
-        }
     }
 }
 
@@ -171,37 +151,6 @@ impl ClothDesc {
             return Err(Diagnostic::at(scene, self.line, message));
         }
         Ok(target)
-    }
-
-    /// Advance (or restart and advance) the simulation to `time` seconds and
-    /// update [`ClothDesc::view`]. Returns whether the view changed. A static
-    /// cloth takes its one equilibrium step whatever the time. A step that
-    /// fails is [`Error::Posing`](crate::Error::Posing), naming the scene, the
-    /// cloth block's line and the time it stepped from.
-    pub fn pose(&mut self, time: f32, scene: &Path) -> Result<bool, crate::Error> {
-        let target = self.check_pose(time, 0, scene)?;
-        let (run, restart) = match self.run.0.take() {
-            Some(run) if run.1 <= target => (run, false),
-            _ => {
-                let cloth = self.setup.start().map_err(|m| Diagnostic::at(scene, self.line, format!("cloth: {m}")))?;
-                ((Box::new(cloth), 0), true)
-            }
-        };
-        let (cloth, steps) = self.run.0.insert(run);
-        let moved = restart || *steps < target;
-        while *steps < target {
-            let from = cloth.time;
-            let failed = |source| {
-                let place = Diagnostic::at(scene, self.line, format!("cloth, stepping from {from} s"));
-                crate::Error::Posing { place, source }
-            };
-            cloth.step(self.dt, self.integrator).map_err(failed)?;
-            *steps += 1;
-        }
-        if moved {
-            self.view.update(cloth);
-        }
-        Ok(moved)
     }
 }
 
@@ -285,7 +234,6 @@ pub(crate) fn parse(f: &mut Fields, assets: &AssetFolder, nodes_before: u64) -> 
         debug,
         line: f.block.line,
         view,
-        run: Run(Some((Box::new(cloth), 0))),
     })
 }
 
@@ -374,36 +322,6 @@ mod tests {
     }
 
     #[test]
-    fn posing_steps_to_the_time_and_restarts_when_it_goes_back() {
-        let mut scene =
-            parse("\"size\" \"1 1\"\n\"resolution\" \"4 4\"\n\"pins\" \"z<=-0.5\"\n\"dt\" \"0.05\"\n").unwrap();
-        let cloth = &mut scene.cloths[0];
-        let rest = cloth.view.surface.aabb();
-        assert!(!cloth.pose(0.0, Path::new("t.scn")).unwrap(), "time 0 is the rest state it already has");
-        assert!(cloth.pose(0.5, Path::new("t.scn")).unwrap());
-        let swung = cloth.view.surface.aabb();
-        assert!(swung.min.y < rest.min.y - 0.2, "the free edge fell: {swung:?}");
-        assert!(!cloth.pose(0.52, Path::new("t.scn")).unwrap(), "less than a step later: no new step");
-        assert!(cloth.pose(0.1, Path::new("t.scn")).unwrap(), "earlier: restarted from rest");
-        assert!(cloth.view.surface.aabb().min.y > swung.min.y);
-        let err = cloth.pose(1e6, Path::new("t.scn")).unwrap_err().to_string();
-        assert!(err.starts_with("t.scn:1: cloth: time 1000000 s is 20000000 steps"), "{err}");
-    }
-
-    #[test]
-    fn a_static_cloth_takes_its_equilibrium_step_at_any_time() {
-        // A 0.1 m cantilever clamped by its back two rows of nodes (one row
-        // alone would be a hinge, free to swing).
-        let body = "\"size\" \"0.1 0.1\"\n\"resolution\" \"5 5\"\n\"pins\" \"z<=-0.02\"\n\"young\" \"1e9\"\n";
-        let mut scene = parse(&format!("{body}\"integrator\" \"static\"\n")).unwrap();
-        let cloth = &mut scene.cloths[0];
-        assert!(cloth.pose(0.0, Path::new("t.scn")).unwrap());
-        let hanging = cloth.view.surface.aabb();
-        assert!(hanging.min.y < -1e-4, "it sags at equilibrium: {hanging:?}");
-        assert!(!cloth.pose(5.0, Path::new("t.scn")).unwrap(), "the same equilibrium later");
-    }
-
-    #[test]
     fn posing_work_is_capped_over_every_cloth_before_any_step() {
         let block = "{\n\"classname\" \"cloth\"\n\"resolution\" \"65 65\"\n\"pins\" \"z<=-0.5\"\n\"dt\" \"0.01\"\n}\n";
         let one = parse_scene(Path::new("dir/t.scn"), block).unwrap();
@@ -423,10 +341,6 @@ mod tests {
         let err = two.check_pose(at(fits)).unwrap_err();
         assert_eq!(err.line, Some(7), "{err}");
         assert!(err.message.contains("other cloths"), "{err}");
-        // Posing itself refuses before stepping (a step of this sheet takes seconds in a debug build).
-        let mut one = one;
-        let err = one.cloths[0].pose(at(fits + 1), Path::new("t.scn")).unwrap_err().to_string();
-        assert!(err.starts_with("t.scn:1: cloth: time"), "{err}");
     }
 
     #[test]

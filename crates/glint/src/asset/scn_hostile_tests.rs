@@ -106,16 +106,6 @@ fn cloth_accelerations_no_step_can_resolve_are_refused_at_their_line() {
 }
 
 #[test]
-fn a_cloth_that_cannot_be_solved_names_its_scene_block_and_time() {
-    // No pins and no floor: a static sheet under gravity has no equilibrium.
-    let mut scene = cloth("\"resolution\" \"3 3\"\n\"integrator\" \"static\"\n").unwrap();
-    let err = scene.cloths[0].pose(0.0, Path::new("dir/t.scn")).unwrap_err();
-    assert_eq!(err.exit_code(), 3);
-    let text = err.to_string();
-    assert!(text.starts_with("dir/t.scn:1: cloth, stepping from 0 s: "), "{text}");
-}
-
-#[test]
 fn a_cloth_mesh_error_never_quotes_the_file() {
     let dir = std::env::temp_dir().join(format!("glint-cloth-quote-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();

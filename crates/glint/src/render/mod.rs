@@ -36,7 +36,7 @@ mod instances;
 mod materials;
 mod mesh_pool;
 mod pipelines;
-mod place;
+pub(crate) mod place;
 mod post;
 mod prepare;
 pub mod queue;

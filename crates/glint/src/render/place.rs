@@ -2,11 +2,11 @@
 //! [`SceneDesc`] is plain data read from a file; placing it adds its textures,
 //! render targets, materials and shapes to the renderer's [`Registry`] and
 //! returns the entities that draw them ([`PlacedScene`]).
-//! [`PlacedScene::pose`] moves them along as the scene's animations and cloths
-//! advance.
+//! [`World::pose`](crate::World::pose) moves them along as the scene's
+//! animations and cloths advance.
 
 use super::{Registry, Renderer};
-use crate::asset::{ClothDesc, MeshRef, Model, SceneDesc, ShapeKind, Texture};
+use crate::asset::{MeshRef, Model, SceneDesc, ShapeKind, Texture};
 use crate::scene::{Entity, Material, MaterialId, RenderTargetId, ShadingModel, ShapeId, TextureId};
 use crate::sim::cloth::ClothView;
 use glam::{Mat4, Quat, Vec3};
@@ -121,62 +121,6 @@ impl Renderer {
     }
 }
 
-impl PlacedScene {
-    /// Pose every model of `desc` (the scene this was placed from) at `time`
-    /// seconds ([`Model::pose`]), advance every cloth to `time`
-    /// ([`ClothDesc::pose`]), and move the matching entities along: only
-    /// entities of animated models and moved cloths change, so only they are
-    /// uploaded again; morphed meshes and cloth surfaces replace their shapes in
-    /// `renderer` (one vertex-buffer write each). Fails when a cloth cannot reach
-    /// `time` (too many steps, or a step that does not converge).
-    pub fn pose(&mut self, desc: &mut SceneDesc, time: f32, renderer: &mut Renderer) -> Result<(), crate::Error> {
-        desc.check_pose(time)?;
-        let entities = &mut self.entities;
-        let mut next = 0;
-        let mut posed: Vec<Option<(bool, Vec<usize>)>> = vec![None; desc.models.len()];
-        for e in &desc.entities {
-            let MeshRef::Model(i) = e.mesh else {
-                next += 1;
-                continue;
-            };
-            let (moved, morphed) = posed[i].get_or_insert_with(|| {
-                let model = &mut desc.models[i];
-                (!model.animations.is_empty(), model.pose(time))
-            });
-            let model = &desc.models[i];
-            for (k, (part, entity)) in model.parts.iter().zip(entities[next..].iter_mut()).enumerate() {
-                if *moved {
-                    *entity.transforms_mut() = part.placed(&e.transforms);
-                    entity.joints_mut().clone_from(&part.joints);
-                }
-                if morphed.contains(&k) {
-                    renderer.update_shape(entity.shape, part.mesh.clone());
-                }
-            }
-            next += model.parts.len();
-        }
-        for cloth in &mut desc.cloths {
-            let count = cloth_entity_count(cloth);
-            if cloth.pose(time, &desc.path)? {
-                let view = &cloth.view;
-                let meshes = std::iter::once(&view.surface).chain(&view.edges);
-                for (entity, mesh) in entities[next..].iter().zip(meshes) {
-                    renderer.update_shape(entity.shape, mesh.clone());
-                }
-                // Pins that did not move are not uploaded again.
-                if count == 3 {
-                    let (moved, pins) = (pin_transforms(view), &mut entities[next + 2]);
-                    if pins.transforms() != moved {
-                        *pins.transforms_mut() = moved;
-                    }
-                }
-            }
-            next += count;
-        }
-        Ok(())
-    }
-}
-
 impl Registry {
     /// Add a model's textures, materials and one shape per part.
     fn add_model(&mut self, model: &Model) -> ModelIds {
@@ -207,10 +151,11 @@ fn model_entities(model: &Model, ids: &ModelIds, placements: &[Mat4]) -> Vec<Ent
         .collect()
 }
 
-/// Entities [`Renderer::place_scene`] makes for a cloth: its surface, and with
-/// the debug view its edge ribbons and (when it has pins) its pin markers.
-fn cloth_entity_count(cloth: &ClothDesc) -> usize {
-    match (&cloth.view.edges, cloth.view.pins.is_empty()) {
+/// Entities [`Renderer::place_scene`] makes for a cloth showing `view`: its
+/// surface, and with the debug view its edge ribbons and (when it has pins)
+/// its pin markers.
+pub(crate) fn cloth_entity_count(view: &ClothView) -> usize {
+    match (&view.edges, view.pins.is_empty()) {
         (None, _) => 1,
         (Some(_), true) => 2,
         (Some(_), false) => 3,
@@ -218,7 +163,7 @@ fn cloth_entity_count(cloth: &ClothDesc) -> usize {
 }
 
 /// One sphere per pinned node, as big as the view's pin markers.
-fn pin_transforms(view: &ClothView) -> Vec<Mat4> {
+pub(crate) fn pin_transforms(view: &ClothView) -> Vec<Mat4> {
     view.pins
         .iter()
         .map(|&p| Mat4::from_scale_rotation_translation(Vec3::splat(view.pin_size), Quat::IDENTITY, p))

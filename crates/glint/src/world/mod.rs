@@ -1,0 +1,155 @@
+//! Core layer, above [`asset`](crate::asset) and [`render`](crate::render): a
+//! [`World`] is a loaded scene placed in a renderer and run. It holds what the
+//! file described ([`SceneDesc`]: cameras, lights, environment, materials,
+//! models, cloth blocks), the entities that draw it, its running simulations
+//! and the time it was last posed at. The `glint` CLI, the viewer and the web
+//! page each hold one:
+//!
+//! ```no_run
+//! use glint::{asset::load_scene, Gpu, OffscreenTarget, Renderer, World};
+//!
+//! let gpu = Gpu::headless()?;
+//! let mut renderer = Renderer::new(&gpu);
+//! let mut world = World::place(load_scene("scenes/showcase.scn".as_ref())?, &mut renderer);
+//! let views = world.views(None);
+//! let mut target = OffscreenTarget::new(&gpu, 640, 360, 4)?;
+//! for frame in 0..3 {
+//!     world.pose(frame as f32 / 30.0, &mut renderer)?;
+//!     world.draw(&mut renderer, &views, &mut target)?;
+//! }
+//! # Ok::<(), glint::Error>(())
+//! ```
+
+mod cloth;
+
+use crate::asset::{MeshRef, SceneDesc};
+use crate::render::{place, PlacedScene};
+use crate::scene::{Entity, Lighting, View};
+use crate::sim::cloth::ClothView;
+use crate::{FrameStats, OffscreenTarget, RenderError, Renderer};
+use cloth::ClothSim;
+
+/// A scene placed in a renderer, with its simulations and clock.
+pub struct World {
+    desc: SceneDesc,
+    placed: PlacedScene,
+    cloths: Vec<ClothSim>,
+    time: f32,
+}
+
+impl World {
+    /// Add `desc`'s textures, render targets, materials, shapes and models to
+    /// `renderer` ([`Renderer::place_scene`]) and start its clock at 0, every
+    /// cloth at rest.
+    pub fn place(desc: SceneDesc, renderer: &mut Renderer) -> Self {
+        let placed = renderer.place_scene(&desc);
+        let cloths = desc.cloths.iter().map(ClothSim::new).collect();
+        Self { desc, placed, cloths, time: 0.0 }
+    }
+
+    /// The scene as its file described it.
+    pub fn desc(&self) -> &SceneDesc {
+        &self.desc
+    }
+
+    /// The entities that draw it, as of the last pose.
+    pub fn entities(&self) -> &[Entity] {
+        &self.placed.entities
+    }
+
+    /// Its lights under its environment, for each frame.
+    pub fn lighting(&self) -> Lighting<'_> {
+        self.desc.lighting()
+    }
+
+    /// The meshes of cloth `index` (in file order) as of the last pose: its
+    /// surface, and with the debug view its edge ribbons and pins.
+    pub fn cloth_view(&self, index: usize) -> Option<&ClothView> {
+        self.cloths.get(index).map(|c| &c.view)
+    }
+
+    /// The time of the last pose, in seconds (0 before the first).
+    pub fn time(&self) -> f32 {
+        self.time
+    }
+
+    /// The views a picture of it draws: camera `camera` alone over the whole
+    /// image (after the cameras drawing render targets, which it may show), or
+    /// else [`SceneDesc::views`]. A camera the scene lacks counts as none.
+    pub fn views(&self, camera: Option<usize>) -> Vec<View> {
+        let (desc, targets) = (&self.desc, &self.placed.render_targets);
+        match camera.filter(|&k| k < desc.cameras.len()) {
+            None => desc.views(targets),
+            Some(k) => desc.target_views(targets).into_iter().chain([desc.camera_view(k)]).collect(),
+        }
+    }
+
+    /// Pose every model at `time` seconds ([`Model::pose`](crate::asset::Model::pose)),
+    /// advance every cloth to `time`, and move the matching entities along: only
+    /// entities of animated models and moved cloths change, so only they are
+    /// uploaded again; morphed meshes and cloth surfaces replace their shapes in
+    /// `renderer` (one vertex-buffer write each).
+    ///
+    /// Errors (exit code 3 in the CLI) when a cloth cannot reach `time`: more
+    /// steps or work than the posing budget allows (before any step), or a step
+    /// that does not converge ([`Error::Posing`](crate::Error::Posing)).
+    pub fn pose(&mut self, time: f32, renderer: &mut Renderer) -> Result<(), crate::Error> {
+        let desc = &mut self.desc;
+        desc.check_pose(time)?;
+        let entities = &mut self.placed.entities;
+        let mut next = 0;
+        let mut posed: Vec<Option<(bool, Vec<usize>)>> = vec![None; desc.models.len()];
+        for e in &desc.entities {
+            let MeshRef::Model(i) = e.mesh else {
+                next += 1;
+                continue;
+            };
+            let (moved, morphed) = posed[i].get_or_insert_with(|| {
+                let model = &mut desc.models[i];
+                (!model.animations.is_empty(), model.pose(time))
+            });
+            let model = &desc.models[i];
+            for (k, (part, entity)) in model.parts.iter().zip(entities[next..].iter_mut()).enumerate() {
+                if *moved {
+                    *entity.transforms_mut() = part.placed(&e.transforms);
+                    entity.joints_mut().clone_from(&part.joints);
+                }
+                if morphed.contains(&k) {
+                    renderer.update_shape(entity.shape, part.mesh.clone());
+                }
+            }
+            next += model.parts.len();
+        }
+        for (sim, cloth) in self.cloths.iter_mut().zip(&desc.cloths) {
+            let count = place::cloth_entity_count(&sim.view);
+            if sim.pose(cloth, time, &desc.path)? {
+                let view = &sim.view;
+                let meshes = std::iter::once(&view.surface).chain(&view.edges);
+                for (entity, mesh) in entities[next..].iter().zip(meshes) {
+                    renderer.update_shape(entity.shape, mesh.clone());
+                }
+                // Pins that did not move are not uploaded again.
+                if count == 3 {
+                    let (moved, pins) = (place::pin_transforms(view), &mut entities[next + 2]);
+                    if pins.transforms() != moved {
+                        *pins.transforms_mut() = moved;
+                    }
+                }
+            }
+            next += count;
+        }
+        self.time = time;
+        Ok(())
+    }
+
+    /// Draw `views` of it into `target` ([`Renderer::render_views`]) and return
+    /// each view's statistics.
+    pub fn draw(
+        &self,
+        renderer: &mut Renderer,
+        views: &[View],
+        target: &mut OffscreenTarget,
+    ) -> Result<Vec<FrameStats>, RenderError> {
+        renderer.render_views(&self.placed.entities, views, self.lighting(), target)
+    }
+}
