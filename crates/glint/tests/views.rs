@@ -200,3 +200,31 @@ fn the_monitor_shows_the_security_cameras_picture() {
     assert!(lit(&image) > 60, "the feed is on the screen: {} bright pixels", lit(&image));
     assert_eq!(lit(&unfed), 0, "no security camera, no picture");
 }
+
+#[test]
+fn each_view_keeps_its_gpu_state_so_an_unchanged_split_screen_uploads_nothing() {
+    // Two cameras that see different things: with one shared set of camera
+    // records and draw lists, each view rewrote the other's every frame.
+    let Some(gpu) = common::gpu() else { return };
+    let (mut renderer, cube, lights) = cube_scene(gpu);
+    let far = Entity::new(cube.shape, cube.material, Mat4::from_translation(Vec3::new(0.0, 0.0, 8.0)));
+    let toward = Camera::perspective(60.0, 0.1, 100.0).looking_at(Vec3::new(0.0, 1.0, 4.0), Vec3::ZERO);
+    let away = Camera::perspective(60.0, 0.1, 100.0).looking_at(Vec3::new(0.0, 1.0, 4.0), Vec3::new(0.0, 1.0, 8.0));
+    let halves = [Viewport { width: 0.5, ..Viewport::FULL }, Viewport { x: 0.5, width: 0.5, ..Viewport::FULL }];
+    let views = [View::new(toward).with_viewport(halves[0]), View::new(away).with_viewport(halves[1])];
+    let mut target = OffscreenTarget::new(gpu, 64, 32, 1).expect("target");
+    let first = renderer.render_views([&cube, &far], &views, &lights, &mut target).expect("frame");
+    let image = target.read_rgba8(gpu).expect("readback");
+    assert!(first.iter().all(|s| s.bytes_uploaded.camera > 0), "each view writes its camera once");
+    let second = renderer.render_views([&cube, &far], &views, &lights, &mut target).expect("frame");
+    for (k, s) in second.iter().enumerate() {
+        assert_eq!(s.bytes_uploaded.total, 0, "view {k} uploads nothing the second time: {:?}", s.bytes_uploaded);
+        assert_eq!(s.draws, first[k].draws, "view {k} draws the same");
+    }
+    assert_eq!(target.read_rgba8(gpu).expect("readback"), image, "the same picture");
+    // The single-view calls keep their own state beside the views'.
+    let alone = renderer.render([&cube, &far], views[0].clone(), &lights, &mut target).expect("frame");
+    assert!(alone.bytes_uploaded.camera > 0, "its own camera record, written once");
+    let again = renderer.render_views([&cube, &far], &views, &lights, &mut target).expect("frame");
+    assert!(again.iter().all(|s| s.bytes_uploaded.camera == 0 && s.bytes_uploaded.draw_indices == 0));
+}

@@ -47,7 +47,7 @@ impl Renderer {
         let sky_at = match self.mode {
             // Naive frames are in submission order: the sky goes first, under everything.
             FrameMode::Naive => 0,
-            FrameMode::Optimized => self.forward.batches.partition_point(|b| b.stage < SKY_STAGE),
+            FrameMode::Optimized => self.view.forward.batches.partition_point(|b| b.stage < SKY_STAGE),
         };
         let clear = match background {
             Background::Color(c) | Background::Gradient { bottom: c, .. } => {
@@ -64,12 +64,12 @@ impl Renderer {
                 timestamp_writes: self.gpu_timer.as_ref().and_then(|t| t.pass_writes(Timed::Forward, true, true)),
                 ..Default::default()
             });
-            pass.set_bind_group(0, &self.scene_group, &[]);
-            pass.set_bind_group(1, &self.views.bind_group, &[ViewBlocks::offset(0)]);
-            pass.set_bind_group(3, &self.forward.bind_group, &[]);
+            pass.set_bind_group(0, &self.view.scene_group, &[]);
+            pass.set_bind_group(1, &self.view.blocks.bind_group, &[ViewBlocks::offset(0)]);
+            pass.set_bind_group(3, &self.view.forward.bind_group, &[]);
             stats.bind_groups_set += 3;
             let mut bound = Bound::default();
-            self.draw_stages(&self.forward, &mut pass, 0..sky_at, &mut bound, stats);
+            self.draw_stages(&self.view.forward, &mut pass, 0..sky_at, &mut bound, stats);
             let sky = match background {
                 Background::Gradient { .. } => self.registry.pipelines.sky_built(target.format()),
                 Background::Color(_) => None,
@@ -84,11 +84,11 @@ impl Renderer {
                 stats.draws += 1;
                 stats.passes.sky = super::PassStats { draw_calls: 1, draws: 1, instances: 1, cpu_ms: 0.0 };
                 // The sky's layout has groups 0–1 only: bind the forward groups again.
-                pass.set_bind_group(3, &self.forward.bind_group, &[]);
+                pass.set_bind_group(3, &self.view.forward.bind_group, &[]);
                 stats.bind_groups_set += 1;
                 bound = Bound { stencil_reference: bound.stencil_reference, ..Bound::default() };
             }
-            self.draw_stages(&self.forward, &mut pass, sky_at..self.forward.batches.len(), &mut bound, stats);
+            self.draw_stages(&self.view.forward, &mut pass, sky_at..self.view.forward.batches.len(), &mut bound, stats);
         }
         if let Some(timer) = &mut self.gpu_timer {
             timer.resolve(&mut encoder, Timed::Forward, self.frame_index);

@@ -40,11 +40,11 @@ impl Renderer {
             if blended {
                 for k in run.start..run.start + run.len {
                     let instance = visible.instances[k as usize] as usize;
-                    self.forward.items.push(item(k, 1, depth(self.store.bounds.center(instance))));
+                    self.view.forward.items.push(item(k, 1, depth(self.store.bounds.center(instance))));
                 }
             } else {
                 let center = self.store.slot(s.slot).bounds.map_or(Vec3A::ZERO, |(c, _)| c);
-                self.forward.items.push(item(run.start, run.len, depth(center)));
+                self.view.forward.items.push(item(run.start, run.len, depth(center)));
             }
         }
     }
@@ -52,7 +52,7 @@ impl Renderer {
     /// The naive baseline's batches: every valid instance of every submitted entity,
     /// in submission order, one draw each, nothing culled or sorted.
     pub(super) fn naive_batches(&mut self, stats: &mut FrameStats) {
-        self.forward.clear();
+        self.view.forward.clear();
         for s in &self.submitted {
             let slot = self.store.slot(s.slot);
             stats.instances_invalid += u64::from(slot.invalid);
@@ -60,15 +60,15 @@ impl Renderer {
             let range = slot.first as usize..(slot.first + slot.count) as usize;
             for i in range {
                 if self.store.bounds.is_valid(i) {
-                    self.forward.batches.push(Batch {
+                    self.view.forward.batches.push(Batch {
                         stage: Queue::Opaque.stage(),
                         pipeline,
                         material: s.material,
                         shape: s.shape,
-                        first_instance: self.forward.draw_indices.len() as u32,
+                        first_instance: self.view.forward.draw_indices.len() as u32,
                         instance_count: 1,
                     });
-                    self.forward.draw_indices.push(i as u32);
+                    self.view.forward.draw_indices.push(i as u32);
                 }
             }
         }
@@ -94,21 +94,21 @@ impl Renderer {
         let bytes = &mut stats.bytes_uploaded;
         let scene = SceneGpu::new(&lighting.environment, lighting.lights, shadowed);
         bytes.scene += self.scene_block.update(&self.queue, scene);
-        bytes.camera += self.views.update(&self.queue, 0, frame.camera.to_gpu(frame.aspect));
+        bytes.camera += self.view.blocks.update(&self.queue, 0, frame.camera.to_gpu(frame.aspect));
         self.upload_instances(bytes)?;
         let naive = self.mode == FrameMode::Naive;
         if naive {
             // Every draw's material entry written before it, one small write each.
-            for b in &self.forward.batches {
+            for b in &self.view.forward.batches {
                 let block = self.registry.materials[b.material.0 as usize].material.to_gpu();
                 bytes.material += self.registry.material_table.write(&self.queue, b.material.0, &block);
             }
         }
         let layout = &self.registry.pipelines.instance_layout;
-        let written = self.forward.upload(&self.device, &self.queue, (layout, self.instances.array()), naive)?;
+        let written = self.view.forward.upload(&self.device, &self.queue, (layout, self.instances.array()), naive)?;
         bytes.draw_indices += written.draw_indices;
         bytes.indirect += written.indirect;
-        stats.instances_drawn = self.forward.draw_indices.len() as u64;
+        stats.instances_drawn = self.view.forward.draw_indices.len() as u64;
         Ok(())
     }
 
@@ -117,8 +117,7 @@ impl Renderer {
     pub(super) fn upload_instances(&mut self, bytes: &mut UploadStats) -> Result<(), RenderError> {
         if self.instances.reserve(&self.device, self.store.len())? {
             self.store.mark_all_dirty();
-            self.forward.rebind(&self.device, &self.registry.pipelines.instance_layout, self.instances.array());
-            self.shadow_list.rebind(&self.device, &self.registry.pipelines.instance_layout, self.instances.array());
+            self.refresh_view();
         }
         for range in self.store.take_dirty() {
             let data = &self.store.instances[range.start as usize..range.end as usize];
@@ -186,11 +185,11 @@ mod tests {
         };
         let stats = r.flush(camera, Lighting::new(&[], sky), &Shadows::none(), &mut target).expect("frame");
         // Drawn order: `front` (opaque), sky, the five glass instances far to near, then the ground (200).
-        let stages: Vec<u8> = r.forward.batches.iter().map(|b| b.stage).collect();
+        let stages: Vec<u8> = r.view.forward.batches.iter().map(|b| b.stage).collect();
         assert_eq!(stages, vec![64, 192, 200]);
-        let glass_batch = r.forward.batches[1];
+        let glass_batch = r.view.forward.batches[1];
         assert_eq!(glass_batch.instance_count, 5, "one entity's instances merge into one draw once sorted");
-        let order: Vec<f32> = r.forward.draw_indices[glass_batch.first_instance as usize..][..5]
+        let order: Vec<f32> = r.view.forward.draw_indices[glass_batch.first_instance as usize..][..5]
             .iter()
             .map(|&i| r.store.instances[i as usize].transform().w_axis.z)
             .collect();

@@ -86,21 +86,37 @@ impl Renderer {
         let mut stats = vec![FrameStats::default(); views.len()];
         for k in order {
             let (view, entities) = (&views[k], drawn[k].iter().copied());
-            stats[k] = match view.output {
-                None => self.render(entities, view, lighting, target)?,
+            stats[k] = self.in_view_state(k, |r| match view.output {
+                None => r.render(entities, view, lighting, target),
                 Some(id) => {
                     let index = id.0 as usize;
-                    let (mut own, texture) = self.registry.render_targets.swap_remove(index);
-                    let result = self.render(entities, view, lighting, &mut own);
-                    self.registry.render_targets.push((own, texture));
-                    let last = self.registry.render_targets.len() - 1;
-                    self.registry.render_targets.swap(index, last);
-                    result?
+                    let (mut own, texture) = r.registry.render_targets.swap_remove(index);
+                    let result = r.render(entities, view, lighting, &mut own);
+                    r.registry.render_targets.push((own, texture));
+                    let last = r.registry.render_targets.len() - 1;
+                    r.registry.render_targets.swap(index, last);
+                    result
                 }
-            };
+            })?;
         }
         self.check_device()?;
         Ok(stats)
+    }
+
+    /// Run `draw` with view `slot`'s GPU state (made on first use, pointed at
+    /// the current instance buffer) in place of the single view's, then keep it
+    /// for the next frame.
+    fn in_view_state<T>(&mut self, slot: usize, draw: impl FnOnce(&mut Self) -> T) -> T {
+        if self.kept_views.len() <= slot {
+            self.kept_views.resize_with(slot + 1, || None);
+        }
+        let kept = self.kept_views[slot].take().unwrap_or_else(|| self.view.sibling(&self.shared()));
+        let single = std::mem::replace(&mut self.view, kept);
+        self.refresh_view();
+        let result = draw(self);
+        self.kept_views[slot] = Some(std::mem::replace(&mut self.view, single));
+        self.refresh_view();
+        result
     }
 
     /// The first error the device reported outside glint's scopes (out of
@@ -344,17 +360,17 @@ impl Renderer {
             stats.cpu_ms.cull = ms_since(t);
 
             let t = Instant::now();
-            self.forward.clear();
+            self.view.forward.clear();
             self.build_queue(frame, &visible);
             stats.cpu_ms.queue = ms_since(t);
 
             let t = Instant::now();
-            queue::sort(&mut self.forward.items);
+            queue::sort(&mut self.view.forward.items);
             stats.cpu_ms.sort = ms_since(t);
 
             let t = Instant::now();
             let shapes = &self.registry.shapes;
-            self.forward.build(0, &visible.instances, |b| shapes[b.shape.0 as usize].gpu.expect("prepared"));
+            self.view.forward.build(0, &visible.instances, |b| shapes[b.shape.0 as usize].gpu.expect("prepared"));
             stats.cpu_ms.batch = ms_since(t);
         }
         self.visible = visible;

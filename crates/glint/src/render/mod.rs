@@ -64,12 +64,11 @@ use crate::asset::Texture;
 use crate::gpu::{Gpu, OffscreenTarget};
 use crate::scene::{Entity, Material, MaterialId, Mesh, RenderTargetId, ShapeId, TextureId};
 use blocks::{SceneGpu, UniformBlock};
-use draw_list::DrawList;
 use frame_variant::FrameVariant;
 use instances::InstanceStore;
 use resources::InstanceBuffer;
-use shadow_maps::{ShadowGpu, ShadowMaps, ShadowSupport};
-use views::ViewBlocks;
+use shadow_maps::{ShadowMaps, ShadowSupport};
+use views::ViewGpu;
 use visible::Visible;
 use web_time::Instant;
 
@@ -115,15 +114,17 @@ pub struct Renderer {
     /// The shapes, materials, textures, render targets and pipelines.
     registry: Registry,
     scene_block: UniformBlock<SceneGpu>,
-    scene_group: wgpu::BindGroup,
-    views: ViewBlocks,
     instances: InstanceBuffer,
-    /// The forward view's draws.
-    forward: DrawList,
+    /// The GPU state of the view being drawn: the single view of `flush`, or
+    /// one of `render_views`' views, swapped in from `kept_views`.
+    view: ViewGpu,
+    /// Each `render_views` view's GPU state, by its place in the list, kept
+    /// between frames while it is not the one being drawn.
+    kept_views: Vec<Option<ViewGpu>>,
     shadow_maps: ShadowMaps,
-    shadow_block: UniformBlock<ShadowGpu>,
-    /// Every shadow view's draws.
-    shadow_list: DrawList,
+    /// How many times the shadow maps were replaced (each view's Scene bind
+    /// group points at one generation).
+    shadow_maps_generation: u64,
     /// Whether this frame's forward pipelines look up shadow maps (the `SHADOWS`
     /// variant): set by `shadow_pass` when a light casts shadows, and by `flush`
     /// when that pass drew maps for its lights.
@@ -162,39 +163,28 @@ impl Renderer {
         let registry = Registry::new(gpu);
         let pipelines = &registry.pipelines;
         let scene_block = UniformBlock::new(&device, "renderer: scene block");
-        let shadow_block = UniformBlock::new(&device, "renderer: shadow block");
         let shadow_maps = ShadowMaps::new(&device, shadows, 1, 1, 1, 1);
-        let scene_group =
-            shadow_maps.scene_group(&device, &pipelines.scene_layout, &scene_block.buffer, &shadow_block.buffer);
-        let views = ViewBlocks::new(&device, &pipelines.camera_layout);
         let instances = InstanceBuffer::new(&device, gpu.vertex_storage());
-        let forward = DrawList::new(
-            &device,
-            "renderer block: forward draw indices",
-            &pipelines.instance_layout,
-            instances.array(),
-            (gpu.draws_indirect(), gpu.vertex_storage()),
-        );
-        let shadow_list = DrawList::new(
-            &device,
-            "renderer block: shadow draw indices",
-            &pipelines.instance_layout,
-            instances.array(),
-            (gpu.draws_indirect(), gpu.vertex_storage()),
-        );
+        let shared = views::Shared {
+            device: &device,
+            pipelines,
+            instances: &instances,
+            scene_block: &scene_block.buffer,
+            shadow_maps: &shadow_maps,
+            shadow_maps_generation: 0,
+        };
+        let view = ViewGpu::new(&shared, (gpu.draws_indirect(), gpu.vertex_storage()));
         Self {
             uncaptured: gpu.uncaptured(),
             device,
             queue,
             registry,
             scene_block,
-            scene_group,
-            views,
             instances,
-            forward,
+            view,
+            kept_views: Vec::new(),
             shadow_maps,
-            shadow_block,
-            shadow_list,
+            shadow_maps_generation: 0,
             frame_variant: FrameVariant::default(),
             store: InstanceStore::default(),
             mode: FrameMode::Optimized,
@@ -211,6 +201,27 @@ impl Renderer {
                 let flags = gpu.adapter.get_texture_format_features(crate::gpu::HDR_FORMAT).flags;
                 flags.sample_count_supported(4) && flags.contains(wgpu::TextureFormatFeatureFlags::MULTISAMPLE_RESOLVE)
             },
+        }
+    }
+
+    /// Point the view being drawn at the shared instance buffer and shadow maps,
+    /// where either was replaced since its bind groups were made.
+    fn refresh_view(&mut self) {
+        let Self { view, device, registry, instances, scene_block, shadow_maps, shadow_maps_generation, .. } = self;
+        let (pipelines, scene_block, shadow_maps_generation) =
+            (&registry.pipelines, &scene_block.buffer, *shadow_maps_generation);
+        view.refresh(&views::Shared { device, pipelines, instances, scene_block, shadow_maps, shadow_maps_generation });
+    }
+
+    /// What every view's GPU state points at.
+    fn shared(&self) -> views::Shared<'_> {
+        views::Shared {
+            device: &self.device,
+            pipelines: &self.registry.pipelines,
+            instances: &self.instances,
+            scene_block: &self.scene_block.buffer,
+            shadow_maps: &self.shadow_maps,
+            shadow_maps_generation: self.shadow_maps_generation,
         }
     }
 

@@ -171,26 +171,39 @@ impl MaterialTable {
 /// The instances of the Renderer block (`@group(3) @binding(0)`): every stored
 /// instance record, persistent between frames (each [`DrawList`](super::draw_list::DrawList)
 /// binds it beside its own draw indices).
-pub(crate) struct InstanceBuffer(GpuArray);
+pub(crate) struct InstanceBuffer {
+    array: GpuArray,
+    /// How many times the buffer was replaced: bind groups made for an older
+    /// generation point at a dropped buffer.
+    generation: u64,
+}
 
 impl InstanceBuffer {
     /// Room for 1,024 records: a storage buffer when `storage`, else a data texture.
     pub(crate) fn new(device: &wgpu::Device, storage: bool) -> Self {
-        Self(GpuArray::new(device, "renderer block: instances", record_bytes::<InstanceGpu>(), 1024, storage))
+        let array = GpuArray::new(device, "renderer block: instances", record_bytes::<InstanceGpu>(), 1024, storage);
+        Self { array, generation: 0 }
     }
 
     /// Make room for `instances` records. Returns whether the buffer was replaced
     /// (its contents must be written again and its bind groups rebuilt).
     pub(crate) fn reserve(&mut self, device: &wgpu::Device, instances: usize) -> Result<bool, RenderError> {
-        self.0.reserve(device, record_bytes::<InstanceGpu>(), instances)
+        let replaced = self.array.reserve(device, record_bytes::<InstanceGpu>(), instances)?;
+        self.generation += u64::from(replaced);
+        Ok(replaced)
     }
 
     /// Write `data` at record `first`; returns bytes written.
     pub(crate) fn write(&self, queue: &wgpu::Queue, first: u32, data: &[InstanceGpu]) -> u64 {
-        self.0.write(queue, first.into(), data)
+        self.array.write(queue, first.into(), data)
     }
 
     pub(crate) fn array(&self) -> &GpuArray {
-        &self.0
+        &self.array
+    }
+
+    /// How many times the buffer was replaced.
+    pub(crate) fn generation(&self) -> u64 {
+        self.generation
     }
 }

@@ -165,12 +165,8 @@ impl Renderer {
             let (layers, cubes) = (layers.max(self.shadow_maps.layers), cubes.max(self.shadow_maps.cubes));
             self.shadow_maps =
                 ShadowMaps::checked(&self.device, self.shadow_maps.support, size_2d, layers, size_cube, cubes)?;
-            self.scene_group = self.shadow_maps.scene_group(
-                &self.device,
-                &self.registry.pipelines.scene_layout,
-                &self.scene_block.buffer,
-                &self.shadow_block.buffer,
-            );
+            self.shadow_maps_generation += 1;
+            self.refresh_view();
         }
         Ok((views, first))
     }
@@ -189,7 +185,7 @@ impl Renderer {
         culling: bool,
         stats: &mut FrameStats,
     ) -> Result<Vec<std::ops::Range<usize>>, RenderError> {
-        self.shadow_list.clear();
+        self.view.shadows.clear();
         let mut visible = std::mem::take(&mut self.visible);
         let mut ranges = Vec::with_capacity(views.len());
         // Blended materials cast no shadow.
@@ -203,7 +199,7 @@ impl Renderer {
                 ViewTarget::Layer(_) => PassKind::ShadowDepth,
                 ViewTarget::CubeFace { .. } => PassKind::ShadowDistance,
             };
-            let first_item = self.shadow_list.items.len();
+            let first_item = self.view.shadows.items.len();
             for &VisibleRun { entry, start, len } in &visible.runs {
                 let pipeline = match self.shadow_pipeline(entry, pass, stats) {
                     Ok(pipeline) => pipeline,
@@ -223,7 +219,7 @@ impl Renderer {
                 // Near to far from the light, so nearer casters hide the rest early.
                 let center = self.store.slot(s.slot).bounds.map_or(Vec3::ZERO, |(c, _)| Vec3::from(c));
                 let depth = view_proj.project_point3(center).z.clamp(0.0, 1.0);
-                self.shadow_list.items.push(DrawItem {
+                self.view.shadows.items.push(DrawItem {
                     key: queue::sort_key(queue.stage(), false, pipeline, texture_set, material, shape, depth),
                     pipeline,
                     material,
@@ -232,10 +228,11 @@ impl Renderer {
                     count: len,
                 });
             }
-            queue::sort(&mut self.shadow_list.items[first_item..]);
+            queue::sort(&mut self.view.shadows.items[first_item..]);
             let shapes = &self.registry.shapes;
             let range = self
-                .shadow_list
+                .view
+                .shadows
                 .build(first_item, &visible.instances, |b| shapes[b.shape.0 as usize].gpu.expect("prepared"));
             ranges.push(range);
         }
@@ -269,12 +266,12 @@ impl Renderer {
         let bytes = &mut stats.bytes_uploaded;
         self.upload_instances(bytes)?;
         for (k, view) in views.iter().enumerate() {
-            bytes.camera += self.views.update(&self.queue, 1 + k, CameraGpu::for_shadow(view));
+            bytes.camera += self.view.blocks.update(&self.queue, 1 + k, CameraGpu::for_shadow(view));
         }
         let block = ShadowGpu::new(views, self.shadow_maps.size_2d, self.shadow_maps.size_cube);
-        bytes.scene += self.shadow_block.update(&self.queue, block);
+        bytes.scene += self.view.shadow_block.update(&self.queue, block);
         let layout = &self.registry.pipelines.instance_layout;
-        let written = self.shadow_list.upload(&self.device, &self.queue, (layout, self.instances.array()), false)?;
+        let written = self.view.shadows.upload(&self.device, &self.queue, (layout, self.instances.array()), false)?;
         bytes.draw_indices += written.draw_indices;
         bytes.indirect += written.indirect;
         Ok(())
@@ -310,17 +307,17 @@ impl Renderer {
                     .and_then(|t| t.pass_writes(Timed::Shadow, k == 0, k + 1 == views.len())),
                 ..Default::default()
             });
-            pass.set_bind_group(1, &self.views.bind_group, &[ViewBlocks::offset(1 + k)]);
-            pass.set_bind_group(3, &self.shadow_list.bind_group, &[]);
+            pass.set_bind_group(1, &self.view.blocks.bind_group, &[ViewBlocks::offset(1 + k)]);
+            pass.set_bind_group(3, &self.view.shadows.bind_group, &[]);
             stats.bind_groups_set += 2;
-            self.draw_stages(&self.shadow_list, &mut pass, range.clone(), &mut Bound::default(), &mut stats);
+            self.draw_stages(&self.view.shadows, &mut pass, range.clone(), &mut Bound::default(), &mut stats);
         }
         if let Some(timer) = &mut self.gpu_timer {
             timer.resolve(&mut encoder, Timed::Shadow, self.frame_index);
         }
         cost.draw_calls = stats.draw_calls;
         cost.draws = stats.draws;
-        cost.instances = self.shadow_list.draw_indices.len() as u64;
+        cost.instances = self.view.shadows.draw_indices.len() as u64;
         encoder.finish()
     }
 }

@@ -1,8 +1,15 @@
-//! Core layer: the Camera block (`@group(1)`) of every view a frame draws — the
-//! camera at record 0, then each shadow view — in one uniform buffer bound with a
-//! dynamic offset. A record is written only when its bytes change.
+//! Core layer: the GPU state a view keeps between frames ([`ViewGpu`]): its
+//! Camera block (`@group(1)`) — the camera at record 0, then each shadow view —
+//! in one uniform buffer bound with a dynamic offset, and its forward and shadow
+//! draw lists. Records and lists are written only where their bytes change, so
+//! a view that did not change uploads nothing, however many views a frame has.
 
 use super::blocks::CameraGpu;
+use super::blocks::UniformBlock;
+use super::draw_list::DrawList;
+use super::pipelines::Pipelines;
+use super::resources::InstanceBuffer;
+use super::shadow_maps::{ShadowGpu, ShadowMaps};
 
 /// Records the buffer holds: the camera and up to this many shadow views.
 pub(crate) const MAX_SHADOW_VIEWS: usize = 64;
@@ -55,4 +62,80 @@ impl ViewBlocks {
     pub(crate) fn offset(index: usize) -> u32 {
         (RECORD_STRIDE * index as u64) as u32
     }
+}
+
+/// What every view's GPU state points at: the shared instance buffer, Scene
+/// block and shadow maps, with the generations that say when they were replaced.
+pub(crate) struct Shared<'a> {
+    pub device: &'a wgpu::Device,
+    pub pipelines: &'a Pipelines,
+    pub instances: &'a InstanceBuffer,
+    pub scene_block: &'a wgpu::Buffer,
+    pub shadow_maps: &'a ShadowMaps,
+    pub shadow_maps_generation: u64,
+}
+
+/// What one view keeps on the GPU between frames: a split screen's views, or a
+/// view into a render target, each draw from their own records, lists and
+/// Shadow block (views are told apart by their place in
+/// [`Renderer::render_views`](super::Renderer::render_views)'s list).
+pub(crate) struct ViewGpu {
+    /// The camera's and the shadow views' Camera-block records.
+    pub blocks: ViewBlocks,
+    /// The forward pass's draws.
+    pub forward: DrawList,
+    /// Every shadow view's draws.
+    pub shadows: DrawList,
+    /// The Shadow block: this view's cascade and spot-light matrices.
+    pub shadow_block: UniformBlock<ShadowGpu>,
+    /// The Scene bind group over the shared Scene block, this view's Shadow
+    /// block and the shared shadow maps.
+    pub scene_group: wgpu::BindGroup,
+    /// The instance buffer and shadow maps generations the bind groups point at.
+    generations: (u64, u64),
+    /// Whether the lists draw indirect, and read storage buffers.
+    paths: (bool, bool),
+}
+
+impl ViewGpu {
+    /// A new view's state over `shared`, drawing indirect and from storage buffers as `paths` say.
+    pub(crate) fn new(shared: &Shared, paths: (bool, bool)) -> Self {
+        let Shared { device, pipelines, instances, .. } = *shared;
+        let list = |label| DrawList::new(device, label, &pipelines.instance_layout, instances.array(), paths);
+        let shadow_block = UniformBlock::new(device, "renderer: shadow block");
+        Self {
+            blocks: ViewBlocks::new(device, &pipelines.camera_layout),
+            forward: list("renderer block: forward draw indices"),
+            shadows: list("renderer block: shadow draw indices"),
+            scene_group: scene_group(shared, &shadow_block),
+            shadow_block,
+            generations: (instances.generation(), shared.shadow_maps_generation),
+            paths,
+        }
+    }
+
+    /// A new view's state, drawing the way this one does.
+    pub(crate) fn sibling(&self, shared: &Shared) -> Self {
+        Self::new(shared, self.paths)
+    }
+
+    /// Point the bind groups at the instance buffer and shadow maps of
+    /// `shared` where either was replaced since they were made.
+    pub(crate) fn refresh(&mut self, shared: &Shared) {
+        let (instances, maps) = (shared.instances.generation(), shared.shadow_maps_generation);
+        if self.generations.0 != instances {
+            let layout = &shared.pipelines.instance_layout;
+            self.forward.rebind(shared.device, layout, shared.instances.array());
+            self.shadows.rebind(shared.device, layout, shared.instances.array());
+        }
+        if self.generations.1 != maps {
+            self.scene_group = scene_group(shared, &self.shadow_block);
+        }
+        self.generations = (instances, maps);
+    }
+}
+
+fn scene_group(shared: &Shared, shadow_block: &UniformBlock<ShadowGpu>) -> wgpu::BindGroup {
+    let layout = &shared.pipelines.scene_layout;
+    shared.shadow_maps.scene_group(shared.device, layout, shared.scene_block, &shadow_block.buffer)
 }
