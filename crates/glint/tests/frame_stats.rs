@@ -385,3 +385,32 @@ fn shadow_lookups_are_compiled_in_only_for_frames_that_draw_shadow_maps() {
     assert_eq!(frame(&mut r, gpu, &[&e], &shadowed).pipelines_compiled, 0);
     assert_eq!(frame(&mut r, gpu, &[&e], &sun()).pipelines_compiled, 0, "both variants stay cached");
 }
+
+#[test]
+fn a_frame_with_shadows_and_a_post_chain_is_one_submission() {
+    let Some(gpu) = common::gpu() else { return };
+    let (mut renderer, cube, material) = renderer_with_cube(gpu);
+    let textured =
+        renderer.add_texture(Texture::new("checker", image::RgbaImage::from_pixel(4, 4, image::Rgba([200; 4])), true));
+    let painted = renderer.add_material(Material { diffuse_map: Some(textured), ..Material::default() });
+    let plain = Entity::new(cube, material, Mat4::IDENTITY);
+    let boxed = Entity::new(cube, painted, Mat4::from_translation(Vec3::X * 2.0));
+    let lights = [Light::directional(Vec3::new(-1.0, -2.0, -1.0), Vec3::ONE, 1.0).with_shadows(Default::default())];
+    let view =
+        glint::View::new(camera()).with_post(vec![glint::scene::PostEffect::BLOOM, glint::scene::PostEffect::TONEMAP]);
+    let mut target = OffscreenTarget::new(gpu, 64, 48, 1).expect("target");
+    let mut draw = |r: &mut Renderer| r.render([&plain, &boxed], view.clone(), &lights, &mut target).expect("frame");
+    let first = draw(&mut renderer);
+    assert!(first.shadow_views > 0 && first.passes.post.draws > 0, "shadows and post ran: {first:?}");
+    assert_eq!(first.submits, 1, "the texture's mip levels go in the frame's submission too");
+    let steady = draw(&mut renderer);
+    assert_eq!(steady.submits, 1, "shadow maps, forward pass and post chain in one submission");
+    // A split screen over part of the target: its clear goes in the first view's submission.
+    let halves = [
+        glint::Viewport { width: 0.5, ..glint::Viewport::FULL },
+        glint::Viewport { x: 0.5, width: 0.4, ..glint::Viewport::FULL },
+    ];
+    let views: Vec<glint::View> = halves.iter().map(|&v| view.clone().with_viewport(v)).collect();
+    let stats = renderer.render_views([&plain, &boxed], &views, &lights, &mut target).expect("frame");
+    assert_eq!(stats.iter().map(|s| s.submits).collect::<Vec<_>>(), [1, 1], "one submission per view");
+}

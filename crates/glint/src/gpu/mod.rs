@@ -9,6 +9,7 @@ mod blit;
 mod context;
 mod errors;
 mod heap;
+mod submit;
 mod target;
 mod window;
 
@@ -19,6 +20,7 @@ pub use window::WindowSurface;
 
 pub(crate) use blit::{sampler_entry, texture_entry, Blitter};
 pub(crate) use errors::{DriverErrors, UncapturedErrors};
+pub(crate) use submit::SubmitQueue;
 
 /// Colour format of every glint target: 8-bit sRGB, so shaders write linear values
 /// and the hardware encodes them.

@@ -162,8 +162,8 @@ impl Renderer {
         crate::scene::draw_order(&outputs, &shown, targets.len()).map_err(|_| RenderError::RenderTargetCycle)
     }
 
-    /// Clear `target` to black.
-    fn clear(&self, target: &OffscreenTarget) {
+    /// Clear `target` to black, in the next flush's submission.
+    fn clear(&mut self, target: &OffscreenTarget) {
         let mut encoder =
             self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("renderer: clear") });
         encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
@@ -171,7 +171,7 @@ impl Renderer {
             color_attachments: &[Some(target.color_attachment(wgpu::Color::BLACK))],
             ..Default::default()
         });
-        self.queue.submit([encoder.finish()]);
+        self.pending.push(encoder.finish());
     }
 
     /// Draw everything submitted since the last flush, seen by `view` (or a
@@ -215,9 +215,13 @@ impl Renderer {
         self.submitted.clear();
         self.instances_submitted = 0;
         self.frame_index += 1;
+        // Commands of a shadow pass whose flush failed are dropped with the frame.
+        self.pending.clear();
+        let submits = (self.queue.submits() - self.submits_counted) as u32;
+        self.submits_counted = self.queue.submits();
         let result = result.and_then(|stats| self.check_device().map(|()| stats));
         result.map(|mut stats| {
-            (stats.frame, stats.gpu) = (frame, gpu);
+            (stats.frame, stats.gpu, stats.submits) = (frame, gpu, submits);
             stats.cpu_ms.total = ms_since(start);
             if let Some(shadow) = &shadows.drawn {
                 stats.shadow_views = shadow.views;
@@ -387,7 +391,9 @@ impl Renderer {
         let composed = self.compose(compose, &mut stats)?;
 
         let t = Instant::now();
-        self.queue.submit(std::iter::once(commands).chain(composed));
+        // New textures' mip levels first: the shadow pass may sample them (alpha-tested casters).
+        let (mips, pending) = (std::mem::take(&mut self.registry.mip_blits), std::mem::take(&mut self.pending));
+        self.queue.submit(mips.into_iter().chain(pending).chain([commands]).chain(composed));
         if let Some(timer) = &mut self.gpu_timer {
             timer.submitted();
         }

@@ -48,7 +48,8 @@ impl Registry {
                         });
                     }
                     let scope = crate::gpu::DriverErrors::watch(&self.device);
-                    let (view, bytes) = self.uploader.upload(&self.device, &self.queue, &pending);
+                    let (view, bytes, blits) = self.uploader.upload(&self.device, &self.queue, &pending);
+                    self.mip_blits.extend(blits);
                     if let Some(error) = scope.finish() {
                         return Err(RenderError::Device { what: "a texture", message: error.to_string() });
                     }

@@ -63,7 +63,7 @@ impl MeshPool {
     pub(crate) fn add(
         &mut self,
         device: &wgpu::Device,
-        queue: &wgpu::Queue,
+        queue: &crate::gpu::SubmitQueue,
         mesh: &Mesh,
     ) -> Result<(MeshRange, u64), MeshTooLarge> {
         let layout = VertexLayout::of(mesh);
@@ -169,7 +169,7 @@ impl Page {
     fn reserve(
         &mut self,
         device: &wgpu::Device,
-        queue: &wgpu::Queue,
+        queue: &crate::gpu::SubmitQueue,
         index: usize,
         vertices: u64,
         indices: u64,

@@ -61,7 +61,7 @@ pub use stats::{FrameStats, PassStats, Passes, StageTimes, UploadStats};
 pub use timer::GpuTimes;
 
 use crate::asset::Texture;
-use crate::gpu::{Gpu, OffscreenTarget};
+use crate::gpu::{Gpu, OffscreenTarget, SubmitQueue};
 use crate::scene::{Entity, Material, MaterialId, Mesh, RenderTargetId, ShapeId, TextureId};
 use blocks::{SceneGpu, UniformBlock};
 use frame_variant::FrameVariant;
@@ -110,7 +110,7 @@ pub struct Renderer {
     /// Errors the device reported outside glint's scopes, returned by the frame.
     uncaptured: crate::gpu::UncapturedErrors,
     device: wgpu::Device,
-    queue: wgpu::Queue,
+    queue: SubmitQueue,
     /// The shapes, materials, textures, render targets and pipelines.
     registry: Registry,
     scene_block: UniformBlock<SceneGpu>,
@@ -121,6 +121,11 @@ pub struct Renderer {
     /// Each `render_views` view's GPU state, by its place in the list, kept
     /// between frames while it is not the one being drawn.
     kept_views: Vec<Option<ViewGpu>>,
+    /// Commands recorded for the next flush's one submission: the shadow pass's,
+    /// and the clear of a target the views do not cover.
+    pending: Vec<wgpu::CommandBuffer>,
+    /// The queue's submission count when the last flush ended.
+    submits_counted: u64,
     shadow_maps: ShadowMaps,
     /// How many times the shadow maps were replaced (each view's Scene bind
     /// group points at one generation).
@@ -158,9 +163,9 @@ impl Renderer {
     /// Create a renderer on `gpu`'s device.
     pub fn new(gpu: &Gpu) -> Self {
         let device = gpu.device.clone();
-        let queue = gpu.queue.clone();
+        let queue = SubmitQueue::new(gpu.queue.clone());
         let shadows = ShadowSupport { gl: gpu.info().backend == wgpu::Backend::Gl };
-        let registry = Registry::new(gpu);
+        let registry = Registry::new(gpu, queue.clone());
         let pipelines = &registry.pipelines;
         let scene_block = UniformBlock::new(&device, "renderer: scene block");
         let shadow_maps = ShadowMaps::new(&device, shadows, 1, 1, 1, 1);
@@ -175,6 +180,7 @@ impl Renderer {
         };
         let view = ViewGpu::new(&shared, (gpu.draws_indirect(), gpu.vertex_storage()));
         Self {
+            submits_counted: queue.submits(),
             uncaptured: gpu.uncaptured(),
             device,
             queue,
@@ -183,6 +189,7 @@ impl Renderer {
             instances,
             view,
             kept_views: Vec::new(),
+            pending: Vec::new(),
             shadow_maps,
             shadow_maps_generation: 0,
             frame_variant: FrameVariant::default(),

@@ -76,7 +76,7 @@ pub(super) struct DefaultMaps {
 /// It holds no scene (entities, lights, environment) and no view.
 pub struct Registry {
     pub(super) device: wgpu::Device,
-    pub(super) queue: wgpu::Queue,
+    pub(super) queue: crate::gpu::SubmitQueue,
     pub(super) pipelines: Pipelines,
     pub(super) uploader: TextureUploader,
     pub(super) sampler: wgpu::Sampler,
@@ -86,6 +86,9 @@ pub struct Registry {
     pub(super) materials: Vec<MaterialSlot>,
     pub(super) material_table: MaterialTable,
     pub(super) texture_sets: Vec<TextureSet>,
+    /// Mip-level blits of textures uploaded since the last frame's submission,
+    /// which runs them first.
+    pub(super) mip_blits: Vec<wgpu::CommandBuffer>,
     pub(super) textures: Vec<TextureSlot>,
     /// Render targets (`add_render_target`), each with the texture that shows it.
     pub(super) render_targets: Vec<(OffscreenTarget, TextureId)>,
@@ -93,12 +96,12 @@ pub struct Registry {
 
 impl Registry {
     /// An empty registry on `gpu`'s device, with its 1×1 default maps.
-    pub(super) fn new(gpu: &Gpu) -> Self {
-        let (device, queue) = (gpu.device.clone(), gpu.queue.clone());
+    pub(super) fn new(gpu: &Gpu, queue: crate::gpu::SubmitQueue) -> Self {
+        let device = gpu.device.clone();
         let uploader = TextureUploader::new(&device);
         let pixel = |name: &str, rgba: [u8; 4], srgb| {
             let texture = Texture::new(name, image::RgbaImage::from_pixel(1, 1, image::Rgba(rgba)), srgb);
-            uploader.upload(&device, &queue, &texture).0
+            uploader.upload(&device, &queue, &texture).0 // one level: no blits
         };
         let defaults = DefaultMaps {
             white_srgb: pixel("default diffuse (white)", [255; 4], true),
@@ -126,6 +129,7 @@ impl Registry {
             shapes: Vec::new(),
             materials: Vec::new(),
             texture_sets: Vec::new(),
+            mip_blits: Vec::new(),
             textures: Vec::new(),
             render_targets: Vec::new(),
             device,

@@ -24,14 +24,16 @@ impl TextureUploader {
         }
     }
 
-    /// Create the GPU texture for `texture`, write level 0 and blit the rest of the
-    /// mip chain. Returns the view and the bytes written from the CPU.
+    /// Create the GPU texture for `texture` and write level 0; record the blits
+    /// of the rest of the mip chain for the next submission (`None` for a
+    /// texture of one level). Returns the view, the bytes written from the CPU
+    /// and the blits.
     pub(crate) fn upload(
         &self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
         texture: &Texture,
-    ) -> (wgpu::TextureView, u64) {
+    ) -> (wgpu::TextureView, u64, Option<wgpu::CommandBuffer>) {
         let (width, height) = texture.image.dimensions();
         let format = if texture.srgb { wgpu::TextureFormat::Rgba8UnormSrgb } else { wgpu::TextureFormat::Rgba8Unorm };
         let levels = texture.mip_levels();
@@ -68,8 +70,8 @@ impl TextureUploader {
         for level in 1..levels {
             self.blitter.blit(device, &mut encoder, pipeline, &level_view(level - 1), &level_view(level));
         }
-        queue.submit([encoder.finish()]);
-        (gpu_texture.create_view(&Default::default()), texture.image.as_raw().len() as u64)
+        let blits = (levels > 1).then(|| encoder.finish());
+        (gpu_texture.create_view(&Default::default()), texture.image.as_raw().len() as u64, blits)
     }
 }
 

@@ -5,7 +5,8 @@
 //! camera's view still casts — and its draws are sorted and batched like the
 //! forward view's, into one [`DrawList`](super::draw_list::DrawList) for all
 //! views. Each view is one depth-only render pass into its layer of the shadow
-//! maps; the whole pass is one submission, before the forward pass.
+//! maps; the whole pass is one command buffer, submitted by the flush with its
+//! own, before the forward pass.
 
 use super::blocks::CameraGpu;
 use super::cull::Frustum;
@@ -121,7 +122,7 @@ impl Renderer {
             let ranges = self.batch_shadow_views(&views, frame.culling, &mut drawn.prepared)?;
             self.upload_shadow_views(&views, &mut drawn.prepared)?;
             let commands = self.encode_shadow_views(&views, &ranges, &mut drawn.cost);
-            self.queue.submit([commands]);
+            self.pending.push(commands);
         }
         drawn.cost.cpu_ms = ms_since(start);
         Ok(Shadows { drawn: Some(drawn) })

@@ -120,6 +120,10 @@ pub struct FrameStats {
     pub pipelines_bound: u32,
     /// Pipelines compiled during this frame (0 in steady state).
     pub pipelines_compiled: u32,
+    /// Queue submissions since the previous frame: the frame's own (its shadow
+    /// pass, forward pass and post chain go in one) plus any made to upload a
+    /// new texture's mip levels or grow a mesh page.
+    pub submits: u32,
     /// `set_bind_group` calls.
     pub bind_groups_set: u32,
     /// Bytes written to the GPU, per block and kind.
