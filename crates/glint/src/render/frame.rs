@@ -7,7 +7,7 @@
 use super::post::ChainImages;
 use super::shadow_pass::{Shadows, ShadowsDrawn};
 use super::view::ViewFrame;
-use super::{ms_since, queue, FrameMode, FrameStats, FrameVariant, RenderError, Renderer};
+use super::{ms_since, queue, FrameMode, FrameStats, FrameVariant, Laps, RenderError, Renderer};
 use crate::gpu::{OffscreenTarget, TargetFormat, HDR_FORMAT};
 use crate::scene::{Entity, Lighting, MaterialId, PostEffect, TextureId, View, MAX_LIGHTS, MAX_POST_EFFECTS};
 use std::collections::HashMap;
@@ -348,56 +348,42 @@ impl Renderer {
             instances_submitted: self.instances_submitted,
             ..Default::default()
         };
-        let t = Instant::now();
+        // Each stage's CPU time is the lap that ends on its line.
+        let mut lap = Laps::start();
         self.frame_variant = FrameVariant::after(drawn, lighting.lights);
         self.prepare(target.format(), &lighting.environment, &mut stats)?;
-        stats.cpu_ms.prepare = ms_since(t);
-
+        stats.cpu_ms.prepare = lap.next();
         let mut visible = std::mem::take(&mut self.visible);
         if self.mode == FrameMode::Naive {
-            let t = Instant::now();
             self.naive_batches(&mut stats);
-            stats.cpu_ms.batch = ms_since(t);
+            stats.cpu_ms.batch = lap.next();
         } else {
-            let t = Instant::now();
             self.cull(frame, &mut visible, &mut stats);
-            stats.cpu_ms.cull = ms_since(t);
-
-            let t = Instant::now();
+            stats.cpu_ms.cull = lap.next();
             self.view.forward.clear();
             self.build_queue(frame, &visible);
-            stats.cpu_ms.queue = ms_since(t);
-
-            let t = Instant::now();
+            stats.cpu_ms.queue = lap.next();
             queue::sort(&mut self.view.forward.items);
-            stats.cpu_ms.sort = ms_since(t);
-
-            let t = Instant::now();
+            stats.cpu_ms.sort = lap.next();
             let shapes = &self.registry.shapes;
             self.view.forward.build(0, &visible.instances, |b| shapes[b.shape.0 as usize].gpu.expect("prepared"));
-            stats.cpu_ms.batch = ms_since(t);
+            stats.cpu_ms.batch = lap.next();
         }
         self.visible = visible;
-
-        let t = Instant::now();
         let shadowed = drawn.map_or(&[][..], |d| d.first_view.as_slice());
         self.upload(frame, lighting, shadowed, &mut stats)?;
-        stats.cpu_ms.upload = ms_since(t);
-
-        let t = Instant::now();
+        stats.cpu_ms.upload = lap.next();
         let commands = self.encode(target, lighting.environment.background, &mut stats);
-        stats.cpu_ms.encode = ms_since(t);
-
+        stats.cpu_ms.encode = lap.next();
         let composed = self.compose(compose, &mut stats)?;
-
-        let t = Instant::now();
-        // New textures' mip levels first: the shadow pass may sample them (alpha-tested casters).
+        lap.next(); // the post chain times itself (`passes.post.cpu_ms`)
+                    // New textures' mip levels first: the shadow pass may sample them (alpha-tested casters).
         let (mips, pending) = (std::mem::take(&mut self.registry.mip_blits), std::mem::take(&mut self.pending));
         self.queue.submit(mips.into_iter().chain(pending).chain([commands]).chain(composed));
         if let Some(timer) = &mut self.gpu_timer {
             timer.submitted();
         }
-        stats.cpu_ms.submit = ms_since(t);
+        stats.cpu_ms.submit = lap.next();
         stats.bytes_uploaded.finish();
         Ok(stats)
     }

@@ -159,6 +159,20 @@ fn ms_since(t: Instant) -> f64 {
     t.elapsed().as_secs_f64() * 1e3
 }
 
+/// The CPU time of consecutive stages: each [`Laps::next`] is the time since
+/// the last (or since [`Laps::start`]), in milliseconds.
+struct Laps(Instant);
+
+impl Laps {
+    fn start() -> Self {
+        Self(Instant::now())
+    }
+
+    fn next(&mut self) -> f64 {
+        ms_since(std::mem::replace(&mut self.0, Instant::now()))
+    }
+}
+
 impl Renderer {
     /// Create a renderer on `gpu`'s device.
     pub fn new(gpu: &Gpu) -> Self {
