@@ -93,7 +93,7 @@ impl Renderer {
     ) -> Result<(), RenderError> {
         let bytes = &mut stats.bytes_uploaded;
         let scene = SceneGpu::new(&lighting.environment, lighting.lights, shadowed);
-        bytes.scene += self.scene_block.update(&self.queue, scene);
+        bytes.scene += self.view.scene_block.update(&self.queue, scene);
         bytes.camera += self.view.blocks.update(&self.queue, 0, frame.camera.to_gpu(frame.aspect));
         self.upload_instances(bytes)?;
         let naive = self.mode == FrameMode::Naive;

@@ -35,19 +35,59 @@ impl Renderer {
         lighting: impl Into<Lighting<'l>>,
         target: &mut OffscreenTarget,
     ) -> Result<FrameStats, RenderError> {
+        let frame = self.record_render(entities, view, lighting, target);
+        self.submit_frame(frame)
+    }
+
+    /// [`render`](Self::render) without its submission: the view's commands
+    /// wait in `pending` for the frame's one submission.
+    fn record_render<'e, 'l>(
+        &mut self,
+        entities: impl IntoIterator<Item = &'e Entity>,
+        view: impl Into<View>,
+        lighting: impl Into<Lighting<'l>>,
+        target: &mut OffscreenTarget,
+    ) -> Result<FrameStats, RenderError> {
         let (view, lighting) = (view.into(), lighting.into());
         for entity in entities {
             self.submit(entity);
         }
         // Flush even after a failed shadow pass, so the submitted entities are dropped.
         let shadows = self.shadow_pass(&view, lighting, target);
-        let frame = self.flush(view, lighting, shadows.as_ref().unwrap_or(&Shadows::none()), target);
+        let frame = self.record_flush(view, lighting, shadows.as_ref().unwrap_or(&Shadows::none()), target);
         shadows.and(frame)
     }
 
+    /// Submit the frame's commands (new textures' mip levels first: the shadow
+    /// passes may sample them) in one submission and count it in `frame`'s
+    /// statistics; a failed frame's commands are dropped.
+    fn submit_frame(&mut self, frame: Result<FrameStats, RenderError>) -> Result<FrameStats, RenderError> {
+        let mut stats = match frame {
+            Ok(stats) => stats,
+            Err(e) => {
+                self.pending.clear();
+                return Err(e);
+            }
+        };
+        let t = Instant::now();
+        let (mips, pending) = (std::mem::take(&mut self.registry.mip_blits), std::mem::take(&mut self.pending));
+        self.queue.submit(mips.into_iter().chain(pending));
+        if let Some(timer) = &mut self.gpu_timer {
+            timer.submitted();
+        }
+        stats.cpu_ms.submit = ms_since(t);
+        stats.cpu_ms.total += stats.cpu_ms.submit;
+        stats.submits = (self.queue.submits() - self.submits_counted) as u32;
+        self.submits_counted = self.queue.submits();
+        self.check_device()?;
+        Ok(stats)
+    }
+
     /// One frame of several `views` of `entities` into `target`, each culled,
-    /// shadowed and drawn on its own ([`render`](Self::render) per view); a later
-    /// view draws over an earlier one where their viewports overlap.
+    /// shadowed and drawn on its own ([`render`](Self::render) per view), all
+    /// in one submission (counted in the first view drawn's
+    /// [`FrameStats::submits`]); a later view draws over an earlier one where
+    /// their viewports overlap.
     ///
     /// A view with an [`output`](View::output) draws into that render target,
     /// before every view that draws a material showing it (the views are taken
@@ -84,22 +124,28 @@ impl Renderer {
             self.clear(target);
         }
         let mut stats = vec![FrameStats::default(); views.len()];
-        for k in order {
+        for &k in &order {
             let (view, entities) = (&views[k], drawn[k].iter().copied());
-            stats[k] = self.in_view_state(k, |r| match view.output {
-                None => r.render(entities, view, lighting, target),
+            let frame = self.in_view_state(k, |r| match view.output {
+                None => r.record_render(entities, view, lighting, target),
                 Some(id) => {
                     let index = id.0 as usize;
                     let (mut own, texture) = r.registry.render_targets.swap_remove(index);
-                    let result = r.render(entities, view, lighting, &mut own);
+                    let result = r.record_render(entities, view, lighting, &mut own);
                     r.registry.render_targets.push((own, texture));
                     let last = r.registry.render_targets.len() - 1;
                     r.registry.render_targets.swap(index, last);
                     result
                 }
-            })?;
+            });
+            match frame {
+                Ok(frame) => stats[k] = frame,
+                Err(e) => return self.submit_frame(Err(e)).map(|_| stats),
+            }
         }
-        self.check_device()?;
+        let first = order.first().copied().unwrap_or(0);
+        let Some(slot) = stats.get_mut(first) else { return Ok(stats) };
+        *slot = self.submit_frame(Ok(std::mem::take(slot)))?;
         Ok(stats)
     }
 
@@ -192,12 +238,25 @@ impl Renderer {
     /// 8. compose — a view drawn into a target of its own (a view of part of the
     ///    target, or one with a post chain: HDR) reaches its rectangle: copied, or
     ///    through its post chain's full-screen passes (`render/post.rs`)
-    /// 9. submit — the frame's command buffers at once
+    /// 9. submit — the frame's command buffers in one submission (with `render_views`, every view's)
     ///
     /// Errors (the submitted entities are dropped): more than [`MAX_LIGHTS`]
     /// lights, an id that is not this renderer's, a viewport outside the
     /// target, or shadow maps drawn for another frame, view or lights.
     pub fn flush<'l>(
+        &mut self,
+        view: impl Into<View>,
+        lighting: impl Into<Lighting<'l>>,
+        shadows: &Shadows,
+        target: &mut OffscreenTarget,
+    ) -> Result<FrameStats, RenderError> {
+        let frame = self.record_flush(view, lighting, shadows, target);
+        self.submit_frame(frame)
+    }
+
+    /// [`flush`](Self::flush) without its submission: the view's commands wait
+    /// in `pending` for the frame's one submission.
+    fn record_flush<'l>(
         &mut self,
         view: impl Into<View>,
         lighting: impl Into<Lighting<'l>>,
@@ -215,13 +274,8 @@ impl Renderer {
         self.submitted.clear();
         self.instances_submitted = 0;
         self.frame_index += 1;
-        // Commands of a shadow pass whose flush failed are dropped with the frame.
-        self.pending.clear();
-        let submits = (self.queue.submits() - self.submits_counted) as u32;
-        self.submits_counted = self.queue.submits();
-        let result = result.and_then(|stats| self.check_device().map(|()| stats));
         result.map(|mut stats| {
-            (stats.frame, stats.gpu, stats.submits) = (frame, gpu, submits);
+            (stats.frame, stats.gpu) = (frame, gpu);
             stats.cpu_ms.total = ms_since(start);
             if let Some(shadow) = &shadows.drawn {
                 stats.shadow_views = shadow.views;
@@ -300,7 +354,9 @@ impl Renderer {
                 let t = Instant::now();
                 let (device, queue, index, timer) =
                     (&self.device, &self.queue, self.frame_index, self.gpu_timer.as_mut());
-                stats.passes.post = self.post.encode((device, queue), &mut encoder, chain, images, index, timer)?;
+                let params = &mut self.view.post_params;
+                stats.passes.post =
+                    self.post.encode((device, queue), params, &mut encoder, chain, images, (index, timer))?;
                 stats.draws += stats.passes.post.draws;
                 stats.draw_calls += stats.passes.post.draw_calls;
                 stats.passes.post.cpu_ms = ms_since(t);
@@ -375,15 +431,9 @@ impl Renderer {
         stats.cpu_ms.upload = lap.next();
         let commands = self.encode(target, lighting.environment.background, &mut stats);
         stats.cpu_ms.encode = lap.next();
+        self.pending.push(commands);
         let composed = self.compose(compose, &mut stats)?;
-        lap.next(); // the post chain times itself (`passes.post.cpu_ms`)
-                    // New textures' mip levels first: the shadow pass may sample them (alpha-tested casters).
-        let (mips, pending) = (std::mem::take(&mut self.registry.mip_blits), std::mem::take(&mut self.pending));
-        self.queue.submit(mips.into_iter().chain(pending).chain([commands]).chain(composed));
-        if let Some(timer) = &mut self.gpu_timer {
-            timer.submitted();
-        }
-        stats.cpu_ms.submit = lap.next();
+        self.pending.extend(composed);
         stats.bytes_uploaded.finish();
         Ok(stats)
     }

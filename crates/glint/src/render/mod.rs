@@ -63,7 +63,6 @@ pub use timer::GpuTimes;
 use crate::asset::Texture;
 use crate::gpu::{Gpu, OffscreenTarget, SubmitQueue};
 use crate::scene::{Entity, Material, MaterialId, Mesh, RenderTargetId, ShapeId, TextureId};
-use blocks::{SceneGpu, UniformBlock};
 use frame_variant::FrameVariant;
 use instances::InstanceStore;
 use resources::InstanceBuffer;
@@ -113,7 +112,6 @@ pub struct Renderer {
     queue: SubmitQueue,
     /// The shapes, materials, textures, render targets and pipelines.
     registry: Registry,
-    scene_block: UniformBlock<SceneGpu>,
     instances: InstanceBuffer,
     /// The GPU state of the view being drawn: the single view of `flush`, or
     /// one of `render_views`' views, swapped in from `kept_views`.
@@ -181,14 +179,12 @@ impl Renderer {
         let shadows = ShadowSupport { gl: gpu.info().backend == wgpu::Backend::Gl };
         let registry = Registry::new(gpu, queue.clone());
         let pipelines = &registry.pipelines;
-        let scene_block = UniformBlock::new(&device, "renderer: scene block");
         let shadow_maps = ShadowMaps::new(&device, shadows, 1, 1, 1, 1);
         let instances = InstanceBuffer::new(&device, gpu.vertex_storage());
         let shared = views::Shared {
             device: &device,
             pipelines,
             instances: &instances,
-            scene_block: &scene_block.buffer,
             shadow_maps: &shadow_maps,
             shadow_maps_generation: 0,
         };
@@ -199,7 +195,6 @@ impl Renderer {
             device,
             queue,
             registry,
-            scene_block,
             instances,
             view,
             kept_views: Vec::new(),
@@ -228,10 +223,9 @@ impl Renderer {
     /// Point the view being drawn at the shared instance buffer and shadow maps,
     /// where either was replaced since its bind groups were made.
     fn refresh_view(&mut self) {
-        let Self { view, device, registry, instances, scene_block, shadow_maps, shadow_maps_generation, .. } = self;
-        let (pipelines, scene_block, shadow_maps_generation) =
-            (&registry.pipelines, &scene_block.buffer, *shadow_maps_generation);
-        view.refresh(&views::Shared { device, pipelines, instances, scene_block, shadow_maps, shadow_maps_generation });
+        let Self { view, device, registry, instances, shadow_maps, shadow_maps_generation, .. } = self;
+        let (pipelines, shadow_maps_generation) = (&registry.pipelines, *shadow_maps_generation);
+        view.refresh(&views::Shared { device, pipelines, instances, shadow_maps, shadow_maps_generation });
     }
 
     /// What every view's GPU state points at.
@@ -240,7 +234,6 @@ impl Renderer {
             device: &self.device,
             pipelines: &self.registry.pipelines,
             instances: &self.instances,
-            scene_block: &self.scene_block.buffer,
             shadow_maps: &self.shadow_maps,
             shadow_maps_generation: self.shadow_maps_generation,
         }

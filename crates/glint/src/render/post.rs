@@ -135,15 +135,32 @@ pub(super) struct ChainImages<'a> {
     pub rect: [u32; 4],
 }
 
-/// The post shader, its pipelines, parameter records and intermediate targets.
+/// A view's post-pass parameter records, one per pass of its chain, each
+/// written only when it changes.
+pub(super) struct PostParams {
+    buffer: wgpu::Buffer,
+    last: Vec<Option<Params>>,
+}
+
+impl PostParams {
+    pub(super) fn new(device: &wgpu::Device) -> Self {
+        let buffer = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("post: pass parameters"),
+            size: PARAMS_STRIDE * MAX_PASSES as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        Self { buffer, last: vec![None; MAX_PASSES] }
+    }
+}
+
+/// The post shader, its pipelines and intermediate targets.
 pub(super) struct PostChain {
     layout: wgpu::BindGroupLayout,
     pipeline_layout: wgpu::PipelineLayout,
     module: Option<wgpu::ShaderModule>,
     sampler: wgpu::Sampler,
     pipelines: HashMap<(Pass, wgpu::TextureFormat), wgpu::RenderPipeline>,
-    params: wgpu::Buffer,
-    last_params: Vec<Option<Params>>,
     pool: Vec<Pooled>,
     /// Bound as the second input where a pass has none.
     black: wgpu::TextureView,
@@ -190,28 +207,23 @@ impl PostChain {
                 ..Default::default()
             }),
             pipelines: HashMap::new(),
-            params: device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("post: pass parameters"),
-                size: PARAMS_STRIDE * MAX_PASSES as u64,
-                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-                mapped_at_creation: false,
-            }),
-            last_params: vec![None; MAX_PASSES],
             pool: Vec::new(),
             black: black.create_view(&Default::default()),
         }
     }
 
-    /// Record `chain` from `images.scene` into `images.output`. Returns the
-    /// chain's draws; the GPU time of effect k is timed as `Timed::Post(k)`.
+    /// Record `chain` from `images.scene` into `images.output`, its passes'
+    /// parameters in `params` (the view's own: views' chains share one
+    /// submission). Returns the chain's draws; the GPU time of effect k is timed
+    /// as `Timed::Post(k)` by `timer`, for frame `frame_index`.
     pub(super) fn encode(
         &mut self,
         (device, queue): (&wgpu::Device, &wgpu::Queue),
+        params: &mut PostParams,
         encoder: &mut wgpu::CommandEncoder,
         chain: &[PostEffect],
         images: &ChainImages,
-        frame_index: u64,
-        mut timer: Option<&mut GpuTimer>,
+        (frame_index, mut timer): (u64, Option<&mut GpuTimer>),
     ) -> Result<PassStats, RenderError> {
         if chain.len() > MAX_POST_EFFECTS {
             return Err(RenderError::PostChainTooLong(chain.len()));
@@ -227,10 +239,10 @@ impl PostChain {
         let mut stats = PassStats::default();
         for (k, (effect, step)) in steps.iter().enumerate() {
             let (sw, sh) = size_of(step.source);
-            let params = Params { a: step.a, texel: [1.0 / sw as f32, 1.0 / sh as f32, 0.0, 0.0] };
-            if self.last_params[k] != Some(params) {
-                queue.write_buffer(&self.params, PARAMS_STRIDE * k as u64, bytemuck::bytes_of(&params));
-                self.last_params[k] = Some(params);
+            let record = Params { a: step.a, texel: [1.0 / sw as f32, 1.0 / sh as f32, 0.0, 0.0] };
+            if params.last[k] != Some(record) {
+                queue.write_buffer(&params.buffer, PARAMS_STRIDE * k as u64, bytemuck::bytes_of(&record));
+                params.last[k] = Some(record);
             }
             let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("post: pass inputs"),
@@ -250,7 +262,7 @@ impl PostChain {
                     wgpu::BindGroupEntry {
                         binding: 3,
                         resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                            buffer: &self.params,
+                            buffer: &params.buffer,
                             offset: 0,
                             size: wgpu::BufferSize::new(std::mem::size_of::<Params>() as u64),
                         }),

@@ -39,7 +39,14 @@ impl Renderer {
         environment: &Environment,
         stats: &mut FrameStats,
     ) -> Result<(), RenderError> {
-        if let Some(remap) = self.store.compact_if_wasteful(self.frame_index) {
+        // Compacting moves instances: not while commands recorded for this
+        // frame's submission (an earlier view's, or this view's shadow pass) draw
+        // from where they are now.
+        let remap = match self.pending.is_empty() {
+            true => self.store.compact_if_wasteful(self.frame_index),
+            false => None,
+        };
+        if let Some(remap) = remap {
             for s in &mut self.submitted {
                 s.slot = remap[s.slot];
             }

@@ -56,6 +56,8 @@ const FREE: u8 = 0;
 const MAPPING: u8 = 1;
 const MAPPED: u8 = 2;
 const FAILED: u8 = 3;
+/// Copies recorded into it, not yet submitted (several frames' views may share a submission).
+const RECORDED: u8 = 4;
 
 /// One frame's timestamps on their way back to the CPU.
 struct Slot {
@@ -143,6 +145,7 @@ impl GpuTimer {
             self.current = self.slots.iter().position(|s| s.state.load(Ordering::Acquire) == FREE);
             let Some(k) = self.current else { return };
             (self.slots[k].frame, self.slots[k].written) = (frame, [false; PAIRS]);
+            self.slots[k].state.store(RECORDED, Ordering::Release);
         }
         let Some(k) = self.current else { return };
         let pair = which.pair();
@@ -154,18 +157,22 @@ impl GpuTimer {
         slot.written[pair] = true;
     }
 
-    /// After the submission holding the frame's forward pass: map its slot, to
-    /// be read once the GPU has finished it.
+    /// After the submission holding the frames' forward passes: map every slot
+    /// recorded into since the last submission, to be read once the GPU has
+    /// finished them (a slot whose frame drew no timed forward pass is freed).
     pub(crate) fn submitted(&mut self) {
-        let Some(slot) = self.current.take().map(|k| &self.slots[k]) else { return };
-        if !slot.written[Timed::Forward.pair()] {
-            return;
+        self.current = None;
+        for slot in self.slots.iter().filter(|s| s.state.load(Ordering::Acquire) == RECORDED) {
+            if !slot.written[Timed::Forward.pair()] {
+                slot.state.store(FREE, Ordering::Release);
+                continue;
+            }
+            slot.state.store(MAPPING, Ordering::Release);
+            let state = Arc::clone(&slot.state);
+            slot.buffer.map_async(wgpu::MapMode::Read, .., move |r| {
+                state.store(if r.is_ok() { MAPPED } else { FAILED }, Ordering::Release);
+            });
         }
-        slot.state.store(MAPPING, Ordering::Release);
-        let state = Arc::clone(&slot.state);
-        slot.buffer.map_async(wgpu::MapMode::Read, .., move |r| {
-            state.store(if r.is_ok() { MAPPED } else { FAILED }, Ordering::Release);
-        });
     }
 
     /// The newest frame's times that have come back, without waiting for the GPU.

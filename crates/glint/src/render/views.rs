@@ -5,9 +5,10 @@
 //! a view that did not change uploads nothing, however many views a frame has.
 
 use super::blocks::CameraGpu;
-use super::blocks::UniformBlock;
+use super::blocks::{SceneGpu, UniformBlock};
 use super::draw_list::DrawList;
 use super::pipelines::Pipelines;
+use super::post::PostParams;
 use super::resources::InstanceBuffer;
 use super::shadow_maps::{ShadowGpu, ShadowMaps};
 
@@ -64,13 +65,12 @@ impl ViewBlocks {
     }
 }
 
-/// What every view's GPU state points at: the shared instance buffer, Scene
-/// block and shadow maps, with the generations that say when they were replaced.
+/// What every view's GPU state points at: the shared instance buffer and
+/// shadow maps, with the generations that say when they were replaced.
 pub(crate) struct Shared<'a> {
     pub device: &'a wgpu::Device,
     pub pipelines: &'a Pipelines,
     pub instances: &'a InstanceBuffer,
-    pub scene_block: &'a wgpu::Buffer,
     pub shadow_maps: &'a ShadowMaps,
     pub shadow_maps_generation: u64,
 }
@@ -86,11 +86,15 @@ pub(crate) struct ViewGpu {
     pub forward: DrawList,
     /// Every shadow view's draws.
     pub shadows: DrawList,
+    /// The Scene block: lights, environment and each light's first shadow view.
+    pub scene_block: UniformBlock<SceneGpu>,
     /// The Shadow block: this view's cascade and spot-light matrices.
     pub shadow_block: UniformBlock<ShadowGpu>,
-    /// The Scene bind group over the shared Scene block, this view's Shadow
-    /// block and the shared shadow maps.
+    /// The Scene bind group over this view's Scene and Shadow blocks and the
+    /// shared shadow maps.
     pub scene_group: wgpu::BindGroup,
+    /// Its post chain's pass parameters.
+    pub post_params: PostParams,
     /// The instance buffer and shadow maps generations the bind groups point at.
     generations: (u64, u64),
     /// Whether the lists draw indirect, and read storage buffers.
@@ -102,12 +106,15 @@ impl ViewGpu {
     pub(crate) fn new(shared: &Shared, paths: (bool, bool)) -> Self {
         let Shared { device, pipelines, instances, .. } = *shared;
         let list = |label| DrawList::new(device, label, &pipelines.instance_layout, instances.array(), paths);
+        let scene_block = UniformBlock::new(device, "renderer: scene block");
         let shadow_block = UniformBlock::new(device, "renderer: shadow block");
         Self {
             blocks: ViewBlocks::new(device, &pipelines.camera_layout),
             forward: list("renderer block: forward draw indices"),
             shadows: list("renderer block: shadow draw indices"),
-            scene_group: scene_group(shared, &shadow_block),
+            scene_group: scene_group(shared, &scene_block, &shadow_block),
+            post_params: PostParams::new(device),
+            scene_block,
             shadow_block,
             generations: (instances.generation(), shared.shadow_maps_generation),
             paths,
@@ -129,13 +136,13 @@ impl ViewGpu {
             self.shadows.rebind(shared.device, layout, shared.instances.array());
         }
         if self.generations.1 != maps {
-            self.scene_group = scene_group(shared, &self.shadow_block);
+            self.scene_group = scene_group(shared, &self.scene_block, &self.shadow_block);
         }
         self.generations = (instances, maps);
     }
 }
 
-fn scene_group(shared: &Shared, shadow_block: &UniformBlock<ShadowGpu>) -> wgpu::BindGroup {
+fn scene_group(shared: &Shared, scene: &UniformBlock<SceneGpu>, shadow: &UniformBlock<ShadowGpu>) -> wgpu::BindGroup {
     let layout = &shared.pipelines.scene_layout;
-    shared.shadow_maps.scene_group(shared.device, layout, shared.scene_block, &shadow_block.buffer)
+    shared.shadow_maps.scene_group(shared.device, layout, &scene.buffer, &shadow.buffer)
 }
