@@ -140,7 +140,11 @@ impl Renderer {
             });
             match frame {
                 Ok(frame) => stats[k] = frame,
-                Err(e) => return self.submit_frame(Err(e)).map(|_| stats),
+                Err(e) => {
+                    // The earlier views' commands go with the failed frame.
+                    self.pending.clear();
+                    return Err(e);
+                }
             }
         }
         let first = order.first().copied().unwrap_or(0);
