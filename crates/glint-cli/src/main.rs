@@ -56,9 +56,6 @@ enum Command {
         /// Print the frame's statistics as one JSON object on stdout.
         #[arg(long)]
         stats: bool,
-        /// Draw everything, skipping frustum culling (to compare costs).
-        #[arg(long)]
-        no_cull: bool,
         /// Pose animated models at this time, in seconds (their first animation).
         #[arg(long, default_value_t = 0.0, value_parser = parse_time)]
         time: f32,
@@ -168,6 +165,37 @@ struct Picture {
     /// interactive use.
     #[arg(long, value_enum)]
     solve: Option<sim::SolveArg>,
+    /// Cull every view this way, whatever its camera's "cull" says: off (draw
+    /// everything), cpu (frustum culling on the CPU) or gpu (on the GPU, the
+    /// default; the CPU's way where the adapter cannot, as on GL).
+    #[arg(long, value_enum)]
+    cull: Option<CullArg>,
+}
+
+/// `--cull`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub(crate) enum CullArg {
+    Off,
+    Cpu,
+    Gpu,
+}
+
+impl CullArg {
+    pub(crate) fn culling(self) -> glint::Culling {
+        match self {
+            Self::Off => glint::Culling::Off,
+            Self::Cpu => glint::Culling::Cpu,
+            Self::Gpu => glint::Culling::Gpu,
+        }
+    }
+}
+
+/// `views` culled as `cull` says, where given.
+pub(crate) fn culled(views: Vec<glint::View>, cull: Option<CullArg>) -> Vec<glint::View> {
+    match cull {
+        None => views,
+        Some(c) => views.into_iter().map(|v| v.with_culling(c.culling())).collect(),
+    }
 }
 
 /// An error naming the scene when it has no camera `camera`.
@@ -329,7 +357,7 @@ struct RenderArgs<'a> {
     msaa: u32,
     camera: Option<usize>,
     stats: bool,
-    no_cull: bool,
+    cull: Option<CullArg>,
     time: f32,
     frames: u32,
     fps: f32,
@@ -337,7 +365,7 @@ struct RenderArgs<'a> {
 }
 
 fn render(args: RenderArgs) -> Result<(), Error> {
-    let RenderArgs { scene, output, size: (width, height), msaa, camera, stats, no_cull, time, frames, fps, options } =
+    let RenderArgs { scene, output, size: (width, height), msaa, camera, stats, cull, time, frames, fps, options } =
         args;
     let desc = load(scene, options)?;
     check_camera(&desc, scene, camera)?;
@@ -359,7 +387,7 @@ fn render(args: RenderArgs) -> Result<(), Error> {
     let mut target = OffscreenTarget::new(&gpu, width, height, msaa)?;
     let mut renderer = Renderer::new(&gpu);
     let mut world = World::place(desc, &mut renderer);
-    let views: Vec<glint::View> = world.views(camera).into_iter().map(|v| v.with_culling(!no_cull)).collect();
+    let views = culled(world.views(camera), cull);
     let progress = (frames > 1).then(|| {
         let bar = indicatif::ProgressBar::new(frames.into());
         let style = indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} frames, {elapsed} ({eta} left)");
@@ -483,14 +511,14 @@ fn main() -> ExitCode {
         ..LoadOptions::default()
     };
     let result = match &cli.command {
-        Command::Render { scene, output, picture, stats, no_cull, time, frames, fps } => render(RenderArgs {
+        Command::Render { scene, output, picture, stats, time, frames, fps } => render(RenderArgs {
             scene,
             output,
             size: picture.size,
             msaa: picture.msaa,
             camera: picture.camera,
             stats: *stats,
-            no_cull: *no_cull,
+            cull: picture.cull,
             time: *time,
             frames: *frames,
             fps: *fps,
@@ -511,6 +539,7 @@ fn main() -> ExitCode {
                     size: picture.size,
                     msaa: picture.msaa,
                     camera: picture.camera,
+                    cull: picture.cull,
                     frames: *frames,
                     screenshot: screenshot.clone(),
                     script: at.clone(),

@@ -20,16 +20,16 @@ fn sun() -> Vec<Light> {
 }
 
 fn frame<'l>(renderer: &mut Renderer, gpu: &Gpu, entities: &[&Entity], lights: impl Into<Lighting<'l>>) -> FrameStats {
-    frame_of(renderer, gpu, entities, lights, true)
+    frame_of(renderer, gpu, entities, lights, glint::Culling::Cpu)
 }
 
-/// [`frame`] with culling on or off.
+/// [`frame`] culled as `culling` says.
 fn frame_of<'l>(
     renderer: &mut Renderer,
     gpu: &Gpu,
     entities: &[&Entity],
     lights: impl Into<Lighting<'l>>,
-    culling: bool,
+    culling: glint::Culling,
 ) -> FrameStats {
     let mut target = OffscreenTarget::new(gpu, 64, 64, 1).expect("target");
     let view = glint::View::new(camera()).with_culling(culling);
@@ -62,7 +62,7 @@ fn ten_thousand_instances_of_one_entity_are_one_draw() {
     assert_eq!(stats.instances_drawn + stats.instances_culled, 10_000);
     assert_eq!(stats.bytes_uploaded.instances, 10_000 * 64, "every instance once, on first sight");
     assert_eq!(stats.bytes_uploaded.draw_indices, 4 * stats.instances_drawn, "one u32 per drawn instance");
-    let unculled = frame_of(&mut r, gpu, &[&e], &sun(), false);
+    let unculled = frame_of(&mut r, gpu, &[&e], &sun(), glint::Culling::Off);
     assert_eq!((unculled.draw_calls, unculled.instances_drawn, unculled.instances_culled), (1, 10_000, 0));
 }
 

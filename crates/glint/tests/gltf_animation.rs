@@ -156,7 +156,7 @@ fn skinned_and_morphed_models_render_at_two_times() {
 fn the_second_uv_set_renders_through_its_transform() {
     let Some(gpu) = common::gpu() else { return };
     let desc = scene("uv1.gltf", Vec3::new(0.0, 0.0, 3.0), Vec3::ZERO);
-    let (image, stats) = common::render_desc(gpu, &desc, 64, true);
+    let (image, stats) = common::render_desc(gpu, &desc, 64, glint::Culling::Cpu);
     assert_eq!(stats.instances_drawn, 1);
     // Quadrants after the 90° turn: green top-left, red bottom-left (the spot lights the middle).
     let (tl, bl) = (image.get_pixel(20, 20), image.get_pixel(20, 44));

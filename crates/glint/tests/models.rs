@@ -168,7 +168,7 @@ fn models_render_from_their_own_framing_camera() {
     let Some(gpu) = common::gpu() else { return };
     let model = Model::load(&models_dir().join("two_materials.obj")).expect("loads");
     let desc = model.into_scene();
-    let (image, stats) = common::render_desc(gpu, &desc, 128, true);
+    let (image, stats) = common::render_desc(gpu, &desc, 128, glint::Culling::Cpu);
     assert_eq!(stats.draws, 4, "three parts and the sky");
     common::assert_matches_reference("obj_two_materials", &image);
 }
@@ -180,7 +180,7 @@ fn the_cornell_box_shows_its_red_and_green_walls() {
     // The classic view: from the open side, looking in.
     desc.cameras[0] = Camera::perspective(40.0, 1.0, 3000.0)
         .looking_at(Vec3::new(278.0, 273.0, -800.0), Vec3::new(278.0, 273.0, 0.0));
-    let (image, _) = common::render_desc(gpu, &desc, 128, true);
+    let (image, _) = common::render_desc(gpu, &desc, 128, glint::Culling::Cpu);
     let count = |f: &dyn Fn([u8; 4]) -> bool| image.pixels().filter(|p| f(p.0)).count();
     let red = count(&|[r, g, b, _]| r > 120 && g < 60 && b < 60);
     let green = count(&|[r, g, b, _]| g > 120 && r < 60 && b < 60);
@@ -223,9 +223,9 @@ fn the_teapot_is_faceted_without_smoothing_groups_and_smooth_in_one() {
         assert!(normals.into_iter().all(|v| (Vec3::from(v.normal).length() - 1.0).abs() < 1e-3));
     }
     let Some(gpu) = common::gpu() else { return };
-    let (image, _) = common::render_desc(gpu, &faceted.into_scene(), 128, true);
+    let (image, _) = common::render_desc(gpu, &faceted.into_scene(), 128, glint::Culling::Cpu);
     common::assert_matches_reference("obj_teapot_faceted", &image);
-    let (image, _) = common::render_desc(gpu, &smooth.into_scene(), 128, true);
+    let (image, _) = common::render_desc(gpu, &smooth.into_scene(), 128, glint::Culling::Cpu);
     common::assert_matches_reference("obj_teapot", &image);
 }
 
@@ -274,7 +274,7 @@ fn gltf_samples_render() {
     {
         let Some(path) = shared_gltf(name) else { return };
         let desc = Model::load(&path).expect("loads").into_scene();
-        let (image, stats) = common::render_desc(gpu, &desc, 128, true);
+        let (image, stats) = common::render_desc(gpu, &desc, 128, glint::Culling::Cpu);
         assert_eq!(stats.draws, draws, "{name}: the model (instanced) and the sky");
         common::assert_matches_reference(reference, &image);
     }
@@ -368,7 +368,7 @@ fn node_animations_pose_the_hierarchy_at_a_time() {
         desc.environment.background = glint::Background::Color(Vec3::ZERO);
         desc.cameras[0] =
             Camera::perspective(50.0, 0.1, 50.0).looking_at(Vec3::new(0.8, 0.5, 3.0), Vec3::new(0.8, 0.5, 0.0));
-        let (image, _) = common::render_desc(gpu, &desc, 64, true);
+        let (image, _) = common::render_desc(gpu, &desc, 64, glint::Culling::Cpu);
         common::assert_matches_reference(name, &image);
     }
 }
@@ -390,7 +390,7 @@ fn obj_map_d_cuts_the_surface_away() {
     let mut desc = model.into_scene();
     desc.environment.background = glint::Background::Color(Vec3::ZERO);
     desc.cameras[0] = Camera::perspective(60.0, 0.1, 10.0).looking_at(Vec3::new(0.0, 0.0, 2.0), Vec3::ZERO);
-    let (image, _) = common::render_desc(gpu, &desc, 48, true);
+    let (image, _) = common::render_desc(gpu, &desc, 48, glint::Culling::Cpu);
     let (left, right) = (image.get_pixel(12, 24), image.get_pixel(36, 24));
     assert!(left[1] > 60, "the green left half is drawn: {left:?}");
     assert_eq!(&right.0[..3], &[0, 0, 0], "the right half shows the background");
@@ -433,6 +433,6 @@ fn obj_smoothing_groups_decide_which_edges_are_sharp() {
     desc.cameras[0] = Camera::perspective(50.0, 0.1, 20.0).looking_at(Vec3::new(0.0, 2.5, 4.5), Vec3::ZERO);
     // A low sun from the left, so the sides' shading runs across them.
     desc.lights = vec![glint::Light::directional(Vec3::new(1.0, -0.3, -0.4), Vec3::ONE, 0.8)];
-    let (image, _) = common::render_desc(gpu, &desc, 96, true);
+    let (image, _) = common::render_desc(gpu, &desc, 96, glint::Culling::Cpu);
     common::assert_matches_reference("obj_smoothing_groups", &image);
 }

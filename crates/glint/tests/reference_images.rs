@@ -53,11 +53,25 @@ fn render_states_fog_and_unlit_variants() {
 }
 
 #[test]
+fn every_scene_matches_its_reference_culled_on_the_cpu_too() {
+    // The tests above cull on the GPU where the adapter can (the default).
+    let Some(gpu) = common::gpu() else { return };
+    for name in ["shapes", "textures", "alpha", "lights", "instancing", "ortho", "states"] {
+        let path = common::repo_root().join("tests/scenes").join(format!("{name}.scn"));
+        let (image, stats) = common::render_file(gpu, &path, 256, glint::Culling::Cpu);
+        assert_eq!(stats.culling, glint::Culling::Cpu);
+        common::assert_matches_reference(name, &image);
+    }
+}
+
+#[test]
 fn culling_never_changes_the_picture() {
     let Some(gpu) = common::gpu() else { return };
     let showcase = common::repo_root().join("scenes/showcase.scn");
-    let (culled, stats) = common::render_file(gpu, &showcase, 192, true);
-    let (unculled, all) = common::render_file(gpu, &showcase, 192, false);
+    let (culled, stats) = common::render_file(gpu, &showcase, 192, glint::Culling::Cpu);
+    let (unculled, all) = common::render_file(gpu, &showcase, 192, glint::Culling::Off);
+    let (on_gpu, _) = common::render_file(gpu, &showcase, 192, glint::Culling::Gpu);
+    assert!(culled == on_gpu, "culled on the CPU and on the GPU, the renders must be identical");
     assert!(stats.instances_culled > 1000, "the showcase has plenty out of view: {}", stats.instances_culled);
     assert_eq!(all.instances_culled, 0);
     assert_eq!(stats.instances_drawn + stats.instances_culled, all.instances_drawn);

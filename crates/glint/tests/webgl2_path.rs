@@ -49,7 +49,7 @@ fn ten_thousand_shadowed_cubes_a_split_screen_and_a_monitor_match() {
     let Some(gpu) = common::webgl2_gpu() else { return };
     let root = common::repo_root();
     let cubes = common::load_scene(&root.join("scenes/bench/peer_cubes_10k.scn"));
-    let (image, stats) = common::render_sized(gpu, &cubes, (640, 360), 1, true);
+    let (image, stats) = common::render_sized(gpu, &cubes, (640, 360), 1, glint::Culling::Cpu);
     assert_eq!((stats.instances_drawn, stats.draw_calls), (5_130, 1));
     common::assert_matches_reference("peer_cubes_10k", &image);
     for (scene, (width, height), samples) in [("split", (192, 96), 1), ("monitor", (160, 90), 4)] {

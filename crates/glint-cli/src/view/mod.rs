@@ -60,6 +60,8 @@ pub struct ViewArgs {
     /// Which of the scene's cameras to show alone (`None`: every camera with a
     /// viewport, or the first).
     pub camera: Option<usize>,
+    /// How every view culls, where given (else as its camera says).
+    pub cull: Option<crate::CullArg>,
     /// Quit after this many frames.
     pub frames: Option<u32>,
     /// Write the last frame here on quitting.
@@ -117,11 +119,12 @@ struct Scene {
 }
 
 impl Scene {
-    /// `desc` placed in a new renderer, showing camera `camera` (see [`World::views`]).
-    fn new(gpu: &Gpu, desc: SceneDesc, camera: Option<usize>) -> Self {
+    /// `desc` placed in a new renderer, showing camera `camera` (see
+    /// [`World::views`]), culled as `cull` says where given.
+    fn new(gpu: &Gpu, desc: SceneDesc, camera: Option<usize>, cull: Option<crate::CullArg>) -> Self {
         let mut renderer = Renderer::new(gpu);
         let world = World::place(desc, &mut renderer);
-        let views = world.views(camera);
+        let views = crate::culled(world.views(camera), cull);
         Self { world, renderer, views }
     }
 
@@ -185,7 +188,7 @@ impl App {
         let surface = WindowSurface::new(&gpu, surface, size.width, size.height)?;
         let msaa = if gpu.supports_msaa(self.args.msaa) { self.args.msaa } else { 1 };
         let target = OffscreenTarget::new(&gpu, size.width.max(1), size.height.max(1), msaa)?;
-        let scene = Scene::new(&gpu, desc, self.args.camera);
+        let scene = Scene::new(&gpu, desc, self.args.camera, self.args.cull);
         let camera = scene.camera();
         eprintln!("glint view: {} on {} ({:?})", self.args.scene.display(), gpu.info().name, gpu.info().backend);
         let now = Instant::now();
@@ -220,7 +223,7 @@ impl View {
 
     /// Load the scene again if its file changed; a bad file is reported and the
     /// current scene stays.
-    fn reload_if_changed(&mut self, path: &Path, camera_index: Option<usize>) {
+    fn reload_if_changed(&mut self, path: &Path, camera_index: Option<usize>, cull: Option<crate::CullArg>) {
         if self.last_watch.elapsed() < WATCH_INTERVAL {
             return;
         }
@@ -234,7 +237,7 @@ impl View {
                 }
                 // The views come from the new file (the chosen camera, or all
                 // views when it has no longer one); the fly camera's place stays.
-                self.scene = Scene::new(&self.gpu, desc, camera_index);
+                self.scene = Scene::new(&self.gpu, desc, camera_index, cull);
                 // Animations and cloths start again from the beginning, rather
                 // than a new cloth stepping all the way to the old time at once.
                 self.clock.restart();
@@ -317,7 +320,11 @@ impl View {
 /// Each view's draw counts for the title: "N draws, M shadow draws", named
 /// "view K: …" when there are several.
 fn view_counts(stats: &[glint::FrameStats]) -> String {
-    let counts = |s: &glint::FrameStats| format!("{} draws, {} shadow draws", s.draws, s.passes.shadow.draws);
+    let counts = |s: &glint::FrameStats| {
+        let culled = format!("culled on the {}", s.culling.name().to_uppercase());
+        let culled = if s.culling == glint::Culling::Off { "not culled".into() } else { culled };
+        format!("{} draws, {} shadow draws, {culled}", s.draws, s.passes.shadow.draws)
+    };
     match stats {
         [one] => counts(one),
         all => all.iter().enumerate().map(|(k, s)| format!("view {k}: {}", counts(s))).collect::<Vec<_>>().join(" | "),
@@ -450,7 +457,7 @@ impl App {
         for step in self.args.script.iter().filter(|s| s.frame == frame) {
             view.do_action(&step.action)?;
         }
-        view.reload_if_changed(&self.args.scene, self.args.camera);
+        view.reload_if_changed(&self.args.scene, self.args.camera, self.args.cull);
         if draw {
             view.draw()?;
         }

@@ -14,8 +14,8 @@ use super::texture::read_texture;
 use super::texture::TextureCache;
 use super::{AssetFolder, Diagnostic, LoadOptions, Model, ShapeKind, Texture, MAX_SCENE_BYTES, MAX_SCENE_TOTAL_BYTES};
 use crate::scene::{
-    Background, Camera, Entity, Environment, Fog, Light, Lighting, Material, PostEffect, RenderTargetId, ShadowLayout,
-    TextureId, View, Viewport, MAX_LIGHTS, MAX_SHADOW_MAP_BYTES,
+    Background, Camera, Culling, Entity, Environment, Fog, Light, Lighting, Material, PostEffect, RenderTargetId,
+    ShadowLayout, TextureId, View, Viewport, MAX_LIGHTS, MAX_SHADOW_MAP_BYTES,
 };
 use crate::text::{list, quote};
 use glam::{EulerRot, Mat4, Quat, Vec3};
@@ -185,6 +185,8 @@ pub struct CameraView {
     /// `output`: the render target it draws into (an index of
     /// [`SceneDesc::render_targets`]), rather than the image.
     pub output: Option<usize>,
+    /// `cull`: how it culls (`off`, `cpu` or `gpu`, the default).
+    pub culling: Culling,
 }
 
 impl SceneDesc {
@@ -224,7 +226,8 @@ impl SceneDesc {
 
     /// Camera `index` over the whole image, with its post chain.
     pub fn camera_view(&self, index: usize) -> View {
-        View::new(self.cameras[index]).with_post(self.camera_views[index].post.clone())
+        let c = &self.camera_views[index];
+        View::new(self.cameras[index]).with_post(c.post.clone()).with_culling(c.culling)
     }
 
     /// Total instances over all render tasks.
@@ -462,7 +465,8 @@ impl Loader<'_> {
         let viewport = f.viewport("viewport")?;
         let post = super::scn_post::chain(f)?;
         let output = self.targets.named(f, "output")?;
-        self.scene.camera_views.push(CameraView { viewport, post, output });
+        let culling = f.choice("cull", &Culling::NAMES)?.map_or(Culling::default(), |(k, _)| Culling::ALL[k]);
+        self.scene.camera_views.push(CameraView { viewport, post, output, culling });
         self.camera_lines.push(f.block.line);
         self.scene.cameras.push(camera);
         Ok(())

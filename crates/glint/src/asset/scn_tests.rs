@@ -171,7 +171,7 @@ fn cameras_with_viewports_are_the_views_and_without_any_the_first_camera_is() {
     assert_eq!(views.len(), 2, "only the cameras with a viewport, in file order");
     assert_eq!(views[0].viewport, crate::scene::Viewport { x: 0.5, y: 0.0, width: 0.5, height: 1.0 });
     assert_eq!(views[1].viewport.x, 0.0);
-    assert!(views.iter().all(|v| v.culling));
+    assert!(views.iter().all(|v| v.culling == crate::scene::Culling::Gpu));
     // A post chain, in the listed order, with each effect's settings.
     let keys = "\"post\" \"tonemap bloom edges\"\n\"tonemap\" \"agx\"\n\"exposure\" \"1.5\"\n\"bloom_threshold\" \"2\"\n\"edge_color\" \"1 0 0\"\n";
     let chain = parse(&camera(keys)).unwrap().camera_view(0).post;

@@ -84,8 +84,11 @@ pub struct Gpu {
     uncaptured: super::errors::UncapturedErrors,
 }
 
+/// Storage buffers the GPU culling pass binds in one compute stage.
+const CULL_STORAGE_BUFFERS: u32 = 8;
+
 /// What the renderer's draws may rely on, from the adapter's capabilities
-/// ([`Gpu::with_webgl2_limits`] turns all three off).
+/// ([`Gpu::with_webgl2_limits`] turns them all off).
 #[derive(Clone, Copy, Debug)]
 struct DrawPaths {
     /// Vertex shaders read storage buffers (else data textures).
@@ -94,6 +97,8 @@ struct DrawPaths {
     base_vertex: bool,
     /// Multi-draw-indirect with a first instance.
     indirect: bool,
+    /// Compute passes that cull instances into the indirect commands.
+    gpu_cull: bool,
 }
 
 impl fmt::Debug for Gpu {
@@ -200,15 +205,32 @@ impl Gpu {
         let vertex_storage = !webgl2
             && flags.contains(wgpu::DownlevelFlags::VERTEX_STORAGE)
             && adapter.limits().max_storage_buffers_per_shader_stage >= 3;
+        // GPU culling: compute passes writing indirect commands, which GL's
+        // backend runs without the checks glint relies on, and eight storage
+        // buffers in a compute stage (WebGPU's default).
+        let gpu_cull = vertex_storage
+            && info.backend != wgpu::Backend::Gl
+            && flags.contains(wgpu::DownlevelFlags::COMPUTE_SHADERS)
+            && adapter.limits().max_storage_buffers_per_shader_stage >= CULL_STORAGE_BUFFERS;
         let limits = match vertex_storage {
-            true => wgpu::Limits::downlevel_defaults(),
+            true => wgpu::Limits {
+                max_storage_buffers_per_shader_stage: match gpu_cull {
+                    true => CULL_STORAGE_BUFFERS,
+                    false => wgpu::Limits::downlevel_defaults().max_storage_buffers_per_shader_stage,
+                },
+                ..wgpu::Limits::downlevel_defaults()
+            },
             false => wgpu::Limits::downlevel_webgl2_defaults(),
         };
         let desc = wgpu::DeviceDescriptor {
             label: Some("glint device"),
             // Timestamps let benchmarks report GPU time; a first instance in indirect
-            // commands lets batches share one multi-draw-indirect call.
-            required_features: features & (wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::INDIRECT_FIRST_INSTANCE),
+            // commands lets batches share one multi-draw-indirect call; a count
+            // buffer lets GPU culling skip the commands it emptied.
+            required_features: features
+                & (wgpu::Features::TIMESTAMP_QUERY
+                    | wgpu::Features::INDIRECT_FIRST_INSTANCE
+                    | wgpu::Features::MULTI_DRAW_INDIRECT_COUNT),
             required_limits: limits.using_resolution(adapter.limits()),
             ..Default::default()
         };
@@ -230,7 +252,8 @@ impl Gpu {
             && flags.contains(wgpu::DownlevelFlags::INDIRECT_EXECUTION);
         let base_vertex = !webgl2 && flags.contains(wgpu::DownlevelFlags::BASE_VERTEX);
         // Indirect commands carry base vertices.
-        let paths = DrawPaths { vertex_storage, base_vertex, indirect: indirect && base_vertex };
+        let indirect = indirect && base_vertex;
+        let paths = DrawPaths { vertex_storage, base_vertex, indirect, gpu_cull: gpu_cull && indirect };
         Ok(Self { adapter, device, queue, info, anisotropy, paths, uncaptured })
     }
 
@@ -260,6 +283,13 @@ impl Gpu {
     /// the renderer can merge batches into multi-draw-indirect calls.
     pub fn draws_indirect(&self) -> bool {
         self.paths.indirect
+    }
+
+    /// Whether views can cull on the GPU ([`Culling::Gpu`](crate::Culling::Gpu)):
+    /// compute shaders, indirect drawing and storage buffers, and not GL's
+    /// backend. Elsewhere such views cull on the CPU.
+    pub fn culls_on_gpu(&self) -> bool {
+        self.paths.gpu_cull
     }
 
     /// Whether vertex shaders read instances and materials from storage

@@ -25,29 +25,44 @@ pub struct Batch {
 /// `batches`, and append their instance indices (from `visible`) to
 /// `draw_indices` in draw order, so each batch is one contiguous range.
 pub fn merge(items: &[DrawItem], visible: &[u32], draw_indices: &mut Vec<u32>, batches: &mut Vec<Batch>) {
+    merge_placed(items, batches, |item, _| {
+        let at = draw_indices.len() as u32;
+        draw_indices.extend_from_slice(&visible[item.first as usize..(item.first + item.count) as usize]);
+        at
+    });
+}
+
+/// [`merge`], with `place` putting each item's instances where its batch
+/// (given by index) draws them: it returns where the item's first goes, right
+/// after the batch's earlier items' when the item joins a batch.
+pub(crate) fn merge_placed(
+    items: &[DrawItem],
+    batches: &mut Vec<Batch>,
+    mut place: impl FnMut(&DrawItem, usize) -> u32,
+) {
     let first_batch = batches.len();
     for item in items {
         let stage = stage_of(item.key);
-        let first = draw_indices.len() as u32;
-        draw_indices.extend_from_slice(&visible[item.first as usize..(item.first + item.count) as usize]);
-        match batches[first_batch..].last_mut() {
-            Some(b)
-                if b.stage == stage
-                    && b.pipeline == item.pipeline
-                    && b.material == item.material
-                    && b.shape == item.shape =>
-            {
-                b.instance_count += item.count;
-            }
-            _ => batches.push(Batch {
+        let joins = batches[first_batch..].last().is_some_and(|b| {
+            b.stage == stage && b.pipeline == item.pipeline && b.material == item.material && b.shape == item.shape
+        });
+        if !joins {
+            batches.push(Batch {
                 stage,
                 pipeline: item.pipeline,
                 material: item.material,
                 shape: item.shape,
-                first_instance: first,
-                instance_count: item.count,
-            }),
+                first_instance: 0,
+                instance_count: 0,
+            });
         }
+        let k = batches.len() - 1;
+        let at = place(item, k);
+        let b = &mut batches[k];
+        if !joins {
+            b.first_instance = at;
+        }
+        b.instance_count += item.count;
     }
 }
 

@@ -1,24 +1,60 @@
 //! Core layer: a [`DrawList`], the draws of one pass kind — the forward view, or
 //! every shadow view of a frame — from sorted items to GPU commands: batches,
-//! their instance indices in draw order, one indirect command per batch, and the
-//! buffers those live in. Each list uploads only what differs from its last frame.
+//! what each draws with, the runs of batches one call draws, their instance
+//! indices in draw order, one indirect command per batch, and the buffers those
+//! live in. Each list uploads only what differs from its last frame.
+//!
+//! Draw-index buffer layout: the instances of batches culled on the CPU, in
+//! draw order, then (lists culled on the GPU, `gpu_cull.rs`) a region the cull
+//! pass fills, one stretch per GPU-culled batch as long as its candidates.
 
 use super::batch::{self, Batch};
+use super::cull::Frustum;
 use super::gpu_array::GpuArray;
+use super::gpu_cull::{CullBindings, CullInput, CullPipelines, CullRange, GpuCull, Run};
 use super::mesh_pool::MeshRange;
 use super::queue::DrawItem;
 use super::resources::GrowBuffer;
 use super::RenderError;
+
+/// What a list may rely on: indirect drawing, storage buffers, GPU culling.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct ListPaths {
+    pub indirect: bool,
+    pub storage: bool,
+    pub gpu_cull: bool,
+}
+
+/// What a batch draws with, found when it was made: its mesh and texture set.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct BatchDraw {
+    pub mesh: MeshRange,
+    pub texture_set: u16,
+}
 
 /// The draws of one pass kind and their GPU buffers.
 pub(crate) struct DrawList {
     label: &'static str,
     /// Draw items of the frame, sorted before batching.
     pub items: Vec<DrawItem>,
-    /// Instanced draws; a view's draws are one contiguous range.
+    /// Instanced draws; a view's draws are one contiguous range. A GPU-culled
+    /// batch's instance count is its candidates', of which the GPU draws the visible.
     pub batches: Vec<Batch>,
-    /// Visible instance indices in draw order (`@group(3) @binding(1)`).
+    /// What each batch draws with.
+    pub draws: Vec<BatchDraw>,
+    /// Runs of adjacent batches of one stage with one pipeline, texture set and
+    /// mesh page: one draw call each where the device draws indirect.
+    pub runs: Vec<Run>,
+    /// Instance indices of the CPU-culled batches in draw order (`@group(3) @binding(1)`).
     pub draw_indices: Vec<u32>,
+    /// The GPU-culled batches' candidates, in batch order.
+    pub cull_ranges: Vec<CullRange>,
+    /// Length of the GPU-culled region of the draw-index buffer.
+    gpu_region: u32,
+    /// Whether each batch is culled on the GPU.
+    on_gpu: Vec<bool>,
+    /// Each view's frustum (the ranges' and runs' `frustum` index it).
+    pub frustums: Vec<Frustum>,
     /// One command per batch, when the device draws indirect.
     pub indirect_args: Vec<wgpu::util::DrawIndexedIndirectArgs>,
     uploaded_draw_indices: Vec<u32>,
@@ -26,6 +62,8 @@ pub(crate) struct DrawList {
     draw_index_buffer: GpuArray,
     /// `None` where the device cannot draw indirect with a first instance.
     pub indirect: Option<GrowBuffer>,
+    /// The list's GPU culling state, where the device can cull on the GPU.
+    pub gpu: Option<GpuCull>,
     /// The Renderer block for this list: the instances and this list's draw indices.
     pub bind_group: wgpu::BindGroup,
 }
@@ -42,21 +80,29 @@ impl DrawList {
         label: &'static str,
         layout: &wgpu::BindGroupLayout,
         instances: &GpuArray,
-        (indirect, storage): (bool, bool),
+        paths: ListPaths,
     ) -> Self {
-        let draw_index_buffer = GpuArray::new(device, label, 4, 1024, storage);
-        let indirect = indirect.then(|| GrowBuffer::new(device, label, wgpu::BufferUsages::INDIRECT, 1024 * 20));
+        let draw_index_buffer = GpuArray::new(device, label, 4, 1024, paths.storage);
+        let usage = wgpu::BufferUsages::INDIRECT | wgpu::BufferUsages::COPY_SRC;
+        let indirect = paths.indirect.then(|| GrowBuffer::new(device, label, usage, 1024 * 20));
         let bind_group = bind(device, label, layout, instances, &draw_index_buffer);
         Self {
             label,
             items: Vec::new(),
             batches: Vec::new(),
+            draws: Vec::new(),
+            runs: Vec::new(),
             draw_indices: Vec::new(),
+            cull_ranges: Vec::new(),
+            gpu_region: 0,
+            on_gpu: Vec::new(),
+            frustums: Vec::new(),
             indirect_args: Vec::new(),
             uploaded_draw_indices: Vec::new(),
             uploaded_indirect_args: Vec::new(),
             draw_index_buffer,
             indirect,
+            gpu: paths.gpu_cull.then(|| GpuCull::new(device, label)),
             bind_group,
         }
     }
@@ -65,53 +111,136 @@ impl DrawList {
     pub(crate) fn clear(&mut self) {
         self.items.clear();
         self.batches.clear();
+        self.draws.clear();
+        self.runs.clear();
         self.draw_indices.clear();
+        self.cull_ranges.clear();
+        self.gpu_region = 0;
+        self.on_gpu.clear();
+        self.frustums.clear();
         self.indirect_args.clear();
     }
 
-    /// Merge the items from `first_item` on (sorted) into batches appended to the
-    /// list (their instance indices from `visible`), and make their indirect
-    /// commands. Returns the range of batches they became.
+    /// Whether this frame's list is culled on the GPU (it has candidates there).
+    pub(crate) fn culled_on_gpu(&self) -> bool {
+        !self.cull_ranges.is_empty()
+    }
+
+    /// Merge the items from `first_item` on (sorted), seen by a view whose
+    /// frustum is `frustum`, into batches appended to the list, and those into
+    /// runs. An item `on_gpu` says is culled on the GPU names store instances
+    /// (`first ..`), which all become its batch's candidates; any other names
+    /// entries of `visible`. `draw_of` says what a batch draws with. Returns
+    /// the range of runs they became.
     pub(crate) fn build(
         &mut self,
         first_item: usize,
         visible: &[u32],
-        mesh: impl Fn(&Batch) -> MeshRange,
+        frustum: Frustum,
+        draw_of: impl Fn(&Batch) -> BatchDraw,
+        on_gpu: impl Fn(&DrawItem) -> bool,
     ) -> std::ops::Range<usize> {
-        let first_batch = self.batches.len();
-        batch::merge(&self.items[first_item..], visible, &mut self.draw_indices, &mut self.batches);
-        if self.indirect.is_some() {
-            self.indirect_args.extend(self.batches[first_batch..].iter().map(|b| {
-                let m = mesh(b);
-                wgpu::util::DrawIndexedIndirectArgs {
-                    index_count: m.index_count,
-                    instance_count: b.instance_count,
-                    first_index: m.first_index,
-                    base_vertex: m.base_vertex,
-                    first_instance: b.first_instance,
-                }
-            }));
+        let (first_batch, first_run, first_range) = (self.batches.len(), self.runs.len(), self.cull_ranges.len());
+        let view = self.frustums.len() as u32;
+        self.frustums.push(frustum);
+        let Self { items, batches, draw_indices, cull_ranges, gpu_region, .. } = self;
+        batch::merge_placed(&items[first_item..], batches, |item, batch| {
+            if !on_gpu(item) {
+                let at = draw_indices.len() as u32;
+                draw_indices.extend_from_slice(&visible[item.first as usize..(item.first + item.count) as usize]);
+                return at;
+            }
+            // The pass places each visible instance after its batch's others:
+            // every range of a batch writes from the batch's first place.
+            let last = cull_ranges.last();
+            let start = last.map_or(0, |r| r.start + r.count);
+            let at = *gpu_region;
+            let out = last.filter(|r| r.batch == batch as u32).map_or(at, |r| r.out);
+            cull_ranges.push(CullRange {
+                first: item.first,
+                count: item.count,
+                start,
+                batch: batch as u32,
+                frustum: view,
+                out,
+            });
+            *gpu_region += item.count;
+            at
+        });
+        self.on_gpu.resize(self.batches.len(), false);
+        for r in &self.cull_ranges[first_range..] {
+            self.on_gpu[r.batch as usize] = true;
         }
-        first_batch..self.batches.len()
+        self.draws.extend(self.batches[first_batch..].iter().map(&draw_of));
+        let key = |k: usize| {
+            let (b, d) = (&self.batches[k], &self.draws[k]);
+            (b.stage, b.pipeline, d.texture_set, d.mesh.page)
+        };
+        let mut start = first_batch;
+        for k in first_batch + 1..=self.batches.len() {
+            if k == self.batches.len() || key(k) != key(start) {
+                self.runs.push(Run::new(start, k - start, view));
+                start = k;
+            }
+        }
+        first_run..self.runs.len()
     }
 
-    /// Point the bind group at a new instance buffer.
+    /// Append one batch drawn alone (the naive baseline's), culled on the CPU,
+    /// its instances the next `count` of `draw_indices`.
+    pub(crate) fn push_alone(&mut self, batch: Batch, draw: BatchDraw) {
+        self.runs.push(Run::new(self.batches.len(), 1, 0));
+        self.batches.push(batch);
+        self.draws.push(draw);
+        self.on_gpu.push(false);
+    }
+
+    /// Point the bind groups at a new instance buffer.
     pub(crate) fn rebind(&mut self, device: &wgpu::Device, layout: &wgpu::BindGroupLayout, instances: &GpuArray) {
         self.bind_group = bind(device, self.label, layout, instances, &self.draw_index_buffer);
+        if let Some(gpu) = &mut self.gpu {
+            gpu.unbind();
+        }
+    }
+
+    /// Place the GPU-culled region after the CPU-culled indices and make one
+    /// indirect command per batch (a GPU-culled one counting no instance: the
+    /// cull pass counts them).
+    fn finish(&mut self) {
+        let base = self.draw_indices.len() as u32;
+        for r in &mut self.cull_ranges {
+            r.out += base;
+        }
+        for (b, _) in self.batches.iter_mut().zip(&self.on_gpu).filter(|(_, &gpu)| gpu) {
+            b.first_instance += base;
+        }
+        if self.indirect.is_some() {
+            let commands = self.batches.iter().zip(&self.draws).zip(&self.on_gpu);
+            self.indirect_args.extend(commands.map(|((b, d), &gpu)| wgpu::util::DrawIndexedIndirectArgs {
+                index_count: d.mesh.index_count,
+                instance_count: if gpu { 0 } else { b.instance_count },
+                first_index: d.mesh.first_index,
+                base_vertex: d.mesh.base_vertex,
+                first_instance: b.first_instance,
+            }));
+        }
     }
 
     /// Write the draw indices and indirect commands where they differ from what
-    /// the GPU holds; `one_by_one` (the naive baseline) writes every draw index
-    /// alone, every frame.
+    /// the GPU holds, and the GPU culling state of a GPU-culled list; `one_by_one`
+    /// (the naive baseline) writes every draw index alone, every frame.
     pub(crate) fn upload(
         &mut self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
         (layout, instances): (&wgpu::BindGroupLayout, &GpuArray),
+        gpu: Option<(&CullPipelines, &wgpu::Buffer)>,
         one_by_one: bool,
     ) -> Result<ListUpload, RenderError> {
+        self.finish();
         let mut written = ListUpload { draw_indices: 0, indirect: 0 };
-        if self.draw_index_buffer.reserve(device, 4, self.draw_indices.len())? {
+        let capacity = self.draw_indices.len() + self.gpu_region as usize;
+        if self.draw_index_buffer.reserve(device, 4, capacity)? {
             self.uploaded_draw_indices.clear();
             self.rebind(device, layout, instances);
         }
@@ -135,8 +264,39 @@ impl DrawList {
                 self.uploaded_indirect_args.clone_from(&self.indirect_args);
             }
         }
+        if let (Some(state), Some((pipelines, bounds)), true) = (&mut self.gpu, gpu, !self.cull_ranges.is_empty()) {
+            let input = CullInput {
+                ranges: &self.cull_ranges,
+                runs: &self.runs,
+                frustums: &self.frustums,
+                commands: self.batches.len(),
+            };
+            let bindings = CullBindings { bounds, draw_indices: self.draw_index_buffer.binding() };
+            written.indirect += state.upload(device, queue, &input, pipelines, bindings)?;
+        }
         Ok(written)
     }
+
+    /// The draw-index buffer, where it is a storage buffer.
+    pub(crate) fn draw_index_buffer(&self) -> Option<&wgpu::Buffer> {
+        match &self.draw_index_buffer {
+            GpuArray::Buffer(b) => Some(&b.buffer),
+            GpuArray::Texture(_) => None,
+        }
+    }
+
+    /// Record this frame's cull pass, when the list is culled on the GPU.
+    pub(crate) fn record_cull(&mut self, encoder: &mut wgpu::CommandEncoder, pipelines: &CullPipelines, submits: u64) {
+        let culled_on_gpu = self.culled_on_gpu();
+        if let (Some(gpu), Some(template), true) = (&mut self.gpu, &self.indirect, culled_on_gpu) {
+            gpu.record(encoder, pipelines, &template.buffer, submits);
+        }
+    }
+}
+
+/// The stage of run `run`'s batches in `list`.
+pub(crate) fn run_stage(list: &DrawList, run: &Run) -> u8 {
+    list.batches[run.first as usize].stage
 }
 
 fn bind(

@@ -3,20 +3,20 @@
 //! Batches come sorted; a run of adjacent batches with the same pipeline, texture
 //! set and mesh-pool page needs no state change between them, so in optimized mode
 //! the run is one `multi_draw_indexed_indirect` call over its batches' commands
-//! (or one `draw_indexed` per batch where the device cannot draw indirect). The
-//! naive baseline draws batch by batch and binds everything again for each.
+//! (or one `draw_indexed` per batch where the device cannot draw indirect). A
+//! list culled on the GPU has its cull pass recorded first, and each run draws
+//! the commands that pass left (with their count, where the device has
+//! `MULTI_DRAW_INDIRECT_COUNT`). The naive baseline draws batch by batch and
+//! binds everything again for each.
 
-use super::batch::Batch;
-use super::draw_list::DrawList;
+use super::draw_list::{run_stage, DrawList};
+use super::gpu_cull::{Run, COMMAND_BYTES};
 use super::queue::{Queue, SKY_STAGE};
 use super::timer::Timed;
 use super::views::ViewBlocks;
 use super::{FrameMode, FrameStats, Renderer};
 use crate::gpu::OffscreenTarget;
 use crate::scene::Background;
-
-/// Bytes of one indexed indirect command.
-const INDIRECT_STRIDE: u64 = std::mem::size_of::<wgpu::util::DrawIndexedIndirectArgs>() as u64;
 
 /// What the pass has bound, to skip redundant state changes.
 #[derive(Default)]
@@ -25,14 +25,6 @@ pub(super) struct Bound {
     texture_set: Option<u16>,
     page: Option<u16>,
     stencil_reference: u32,
-}
-
-/// The state a batch draws with: runs of equal keys share one call.
-#[derive(Clone, Copy, PartialEq, Eq)]
-struct RunKey {
-    pipeline: u16,
-    texture_set: u16,
-    page: u16,
 }
 
 impl Renderer {
@@ -44,10 +36,11 @@ impl Renderer {
         background: Background,
         stats: &mut FrameStats,
     ) -> wgpu::CommandBuffer {
+        let list = &self.view.forward;
         let sky_at = match self.mode {
             // Naive frames are in submission order: the sky goes first, under everything.
             FrameMode::Naive => 0,
-            FrameMode::Optimized => self.view.forward.batches.partition_point(|b| b.stage < SKY_STAGE),
+            FrameMode::Optimized => list.runs.partition_point(|r| run_stage(list, r) < SKY_STAGE),
         };
         let clear = match background {
             Background::Color(c) | Background::Gradient { bottom: c, .. } => {
@@ -56,6 +49,9 @@ impl Renderer {
         };
         let mut encoder =
             self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("renderer: frame") });
+        if let Some(pipelines) = &self.cull_pipelines {
+            self.view.forward.record_cull(&mut encoder, pipelines, self.queue.submits());
+        }
         {
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("forward pass"),
@@ -88,7 +84,7 @@ impl Renderer {
                 stats.bind_groups_set += 1;
                 bound = Bound { stencil_reference: bound.stencil_reference, ..Bound::default() };
             }
-            self.draw_stages(&self.view.forward, &mut pass, sky_at..self.view.forward.batches.len(), &mut bound, stats);
+            self.draw_stages(&self.view.forward, &mut pass, sky_at..self.view.forward.runs.len(), &mut bound, stats);
         }
         if let Some(timer) = &mut self.gpu_timer {
             timer.resolve(&mut encoder, Timed::Forward, self.frame_index);
@@ -96,7 +92,7 @@ impl Renderer {
         encoder.finish()
     }
 
-    /// Draw `list`'s batches in `range`, one debug group per stage.
+    /// Draw `list`'s runs in `range`, one debug group per stage.
     pub(super) fn draw_stages(
         &self,
         list: &DrawList,
@@ -106,90 +102,90 @@ impl Renderer {
         stats: &mut FrameStats,
     ) {
         let mut at = range.start;
-        for stage in list.batches[range].chunk_by(|a, b| a.stage == b.stage) {
+        for stage in list.runs[range].chunk_by(|a, b| run_stage(list, a) == run_stage(list, b)) {
             let (start, calls, draws) = (web_time::Instant::now(), stats.draw_calls, stats.draws);
-            pass.push_debug_group(&stage_name(stage[0].stage));
-            let naive = self.mode == FrameMode::Naive;
-            for run in stage.chunk_by(|a, b| !naive && self.run_key(a) == self.run_key(b)) {
+            let name = run_stage(list, &stage[0]);
+            pass.push_debug_group(&stage_name(name));
+            for run in stage {
                 self.draw_run(list, pass, at, run, bound, stats);
-                at += run.len();
+                at += 1;
             }
             pass.pop_debug_group();
             let named = &mut stats.passes;
-            let cost = match stage[0].stage {
+            let cost = match name {
                 s if s < SKY_STAGE && s != Queue::AlphaTest.stage() => &mut named.opaque,
                 s if s == Queue::AlphaTest.stage() => &mut named.alpha_test,
                 _ => &mut named.transparent,
             };
             cost.draw_calls += stats.draw_calls - calls;
             cost.draws += stats.draws - draws;
-            cost.instances += stage.iter().map(|b| u64::from(b.instance_count)).sum::<u64>();
+            let batches = stage.iter().flat_map(|r| &list.batches[r.batches()]);
+            cost.instances += batches.map(|b| u64::from(b.instance_count)).sum::<u64>();
             cost.cpu_ms += super::ms_since(start);
         }
     }
 
-    /// Draw `run` (batches from index `at`), which share one [`RunKey`], setting
-    /// only the state that changes (naive frames: all of it).
+    /// Draw run `k` of `list` (`run`), setting only the state that changes
+    /// (naive frames: all of it).
     fn draw_run(
         &self,
         list: &DrawList,
         pass: &mut wgpu::RenderPass<'_>,
-        at: usize,
-        run: &[Batch],
+        k: usize,
+        run: &Run,
         bound: &mut Bound,
         stats: &mut FrameStats,
     ) {
         if self.mode == FrameMode::Naive {
             *bound = Bound::default();
         }
-        let key = self.run_key(&run[0]);
-        let reference = self.registry.pipelines.stencil_reference(key.pipeline);
+        let (first, draw) = (&list.batches[run.first as usize], &list.draws[run.first as usize]);
+        let reference = self.registry.pipelines.stencil_reference(first.pipeline);
         if bound.stencil_reference != reference || self.mode == FrameMode::Naive {
             pass.set_stencil_reference(reference);
             bound.stencil_reference = reference;
         }
-        if bound.pipeline != Some(key.pipeline) {
-            pass.set_pipeline(self.registry.pipelines.forward(key.pipeline));
-            bound.pipeline = Some(key.pipeline);
+        if bound.pipeline != Some(first.pipeline) {
+            pass.set_pipeline(self.registry.pipelines.forward(first.pipeline));
+            bound.pipeline = Some(first.pipeline);
             stats.pipelines_bound += 1;
         }
-        if bound.texture_set != Some(key.texture_set) {
-            pass.set_bind_group(2, &self.registry.texture_sets[key.texture_set as usize].bind_group, &[]);
-            bound.texture_set = Some(key.texture_set);
+        if bound.texture_set != Some(draw.texture_set) {
+            pass.set_bind_group(2, &self.registry.texture_sets[draw.texture_set as usize].bind_group, &[]);
+            bound.texture_set = Some(draw.texture_set);
             stats.bind_groups_set += 1;
         }
-        if bound.page != Some(key.page) && self.base_vertex {
-            self.registry.mesh_pool.bind(pass, key.page);
-            bound.page = Some(key.page);
+        let page = draw.mesh.page;
+        if bound.page != Some(page) && self.base_vertex {
+            self.registry.mesh_pool.bind(pass, page);
+            bound.page = Some(page);
         }
-        stats.draws += run.len() as u32;
-        match &list.indirect {
-            Some(indirect) if self.mode == FrameMode::Optimized => {
-                pass.multi_draw_indexed_indirect(&indirect.buffer, at as u64 * INDIRECT_STRIDE, run.len() as u32);
+        stats.draws += run.len;
+        match (&list.indirect, &list.gpu, &self.cull_pipelines) {
+            (_, Some(gpu), Some(pipelines)) if list.culled_on_gpu() => {
+                gpu.draw_run(pipelines, pass, k, run);
+                stats.draw_calls += 1;
+            }
+            (Some(indirect), ..) if self.mode == FrameMode::Optimized => {
+                pass.multi_draw_indexed_indirect(&indirect.buffer, u64::from(run.first) * COMMAND_BYTES, run.len);
                 stats.draw_calls += 1;
             }
             _ => {
-                for b in run {
-                    let mesh = self.registry.shapes[b.shape.0 as usize].gpu.expect("prepared");
+                for (b, draw) in list.batches[run.batches()].iter().zip(&list.draws[run.batches()]) {
+                    let mesh = draw.mesh;
                     let indices = mesh.first_index..mesh.first_index + mesh.index_count;
                     let base_vertex = match self.base_vertex {
                         true => mesh.base_vertex,
                         false => {
-                            self.registry.mesh_pool.bind_from(pass, key.page, mesh.base_vertex as u64);
+                            self.registry.mesh_pool.bind_from(pass, page, mesh.base_vertex as u64);
                             0
                         }
                     };
                     pass.draw_indexed(indices, base_vertex, b.first_instance..b.first_instance + b.instance_count);
                 }
-                stats.draw_calls += run.len() as u32;
+                stats.draw_calls += run.len;
             }
         }
-    }
-
-    fn run_key(&self, b: &Batch) -> RunKey {
-        let material = self.registry.materials[b.material.0 as usize].gpu.as_ref().expect("prepared");
-        let mesh = self.registry.shapes[b.shape.0 as usize].gpu.expect("prepared");
-        RunKey { pipeline: b.pipeline, texture_set: material.texture_set, page: mesh.page }
     }
 }
 

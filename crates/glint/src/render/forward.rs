@@ -12,12 +12,14 @@ use glam::Vec3A;
 
 impl Renderer {
     /// Stage 3: one draw item per visible run, or per visible instance for blended
-    /// materials so that they can be sorted far to near one by one. Depth is the
-    /// view distance of the run's (or instance's) box centre over the far plane.
+    /// materials so that they can be sorted far to near one by one; culled on
+    /// the GPU, one per entity's candidates. Depth is the view distance of the
+    /// run's (or instance's, or entity's) box centre over the far plane.
     pub(super) fn build_queue(&mut self, frame: &ViewFrame, visible: &Visible) {
         let far = frame.camera.far();
         let depth = |center: Vec3A| -frame.view.transform_point3a(center).z / far;
-        for run in &visible.runs {
+        let runs = visible.runs.iter().map(|r| (r, false)).chain(visible.candidates.iter().map(|r| (r, true)));
+        for (run, candidates) in runs {
             let s = &self.submitted[run.entry];
             let material = &self.registry.materials[s.material.0 as usize];
             let pipeline = self.pipeline_of(s);
@@ -37,7 +39,7 @@ impl Renderer {
                 first,
                 count,
             };
-            if blended {
+            if blended && !candidates {
                 for k in run.start..run.start + run.len {
                     let instance = visible.instances[k as usize] as usize;
                     self.view.forward.items.push(item(k, 1, depth(self.store.bounds.center(instance))));
@@ -60,14 +62,16 @@ impl Renderer {
             let range = slot.first as usize..(slot.first + slot.count) as usize;
             for i in range {
                 if self.store.bounds.is_valid(i) {
-                    self.view.forward.batches.push(Batch {
+                    let batch = Batch {
                         stage: Queue::Opaque.stage(),
                         pipeline,
                         material: s.material,
                         shape: s.shape,
                         first_instance: self.view.forward.draw_indices.len() as u32,
                         instance_count: 1,
-                    });
+                    };
+                    let draw = self.registry.batch_draw(&batch);
+                    self.view.forward.push_alone(batch, draw);
                     self.view.forward.draw_indices.push(i as u32);
                 }
             }
@@ -105,10 +109,21 @@ impl Renderer {
             }
         }
         let layout = &self.registry.pipelines.instance_layout;
-        let written = self.view.forward.upload(&self.device, &self.queue, (layout, self.instances.array()), naive)?;
+        let gpu = self.cull_pipelines.as_ref().zip(self.instances.bounds());
+        let written =
+            self.view.forward.upload(&self.device, &self.queue, (layout, self.instances.array()), gpu, naive)?;
         bytes.draw_indices += written.draw_indices;
         bytes.indirect += written.indirect;
         stats.instances_drawn = self.view.forward.draw_indices.len() as u64;
+        if self.view.forward.culled_on_gpu() {
+            // Counted on the GPU (blended instances included), a frame or two late.
+            let submits = self.queue.submits();
+            let drawn = self.view.forward.gpu.as_mut().and_then(|g| g.drawn(&self.device, submits));
+            let drawn = drawn.map(|d| d.iter().map(|&n| u64::from(n)).sum::<u64>());
+            let valid = stats.instances_submitted - stats.instances_invalid;
+            stats.instances_drawn = drawn.unwrap_or(0);
+            stats.instances_culled = drawn.map_or(0, |d| valid.saturating_sub(d));
+        }
         Ok(())
     }
 
@@ -121,7 +136,8 @@ impl Renderer {
         }
         for range in self.store.take_dirty() {
             let data = &self.store.instances[range.start as usize..range.end as usize];
-            bytes.instances += self.instances.write(&self.queue, range.start, data);
+            let (instances, bounds) = self.instances.write(&self.queue, range.start, data, &self.store.bounds);
+            (bytes.instances, bytes.bounds) = (bytes.instances + instances, bytes.bounds + bounds);
         }
         Ok(())
     }

@@ -9,7 +9,7 @@ use super::shadow_pass::{Shadows, ShadowsDrawn};
 use super::view::ViewFrame;
 use super::{ms_since, queue, FrameMode, FrameStats, FrameVariant, Laps, RenderError, Renderer};
 use crate::gpu::{OffscreenTarget, TargetFormat, HDR_FORMAT};
-use crate::scene::{Entity, Lighting, MaterialId, PostEffect, TextureId, View, MAX_LIGHTS, MAX_POST_EFFECTS};
+use crate::scene::{Culling, Entity, Lighting, MaterialId, PostEffect, TextureId, View, MAX_LIGHTS, MAX_POST_EFFECTS};
 use std::collections::HashMap;
 use web_time::Instant;
 
@@ -313,7 +313,7 @@ impl Renderer {
             None => None,
         };
         let [x, y, width, height] = view.viewport.pixels(target.width(), target.height());
-        let frame = ViewFrame::new(view, width, height);
+        let frame = ViewFrame::new(view, width, height, self.cull_pipelines.is_some());
         let format = self.scene_format(view, target);
         if (width, height, format) == (target.width(), target.height(), target.format()) {
             return self.run_frame(&frame, lighting, drawn, target, Compose::Direct);
@@ -425,8 +425,9 @@ impl Renderer {
             stats.cpu_ms.queue = lap.next();
             queue::sort(&mut self.view.forward.items);
             stats.cpu_ms.sort = lap.next();
-            let shapes = &self.registry.shapes;
-            self.view.forward.build(0, &visible.instances, |b| shapes[b.shape.0 as usize].gpu.expect("prepared"));
+            let registry = &self.registry;
+            let on_gpu = |item: &queue::DrawItem| frame.culling == Culling::Gpu && !registry.blended(item.material);
+            self.view.forward.build(0, &visible.instances, frame.frustum, |b| registry.batch_draw(b), on_gpu);
             stats.cpu_ms.batch = lap.next();
         }
         self.visible = visible;

@@ -38,7 +38,9 @@ impl GpuArray {
     pub(crate) fn new(device: &wgpu::Device, label: &'static str, bytes: u32, records: u32, storage: bool) -> Self {
         if storage {
             let size = u64::from(bytes) * u64::from(records);
-            return Self::Buffer(GrowBuffer::new(device, label, wgpu::BufferUsages::STORAGE, size));
+            // Copied from only to read it back for inspection.
+            let usage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC;
+            return Self::Buffer(GrowBuffer::new(device, label, usage, size));
         }
         debug_assert!(bytes == 4 || bytes % 16 == 0, "{label}: {bytes}-byte records do not fill texels");
         let (format, texel_bytes) =

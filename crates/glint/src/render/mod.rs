@@ -32,6 +32,8 @@ mod forward;
 mod frame;
 mod frame_variant;
 mod gpu_array;
+mod gpu_cull;
+mod inspect;
 mod instances;
 mod materials;
 mod mesh_pool;
@@ -63,6 +65,7 @@ pub use timer::GpuTimes;
 use crate::asset::Texture;
 use crate::gpu::{Gpu, OffscreenTarget, SubmitQueue};
 use crate::scene::{Entity, Material, MaterialId, Mesh, RenderTargetId, ShapeId, TextureId};
+use draw_list::ListPaths;
 use frame_variant::FrameVariant;
 use instances::InstanceStore;
 use resources::InstanceBuffer;
@@ -151,6 +154,8 @@ pub struct Renderer {
     hdr_msaa: bool,
     /// Whether indexed draws take a base vertex ([`Gpu::base_vertex`]).
     base_vertex: bool,
+    /// The GPU culling passes, where views can cull on the GPU ([`Gpu::culls_on_gpu`]).
+    cull_pipelines: Option<gpu_cull::CullPipelines>,
 }
 
 fn ms_since(t: Instant) -> f64 {
@@ -180,7 +185,7 @@ impl Renderer {
         let registry = Registry::new(gpu, queue.clone());
         let pipelines = &registry.pipelines;
         let shadow_maps = ShadowMaps::new(&device, shadows, 1, 1, 1, 1);
-        let instances = InstanceBuffer::new(&device, gpu.vertex_storage());
+        let instances = InstanceBuffer::new(&device, gpu.vertex_storage(), gpu.culls_on_gpu());
         let shared = views::Shared {
             device: &device,
             pipelines,
@@ -188,7 +193,9 @@ impl Renderer {
             shadow_maps: &shadow_maps,
             shadow_maps_generation: 0,
         };
-        let view = ViewGpu::new(&shared, (gpu.draws_indirect(), gpu.vertex_storage()));
+        let paths =
+            ListPaths { indirect: gpu.draws_indirect(), storage: gpu.vertex_storage(), gpu_cull: gpu.culls_on_gpu() };
+        let view = ViewGpu::new(&shared, paths);
         Self {
             submits_counted: queue.submits(),
             uncaptured: gpu.uncaptured(),
@@ -212,6 +219,7 @@ impl Renderer {
             visible: Visible::default(),
             view_targets: Vec::new(),
             post: post::PostChain::new(&gpu.device),
+            cull_pipelines: gpu.culls_on_gpu().then(|| gpu_cull::CullPipelines::new(&gpu.device)),
             base_vertex: gpu.base_vertex(),
             hdr_msaa: {
                 let flags = gpu.adapter.get_texture_format_features(crate::gpu::HDR_FORMAT).flags;

@@ -222,6 +222,18 @@ impl Registry {
         })
     }
 
+    /// What batch `b` draws with (its material and shape prepared).
+    pub(super) fn batch_draw(&self, b: &super::batch::Batch) -> super::draw_list::BatchDraw {
+        let material = self.materials[b.material.0 as usize].gpu.as_ref().expect("prepared");
+        let mesh = self.shapes[b.shape.0 as usize].gpu.expect("prepared");
+        super::draw_list::BatchDraw { mesh, texture_set: material.texture_set }
+    }
+
+    /// Whether material `id` blends (its draws are sorted far to near).
+    pub(super) fn blended(&self, id: MaterialId) -> bool {
+        self.material(id).is_some_and(|m| m.alpha_mode == crate::scene::AlphaMode::Blend)
+    }
+
     /// Whether material `id` shows `texture` in one of its maps.
     pub(super) fn shows(&self, id: MaterialId, texture: TextureId) -> bool {
         self.materials.get(id.0 as usize).is_some_and(|m| m.material.maps().contains(&Some(texture)))

@@ -2,7 +2,9 @@
 //! the material table — and the Renderer block's instance records.
 
 use super::blocks::{InstanceGpu, MaterialGpu};
+use super::cull::Boxes;
 use super::gpu_array::GpuArray;
+use super::gpu_cull::BoundsGpu;
 use super::RenderError;
 use crate::asset::Texture;
 use crate::gpu::{Blitter, DriverErrors};
@@ -175,29 +177,47 @@ impl MaterialTable {
 /// binds it beside its own draw indices).
 pub(crate) struct InstanceBuffer {
     array: GpuArray,
+    /// Each instance's world box, where views cull on the GPU.
+    bounds: Option<GrowBuffer>,
     /// How many times the buffer was replaced: bind groups made for an older
     /// generation point at a dropped buffer.
     generation: u64,
 }
 
 impl InstanceBuffer {
-    /// Room for 1,024 records: a storage buffer when `storage`, else a data texture.
-    pub(crate) fn new(device: &wgpu::Device, storage: bool) -> Self {
+    /// Room for 1,024 records: a storage buffer when `storage`, else a data
+    /// texture; with their world boxes when `bounds` (GPU culling).
+    pub(crate) fn new(device: &wgpu::Device, storage: bool, bounds: bool) -> Self {
         let array = GpuArray::new(device, "renderer block: instances", record_bytes::<InstanceGpu>(), 1024, storage);
-        Self { array, generation: 0 }
+        let size = 1024 * u64::from(record_bytes::<BoundsGpu>());
+        let bounds =
+            bounds.then(|| GrowBuffer::new(device, "gpu culling: instance bounds", wgpu::BufferUsages::STORAGE, size));
+        Self { array, bounds, generation: 0 }
     }
 
     /// Make room for `instances` records. Returns whether the buffer was replaced
     /// (its contents must be written again and its bind groups rebuilt).
     pub(crate) fn reserve(&mut self, device: &wgpu::Device, instances: usize) -> Result<bool, RenderError> {
-        let replaced = self.array.reserve(device, record_bytes::<InstanceGpu>(), instances)?;
+        let mut replaced = self.array.reserve(device, record_bytes::<InstanceGpu>(), instances)?;
+        if let Some(bounds) = &mut self.bounds {
+            replaced |= bounds.reserve(device, u64::from(record_bytes::<BoundsGpu>()) * instances as u64)?;
+        }
         self.generation += u64::from(replaced);
         Ok(replaced)
     }
 
-    /// Write `data` at record `first`; returns bytes written.
-    pub(crate) fn write(&self, queue: &wgpu::Queue, first: u32, data: &[InstanceGpu]) -> u64 {
-        self.array.write(queue, first.into(), data)
+    /// Write `data` at record `first`, and their world boxes where views cull
+    /// on the GPU; returns bytes written: instances, boxes.
+    pub(crate) fn write(&self, queue: &wgpu::Queue, first: u32, data: &[InstanceGpu], boxes: &Boxes) -> (u64, u64) {
+        let written = self.array.write(queue, first.into(), data);
+        let Some(bounds) = &self.bounds else { return (written, 0) };
+        let range = first as usize..first as usize + data.len();
+        (written, bounds.write(queue, first.into(), &BoundsGpu::of(boxes, range)))
+    }
+
+    /// The world boxes, where views cull on the GPU.
+    pub(crate) fn bounds(&self) -> Option<&wgpu::Buffer> {
+        self.bounds.as_ref().map(|b| &b.buffer)
     }
 
     pub(crate) fn array(&self) -> &GpuArray {

@@ -21,7 +21,7 @@ use super::views::{ViewBlocks, MAX_SHADOW_VIEWS};
 use super::visible::VisibleRun;
 use super::{ms_since, FrameStats, PassStats, RenderError, Renderer};
 use crate::gpu::OffscreenTarget;
-use crate::scene::{Aabb, AlphaMode, Light, LightKind, Lighting, ShadowLayout, View, MAX_LIGHTS};
+use crate::scene::{Aabb, AlphaMode, Culling, Light, LightKind, Lighting, ShadowLayout, View, MAX_LIGHTS};
 use glam::Vec3;
 use web_time::Instant;
 
@@ -107,7 +107,7 @@ impl Renderer {
         self.frame_variant = super::FrameVariant::expected(lights);
         self.prepare(self.scene_format(&view, target), &lighting.environment, &mut prepared)?;
         let [_, _, width, height] = view.viewport.pixels(target.width(), target.height());
-        let frame = ViewFrame::new(&view, width, height);
+        let frame = ViewFrame::new(&view, width, height, self.cull_pipelines.is_some());
         let (views, first_view) = self.plan_shadow_views(&frame, lights)?;
         let mut drawn = ShadowsDrawn {
             frame_index: self.frame_index,
@@ -178,12 +178,13 @@ impl Renderer {
         Aabb::from_points(boxes.flat_map(|(c, e)| [Vec3::from(c - e), Vec3::from(c + e)]))
     }
 
-    /// Cull, queue, sort and batch every view's casters into the shadow list;
-    /// returns each view's range of batches.
+    /// Cull, queue, sort and batch every view's casters into the shadow list
+    /// (culled on the GPU: every valid instance a candidate); returns each
+    /// view's range of runs.
     fn batch_shadow_views(
         &mut self,
         views: &[ShadowView],
-        culling: bool,
+        culling: Culling,
         stats: &mut FrameStats,
     ) -> Result<Vec<std::ops::Range<usize>>, RenderError> {
         self.view.shadows.clear();
@@ -195,13 +196,14 @@ impl Renderer {
         for view in views {
             let view_proj = view.view_proj();
             let casts = |s: &super::Submitted| s.cast_shadows && !blended[s.material.0 as usize];
-            self.collect_visible(&Frustum::from_view_proj(view_proj), culling, casts, &mut visible);
+            let frustum = Frustum::from_view_proj(view_proj);
+            self.collect_visible(&frustum, culling, casts, &mut visible);
             let pass = match view.target {
                 ViewTarget::Layer(_) => PassKind::ShadowDepth,
                 ViewTarget::CubeFace { .. } => PassKind::ShadowDistance,
             };
             let first_item = self.view.shadows.items.len();
-            for &VisibleRun { entry, start, len } in &visible.runs {
+            for &VisibleRun { entry, start, len } in visible.runs.iter().chain(&visible.candidates) {
                 let pipeline = match self.shadow_pipeline(entry, pass, stats) {
                     Ok(pipeline) => pipeline,
                     Err(e) => {
@@ -230,12 +232,10 @@ impl Renderer {
                 });
             }
             queue::sort(&mut self.view.shadows.items[first_item..]);
-            let shapes = &self.registry.shapes;
-            let range = self
-                .view
-                .shadows
-                .build(first_item, &visible.instances, |b| shapes[b.shape.0 as usize].gpu.expect("prepared"));
-            ranges.push(range);
+            // Blended materials cast no shadow: culled on the GPU, every item is.
+            let (registry, on_gpu) = (&self.registry, culling == Culling::Gpu);
+            let list = &mut self.view.shadows;
+            ranges.push(list.build(first_item, &visible.instances, frustum, |b| registry.batch_draw(b), |_| on_gpu));
         }
         self.visible = visible;
         Ok(ranges)
@@ -272,7 +272,9 @@ impl Renderer {
         let block = ShadowGpu::new(views, self.shadow_maps.size_2d, self.shadow_maps.size_cube);
         bytes.scene += self.view.shadow_block.update(&self.queue, block);
         let layout = &self.registry.pipelines.instance_layout;
-        let written = self.view.shadows.upload(&self.device, &self.queue, (layout, self.instances.array()), false)?;
+        let gpu = self.cull_pipelines.as_ref().zip(self.instances.bounds());
+        let written =
+            self.view.shadows.upload(&self.device, &self.queue, (layout, self.instances.array()), gpu, false)?;
         bytes.draw_indices += written.draw_indices;
         bytes.indirect += written.indirect;
         Ok(())
@@ -288,6 +290,9 @@ impl Renderer {
         let mut encoder = self
             .device
             .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("renderer: shadow maps") });
+        if let Some(pipelines) = &self.cull_pipelines {
+            self.view.shadows.record_cull(&mut encoder, pipelines, self.queue.submits());
+        }
         let mut stats = FrameStats::default();
         for (k, (view, range)) in views.iter().zip(ranges).enumerate() {
             let attachment = match view.target {
@@ -319,6 +324,12 @@ impl Renderer {
         cost.draw_calls = stats.draw_calls;
         cost.draws = stats.draws;
         cost.instances = self.view.shadows.draw_indices.len() as u64;
+        if self.view.shadows.culled_on_gpu() {
+            // Counted on the GPU, a frame or two late (0 before the first count comes back).
+            let submits = self.queue.submits();
+            let drawn = self.view.shadows.gpu.as_mut().and_then(|g| g.drawn(&self.device, submits));
+            cost.instances = drawn.map_or(0, |d| d.iter().map(|&n| u64::from(n)).sum());
+        }
         encoder.finish()
     }
 }

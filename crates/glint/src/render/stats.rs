@@ -1,6 +1,7 @@
 //! Core layer: [`FrameStats`], the cost of one frame in numbers.
 
 use super::GpuTimes;
+use crate::scene::Culling;
 use serde::Serialize;
 
 /// Bytes written to the GPU during a frame, per shader data block and kind.
@@ -14,6 +15,8 @@ pub struct UploadStats {
     pub material: u64,
     /// Renderer block (`@group(3)`): instances (transform and material) that changed.
     pub instances: u64,
+    /// The world boxes of the instances that changed, where views cull on the GPU.
+    pub bounds: u64,
     /// Renderer block (`@group(3)`): the visible instance indices in draw order,
     /// when they differ from the last frame's.
     pub draw_indices: u64,
@@ -36,6 +39,7 @@ impl UploadStats {
         self.camera += other.camera;
         self.material += other.material;
         self.instances += other.instances;
+        self.bounds += other.bounds;
         self.draw_indices += other.draw_indices;
         self.indirect += other.indirect;
         self.textures += other.textures;
@@ -46,7 +50,13 @@ impl UploadStats {
     /// Fill in the sums from the per-block counts.
     pub(crate) fn finish(&mut self) {
         self.uniforms = self.scene + self.camera + self.material;
-        self.total = self.uniforms + self.instances + self.draw_indices + self.indirect + self.textures + self.meshes;
+        self.total = self.uniforms
+            + self.instances
+            + self.bounds
+            + self.draw_indices
+            + self.indirect
+            + self.textures
+            + self.meshes;
     }
 }
 
@@ -132,12 +142,19 @@ pub struct FrameStats {
     pub entities_submitted: u32,
     /// Instances submitted since the last flush.
     pub instances_submitted: u64,
-    /// Instances outside the view frustum.
+    /// Instances outside the view frustum (culled on the GPU: counted there,
+    /// as [`instances_drawn`](Self::instances_drawn) is).
     pub instances_culled: u64,
     /// Instances skipped because their transform has NaN or infinity.
     pub instances_invalid: u64,
-    /// Instances drawn.
+    /// Instances drawn. Culled on the GPU, the count of the newest earlier
+    /// frame of this view whose count came back (a frame or two before; read
+    /// without waiting), plus the blended instances culled on the CPU; 0 until
+    /// the first comes back.
     pub instances_drawn: u64,
+    /// How the view was culled: [`Culling::Gpu`] only where the device can
+    /// (else [`Culling::Cpu`], whatever the view asked for).
+    pub culling: Culling,
     /// CPU time per stage.
     pub cpu_ms: StageTimes,
     /// Shadow views drawn by this frame's shadow pass.

@@ -2,7 +2,7 @@
 //! [`View`](crate::scene::View).
 
 use super::cull::Frustum;
-use crate::scene::{Camera, View};
+use crate::scene::{Camera, Culling, View};
 use glam::Mat4;
 
 /// A view's camera matrices for one frame at its aspect ratio: what culling,
@@ -17,17 +17,22 @@ pub(super) struct ViewFrame {
     pub view: Mat4,
     /// Its frustum in world space.
     pub frustum: Frustum,
-    /// Whether it culls.
-    pub culling: bool,
+    /// How it culls: [`Culling::Gpu`] only where the device can.
+    pub culling: Culling,
 }
 
 impl ViewFrame {
-    /// `view` drawn into a rectangle `width` × `height` pixels.
-    pub fn new(view: &View, width: u32, height: u32) -> Self {
+    /// `view` drawn into a rectangle `width` × `height` pixels, by a renderer
+    /// that can cull on the GPU when `gpu_cull`.
+    pub fn new(view: &View, width: u32, height: u32, gpu_cull: bool) -> Self {
         let aspect = width as f32 / height.max(1) as f32;
         let camera = view.camera;
         let matrix = camera.view();
         let frustum = Frustum::from_view_proj(camera.projection(aspect) * matrix);
-        Self { camera, aspect, view: matrix, frustum, culling: view.culling }
+        let culling = match view.culling {
+            Culling::Gpu if !gpu_cull => Culling::Cpu,
+            culling => culling,
+        };
+        Self { camera, aspect, view: matrix, frustum, culling }
     }
 }

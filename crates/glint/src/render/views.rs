@@ -6,7 +6,7 @@
 
 use super::blocks::CameraGpu;
 use super::blocks::{SceneGpu, UniformBlock};
-use super::draw_list::DrawList;
+use super::draw_list::{DrawList, ListPaths};
 use super::pipelines::Pipelines;
 use super::post::PostParams;
 use super::resources::InstanceBuffer;
@@ -97,13 +97,13 @@ pub(crate) struct ViewGpu {
     pub post_params: PostParams,
     /// The instance buffer and shadow maps generations the bind groups point at.
     generations: (u64, u64),
-    /// Whether the lists draw indirect, and read storage buffers.
-    paths: (bool, bool),
+    /// How the lists draw.
+    paths: ListPaths,
 }
 
 impl ViewGpu {
-    /// A new view's state over `shared`, drawing indirect and from storage buffers as `paths` say.
-    pub(crate) fn new(shared: &Shared, paths: (bool, bool)) -> Self {
+    /// A new view's state over `shared`, its lists drawing as `paths` say.
+    pub(crate) fn new(shared: &Shared, paths: ListPaths) -> Self {
         let Shared { device, pipelines, instances, .. } = *shared;
         let list = |label| DrawList::new(device, label, &pipelines.instance_layout, instances.array(), paths);
         let scene_block = UniformBlock::new(device, "renderer: scene block");

@@ -7,6 +7,7 @@ use super::cull::{self, Containment, Frustum};
 use super::instances::{self, InstanceStore};
 use super::view::ViewFrame;
 use super::{FrameStats, Renderer, Submitted};
+use crate::scene::Culling;
 use rayon::prelude::*;
 
 /// Submitted instances above which entities are culled on all cores. Tiles make
@@ -25,7 +26,8 @@ pub(super) struct VisibleRun {
 }
 
 /// What one view (or shadow view) sees: the visible instances of the submitted
-/// entities in submission order, and each entity's run of them. Kept by the
+/// entities in submission order, and each entity's run of them; culled on the
+/// GPU, each entity's valid instances, which the GPU tests. Kept by the
 /// renderer between frames only to reuse its allocations.
 #[derive(Default)]
 pub(super) struct Visible {
@@ -33,6 +35,9 @@ pub(super) struct Visible {
     pub instances: Vec<u32>,
     /// One run per entity with any instance visible.
     pub runs: Vec<VisibleRun>,
+    /// Culled on the GPU: one run per entity with any valid instance, `start`
+    /// its first in the store (blended entities are culled on the CPU).
+    pub candidates: Vec<VisibleRun>,
 }
 
 impl Renderer {
@@ -45,21 +50,37 @@ impl Renderer {
         let store = &self.store;
         stats.instances_invalid = self.submitted.iter().map(|s| u64::from(store.slot(s.slot).invalid)).sum();
         stats.instances_culled = stats.instances_submitted - stats.instances_invalid - visible.instances.len() as u64;
+        stats.culling = frame.culling;
     }
 
     /// Fill `out` with the instances of the submitted entities `wanted` keeps
-    /// that `frustum` sees (every valid one when not `culling`).
+    /// that `frustum` sees (every valid one when `culling` is off); culling on
+    /// the GPU, with the candidates of those not blended.
     pub(super) fn collect_visible(
         &self,
         frustum: &Frustum,
-        culling: bool,
+        culling: Culling,
         wanted: impl Fn(&Submitted) -> bool + Sync,
         out: &mut Visible,
     ) {
         out.instances.clear();
         out.runs.clear();
+        out.candidates.clear();
         let store = &self.store;
-        let Visible { instances: visible, runs } = out;
+        // Per material (captured by the parallel culler below, so plain data).
+        let gpu: Vec<bool> = (0..self.registry.materials.len() as u32)
+            .map(|m| culling == Culling::Gpu && !self.registry.blended(crate::scene::MaterialId(m)))
+            .collect();
+        let on_gpu = |s: &Submitted| gpu[s.material.0 as usize];
+        for (entry, s) in self.submitted.iter().enumerate().filter(|(_, s)| on_gpu(s) && wanted(s)) {
+            let slot = store.slot(s.slot);
+            if slot.count > slot.invalid {
+                out.candidates.push(VisibleRun { entry, start: slot.first, len: slot.count - slot.invalid });
+            }
+        }
+        let wanted = |s: &Submitted| !on_gpu(s) && wanted(s);
+        let culling = culling != Culling::Off;
+        let Visible { instances: visible, runs, .. } = out;
         let mut push_run = |entry: usize, visible: &mut Vec<u32>, start: usize| {
             let len = (visible.len() - start) as u32;
             if len > 0 {

@@ -47,6 +47,42 @@ impl Default for Viewport {
     }
 }
 
+/// How a view decides which instances to draw (`--cull` in the CLI, the
+/// camera key `cull` in `.scn`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Culling {
+    /// Draw every instance: to compare costs.
+    Off,
+    /// Frustum culling on the CPU: each entity's world box, then each
+    /// 64-instance tile's, then each instance's where a tile crosses a plane.
+    Cpu,
+    /// Frustum culling on the GPU: a compute pass tests every instance and
+    /// writes the instance counts of the view's indirect draws. Blended
+    /// instances, which are sorted far to near on the CPU, are culled there.
+    /// Where the adapter cannot (no compute or indirect drawing: GL, WebGL2),
+    /// the view takes [`Culling::Cpu`]'s path and its statistics say so.
+    #[default]
+    Gpu,
+}
+
+impl Culling {
+    /// Every way, in order.
+    pub const ALL: [Self; 3] = [Self::Off, Self::Cpu, Self::Gpu];
+    /// Their names in the CLI and `.scn` files, in the same order.
+    pub const NAMES: [&'static str; 3] = ["off", "cpu", "gpu"];
+
+    /// The way named `name` (one of [`Culling::NAMES`]).
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::NAMES.iter().position(|n| *n == name).map(|k| Self::ALL[k])
+    }
+
+    /// Its name.
+    pub fn name(self) -> &'static str {
+        Self::NAMES[self as usize]
+    }
+}
+
 /// One camera's part of a frame.
 #[derive(Clone, Debug, PartialEq)]
 pub struct View {
@@ -54,8 +90,9 @@ pub struct View {
     pub camera: Camera,
     /// Where in the target it draws (the whole target by default).
     pub viewport: Viewport,
-    /// Frustum culling (on by default; off draws everything, to compare costs).
-    pub culling: bool,
+    /// How it culls ([`Culling::Gpu`] by default, which takes the CPU's path where
+    /// the adapter cannot cull on the GPU; [`Culling::Off`] draws everything, to compare costs).
+    pub culling: Culling,
     /// Post-processing passes, in order (none by default: the view is drawn
     /// straight into the target, and the chain costs nothing).
     pub post: Vec<PostEffect>,
@@ -67,7 +104,7 @@ pub struct View {
 impl View {
     /// The whole target seen by `camera`, culled.
     pub fn new(camera: Camera) -> Self {
-        Self { camera, viewport: Viewport::FULL, culling: true, post: Vec::new(), output: None }
+        Self { camera, viewport: Viewport::FULL, culling: Culling::Gpu, post: Vec::new(), output: None }
     }
 
     /// This view drawing into `viewport`.
@@ -85,8 +122,8 @@ impl View {
         Self { output: Some(output), ..self }
     }
 
-    /// This view with culling on or off.
-    pub fn with_culling(self, culling: bool) -> Self {
+    /// This view culled as `culling` says.
+    pub fn with_culling(self, culling: Culling) -> Self {
         Self { culling, ..self }
     }
 }

@@ -230,6 +230,8 @@ impl ShaderLibrary {
 pub(crate) const BLIT: &str = include_str!("blit.wgsl");
 /// The post-processing passes (render/post.rs).
 pub(crate) const POST: &str = include_str!("post.wgsl");
+/// GPU frustum culling of a draw list (`render/gpu_cull.rs`).
+pub(crate) const CULL: &str = include_str!("cull.wgsl");
 
 #[cfg(test)]
 mod tests {

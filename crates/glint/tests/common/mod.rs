@@ -68,11 +68,11 @@ pub fn load_scene(path: &Path) -> glint::asset::SceneDesc {
 
 /// Render one frame of a scene under `tests/scenes/` at `size`×`size` with 4× MSAA.
 pub fn render_scene(gpu: &Gpu, name: &str, size: u32) -> (image::RgbaImage, FrameStats) {
-    render_file(gpu, &repo_root().join("tests/scenes").join(format!("{name}.scn")), size, true)
+    render_file(gpu, &repo_root().join("tests/scenes").join(format!("{name}.scn")), size, glint::Culling::Gpu)
 }
 
-/// Render one frame of the scene file at `path`, culling on or off.
-pub fn render_file(gpu: &Gpu, path: &Path, size: u32, culling: bool) -> (image::RgbaImage, FrameStats) {
+/// Render one frame of the scene file at `path`, culled as `culling` says.
+pub fn render_file(gpu: &Gpu, path: &Path, size: u32, culling: glint::Culling) -> (image::RgbaImage, FrameStats) {
     let desc = load_scene(path);
     assert!(desc.warnings.is_empty(), "{:?}", desc.warnings);
     render_desc(gpu, &desc, size, culling)
@@ -83,7 +83,7 @@ pub fn render_desc(
     gpu: &Gpu,
     desc: &glint::asset::SceneDesc,
     size: u32,
-    culling: bool,
+    culling: glint::Culling,
 ) -> (image::RgbaImage, FrameStats) {
     render_sized(gpu, desc, (size, size), 4, culling)
 }
@@ -95,7 +95,7 @@ pub fn render_sized(
     desc: &glint::asset::SceneDesc,
     (width, height): (u32, u32),
     samples: u32,
-    culling: bool,
+    culling: glint::Culling,
 ) -> (image::RgbaImage, FrameStats) {
     let mut renderer = Renderer::new(gpu);
     let entities = renderer.place_scene(desc).entities;

@@ -1,0 +1,480 @@
+//! Core layer: frustum culling on the GPU ([`Culling::Gpu`](crate::Culling::Gpu)).
+//!
+//! A draw list culled on the GPU is built from every valid instance of the
+//! entities it draws (blended ones excepted: they are sorted far to near, so
+//! culled on the CPU), as *cull ranges*: runs of consecutive store instances,
+//! each with its batch, its frustum and where its batch's instances start in
+//! the draw-index buffer. The CPU's work per frame is per entity, never per
+//! instance, and what it uploads changes only when the entities do.
+//!
+//! Each frame the list's indirect commands are copied from the CPU's (whose
+//! GPU-culled instance counts are 0) into [`GpuCull::args`], then one compute
+//! pass (`shader/cull.wgsl`) tests every candidate's world box (uploaded with
+//! the instances, [`BoundsGpu`]) against its frustum, writes the visible ones'
+//! store indices into their batch's range and counts them into the command;
+//! then copies each run's non-empty commands to the front of the run's range of
+//! [`GpuCull::drawn_args`] with their count, which a
+//! `multi_draw_indexed_indirect_count` call reads (where the adapter has
+//! `MULTI_DRAW_INDIRECT_COUNT`; elsewhere the run draws all of
+//! [`GpuCull::args`], empty commands included). Each frustum's instances drawn
+//! come back to the CPU a frame or two late, without a stall.
+
+use super::resources::GrowBuffer;
+use super::RenderError;
+use crate::render::cull::{Boxes, Frustum};
+use std::sync::atomic::{AtomicU8, Ordering};
+use std::sync::Arc;
+
+/// Invocations per workgroup of both entry points.
+const WORKGROUP: u32 = 64;
+/// Bytes of one indexed indirect command.
+pub(crate) const COMMAND_BYTES: u64 = std::mem::size_of::<wgpu::util::DrawIndexedIndirectArgs>() as u64;
+
+/// One instance's world box as the cull pass reads it (`w` unused).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub(crate) struct BoundsGpu {
+    center: [f32; 4],
+    extent: [f32; 4],
+}
+
+impl BoundsGpu {
+    /// Boxes `range` of `boxes`, as the cull pass reads them.
+    pub(crate) fn of(boxes: &Boxes, range: std::ops::Range<usize>) -> Vec<Self> {
+        (range)
+            .map(|i| {
+                let (c, e) = (boxes.center(i), boxes.extent(i));
+                Self { center: [c.x, c.y, c.z, 0.0], extent: [e.x, e.y, e.z, 0.0] }
+            })
+            .collect()
+    }
+}
+
+/// Candidates `start .. start + count` of a list: store instances `first ..`,
+/// tested against frustum `frustum`, drawn by batch `batch`, whose instances
+/// start at `out` in the draw-index buffer.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, bytemuck::Pod, bytemuck::Zeroable)]
+pub(crate) struct CullRange {
+    pub first: u32,
+    pub count: u32,
+    pub start: u32,
+    pub batch: u32,
+    pub frustum: u32,
+    pub out: u32,
+}
+
+/// Batches `first .. first + len` of a list, drawn by one call, seen by `frustum`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, bytemuck::Pod, bytemuck::Zeroable)]
+pub(crate) struct Run {
+    pub first: u32,
+    pub len: u32,
+    pub frustum: u32,
+    pad: u32,
+}
+
+impl Run {
+    pub(crate) fn new(first: usize, len: usize, frustum: u32) -> Self {
+        Self { first: first as u32, len: len as u32, frustum, pad: 0 }
+    }
+
+    /// Its batches.
+    pub(crate) fn batches(&self) -> std::ops::Range<usize> {
+        self.first as usize..(self.first + self.len) as usize
+    }
+}
+
+/// `cull.wgsl`'s `Params`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, bytemuck::Pod, bytemuck::Zeroable)]
+struct Params {
+    ranges: u32,
+    candidates: u32,
+    runs: u32,
+    totals: u32,
+}
+
+/// The cull and compact compute pipelines, one pair per renderer.
+pub(crate) struct CullPipelines {
+    cull_layout: wgpu::BindGroupLayout,
+    compact_layout: wgpu::BindGroupLayout,
+    cull: wgpu::ComputePipeline,
+    compact: wgpu::ComputePipeline,
+    /// Whether runs draw with a count buffer.
+    draw_count: bool,
+}
+
+impl CullPipelines {
+    pub(crate) fn new(device: &wgpu::Device) -> Self {
+        let entry = |binding, ty| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: wgpu::ShaderStages::COMPUTE,
+            ty,
+            count: None,
+        };
+        let storage = |binding, read_only| {
+            entry(
+                binding,
+                wgpu::BindingType::Buffer {
+                    ty: wgpu::BufferBindingType::Storage { read_only },
+                    has_dynamic_offset: false,
+                    min_binding_size: None,
+                },
+            )
+        };
+        let uniform = wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Uniform,
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        };
+        let cull_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("gpu culling: candidates"),
+            entries: &[
+                entry(0, uniform),
+                storage(1, true),
+                storage(2, true),
+                storage(3, true),
+                storage(4, false),
+                storage(5, false),
+            ],
+        });
+        let compact_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("gpu culling: runs"),
+            entries: &[storage(0, true), storage(1, false), storage(2, false)],
+        });
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("cull.wgsl"),
+            source: wgpu::ShaderSource::Wgsl(crate::shader::CULL.into()),
+        });
+        let pipeline = |entry: &str, layouts: &[Option<&wgpu::BindGroupLayout>]| {
+            let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some(entry),
+                bind_group_layouts: layouts,
+                immediate_size: 0,
+            });
+            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some(entry),
+                layout: Some(&layout),
+                module: &module,
+                entry_point: Some(entry),
+                compilation_options: Default::default(),
+                cache: None,
+            })
+        };
+        Self {
+            cull: pipeline("cull", &[Some(&cull_layout)]),
+            compact: pipeline("compact", &[Some(&cull_layout), Some(&compact_layout)]),
+            cull_layout,
+            compact_layout,
+            draw_count: device.features().contains(wgpu::Features::MULTI_DRAW_INDIRECT_COUNT),
+        }
+    }
+}
+
+/// What a list culled on the GPU holds there beside its draw indices.
+pub(crate) struct GpuCull {
+    label: &'static str,
+    params: wgpu::Buffer,
+    ranges: GrowBuffer,
+    planes: GrowBuffer,
+    /// The commands the cull pass counts instances into.
+    pub args: GrowBuffer,
+    /// Each run's non-empty commands, from the run's first batch on.
+    pub drawn_args: GrowBuffer,
+    runs: GrowBuffer,
+    /// Each run's command count, then each frustum's instances drawn.
+    pub counts: GrowBuffer,
+    groups: Option<[wgpu::BindGroup; 2]>,
+    uploaded: (Vec<CullRange>, Vec<Run>, Vec<[f32; 4]>, Params),
+    params_now: Params,
+    readback: Readback,
+}
+
+/// What [`GpuCull::upload`] writes from.
+pub(crate) struct CullInput<'a> {
+    pub ranges: &'a [CullRange],
+    pub runs: &'a [Run],
+    pub frustums: &'a [Frustum],
+    /// Indirect commands in the list.
+    pub commands: usize,
+}
+
+/// The buffers the cull pass binds that the list does not own.
+pub(crate) struct CullBindings<'a> {
+    pub bounds: &'a wgpu::Buffer,
+    pub draw_indices: wgpu::BindingResource<'a>,
+}
+
+impl GpuCull {
+    pub(crate) fn new(device: &wgpu::Device, label: &'static str) -> Self {
+        use wgpu::BufferUsages as U;
+        let buffer = |usage, bytes| GrowBuffer::new(device, label, usage, bytes);
+        Self {
+            label,
+            params: device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: std::mem::size_of::<Params>() as u64,
+                usage: U::UNIFORM | U::COPY_DST,
+                mapped_at_creation: false,
+            }),
+            ranges: buffer(U::STORAGE, 1024),
+            planes: buffer(U::STORAGE, 1024),
+            args: buffer(U::STORAGE | U::INDIRECT | U::COPY_SRC, 1024),
+            drawn_args: buffer(U::STORAGE | U::INDIRECT | U::COPY_SRC, 1024),
+            runs: buffer(U::STORAGE, 1024),
+            counts: buffer(U::STORAGE | U::INDIRECT | U::COPY_SRC, 1024),
+            groups: None,
+            uploaded: Default::default(),
+            params_now: Params::default(),
+            readback: Readback::new(device),
+        }
+    }
+
+    /// Forget the bind groups (a buffer they hold was replaced).
+    pub(crate) fn unbind(&mut self) {
+        self.groups = None;
+    }
+
+    /// Write what changed of `input` (and make room for it); returns bytes written.
+    pub(crate) fn upload(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        input: &CullInput,
+        pipelines: &CullPipelines,
+        bindings: CullBindings,
+    ) -> Result<u64, RenderError> {
+        let planes: Vec<[f32; 4]> = input.frustums.iter().flat_map(|f| f.planes().map(|p| p.to_array())).collect();
+        let candidates = input.ranges.last().map_or(0, |r| r.start + r.count);
+        let params = Params {
+            ranges: input.ranges.len() as u32,
+            candidates,
+            runs: input.runs.len() as u32,
+            totals: input.runs.len() as u32,
+        };
+        let commands = input.commands as u64 * COMMAND_BYTES;
+        let mut replaced = false;
+        for (buffer, bytes) in [
+            (&mut self.ranges, std::mem::size_of_val(input.ranges) as u64),
+            (&mut self.planes, std::mem::size_of_val(planes.as_slice()) as u64),
+            (&mut self.args, commands),
+            (&mut self.drawn_args, commands),
+            (&mut self.runs, std::mem::size_of_val(input.runs) as u64),
+            (&mut self.counts, 4 * (input.runs.len() + input.frustums.len()) as u64),
+        ] {
+            replaced |= buffer.reserve(device, bytes)?;
+        }
+        if replaced {
+            self.uploaded = Default::default();
+            self.groups = None;
+        }
+        let mut written = 0;
+        if self.uploaded.0 != input.ranges {
+            written += self.ranges.write(queue, 0, input.ranges);
+            self.uploaded.0 = input.ranges.to_vec();
+        }
+        if self.uploaded.1 != input.runs {
+            written += self.runs.write(queue, 0, input.runs);
+            self.uploaded.1 = input.runs.to_vec();
+        }
+        if self.uploaded.2 != planes {
+            written += self.planes.write(queue, 0, &planes);
+            self.uploaded.2 = planes;
+        }
+        if self.uploaded.3 != params || replaced {
+            queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
+            written += std::mem::size_of::<Params>() as u64;
+            self.uploaded.3 = params;
+        }
+        self.params_now = params;
+        if self.groups.is_none() {
+            self.groups = Some(self.bind(device, pipelines, bindings));
+        }
+        Ok(written)
+    }
+
+    fn bind(&self, device: &wgpu::Device, pipelines: &CullPipelines, bindings: CullBindings) -> [wgpu::BindGroup; 2] {
+        fn whole(buffer: &wgpu::Buffer) -> wgpu::BindingResource<'_> {
+            buffer.as_entire_binding()
+        }
+        let entries = [
+            wgpu::BindGroupEntry { binding: 0, resource: whole(&self.params) },
+            wgpu::BindGroupEntry { binding: 1, resource: whole(bindings.bounds) },
+            wgpu::BindGroupEntry { binding: 2, resource: whole(&self.ranges.buffer) },
+            wgpu::BindGroupEntry { binding: 3, resource: whole(&self.planes.buffer) },
+            wgpu::BindGroupEntry { binding: 4, resource: bindings.draw_indices },
+            wgpu::BindGroupEntry { binding: 5, resource: whole(&self.args.buffer) },
+        ];
+        let cull = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some(self.label),
+            layout: &pipelines.cull_layout,
+            entries: &entries,
+        });
+        let compact = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some(self.label),
+            layout: &pipelines.compact_layout,
+            entries: &[
+                wgpu::BindGroupEntry { binding: 0, resource: whole(&self.runs.buffer) },
+                wgpu::BindGroupEntry { binding: 1, resource: whole(&self.drawn_args.buffer) },
+                wgpu::BindGroupEntry { binding: 2, resource: whole(&self.counts.buffer) },
+            ],
+        });
+        [cull, compact]
+    }
+
+    /// Record the cull pass: the commands reset from `template` (the CPU's),
+    /// every candidate tested, the runs compacted, the totals copied for
+    /// reading back (`submits`: the queue's submissions so far).
+    pub(crate) fn record(
+        &mut self,
+        encoder: &mut wgpu::CommandEncoder,
+        pipelines: &CullPipelines,
+        template: &wgpu::Buffer,
+        submits: u64,
+    ) {
+        let Some([cull, compact]) = &self.groups else { return };
+        let Params { candidates, runs, totals, .. } = self.params_now;
+        let frustums = self.uploaded.2.len() as u32 / 6;
+        let commands = self.uploaded.1.last().map_or(0, |r| u64::from(r.first + r.len));
+        if commands > 0 {
+            encoder.copy_buffer_to_buffer(template, 0, &self.args.buffer, 0, commands * COMMAND_BYTES);
+        }
+        encoder.clear_buffer(
+            &self.counts.buffer,
+            0,
+            Some(u64::from(4 * (runs + frustums).div_ceil(4) * 4).min(self.counts.buffer.size())),
+        );
+        {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("cull instances"),
+                timestamp_writes: None,
+            });
+            pass.set_bind_group(0, cull, &[]);
+            if candidates > 0 {
+                pass.set_pipeline(&pipelines.cull);
+                let (x, y) = grid(candidates);
+                pass.dispatch_workgroups(x, y, 1);
+            }
+            if runs > 0 {
+                pass.set_pipeline(&pipelines.compact);
+                pass.set_bind_group(1, compact, &[]);
+                let (x, y) = grid(runs);
+                pass.dispatch_workgroups(x, y, 1);
+            }
+        }
+        self.readback.copy(encoder, &self.counts.buffer, u64::from(totals) * 4, frustums, submits);
+    }
+
+    /// Draw run `k` (`run`) of the list from the culled commands.
+    pub(crate) fn draw_run(&self, pipelines: &CullPipelines, pass: &mut wgpu::RenderPass<'_>, k: usize, run: &Run) {
+        let at = u64::from(run.first) * COMMAND_BYTES;
+        match pipelines.draw_count {
+            true => pass.multi_draw_indexed_indirect_count(
+                &self.drawn_args.buffer,
+                at,
+                &self.counts.buffer,
+                k as u64 * 4,
+                run.len,
+            ),
+            false => pass.multi_draw_indexed_indirect(&self.args.buffer, at, run.len),
+        }
+    }
+
+    /// Each frustum's instances drawn by the newest frame whose counts came
+    /// back (`None` before the first), without waiting for the GPU.
+    pub(crate) fn drawn(&mut self, device: &wgpu::Device, submits: u64) -> Option<&[u32]> {
+        self.readback.collect(device, submits)
+    }
+}
+
+/// Workgroups for `n` invocations, in rows of at most 65,535.
+fn grid(n: u32) -> (u32, u32) {
+    let groups = n.div_ceil(WORKGROUP);
+    let x = groups.min(65_535);
+    (x, groups.div_ceil(x))
+}
+
+const FREE: u8 = 0;
+const MAPPING: u8 = 1;
+const MAPPED: u8 = 2;
+const FAILED: u8 = 3;
+const COPIED: u8 = 4;
+/// Readback slots: a frame's counts are read two or three frames later.
+const SLOTS: usize = 3;
+/// Frustums a list has at most: the camera, or every shadow view.
+const MAX_FRUSTUMS: u64 = super::views::MAX_SHADOW_VIEWS as u64;
+
+/// A few small buffers the per-frustum totals are copied into and mapped from.
+struct Readback {
+    slots: Vec<(wgpu::Buffer, Arc<AtomicU8>, u64, u32)>,
+    latest: Option<Vec<u32>>,
+}
+
+impl Readback {
+    fn new(device: &wgpu::Device) -> Self {
+        let slot = |_| {
+            let buffer = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("gpu culling: instances drawn, read back"),
+                size: 4 * MAX_FRUSTUMS,
+                usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+                mapped_at_creation: false,
+            });
+            (buffer, Arc::new(AtomicU8::new(FREE)), 0, 0)
+        };
+        Self { slots: (0..SLOTS).map(slot).collect(), latest: None }
+    }
+
+    /// Copy `frustums` totals from `at` in `counts` into a free slot (none free: skipped).
+    fn copy(
+        &mut self,
+        encoder: &mut wgpu::CommandEncoder,
+        counts: &wgpu::Buffer,
+        at: u64,
+        frustums: u32,
+        submits: u64,
+    ) {
+        let frustums = frustums.min(MAX_FRUSTUMS as u32);
+        let Some(slot) = self.slots.iter_mut().find(|s| s.1.load(Ordering::Acquire) == FREE) else { return };
+        if frustums > 0 {
+            encoder.copy_buffer_to_buffer(counts, at, &slot.0, 0, 4 * u64::from(frustums));
+            slot.1.store(COPIED, Ordering::Release);
+            (slot.2, slot.3) = (submits, frustums);
+        }
+    }
+
+    /// Map the slots whose copies were submitted (the queue has made more than
+    /// `submits` submissions since), and take the newest mapped one's totals.
+    fn collect(&mut self, device: &wgpu::Device, submits: u64) -> Option<&[u32]> {
+        let _ = device.poll(wgpu::PollType::Poll);
+        let mut newest: Option<(u64, Vec<u32>)> = None;
+        for (buffer, state, copied_at, frustums) in &self.slots {
+            match state.load(Ordering::Acquire) {
+                COPIED if submits > *copied_at => {
+                    state.store(MAPPING, Ordering::Release);
+                    let state = Arc::clone(state);
+                    buffer.map_async(wgpu::MapMode::Read, .., move |r| {
+                        state.store(if r.is_ok() { MAPPED } else { FAILED }, Ordering::Release);
+                    });
+                }
+                MAPPED => {
+                    let totals = buffer
+                        .get_mapped_range(..)
+                        .ok()
+                        .map(|view| bytemuck::cast_slice::<u8, u32>(&view[..4 * *frustums as usize]).to_vec());
+                    buffer.unmap();
+                    state.store(FREE, Ordering::Release);
+                    if let Some(totals) = totals.filter(|_| newest.as_ref().is_none_or(|n| n.0 < *copied_at)) {
+                        newest = Some((*copied_at, totals));
+                    }
+                }
+                FAILED => state.store(FREE, Ordering::Release),
+                _ => {}
+            }
+        }
+        if let Some((_, totals)) = newest {
+            self.latest = Some(totals);
+        }
+        self.latest.as_deref()
+    }
+}

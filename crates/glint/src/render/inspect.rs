@@ -1,0 +1,63 @@
+//! Core layer: [`Renderer::drawn_instances`], what the last frame's lists drew,
+//! read back from the GPU: how tests tell that culling on the GPU keeps exactly
+//! the instances culling on the CPU keeps.
+
+use super::draw_list::DrawList;
+use super::{RenderError, Renderer};
+
+impl Renderer {
+    /// The instances the last frame of the single view (`render` or `flush`)
+    /// drew, as instance-store indices, sorted: the camera's, then each shadow
+    /// view's. Culled on the GPU, read back from what the cull pass wrote
+    /// (waiting for the GPU); culled on the CPU, from the lists. Store indices
+    /// are the renderer's own business, but two renderers given the same
+    /// entities in the same order number them alike.
+    #[doc(hidden)]
+    pub fn drawn_instances(&self) -> Result<Vec<Vec<u32>>, RenderError> {
+        let mut views = self.read_list(&self.view.forward)?;
+        views.extend(self.read_list(&self.view.shadows)?);
+        Ok(views)
+    }
+
+    /// Each frustum's instances drawn by `list`, sorted.
+    fn read_list(&self, list: &DrawList) -> Result<Vec<Vec<u32>>, RenderError> {
+        let mut views = vec![Vec::new(); list.frustums.len()];
+        let (indices, counts) = match (&list.gpu, list.culled_on_gpu()) {
+            (Some(gpu), true) => {
+                let indices = self.read_words(list.draw_index_buffer().expect("a storage buffer"))?;
+                let args = self.read_words(&gpu.args.buffer)?;
+                let counts: Vec<u32> = (0..list.batches.len()).map(|b| args[5 * b + 1]).collect();
+                (indices, counts)
+            }
+            _ => (list.draw_indices.clone(), list.batches.iter().map(|b| b.instance_count).collect()),
+        };
+        for run in &list.runs {
+            for b in run.batches() {
+                let first = list.batches[b].first_instance as usize;
+                views[run.frustum as usize].extend_from_slice(&indices[first..first + counts[b] as usize]);
+            }
+        }
+        views.iter_mut().for_each(|v| v.sort_unstable());
+        Ok(views)
+    }
+
+    /// The words of `buffer`, waiting for the GPU.
+    fn read_words(&self, buffer: &wgpu::Buffer) -> Result<Vec<u32>, RenderError> {
+        let staging = self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("renderer: inspection readback"),
+            size: buffer.size(),
+            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+            mapped_at_creation: false,
+        });
+        let mut encoder = self.device.create_command_encoder(&Default::default());
+        encoder.copy_buffer_to_buffer(buffer, 0, &staging, 0, buffer.size());
+        self.queue.submit([encoder.finish()]);
+        let (sender, receiver) = std::sync::mpsc::channel();
+        staging.map_async(wgpu::MapMode::Read, .., move |r| drop(sender.send(r)));
+        let failed = |message: String| RenderError::Device { what: "an inspection readback", message };
+        self.device.poll(wgpu::PollType::wait_indefinitely()).map_err(|e| failed(e.to_string()))?;
+        receiver.recv().map_err(|e| failed(e.to_string()))?.map_err(|e| failed(e.to_string()))?;
+        let words = staging.get_mapped_range(..).map_err(|e| failed(e.to_string()))?;
+        Ok(bytemuck::cast_slice(&words).to_vec())
+    }
+}
