@@ -1,13 +1,40 @@
-//! `glint bench`: steady-state frame cost of a scene, optimized and naive.
+//! `glint bench`: steady-state frame cost of a scene: the naive baseline, and
+//! the optimized frame culled on the CPU and on the GPU.
 
 use glint::asset::SceneDesc;
 use glint::{Error, FrameMode, FrameStats, Gpu, OffscreenTarget, Renderer};
 use serde::Serialize;
 
+/// One way of building frames that a bench measures.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BenchRun {
+    /// The naive baseline ([`FrameMode::Naive`]).
+    Naive,
+    /// The optimized frame, culled this way (`--mode optimized` and `both`).
+    Optimized(glint::Culling),
+    /// The optimized frame culled this way, beside the others (`--mode all`).
+    Culled(glint::Culling),
+}
+
+impl BenchRun {
+    /// Its name in reports: `naive`, `optimized`, or (`--mode all`)
+    /// `unculled`, `cpu-culled` or `gpu-culled`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Naive => "naive",
+            Self::Optimized(_) => "optimized",
+            Self::Culled(glint::Culling::Off) => "unculled",
+            Self::Culled(glint::Culling::Cpu) => "cpu-culled",
+            Self::Culled(glint::Culling::Gpu) => "gpu-culled",
+        }
+    }
+}
+
 /// One mode's measurements.
 #[derive(Serialize)]
 pub struct ModeReport {
-    /// `optimized` or `naive`.
+    /// [`BenchRun::name`] (the way asked for: `stats.culling` says which way
+    /// the device culled).
     pub mode: &'static str,
     /// Frames measured (after the warm-up).
     pub frames: usize,
@@ -20,6 +47,10 @@ pub struct ModeReport {
     pub fps: f64,
     /// Median CPU time of `flush`, ms (the shadow pass is apart: `shadow_cpu_ms_median`).
     pub cpu_ms_median: f64,
+    /// Median of glint's own CPU work in `flush`, ms: all of it but the encode
+    /// and submit stages, whose time is mostly wgpu's recording and submission
+    /// (`examples/bare_cubes.rs` measures that floor alone).
+    pub own_cpu_ms_median: f64,
     /// 95th percentile CPU time of `flush`, ms.
     pub cpu_ms_p95: f64,
     /// Median GPU time of the forward pass from timestamp queries; null where unsupported.
@@ -71,6 +102,8 @@ pub struct BenchConfig {
     pub size: (u32, u32),
     /// MSAA samples.
     pub msaa: u32,
+    /// Degrees the camera turns about its target (around the up axis) each frame.
+    pub orbit: f32,
 }
 
 /// The view a bench draws: the scene's first camera with its post chain, or
@@ -103,18 +136,32 @@ fn median_of(frames: &[FrameStats], f: impl Fn(&FrameStats) -> f64) -> f64 {
     percentile(&v, 0.5)
 }
 
-/// Run `config.frames` frames of `desc` in `mode` and summarise them.
+/// `view` with its camera turned `degrees` about its target, around its up axis.
+fn orbited(view: &glint::View, degrees: f32) -> glint::View {
+    let camera = view.camera;
+    let turn = glam::Quat::from_axis_angle(camera.up.normalize_or(glam::Vec3::Y), degrees.to_radians());
+    let eye = camera.target + turn * (camera.eye - camera.target);
+    glint::View { camera: camera.looking_at(eye, camera.target), ..view.clone() }
+}
+
+/// Run `config.frames` frames of `desc` built as `run` says and summarise them.
 pub fn run_mode(
     gpu: &Gpu,
     desc: &SceneDesc,
     view: &glint::View,
-    mode: FrameMode,
+    run: BenchRun,
     config: &BenchConfig,
 ) -> Result<ModeReport, Error> {
     let (width, height) = config.size;
     let mut target = OffscreenTarget::new(gpu, width, height, config.msaa)?;
     let mut renderer = Renderer::new(gpu);
-    renderer.set_mode(mode);
+    let view = &match run {
+        BenchRun::Naive => {
+            renderer.set_mode(FrameMode::Naive);
+            view.clone()
+        }
+        BenchRun::Optimized(culling) | BenchRun::Culled(culling) => view.clone().with_culling(culling),
+    };
     let timed = renderer.enable_gpu_timing();
     let mut gpu_ms = Vec::new();
     let mut shadow_gpu_ms = Vec::new();
@@ -126,6 +173,7 @@ pub fn run_mode(
     let mut frame_ms = Vec::with_capacity(config.frames);
     let mut resident_frame_100 = None;
     for i in 0..config.warmup + config.frames {
+        let view = &orbited(view, config.orbit * i as f32);
         let frame_start = std::time::Instant::now();
         // The frame's three calls, with the GPU let finish after the shadow pass and
         // after flush, outside the measured CPU times: a CPU rasterizer's threads
@@ -177,16 +225,14 @@ pub fn run_mode(
         total: percentile(&totals, 0.5),
     };
     Ok(ModeReport {
-        mode: match mode {
-            FrameMode::Optimized => "optimized",
-            FrameMode::Naive => "naive",
-        },
+        mode: run.name(),
         frames: config.frames,
         frame_ms_median,
         frame_ms_p95: percentile(&frame_ms, 0.95),
         fps: 1e3 / frame_ms_median.max(1e-9),
         cpu_ms_median: percentile(&totals, 0.5),
         cpu_ms_p95: percentile(&totals, 0.95),
+        own_cpu_ms_median: median_of(&frames, |f| f.cpu_ms.total - f.cpu_ms.encode - f.cpu_ms.submit),
         gpu_ms_median: timed.then(|| median(&mut gpu_ms)).flatten(),
         shadow_cpu_ms_median: median_of(&frames, |f| f.passes.shadow.cpu_ms),
         shadow_gpu_ms_median: timed.then(|| median(&mut shadow_gpu_ms)).flatten(),
@@ -207,12 +253,16 @@ pub fn format_mode(r: &ModeReport) -> String {
     let s = &r.stage_ms_median;
     let gpu = r.gpu_ms_median.map_or_else(|| "n/a".to_string(), |ms| format!("{ms:.3} ms"));
     text.push_str(&format!(
-        "{:>9}: frame {:.3} ms median ({:.1} fps), {:.3} ms p95 (first call until the GPU is done)\n",
-        r.mode, r.frame_ms_median, r.fps, r.frame_ms_p95
+        "{:>10}: frame {:.3} ms median ({:.1} fps), {:.3} ms p95 (first call until the GPU is done), culled: {}\n",
+        r.mode,
+        r.frame_ms_median,
+        r.fps,
+        r.frame_ms_p95,
+        r.stats.culling.name()
     ));
     text.push_str(&format!(
-        "{:>9}  cpu {:.4} ms median, {:.4} ms p95 | gpu {gpu} median | {:.2} ns/instance ({:.2} ns cull+sort+batch+upload)\n",
-        "", r.cpu_ms_median, r.cpu_ms_p95, r.ns_per_instance, r.ns_per_instance_cull_sort_batch_upload
+        "{:>9}  cpu {:.4} ms median ({:.4} ms glint's own), {:.4} ms p95 | gpu {gpu} median | {:.2} ns/instance ({:.2} ns cull+sort+batch+upload)\n",
+        "", r.cpu_ms_median, r.own_cpu_ms_median, r.cpu_ms_p95, r.ns_per_instance, r.ns_per_instance_cull_sort_batch_upload
     ));
     text.push_str(&format!(
         "           stages (median ms): prepare {:.4}  cull {:.4}  queue {:.4}  sort {:.4}  batch {:.4}  upload {:.4}  encode {:.4}  submit {:.4}\n",
@@ -260,4 +310,17 @@ pub fn format_mode(r: &ModeReport) -> String {
         ));
     }
     text
+}
+
+/// Ratios of every pair of runs (the earlier over the later: how many times
+/// faster the later is), whole frame and `flush` CPU, as (name, frame, cpu).
+pub fn ratios(reports: &[ModeReport]) -> Vec<(String, f64, f64)> {
+    let mut out = Vec::new();
+    for (k, a) in reports.iter().enumerate() {
+        for b in &reports[k + 1..] {
+            let name = format!("{} / {}", a.mode, b.mode);
+            out.push((name, a.frame_ms_median / b.frame_ms_median, a.cpu_ms_median / b.cpu_ms_median));
+        }
+    }
+    out
 }

@@ -66,7 +66,8 @@ enum Command {
         #[arg(long, default_value_t = 30.0, value_parser = parse_fps)]
         fps: f32,
     },
-    /// Measure a scene's steady-state frame cost, optimized and/or the naive baseline.
+    /// Measure a scene's steady-state frame cost: the naive baseline, and the
+    /// optimized frame culled on the CPU and on the GPU, side by side.
     #[command(after_help = EXIT_CODES)]
     Bench {
         /// The scene file.
@@ -77,9 +78,16 @@ enum Command {
         /// Unmeasured frames before them (0..=100000).
         #[arg(long, default_value_t = 5, value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(0..=MAX_BENCH_FRAMES))]
         warmup: usize,
-        /// Which way to build frames.
-        #[arg(long, value_enum, default_value_t = BenchMode::Both)]
+        /// Which ways to build frames.
+        #[arg(long, value_enum, default_value_t = BenchMode::All)]
         mode: BenchMode,
+        /// How the optimized frame culls (modes optimized and both), whatever
+        /// the camera's "cull" says.
+        #[arg(long, value_enum)]
+        cull: Option<CullArg>,
+        /// Turn the camera this many degrees about its target each frame (0..=360).
+        #[arg(long, default_value_t = 0.0, value_parser = parse_orbit)]
+        orbit: f32,
         /// Image size, WIDTHxHEIGHT.
         #[arg(long, default_value = "1280x720", value_parser = parse_size)]
         size: (u32, u32),
@@ -220,35 +228,56 @@ impl Picture {
 /// `glint bench --mode`.
 #[derive(Clone, Copy, ValueEnum)]
 enum BenchMode {
+    /// The naive baseline, then the optimized frame culled on the CPU and on the GPU.
+    All,
+    /// The optimized frame, culled as the camera (or --cull) says.
     Optimized,
+    /// The naive baseline.
     Naive,
+    /// The optimized frame (as with `optimized`), then the naive baseline.
     Both,
+}
+
+/// Where `glint bench` reports: JSON or text, and a chart.
+struct BenchOutput<'a> {
+    json: bool,
+    plot: Option<&'a Path>,
 }
 
 fn run_bench(
     scene: &Path,
     config: &bench::BenchConfig,
-    mode: BenchMode,
-    json: bool,
-    plot: Option<&Path>,
+    (mode, cull): (BenchMode, Option<CullArg>),
+    BenchOutput { json, plot }: BenchOutput,
     post: Option<Vec<glint::scene::PostEffect>>,
     options: LoadOptions,
 ) -> Result<(), Error> {
-    let bench::BenchConfig { frames, warmup, size, msaa } = *config;
+    let bench::BenchConfig { frames, warmup, size, msaa, orbit } = *config;
     if frames == 0 {
         return Err(glint::Diagnostic::file(scene, "--frames must be at least 1").into());
     }
     let desc = load(scene, options)?;
     let gpu = Gpu::headless()?;
-    let modes = match mode {
-        BenchMode::Optimized => vec![glint::FrameMode::Optimized],
-        BenchMode::Naive => vec![glint::FrameMode::Naive],
-        BenchMode::Both => vec![glint::FrameMode::Optimized, glint::FrameMode::Naive],
-    };
     let view = bench::bench_view(&desc, post);
+    let optimized = bench::BenchRun::Optimized(cull.map_or(view.culling, CullArg::culling));
+    let runs = match mode {
+        BenchMode::All => vec![
+            bench::BenchRun::Naive,
+            bench::BenchRun::Culled(glint::Culling::Cpu),
+            bench::BenchRun::Culled(glint::Culling::Gpu),
+        ],
+        BenchMode::Optimized => vec![optimized],
+        BenchMode::Naive => vec![bench::BenchRun::Naive],
+        BenchMode::Both => vec![optimized, bench::BenchRun::Naive],
+    };
     let reports =
-        modes.into_iter().map(|m| bench::run_mode(&gpu, &desc, &view, m, config)).collect::<Result<Vec<_>, _>>()?;
-    let speedup = (reports.len() == 2).then(|| reports[1].cpu_ms_median / reports[0].cpu_ms_median);
+        runs.into_iter().map(|r| bench::run_mode(&gpu, &desc, &view, r, config)).collect::<Result<Vec<_>, _>>()?;
+    let speedup = match mode {
+        BenchMode::Both => Some(reports[1].cpu_ms_median / reports[0].cpu_ms_median),
+        BenchMode::All => Some(reports[0].cpu_ms_median / reports[2].cpu_ms_median),
+        _ => None,
+    };
+    let ratios = bench::ratios(&reports);
     if json {
         let modes: serde_json::Map<String, serde_json::Value> =
             reports.iter().map(|r| (r.mode.to_string(), serde_json::to_value(r).expect("report serialises"))).collect();
@@ -258,8 +287,10 @@ fn run_bench(
             "size": format!("{}x{}", size.0, size.1),
             "msaa": msaa,
             "adapter": format!("{} ({:?})", gpu.info().name, gpu.info().backend),
+            "orbit_degrees_per_frame": orbit,
             "modes": modes,
             "speedup": speedup,
+            "ratios": ratios.iter().map(|(name, frame, cpu)| serde_json::json!({"runs": name, "frame": frame, "cpu": cpu})).collect::<Vec<_>>(),
         });
         output::print(&format!("{out}\n"))?;
     } else {
@@ -275,8 +306,8 @@ fn run_bench(
         for r in &reports {
             text.push_str(&bench::format_mode(r));
         }
-        if let Some(x) = speedup {
-            text.push_str(&format!("speedup (naive CPU median / optimized CPU median): {x:.1}x\n"));
+        for (name, frame, cpu) in &ratios {
+            text.push_str(&format!("{name}: whole frame {frame:.2}x, flush CPU {cpu:.2}x\n"));
         }
         output::print(&text)?;
     }
@@ -294,6 +325,14 @@ fn parse_size(s: &str) -> Result<(u32, u32), String> {
     match (side(w), side(h)) {
         (Some(w), Some(h)) => Ok((w, h)),
         _ => Err(format!("'{s}': each side must be a whole number in 1..=16384")),
+    }
+}
+
+/// `--orbit`: degrees per frame, 0..=360.
+fn parse_orbit(s: &str) -> Result<f32, String> {
+    match s.parse::<f32>() {
+        Ok(d) if (0.0..=360.0).contains(&d) => Ok(d),
+        _ => Err(format!("expected degrees per frame from 0 to 360, found {s:?}")),
     }
 }
 
@@ -548,9 +587,11 @@ fn main() -> ExitCode {
                 view::run(args, desc)
             })
         }
-        Command::Bench { scene, frames, warmup, mode, size, msaa, json, plot, post } => {
-            let config = bench::BenchConfig { frames: *frames, warmup: *warmup, size: *size, msaa: *msaa };
-            run_bench(scene, &config, *mode, *json, plot.as_deref(), post.clone().map(|p| p.0), options)
+        Command::Bench { scene, frames, warmup, mode, cull, orbit, size, msaa, json, plot, post } => {
+            let config =
+                bench::BenchConfig { frames: *frames, warmup: *warmup, size: *size, msaa: *msaa, orbit: *orbit };
+            let output = BenchOutput { json: *json, plot: plot.as_deref() };
+            run_bench(scene, &config, (*mode, *cull), output, post.clone().map(|p| p.0), options)
         }
     };
     match result {

@@ -179,6 +179,9 @@ fn render_writes_the_png_and_prints_stats_json() {
         "--size",
         "320x180",
         "--stats",
+        // Culled on the CPU, so that the one frame's counts are known when it ends.
+        "--cull",
+        "cpu",
     ]);
     if out.status.code() == Some(2) && std::env::var("GLINT_REQUIRE_ADAPTER").as_deref() != Ok("1") {
         eprintln!("skipping: no GPU adapter ({})", stderr(&out));
@@ -217,7 +220,7 @@ fn render_writes_the_png_and_prints_stats_json() {
 
     let scene = repo("scenes/showcase.scn");
     let args = ["render", scene.to_str().expect("path"), "-o", png.to_str().expect("path"), "--size", "64x36"];
-    let out = glint(&[&args[..], &["--stats", "--no-cull"]].concat());
+    let out = glint(&[&args[..], &["--stats", "--cull", "off"]].concat());
     let all: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
     assert_eq!((all["instances_drawn"].as_u64(), all["instances_culled"].as_u64()), (Some(12040), Some(0)));
 }
@@ -254,7 +257,7 @@ fn render_draws_every_camera_with_a_viewport_unless_one_is_picked() {
 }
 
 #[test]
-fn bench_reports_both_modes_as_json() {
+fn bench_reports_naive_cpu_culled_and_gpu_culled_side_by_side_as_json() {
     let scene = repo("tests/scenes/ortho.scn");
     let args = ["bench", scene.to_str().expect("path"), "--frames", "3", "--warmup", "1", "--size", "64x64", "--json"];
     let out = glint(&args);
@@ -266,8 +269,10 @@ fn bench_reports_both_modes_as_json() {
     let report: serde_json::Value = serde_json::from_slice(&out.stdout).expect("one JSON object");
     assert_eq!(report["frames"], 3);
     assert!(report["scene"].as_str().expect("scene").ends_with("ortho.scn"));
-    for mode in ["optimized", "naive"] {
+    for mode in ["naive", "cpu-culled", "gpu-culled"] {
         let m = &report["modes"][mode];
+        let own = m["own_cpu_ms_median"].as_f64().expect("own_cpu_ms_median");
+        assert!(own > 0.0 && own <= m["cpu_ms_median"].as_f64().expect("cpu"), "{mode}: {m}");
         for key in ["cpu_ms_median", "cpu_ms_p95", "ns_per_instance"] {
             assert!(m[key].as_f64().expect(key) > 0.0, "{mode}.{key}: {m}");
         }
@@ -293,11 +298,24 @@ fn bench_reports_both_modes_as_json() {
         }
     }
     // Ortho scene: plane + 9 cubes. Optimized: 2 draws; naive: one per instance.
-    assert_eq!(report["modes"]["optimized"]["stats"]["draws"], 2);
+    for mode in ["cpu-culled", "gpu-culled"] {
+        assert_eq!(report["modes"][mode]["stats"]["draws"], 2);
+        assert_eq!(report["modes"][mode]["stats"]["pipelines_compiled"], 0, "precompiled before the first frame");
+    }
+    assert_eq!(report["modes"]["cpu-culled"]["stats"]["culling"], "cpu");
     assert_eq!(report["modes"]["naive"]["stats"]["draws"], 10);
     assert_eq!(report["modes"]["naive"]["stats"]["draw_calls"], 10);
-    assert_eq!(report["modes"]["optimized"]["stats"]["pipelines_compiled"], 0, "precompiled before the first frame");
     assert!(report["speedup"].as_f64().expect("speedup") > 0.0);
+    // Each pair of runs, the earlier over the later.
+    let ratios = report["ratios"].as_array().expect("ratios");
+    let names: Vec<&str> = ratios.iter().map(|r| r["runs"].as_str().expect("runs")).collect();
+    assert_eq!(names, ["naive / cpu-culled", "naive / gpu-culled", "cpu-culled / gpu-culled"]);
+    assert!(ratios.iter().all(|r| r["frame"].as_f64().is_some_and(|x| x > 0.0)));
+    // One way alone keeps the name "optimized", culled as asked.
+    let out = glint(&[&args[..], &["--mode", "optimized", "--cull", "cpu"]].concat());
+    let one: serde_json::Value = serde_json::from_slice(&out.stdout).expect("one JSON object");
+    assert_eq!(one["modes"].as_object().map(|m| m.len()), Some(1));
+    assert_eq!(one["modes"]["optimized"]["stats"]["culling"], "cpu");
     assert_eq!(glint(&["bench", scene.to_str().expect("path"), "--frames", "0"]).status.code(), Some(1));
 }
 

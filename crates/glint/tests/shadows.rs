@@ -39,8 +39,10 @@ fn render(
     for e in &scene.entities {
         scene.renderer.submit(e);
     }
-    let shadows = scene.renderer.shadow_pass(scene.camera, lights, &target).expect("shadow pass");
-    let stats = scene.renderer.flush(scene.camera, lights, &shadows, &mut target).expect("frame");
+    // Culled on the CPU, so that this frame's counts are known now.
+    let view = glint::View::new(scene.camera).with_culling(glint::Culling::Cpu);
+    let shadows = scene.renderer.shadow_pass(&view, lights, &target).expect("shadow pass");
+    let stats = scene.renderer.flush(view, lights, &shadows, &mut target).expect("frame");
     (target.read_rgba8(gpu).expect("readback"), stats)
 }
 

@@ -415,6 +415,7 @@ impl Renderer {
         stats.cpu_ms.prepare = lap.next();
         let mut visible = std::mem::take(&mut self.visible);
         if self.mode == FrameMode::Naive {
+            stats.culling = Culling::Off;
             self.naive_batches(&mut stats);
             stats.cpu_ms.batch = lap.next();
         } else {
