@@ -66,6 +66,8 @@ for (const backend of backends) {
         continue;
       }
       const shown = await page.evaluate(() => document.getElementById("glint").dataset.backend);
+      // WebGPU culls on the GPU, WebGL2 (no compute) on the CPU.
+      const culling = await page.evaluate(() => document.getElementById("glint").dataset.culling);
       // The frame as the renderer drew it, encoded as PNG by the browser.
       const png = await page.evaluate(async () => {
         const f = await window.glintReadFrame();
@@ -92,8 +94,9 @@ for (const backend of backends) {
         ok = false;
         verdict = `${e.stdout}${e.stderr}`.trim();
       }
-      if (shown !== expected) ok = false;
-      report(ok, name, `${shown}, first frame ${Math.round(state.first)} ms after navigation; ${verdict}`);
+      const expectedCulling = backend === "webgpu" ? "gpu" : "cpu";
+      if (shown !== expected || culling !== expectedCulling) ok = false;
+      report(ok, name, `${shown}, culled on the ${culling}, first frame ${Math.round(state.first)} ms after navigation; ${verdict}`);
     } finally {
       await page.close();
     }

@@ -279,18 +279,22 @@ impl Viewer {
         let calls: u32 = stats.iter().map(|s| s.draw_calls).sum();
         let drawn: u64 = stats.iter().map(|s| s.instances_drawn).sum();
         let (w, h) = (self.target.width(), self.target.height());
+        // How the views were culled: on the GPU with WebGPU, on the CPU with WebGL2.
+        let culling = stats.first().map_or("none", |s| s.culling.name());
         set_text(
             "status",
             &format!(
-                "{} | {} | {w}x{h} | {:.1} ms a frame | {draws} draws in {calls} calls | {drawn} instances | {} views",
+                "{} | {} | {w}x{h} | {:.1} ms a frame | {draws} draws in {calls} calls | {drawn} instances | {} | {} views",
                 self.backend,
                 shown.world.desc().path.display(),
                 self.frame_ms,
+                stats.first().map_or("", |s| s.culling.describe()),
                 stats.len()
             ),
         );
         let _ = self.canvas.set_attribute("data-frames", &self.frames.to_string());
         let _ = self.canvas.set_attribute("data-backend", self.backend);
+        let _ = self.canvas.set_attribute("data-culling", culling);
         Ok(())
     }
 

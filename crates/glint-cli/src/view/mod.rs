@@ -321,9 +321,7 @@ impl View {
 /// "view K: …" when there are several.
 fn view_counts(stats: &[glint::FrameStats]) -> String {
     let counts = |s: &glint::FrameStats| {
-        let culled = format!("culled on the {}", s.culling.name().to_uppercase());
-        let culled = if s.culling == glint::Culling::Off { "not culled".into() } else { culled };
-        format!("{} draws, {} shadow draws, {culled}", s.draws, s.passes.shadow.draws)
+        format!("{} draws, {} shadow draws, {}", s.draws, s.passes.shadow.draws, s.culling.describe())
     };
     match stats {
         [one] => counts(one),

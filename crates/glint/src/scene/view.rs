@@ -81,6 +81,11 @@ impl Culling {
     pub fn name(self) -> &'static str {
         Self::NAMES[self as usize]
     }
+
+    /// What it did, for a status line: "culled on the GPU", "culled on the CPU" or "not culled".
+    pub fn describe(self) -> &'static str {
+        ["not culled", "culled on the CPU", "culled on the GPU"][self as usize]
+    }
 }
 
 /// One camera's part of a frame.
