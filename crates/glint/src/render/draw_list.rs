@@ -186,13 +186,31 @@ impl DrawList {
         first_run..self.runs.len()
     }
 
-    /// Append one batch drawn alone (the naive baseline's), culled on the CPU,
-    /// its instances the next `count` of `draw_indices`.
-    pub(crate) fn push_alone(&mut self, batch: Batch, draw: BatchDraw) {
+    /// Append one batch of one instance, `instance`, drawn alone (the naive
+    /// baseline's).
+    pub(crate) fn push_alone(&mut self, batch: Batch, draw: BatchDraw, instance: u32) {
         self.runs.push(Run::new(self.batches.len(), 1, 0));
         self.batches.push(batch);
         self.draws.push(draw);
         self.on_gpu.push(false);
+        self.draw_indices.push(instance);
+    }
+
+    /// Write every draw index alone (the naive baseline's way, every frame);
+    /// returns bytes written.
+    pub(crate) fn write_indices_one_by_one(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        (layout, instances): (&wgpu::BindGroupLayout, &GpuArray),
+    ) -> Result<u64, RenderError> {
+        if self.draw_index_buffer.reserve(device, 4, self.draw_indices.len())? {
+            self.rebind(device, layout, instances);
+        }
+        self.uploaded_draw_indices.clear();
+        let each = (0..self.draw_indices.len())
+            .map(|k| self.draw_index_buffer.write(queue, k as u64, &self.draw_indices[k..=k]));
+        Ok(each.sum())
     }
 
     /// Point the bind groups at a new instance buffer.
@@ -227,15 +245,13 @@ impl DrawList {
     }
 
     /// Write the draw indices and indirect commands where they differ from what
-    /// the GPU holds, and the GPU culling state of a GPU-culled list; `one_by_one`
-    /// (the naive baseline) writes every draw index alone, every frame.
+    /// the GPU holds, and the GPU culling state of a GPU-culled list.
     pub(crate) fn upload(
         &mut self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
         (layout, instances): (&wgpu::BindGroupLayout, &GpuArray),
         gpu: Option<(&CullPipelines, &wgpu::Buffer)>,
-        one_by_one: bool,
     ) -> Result<ListUpload, RenderError> {
         self.finish();
         let mut written = ListUpload { draw_indices: 0, indirect: 0 };
@@ -244,12 +260,7 @@ impl DrawList {
             self.uploaded_draw_indices.clear();
             self.rebind(device, layout, instances);
         }
-        if one_by_one {
-            for k in 0..self.draw_indices.len() {
-                written.draw_indices += self.draw_index_buffer.write(queue, k as u64, &self.draw_indices[k..=k]);
-            }
-            self.uploaded_draw_indices.clear();
-        } else if self.draw_indices != self.uploaded_draw_indices {
+        if self.draw_indices != self.uploaded_draw_indices {
             written.draw_indices = self.draw_index_buffer.write(queue, 0, &self.draw_indices);
             self.uploaded_draw_indices.clone_from(&self.draw_indices);
         }

@@ -6,15 +6,15 @@
 //! (or one `draw_indexed` per batch where the device cannot draw indirect). A
 //! list culled on the GPU has its cull pass recorded first, and each run draws
 //! the commands that pass left (with their count, where the device has
-//! `MULTI_DRAW_INDIRECT_COUNT`). The naive baseline draws batch by batch and
-//! binds everything again for each.
+//! `MULTI_DRAW_INDIRECT_COUNT`). (The naive baseline has its own encoder:
+//! `naive.rs`.)
 
 use super::draw_list::{run_stage, DrawList};
 use super::gpu_cull::{Run, COMMAND_BYTES};
 use super::queue::{Queue, SKY_STAGE};
 use super::timer::Timed;
 use super::views::ViewBlocks;
-use super::{FrameMode, FrameStats, Renderer};
+use super::{FrameStats, Renderer};
 use crate::gpu::OffscreenTarget;
 use crate::scene::Background;
 
@@ -37,51 +37,17 @@ impl Renderer {
         stats: &mut FrameStats,
     ) -> wgpu::CommandBuffer {
         let list = &self.view.forward;
-        let sky_at = match self.mode {
-            // Naive frames are in submission order: the sky goes first, under everything.
-            FrameMode::Naive => 0,
-            FrameMode::Optimized => list.runs.partition_point(|r| run_stage(list, r) < SKY_STAGE),
-        };
-        let clear = match background {
-            Background::Color(c) | Background::Gradient { bottom: c, .. } => {
-                wgpu::Color { r: c.x.into(), g: c.y.into(), b: c.z.into(), a: 1.0 }
-            }
-        };
+        let sky_at = list.runs.partition_point(|r| run_stage(list, r) < SKY_STAGE);
         let mut encoder =
             self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("renderer: frame") });
         if let Some(pipelines) = &self.cull_pipelines {
             self.view.forward.record_cull(&mut encoder, pipelines, self.queue.submits());
         }
         {
-            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("forward pass"),
-                color_attachments: &[Some(target.color_attachment(clear))],
-                depth_stencil_attachment: Some(target.depth_attachment()),
-                timestamp_writes: self.gpu_timer.as_ref().and_then(|t| t.pass_writes(Timed::Forward, true, true)),
-                ..Default::default()
-            });
-            pass.set_bind_group(0, &self.view.scene_group, &[]);
-            pass.set_bind_group(1, &self.view.blocks.bind_group, &[ViewBlocks::offset(0)]);
-            pass.set_bind_group(3, &self.view.forward.bind_group, &[]);
-            stats.bind_groups_set += 3;
+            let mut pass = self.begin_forward_pass(&mut encoder, target, background, stats);
             let mut bound = Bound::default();
             self.draw_stages(&self.view.forward, &mut pass, 0..sky_at, &mut bound, stats);
-            let sky = match background {
-                Background::Gradient { .. } => self.registry.pipelines.sky_built(target.format()),
-                Background::Color(_) => None,
-            };
-            if let Some(sky) = sky {
-                pass.push_debug_group("sky");
-                pass.set_pipeline(sky);
-                pass.draw(0..3, 0..1);
-                pass.pop_debug_group();
-                stats.pipelines_bound += 1;
-                stats.draw_calls += 1;
-                stats.draws += 1;
-                stats.passes.sky = super::PassStats { draw_calls: 1, draws: 1, instances: 1, cpu_ms: 0.0 };
-                // The sky's layout has groups 0–1 only: bind the forward groups again.
-                pass.set_bind_group(3, &self.view.forward.bind_group, &[]);
-                stats.bind_groups_set += 1;
+            if self.draw_sky(&mut pass, target, background, stats) {
                 bound = Bound { stencil_reference: bound.stencil_reference, ..Bound::default() };
             }
             self.draw_stages(&self.view.forward, &mut pass, sky_at..self.view.forward.runs.len(), &mut bound, stats);
@@ -90,6 +56,62 @@ impl Renderer {
             timer.resolve(&mut encoder, Timed::Forward, self.frame_index);
         }
         encoder.finish()
+    }
+
+    /// Begin the view's forward pass into `target`, cleared to `background`,
+    /// with the Scene, Camera and Renderer blocks bound.
+    pub(super) fn begin_forward_pass<'e>(
+        &self,
+        encoder: &'e mut wgpu::CommandEncoder,
+        target: &OffscreenTarget,
+        background: Background,
+        stats: &mut FrameStats,
+    ) -> wgpu::RenderPass<'e> {
+        let clear = match background {
+            Background::Color(c) | Background::Gradient { bottom: c, .. } => {
+                wgpu::Color { r: c.x.into(), g: c.y.into(), b: c.z.into(), a: 1.0 }
+            }
+        };
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("forward pass"),
+            color_attachments: &[Some(target.color_attachment(clear))],
+            depth_stencil_attachment: Some(target.depth_attachment()),
+            timestamp_writes: self.gpu_timer.as_ref().and_then(|t| t.pass_writes(Timed::Forward, true, true)),
+            ..Default::default()
+        });
+        pass.set_bind_group(0, &self.view.scene_group, &[]);
+        pass.set_bind_group(1, &self.view.blocks.bind_group, &[ViewBlocks::offset(0)]);
+        pass.set_bind_group(3, &self.view.forward.bind_group, &[]);
+        stats.bind_groups_set += 3;
+        pass
+    }
+
+    /// Draw the gradient sky of `background` (none for a plain colour); returns
+    /// whether it drew, after which only groups 0, 1 and 3 are bound.
+    pub(super) fn draw_sky(
+        &self,
+        pass: &mut wgpu::RenderPass<'_>,
+        target: &OffscreenTarget,
+        background: Background,
+        stats: &mut FrameStats,
+    ) -> bool {
+        let sky = match background {
+            Background::Gradient { .. } => self.registry.pipelines.sky_built(target.format()),
+            Background::Color(_) => None,
+        };
+        let Some(sky) = sky else { return false };
+        pass.push_debug_group("sky");
+        pass.set_pipeline(sky);
+        pass.draw(0..3, 0..1);
+        pass.pop_debug_group();
+        stats.pipelines_bound += 1;
+        stats.draw_calls += 1;
+        stats.draws += 1;
+        stats.passes.sky = super::PassStats { draw_calls: 1, draws: 1, instances: 1, cpu_ms: 0.0 };
+        // The sky's layout has groups 0–1 only: bind the forward groups again.
+        pass.set_bind_group(3, &self.view.forward.bind_group, &[]);
+        stats.bind_groups_set += 1;
+        true
     }
 
     /// Draw `list`'s runs in `range`, one debug group per stage.
@@ -125,8 +147,7 @@ impl Renderer {
         }
     }
 
-    /// Draw run `k` of `list` (`run`), setting only the state that changes
-    /// (naive frames: all of it).
+    /// Draw run `k` of `list` (`run`), setting only the state that changes.
     fn draw_run(
         &self,
         list: &DrawList,
@@ -136,12 +157,9 @@ impl Renderer {
         bound: &mut Bound,
         stats: &mut FrameStats,
     ) {
-        if self.mode == FrameMode::Naive {
-            *bound = Bound::default();
-        }
         let (first, draw) = (&list.batches[run.first as usize], &list.draws[run.first as usize]);
         let reference = self.registry.pipelines.stencil_reference(first.pipeline);
-        if bound.stencil_reference != reference || self.mode == FrameMode::Naive {
+        if bound.stencil_reference != reference {
             pass.set_stencil_reference(reference);
             bound.stencil_reference = reference;
         }
@@ -166,7 +184,7 @@ impl Renderer {
                 gpu.draw_run(pipelines, pass, k, run);
                 stats.draw_calls += 1;
             }
-            (Some(indirect), ..) if self.mode == FrameMode::Optimized => {
+            (Some(indirect), ..) => {
                 pass.multi_draw_indexed_indirect(&indirect.buffer, u64::from(run.first) * COMMAND_BYTES, run.len);
                 stats.draw_calls += 1;
             }

@@ -1,12 +1,10 @@
-//! Core layer: the forward view's stages 3 (queue) and 6 (upload), and the
-//! naive baseline's batches.
+//! Core layer: the forward view's stages 3 (queue) and 6 (upload).
 
-use super::batch::Batch;
 use super::blocks::SceneGpu;
 use super::queue::{self, DrawItem, Queue};
 use super::view::ViewFrame;
 use super::visible::Visible;
-use super::{FrameMode, FrameStats, RenderError, Renderer, Submitted, UploadStats};
+use super::{FrameStats, RenderError, Renderer, Submitted, UploadStats};
 use crate::scene::Lighting;
 use glam::Vec3A;
 
@@ -51,33 +49,6 @@ impl Renderer {
         }
     }
 
-    /// The naive baseline's batches: every valid instance of every submitted entity,
-    /// in submission order, one draw each, nothing culled or sorted.
-    pub(super) fn naive_batches(&mut self, stats: &mut FrameStats) {
-        self.view.forward.clear();
-        for s in &self.submitted {
-            let slot = self.store.slot(s.slot);
-            stats.instances_invalid += u64::from(slot.invalid);
-            let pipeline = self.pipeline_of(s);
-            let range = slot.first as usize..(slot.first + slot.count) as usize;
-            for i in range {
-                if self.store.bounds.is_valid(i) {
-                    let batch = Batch {
-                        stage: Queue::Opaque.stage(),
-                        pipeline,
-                        material: s.material,
-                        shape: s.shape,
-                        first_instance: self.view.forward.draw_indices.len() as u32,
-                        instance_count: 1,
-                    };
-                    let draw = self.registry.batch_draw(&batch);
-                    self.view.forward.push_alone(batch, draw);
-                    self.view.forward.draw_indices.push(i as u32);
-                }
-            }
-        }
-    }
-
     /// The forward pipeline a submitted entity draws with (prepared).
     pub(super) fn pipeline_of(&self, s: &Submitted) -> u16 {
         let layout = self.registry.shapes[s.shape.0 as usize].layout;
@@ -95,23 +66,11 @@ impl Renderer {
         shadowed: &[Option<u32>],
         stats: &mut FrameStats,
     ) -> Result<(), RenderError> {
+        self.upload_view_blocks(frame, lighting, shadowed, &mut stats.bytes_uploaded)?;
         let bytes = &mut stats.bytes_uploaded;
-        let scene = SceneGpu::new(&lighting.environment, lighting.lights, shadowed);
-        bytes.scene += self.view.scene_block.update(&self.queue, scene);
-        bytes.camera += self.view.blocks.update(&self.queue, 0, frame.camera.to_gpu(frame.aspect));
-        self.upload_instances(bytes)?;
-        let naive = self.mode == FrameMode::Naive;
-        if naive {
-            // Every draw's material entry written before it, one small write each.
-            for b in &self.view.forward.batches {
-                let block = self.registry.materials[b.material.0 as usize].material.to_gpu();
-                bytes.material += self.registry.material_table.write(&self.queue, b.material.0, &block);
-            }
-        }
         let layout = &self.registry.pipelines.instance_layout;
         let gpu = self.cull_pipelines.as_ref().zip(self.instances.bounds());
-        let written =
-            self.view.forward.upload(&self.device, &self.queue, (layout, self.instances.array()), gpu, naive)?;
+        let written = self.view.forward.upload(&self.device, &self.queue, (layout, self.instances.array()), gpu)?;
         bytes.draw_indices += written.draw_indices;
         bytes.indirect += written.indirect;
         stats.instances_drawn = self.view.forward.draw_indices.len() as u64;
@@ -125,6 +84,21 @@ impl Renderer {
             stats.instances_culled = drawn.map_or(0, |d| valid.saturating_sub(d));
         }
         Ok(())
+    }
+
+    /// The view's Scene and Camera blocks where they changed, and the instances
+    /// that changed.
+    pub(super) fn upload_view_blocks(
+        &mut self,
+        frame: &ViewFrame,
+        lighting: &Lighting,
+        shadowed: &[Option<u32>],
+        bytes: &mut UploadStats,
+    ) -> Result<(), RenderError> {
+        let scene = SceneGpu::new(&lighting.environment, lighting.lights, shadowed);
+        bytes.scene += self.view.scene_block.update(&self.queue, scene);
+        bytes.camera += self.view.blocks.update(&self.queue, 0, frame.camera.to_gpu(frame.aspect));
+        self.upload_instances(bytes)
     }
 
     /// Write the instances that changed (all of them when the buffer grew, and

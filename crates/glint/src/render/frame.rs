@@ -413,30 +413,33 @@ impl Renderer {
         self.frame_variant = FrameVariant::after(drawn, lighting.lights);
         self.prepare(target.format(), &lighting.environment, &mut stats)?;
         stats.cpu_ms.prepare = lap.next();
-        let mut visible = std::mem::take(&mut self.visible);
-        if self.mode == FrameMode::Naive {
-            stats.culling = Culling::Off;
-            self.naive_batches(&mut stats);
-            stats.cpu_ms.batch = lap.next();
-        } else {
-            self.cull(frame, &mut visible, &mut stats);
-            stats.cpu_ms.cull = lap.next();
-            self.view.forward.clear();
-            self.build_queue(frame, &visible);
-            stats.cpu_ms.queue = lap.next();
-            queue::sort(&mut self.view.forward.items);
-            stats.cpu_ms.sort = lap.next();
-            let registry = &self.registry;
-            let on_gpu = |item: &queue::DrawItem| frame.culling == Culling::Gpu && !registry.blended(item.material);
-            self.view.forward.build(0, &visible.instances, frame.frustum, |b| registry.batch_draw(b), on_gpu);
-            stats.cpu_ms.batch = lap.next();
-        }
-        self.visible = visible;
         let shadowed = drawn.map_or(&[][..], |d| d.first_view.as_slice());
-        self.upload(frame, lighting, shadowed, &mut stats)?;
-        stats.cpu_ms.upload = lap.next();
-        let commands = self.encode(target, lighting.environment.background, &mut stats);
-        stats.cpu_ms.encode = lap.next();
+        let commands = match self.mode {
+            FrameMode::Naive => {
+                stats.culling = Culling::Off;
+                self.naive_frame(frame, (lighting, shadowed), target, &mut stats, &mut lap)?
+            }
+            FrameMode::Optimized => {
+                let mut visible = std::mem::take(&mut self.visible);
+                self.cull(frame, &mut visible, &mut stats);
+                stats.cpu_ms.cull = lap.next();
+                self.view.forward.clear();
+                self.build_queue(frame, &visible);
+                stats.cpu_ms.queue = lap.next();
+                queue::sort(&mut self.view.forward.items);
+                stats.cpu_ms.sort = lap.next();
+                let registry = &self.registry;
+                let on_gpu = |item: &queue::DrawItem| frame.culling == Culling::Gpu && !registry.blended(item.material);
+                self.view.forward.build(0, &visible.instances, frame.frustum, |b| registry.batch_draw(b), on_gpu);
+                stats.cpu_ms.batch = lap.next();
+                self.visible = visible;
+                self.upload(frame, lighting, shadowed, &mut stats)?;
+                stats.cpu_ms.upload = lap.next();
+                let commands = self.encode(target, lighting.environment.background, &mut stats);
+                stats.cpu_ms.encode = lap.next();
+                commands
+            }
+        };
         self.pending.push(commands);
         let composed = self.compose(compose, &mut stats)?;
         self.pending.extend(composed);

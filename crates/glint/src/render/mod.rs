@@ -37,6 +37,7 @@ mod inspect;
 mod instances;
 mod materials;
 mod mesh_pool;
+mod naive;
 mod pipelines;
 pub(crate) mod place;
 mod post;

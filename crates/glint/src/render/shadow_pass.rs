@@ -273,8 +273,7 @@ impl Renderer {
         bytes.scene += self.view.shadow_block.update(&self.queue, block);
         let layout = &self.registry.pipelines.instance_layout;
         let gpu = self.cull_pipelines.as_ref().zip(self.instances.bounds());
-        let written =
-            self.view.shadows.upload(&self.device, &self.queue, (layout, self.instances.array()), gpu, false)?;
+        let written = self.view.shadows.upload(&self.device, &self.queue, (layout, self.instances.array()), gpu)?;
         bytes.draw_indices += written.draw_indices;
         bytes.indirect += written.indirect;
         Ok(())

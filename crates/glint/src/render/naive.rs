@@ -1,0 +1,135 @@
+//! Core layer: the naive baseline `glint bench` measures the optimized frame
+//! against ([`FrameMode::Naive`](super::FrameMode::Naive)): the way frames were
+//! built before the application stage. Every valid instance of every submitted
+//! entity is one draw, in submission order, nothing culled or sorted; each
+//! draw's material entry and instance index are written on their own before
+//! it, every frame; and the pass binds every state again for every draw, one
+//! `draw_indexed` call each. It shares the optimized frame's prepare, blocks
+//! and compose stages, and nothing of its batching, upload or encoding.
+
+use super::batch::Batch;
+use super::queue::Queue;
+use super::timer::Timed;
+use super::view::ViewFrame;
+use super::{FrameStats, Laps, RenderError, Renderer};
+use crate::gpu::OffscreenTarget;
+use crate::scene::Lighting;
+
+impl Renderer {
+    /// The naive frame's stages between prepare and compose: batch, upload,
+    /// encode (each stage's CPU time in `stats`, from `lap`). `shadowed` is
+    /// each light's first shadow view.
+    pub(super) fn naive_frame(
+        &mut self,
+        frame: &ViewFrame,
+        (lighting, shadowed): (&Lighting, &[Option<u32>]),
+        target: &OffscreenTarget,
+        stats: &mut FrameStats,
+        lap: &mut Laps,
+    ) -> Result<wgpu::CommandBuffer, RenderError> {
+        self.naive_batches(stats);
+        stats.cpu_ms.batch = lap.next();
+        self.naive_upload(frame, (lighting, shadowed), stats)?;
+        stats.cpu_ms.upload = lap.next();
+        let commands = self.naive_encode(target, lighting, stats);
+        stats.cpu_ms.encode = lap.next();
+        Ok(commands)
+    }
+
+    /// One batch per valid instance of every submitted entity, in submission order.
+    fn naive_batches(&mut self, stats: &mut FrameStats) {
+        self.view.forward.clear();
+        for s in &self.submitted {
+            let slot = self.store.slot(s.slot);
+            stats.instances_invalid += u64::from(slot.invalid);
+            let pipeline = self.pipeline_of(s);
+            for i in slot.first..slot.first + slot.count {
+                if self.store.bounds.is_valid(i as usize) {
+                    let batch = Batch {
+                        stage: Queue::Opaque.stage(),
+                        pipeline,
+                        material: s.material,
+                        shape: s.shape,
+                        first_instance: self.view.forward.draw_indices.len() as u32,
+                        instance_count: 1,
+                    };
+                    let draw = self.registry.batch_draw(&batch);
+                    self.view.forward.push_alone(batch, draw, i);
+                }
+            }
+        }
+        stats.instances_drawn = self.view.forward.draw_indices.len() as u64;
+    }
+
+    /// The view's blocks and changed instances as the optimized frame writes
+    /// them; then every draw's material entry and instance index, one small
+    /// write each.
+    fn naive_upload(
+        &mut self,
+        frame: &ViewFrame,
+        (lighting, shadowed): (&Lighting, &[Option<u32>]),
+        stats: &mut FrameStats,
+    ) -> Result<(), RenderError> {
+        let bytes = &mut stats.bytes_uploaded;
+        self.upload_view_blocks(frame, lighting, shadowed, bytes)?;
+        for b in &self.view.forward.batches {
+            let block = self.registry.materials[b.material.0 as usize].material.to_gpu();
+            bytes.material += self.registry.material_table.write(&self.queue, b.material.0, &block);
+        }
+        let layout = &self.registry.pipelines.instance_layout;
+        let list = &mut self.view.forward;
+        bytes.draw_indices +=
+            list.write_indices_one_by_one(&self.device, &self.queue, (layout, self.instances.array()))?;
+        Ok(())
+    }
+
+    /// One pass: the sky first, under everything, then each batch with every
+    /// state bound again and its own `draw_indexed` call.
+    fn naive_encode(
+        &mut self,
+        target: &OffscreenTarget,
+        lighting: &Lighting,
+        stats: &mut FrameStats,
+    ) -> wgpu::CommandBuffer {
+        let label = Some("renderer: naive frame");
+        let mut encoder = self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label });
+        let start = web_time::Instant::now();
+        {
+            let background = lighting.environment.background;
+            let mut pass = self.begin_forward_pass(&mut encoder, target, background, stats);
+            self.draw_sky(&mut pass, target, background, stats);
+            let list = &self.view.forward;
+            pass.push_debug_group("naive: one draw per instance");
+            for (b, draw) in list.batches.iter().zip(&list.draws) {
+                let pipelines = &self.registry.pipelines;
+                pass.set_stencil_reference(pipelines.stencil_reference(b.pipeline));
+                pass.set_pipeline(pipelines.forward(b.pipeline));
+                pass.set_bind_group(2, &self.registry.texture_sets[draw.texture_set as usize].bind_group, &[]);
+                let mesh = draw.mesh;
+                let base_vertex = match self.base_vertex {
+                    true => {
+                        self.registry.mesh_pool.bind(&mut pass, mesh.page);
+                        mesh.base_vertex
+                    }
+                    false => {
+                        self.registry.mesh_pool.bind_from(&mut pass, mesh.page, mesh.base_vertex as u64);
+                        0
+                    }
+                };
+                let indices = mesh.first_index..mesh.first_index + mesh.index_count;
+                pass.draw_indexed(indices, base_vertex, b.first_instance..b.first_instance + 1);
+            }
+            pass.pop_debug_group();
+            let n = list.batches.len() as u32;
+            (stats.pipelines_bound, stats.bind_groups_set) = (stats.pipelines_bound + n, stats.bind_groups_set + n);
+            (stats.draws, stats.draw_calls) = (stats.draws + n, stats.draw_calls + n);
+            let instances = u64::from(n);
+            stats.passes.opaque =
+                super::PassStats { draw_calls: n, draws: n, instances, cpu_ms: super::ms_since(start) };
+        }
+        if let Some(timer) = &mut self.gpu_timer {
+            timer.resolve(&mut encoder, Timed::Forward, self.frame_index);
+        }
+        encoder.finish()
+    }
+}
