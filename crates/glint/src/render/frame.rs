@@ -318,7 +318,7 @@ impl Renderer {
         if (width, height, format) == (target.width(), target.height(), target.format()) {
             return self.run_frame(&frame, lighting, drawn, target, Compose::Direct);
         }
-        let own = self.take_view_target(width, height, format);
+        let own = self.targets.take_view(&self.device, (width, height), format, self.frame_index);
         let images = ChainImages {
             scene: own.color_view(),
             size: (width, height),
@@ -331,7 +331,7 @@ impl Renderer {
             false => Compose::Post { chain: &view.post, images: &images },
         };
         let result = self.run_frame(&frame, lighting, drawn, &own, compose);
-        self.view_targets.push((own, self.frame_index));
+        self.targets.put_back(own, self.frame_index);
         result
     }
 
@@ -358,9 +358,9 @@ impl Renderer {
                 let t = Instant::now();
                 let (device, queue, index, timer) =
                     (&self.device, &self.queue, self.frame_index, self.gpu_timer.as_mut());
-                let params = &mut self.view.post_params;
+                let (params, pool) = (&mut self.view.post_params, &mut self.targets);
                 stats.passes.post =
-                    self.post.encode((device, queue), params, &mut encoder, chain, images, (index, timer))?;
+                    self.post.encode((device, queue), (params, pool), &mut encoder, chain, images, (index, timer))?;
                 stats.draws += stats.passes.post.draws;
                 stats.draw_calls += stats.passes.post.draw_calls;
                 stats.passes.post.cpu_ms = ms_since(t);
@@ -376,19 +376,6 @@ impl Renderer {
             true => target.format(),
             false => TargetFormat { color: HDR_FORMAT, samples: if self.hdr_msaa { target.samples() } else { 1 } },
         }
-    }
-
-    /// A view target of this size and sample count: one kept from an earlier
-    /// frame, or a new one. Targets unused for more than a frame are dropped.
-    fn take_view_target(&mut self, width: u32, height: u32, format: TargetFormat) -> OffscreenTarget {
-        let now = self.frame_index;
-        let fits = |t: &OffscreenTarget| (t.width(), t.height(), t.format()) == (width, height, format);
-        if let Some(k) = self.view_targets.iter().position(|(t, _)| fits(t)) {
-            return self.view_targets.swap_remove(k).0;
-        }
-        // A window being resized asks for a new size every frame: keep only recent ones.
-        self.view_targets.retain(|(_, used)| used + 2 >= now);
-        OffscreenTarget::on_device(&self.device, width, height, format)
     }
 
     /// One view's frame into `target`, stage by stage (the list at [`flush`](Self::flush)).

@@ -49,6 +49,7 @@ mod shadow_maps;
 mod shadow_pass;
 mod shadow_views;
 mod stats;
+mod target_pool;
 mod timer;
 mod view;
 mod views;
@@ -64,7 +65,7 @@ pub use stats::{FrameStats, PassStats, Passes, StageTimes, UploadStats};
 pub use timer::GpuTimes;
 
 use crate::asset::Texture;
-use crate::gpu::{Gpu, OffscreenTarget, SubmitQueue};
+use crate::gpu::{Gpu, SubmitQueue};
 use crate::scene::{Entity, Material, MaterialId, Mesh, RenderTargetId, ShapeId, TextureId};
 use draw_list::ListPaths;
 use frame_variant::FrameVariant;
@@ -146,9 +147,8 @@ pub struct Renderer {
     submitted: Vec<Submitted>,
     instances_submitted: u64,
     visible: Visible,
-    /// Targets of views that draw into part of the output, by size and samples,
-    /// with the frame each was last used in.
-    view_targets: Vec<(OffscreenTarget, u64)>,
+    /// Transient targets: views' own and the post chain's images.
+    targets: target_pool::TargetPool,
     post: post::PostChain,
     /// Samples of a post-processed view's HDR target: the output's where the
     /// adapter multisamples the HDR format, else 1.
@@ -218,7 +218,7 @@ impl Renderer {
             submitted: Vec::new(),
             instances_submitted: 0,
             visible: Visible::default(),
-            view_targets: Vec::new(),
+            targets: target_pool::TargetPool::default(),
             post: post::PostChain::new(&gpu.device),
             cull_pipelines: gpu.culls_on_gpu().then(|| gpu_cull::CullPipelines::new(&gpu.device)),
             base_vertex: gpu.base_vertex(),

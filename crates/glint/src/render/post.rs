@@ -5,6 +5,7 @@
 //! output. Intermediates are kept between frames by size, never made per frame;
 //! each effect's parameters are written only when they change.
 
+use super::target_pool::TargetPool;
 use super::timer::{GpuTimer, Timed};
 use super::{PassStats, RenderError};
 use crate::gpu::{sampler_entry, texture_entry, HDR_FORMAT};
@@ -113,14 +114,6 @@ fn steps(chain: &[PostEffect]) -> Vec<(usize, Step)> {
     out
 }
 
-/// An intermediate target kept between frames.
-struct Pooled {
-    size: (u32, u32),
-    slot: usize,
-    view: wgpu::TextureView,
-    last_used: u64,
-}
-
 /// What a chain draws from and into.
 pub(super) struct ChainImages<'a> {
     /// The view drawn in HDR, and its size.
@@ -161,7 +154,6 @@ pub(super) struct PostChain {
     module: Option<wgpu::ShaderModule>,
     sampler: wgpu::Sampler,
     pipelines: HashMap<(Pass, wgpu::TextureFormat), wgpu::RenderPipeline>,
-    pool: Vec<Pooled>,
     /// Bound as the second input where a pass has none.
     black: wgpu::TextureView,
 }
@@ -207,19 +199,18 @@ impl PostChain {
                 ..Default::default()
             }),
             pipelines: HashMap::new(),
-            pool: Vec::new(),
             black: black.create_view(&Default::default()),
         }
     }
 
     /// Record `chain` from `images.scene` into `images.output`, its passes'
     /// parameters in `params` (the view's own: views' chains share one
-    /// submission). Returns the chain's draws; the GPU time of effect k is timed
+    /// submission), its intermediate images from `pool`. Returns the chain's draws; the GPU time of effect k is timed
     /// as `Timed::Post(k)` by `timer`, for frame `frame_index`.
     pub(super) fn encode(
         &mut self,
         (device, queue): (&wgpu::Device, &wgpu::Queue),
-        params: &mut PostParams,
+        (params, pool): (&mut PostParams, &mut TargetPool),
         encoder: &mut wgpu::CommandEncoder,
         chain: &[PostEffect],
         images: &ChainImages,
@@ -229,7 +220,8 @@ impl PostChain {
             return Err(RenderError::PostChainTooLong(chain.len()));
         }
         let steps = steps(chain);
-        self.prepare(device, &steps, images, frame_index)?;
+        self.prepare(device, &steps, images, (pool, frame_index))?;
+        let pool = &*pool;
         let (width, height) = images.size;
         let half = ((width / 2).max(1), (height / 2).max(1));
         let size_of = |image: Image| match image {
@@ -250,12 +242,12 @@ impl PostChain {
                 entries: &[
                     wgpu::BindGroupEntry {
                         binding: 0,
-                        resource: wgpu::BindingResource::TextureView(self.view(step.source, images)),
+                        resource: wgpu::BindingResource::TextureView(self.view(step.source, images, pool)),
                     },
                     wgpu::BindGroupEntry {
                         binding: 1,
                         resource: wgpu::BindingResource::TextureView(
-                            step.extra.map_or(&self.black, |e| self.view(e, images)),
+                            step.extra.map_or(&self.black, |e| self.view(e, images, pool)),
                         ),
                     },
                     wgpu::BindGroupEntry { binding: 2, resource: wgpu::BindingResource::Sampler(&self.sampler) },
@@ -276,7 +268,7 @@ impl PostChain {
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some(&format!("post: {} ({})", chain[*effect].name(), step.pass.entry_point())),
                 color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: self.view(step.target, images),
+                    view: self.view(step.target, images, pool),
                     depth_slice: None,
                     resolve_target: None,
                     ops: wgpu::Operations { load: wgpu::LoadOp::Load, store: wgpu::StoreOp::Store },
@@ -309,7 +301,7 @@ impl PostChain {
         device: &wgpu::Device,
         steps: &[(usize, Step)],
         images: &ChainImages,
-        frame_index: u64,
+        (pool, frame_index): (&mut TargetPool, u64),
     ) -> Result<(), RenderError> {
         let scope = crate::gpu::DriverErrors::watch(device);
         let module = self.module.get_or_insert_with(|| {
@@ -349,26 +341,7 @@ impl PostChain {
         let used = |image: &Image| matches!(image, Image::Pooled(_)).then_some(*image);
         for image in steps.iter().flat_map(|(_, s)| [used(&s.source), s.extra, used(&s.target)]).flatten() {
             let Image::Pooled(slot) = image else { continue };
-            let size = if slot >= 2 { half } else { images.size };
-            match self.pool.iter_mut().find(|p| p.size == size && p.slot == slot) {
-                Some(kept) => kept.last_used = frame_index,
-                None => {
-                    // A window being resized asks for new sizes: keep only recent ones.
-                    self.pool.retain(|p| p.last_used + 2 >= frame_index);
-                    let texture = device.create_texture(&wgpu::TextureDescriptor {
-                        label: Some("post: intermediate"),
-                        size: wgpu::Extent3d { width: size.0, height: size.1, depth_or_array_layers: 1 },
-                        mip_level_count: 1,
-                        sample_count: 1,
-                        dimension: wgpu::TextureDimension::D2,
-                        format: HDR_FORMAT,
-                        usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
-                        view_formats: &[],
-                    });
-                    let view = texture.create_view(&Default::default());
-                    self.pool.push(Pooled { size, slot, view, last_used: frame_index });
-                }
-            }
+            pool.keep_image(device, if slot >= 2 { half } else { images.size }, slot, frame_index);
         }
         match scope.finish() {
             Some(error) => {
@@ -380,7 +353,7 @@ impl PostChain {
         }
     }
 
-    fn view<'a>(&'a self, image: Image, images: &'a ChainImages) -> &'a wgpu::TextureView {
+    fn view<'a>(&'a self, image: Image, images: &'a ChainImages, pool: &'a TargetPool) -> &'a wgpu::TextureView {
         let (width, height) = images.size;
         let half = ((width / 2).max(1), (height / 2).max(1));
         match image {
@@ -388,7 +361,7 @@ impl PostChain {
             Image::Output => images.output,
             Image::Pooled(slot) => {
                 let size = if slot >= 2 { half } else { images.size };
-                &self.pool.iter().find(|p| p.size == size && p.slot == slot).expect("prepared").view
+                pool.image(size, slot).expect("prepared")
             }
         }
     }
