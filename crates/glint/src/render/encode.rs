@@ -40,6 +40,7 @@ impl Renderer {
         let sky_at = list.runs.partition_point(|r| run_stage(list, r) < SKY_STAGE);
         let mut encoder =
             self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("renderer: frame") });
+        encoder.push_debug_group(&self.debug_group("forward"));
         if let Some(pipelines) = &self.cull_pipelines {
             self.view.forward.record_cull(&mut encoder, pipelines, self.queue.submits());
         }
@@ -52,10 +53,20 @@ impl Renderer {
             }
             self.draw_stages(&self.view.forward, &mut pass, sky_at..self.view.forward.runs.len(), &mut bound, stats);
         }
+        encoder.pop_debug_group();
         if let Some(timer) = &mut self.gpu_timer {
             timer.resolve(&mut encoder, Timed::Forward, self.frame_index);
         }
         encoder.finish()
+    }
+
+    /// The name of a debug group of the view being drawn: "frame 7 › view 1 › `part`"
+    /// (no view number for a single view).
+    pub(super) fn debug_group(&self, part: &str) -> String {
+        match self.view_slot {
+            Some(k) => format!("frame {} › view {k} › {part}", self.frame_index),
+            None => format!("frame {} › {part}", self.frame_index),
+        }
     }
 
     /// Begin the view's forward pass into `target`, cleared to `background`,

@@ -2,7 +2,10 @@
 //! [`Renderer::flush`] is one view's frame, whose stages [`Renderer::run_frame`]
 //! calls in order (prepare → cull → queue → sort → batch → upload → encode →
 //! compose → submit) after [`Renderer::shadow_pass`] has drawn that view's
-//! shadow maps.
+//! shadow maps. Debug groups name each view's command buffers after the
+//! outline: "frame N › view k › shadows" (a render pass per "light n cascade
+//! c" or "light n face f"), "… › forward" (the cull pass, then the forward
+//! pass's stages), "… › post".
 
 use super::post::ChainImages;
 use super::shadow_pass::{Shadows, ShadowsDrawn};
@@ -163,7 +166,9 @@ impl Renderer {
         let kept = self.kept_views[slot].take().unwrap_or_else(|| self.view.sibling(&self.shared()));
         let single = std::mem::replace(&mut self.view, kept);
         self.refresh_view();
+        self.view_slot = Some(slot);
         let result = draw(self);
+        self.view_slot = None;
         self.kept_views[slot] = Some(std::mem::replace(&mut self.view, single));
         self.refresh_view();
         result
@@ -356,6 +361,7 @@ impl Renderer {
             ),
             Compose::Post { chain, images } => {
                 let t = Instant::now();
+                encoder.push_debug_group(&self.debug_group("post"));
                 let (device, queue, index, timer) =
                     (&self.device, &self.queue, self.frame_index, self.gpu_timer.as_mut());
                 let (params, pool) = (&mut self.view.post_params, &mut self.targets);
@@ -363,6 +369,7 @@ impl Renderer {
                     self.post.encode((device, queue), (params, pool), &mut encoder, chain, images, (index, timer))?;
                 stats.draws += stats.passes.post.draws;
                 stats.draw_calls += stats.passes.post.draw_calls;
+                encoder.pop_debug_group();
                 stats.passes.post.cpu_ms = ms_since(t);
             }
         }

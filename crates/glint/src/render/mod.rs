@@ -124,6 +124,8 @@ pub struct Renderer {
     /// Each `render_views` view's GPU state, by its place in the list, kept
     /// between frames while it is not the one being drawn.
     kept_views: Vec<Option<ViewGpu>>,
+    /// The place in `render_views`' list of the view being drawn (`None`: the single view).
+    view_slot: Option<usize>,
     /// Commands recorded for the next flush's one submission: the shadow pass's,
     /// and the clear of a target the views do not cover.
     pending: Vec<wgpu::CommandBuffer>,
@@ -206,6 +208,7 @@ impl Renderer {
             instances,
             view,
             kept_views: Vec::new(),
+            view_slot: None,
             pending: Vec::new(),
             shadow_maps,
             shadow_maps_generation: 0,

@@ -94,6 +94,7 @@ impl Renderer {
         let label = Some("renderer: naive frame");
         let mut encoder = self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label });
         let start = web_time::Instant::now();
+        encoder.push_debug_group(&self.debug_group("forward (naive)"));
         {
             let background = lighting.environment.background;
             let mut pass = self.begin_forward_pass(&mut encoder, target, background, stats);
@@ -127,6 +128,7 @@ impl Renderer {
             stats.passes.opaque =
                 super::PassStats { draw_calls: n, draws: n, instances, cpu_ms: super::ms_since(start) };
         }
+        encoder.pop_debug_group();
         if let Some(timer) = &mut self.gpu_timer {
             timer.resolve(&mut encoder, Timed::Forward, self.frame_index);
         }

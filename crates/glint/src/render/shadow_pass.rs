@@ -75,6 +75,13 @@ impl ShadowsDrawn {
     }
 }
 
+/// A frame's shadow views, their names, and each light's first view.
+struct ShadowPlan {
+    views: Vec<ShadowView>,
+    names: Vec<String>,
+    first: Vec<Option<u32>>,
+}
+
 impl Renderer {
     /// Draw the shadow maps of every light in `lighting` that casts shadows (see
     /// [`Light::with_shadows`]), from the entities submitted so far, for `view`
@@ -108,7 +115,7 @@ impl Renderer {
         self.prepare(self.scene_format(&view, target), &lighting.environment, &mut prepared)?;
         let [_, _, width, height] = view.viewport.pixels(target.width(), target.height());
         let frame = ViewFrame::new(&view, width, height, self.cull_pipelines.is_some());
-        let (views, first_view) = self.plan_shadow_views(&frame, lights)?;
+        let ShadowPlan { views, names, first: first_view } = self.plan_shadow_views(&frame, lights)?;
         let mut drawn = ShadowsDrawn {
             frame_index: self.frame_index,
             view,
@@ -121,23 +128,20 @@ impl Renderer {
         if !views.is_empty() {
             let ranges = self.batch_shadow_views(&views, frame.culling, &mut drawn.prepared)?;
             self.upload_shadow_views(&views, &mut drawn.prepared)?;
-            let commands = self.encode_shadow_views(&views, &ranges, &mut drawn.cost);
+            let commands = self.encode_shadow_views((&views, &names), &ranges, &mut drawn.cost);
             self.pending.push(commands);
         }
         drawn.cost.cpu_ms = ms_since(start);
         Ok(Shadows { drawn: Some(drawn) })
     }
 
-    /// Every shadow view of `lights`, and each light's first view. Sizes the
-    /// shadow maps for them (rebuilding the Scene bind group when they change).
-    fn plan_shadow_views(
-        &mut self,
-        frame: &ViewFrame,
-        lights: &[Light],
-    ) -> Result<(Vec<ShadowView>, Vec<Option<u32>>), RenderError> {
+    /// Every shadow view of `lights`, its name ("light 0 cascade 2", "light 1
+    /// face 3") and each light's first view. Sizes the shadow maps for them
+    /// (rebuilding the Scene bind group when they change).
+    fn plan_shadow_views(&mut self, frame: &ViewFrame, lights: &[Light]) -> Result<ShadowPlan, RenderError> {
         let layout = ShadowLayout::plan(lights);
         let casters = self.caster_bounds();
-        let mut views = Vec::new();
+        let (mut views, mut names) = (Vec::new(), Vec::new());
         for (k, (light, first)) in lights.iter().zip(&layout.first).enumerate() {
             let Some(settings) = light.shadows else { continue };
             let Some(first) = *first else {
@@ -159,6 +163,16 @@ impl Renderer {
                     views.extend(shadow_views::cube(light, &shared(layout.size_cube), first).into_iter().flatten())
                 }
             }
+            let part = match light.kind {
+                LightKind::Directional { .. } => " cascade",
+                LightKind::Spot { .. } => "",
+                LightKind::Point { .. } => " face",
+            };
+            let new = names.len()..views.len();
+            names.extend(new.enumerate().map(|(j, _)| match part {
+                "" => format!("light {k}"),
+                part => format!("light {k}{part} {j}"),
+            }));
         }
         let ShadowLayout { size_2d, size_cube, layers, cubes, first } = layout;
         debug_assert!(views.len() <= MAX_SHADOW_VIEWS);
@@ -169,7 +183,7 @@ impl Renderer {
             self.shadow_maps_generation += 1;
             self.refresh_view();
         }
-        Ok((views, first))
+        Ok(ShadowPlan { views, names, first })
     }
 
     /// The world box around every submitted entity that casts shadows.
@@ -279,16 +293,18 @@ impl Renderer {
         Ok(())
     }
 
-    /// One depth pass per view into its layer of the shadow maps.
+    /// One depth pass per view (named in `names`) into its layer of the shadow
+    /// maps, after the cull pass where the list is culled on the GPU.
     fn encode_shadow_views(
         &mut self,
-        views: &[ShadowView],
+        (views, names): (&[ShadowView], &[String]),
         ranges: &[std::ops::Range<usize>],
         cost: &mut PassStats,
     ) -> wgpu::CommandBuffer {
         let mut encoder = self
             .device
             .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("renderer: shadow maps") });
+        encoder.push_debug_group(&self.debug_group("shadows"));
         if let Some(pipelines) = &self.cull_pipelines {
             self.view.shadows.record_cull(&mut encoder, pipelines, self.queue.submits());
         }
@@ -299,7 +315,7 @@ impl Renderer {
                 ViewTarget::CubeFace { cube, face } => &self.shadow_maps.face_views[(6 * cube + face) as usize],
             };
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some(&format!("shadow view {k} ({:?})", view.target)),
+                label: Some(&names[k]),
                 color_attachments: &[],
                 depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
                     view: attachment,
@@ -317,6 +333,7 @@ impl Renderer {
             stats.bind_groups_set += 2;
             self.draw_stages(&self.view.shadows, &mut pass, range.clone(), &mut Bound::default(), &mut stats);
         }
+        encoder.pop_debug_group();
         if let Some(timer) = &mut self.gpu_timer {
             timer.resolve(&mut encoder, Timed::Shadow, self.frame_index);
         }
