@@ -99,6 +99,8 @@ struct DrawPaths {
     indirect: bool,
     /// Compute passes that cull instances into the indirect commands.
     gpu_cull: bool,
+    /// Those passes occlusion-cull too: a depth pyramid in a storage texture.
+    occlusion: bool,
 }
 
 impl fmt::Debug for Gpu {
@@ -253,7 +255,18 @@ impl Gpu {
         let base_vertex = !webgl2 && flags.contains(wgpu::DownlevelFlags::BASE_VERTEX);
         // Indirect commands carry base vertices.
         let indirect = indirect && base_vertex;
-        let paths = DrawPaths { vertex_storage, base_vertex, indirect, gpu_cull: gpu_cull && indirect };
+        let gpu_cull = gpu_cull && indirect;
+        let r32_storage = adapter.get_texture_format_features(wgpu::TextureFormat::R32Float).allowed_usages;
+        let occlusion = gpu_cull
+            && device.limits().max_storage_textures_per_shader_stage >= 1
+            && r32_storage.contains(wgpu::TextureUsages::STORAGE_BINDING);
+        if gpu_cull && !occlusion {
+            log::warn!(
+                "glint: '{}' has no storage textures for a depth pyramid: GPU culling without occlusion",
+                info.name
+            );
+        }
+        let paths = DrawPaths { vertex_storage, base_vertex, indirect, gpu_cull, occlusion };
         Ok(Self { adapter, device, queue, info, anisotropy, paths, uncaptured })
     }
 
@@ -290,6 +303,12 @@ impl Gpu {
     /// backend. Elsewhere such views cull on the CPU.
     pub fn culls_on_gpu(&self) -> bool {
         self.paths.gpu_cull
+    }
+
+    /// Whether views culled on the GPU are occlusion-culled too (two phases
+    /// with a depth pyramid): where the device has storage textures.
+    pub fn occlusion_culls(&self) -> bool {
+        self.paths.occlusion
     }
 
     /// Whether vertex shaders read instances and materials from storage

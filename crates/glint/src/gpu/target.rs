@@ -22,6 +22,9 @@ pub struct OffscreenTarget {
     /// Multisampled colour, present only when `samples > 1`.
     msaa_view: Option<wgpu::TextureView>,
     depth_view: wgpu::TextureView,
+    /// The depth aspect alone, for reading depth in a shader (occlusion
+    /// culling's pyramid), where the device occlusion-culls.
+    depth_only_view: Option<wgpu::TextureView>,
 }
 
 /// Bytes per pixel of [`COLOR_FORMAT`].
@@ -42,7 +45,8 @@ impl OffscreenTarget {
             return Err(GpuError::SampleCount(samples));
         }
         let scope = super::DriverErrors::watch(&gpu.device);
-        let target = Self::on_device(&gpu.device, width, height, TargetFormat { color: COLOR_FORMAT, samples });
+        let format = TargetFormat { color: COLOR_FORMAT, samples };
+        let target = Self::on_device(&gpu.device, width, height, format, gpu.occlusion_culls());
         match scope.finish() {
             None => Ok(target),
             Some(e) => Err(GpuError::Failed(format!(
@@ -53,9 +57,18 @@ impl OffscreenTarget {
     }
 
     /// [`OffscreenTarget::new`] without its checks, for a target no larger and
-    /// with no more samples than one that passed them.
+    /// with no more samples than one that passed them, its depth readable in
+    /// shaders when `read_depth` (occlusion culling: only where the device
+    /// does it, as GL's backend draws point-light shadows wrong beside a
+    /// readable depth buffer).
     /// The colour format may be [`HDR_FORMAT`](super::HDR_FORMAT) (not readable back).
-    pub(crate) fn on_device(device: &wgpu::Device, width: u32, height: u32, format: TargetFormat) -> Self {
+    pub(crate) fn on_device(
+        device: &wgpu::Device,
+        width: u32,
+        height: u32,
+        format: TargetFormat,
+        read_depth: bool,
+    ) -> Self {
         let TargetFormat { color: color_format, samples } = format;
         let size = wgpu::Extent3d { width, height, depth_or_array_layers: 1 };
         let texture = |label: &str, format, samples, usage| {
@@ -83,7 +96,17 @@ impl OffscreenTarget {
             texture("offscreen target: msaa colour", color_format, samples, wgpu::TextureUsages::RENDER_ATTACHMENT)
                 .create_view(&Default::default())
         });
-        let depth = texture("offscreen target: depth", DEPTH_FORMAT, samples, wgpu::TextureUsages::RENDER_ATTACHMENT);
+        let depth_usage = match read_depth {
+            true => wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
+            false => wgpu::TextureUsages::RENDER_ATTACHMENT,
+        };
+        let depth = texture("offscreen target: depth", DEPTH_FORMAT, samples, depth_usage);
+        let depth_only_view = read_depth.then(|| {
+            depth.create_view(&wgpu::TextureViewDescriptor {
+                aspect: wgpu::TextureAspect::DepthOnly,
+                ..Default::default()
+            })
+        });
         Self {
             width,
             height,
@@ -93,6 +116,7 @@ impl OffscreenTarget {
             resolved,
             msaa_view,
             depth_view: depth.create_view(&Default::default()),
+            depth_only_view,
         }
     }
 
@@ -148,6 +172,55 @@ impl OffscreenTarget {
                 ops,
             },
         }
+    }
+
+    /// The attachments of the first of two passes that draw one picture: colour
+    /// cleared to `clear` and kept (not resolved yet), depth and stencil
+    /// cleared and kept.
+    pub(crate) fn first_of_two(
+        &self,
+        clear: wgpu::Color,
+    ) -> (wgpu::RenderPassColorAttachment<'_>, wgpu::RenderPassDepthStencilAttachment<'_>) {
+        let color = wgpu::RenderPassColorAttachment {
+            view: self.msaa_view.as_ref().unwrap_or(&self.resolved_view),
+            depth_slice: None,
+            resolve_target: None,
+            ops: wgpu::Operations { load: wgpu::LoadOp::Clear(clear), store: wgpu::StoreOp::Store },
+        };
+        let depth = wgpu::RenderPassDepthStencilAttachment {
+            view: &self.depth_view,
+            depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(1.0), store: wgpu::StoreOp::Store }),
+            stencil_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(0), store: wgpu::StoreOp::Store }),
+        };
+        (color, depth)
+    }
+
+    /// The attachments of the second: colour, depth and stencil loaded; the
+    /// colour resolved (with MSAA) and depth and stencil discarded at the end.
+    pub(crate) fn second_of_two(
+        &self,
+    ) -> (wgpu::RenderPassColorAttachment<'_>, wgpu::RenderPassDepthStencilAttachment<'_>) {
+        let (color, _) = self.first_of_two(wgpu::Color::BLACK);
+        let color = wgpu::RenderPassColorAttachment {
+            resolve_target: self.msaa_view.as_ref().map(|_| &self.resolved_view),
+            ops: wgpu::Operations {
+                load: wgpu::LoadOp::Load,
+                store: if self.msaa_view.is_some() { wgpu::StoreOp::Discard } else { wgpu::StoreOp::Store },
+            },
+            ..color
+        };
+        let depth = wgpu::RenderPassDepthStencilAttachment {
+            view: &self.depth_view,
+            depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Load, store: wgpu::StoreOp::Discard }),
+            stencil_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Load, store: wgpu::StoreOp::Discard }),
+        };
+        (color, depth)
+    }
+
+    /// The depth aspect alone, to read in a shader; `None` unless the target
+    /// was made for occlusion culling.
+    pub(crate) fn depth_only_view(&self) -> Option<&wgpu::TextureView> {
+        self.depth_only_view.as_ref()
     }
 
     /// The depth-stencil attachment, cleared to the far plane (1.0) and stencil 0.

@@ -13,6 +13,7 @@ use super::cull::Frustum;
 use super::gpu_array::GpuArray;
 use super::gpu_cull::{CullBindings, CullInput, CullPipelines, CullRange, GpuCull, Run};
 use super::mesh_pool::MeshRange;
+use super::occlusion::{late_commands, LateInput};
 use super::queue::DrawItem;
 use super::resources::GrowBuffer;
 use super::RenderError;
@@ -245,17 +246,23 @@ impl DrawList {
     }
 
     /// Write the draw indices and indirect commands where they differ from what
-    /// the GPU holds, and the GPU culling state of a GPU-culled list.
+    /// the GPU holds, and the GPU culling state of a GPU-culled list; `occlusion`
+    /// (the view's view-projection and its depth buffer's width, height and
+    /// samples) occlusion-culls it where the device can.
     pub(crate) fn upload(
         &mut self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
         (layout, instances): (&wgpu::BindGroupLayout, &GpuArray),
         gpu: Option<(&CullPipelines, &wgpu::Buffer)>,
+        occlusion: Option<(glam::Mat4, (u32, u32, u32))>,
     ) -> Result<ListUpload, RenderError> {
         self.finish();
         let mut written = ListUpload { draw_indices: 0, indirect: 0 };
-        let capacity = self.draw_indices.len() + self.gpu_region as usize;
+        let occlusion = occlusion.filter(|_| gpu.is_some_and(|(p, _)| p.occlusion()) && self.culled_on_gpu());
+        // Occlusion culling places the late phase's instances after the early ones'.
+        let regions = if occlusion.is_some() { 2 } else { 1 };
+        let capacity = self.draw_indices.len() + regions * self.gpu_region as usize;
         if self.draw_index_buffer.reserve(device, 4, capacity)? {
             self.uploaded_draw_indices.clear();
             self.rebind(device, layout, instances);
@@ -275,15 +282,28 @@ impl DrawList {
                 self.uploaded_indirect_args.clone_from(&self.indirect_args);
             }
         }
-        if let (Some(state), Some((pipelines, bounds)), true) = (&mut self.gpu, gpu, !self.cull_ranges.is_empty()) {
+        let draw_indices = match &self.draw_index_buffer {
+            GpuArray::Buffer(b) => Some(&b.buffer),
+            GpuArray::Texture(_) => None,
+        };
+        if let (Some(state), Some((pipelines, bounds)), Some(draw_indices), true) =
+            (&mut self.gpu, gpu, draw_indices, !self.cull_ranges.is_empty())
+        {
             let input = CullInput {
                 ranges: &self.cull_ranges,
                 runs: &self.runs,
                 frustums: &self.frustums,
                 commands: self.batches.len(),
             };
-            let bindings = CullBindings { bounds, draw_indices: self.draw_index_buffer.binding() };
-            written.indirect += state.upload(device, queue, &input, pipelines, bindings)?;
+            let template = occlusion.map(|_| late_commands(&self.indirect_args, &self.on_gpu, self.gpu_region));
+            let late = occlusion.zip(template.as_deref()).map(|((view_proj, depth), template)| LateInput {
+                view_proj,
+                depth,
+                template,
+                place_offset: self.gpu_region,
+            });
+            let bindings = CullBindings { bounds, draw_indices };
+            written.indirect += state.upload(device, queue, (&input, late.as_ref()), pipelines, bindings)?;
         }
         Ok(written)
     }

@@ -18,6 +18,17 @@ use super::{FrameStats, Renderer};
 use crate::gpu::OffscreenTarget;
 use crate::scene::Background;
 
+/// Which part of a view's forward pass a render pass is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum Part {
+    /// All of it.
+    Whole,
+    /// Occlusion culling's early draws.
+    First,
+    /// Its late draws, the sky and what follows.
+    Second,
+}
+
 /// What the pass has bound, to skip redundant state changes.
 #[derive(Default)]
 pub(super) struct Bound {
@@ -44,14 +55,37 @@ impl Renderer {
         if let Some(pipelines) = &self.cull_pipelines {
             self.view.forward.record_cull(&mut encoder, pipelines, self.queue.submits());
         }
+        let depth = target.depth_only_view().filter(|_| self.view.forward.gpu.as_ref().is_some_and(|g| g.occluding));
+        let end = self.view.forward.runs.len();
+        let mut bound = Bound::default();
+        // Occlusion culling: the opaque stages of what was seen last frame, then
+        // the late phase (depth pyramid, late cull), then what it found in a
+        // second pass, which goes on with the sky and the later stages.
+        let (late, after_sky) = match (depth, &self.cull_pipelines) {
+            (Some(depth), Some(pipelines)) => {
+                {
+                    let mut pass = self.begin_forward_pass(&mut encoder, target, (background, Part::First), stats);
+                    self.draw_stages(&self.view.forward, &mut pass, (0..sky_at, &[false]), &mut bound, stats);
+                }
+                if let Some(gpu) = &mut self.view.forward.gpu {
+                    gpu.record_late((&self.device, &mut encoder), pipelines, depth, self.queue.submits());
+                }
+                (Part::Second, &[false, true][..])
+            }
+            _ => (Part::Whole, &[false][..]),
+        };
         {
-            let mut pass = self.begin_forward_pass(&mut encoder, target, background, stats);
-            let mut bound = Bound::default();
-            self.draw_stages(&self.view.forward, &mut pass, 0..sky_at, &mut bound, stats);
+            let mut pass = self.begin_forward_pass(&mut encoder, target, (background, late), stats);
+            if late == Part::Second {
+                bound = Bound::default();
+                self.draw_stages(&self.view.forward, &mut pass, (0..sky_at, &[true]), &mut bound, stats);
+            } else {
+                self.draw_stages(&self.view.forward, &mut pass, (0..sky_at, &[false]), &mut bound, stats);
+            }
             if self.draw_sky(&mut pass, target, background, stats) {
                 bound = Bound { stencil_reference: bound.stencil_reference, ..Bound::default() };
             }
-            self.draw_stages(&self.view.forward, &mut pass, sky_at..self.view.forward.runs.len(), &mut bound, stats);
+            self.draw_stages(&self.view.forward, &mut pass, (sky_at..end, after_sky), &mut bound, stats);
         }
         encoder.pop_debug_group();
         if let Some(timer) = &mut self.gpu_timer {
@@ -69,13 +103,13 @@ impl Renderer {
         }
     }
 
-    /// Begin the view's forward pass into `target`, cleared to `background`,
-    /// with the Scene, Camera and Renderer blocks bound.
+    /// Begin the view's forward pass (or `part` of it) into `target`, cleared
+    /// to `background`, with the Scene, Camera and Renderer blocks bound.
     pub(super) fn begin_forward_pass<'e>(
         &self,
         encoder: &'e mut wgpu::CommandEncoder,
         target: &OffscreenTarget,
-        background: Background,
+        (background, part): (Background, Part),
         stats: &mut FrameStats,
     ) -> wgpu::RenderPass<'e> {
         let clear = match background {
@@ -83,11 +117,21 @@ impl Renderer {
                 wgpu::Color { r: c.x.into(), g: c.y.into(), b: c.z.into(), a: 1.0 }
             }
         };
+        let (color, depth) = match part {
+            Part::Whole => (target.color_attachment(clear), target.depth_attachment()),
+            Part::First => target.first_of_two(clear),
+            Part::Second => target.second_of_two(),
+        };
+        let (begins, ends) = (part != Part::Second, part != Part::First);
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("forward pass"),
-            color_attachments: &[Some(target.color_attachment(clear))],
-            depth_stencil_attachment: Some(target.depth_attachment()),
-            timestamp_writes: self.gpu_timer.as_ref().and_then(|t| t.pass_writes(Timed::Forward, true, true)),
+            label: Some(match part {
+                Part::Whole => "forward pass",
+                Part::First => "forward pass: early",
+                Part::Second => "forward pass: late",
+            }),
+            color_attachments: &[Some(color)],
+            depth_stencil_attachment: Some(depth),
+            timestamp_writes: self.gpu_timer.as_ref().and_then(|t| t.pass_writes(Timed::Forward, begins, ends)),
             ..Default::default()
         });
         pass.set_bind_group(0, &self.view.scene_group, &[]);
@@ -125,12 +169,14 @@ impl Renderer {
         true
     }
 
-    /// Draw `list`'s runs in `range`, one debug group per stage.
+    /// Draw `list`'s runs in `range`, one debug group per stage, each stage
+    /// from the commands of each of `phases` in turn (occlusion culling's late
+    /// phase when true, else the early or only one).
     pub(super) fn draw_stages(
         &self,
         list: &DrawList,
         pass: &mut wgpu::RenderPass<'_>,
-        range: std::ops::Range<usize>,
+        (range, phases): (std::ops::Range<usize>, &[bool]),
         bound: &mut Bound,
         stats: &mut FrameStats,
     ) {
@@ -139,10 +185,12 @@ impl Renderer {
             let (start, calls, draws) = (web_time::Instant::now(), stats.draw_calls, stats.draws);
             let name = run_stage(list, &stage[0]);
             pass.push_debug_group(&stage_name(name));
-            for run in stage {
-                self.draw_run(list, pass, at, run, bound, stats);
-                at += 1;
+            for &late in phases {
+                for (k, run) in stage.iter().enumerate() {
+                    self.draw_run(list, pass, (at + k, late), run, bound, stats);
+                }
             }
+            at += stage.len();
             pass.pop_debug_group();
             let named = &mut stats.passes;
             let cost = match name {
@@ -158,12 +206,13 @@ impl Renderer {
         }
     }
 
-    /// Draw run `k` of `list` (`run`), setting only the state that changes.
+    /// Draw run `k` of `list` (`run`), from the late phase's commands when
+    /// `late`, setting only the state that changes.
     fn draw_run(
         &self,
         list: &DrawList,
         pass: &mut wgpu::RenderPass<'_>,
-        k: usize,
+        (k, late): (usize, bool),
         run: &Run,
         bound: &mut Bound,
         stats: &mut FrameStats,
@@ -189,15 +238,18 @@ impl Renderer {
             self.registry.mesh_pool.bind(pass, page);
             bound.page = Some(page);
         }
-        stats.draws += run.len;
         match (&list.indirect, &list.gpu, &self.cull_pipelines) {
             (_, Some(gpu), Some(pipelines)) if list.culled_on_gpu() => {
-                gpu.draw_run(pipelines, pass, k, run);
-                stats.draw_calls += 1;
+                gpu.draw_run(pipelines, pass, (k, late), run);
+                // A batch is one draw, in one phase or both; the late calls apart.
+                match late {
+                    true => stats.late_draw_calls += 1,
+                    false => (stats.draws, stats.draw_calls) = (stats.draws + run.len, stats.draw_calls + 1),
+                }
             }
             (Some(indirect), ..) => {
                 pass.multi_draw_indexed_indirect(&indirect.buffer, u64::from(run.first) * COMMAND_BYTES, run.len);
-                stats.draw_calls += 1;
+                (stats.draws, stats.draw_calls) = (stats.draws + run.len, stats.draw_calls + 1);
             }
             _ => {
                 for (b, draw) in list.batches[run.batches()].iter().zip(&list.draws[run.batches()]) {
@@ -212,7 +264,7 @@ impl Renderer {
                     };
                     pass.draw_indexed(indices, base_vertex, b.first_instance..b.first_instance + b.instance_count);
                 }
-                stats.draw_calls += run.len;
+                (stats.draws, stats.draw_calls) = (stats.draws + run.len, stats.draw_calls + run.len);
             }
         }
     }

@@ -5,7 +5,8 @@ use super::queue::{self, DrawItem, Queue};
 use super::view::ViewFrame;
 use super::visible::Visible;
 use super::{FrameStats, RenderError, Renderer, Submitted, UploadStats};
-use crate::scene::Lighting;
+use crate::gpu::OffscreenTarget;
+use crate::scene::{Culling, Lighting};
 use glam::Vec3A;
 
 impl Renderer {
@@ -59,18 +60,24 @@ impl Renderer {
     /// Stage 6: write the blocks that changed, the instances that changed, and this
     /// frame's draw indices and indirect commands where they differ from the last frame's.
     /// `shadowed` is each light's first shadow view (empty: no shadows).
+    /// Culled on the GPU, the view is occlusion-culled against its depth in `target`.
     pub(super) fn upload(
         &mut self,
         frame: &ViewFrame,
-        lighting: &Lighting,
-        shadowed: &[Option<u32>],
+        (lighting, shadowed): (&Lighting, &[Option<u32>]),
+        target: &OffscreenTarget,
         stats: &mut FrameStats,
     ) -> Result<(), RenderError> {
         self.upload_view_blocks(frame, lighting, shadowed, &mut stats.bytes_uploaded)?;
         let bytes = &mut stats.bytes_uploaded;
         let layout = &self.registry.pipelines.instance_layout;
         let gpu = self.cull_pipelines.as_ref().zip(self.instances.bounds());
-        let written = self.view.forward.upload(&self.device, &self.queue, (layout, self.instances.array()), gpu)?;
+        let view_proj = frame.camera.projection(frame.aspect) * frame.view;
+        let depth = (target.width(), target.height(), target.samples());
+        let occlusion = (frame.culling == Culling::Gpu).then_some((view_proj, depth));
+        let list = &mut self.view.forward;
+        let written = list.upload(&self.device, &self.queue, (layout, self.instances.array()), gpu, occlusion)?;
+        stats.occlusion = list.gpu.as_ref().is_some_and(|g| g.occluding);
         bytes.draw_indices += written.draw_indices;
         bytes.indirect += written.indirect;
         stats.instances_drawn = self.view.forward.draw_indices.len() as u64;

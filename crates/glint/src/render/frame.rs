@@ -323,7 +323,8 @@ impl Renderer {
         if (width, height, format) == (target.width(), target.height(), target.format()) {
             return self.run_frame(&frame, lighting, drawn, target, Compose::Direct);
         }
-        let own = self.targets.take_view(&self.device, (width, height), format, self.frame_index);
+        let read_depth = self.cull_pipelines.as_ref().is_some_and(|p| p.occlusion());
+        let own = self.targets.take_view(&self.device, (width, height), (format, read_depth), self.frame_index);
         let images = ChainImages {
             scene: own.color_view(),
             size: (width, height),
@@ -427,7 +428,7 @@ impl Renderer {
                 self.view.forward.build(0, &visible.instances, frame.frustum, |b| registry.batch_draw(b), on_gpu);
                 stats.cpu_ms.batch = lap.next();
                 self.visible = visible;
-                self.upload(frame, lighting, shadowed, &mut stats)?;
+                self.upload(frame, (lighting, shadowed), target, &mut stats)?;
                 stats.cpu_ms.upload = lap.next();
                 let commands = self.encode(target, lighting.environment.background, &mut stats);
                 stats.cpu_ms.encode = lap.next();

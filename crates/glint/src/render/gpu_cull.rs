@@ -19,6 +19,7 @@
 //! [`GpuCull::args`], empty commands included). Each frustum's instances drawn
 //! come back to the CPU a frame or two late, without a stall.
 
+use super::occlusion::{LateInput, LatePhase, PyramidPipelines};
 use super::resources::GrowBuffer;
 use super::RenderError;
 use crate::render::cull::{Boxes, Frustum};
@@ -85,7 +86,7 @@ impl Run {
     }
 }
 
-/// `cull.wgsl`'s `Params`.
+/// `cull.wgsl`'s `Params`: one set for the early (or only) phase, one for the late.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, bytemuck::Pod, bytemuck::Zeroable)]
 struct Params {
@@ -93,20 +94,36 @@ struct Params {
     candidates: u32,
     runs: u32,
     totals: u32,
+    counts_first: u32,
+    place_offset: u32,
+    pad: [u32; 2],
 }
 
-/// The cull and compact compute pipelines, one pair per renderer.
+/// The occlusion-culling pipelines: both phases' cull passes and the pyramid.
+struct OcclusionPipelines {
+    layout: wgpu::BindGroupLayout,
+    early: wgpu::ComputePipeline,
+    late: wgpu::ComputePipeline,
+    pyramid: PyramidPipelines,
+}
+
+/// The cull and compact compute pipelines, one pair per renderer, and the
+/// occlusion culling ones where the device has storage textures.
 pub(crate) struct CullPipelines {
     cull_layout: wgpu::BindGroupLayout,
     compact_layout: wgpu::BindGroupLayout,
     cull: wgpu::ComputePipeline,
     compact: wgpu::ComputePipeline,
+    occlusion: Option<OcclusionPipelines>,
     /// Whether runs draw with a count buffer.
-    draw_count: bool,
+    pub draw_count: bool,
+    /// Whether views culled on the GPU are occlusion-culled ([`Renderer::set_occlusion_culling`](super::Renderer::set_occlusion_culling)).
+    pub occlusion_on: bool,
 }
 
 impl CullPipelines {
-    pub(crate) fn new(device: &wgpu::Device) -> Self {
+    /// The pipelines, with occlusion culling's when `occlusion`.
+    pub(crate) fn new(device: &wgpu::Device, occlusion: bool) -> Self {
         let entry = |binding, ty| wgpu::BindGroupLayoutEntry {
             binding,
             visibility: wgpu::ShaderStages::COMPUTE,
@@ -162,13 +179,37 @@ impl CullPipelines {
                 cache: None,
             })
         };
+        let occlusion = occlusion.then(|| {
+            let texture = wgpu::BindingType::Texture {
+                sample_type: wgpu::TextureSampleType::Float { filterable: false },
+                view_dimension: wgpu::TextureViewDimension::D2,
+                multisampled: false,
+            };
+            let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some("gpu culling: occlusion"),
+                entries: &[storage(0, false), entry(1, texture), entry(2, uniform)],
+            });
+            OcclusionPipelines {
+                early: pipeline("cull_early", &[Some(&cull_layout), None, Some(&layout)]),
+                late: pipeline("cull_late", &[Some(&cull_layout), None, Some(&layout)]),
+                pyramid: PyramidPipelines::new(device),
+                layout,
+            }
+        });
         Self {
             cull: pipeline("cull", &[Some(&cull_layout)]),
             compact: pipeline("compact", &[Some(&cull_layout), Some(&compact_layout)]),
             cull_layout,
             compact_layout,
+            occlusion,
             draw_count: device.features().contains(wgpu::Features::MULTI_DRAW_INDIRECT_COUNT),
+            occlusion_on: true,
         }
+    }
+
+    /// Whether views culled on the GPU are occlusion-culled too.
+    pub(crate) fn occlusion(&self) -> bool {
+        self.occlusion.is_some() && self.occlusion_on
     }
 }
 
@@ -189,6 +230,14 @@ pub(crate) struct GpuCull {
     uploaded: (Vec<CullRange>, Vec<Run>, Vec<[f32; 4]>, Params),
     params_now: Params,
     readback: Readback,
+    /// The late phase, once the list has been occlusion-culled.
+    late: Option<LatePhase>,
+    /// Its bind groups: group 0 and 1 of the late dispatches, group 2 of both phases.
+    late_groups: Option<[wgpu::BindGroup; 3]>,
+    /// Whether this frame's list is occlusion-culled.
+    pub occluding: bool,
+    /// The late phase's `Params` as written.
+    late_params: Option<Params>,
 }
 
 /// What [`GpuCull::upload`] writes from.
@@ -203,7 +252,7 @@ pub(crate) struct CullInput<'a> {
 /// The buffers the cull pass binds that the list does not own.
 pub(crate) struct CullBindings<'a> {
     pub bounds: &'a wgpu::Buffer,
-    pub draw_indices: wgpu::BindingResource<'a>,
+    pub draw_indices: &'a wgpu::Buffer,
 }
 
 impl GpuCull {
@@ -228,12 +277,17 @@ impl GpuCull {
             uploaded: Default::default(),
             params_now: Params::default(),
             readback: Readback::new(device),
+            late: None,
+            late_groups: None,
+            occluding: false,
+            late_params: None,
         }
     }
 
     /// Forget the bind groups (a buffer they hold was replaced).
     pub(crate) fn unbind(&mut self) {
         self.groups = None;
+        self.late_groups = None;
     }
 
     /// Write what changed of `input` (and make room for it); returns bytes written.
@@ -241,17 +295,22 @@ impl GpuCull {
         &mut self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
-        input: &CullInput,
+        (input, late): (&CullInput, Option<&LateInput>),
         pipelines: &CullPipelines,
         bindings: CullBindings,
     ) -> Result<u64, RenderError> {
         let planes: Vec<[f32; 4]> = input.frustums.iter().flat_map(|f| f.planes().map(|p| p.to_array())).collect();
         let candidates = input.ranges.last().map_or(0, |r| r.start + r.count);
+        let runs = input.runs.len() as u32;
+        // Counts: the early runs', the late runs', then each frustum's total.
         let params = Params {
             ranges: input.ranges.len() as u32,
             candidates,
-            runs: input.runs.len() as u32,
-            totals: input.runs.len() as u32,
+            runs,
+            totals: 2 * runs,
+            counts_first: 0,
+            place_offset: 0,
+            pad: [0; 2],
         };
         let commands = input.commands as u64 * COMMAND_BYTES;
         let mut replaced = false;
@@ -261,7 +320,7 @@ impl GpuCull {
             (&mut self.args, commands),
             (&mut self.drawn_args, commands),
             (&mut self.runs, std::mem::size_of_val(input.runs) as u64),
-            (&mut self.counts, 4 * (input.runs.len() + input.frustums.len()) as u64),
+            (&mut self.counts, 4 * (2 * input.runs.len() + input.frustums.len()) as u64),
         ] {
             replaced |= buffer.reserve(device, bytes)?;
         }
@@ -273,6 +332,10 @@ impl GpuCull {
         if self.uploaded.0 != input.ranges {
             written += self.ranges.write(queue, 0, input.ranges);
             self.uploaded.0 = input.ranges.to_vec();
+            // New candidates: last frame's flags say nothing of them.
+            if let Some(late) = &mut self.late {
+                late.reset_hidden = true;
+            }
         }
         if self.uploaded.1 != input.runs {
             written += self.runs.write(queue, 0, input.runs);
@@ -289,22 +352,63 @@ impl GpuCull {
         }
         self.params_now = params;
         if self.groups.is_none() {
-            self.groups = Some(self.bind(device, pipelines, bindings));
+            self.groups = Some(self.bind(device, pipelines, &bindings, (&self.params, &self.args, &self.drawn_args)));
+        }
+        self.occluding = false;
+        if let (Some(input), Some(occlusion), true) = (late, &pipelines.occlusion, pipelines.occlusion_on) {
+            written += self.upload_late(device, queue, (input, params), (pipelines, occlusion), &bindings)?;
+            self.occluding = true;
         }
         Ok(written)
     }
 
-    fn bind(&self, device: &wgpu::Device, pipelines: &CullPipelines, bindings: CullBindings) -> [wgpu::BindGroup; 2] {
+    /// The late phase's part of [`upload`](Self::upload).
+    fn upload_late(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        (input, early): (&LateInput, Params),
+        (pipelines, occlusion): (&CullPipelines, &OcclusionPipelines),
+        bindings: &CullBindings,
+    ) -> Result<u64, RenderError> {
+        let late = self.late.get_or_insert_with(|| LatePhase::new(device, self.label));
+        let (mut written, replaced) = late.upload(device, queue, input, early.candidates)?;
+        let params = Params { counts_first: early.runs, place_offset: input.place_offset, ..early };
+        if replaced || self.late_params != Some(params) {
+            queue.write_buffer(&late.params, 0, bytemuck::bytes_of(&params));
+            written += std::mem::size_of::<Params>() as u64;
+            self.late_params = Some(params);
+        }
+        if replaced {
+            self.late_groups = None;
+        }
+        if self.late_groups.is_none() {
+            let late = self.late.as_ref().expect("made above");
+            let [cull, compact] = self.bind(device, pipelines, bindings, (&late.params, &late.args, &late.drawn_args));
+            self.late_groups = Some([cull, compact, late.bind(device, &occlusion.layout)]);
+        }
+        Ok(written)
+    }
+
+    /// The cull and compact groups over `params` and the commands `args` (the
+    /// early ones or the late) with their compacted `drawn_args`.
+    fn bind(
+        &self,
+        device: &wgpu::Device,
+        pipelines: &CullPipelines,
+        bindings: &CullBindings,
+        (params, args, drawn_args): (&wgpu::Buffer, &GrowBuffer, &GrowBuffer),
+    ) -> [wgpu::BindGroup; 2] {
         fn whole(buffer: &wgpu::Buffer) -> wgpu::BindingResource<'_> {
             buffer.as_entire_binding()
         }
         let entries = [
-            wgpu::BindGroupEntry { binding: 0, resource: whole(&self.params) },
+            wgpu::BindGroupEntry { binding: 0, resource: whole(params) },
             wgpu::BindGroupEntry { binding: 1, resource: whole(bindings.bounds) },
             wgpu::BindGroupEntry { binding: 2, resource: whole(&self.ranges.buffer) },
             wgpu::BindGroupEntry { binding: 3, resource: whole(&self.planes.buffer) },
-            wgpu::BindGroupEntry { binding: 4, resource: bindings.draw_indices },
-            wgpu::BindGroupEntry { binding: 5, resource: whole(&self.args.buffer) },
+            wgpu::BindGroupEntry { binding: 4, resource: whole(bindings.draw_indices) },
+            wgpu::BindGroupEntry { binding: 5, resource: whole(&args.buffer) },
         ];
         let cull = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some(self.label),
@@ -316,16 +420,17 @@ impl GpuCull {
             layout: &pipelines.compact_layout,
             entries: &[
                 wgpu::BindGroupEntry { binding: 0, resource: whole(&self.runs.buffer) },
-                wgpu::BindGroupEntry { binding: 1, resource: whole(&self.drawn_args.buffer) },
+                wgpu::BindGroupEntry { binding: 1, resource: whole(&drawn_args.buffer) },
                 wgpu::BindGroupEntry { binding: 2, resource: whole(&self.counts.buffer) },
             ],
         });
         [cull, compact]
     }
 
-    /// Record the cull pass: the commands reset from `template` (the CPU's),
-    /// every candidate tested, the runs compacted, the totals copied for
-    /// reading back (`submits`: the queue's submissions so far).
+    /// Record the (early) cull pass: the commands reset from `template` (the
+    /// CPU's) and `late_template`'s, every candidate tested (occluding: only
+    /// those seen last frame), the runs compacted; not occluding, the totals
+    /// copied for reading back (`submits`: the queue's submissions so far).
     pub(crate) fn record(
         &mut self,
         encoder: &mut wgpu::CommandEncoder,
@@ -334,17 +439,21 @@ impl GpuCull {
         submits: u64,
     ) {
         let Some([cull, compact]) = &self.groups else { return };
-        let Params { candidates, runs, totals, .. } = self.params_now;
+        let Params { candidates, runs, .. } = self.params_now;
         let frustums = self.uploaded.2.len() as u32 / 6;
-        let commands = self.uploaded.1.last().map_or(0, |r| u64::from(r.first + r.len));
+        let commands = u64::from(self.uploaded.1.last().map_or(0, |r| r.first + r.len)) * COMMAND_BYTES;
+        let occluding = self.occluding.then(|| self.late.as_ref().zip(self.late_groups.as_ref())).flatten();
+        let occluding_now = occluding.is_some();
         if commands > 0 {
-            encoder.copy_buffer_to_buffer(template, 0, &self.args.buffer, 0, commands * COMMAND_BYTES);
+            encoder.copy_buffer_to_buffer(template, 0, &self.args.buffer, 0, commands);
+            if let Some((late, _)) = occluding {
+                encoder.copy_buffer_to_buffer(&late.template.buffer, 0, &late.args.buffer, 0, commands);
+            }
         }
-        encoder.clear_buffer(
-            &self.counts.buffer,
-            0,
-            Some(u64::from(4 * (runs + frustums).div_ceil(4) * 4).min(self.counts.buffer.size())),
-        );
+        encoder.clear_buffer(&self.counts.buffer, 0, Some(4 * u64::from(2 * runs + frustums)));
+        if let Some((late, _)) = occluding.filter(|(late, _)| late.reset_hidden) {
+            encoder.clear_buffer(&late.hidden.buffer, 0, None);
+        }
         {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("cull instances"),
@@ -352,7 +461,13 @@ impl GpuCull {
             });
             pass.set_bind_group(0, cull, &[]);
             if candidates > 0 {
-                pass.set_pipeline(&pipelines.cull);
+                match (occluding, &pipelines.occlusion) {
+                    (Some((_, [.., occlusion])), Some(o)) => {
+                        pass.set_pipeline(&o.early);
+                        pass.set_bind_group(2, occlusion, &[]);
+                    }
+                    _ => pass.set_pipeline(&pipelines.cull),
+                }
                 let (x, y) = grid(candidates);
                 pass.dispatch_workgroups(x, y, 1);
             }
@@ -363,22 +478,86 @@ impl GpuCull {
                 pass.dispatch_workgroups(x, y, 1);
             }
         }
-        self.readback.copy(encoder, &self.counts.buffer, u64::from(totals) * 4, frustums, submits);
+        if let Some(late) = &mut self.late {
+            late.reset_hidden &= !occluding_now;
+        }
+        if !occluding_now {
+            self.readback.copy(encoder, &self.counts.buffer, u64::from(2 * runs) * 4, frustums, submits);
+        }
     }
 
-    /// Draw run `k` (`run`) of the list from the culled commands.
-    pub(crate) fn draw_run(&self, pipelines: &CullPipelines, pass: &mut wgpu::RenderPass<'_>, k: usize, run: &Run) {
+    /// Record the late phase, between the early and the late forward pass:
+    /// the pyramid from `depth` (its depth-only view), every candidate tested
+    /// against it, the late runs compacted, the totals copied for reading back.
+    pub(crate) fn record_late(
+        &mut self,
+        (device, encoder): (&wgpu::Device, &mut wgpu::CommandEncoder),
+        pipelines: &CullPipelines,
+        depth: &wgpu::TextureView,
+        submits: u64,
+    ) {
+        let (Some(late), Some([cull, compact, occlusion]), Some(o)) =
+            (&self.late, &self.late_groups, &pipelines.occlusion)
+        else {
+            return;
+        };
+        let Params { candidates, runs, .. } = self.params_now;
+        if let Some(pyramid) = &late.pyramid {
+            pyramid.record(device, encoder, &o.pyramid, depth);
+        }
+        {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("cull instances: late"),
+                timestamp_writes: None,
+            });
+            pass.set_bind_group(0, cull, &[]);
+            pass.set_bind_group(2, occlusion, &[]);
+            if candidates > 0 {
+                pass.set_pipeline(&o.late);
+                let (x, y) = grid(candidates);
+                pass.dispatch_workgroups(x, y, 1);
+            }
+            if runs > 0 {
+                pass.set_pipeline(&pipelines.compact);
+                pass.set_bind_group(1, compact, &[]);
+                let (x, y) = grid(runs);
+                pass.dispatch_workgroups(x, y, 1);
+            }
+        }
+        let frustums = self.uploaded.2.len() as u32 / 6;
+        self.readback.copy(encoder, &self.counts.buffer, u64::from(2 * runs) * 4, frustums, submits);
+    }
+
+    /// Draw run `k` (`run`) of the list from the culled commands: the early
+    /// phase's (or the only one's), or the late phase's when `late`.
+    pub(crate) fn draw_run(
+        &self,
+        pipelines: &CullPipelines,
+        pass: &mut wgpu::RenderPass<'_>,
+        (k, late): (usize, bool),
+        run: &Run,
+    ) {
         let at = u64::from(run.first) * COMMAND_BYTES;
-        match pipelines.draw_count {
-            true => pass.multi_draw_indexed_indirect_count(
+        let runs = self.params_now.runs as usize;
+        match (late, &self.late, pipelines.draw_count) {
+            (true, Some(l), count) => {
+                super::occlusion::draw_late_run(l, &self.counts.buffer, count, pass, (k, runs), run)
+            }
+            (true, None, _) => {}
+            (false, _, true) => pass.multi_draw_indexed_indirect_count(
                 &self.drawn_args.buffer,
                 at,
                 &self.counts.buffer,
                 k as u64 * 4,
                 run.len,
             ),
-            false => pass.multi_draw_indexed_indirect(&self.args.buffer, at, run.len),
+            (false, _, false) => pass.multi_draw_indexed_indirect(&self.args.buffer, at, run.len),
         }
+    }
+
+    /// The late phase's commands, when this frame's list is occlusion-culled.
+    pub(crate) fn late_args(&self) -> Option<&wgpu::Buffer> {
+        self.late.as_ref().filter(|_| self.occluding).map(|l| &l.args.buffer)
     }
 
     /// Each frustum's instances drawn by the newest frame whose counts came

@@ -22,19 +22,28 @@ impl Renderer {
     /// Each frustum's instances drawn by `list`, sorted.
     fn read_list(&self, list: &DrawList) -> Result<Vec<Vec<u32>>, RenderError> {
         let mut views = vec![Vec::new(); list.frustums.len()];
-        let (indices, counts) = match (&list.gpu, list.culled_on_gpu()) {
+        // Each batch's (first place, instances) in the draw indices, per phase.
+        let (indices, phases): (Vec<u32>, Vec<Vec<(u32, u32)>>) = match (&list.gpu, list.culled_on_gpu()) {
             (Some(gpu), true) => {
                 let indices = self.read_words(list.draw_index_buffer().expect("a storage buffer"))?;
-                let args = self.read_words(&gpu.args.buffer)?;
-                let counts: Vec<u32> = (0..list.batches.len()).map(|b| args[5 * b + 1]).collect();
-                (indices, counts)
+                let mut phases = Vec::new();
+                for args in [Some(&gpu.args.buffer), gpu.late_args()].into_iter().flatten() {
+                    let words = self.read_words(args)?;
+                    phases.push((0..list.batches.len()).map(|b| (words[5 * b + 4], words[5 * b + 1])).collect());
+                }
+                (indices, phases)
             }
-            _ => (list.draw_indices.clone(), list.batches.iter().map(|b| b.instance_count).collect()),
+            _ => (
+                list.draw_indices.clone(),
+                vec![list.batches.iter().map(|b| (b.first_instance, b.instance_count)).collect()],
+            ),
         };
         for run in &list.runs {
             for b in run.batches() {
-                let first = list.batches[b].first_instance as usize;
-                views[run.frustum as usize].extend_from_slice(&indices[first..first + counts[b] as usize]);
+                for phase in &phases {
+                    let (first, count) = (phase[b].0 as usize, phase[b].1 as usize);
+                    views[run.frustum as usize].extend_from_slice(&indices[first..first + count]);
+                }
             }
         }
         views.iter_mut().for_each(|v| v.sort_unstable());

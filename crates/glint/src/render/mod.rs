@@ -38,6 +38,7 @@ mod instances;
 mod materials;
 mod mesh_pool;
 mod naive;
+mod occlusion;
 mod pipelines;
 pub(crate) mod place;
 mod post;
@@ -223,7 +224,9 @@ impl Renderer {
             visible: Visible::default(),
             targets: target_pool::TargetPool::default(),
             post: post::PostChain::new(&gpu.device),
-            cull_pipelines: gpu.culls_on_gpu().then(|| gpu_cull::CullPipelines::new(&gpu.device)),
+            cull_pipelines: gpu
+                .culls_on_gpu()
+                .then(|| gpu_cull::CullPipelines::new(&gpu.device, gpu.occlusion_culls())),
             base_vertex: gpu.base_vertex(),
             hdr_msaa: {
                 let flags = gpu.adapter.get_texture_format_features(crate::gpu::HDR_FORMAT).flags;
@@ -316,6 +319,19 @@ impl Renderer {
     /// them; `None` when timing is off or unsupported, or that frame was already read.
     pub fn read_gpu_times(&mut self) -> Option<GpuTimes> {
         self.gpu_timer.as_mut()?.read(&self.device)
+    }
+
+    /// Occlusion-cull the views culled on the GPU (the default, where the
+    /// device can: [`Gpu::occlusion_culls`]) or not, to compare costs and to
+    /// compare GPU and CPU frustum culling; returns whether views will be.
+    pub fn set_occlusion_culling(&mut self, on: bool) -> bool {
+        match &mut self.cull_pipelines {
+            Some(pipelines) => {
+                pipelines.occlusion_on = on;
+                pipelines.occlusion()
+            }
+            None => false,
+        }
     }
 
     /// Build frames the optimized way (the default) or the naive way, for comparison.

@@ -8,6 +8,7 @@
 //! and compose stages, and nothing of its batching, upload or encoding.
 
 use super::batch::Batch;
+use super::encode::Part;
 use super::queue::Queue;
 use super::timer::Timed;
 use super::view::ViewFrame;
@@ -97,7 +98,7 @@ impl Renderer {
         encoder.push_debug_group(&self.debug_group("forward (naive)"));
         {
             let background = lighting.environment.background;
-            let mut pass = self.begin_forward_pass(&mut encoder, target, background, stats);
+            let mut pass = self.begin_forward_pass(&mut encoder, target, (background, Part::Whole), stats);
             self.draw_sky(&mut pass, target, background, stats);
             let list = &self.view.forward;
             pass.push_debug_group("naive: one draw per instance");

@@ -92,6 +92,8 @@ pub struct Registry {
     pub(super) textures: Vec<TextureSlot>,
     /// Render targets (`add_render_target`), each with the texture that shows it.
     pub(super) render_targets: Vec<(OffscreenTarget, TextureId)>,
+    /// Whether the device occlusion-culls (render targets' depth is then readable).
+    pub(super) occlusion: bool,
 }
 
 impl Registry {
@@ -120,6 +122,7 @@ impl Registry {
             ..Default::default()
         });
         Self {
+            occlusion: gpu.occlusion_culls(),
             pipelines: Pipelines::new(&device, gpu.vertex_storage()),
             mesh_pool: MeshPool::new(&device),
             material_table: MaterialTable::new(&device, gpu.vertex_storage()),
@@ -196,7 +199,9 @@ impl Registry {
             return Err(RenderError::TextureTooLarge { name, width, height, side });
         }
         let color = if hdr { crate::gpu::HDR_FORMAT } else { crate::gpu::COLOR_FORMAT };
-        let target = OffscreenTarget::on_device(&self.device, width, height, TargetFormat { color, samples: 1 });
+        // A render target's views are culled as any other: its depth readable where the device occlusion-culls.
+        let format = TargetFormat { color, samples: 1 };
+        let target = OffscreenTarget::on_device(&self.device, width, height, format, self.occlusion);
         self.textures.push(TextureSlot { pending: None, view: Some(target.color_view().clone()) });
         let texture = TextureId(self.textures.len() as u32 - 1);
         self.render_targets.push((target, texture));

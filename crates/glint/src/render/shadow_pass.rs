@@ -287,7 +287,8 @@ impl Renderer {
         bytes.scene += self.view.shadow_block.update(&self.queue, block);
         let layout = &self.registry.pipelines.instance_layout;
         let gpu = self.cull_pipelines.as_ref().zip(self.instances.bounds());
-        let written = self.view.shadows.upload(&self.device, &self.queue, (layout, self.instances.array()), gpu)?;
+        let written =
+            self.view.shadows.upload(&self.device, &self.queue, (layout, self.instances.array()), gpu, None)?;
         bytes.draw_indices += written.draw_indices;
         bytes.indirect += written.indirect;
         Ok(())
@@ -331,7 +332,13 @@ impl Renderer {
             pass.set_bind_group(1, &self.view.blocks.bind_group, &[ViewBlocks::offset(1 + k)]);
             pass.set_bind_group(3, &self.view.shadows.bind_group, &[]);
             stats.bind_groups_set += 2;
-            self.draw_stages(&self.view.shadows, &mut pass, range.clone(), &mut Bound::default(), &mut stats);
+            self.draw_stages(
+                &self.view.shadows,
+                &mut pass,
+                (range.clone(), &[false]),
+                &mut Bound::default(),
+                &mut stats,
+            );
         }
         encoder.pop_debug_group();
         if let Some(timer) = &mut self.gpu_timer {

@@ -126,6 +126,9 @@ pub struct FrameStats {
     /// Instanced draws the GPU runs: one per batch (each command of a
     /// multi-draw-indirect call), plus the sky.
     pub draws: u32,
+    /// With occlusion culling, the late phase's draw calls (one per run of
+    /// batches, drawing what became visible), besides `draw_calls`.
+    pub late_draw_calls: u32,
     /// `set_pipeline` calls.
     pub pipelines_bound: u32,
     /// Pipelines compiled during this frame (0 in steady state).
@@ -155,6 +158,9 @@ pub struct FrameStats {
     /// How the view was culled: [`Culling::Gpu`] only where the device can
     /// (else [`Culling::Cpu`], whatever the view asked for).
     pub culling: Culling,
+    /// Whether it was occlusion-culled too (two phases with a depth pyramid:
+    /// culled on the GPU where the device has storage textures).
+    pub occlusion: bool,
     /// CPU time per stage.
     pub cpu_ms: StageTimes,
     /// Shadow views drawn by this frame's shadow pass.

@@ -42,7 +42,7 @@ impl TargetPool {
         &mut self,
         device: &wgpu::Device,
         size: (u32, u32),
-        format: TargetFormat,
+        (format, read_depth): (TargetFormat, bool),
         frame: u64,
     ) -> OffscreenTarget {
         let usage = TargetUse::View(format);
@@ -52,7 +52,7 @@ impl TargetPool {
         }
         self.drop_stale(frame);
         self.entries.push(Entry { size, usage, target: None, last_used: frame });
-        OffscreenTarget::on_device(device, size.0, size.1, format)
+        OffscreenTarget::on_device(device, size.0, size.1, format, read_depth)
     }
 
     /// Give back a view target taken in frame `frame`.
@@ -122,20 +122,20 @@ mod tests {
         let format = TargetFormat { color: COLOR_FORMAT, samples: 1 };
         let mut pool = TargetPool::default();
         // Two views of one size in one frame: two targets.
-        let a = pool.take_view(device, (8, 4), format, 0);
-        let b = pool.take_view(device, (8, 4), format, 0);
+        let a = pool.take_view(device, (8, 4), (format, false), 0);
+        let b = pool.take_view(device, (8, 4), (format, false), 0);
         pool.put_back(a, 0);
         pool.put_back(b, 0);
         assert_eq!(pool.entries.len(), 2);
         // The next frame takes them again rather than making new ones.
-        let a = pool.take_view(device, (8, 4), format, 1);
+        let a = pool.take_view(device, (8, 4), (format, false), 1);
         pool.put_back(a, 1);
         pool.keep_image(device, (8, 4), 0, 1);
         pool.keep_image(device, (8, 4), 0, 1);
         assert_eq!(pool.entries.len(), 3, "one post image per size and slot");
         assert!(pool.image((8, 4), 0).is_some() && pool.image((8, 4), 1).is_none());
         // Four frames later a new size drops what was not used since.
-        let c = pool.take_view(device, (16, 16), format, 5);
+        let c = pool.take_view(device, (16, 16), (format, false), 5);
         pool.put_back(c, 5);
         assert_eq!(pool.entries.len(), 1);
     }

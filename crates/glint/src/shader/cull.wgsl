@@ -9,6 +9,14 @@
 // and writes its store index there. The test is the CPU culler's, term for
 // term: a box is culled only when it is wholly outside one plane, so NaN keeps it.
 //
+// With occlusion culling (two phases, render/occlusion.rs), `cull_early` and
+// `cull_late` take `cull`'s place. `cull_early` keeps only what was visible last
+// frame (its flag in `hidden` is 0); the frame draws that, builds a depth pyramid
+// from it, and `cull_late` tests every candidate against frustum and pyramid,
+// writes its flag for the next frame and places what is visible now but was not
+// drawn early into the late commands (group 0 then binds those, and `params`
+// says where their places and counts go).
+//
 // `compact`: one invocation per run of batches drawn by one multi-draw call.
 // It copies the run's non-empty commands, in order, to the start of the run's
 // range of `drawn_args`, writes how many there are (the count a
@@ -47,6 +55,24 @@ struct Params {
     // Runs, and where the per-frustum instance totals start in `counts`.
     runs: u32,
     totals: u32,
+    // Where this phase's run counts start in `counts`, and how far past a
+    // range's `out` its places are (the late phase's region).
+    counts_first: u32,
+    place_offset: u32,
+    pad0: u32,
+    pad1: u32,
+}
+
+// The view seen by the occlusion test: its view-projection matrix, the depth
+// buffer's size in pixels and the pyramid's levels (level 0: the depth buffer
+// padded to powers of two with the far plane; level k + 1 texel t: the farthest
+// of level k's texels 2t and 2t + 1 on each axis, so level k texel p >> k holds
+// the farthest depth of level-0 pixel p's square).
+struct Occlusion {
+    view_proj: mat4x4<f32>,
+    size: vec2<f32>,
+    levels: u32,
+    pad: u32,
 }
 
 @group(0) @binding(0) var<uniform> params: Params;
@@ -63,7 +89,14 @@ struct Params {
 // Each run's command count, then each frustum's instances drawn.
 @group(1) @binding(2) var<storage, read_write> counts: array<atomic<u32>>;
 
+@group(2) @binding(0) var<storage, read_write> hidden: array<u32>;
+@group(2) @binding(1) var pyramid: texture_2d<f32>;
+@group(2) @binding(2) var<uniform> occlusion: Occlusion;
+
 const WORKGROUP: u32 = 64u;
+// How much farther than the pyramid's depth a box must be to count hidden:
+// more than a 24-bit depth buffer's rounding, so a surface never hides itself.
+const DEPTH_MARGIN: f32 = 1e-6;
 
 // The invocation's number across a dispatch of several rows of workgroups.
 fn invocation(id: vec3<u32>, groups: vec3<u32>) -> u32 {
@@ -82,13 +115,9 @@ fn visible(c: vec3<f32>, e: vec3<f32>, first: u32) -> bool {
     return true;
 }
 
-@compute @workgroup_size(64)
-fn cull(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    let g = invocation(id, groups);
-    if g >= params.candidates {
-        return;
-    }
-    // The last range starting at or before g.
+// Candidate `g`'s store instance and range, by binary search for the last range
+// starting at or before it.
+fn candidate(g: u32) -> CullRange {
     var lo = 0u;
     var hi = params.ranges - 1u;
     while lo < hi {
@@ -99,12 +128,92 @@ fn cull(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
             hi = mid - 1u;
         }
     }
-    let r = ranges[lo];
+    return ranges[lo];
+}
+
+// Place store instance `instance` of range `r` among its batch's instances.
+fn place(r: CullRange, instance: u32) {
+    let at = atomicAdd(&args[r.batch * 5u + 1u], 1u);
+    draw_indices[r.out + params.place_offset + at] = instance;
+}
+
+// Whether the box `c ± e` is wholly behind what the depth pyramid holds.
+// Conservative: a box crossing the eye plane, or with NaN in it, is not.
+fn occluded(c: vec3<f32>, e: vec3<f32>) -> bool {
+    var lo = vec3<f32>(1e30);
+    var hi = vec3<f32>(-1e30);
+    for (var k = 0u; k < 8u; k++) {
+        let s = vec3<f32>(select(-1.0, 1.0, (k & 1u) != 0u), select(-1.0, 1.0, (k & 2u) != 0u), select(-1.0, 1.0, (k & 4u) != 0u));
+        let p = occlusion.view_proj * vec4<f32>(c + e * s, 1.0);
+        if !(p.w > 1e-6) {
+            return false;
+        }
+        lo = min(lo, p.xyz / p.w);
+        hi = max(hi, p.xyz / p.w);
+    }
+    let size = occlusion.size;
+    let x = clamp(vec2<f32>(lo.x, hi.x) * 0.5 + 0.5, vec2<f32>(0.0), vec2<f32>(1.0)) * size.x;
+    let y = clamp(0.5 - vec2<f32>(hi.y, lo.y) * 0.5, vec2<f32>(0.0), vec2<f32>(1.0)) * size.y;
+    let last = vec2<u32>(size) - 1u;
+    let p0 = min(vec2<u32>(u32(x.x), u32(y.x)), last);
+    let p1 = min(vec2<u32>(u32(x.y), u32(y.y)), last);
+    // The finest level where the box's pixels span at most two texels each way.
+    var level = 0u;
+    while level + 1u < occlusion.levels && any((p1 >> vec2<u32>(level)) - (p0 >> vec2<u32>(level)) > vec2<u32>(1u)) {
+        level += 1u;
+    }
+    let a = p0 >> vec2<u32>(level);
+    let b = p1 >> vec2<u32>(level);
+    let l = i32(level);
+    let far = max(
+        max(textureLoad(pyramid, a, l).r, textureLoad(pyramid, vec2<u32>(b.x, a.y), l).r),
+        max(textureLoad(pyramid, vec2<u32>(a.x, b.y), l).r, textureLoad(pyramid, b, l).r),
+    );
+    return lo.z > far + DEPTH_MARGIN;
+}
+
+@compute @workgroup_size(64)
+fn cull(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let g = invocation(id, groups);
+    if g >= params.candidates {
+        return;
+    }
+    let r = candidate(g);
     let instance = r.first + (g - r.start);
     let b = bounds[instance];
     if visible(b.center.xyz, b.extent.xyz, r.frustum * 6u) {
-        let place = atomicAdd(&args[r.batch * 5u + 1u], 1u);
-        draw_indices[r.out + place] = instance;
+        place(r, instance);
+    }
+}
+
+@compute @workgroup_size(64)
+fn cull_early(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let g = invocation(id, groups);
+    if g >= params.candidates {
+        return;
+    }
+    let r = candidate(g);
+    let instance = r.first + (g - r.start);
+    let b = bounds[instance];
+    if hidden[g] == 0u && visible(b.center.xyz, b.extent.xyz, r.frustum * 6u) {
+        place(r, instance);
+    }
+}
+
+@compute @workgroup_size(64)
+fn cull_late(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let g = invocation(id, groups);
+    if g >= params.candidates {
+        return;
+    }
+    let r = candidate(g);
+    let instance = r.first + (g - r.start);
+    let b = bounds[instance];
+    let seen = visible(b.center.xyz, b.extent.xyz, r.frustum * 6u) && !occluded(b.center.xyz, b.extent.xyz);
+    let drawn_early = hidden[g] == 0u;
+    hidden[g] = select(1u, 0u, seen);
+    if seen && !drawn_early {
+        place(r, instance);
     }
 }
 
@@ -128,6 +237,6 @@ fn compact(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups
             instances += count;
         }
     }
-    atomicStore(&counts[k], kept);
+    atomicStore(&counts[params.counts_first + k], kept);
     atomicAdd(&counts[params.totals + run.frustum], instances);
 }

@@ -232,6 +232,8 @@ pub(crate) const BLIT: &str = include_str!("blit.wgsl");
 pub(crate) const POST: &str = include_str!("post.wgsl");
 /// GPU frustum culling of a draw list (`render/gpu_cull.rs`).
 pub(crate) const CULL: &str = include_str!("cull.wgsl");
+/// The depth pyramid of occlusion culling (`render/occlusion.rs`).
+pub(crate) const PYRAMID: &str = include_str!("pyramid.wgsl");
 
 #[cfg(test)]
 mod tests {
