@@ -288,7 +288,7 @@ impl Viewer {
                 self.backend,
                 shown.world.desc().path.display(),
                 self.frame_ms,
-                stats.first().map_or("", |s| s.culling.describe()),
+                stats.first().map_or("", |s| s.culled()),
                 stats.len()
             ),
         );

@@ -320,9 +320,8 @@ impl View {
 /// Each view's draw counts for the title: "N draws, M shadow draws", named
 /// "view K: …" when there are several.
 fn view_counts(stats: &[glint::FrameStats]) -> String {
-    let counts = |s: &glint::FrameStats| {
-        format!("{} draws, {} shadow draws, {}", s.draws, s.passes.shadow.draws, s.culling.describe())
-    };
+    let counts =
+        |s: &glint::FrameStats| format!("{} draws, {} shadow draws, {}", s.draws, s.passes.shadow.draws, s.culled());
     match stats {
         [one] => counts(one),
         all => all.iter().enumerate().map(|(k, s)| format!("view {k}: {}", counts(s))).collect::<Vec<_>>().join(" | "),

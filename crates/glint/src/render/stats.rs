@@ -174,3 +174,14 @@ pub struct FrameStats {
     /// and a timed frame has come back, or where the device has no timestamp queries.
     pub gpu: Option<GpuTimes>,
 }
+
+impl FrameStats {
+    /// How the view was culled, for a status line: "culled on the GPU, with
+    /// occlusion", or as [`Culling::describe`] says.
+    pub fn culled(&self) -> &'static str {
+        match self.occlusion {
+            true => "culled on the GPU, with occlusion",
+            false => self.culling.describe(),
+        }
+    }
+}
