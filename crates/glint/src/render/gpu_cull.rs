@@ -164,21 +164,8 @@ impl CullPipelines {
             label: Some("cull.wgsl"),
             source: wgpu::ShaderSource::Wgsl(crate::shader::CULL.into()),
         });
-        let pipeline = |entry: &str, layouts: &[Option<&wgpu::BindGroupLayout>]| {
-            let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: Some(entry),
-                bind_group_layouts: layouts,
-                immediate_size: 0,
-            });
-            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some(entry),
-                layout: Some(&layout),
-                module: &module,
-                entry_point: Some(entry),
-                compilation_options: Default::default(),
-                cache: None,
-            })
-        };
+        let pipeline =
+            |entry, layouts: &[Option<&wgpu::BindGroupLayout>]| compute_pipeline(device, &module, entry, layouts);
         let occlusion = occlusion.then(|| {
             let texture = wgpu::BindingType::Texture {
                 sample_type: wgpu::TextureSampleType::Float { filterable: false },
@@ -460,23 +447,14 @@ impl GpuCull {
                 timestamp_writes: None,
             });
             pass.set_bind_group(0, cull, &[]);
-            if candidates > 0 {
-                match (occluding, &pipelines.occlusion) {
-                    (Some((_, [.., occlusion])), Some(o)) => {
-                        pass.set_pipeline(&o.early);
-                        pass.set_bind_group(2, occlusion, &[]);
-                    }
-                    _ => pass.set_pipeline(&pipelines.cull),
+            let pipeline = match (occluding, &pipelines.occlusion) {
+                (Some((_, [.., occlusion])), Some(o)) => {
+                    pass.set_bind_group(2, occlusion, &[]);
+                    &o.early
                 }
-                let (x, y) = grid(candidates);
-                pass.dispatch_workgroups(x, y, 1);
-            }
-            if runs > 0 {
-                pass.set_pipeline(&pipelines.compact);
-                pass.set_bind_group(1, compact, &[]);
-                let (x, y) = grid(runs);
-                pass.dispatch_workgroups(x, y, 1);
-            }
+                _ => &pipelines.cull,
+            };
+            dispatch(&mut pass, (pipeline, candidates), (pipelines, compact, runs));
         }
         if let Some(late) = &mut self.late {
             late.reset_hidden &= !occluding_now;
@@ -512,17 +490,7 @@ impl GpuCull {
             });
             pass.set_bind_group(0, cull, &[]);
             pass.set_bind_group(2, occlusion, &[]);
-            if candidates > 0 {
-                pass.set_pipeline(&o.late);
-                let (x, y) = grid(candidates);
-                pass.dispatch_workgroups(x, y, 1);
-            }
-            if runs > 0 {
-                pass.set_pipeline(&pipelines.compact);
-                pass.set_bind_group(1, compact, &[]);
-                let (x, y) = grid(runs);
-                pass.dispatch_workgroups(x, y, 1);
-            }
+            dispatch(&mut pass, (&o.late, candidates), (pipelines, compact, runs));
         }
         let frustums = self.uploaded.2.len() as u32 / 6;
         self.readback.copy(encoder, &self.counts.buffer, u64::from(2 * runs) * 4, frustums, submits);
@@ -564,6 +532,49 @@ impl GpuCull {
     /// back (`None` before the first), without waiting for the GPU.
     pub(crate) fn drawn(&mut self, device: &wgpu::Device, submits: u64) -> Option<&[u32]> {
         self.readback.collect(device, submits)
+    }
+}
+
+/// The compute pipeline of `module`'s entry point `entry` over bind groups of `layouts`.
+pub(crate) fn compute_pipeline(
+    device: &wgpu::Device,
+    module: &wgpu::ShaderModule,
+    entry: &str,
+    layouts: &[Option<&wgpu::BindGroupLayout>],
+) -> wgpu::ComputePipeline {
+    let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: Some(entry),
+        bind_group_layouts: layouts,
+        immediate_size: 0,
+    });
+    device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+        label: Some(entry),
+        layout: Some(&layout),
+        module,
+        entry_point: Some(entry),
+        compilation_options: Default::default(),
+        cache: None,
+    })
+}
+
+/// In `pass` (its group 0, and 2 where the cull pipeline reads it, bound):
+/// `cull` over `candidates` invocations, then the compact pass over `runs`
+/// with `compact` as its group 1.
+fn dispatch(
+    pass: &mut wgpu::ComputePass<'_>,
+    (cull, candidates): (&wgpu::ComputePipeline, u32),
+    (pipelines, compact, runs): (&CullPipelines, &wgpu::BindGroup, u32),
+) {
+    if candidates > 0 {
+        pass.set_pipeline(cull);
+        let (x, y) = grid(candidates);
+        pass.dispatch_workgroups(x, y, 1);
+    }
+    if runs > 0 {
+        pass.set_pipeline(&pipelines.compact);
+        pass.set_bind_group(1, compact, &[]);
+        let (x, y) = grid(runs);
+        pass.dispatch_workgroups(x, y, 1);
     }
 }
 

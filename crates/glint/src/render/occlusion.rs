@@ -70,21 +70,7 @@ impl PyramidPipelines {
             label: Some("pyramid.wgsl"),
             source: wgpu::ShaderSource::Wgsl(crate::shader::PYRAMID.into()),
         });
-        let pipeline = |entry: &str, layout: &wgpu::BindGroupLayout| {
-            let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: Some(entry),
-                bind_group_layouts: &[Some(layout)],
-                immediate_size: 0,
-            });
-            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some(entry),
-                layout: Some(&layout),
-                module: &module,
-                entry_point: Some(entry),
-                compilation_options: Default::default(),
-                cache: None,
-            })
-        };
+        let pipeline = |entry, layout| super::gpu_cull::compute_pipeline(device, &module, entry, &[Some(layout)]);
         Self {
             first: pipeline("first", &layouts[0]),
             first_multisampled: pipeline("first_multisampled", &layouts[1]),

@@ -172,48 +172,55 @@ fn occluded(c: vec3<f32>, e: vec3<f32>) -> bool {
     return lo.z > far + DEPTH_MARGIN;
 }
 
-@compute @workgroup_size(64)
-fn cull(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+// One invocation's candidate: its number, range and store instance, and the
+// instance's world box; `valid` is false past the list's candidates.
+struct Candidate {
+    valid: bool,
+    g: u32,
+    range: CullRange,
+    instance: u32,
+    center: vec3<f32>,
+    extent: vec3<f32>,
+}
+
+fn candidate_of(id: vec3<u32>, groups: vec3<u32>) -> Candidate {
     let g = invocation(id, groups);
     if g >= params.candidates {
-        return;
+        return Candidate(false, g, CullRange(0u, 0u, 0u, 0u, 0u, 0u), 0u, vec3<f32>(0.0), vec3<f32>(0.0));
     }
     let r = candidate(g);
     let instance = r.first + (g - r.start);
     let b = bounds[instance];
-    if visible(b.center.xyz, b.extent.xyz, r.frustum * 6u) {
-        place(r, instance);
+    return Candidate(true, g, r, instance, b.center.xyz, b.extent.xyz);
+}
+
+@compute @workgroup_size(64)
+fn cull(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let c = candidate_of(id, groups);
+    if c.valid && visible(c.center, c.extent, c.range.frustum * 6u) {
+        place(c.range, c.instance);
     }
 }
 
 @compute @workgroup_size(64)
 fn cull_early(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    let g = invocation(id, groups);
-    if g >= params.candidates {
-        return;
-    }
-    let r = candidate(g);
-    let instance = r.first + (g - r.start);
-    let b = bounds[instance];
-    if hidden[g] == 0u && visible(b.center.xyz, b.extent.xyz, r.frustum * 6u) {
-        place(r, instance);
+    let c = candidate_of(id, groups);
+    if c.valid && hidden[c.g] == 0u && visible(c.center, c.extent, c.range.frustum * 6u) {
+        place(c.range, c.instance);
     }
 }
 
 @compute @workgroup_size(64)
 fn cull_late(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    let g = invocation(id, groups);
-    if g >= params.candidates {
+    let c = candidate_of(id, groups);
+    if !c.valid {
         return;
     }
-    let r = candidate(g);
-    let instance = r.first + (g - r.start);
-    let b = bounds[instance];
-    let seen = visible(b.center.xyz, b.extent.xyz, r.frustum * 6u) && !occluded(b.center.xyz, b.extent.xyz);
-    let drawn_early = hidden[g] == 0u;
-    hidden[g] = select(1u, 0u, seen);
+    let seen = visible(c.center, c.extent, c.range.frustum * 6u) && !occluded(c.center, c.extent);
+    let drawn_early = hidden[c.g] == 0u;
+    hidden[c.g] = select(1u, 0u, seen);
     if seen && !drawn_early {
-        place(r, instance);
+        place(c.range, c.instance);
     }
 }
 
