@@ -20,11 +20,10 @@
 //! come back to the CPU a frame or two late, without a stall.
 
 use super::occlusion::{LateInput, LatePhase, PyramidPipelines};
+use super::readback::Readback;
 use super::resources::GrowBuffer;
 use super::RenderError;
 use crate::render::cull::{Boxes, Frustum};
-use std::sync::atomic::{AtomicU8, Ordering};
-use std::sync::Arc;
 
 /// Invocations per workgroup of both entry points.
 const WORKGROUP: u32 = 64;
@@ -583,88 +582,4 @@ fn grid(n: u32) -> (u32, u32) {
     let groups = n.div_ceil(WORKGROUP);
     let x = groups.min(65_535);
     (x, groups.div_ceil(x))
-}
-
-const FREE: u8 = 0;
-const MAPPING: u8 = 1;
-const MAPPED: u8 = 2;
-const FAILED: u8 = 3;
-const COPIED: u8 = 4;
-/// Readback slots: a frame's counts are read two or three frames later.
-const SLOTS: usize = 3;
-/// Frustums a list has at most: the camera, or every shadow view.
-const MAX_FRUSTUMS: u64 = super::views::MAX_SHADOW_VIEWS as u64;
-
-/// A few small buffers the per-frustum totals are copied into and mapped from.
-struct Readback {
-    slots: Vec<(wgpu::Buffer, Arc<AtomicU8>, u64, u32)>,
-    latest: Option<Vec<u32>>,
-}
-
-impl Readback {
-    fn new(device: &wgpu::Device) -> Self {
-        let slot = |_| {
-            let buffer = device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("gpu culling: instances drawn, read back"),
-                size: 4 * MAX_FRUSTUMS,
-                usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-                mapped_at_creation: false,
-            });
-            (buffer, Arc::new(AtomicU8::new(FREE)), 0, 0)
-        };
-        Self { slots: (0..SLOTS).map(slot).collect(), latest: None }
-    }
-
-    /// Copy `frustums` totals from `at` in `counts` into a free slot (none free: skipped).
-    fn copy(
-        &mut self,
-        encoder: &mut wgpu::CommandEncoder,
-        counts: &wgpu::Buffer,
-        at: u64,
-        frustums: u32,
-        submits: u64,
-    ) {
-        let frustums = frustums.min(MAX_FRUSTUMS as u32);
-        let Some(slot) = self.slots.iter_mut().find(|s| s.1.load(Ordering::Acquire) == FREE) else { return };
-        if frustums > 0 {
-            encoder.copy_buffer_to_buffer(counts, at, &slot.0, 0, 4 * u64::from(frustums));
-            slot.1.store(COPIED, Ordering::Release);
-            (slot.2, slot.3) = (submits, frustums);
-        }
-    }
-
-    /// Map the slots whose copies were submitted (the queue has made more than
-    /// `submits` submissions since), and take the newest mapped one's totals.
-    fn collect(&mut self, device: &wgpu::Device, submits: u64) -> Option<&[u32]> {
-        let _ = device.poll(wgpu::PollType::Poll);
-        let mut newest: Option<(u64, Vec<u32>)> = None;
-        for (buffer, state, copied_at, frustums) in &self.slots {
-            match state.load(Ordering::Acquire) {
-                COPIED if submits > *copied_at => {
-                    state.store(MAPPING, Ordering::Release);
-                    let state = Arc::clone(state);
-                    buffer.map_async(wgpu::MapMode::Read, .., move |r| {
-                        state.store(if r.is_ok() { MAPPED } else { FAILED }, Ordering::Release);
-                    });
-                }
-                MAPPED => {
-                    let totals = buffer
-                        .get_mapped_range(..)
-                        .ok()
-                        .map(|view| bytemuck::cast_slice::<u8, u32>(&view[..4 * *frustums as usize]).to_vec());
-                    buffer.unmap();
-                    state.store(FREE, Ordering::Release);
-                    if let Some(totals) = totals.filter(|_| newest.as_ref().is_none_or(|n| n.0 < *copied_at)) {
-                        newest = Some((*copied_at, totals));
-                    }
-                }
-                FAILED => state.store(FREE, Ordering::Release),
-                _ => {}
-            }
-        }
-        if let Some((_, totals)) = newest {
-            self.latest = Some(totals);
-        }
-        self.latest.as_deref()
-    }
 }

@@ -44,6 +44,7 @@ pub(crate) mod place;
 mod post;
 mod prepare;
 pub mod queue;
+mod readback;
 mod registry;
 mod resources;
 mod shadow_maps;
