@@ -41,6 +41,7 @@ fn random_items(n: usize) -> Vec<DrawItem> {
                 shape: s,
                 first: i,
                 count: 1,
+                entry: 0,
             }
         })
         .collect()

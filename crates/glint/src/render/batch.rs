@@ -25,7 +25,7 @@ pub struct Batch {
 /// `batches`, and append their instance indices (from `visible`) to
 /// `draw_indices` in draw order, so each batch is one contiguous range.
 pub fn merge(items: &[DrawItem], visible: &[u32], draw_indices: &mut Vec<u32>, batches: &mut Vec<Batch>) {
-    merge_placed(items, batches, |item, _| {
+    merge_placed(items, batches, |item, _, _| {
         let at = draw_indices.len() as u32;
         draw_indices.extend_from_slice(&visible[item.first as usize..(item.first + item.count) as usize]);
         at
@@ -33,12 +33,13 @@ pub fn merge(items: &[DrawItem], visible: &[u32], draw_indices: &mut Vec<u32>, b
 }
 
 /// [`merge`], with `place` putting each item's instances where its batch
-/// (given by index) draws them: it returns where the item's first goes, right
-/// after the batch's earlier items' when the item joins a batch.
+/// (given by index, and whether the item begins it) draws them: it returns
+/// where the item's first goes, right after the batch's earlier items' when
+/// the item joins a batch.
 pub(crate) fn merge_placed(
     items: &[DrawItem],
     batches: &mut Vec<Batch>,
-    mut place: impl FnMut(&DrawItem, usize) -> u32,
+    mut place: impl FnMut(&DrawItem, usize, bool) -> u32,
 ) {
     let first_batch = batches.len();
     for item in items {
@@ -57,7 +58,7 @@ pub(crate) fn merge_placed(
             });
         }
         let k = batches.len() - 1;
-        let at = place(item, k);
+        let at = place(item, k, !joins);
         let b = &mut batches[k];
         if !joins {
             b.first_instance = at;
@@ -80,6 +81,7 @@ mod tests {
             shape: s,
             first,
             count,
+            entry: 0,
         }
     }
 

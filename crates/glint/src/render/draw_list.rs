@@ -131,21 +131,24 @@ impl DrawList {
     /// frustum is `frustum`, into batches appended to the list, and those into
     /// runs. An item `on_gpu` says is culled on the GPU names store instances
     /// (`first ..`), which all become its batch's candidates; any other names
-    /// entries of `visible`. `draw_of` says what a batch draws with. Returns
-    /// the range of runs they became.
+    /// entries of `visible`. `draw_of` says what the batch an item begins
+    /// draws with. Returns the range of runs they became.
     pub(crate) fn build(
         &mut self,
         first_item: usize,
         visible: &[u32],
         frustum: Frustum,
-        draw_of: impl Fn(&Batch) -> BatchDraw,
+        draw_of: impl Fn(&DrawItem) -> BatchDraw,
         on_gpu: impl Fn(&DrawItem) -> bool,
     ) -> std::ops::Range<usize> {
         let (first_batch, first_run, first_range) = (self.batches.len(), self.runs.len(), self.cull_ranges.len());
         let view = self.frustums.len() as u32;
         self.frustums.push(frustum);
-        let Self { items, batches, draw_indices, cull_ranges, gpu_region, .. } = self;
-        batch::merge_placed(&items[first_item..], batches, |item, batch| {
+        let Self { items, batches, draws, draw_indices, cull_ranges, gpu_region, .. } = self;
+        batch::merge_placed(&items[first_item..], batches, |item, batch, begins| {
+            if begins {
+                draws.push(draw_of(item));
+            }
             if !on_gpu(item) {
                 let at = draw_indices.len() as u32;
                 draw_indices.extend_from_slice(&visible[item.first as usize..(item.first + item.count) as usize]);
@@ -172,7 +175,6 @@ impl DrawList {
         for r in &self.cull_ranges[first_range..] {
             self.on_gpu[r.batch as usize] = true;
         }
-        self.draws.extend(self.batches[first_batch..].iter().map(&draw_of));
         let key = |k: usize| {
             let (b, d) = (&self.batches[k], &self.draws[k]);
             (b.stage, b.pipeline, d.texture_set, d.mesh.page)

@@ -1,10 +1,11 @@
 //! Core layer: the forward view's stages 3 (queue) and 6 (upload).
 
 use super::blocks::SceneGpu;
+use super::prepare::Prepared;
 use super::queue::{self, DrawItem, Queue};
 use super::view::ViewFrame;
 use super::visible::Visible;
-use super::{FrameStats, RenderError, Renderer, Submitted, UploadStats};
+use super::{FrameStats, RenderError, Renderer, UploadStats};
 use crate::gpu::OffscreenTarget;
 use crate::scene::{Culling, Lighting};
 use glam::Vec3A;
@@ -14,15 +15,15 @@ impl Renderer {
     /// materials so that they can be sorted far to near one by one; culled on
     /// the GPU, one per entity's candidates. Depth is the view distance of the
     /// run's (or instance's, or entity's) box centre over the far plane.
-    pub(super) fn build_queue(&mut self, frame: &ViewFrame, visible: &Visible) {
+    pub(super) fn build_queue(&mut self, frame: &ViewFrame, visible: &Visible, prepared: &[Prepared]) {
         let far = frame.camera.far();
         let depth = |center: Vec3A| -frame.view.transform_point3a(center).z / far;
         let runs = visible.runs.iter().map(|r| (r, false)).chain(visible.candidates.iter().map(|r| (r, true)));
         for (run, candidates) in runs {
             let s = &self.submitted[run.entry];
             let material = &self.registry.materials[s.material.0 as usize];
-            let pipeline = self.pipeline_of(s);
-            let texture_set = material.gpu.as_ref().expect("prepared").texture_set;
+            let Prepared { pipeline, draw, .. } = prepared[run.entry];
+            let texture_set = draw.texture_set;
             let queue = match material.material.alpha_mode {
                 crate::scene::AlphaMode::Opaque => Queue::Opaque,
                 crate::scene::AlphaMode::Mask { .. } => Queue::AlphaTest,
@@ -37,6 +38,7 @@ impl Renderer {
                 shape: s.shape,
                 first,
                 count,
+                entry: run.entry as u32,
             };
             if blended && !candidates {
                 for k in run.start..run.start + run.len {
@@ -48,13 +50,6 @@ impl Renderer {
                 self.view.forward.items.push(item(run.start, run.len, depth(center)));
             }
         }
-    }
-
-    /// The forward pipeline a submitted entity draws with (prepared).
-    pub(super) fn pipeline_of(&self, s: &Submitted) -> u16 {
-        let layout = self.registry.shapes[s.shape.0 as usize].layout;
-        let twin = self.registry.materials[s.material.0 as usize].gpu.as_ref().expect("prepared");
-        twin.pipelines[layout.index()].expect("prepared")
     }
 
     /// Stage 6: write the blocks that changed, the instances that changed, and this

@@ -406,26 +406,27 @@ impl Renderer {
         // Each stage's CPU time is the lap that ends on its line.
         let mut lap = Laps::start();
         self.frame_variant = FrameVariant::after(drawn, lighting.lights);
-        self.prepare(target.format(), &lighting.environment, &mut stats)?;
+        let prepared = self.prepare(target.format(), &lighting.environment, &mut stats)?;
         stats.cpu_ms.prepare = lap.next();
         let shadowed = drawn.map_or(&[][..], |d| d.first_view.as_slice());
         let commands = match self.mode {
             FrameMode::Naive => {
                 stats.culling = Culling::Off;
-                self.naive_frame(frame, (lighting, shadowed), target, &mut stats, &mut lap)?
+                self.naive_frame(frame, (lighting, shadowed), (target, &prepared), &mut stats, &mut lap)?
             }
             FrameMode::Optimized => {
                 let mut visible = std::mem::take(&mut self.visible);
                 self.cull(frame, &mut visible, &mut stats);
                 stats.cpu_ms.cull = lap.next();
                 self.view.forward.clear();
-                self.build_queue(frame, &visible);
+                self.build_queue(frame, &visible, &prepared);
                 stats.cpu_ms.queue = lap.next();
                 queue::sort(&mut self.view.forward.items);
                 stats.cpu_ms.sort = lap.next();
                 let registry = &self.registry;
                 let on_gpu = |item: &queue::DrawItem| frame.culling == Culling::Gpu && !registry.blended(item.material);
-                self.view.forward.build(0, &visible.instances, frame.frustum, |b| registry.batch_draw(b), on_gpu);
+                let draw_of = |item: &queue::DrawItem| prepared[item.entry as usize].draw;
+                self.view.forward.build(0, &visible.instances, frame.frustum, draw_of, on_gpu);
                 stats.cpu_ms.batch = lap.next();
                 self.visible = visible;
                 self.upload(frame, (lighting, shadowed), target, &mut stats)?;

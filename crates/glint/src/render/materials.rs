@@ -13,6 +13,7 @@ impl Registry {
     /// Make material `id` ready to draw meshes of `layout` into `target` under
     /// `environment` (its fog) in a frame of variant `frame`: its textures
     /// uploaded, its texture set, its table entry written if edited, its pipeline built.
+    /// Returns its pipeline and texture set.
     pub(super) fn prepare_material(
         &mut self,
         id: MaterialId,
@@ -20,13 +21,13 @@ impl Registry {
         target: TargetFormat,
         (environment, frame): (&Environment, FrameVariant),
         stats: &mut FrameStats,
-    ) -> Result<(), RenderError> {
+    ) -> Result<(u16, u16), RenderError> {
         let slot = self.materials.get(id.0 as usize).ok_or(RenderError::UnknownMaterial(id))?;
         let fog = environment.fog.is_some();
         let current =
             slot.gpu.as_ref().filter(|g| !slot.dirty && g.target == target && g.fog == fog && g.frame == frame);
-        if current.is_some_and(|g| g.pipelines[layout.index()].is_some()) {
-            return Ok(());
+        if let Some((pipeline, twin)) = current.and_then(|g| g.pipelines[layout.index()].zip(Some(g))) {
+            return Ok((pipeline, twin.texture_set));
         }
         let material = slot.material.clone();
         if current.is_none() {
@@ -87,7 +88,7 @@ impl Registry {
         stats.pipelines_compiled += u32::from(built);
         let twin = self.materials[id.0 as usize].gpu.as_mut().expect("made above");
         twin.pipelines[layout.index()] = Some(pipeline);
-        Ok(())
+        Ok((pipeline, twin.texture_set))
     }
 
     /// The Material block's bind group for a texture set: the table and the maps

@@ -42,7 +42,7 @@ mod occlusion;
 mod pipelines;
 pub(crate) mod place;
 mod post;
-mod prepare;
+pub(crate) mod prepare;
 pub mod queue;
 mod readback;
 mod registry;

@@ -9,6 +9,7 @@
 
 use super::batch::Batch;
 use super::encode::Part;
+use super::prepare::Prepared;
 use super::queue::Queue;
 use super::timer::Timed;
 use super::view::ViewFrame;
@@ -24,11 +25,11 @@ impl Renderer {
         &mut self,
         frame: &ViewFrame,
         (lighting, shadowed): (&Lighting, &[Option<u32>]),
-        target: &OffscreenTarget,
+        (target, prepared): (&OffscreenTarget, &[Prepared]),
         stats: &mut FrameStats,
         lap: &mut Laps,
     ) -> Result<wgpu::CommandBuffer, RenderError> {
-        self.naive_batches(stats);
+        self.naive_batches(stats, prepared);
         stats.cpu_ms.batch = lap.next();
         self.naive_upload(frame, (lighting, shadowed), stats)?;
         stats.cpu_ms.upload = lap.next();
@@ -37,13 +38,13 @@ impl Renderer {
         Ok(commands)
     }
 
-    /// One batch per valid instance of every submitted entity, in submission order.
-    fn naive_batches(&mut self, stats: &mut FrameStats) {
+    /// One batch per valid instance of every submitted entity, in submission
+    /// order, each drawing as `prepared` says.
+    fn naive_batches(&mut self, stats: &mut FrameStats, prepared: &[Prepared]) {
         self.view.forward.clear();
-        for s in &self.submitted {
+        for (s, &Prepared { pipeline, draw, .. }) in self.submitted.iter().zip(prepared) {
             let slot = self.store.slot(s.slot);
             stats.instances_invalid += u64::from(slot.invalid);
-            let pipeline = self.pipeline_of(s);
             for i in slot.first..slot.first + slot.count {
                 if self.store.bounds.is_valid(i as usize) {
                     let batch = Batch {
@@ -54,7 +55,6 @@ impl Renderer {
                         first_instance: self.view.forward.draw_indices.len() as u32,
                         instance_count: 1,
                     };
-                    let draw = self.registry.batch_draw(&batch);
                     self.view.forward.push_alone(batch, draw, i);
                 }
             }

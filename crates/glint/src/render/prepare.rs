@@ -2,9 +2,20 @@
 //! entities use exists on the GPU (mesh buffers, textures, material blocks,
 //! pipelines), and [`Renderer::precompile`], which does it before the first frame.
 
+use super::draw_list::BatchDraw;
+use super::pipelines::VertexLayout;
 use super::{FrameStats, FrameVariant, Registry, RenderError, Renderer};
 use crate::gpu::TargetFormat;
 use crate::scene::{Background, Entity, Environment, Lighting, MaterialId, ShapeId, MAX_LIGHTS};
+
+/// What a submitted entity draws with, as stage 1 made it: its forward
+/// pipeline, its mesh's vertex layout, and what its batches draw with.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Prepared {
+    pub pipeline: u16,
+    pub layout: VertexLayout,
+    pub draw: BatchDraw,
+}
 
 impl Renderer {
     /// Build, before the first frame, everything drawing `entities` under `lighting`
@@ -33,12 +44,13 @@ impl Renderer {
     /// Stage 1: make sure everything the submitted entities use exists on the GPU
     /// (for `target`, under `environment`),
     /// and compact the instance store when it holds more garbage than data.
+    /// Returns what each submitted entity draws with, in submission order.
     pub(super) fn prepare(
         &mut self,
         target: TargetFormat,
         environment: &Environment,
         stats: &mut FrameStats,
-    ) -> Result<(), RenderError> {
+    ) -> Result<Vec<Prepared>, RenderError> {
         // Compacting moves instances: not while commands recorded for this
         // frame's submission (an earlier view's, or this view's shadow pass) draw
         // from where they are now.
@@ -59,14 +71,14 @@ impl Renderer {
 impl Registry {
     /// Stage 1 for the registry: mesh buffers, textures, material blocks and
     /// pipelines for each (shape, material) in `uses`, drawn into `target` under
-    /// `environment` in a frame of variant `frame`.
+    /// `environment` in a frame of variant `frame`. Returns what each use draws with.
     pub(super) fn prepare_uses(
         &mut self,
         uses: &[(ShapeId, MaterialId)],
         target: TargetFormat,
         (environment, frame): (&Environment, FrameVariant),
         stats: &mut FrameStats,
-    ) -> Result<(), RenderError> {
+    ) -> Result<Vec<Prepared>, RenderError> {
         if self.material_table.reserve(&self.device, self.materials.len())? {
             // A new table: every entry is written again, every texture set rebound to it.
             for slot in &mut self.materials {
@@ -76,27 +88,34 @@ impl Registry {
                 self.texture_sets[k].bind_group = self.texture_set_group(self.texture_sets[k].maps);
             }
         }
+        let mut prepared = Vec::with_capacity(uses.len());
         for &(shape, material) in uses {
             let slot = self.shapes.get_mut(shape.0 as usize).ok_or(RenderError::UnknownShape(shape))?;
-            if slot.gpu.is_none() {
-                let scope = crate::gpu::DriverErrors::watch(&self.device);
-                let added = self.mesh_pool.add(&self.device, &self.queue, &slot.mesh);
-                if let Some(error) = scope.finish() {
-                    return Err(RenderError::Device { what: "the mesh pool", message: error.to_string() });
+            let mesh = match slot.gpu {
+                Some(range) => range,
+                None => {
+                    let scope = crate::gpu::DriverErrors::watch(&self.device);
+                    let added = self.mesh_pool.add(&self.device, &self.queue, &slot.mesh);
+                    if let Some(error) = scope.finish() {
+                        return Err(RenderError::Device { what: "the mesh pool", message: error.to_string() });
+                    }
+                    let (range, bytes) = added.map_err(|source| RenderError::MeshTooLarge { shape, source })?;
+                    slot.gpu = Some(range);
+                    stats.bytes_uploaded.meshes += bytes;
+                    range
                 }
-                let (range, bytes) = added.map_err(|source| RenderError::MeshTooLarge { shape, source })?;
-                slot.gpu = Some(range);
-                stats.bytes_uploaded.meshes += bytes;
-            }
-            if let (true, Some(range)) = (std::mem::take(&mut slot.rewrite), slot.gpu) {
-                stats.bytes_uploaded.meshes += self.mesh_pool.rewrite_vertices(&self.queue, range, &slot.mesh);
+            };
+            if std::mem::take(&mut slot.rewrite) {
+                stats.bytes_uploaded.meshes += self.mesh_pool.rewrite_vertices(&self.queue, mesh, &slot.mesh);
             }
             let layout = slot.layout;
-            self.prepare_material(material, layout, target, (environment, frame), stats)?;
+            let (pipeline, texture_set) =
+                self.prepare_material(material, layout, target, (environment, frame), stats)?;
+            prepared.push(Prepared { pipeline, layout, draw: BatchDraw { mesh, texture_set } });
         }
         if matches!(environment.background, Background::Gradient { .. }) {
             stats.pipelines_compiled += u32::from(self.pipelines.build_sky(&self.device, target)?);
         }
-        Ok(())
+        Ok(prepared)
     }
 }

@@ -138,6 +138,8 @@ pub struct DrawItem {
     pub first: u32,
     /// Number of entries.
     pub count: u32,
+    /// The submitted entity it draws, by its place among the frame's submissions.
+    pub entry: u32,
 }
 
 /// Below this many items a comparison sort beats the radix sort's eight fixed passes.
@@ -216,7 +218,7 @@ mod tests {
 
     #[test]
     fn sort_orders_by_key_and_is_stable_on_both_paths() {
-        let item = |key, first| DrawItem { key, pipeline: 0, material: M0, shape: S0, first, count: 1 };
+        let item = |key, first| DrawItem { key, pipeline: 0, material: M0, shape: S0, first, count: 1, entry: 0 };
         let mut items = vec![item(5, 0), item(1, 1), item(5, 2), item(u64::MAX, 3), item(0, 4)];
         sort(&mut items);
         let firsts: Vec<u32> = items.iter().map(|i| i.first).collect();

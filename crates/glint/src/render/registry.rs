@@ -227,11 +227,28 @@ impl Registry {
         })
     }
 
-    /// What batch `b` draws with (its material and shape prepared).
-    pub(super) fn batch_draw(&self, b: &super::batch::Batch) -> super::draw_list::BatchDraw {
-        let material = self.materials[b.material.0 as usize].gpu.as_ref().expect("prepared");
-        let mesh = self.shapes[b.shape.0 as usize].gpu.expect("prepared");
-        super::draw_list::BatchDraw { mesh, texture_set: material.texture_set }
+    /// The shadow pipeline for `pass` of `material` drawn as `prepared` says:
+    /// cached in the material's twin per vertex layout, built (from its forward
+    /// pipeline's variant) on first use.
+    pub(super) fn shadow_pipeline(
+        &mut self,
+        material: MaterialId,
+        prepared: &super::prepare::Prepared,
+        pass: super::pipelines::PassKind,
+        stats: &mut super::FrameStats,
+    ) -> Result<u16, RenderError> {
+        let (layout, kind) = (prepared.layout.index(), usize::from(pass == super::pipelines::PassKind::ShadowDistance));
+        let cached = self.materials.get(material.0 as usize).and_then(|m| m.gpu.as_ref());
+        if let Some(id) = cached.and_then(|t| t.shadow_pipelines[layout][kind]) {
+            return Ok(id);
+        }
+        let key = Pipelines::shadow_key(self.pipelines.key_of(prepared.pipeline), pass);
+        let (id, built) = self.pipelines.forward_id(&self.device, key)?;
+        stats.pipelines_compiled += u32::from(built);
+        if let Some(twin) = self.materials.get_mut(material.0 as usize).and_then(|m| m.gpu.as_mut()) {
+            twin.shadow_pipelines[layout][kind] = Some(id);
+        }
+        Ok(id)
     }
 
     /// Whether material `id` blends (its draws are sorted far to near).

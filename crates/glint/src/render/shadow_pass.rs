@@ -11,7 +11,8 @@
 use super::blocks::CameraGpu;
 use super::cull::Frustum;
 use super::encode::Bound;
-use super::pipelines::{PassKind, Pipelines};
+use super::pipelines::PassKind;
+use super::prepare::Prepared;
 use super::queue::{self, DrawItem, Queue};
 use super::shadow_maps::{ShadowGpu, ShadowMaps};
 use super::shadow_views::{self, ShadowView, ViewTarget};
@@ -112,7 +113,7 @@ impl Renderer {
         let mut prepared = FrameStats::default();
         // The flush after this pass samples the maps it draws: choose its pipelines now.
         self.frame_variant = super::FrameVariant::expected(lights);
-        self.prepare(self.scene_format(&view, target), &lighting.environment, &mut prepared)?;
+        let draws_with = self.prepare(self.scene_format(&view, target), &lighting.environment, &mut prepared)?;
         let [_, _, width, height] = view.viewport.pixels(target.width(), target.height());
         let frame = ViewFrame::new(&view, width, height, self.cull_pipelines.is_some());
         let ShadowPlan { views, names, first: first_view } = self.plan_shadow_views(&frame, lights)?;
@@ -126,7 +127,7 @@ impl Renderer {
             prepared,
         };
         if !views.is_empty() {
-            let ranges = self.batch_shadow_views(&views, frame.culling, &mut drawn.prepared)?;
+            let ranges = self.batch_shadow_views((&views, &draws_with), frame.culling, &mut drawn.prepared)?;
             self.upload_shadow_views(&views, &mut drawn.prepared)?;
             let commands = self.encode_shadow_views((&views, &names), &ranges, &mut drawn.cost);
             self.pending.push(commands);
@@ -193,11 +194,11 @@ impl Renderer {
     }
 
     /// Cull, queue, sort and batch every view's casters into the shadow list
-    /// (culled on the GPU: every valid instance a candidate); returns each
-    /// view's range of runs.
+    /// (culled on the GPU: every valid instance a candidate), each submitted
+    /// entity drawing as `prepared` says; returns each view's range of runs.
     fn batch_shadow_views(
         &mut self,
-        views: &[ShadowView],
+        (views, prepared): (&[ShadowView], &[Prepared]),
         culling: Culling,
         stats: &mut FrameStats,
     ) -> Result<Vec<std::ops::Range<usize>>, RenderError> {
@@ -218,7 +219,8 @@ impl Renderer {
             };
             let first_item = self.view.shadows.items.len();
             for &VisibleRun { entry, start, len } in visible.runs.iter().chain(&visible.candidates) {
-                let pipeline = match self.shadow_pipeline(entry, pass, stats) {
+                let material = self.submitted[entry].material;
+                let pipeline = match self.registry.shadow_pipeline(material, &prepared[entry], pass, stats) {
                     Ok(pipeline) => pipeline,
                     Err(e) => {
                         self.visible = visible;
@@ -232,7 +234,7 @@ impl Renderer {
                     AlphaMode::Mask { .. } => Queue::AlphaTest,
                     _ => Queue::Opaque,
                 };
-                let texture_set = slot.gpu.as_ref().expect("prepared").texture_set;
+                let texture_set = prepared[entry].draw.texture_set;
                 // Near to far from the light, so nearer casters hide the rest early.
                 let center = self.store.slot(s.slot).bounds.map_or(Vec3::ZERO, |(c, _)| Vec3::from(c));
                 let depth = view_proj.project_point3(center).z.clamp(0.0, 1.0);
@@ -243,36 +245,17 @@ impl Renderer {
                     shape,
                     first: start,
                     count: len,
+                    entry: entry as u32,
                 });
             }
             queue::sort(&mut self.view.shadows.items[first_item..]);
             // Blended materials cast no shadow: culled on the GPU, every item is.
-            let (registry, on_gpu) = (&self.registry, culling == Culling::Gpu);
-            let list = &mut self.view.shadows;
-            ranges.push(list.build(first_item, &visible.instances, frustum, |b| registry.batch_draw(b), |_| on_gpu));
+            let on_gpu = culling == Culling::Gpu;
+            let draw_of = |item: &DrawItem| prepared[item.entry as usize].draw;
+            ranges.push(self.view.shadows.build(first_item, &visible.instances, frustum, draw_of, |_| on_gpu));
         }
         self.visible = visible;
         Ok(ranges)
-    }
-
-    /// The shadow pipeline of submitted entity `entry` for `pass`: cached in its
-    /// material's twin per vertex layout, built (from its forward pipeline's
-    /// variant) on first use.
-    fn shadow_pipeline(&mut self, entry: usize, pass: PassKind, stats: &mut FrameStats) -> Result<u16, RenderError> {
-        let s = &self.submitted[entry];
-        let layout = self.registry.shapes[s.shape.0 as usize].layout.index();
-        let kind = usize::from(pass == PassKind::ShadowDistance);
-        let twin = self.registry.materials[s.material.0 as usize].gpu.as_ref().expect("prepared");
-        if let Some(id) = twin.shadow_pipelines[layout][kind] {
-            return Ok(id);
-        }
-        let forward = twin.pipelines[layout].expect("prepared");
-        let key = Pipelines::shadow_key(self.registry.pipelines.key_of(forward), pass);
-        let (id, built) = self.registry.pipelines.forward_id(&self.device, key)?;
-        stats.pipelines_compiled += u32::from(built);
-        let twin = self.registry.materials[s.material.0 as usize].gpu.as_mut().expect("prepared");
-        twin.shadow_pipelines[layout][kind] = Some(id);
-        Ok(id)
     }
 
     /// Write the instances that changed, each view's Camera record, the Shadow
