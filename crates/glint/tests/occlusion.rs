@@ -127,3 +127,21 @@ fn what_comes_out_from_behind_the_wall_is_drawn_in_the_same_frame() {
     let differing = image.pixels().zip(picture.pixels()).filter(|(a, b)| a != b).count();
     assert_eq!(differing, 0, "pixels that differ from the frustum-only picture");
 }
+
+#[test]
+fn where_nothing_is_hidden_occlusion_culling_pauses_and_tries_again() {
+    let Some(gpu) = common::gpu() else { return };
+    if !gpu.occlusion_culls() {
+        return;
+    }
+    // Only the row in front of where the wall was: occlusion culling hides nothing.
+    let mut street = street(gpu);
+    street.entities.drain(..2);
+    let occluded: Vec<bool> = (0..45).map(|_| frame(&mut street, Culling::Gpu).occlusion).collect();
+    let paused = occluded.iter().position(|o| !o).expect("it pauses once a count says it hid nothing");
+    assert!(occluded[..paused].iter().all(|&o| o) && paused <= 4, "{occluded:?}");
+    let resumed = paused + occluded[paused..].iter().position(|&o| o).expect("and tries again");
+    // The probe frames' counts still coming back restart the pause: a few frames more.
+    let skip = glint::render::SKIP_UNPAID_OCCLUSION as usize;
+    assert!((skip..=skip + 4).contains(&(resumed - paused)), "{occluded:?}");
+}

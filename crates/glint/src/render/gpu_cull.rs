@@ -25,6 +25,10 @@ use super::resources::GrowBuffer;
 use super::RenderError;
 use crate::render::cull::{Boxes, Frustum};
 
+/// Frames a view is culled by frustum alone after an occlusion-culled frame
+/// that hid nothing.
+pub const SKIP_UNPAID_OCCLUSION: u32 = 30;
+
 /// Invocations per workgroup of both entry points.
 const WORKGROUP: u32 = 64;
 /// Bytes of one indexed indirect command.
@@ -224,6 +228,10 @@ pub(crate) struct GpuCull {
     pub occluding: bool,
     /// The late phase's `Params` as written.
     late_params: Option<Params>,
+    /// Whether the newest occlusion-culled frame whose counts came back hid anything.
+    occlusion_pays: bool,
+    /// Frames left without occlusion culling, after one that hid nothing.
+    skip_occlusion: u32,
 }
 
 /// What [`GpuCull::upload`] writes from.
@@ -267,6 +275,8 @@ impl GpuCull {
             late_groups: None,
             occluding: false,
             late_params: None,
+            occlusion_pays: true,
+            skip_occlusion: 0,
         }
     }
 
@@ -288,7 +298,9 @@ impl GpuCull {
         let planes: Vec<[f32; 4]> = input.frustums.iter().flat_map(|f| f.planes().map(|p| p.to_array())).collect();
         let candidates = input.ranges.last().map_or(0, |r| r.start + r.count);
         let runs = input.runs.len() as u32;
-        // Counts: the early runs', the late runs', then each frustum's total.
+        // Counts: the early runs', the late runs', each frustum's total, then
+        // how many instances the late phase found hidden.
+        let frustums = input.frustums.len() as u32;
         let params = Params {
             ranges: input.ranges.len() as u32,
             candidates,
@@ -306,7 +318,7 @@ impl GpuCull {
             (&mut self.args, commands),
             (&mut self.drawn_args, commands),
             (&mut self.runs, std::mem::size_of_val(input.runs) as u64),
-            (&mut self.counts, 4 * (2 * input.runs.len() + input.frustums.len()) as u64),
+            (&mut self.counts, 4 * u64::from(2 * runs + frustums + 1)),
         ] {
             replaced |= buffer.reserve(device, bytes)?;
         }
@@ -341,7 +353,11 @@ impl GpuCull {
             self.groups = Some(self.bind(device, pipelines, &bindings, (&self.params, &self.args, &self.drawn_args)));
         }
         self.occluding = false;
-        if let (Some(input), Some(occlusion), true) = (late, &pipelines.occlusion, pipelines.occlusion_on) {
+        // Where occlusion culling hid nothing, frustum culling alone for a while.
+        let probe = self.occlusion_pays || self.skip_occlusion == 0;
+        self.skip_occlusion = self.skip_occlusion.saturating_sub(u32::from(!probe));
+        if let (Some(input), Some(occlusion), true, true) = (late, &pipelines.occlusion, pipelines.occlusion_on, probe)
+        {
             written += self.upload_late(device, queue, (input, params), (pipelines, occlusion), &bindings)?;
             self.occluding = true;
         }
@@ -436,9 +452,11 @@ impl GpuCull {
                 encoder.copy_buffer_to_buffer(&late.template.buffer, 0, &late.args.buffer, 0, commands);
             }
         }
-        encoder.clear_buffer(&self.counts.buffer, 0, Some(4 * u64::from(2 * runs + frustums)));
-        if let Some((late, _)) = occluding.filter(|(late, _)| late.reset_hidden) {
-            encoder.clear_buffer(&late.hidden.buffer, 0, None);
+        encoder.clear_buffer(&self.counts.buffer, 0, Some(4 * u64::from(2 * runs + frustums + 1)));
+        if let Some((late, _)) = occluding {
+            // All flags for new candidates; else only the hidden count after them.
+            let from = if late.reset_hidden { 0 } else { 4 * u64::from(candidates) };
+            encoder.clear_buffer(&late.hidden.buffer, from, Some(4 * u64::from(candidates) + 4 - from));
         }
         {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
@@ -491,8 +509,17 @@ impl GpuCull {
             pass.set_bind_group(2, occlusion, &[]);
             dispatch(&mut pass, (&o.late, candidates), (pipelines, compact, runs));
         }
+        // The totals, and the hidden count after them.
         let frustums = self.uploaded.2.len() as u32 / 6;
-        self.readback.copy(encoder, &self.counts.buffer, u64::from(2 * runs) * 4, frustums, submits);
+        let hidden_at = 4 * u64::from(2 * runs + frustums);
+        encoder.copy_buffer_to_buffer(
+            &late.hidden.buffer,
+            4 * u64::from(candidates),
+            &self.counts.buffer,
+            hidden_at,
+            4,
+        );
+        self.readback.copy(encoder, &self.counts.buffer, u64::from(2 * runs) * 4, frustums + 1, submits);
     }
 
     /// Draw run `k` (`run`) of the list from the culled commands: the early
@@ -528,9 +555,25 @@ impl GpuCull {
     }
 
     /// Each frustum's instances drawn by the newest frame whose counts came
-    /// back (`None` before the first), without waiting for the GPU.
+    /// back (`None` before the first), without waiting for the GPU. An
+    /// occlusion-culled frame's counts also say whether occlusion culling hid
+    /// anything: where it hid nothing, the list is culled by frustum alone for
+    /// [`SKIP_UNPAID_OCCLUSION`] frames, then tries again (on a CPU rasterizer
+    /// the pyramid and the second pass cost more than frustum culling alone).
     pub(crate) fn drawn(&mut self, device: &wgpu::Device, submits: u64) -> Option<&[u32]> {
-        self.readback.collect(device, submits)
+        let frustums = self.uploaded.2.len() / 6;
+        self.readback.collect(device, submits);
+        let fresh = self.readback.take_fresh();
+        let latest = self.readback.latest()?;
+        if fresh {
+            if let Some(&hidden) = latest.get(frustums) {
+                self.occlusion_pays = hidden > 0;
+                if !self.occlusion_pays {
+                    self.skip_occlusion = SKIP_UNPAID_OCCLUSION;
+                }
+            }
+        }
+        Some(&latest[..frustums.min(latest.len())])
     }
 }
 

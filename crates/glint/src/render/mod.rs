@@ -59,6 +59,7 @@ mod visible;
 
 pub use crate::scene::{ShadowLayout, MAX_CUBES, MAX_SHADOW_MAP_BYTES};
 pub use error::RenderError;
+pub use gpu_cull::SKIP_UNPAID_OCCLUSION;
 pub use mesh_pool::MeshTooLarge;
 pub use place::PlacedScene;
 pub use registry::Registry;

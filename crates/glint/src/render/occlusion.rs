@@ -5,8 +5,9 @@
 //!    candidate, [`LatePhase::hidden`]) inside the frustum; the forward pass
 //!    draws the opaque and alpha-tested stages of that.
 //! 2. The [`DepthPyramid`] is built from the depth buffer with compute
-//!    (`shader/pyramid.wgsl`): conservative at every size, as its level 0 is the
-//!    depth buffer padded to powers of two with the far plane.
+//!    (`shader/pyramid.wgsl`): conservative at every size, as its level 0 (at
+//!    half the buffer's resolution, each texel the farthest of its 2 × 2
+//!    pixels) is padded to powers of two with the far plane.
 //! 3. Late: every candidate is tested against frustum and pyramid; its flag is
 //!    written for the next frame, and what is visible now but was not drawn
 //!    early goes into the late commands, drawn by a second forward pass (which
@@ -80,8 +81,8 @@ impl PyramidPipelines {
     }
 }
 
-/// A view's depth pyramid: R32Float, level 0 the depth buffer's size rounded
-/// up to powers of two, down to one texel.
+/// A view's depth pyramid: R32Float, level 0 half the depth buffer's size
+/// rounded up to powers of two, down to one texel.
 pub(crate) struct DepthPyramid {
     /// The depth buffer's size and samples it was made for.
     depth: (u32, u32, u32),
@@ -92,7 +93,7 @@ pub(crate) struct DepthPyramid {
 
 impl DepthPyramid {
     pub(crate) fn new(device: &wgpu::Device, (width, height, samples): (u32, u32, u32)) -> Self {
-        let size = (width.next_power_of_two(), height.next_power_of_two());
+        let size = (width.div_ceil(2).next_power_of_two(), height.div_ceil(2).next_power_of_two());
         let count = 32 - size.0.max(size.1).leading_zeros();
         let texture = device.create_texture(&wgpu::TextureDescriptor {
             label: Some("depth pyramid"),
@@ -197,7 +198,8 @@ pub(crate) struct LatePhase {
     pub args: GrowBuffer,
     /// Each run's non-empty late commands.
     pub drawn_args: GrowBuffer,
-    /// Per candidate: 1 when it was not visible last frame.
+    /// Per candidate: 1 when it was not visible last frame; then the late
+    /// phase's count of instances it found hidden.
     pub hidden: GrowBuffer,
     /// The flags must be cleared before the next early pass (new candidates).
     pub reset_hidden: bool,
@@ -225,7 +227,7 @@ impl LatePhase {
             // Copied from only to read back for inspection.
             args: buffer(U::STORAGE | U::INDIRECT | U::COPY_SRC, 1024),
             drawn_args: buffer(U::STORAGE | U::INDIRECT, 1024),
-            hidden: buffer(U::STORAGE, 1024),
+            hidden: buffer(U::STORAGE | U::COPY_SRC, 1024),
             reset_hidden: true,
             pyramid: None,
             uploaded_occlusion: OcclusionGpu::default(),
@@ -247,7 +249,7 @@ impl LatePhase {
         for buffer in [&mut self.template, &mut self.args, &mut self.drawn_args] {
             replaced |= buffer.reserve(device, commands)?;
         }
-        if self.hidden.reserve(device, 4 * u64::from(candidates))? {
+        if self.hidden.reserve(device, 4 * (u64::from(candidates) + 1))? {
             (replaced, self.reset_hidden) = (true, true);
         }
         if replaced {

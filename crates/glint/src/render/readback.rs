@@ -20,6 +20,8 @@ const MAX_FRUSTUMS: u64 = super::views::MAX_SHADOW_VIEWS as u64;
 pub(crate) struct Readback {
     slots: Vec<(wgpu::Buffer, Arc<AtomicU8>, u64, u32)>,
     latest: Option<Vec<u32>>,
+    /// Whether `latest` came back since [`take_fresh`](Readback::take_fresh).
+    fresh: bool,
 }
 
 impl Readback {
@@ -33,7 +35,7 @@ impl Readback {
             });
             (buffer, Arc::new(AtomicU8::new(FREE)), 0, 0)
         };
-        Self { slots: (0..SLOTS).map(slot).collect(), latest: None }
+        Self { slots: (0..SLOTS).map(slot).collect(), latest: None, fresh: false }
     }
 
     /// Copy `frustums` totals from `at` in `counts` into a free slot (none free: skipped).
@@ -84,8 +86,18 @@ impl Readback {
             }
         }
         if let Some((_, totals)) = newest {
-            self.latest = Some(totals);
+            (self.latest, self.fresh) = (Some(totals), true);
         }
         self.latest.as_deref()
+    }
+
+    /// The newest values that came back.
+    pub(crate) fn latest(&self) -> Option<&[u32]> {
+        self.latest.as_deref()
+    }
+
+    /// Whether new values came back since the last call.
+    pub(crate) fn take_fresh(&mut self) -> bool {
+        std::mem::take(&mut self.fresh)
     }
 }

@@ -64,10 +64,8 @@ struct Params {
 }
 
 // The view seen by the occlusion test: its view-projection matrix, the depth
-// buffer's size in pixels and the pyramid's levels (level 0: the depth buffer
-// padded to powers of two with the far plane; level k + 1 texel t: the farthest
-// of level k's texels 2t and 2t + 1 on each axis, so level k texel p >> k holds
-// the farthest depth of level-0 pixel p's square).
+// buffer's size in pixels and the pyramid's levels (shader/pyramid.wgsl: level
+// k texel p >> (k + 1) holds the farthest depth of depth pixel p's square).
 struct Occlusion {
     view_proj: mat4x4<f32>,
     size: vec2<f32>,
@@ -89,7 +87,9 @@ struct Occlusion {
 // Each run's command count, then each frustum's instances drawn.
 @group(1) @binding(2) var<storage, read_write> counts: array<atomic<u32>>;
 
-@group(2) @binding(0) var<storage, read_write> hidden: array<u32>;
+// Per candidate: 1 when it was not visible last frame; then one more word,
+// where the late phase counts the instances it found hidden.
+@group(2) @binding(0) var<storage, read_write> hidden: array<atomic<u32>>;
 @group(2) @binding(1) var pyramid: texture_2d<f32>;
 @group(2) @binding(2) var<uniform> occlusion: Occlusion;
 
@@ -159,11 +159,11 @@ fn occluded(c: vec3<f32>, e: vec3<f32>) -> bool {
     let p1 = min(vec2<u32>(u32(x.y), u32(y.y)), last);
     // The finest level where the box's pixels span at most two texels each way.
     var level = 0u;
-    while level + 1u < occlusion.levels && any((p1 >> vec2<u32>(level)) - (p0 >> vec2<u32>(level)) > vec2<u32>(1u)) {
+    while level + 1u < occlusion.levels && any((p1 >> vec2<u32>(level + 1u)) - (p0 >> vec2<u32>(level + 1u)) > vec2<u32>(1u)) {
         level += 1u;
     }
-    let a = p0 >> vec2<u32>(level);
-    let b = p1 >> vec2<u32>(level);
+    let a = p0 >> vec2<u32>(level + 1u);
+    let b = p1 >> vec2<u32>(level + 1u);
     let l = i32(level);
     let far = max(
         max(textureLoad(pyramid, a, l).r, textureLoad(pyramid, vec2<u32>(b.x, a.y), l).r),
@@ -205,7 +205,7 @@ fn cull(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
 @compute @workgroup_size(64)
 fn cull_early(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let c = candidate_of(id, groups);
-    if c.valid && hidden[c.g] == 0u && visible(c.center, c.extent, c.range.frustum * 6u) {
+    if c.valid && atomicLoad(&hidden[c.g]) == 0u && visible(c.center, c.extent, c.range.frustum * 6u) {
         place(c.range, c.instance);
     }
 }
@@ -216,9 +216,13 @@ fn cull_late(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgrou
     if !c.valid {
         return;
     }
-    let seen = visible(c.center, c.extent, c.range.frustum * 6u) && !occluded(c.center, c.extent);
-    let drawn_early = hidden[c.g] == 0u;
-    hidden[c.g] = select(1u, 0u, seen);
+    let in_frustum = visible(c.center, c.extent, c.range.frustum * 6u);
+    let seen = in_frustum && !occluded(c.center, c.extent);
+    if in_frustum && !seen {
+        atomicAdd(&hidden[params.candidates], 1u);
+    }
+    let drawn_early = atomicLoad(&hidden[c.g]) == 0u;
+    atomicStore(&hidden[c.g], select(1u, 0u, seen));
     if seen && !drawn_early {
         place(c.range, c.instance);
     }
