@@ -65,6 +65,17 @@ fn every_scene_matches_its_reference_culled_on_the_cpu_too() {
 }
 
 #[test]
+fn every_scene_matches_its_reference_on_gl_which_culls_on_the_cpu() {
+    let Some(gl) = common::gl_gpu() else { return };
+    for name in ["shapes", "textures", "alpha", "lights", "instancing", "ortho", "states"] {
+        let path = common::repo_root().join("tests/scenes").join(format!("{name}.scn"));
+        let (image, stats) = common::render_file(gl, &path, 256, glint::Culling::Gpu);
+        assert_eq!((stats.culling, stats.occlusion), (glint::Culling::Cpu, false), "{name}");
+        common::assert_matches_reference(name, &image);
+    }
+}
+
+#[test]
 fn culling_never_changes_the_picture() {
     let Some(gpu) = common::gpu() else { return };
     let showcase = common::repo_root().join("scenes/showcase.scn");
