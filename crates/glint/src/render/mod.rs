@@ -162,6 +162,8 @@ pub struct Renderer {
     base_vertex: bool,
     /// The GPU culling passes, where views can cull on the GPU ([`Gpu::culls_on_gpu`]).
     cull_pipelines: Option<gpu_cull::CullPipelines>,
+    /// The last prepared table and what it was made for.
+    last_prepared: Option<(prepare::PrepareKey, Vec<prepare::Prepared>)>,
 }
 
 fn ms_since(t: Instant) -> f64 {
@@ -226,6 +228,7 @@ impl Renderer {
             visible: Visible::default(),
             targets: target_pool::TargetPool::default(),
             post: post::PostChain::new(&gpu.device),
+            last_prepared: None,
             cull_pipelines: gpu
                 .culls_on_gpu()
                 .then(|| gpu_cull::CullPipelines::new(&gpu.device, gpu.occlusion_culls())),

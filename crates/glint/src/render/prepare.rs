@@ -8,6 +8,18 @@ use super::{FrameStats, FrameVariant, Registry, RenderError, Renderer};
 use crate::gpu::TargetFormat;
 use crate::scene::{Background, Entity, Environment, Lighting, MaterialId, ShapeId, MAX_LIGHTS};
 
+/// What a prepared table was made for: the frame, its submissions so far,
+/// the target, the frame's variant and the environment's fog and sky.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) struct PrepareKey {
+    frame: u64,
+    entities: usize,
+    target: TargetFormat,
+    variant: FrameVariant,
+    fog: bool,
+    sky: bool,
+}
+
 /// What a submitted entity draws with, as stage 1 made it: its forward
 /// pipeline, its mesh's vertex layout, and what its batches draw with.
 #[derive(Clone, Copy, Debug)]
@@ -45,7 +57,32 @@ impl Renderer {
     /// (for `target`, under `environment`),
     /// and compact the instance store when it holds more garbage than data.
     /// Returns what each submitted entity draws with, in submission order.
+    /// A view's flush reuses its shadow pass's table when nothing it depends
+    /// on changed in between: prepare runs once per view.
     pub(super) fn prepare(
+        &mut self,
+        target: TargetFormat,
+        environment: &Environment,
+        stats: &mut FrameStats,
+    ) -> Result<Vec<Prepared>, RenderError> {
+        let key = PrepareKey {
+            frame: self.frame_index,
+            entities: self.submitted.len(),
+            target,
+            variant: self.frame_variant,
+            fog: environment.fog.is_some(),
+            sky: matches!(environment.background, Background::Gradient { .. }),
+        };
+        if let Some((_, table)) = self.last_prepared.as_ref().filter(|(k, _)| *k == key) {
+            return Ok(table.clone());
+        }
+        let table = self.prepare_anew(target, environment, stats)?;
+        self.last_prepared = Some((key, table.clone()));
+        Ok(table)
+    }
+
+    /// [`prepare`](Self::prepare)'s work.
+    fn prepare_anew(
         &mut self,
         target: TargetFormat,
         environment: &Environment,
