@@ -237,13 +237,17 @@ impl Renderer {
     ///
     /// The frame of one view, one stage per line (`Renderer::draw_view`):
     /// 1. prepare — GPU twins for new shapes, textures, materials and pipelines; edited materials rewritten
-    /// 2. cull — each entity's world box, then its instances', against the view's frustum
+    /// 2. cull — each entity's world box, then its instances', against the view's frustum;
+    ///    culled on the GPU ([`Culling::Gpu`]), every valid instance of each entity not blended
+    ///    becomes a candidate the GPU tests (`render/gpu_cull.rs`)
     /// 3. queue — one draw item with a 64-bit sort key per visible run (per instance when blended)
     /// 4. sort — radix sort by key
     /// 5. batch — equal (stage, pipeline, material, shape) runs merged into instanced draws, one indirect command each
     /// 6. upload — Scene and Camera blocks if changed, changed instances, draw indices and indirect commands if changed
-    /// 7. encode — one pass: opaque → alpha-test → sky → transparent (or as `render_order` says);
-    ///    batches sharing pipeline, texture set and mesh page go in one multi-draw-indirect call
+    /// 7. encode — culled on the GPU, the cull pass first; one pass: opaque → alpha-test → sky →
+    ///    transparent (or as `render_order` says); batches sharing pipeline, texture set and
+    ///    mesh page go in one multi-draw-indirect call. Occlusion culling splits the pass
+    ///    around its depth pyramid and late cull (`render/occlusion.rs`)
     /// 8. compose — a view drawn into a target of its own (a view of part of the
     ///    target, or one with a post chain: HDR) reaches its rectangle: copied, or
     ///    through its post chain's full-screen passes (`render/post.rs`)
