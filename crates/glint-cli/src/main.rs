@@ -435,7 +435,7 @@ fn render(args: RenderArgs) -> Result<(), Error> {
     });
     for k in 0..frames {
         world.pose(time + k as f32 / fps, &mut renderer)?;
-        let frame = world.draw(&mut renderer, &views, &mut target)?;
+        let mut frame = world.draw(&mut renderer, &views, &mut target)?;
         let path = numbered(output, k).map_err(|m| glint::Diagnostic::file(output, m))?;
         if let Some(dir) = path.parent().filter(|d| frames > 1 && !d.as_os_str().is_empty()) {
             std::fs::create_dir_all(dir)
@@ -447,6 +447,8 @@ fn render(args: RenderArgs) -> Result<(), Error> {
             bar.inc(1);
         }
         if stats {
+            // The counts of views culled on the GPU, which a running frame loop reads a frame or two late.
+            renderer.wait_for_counts(&mut frame);
             let info = gpu.info();
             // One view: its statistics; several: each view's, in order.
             let mut json = match frame.as_slice() {

@@ -179,9 +179,6 @@ fn render_writes_the_png_and_prints_stats_json() {
         "--size",
         "320x180",
         "--stats",
-        // Culled on the CPU, so that the one frame's counts are known when it ends.
-        "--cull",
-        "cpu",
     ]);
     if out.status.code() == Some(2) && std::env::var("GLINT_REQUIRE_ADAPTER").as_deref() != Ok("1") {
         eprintln!("skipping: no GPU adapter ({})", stderr(&out));
@@ -223,6 +220,15 @@ fn render_writes_the_png_and_prints_stats_json() {
     let out = glint(&[&args[..], &["--stats", "--cull", "off"]].concat());
     let all: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
     assert_eq!((all["instances_drawn"].as_u64(), all["instances_culled"].as_u64()), (Some(12040), Some(0)));
+    // The one frame's counts, counted on the GPU (waited for) and on the CPU, agree.
+    let counts = |cull: &str| {
+        let out = glint(&[&args[..], &["--stats", "--cull", cull]].concat());
+        let s: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+        (s["culling"].clone(), s["instances_drawn"].as_u64(), s["instances_culled"].as_u64())
+    };
+    let (on_gpu, on_cpu) = (counts("gpu"), counts("cpu"));
+    assert_eq!((on_gpu.1, on_gpu.2), (on_cpu.1, on_cpu.2), "{on_gpu:?} {on_cpu:?}");
+    assert!(on_cpu.1.is_some_and(|drawn| drawn > 0 && drawn < 12040));
 }
 
 #[test]

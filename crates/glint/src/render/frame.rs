@@ -156,6 +156,24 @@ impl Renderer {
         Ok(stats)
     }
 
+    /// Fill in the instance counts of the views of the last
+    /// [`render_views`](Self::render_views) (`stats`, its statistics) that were
+    /// culled on the GPU, waiting for the GPU to count them: for a frame on its
+    /// own, such as `glint render --stats` draws (in a running frame loop the
+    /// counts come a frame or two late, without waiting).
+    pub fn wait_for_counts(&mut self, stats: &mut [FrameStats]) {
+        let submits = self.queue.submits();
+        for (k, stats) in stats.iter_mut().enumerate().filter(|(_, s)| s.culling == Culling::Gpu) {
+            let Some(Some(view)) = self.kept_views.get_mut(k) else { continue };
+            let Some(gpu) = view.forward.gpu.as_mut() else { continue };
+            if let Some(drawn) = gpu.wait_drawn(&self.device, submits) {
+                let drawn: u64 = drawn.iter().map(|&n| u64::from(n)).sum();
+                let valid = stats.instances_submitted - stats.instances_invalid;
+                (stats.instances_drawn, stats.instances_culled) = (drawn, valid.saturating_sub(drawn));
+            }
+        }
+    }
+
     /// Run `draw` with view `slot`'s GPU state (made on first use, pointed at
     /// the current instance buffer) in place of the single view's, then keep it
     /// for the next frame.

@@ -554,6 +554,13 @@ impl GpuCull {
         self.late.as_ref().filter(|_| self.occluding).map(|l| &l.args.buffer)
     }
 
+    /// Each frustum's instances drawn by the last frame, waiting for the GPU.
+    pub(crate) fn wait_drawn(&mut self, device: &wgpu::Device, submits: u64) -> Option<&[u32]> {
+        let frustums = self.uploaded.2.len() / 6;
+        let latest = self.readback.wait_all(device, submits)?;
+        Some(&latest[..frustums.min(latest.len())])
+    }
+
     /// Each frustum's instances drawn by the newest frame whose counts came
     /// back (`None` before the first), without waiting for the GPU. An
     /// occlusion-culled frame's counts also say whether occlusion culling hid

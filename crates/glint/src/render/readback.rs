@@ -100,4 +100,19 @@ impl Readback {
     pub(crate) fn take_fresh(&mut self) -> bool {
         std::mem::take(&mut self.fresh)
     }
+
+    /// Wait until every copy made so far has come back (the queue has made
+    /// `submits` submissions), then give the newest values; gives up after
+    /// 10 s of waiting.
+    pub(crate) fn wait_all(&mut self, device: &wgpu::Device, submits: u64) -> Option<&[u32]> {
+        let start = web_time::Instant::now();
+        loop {
+            self.collect(device, submits);
+            let waiting = self.slots.iter().any(|s| matches!(s.1.load(Ordering::Acquire), COPIED | MAPPING | MAPPED));
+            if !waiting || start.elapsed() > std::time::Duration::from_secs(10) {
+                return self.latest.as_deref();
+            }
+            device.poll(wgpu::PollType::wait_indefinitely()).ok()?;
+        }
+    }
 }
