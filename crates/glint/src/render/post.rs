@@ -236,20 +236,17 @@ impl PostChain {
                 queue.write_buffer(&params.buffer, PARAMS_STRIDE * k as u64, bytemuck::bytes_of(&record));
                 params.last[k] = Some(record);
             }
+            let source = self.view(step.source, images, pool)?;
+            let extra = match step.extra {
+                Some(e) => self.view(e, images, pool)?,
+                None => &self.black,
+            };
             let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("post: pass inputs"),
                 layout: &self.layout,
                 entries: &[
-                    wgpu::BindGroupEntry {
-                        binding: 0,
-                        resource: wgpu::BindingResource::TextureView(self.view(step.source, images, pool)),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 1,
-                        resource: wgpu::BindingResource::TextureView(
-                            step.extra.map_or(&self.black, |e| self.view(e, images, pool)),
-                        ),
-                    },
+                    wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(source) },
+                    wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::TextureView(extra) },
                     wgpu::BindGroupEntry { binding: 2, resource: wgpu::BindingResource::Sampler(&self.sampler) },
                     wgpu::BindGroupEntry {
                         binding: 3,
@@ -268,7 +265,7 @@ impl PostChain {
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some(&format!("post: {} ({})", chain[*effect].name(), step.pass.entry_point())),
                 color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: self.view(step.target, images, pool),
+                    view: self.view(step.target, images, pool)?,
                     depth_slice: None,
                     resolve_target: None,
                     ops: wgpu::Operations { load: wgpu::LoadOp::Load, store: wgpu::StoreOp::Store },
@@ -353,15 +350,25 @@ impl PostChain {
         }
     }
 
-    fn view<'a>(&'a self, image: Image, images: &'a ChainImages, pool: &'a TargetPool) -> &'a wgpu::TextureView {
+    /// The texture view of `image` (a pooled image as `prepare` made it).
+    fn view<'a>(
+        &'a self,
+        image: Image,
+        images: &'a ChainImages,
+        pool: &'a TargetPool,
+    ) -> Result<&'a wgpu::TextureView, RenderError> {
         let (width, height) = images.size;
         let half = ((width / 2).max(1), (height / 2).max(1));
         match image {
-            Image::Scene => images.scene,
-            Image::Output => images.output,
+            Image::Scene => Ok(images.scene),
+            Image::Output => Ok(images.output),
             Image::Pooled(slot) => {
                 let size = if slot >= 2 { half } else { images.size };
-                pool.image(size, slot).expect("prepared")
+                let missing = || RenderError::Device {
+                    what: "the post-processing passes",
+                    message: format!("no intermediate image {slot} of {}x{}", size.0, size.1),
+                };
+                pool.image(size, slot).ok_or_else(missing)
             }
         }
     }
