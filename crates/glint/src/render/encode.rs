@@ -43,17 +43,15 @@ impl Renderer {
     /// alpha-test → sky → transparent (or as `render_order` stages say).
     pub(super) fn encode(
         &mut self,
+        encoder: &mut wgpu::CommandEncoder,
         target: &OffscreenTarget,
         background: Background,
         stats: &mut FrameStats,
-    ) -> wgpu::CommandBuffer {
+    ) {
         let list = &self.view.forward;
         let sky_at = list.runs.partition_point(|r| run_stage(list, r) < SKY_STAGE);
-        let mut encoder =
-            self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("renderer: frame") });
-        encoder.push_debug_group(&self.debug_group("forward"));
         if let Some(pipelines) = &self.cull_pipelines {
-            self.view.forward.record_cull(&mut encoder, pipelines, self.queue.submits());
+            self.view.forward.record_cull(encoder, pipelines, self.queue.submits());
         }
         let depth = target.depth_only_view().filter(|_| self.view.forward.gpu.as_ref().is_some_and(|g| g.occluding));
         let end = self.view.forward.runs.len();
@@ -64,18 +62,18 @@ impl Renderer {
         let (late, after_sky) = match (depth, &self.cull_pipelines) {
             (Some(depth), Some(pipelines)) => {
                 {
-                    let mut pass = self.begin_forward_pass(&mut encoder, target, (background, Part::First), stats);
+                    let mut pass = self.begin_forward_pass(encoder, target, (background, Part::First), stats);
                     self.draw_stages(&self.view.forward, &mut pass, (0..sky_at, &[false]), &mut bound, stats);
                 }
                 if let Some(gpu) = &mut self.view.forward.gpu {
-                    gpu.record_late((&self.device, &mut encoder), pipelines, depth, self.queue.submits());
+                    gpu.record_late((&self.device, encoder), pipelines, depth, self.queue.submits());
                 }
                 (Part::Second, &[false, true][..])
             }
             _ => (Part::Whole, &[false][..]),
         };
         {
-            let mut pass = self.begin_forward_pass(&mut encoder, target, (background, late), stats);
+            let mut pass = self.begin_forward_pass(encoder, target, (background, late), stats);
             if late == Part::Second {
                 bound = Bound::default();
                 self.draw_stages(&self.view.forward, &mut pass, (0..sky_at, &[true]), &mut bound, stats);
@@ -87,19 +85,8 @@ impl Renderer {
             }
             self.draw_stages(&self.view.forward, &mut pass, (sky_at..end, after_sky), &mut bound, stats);
         }
-        encoder.pop_debug_group();
         if let Some(timer) = &mut self.gpu_timer {
-            timer.resolve(&mut encoder, Timed::Forward, self.frame_index);
-        }
-        encoder.finish()
-    }
-
-    /// The name of a debug group of the view being drawn: "frame 7 › view 1 › `part`"
-    /// (no view number for a single view).
-    pub(super) fn debug_group(&self, part: &str) -> String {
-        match self.view_slot {
-            Some(k) => format!("frame {} › view {k} › {part}", self.frame_index),
-            None => format!("frame {} › {part}", self.frame_index),
+            timer.resolve(encoder, Timed::Forward, self.frame_index);
         }
     }
 

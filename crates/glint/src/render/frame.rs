@@ -2,10 +2,11 @@
 //! [`Renderer::flush`] is one view's frame, whose stages [`Renderer::run_frame`]
 //! calls in order (prepare → cull → queue → sort → batch → upload → encode →
 //! compose → submit) after [`Renderer::shadow_pass`] has drawn that view's
-//! shadow maps. Debug groups name each view's command buffers after the
-//! outline: "frame N › view k › shadows" (a render pass per "light n cascade
-//! c" or "light n face f"), "… › forward" (the cull pass, then the forward
-//! pass's stages), "… › post".
+//! shadow maps. A frame is one command encoder and one submission. Its passes
+//! are labelled after the outline ("light n cascade c", "cull instances",
+//! "forward pass: early", "depth pyramid", "post: …"); debug groups around
+//! them are left out, as lavapipe (Mesa 22.3) crashes in
+//! `vkCmdBeginDebugUtilsLabelEXT` when one command buffer holds them.
 
 use super::post::ChainImages;
 use super::shadow_pass::{Shadows, ShadowsDrawn};
@@ -43,7 +44,7 @@ impl Renderer {
     }
 
     /// [`render`](Self::render) without its submission: the view's commands
-    /// wait in `pending` for the frame's one submission.
+    /// wait in the frame's encoder for its one submission.
     fn record_render<'e, 'l>(
         &mut self,
         entities: impl IntoIterator<Item = &'e Entity>,
@@ -68,13 +69,13 @@ impl Renderer {
         let mut stats = match frame {
             Ok(stats) => stats,
             Err(e) => {
-                self.pending.clear();
+                self.encoder = None;
                 return Err(e);
             }
         };
         let t = Instant::now();
-        let (mips, pending) = (std::mem::take(&mut self.registry.mip_blits), std::mem::take(&mut self.pending));
-        self.queue.submit(mips.into_iter().chain(pending));
+        let commands = self.encoder.take().map(wgpu::CommandEncoder::finish);
+        self.queue.submit(std::mem::take(&mut self.registry.mip_blits).into_iter().chain(commands));
         if let Some(timer) = &mut self.gpu_timer {
             timer.submitted();
         }
@@ -145,7 +146,7 @@ impl Renderer {
                 Ok(frame) => stats[k] = frame,
                 Err(e) => {
                     // The earlier views' commands go with the failed frame.
-                    self.pending.clear();
+                    self.encoder = None;
                     return Err(e);
                 }
             }
@@ -184,9 +185,7 @@ impl Renderer {
         let kept = self.kept_views[slot].take().unwrap_or_else(|| self.view.sibling(&self.shared()));
         let single = std::mem::replace(&mut self.view, kept);
         self.refresh_view();
-        self.view_slot = Some(slot);
         let result = draw(self);
-        self.view_slot = None;
         self.kept_views[slot] = Some(std::mem::replace(&mut self.view, single));
         self.refresh_view();
         result
@@ -235,16 +234,24 @@ impl Renderer {
         crate::scene::draw_order(&outputs, &shown, targets.len()).map_err(|_| RenderError::RenderTargetCycle)
     }
 
-    /// Clear `target` to black, in the next flush's submission.
+    /// Clear `target` to black, in the frame's encoder.
     fn clear(&mut self, target: &OffscreenTarget) {
-        let mut encoder =
-            self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("renderer: clear") });
+        let mut encoder = self.take_encoder();
         encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("clear the target"),
             color_attachments: &[Some(target.color_attachment(wgpu::Color::BLACK))],
             ..Default::default()
         });
-        self.pending.push(encoder.finish());
+        self.encoder = Some(encoder);
+    }
+
+    /// The frame's command encoder, begun when this is the frame's first
+    /// command; put it back in `self.encoder`.
+    pub(super) fn take_encoder(&mut self) -> wgpu::CommandEncoder {
+        self.encoder.take().unwrap_or_else(|| {
+            let label = Some("renderer: frame");
+            self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label })
+        })
     }
 
     /// Draw everything submitted since the last flush, seen by `view` (or a
@@ -269,7 +276,7 @@ impl Renderer {
     /// 8. compose — a view drawn into a target of its own (a view of part of the
     ///    target, or one with a post chain: HDR) reaches its rectangle: copied, or
     ///    through its post chain's full-screen passes (`render/post.rs`)
-    /// 9. submit — the frame's command buffers in one submission (with `render_views`, every view's)
+    /// 9. submit — the frame's one command encoder in one submission (with `render_views`, every view's)
     ///
     /// Errors (the submitted entities are dropped): more than [`MAX_LIGHTS`]
     /// lights, an id that is not this renderer's, a viewport outside the
@@ -286,7 +293,7 @@ impl Renderer {
     }
 
     /// [`flush`](Self::flush) without its submission: the view's commands wait
-    /// in `pending` for the frame's one submission.
+    /// in the frame's encoder for its one submission.
     fn record_flush<'l>(
         &mut self,
         view: impl Into<View>,
@@ -367,13 +374,12 @@ impl Renderer {
     /// or its post chain run, into its rectangle of the output.
     fn compose(
         &mut self,
+        encoder: &mut wgpu::CommandEncoder,
         compose: Compose,
         stats: &mut FrameStats,
-    ) -> Result<Option<wgpu::CommandBuffer>, RenderError> {
-        let label = Some("renderer: view into its viewport");
-        let mut encoder = self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label });
+    ) -> Result<(), RenderError> {
         match compose {
-            Compose::Direct => return Ok(None),
+            Compose::Direct => {}
             Compose::Copy { from, to, origin: [x, y] } => encoder.copy_texture_to_texture(
                 from.color_texture().as_image_copy(),
                 wgpu::TexelCopyTextureInfo {
@@ -384,19 +390,17 @@ impl Renderer {
             ),
             Compose::Post { chain, images } => {
                 let t = Instant::now();
-                encoder.push_debug_group(&self.debug_group("post"));
                 let (device, queue, index, timer) =
                     (&self.device, &self.queue, self.frame_index, self.gpu_timer.as_mut());
                 let (params, pool) = (&mut self.view.post_params, &mut self.targets);
                 stats.passes.post =
-                    self.post.encode((device, queue), (params, pool), &mut encoder, chain, images, (index, timer))?;
+                    self.post.encode((device, queue), (params, pool), encoder, chain, images, (index, timer))?;
                 stats.draws += stats.passes.post.draws;
                 stats.draw_calls += stats.passes.post.draw_calls;
-                encoder.pop_debug_group();
                 stats.passes.post.cpu_ms = ms_since(t);
             }
         }
-        Ok(Some(encoder.finish()))
+        Ok(())
     }
 
     /// The target a view's scene is drawn into: HDR (with the output's samples
@@ -431,10 +435,19 @@ impl Renderer {
         let prepared = self.prepare(target.format(), &lighting.environment, &mut stats)?;
         stats.cpu_ms.prepare = lap.next();
         let shadowed = drawn.map_or(&[][..], |d| d.first_view.as_slice());
-        let commands = match self.mode {
+        // The frame's encoder, given back once this view's commands are in it
+        // (a failed view drops it, and the frame).
+        let mut encoder = self.take_encoder();
+        match self.mode {
             FrameMode::Naive => {
                 stats.culling = Culling::Off;
-                self.naive_frame(frame, (lighting, shadowed), (target, &prepared), &mut stats, &mut lap)?
+                self.naive_frame(
+                    frame,
+                    (lighting, shadowed),
+                    (target, &prepared),
+                    (&mut encoder, &mut stats),
+                    &mut lap,
+                )?;
             }
             FrameMode::Optimized => {
                 let mut visible = std::mem::take(&mut self.visible);
@@ -453,14 +466,12 @@ impl Renderer {
                 self.visible = visible;
                 self.upload(frame, (lighting, shadowed), target, &mut stats)?;
                 stats.cpu_ms.upload = lap.next();
-                let commands = self.encode(target, lighting.environment.background, &mut stats);
+                self.encode(&mut encoder, target, lighting.environment.background, &mut stats);
                 stats.cpu_ms.encode = lap.next();
-                commands
             }
-        };
-        self.pending.push(commands);
-        let composed = self.compose(compose, &mut stats)?;
-        self.pending.extend(composed);
+        }
+        self.compose(&mut encoder, compose, &mut stats)?;
+        self.encoder = Some(encoder);
         stats.bytes_uploaded.finish();
         Ok(stats)
     }

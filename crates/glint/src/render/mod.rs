@@ -127,11 +127,10 @@ pub struct Renderer {
     /// Each `render_views` view's GPU state, by its place in the list, kept
     /// between frames while it is not the one being drawn.
     kept_views: Vec<Option<ViewGpu>>,
-    /// The place in `render_views`' list of the view being drawn (`None`: the single view).
-    view_slot: Option<usize>,
-    /// Commands recorded for the next flush's one submission: the shadow pass's,
-    /// and the clear of a target the views do not cover.
-    pending: Vec<wgpu::CommandBuffer>,
+    /// The frame's one command encoder, from the first command recorded (a
+    /// shadow pass, a view, the clear of a target the views do not cover) to
+    /// the frame's one submission.
+    encoder: Option<wgpu::CommandEncoder>,
     /// The queue's submission count when the last flush ended.
     submits_counted: u64,
     shadow_maps: ShadowMaps,
@@ -213,8 +212,7 @@ impl Renderer {
             instances,
             view,
             kept_views: Vec::new(),
-            view_slot: None,
-            pending: Vec::new(),
+            encoder: None,
             shadow_maps,
             shadow_maps_generation: 0,
             frame_variant: FrameVariant::default(),

@@ -19,23 +19,23 @@ use crate::scene::Lighting;
 
 impl Renderer {
     /// The naive frame's stages between prepare and compose: batch, upload,
-    /// encode (each stage's CPU time in `stats`, from `lap`). `shadowed` is
-    /// each light's first shadow view.
+    /// encode into `encoder` (each stage's CPU time in `stats`, from `lap`).
+    /// `shadowed` is each light's first shadow view.
     pub(super) fn naive_frame(
         &mut self,
         frame: &ViewFrame,
         (lighting, shadowed): (&Lighting, &[Option<u32>]),
         (target, prepared): (&OffscreenTarget, &[Prepared]),
-        stats: &mut FrameStats,
+        (encoder, stats): (&mut wgpu::CommandEncoder, &mut FrameStats),
         lap: &mut Laps,
-    ) -> Result<wgpu::CommandBuffer, RenderError> {
+    ) -> Result<(), RenderError> {
         self.naive_batches(stats, prepared);
         stats.cpu_ms.batch = lap.next();
         self.naive_upload(frame, (lighting, shadowed), stats)?;
         stats.cpu_ms.upload = lap.next();
-        let commands = self.naive_encode(target, lighting, stats);
+        self.naive_encode(encoder, target, lighting, stats);
         stats.cpu_ms.encode = lap.next();
-        Ok(commands)
+        Ok(())
     }
 
     /// One batch per valid instance of every submitted entity, in submission
@@ -88,17 +88,15 @@ impl Renderer {
     /// state bound again and its own `draw_indexed` call.
     fn naive_encode(
         &mut self,
+        encoder: &mut wgpu::CommandEncoder,
         target: &OffscreenTarget,
         lighting: &Lighting,
         stats: &mut FrameStats,
-    ) -> wgpu::CommandBuffer {
-        let label = Some("renderer: naive frame");
-        let mut encoder = self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label });
+    ) {
         let start = web_time::Instant::now();
-        encoder.push_debug_group(&self.debug_group("forward (naive)"));
         {
             let background = lighting.environment.background;
-            let mut pass = self.begin_forward_pass(&mut encoder, target, (background, Part::Whole), stats);
+            let mut pass = self.begin_forward_pass(encoder, target, (background, Part::Whole), stats);
             self.draw_sky(&mut pass, target, background, stats);
             let list = &self.view.forward;
             pass.push_debug_group("naive: one draw per instance");
@@ -129,10 +127,8 @@ impl Renderer {
             stats.passes.opaque =
                 super::PassStats { draw_calls: n, draws: n, instances, cpu_ms: super::ms_since(start) };
         }
-        encoder.pop_debug_group();
         if let Some(timer) = &mut self.gpu_timer {
-            timer.resolve(&mut encoder, Timed::Forward, self.frame_index);
+            timer.resolve(encoder, Timed::Forward, self.frame_index);
         }
-        encoder.finish()
     }
 }

@@ -91,7 +91,7 @@ impl Renderer {
         // Compacting moves instances: not while commands recorded for this
         // frame's submission (an earlier view's, or this view's shadow pass) draw
         // from where they are now.
-        let remap = match self.pending.is_empty() {
+        let remap = match self.encoder.is_none() {
             true => self.store.compact_if_wasteful(self.frame_index),
             false => None,
         };

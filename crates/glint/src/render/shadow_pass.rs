@@ -129,8 +129,9 @@ impl Renderer {
         if !views.is_empty() {
             let ranges = self.batch_shadow_views((&views, &draws_with), frame.culling, &mut drawn.prepared)?;
             self.upload_shadow_views(&views, &mut drawn.prepared)?;
-            let commands = self.encode_shadow_views((&views, &names), &ranges, &mut drawn.cost);
-            self.pending.push(commands);
+            let mut encoder = self.take_encoder();
+            self.encode_shadow_views(&mut encoder, (&views, &names), &ranges, &mut drawn.cost);
+            self.encoder = Some(encoder);
         }
         drawn.cost.cpu_ms = ms_since(start);
         Ok(Shadows { drawn: Some(drawn) })
@@ -281,16 +282,13 @@ impl Renderer {
     /// maps, after the cull pass where the list is culled on the GPU.
     fn encode_shadow_views(
         &mut self,
+        encoder: &mut wgpu::CommandEncoder,
         (views, names): (&[ShadowView], &[String]),
         ranges: &[std::ops::Range<usize>],
         cost: &mut PassStats,
-    ) -> wgpu::CommandBuffer {
-        let mut encoder = self
-            .device
-            .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("renderer: shadow maps") });
-        encoder.push_debug_group(&self.debug_group("shadows"));
+    ) {
         if let Some(pipelines) = &self.cull_pipelines {
-            self.view.shadows.record_cull(&mut encoder, pipelines, self.queue.submits());
+            self.view.shadows.record_cull(encoder, pipelines, self.queue.submits());
         }
         let mut stats = FrameStats::default();
         for (k, (view, range)) in views.iter().zip(ranges).enumerate() {
@@ -323,9 +321,8 @@ impl Renderer {
                 &mut stats,
             );
         }
-        encoder.pop_debug_group();
         if let Some(timer) = &mut self.gpu_timer {
-            timer.resolve(&mut encoder, Timed::Shadow, self.frame_index);
+            timer.resolve(encoder, Timed::Shadow, self.frame_index);
         }
         cost.draw_calls = stats.draw_calls;
         cost.draws = stats.draws;
@@ -336,6 +333,5 @@ impl Renderer {
             let drawn = self.view.shadows.gpu.as_mut().and_then(|g| g.drawn(&self.device, submits));
             cost.instances = drawn.map_or(0, |d| d.iter().map(|&n| u64::from(n)).sum());
         }
-        encoder.finish()
     }
 }
