@@ -19,7 +19,9 @@
 //! [`GpuCull::args`], empty commands included). Each frustum's instances drawn
 //! come back to the CPU a frame or two late, without a stall.
 
-use super::occlusion::{LateInput, LatePhase, PyramidPipelines};
+use super::cull_pipelines::OcclusionPipelines;
+pub(crate) use super::cull_pipelines::{compute_pipeline, CullPipelines};
+use super::occlusion::{LateInput, LatePhase};
 use super::readback::Readback;
 use super::resources::GrowBuffer;
 use super::RenderError;
@@ -100,107 +102,6 @@ struct Params {
     counts_first: u32,
     place_offset: u32,
     pad: [u32; 2],
-}
-
-/// The occlusion-culling pipelines: both phases' cull passes and the pyramid.
-struct OcclusionPipelines {
-    layout: wgpu::BindGroupLayout,
-    early: wgpu::ComputePipeline,
-    late: wgpu::ComputePipeline,
-    pyramid: PyramidPipelines,
-}
-
-/// The cull and compact compute pipelines, one pair per renderer, and the
-/// occlusion culling ones where the device has storage textures.
-pub(crate) struct CullPipelines {
-    cull_layout: wgpu::BindGroupLayout,
-    compact_layout: wgpu::BindGroupLayout,
-    cull: wgpu::ComputePipeline,
-    compact: wgpu::ComputePipeline,
-    occlusion: Option<OcclusionPipelines>,
-    /// Whether runs draw with a count buffer.
-    pub draw_count: bool,
-    /// Whether views culled on the GPU are occlusion-culled ([`Renderer::set_occlusion_culling`](super::Renderer::set_occlusion_culling)).
-    pub occlusion_on: bool,
-}
-
-impl CullPipelines {
-    /// The pipelines, with occlusion culling's when `occlusion`.
-    pub(crate) fn new(device: &wgpu::Device, occlusion: bool) -> Self {
-        let entry = |binding, ty| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: wgpu::ShaderStages::COMPUTE,
-            ty,
-            count: None,
-        };
-        let storage = |binding, read_only| {
-            entry(
-                binding,
-                wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Storage { read_only },
-                    has_dynamic_offset: false,
-                    min_binding_size: None,
-                },
-            )
-        };
-        let uniform = wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Uniform,
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        };
-        let cull_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("gpu culling: candidates"),
-            entries: &[
-                entry(0, uniform),
-                storage(1, true),
-                storage(2, true),
-                storage(3, true),
-                storage(4, false),
-                storage(5, false),
-            ],
-        });
-        let compact_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("gpu culling: runs"),
-            entries: &[storage(0, true), storage(1, false), storage(2, false)],
-        });
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("cull.wgsl"),
-            source: wgpu::ShaderSource::Wgsl(crate::shader::CULL.into()),
-        });
-        let pipeline =
-            |entry, layouts: &[Option<&wgpu::BindGroupLayout>]| compute_pipeline(device, &module, entry, layouts);
-        let occlusion = occlusion.then(|| {
-            let texture = wgpu::BindingType::Texture {
-                sample_type: wgpu::TextureSampleType::Float { filterable: false },
-                view_dimension: wgpu::TextureViewDimension::D2,
-                multisampled: false,
-            };
-            let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-                label: Some("gpu culling: occlusion"),
-                entries: &[storage(0, false), entry(1, texture), entry(2, uniform)],
-            });
-            OcclusionPipelines {
-                early: pipeline("cull_early", &[Some(&cull_layout), None, Some(&layout)]),
-                late: pipeline("cull_late", &[Some(&cull_layout), None, Some(&layout)]),
-                pyramid: PyramidPipelines::new(device),
-                layout,
-            }
-        });
-        Self {
-            cull: pipeline("cull", &[Some(&cull_layout)]),
-            compact: pipeline("compact", &[Some(&cull_layout), Some(&compact_layout)]),
-            cull_layout,
-            compact_layout,
-            occlusion,
-            draw_count: device.features().contains(wgpu::Features::MULTI_DRAW_INDIRECT_COUNT),
-            occlusion_on: true,
-        }
-    }
-
-    /// Whether views culled on the GPU are occlusion-culled too.
-    pub(crate) fn occlusion(&self) -> bool {
-        self.occlusion.is_some() && self.occlusion_on
-    }
 }
 
 /// What a list culled on the GPU holds there beside its draw indices.
@@ -582,28 +483,6 @@ impl GpuCull {
         }
         Some(&latest[..frustums.min(latest.len())])
     }
-}
-
-/// The compute pipeline of `module`'s entry point `entry` over bind groups of `layouts`.
-pub(crate) fn compute_pipeline(
-    device: &wgpu::Device,
-    module: &wgpu::ShaderModule,
-    entry: &str,
-    layouts: &[Option<&wgpu::BindGroupLayout>],
-) -> wgpu::ComputePipeline {
-    let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-        label: Some(entry),
-        bind_group_layouts: layouts,
-        immediate_size: 0,
-    });
-    device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-        label: Some(entry),
-        layout: Some(&layout),
-        module,
-        entry_point: Some(entry),
-        compilation_options: Default::default(),
-        cache: None,
-    })
 }
 
 /// In `pass` (its group 0, and 2 where the cull pipeline reads it, bound):

@@ -25,6 +25,7 @@
 pub mod batch;
 mod blocks;
 pub mod cull;
+mod cull_pipelines;
 mod draw_list;
 mod encode;
 mod error;
