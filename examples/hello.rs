@@ -39,7 +39,10 @@ fn main() -> Result<(), glint::Error> {
         renderer.submit(&ring);
         renderer.submit(&bouncer);
         let shadows = renderer.shadow_pass(camera, &lights, &target)?;
-        let stats = renderer.flush(camera, &lights, &shadows, &mut target)?;
+        let mut stats = renderer.flush(camera, &lights, &shadows, &mut target)?;
+        // Culled on the GPU, the instance counts come back a frame or two
+        // late; waiting for them here keeps the printout simple.
+        renderer.wait_for_counts(std::slice::from_mut(&mut stats));
         println!(
             "frame {frame}: {} draws, {} instances, {} shadow views ({} draws), {} bytes uploaded",
             stats.draw_calls,

@@ -39,6 +39,7 @@ impl Renderer {
         lighting: impl Into<Lighting<'l>>,
         target: &mut OffscreenTarget,
     ) -> Result<FrameStats, RenderError> {
+        self.last_frame_had_views = false;
         let frame = self.record_render(entities, view, lighting, target);
         self.submit_frame(frame)
     }
@@ -110,6 +111,7 @@ impl Renderer {
         E: IntoIterator<Item = &'e Entity> + Clone,
     {
         let lighting = lighting.into();
+        self.last_frame_had_views = true;
         let drawn: Vec<Vec<&Entity>> = (views.iter())
             .map(|v| {
                 let own = v.output.and_then(|id| self.registry.render_targets.get(id.0 as usize)).map(|t| t.1);
@@ -157,16 +159,20 @@ impl Renderer {
         Ok(stats)
     }
 
-    /// Fill in the instance counts of the views of the last
-    /// [`render_views`](Self::render_views) (`stats`, its statistics) that were
-    /// culled on the GPU, waiting for the GPU to count them: for a frame on its
-    /// own, such as `glint render --stats` draws (in a running frame loop the
-    /// counts come a frame or two late, without waiting).
+    /// Fill in the instance counts of the last frame's views (`stats`, its
+    /// statistics: [`render_views`](Self::render_views)' list, or the one of
+    /// [`render`](Self::render) or [`flush`](Self::flush)) that were culled on
+    /// the GPU, waiting for the GPU to count them: for a frame on its own, such
+    /// as `glint render --stats` draws (in a running frame loop the counts come
+    /// a frame or two late, without waiting).
     pub fn wait_for_counts(&mut self, stats: &mut [FrameStats]) {
         let submits = self.queue.submits();
         for (k, stats) in stats.iter_mut().enumerate().filter(|(_, s)| s.culling == Culling::Gpu) {
-            let Some(Some(view)) = self.kept_views.get_mut(k) else { continue };
-            let Some(gpu) = view.forward.gpu.as_mut() else { continue };
+            let view = match self.last_frame_had_views {
+                true => self.kept_views.get_mut(k).and_then(Option::as_mut),
+                false => Some(&mut self.view).filter(|_| k == 0),
+            };
+            let Some(gpu) = view.and_then(|v| v.forward.gpu.as_mut()) else { continue };
             if let Some(drawn) = gpu.wait_drawn(&self.device, submits) {
                 let drawn: u64 = drawn.iter().map(|&n| u64::from(n)).sum();
                 let valid = stats.instances_submitted - stats.instances_invalid;
@@ -288,6 +294,7 @@ impl Renderer {
         shadows: &Shadows,
         target: &mut OffscreenTarget,
     ) -> Result<FrameStats, RenderError> {
+        self.last_frame_had_views = false;
         let frame = self.record_flush(view, lighting, shadows, target);
         self.submit_frame(frame)
     }

@@ -162,6 +162,9 @@ pub struct Renderer {
     base_vertex: bool,
     /// The GPU culling passes, where views can cull on the GPU ([`Gpu::culls_on_gpu`]).
     cull_pipelines: Option<gpu_cull::CullPipelines>,
+    /// Whether the last frame was `render_views`' (its views' state kept in
+    /// `kept_views`) rather than `render`'s or `flush`'s (in `view`).
+    last_frame_had_views: bool,
     /// The last prepared table and what it was made for.
     last_prepared: Option<(prepare::PrepareKey, Vec<prepare::Prepared>)>,
 }
@@ -227,6 +230,7 @@ impl Renderer {
             visible: Visible::default(),
             targets: target_pool::TargetPool::default(),
             post: post::PostChain::new(&gpu.device),
+            last_frame_had_views: false,
             last_prepared: None,
             cull_pipelines: gpu
                 .culls_on_gpu()
