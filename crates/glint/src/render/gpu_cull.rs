@@ -224,8 +224,9 @@ impl GpuCull {
             replaced |= buffer.reserve(device, bytes)?;
         }
         if replaced {
+            // Both phases' groups hold the ranges, planes, runs and counts.
             self.uploaded = Default::default();
-            self.groups = None;
+            self.unbind();
         }
         let mut written = 0;
         if self.uploaded.0 != input.ranges {
