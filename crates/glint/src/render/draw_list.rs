@@ -284,12 +284,8 @@ impl DrawList {
                 self.uploaded_indirect_args.clone_from(&self.indirect_args);
             }
         }
-        let draw_indices = match &self.draw_index_buffer {
-            GpuArray::Buffer(b) => Some(&b.buffer),
-            GpuArray::Texture(_) => None,
-        };
         if let (Some(state), Some((pipelines, bounds)), Some(draw_indices), true) =
-            (&mut self.gpu, gpu, draw_indices, !self.cull_ranges.is_empty())
+            (&mut self.gpu, gpu, self.draw_index_buffer.buffer(), !self.cull_ranges.is_empty())
         {
             let input = CullInput {
                 ranges: &self.cull_ranges,
@@ -312,10 +308,7 @@ impl DrawList {
 
     /// The draw-index buffer, where it is a storage buffer.
     pub(crate) fn draw_index_buffer(&self) -> Option<&wgpu::Buffer> {
-        match &self.draw_index_buffer {
-            GpuArray::Buffer(b) => Some(&b.buffer),
-            GpuArray::Texture(_) => None,
-        }
+        self.draw_index_buffer.buffer()
     }
 
     /// Record this frame's cull pass, when the list is culled on the GPU.

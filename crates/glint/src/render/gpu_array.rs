@@ -122,6 +122,14 @@ impl GpuArray {
         bytes.len() as u64
     }
 
+    /// The storage buffer, where the array is one.
+    pub(crate) fn buffer(&self) -> Option<&wgpu::Buffer> {
+        match self {
+            Self::Buffer(b) => Some(&b.buffer),
+            Self::Texture(_) => None,
+        }
+    }
+
     /// The array for a bind group entry.
     pub(crate) fn binding(&self) -> wgpu::BindingResource<'_> {
         match self {

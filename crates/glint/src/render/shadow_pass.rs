@@ -165,16 +165,12 @@ impl Renderer {
                     views.extend(shadow_views::cube(light, &shared(layout.size_cube), first).into_iter().flatten())
                 }
             }
-            let part = match light.kind {
-                LightKind::Directional { .. } => " cascade",
-                LightKind::Spot { .. } => "",
-                LightKind::Point { .. } => " face",
+            let name = |j| match light.kind {
+                LightKind::Directional { .. } => format!("light {k} cascade {j}"),
+                LightKind::Spot { .. } => format!("light {k}"),
+                LightKind::Point { .. } => format!("light {k} face {j}"),
             };
-            let new = names.len()..views.len();
-            names.extend(new.enumerate().map(|(j, _)| match part {
-                "" => format!("light {k}"),
-                part => format!("light {k}{part} {j}"),
-            }));
+            names.extend((0..views.len() - names.len()).map(name));
         }
         let ShadowLayout { size_2d, size_cube, layers, cubes, first } = layout;
         debug_assert!(views.len() <= MAX_SHADOW_VIEWS);
