@@ -387,8 +387,17 @@ fn shadow_lookups_are_compiled_in_only_for_frames_that_draw_shadow_maps() {
 }
 
 #[test]
-fn a_frame_with_shadows_and_a_post_chain_is_one_submission() {
+fn a_frame_with_shadows_and_a_post_chain_is_one_submission_its_debug_groups_nested_like_its_outline() {
     let Some(gpu) = common::gpu() else { return };
+    one_submission_nested_like_the_outline(gpu);
+    // GL's llvmpipe takes the debug groups (lavapipe 22 cannot): an unbalanced
+    // group would fail the frame there.
+    let Some(gl) = common::gl_gpu() else { return };
+    assert!(gl.debug_groups(), "{:?}", gl.info());
+    one_submission_nested_like_the_outline(gl);
+}
+
+fn one_submission_nested_like_the_outline(gpu: &glint::Gpu) {
     let (mut renderer, cube, material) = renderer_with_cube(gpu);
     let textured =
         renderer.add_texture(Texture::new("checker", image::RgbaImage::from_pixel(4, 4, image::Rgba([200; 4])), true));
@@ -405,6 +414,7 @@ fn a_frame_with_shadows_and_a_post_chain_is_one_submission() {
     assert_eq!(first.submits, 1, "the texture's mip levels go in the frame's submission too");
     let steady = draw(&mut renderer);
     assert_eq!(steady.submits, 1, "shadow maps, forward pass and post chain in one submission");
+    assert_eq!(renderer.frame_outline(), ["frame 1", "frame 1 › shadows", "frame 1 › forward", "frame 1 › post"]);
     // A split screen over part of the target: its clear and both views go in one submission.
     let halves = [
         glint::Viewport { width: 0.5, ..glint::Viewport::FULL },
@@ -414,4 +424,13 @@ fn a_frame_with_shadows_and_a_post_chain_is_one_submission() {
     let stats = renderer.render_views([&plain, &boxed], &views, &lights, &mut target).expect("frame");
     let submits: Vec<u32> = stats.iter().map(|s| s.submits).collect();
     assert_eq!(submits, [1, 0], "both views in one submission, counted in the first");
+    let groups = |k: usize| ["", " › shadows", " › forward", " › post"].map(|part| format!("frame 2 › view {k}{part}"));
+    let outline: Vec<String> = std::iter::once("frame 2".to_owned()).chain(groups(0)).chain(groups(1)).collect();
+    assert_eq!(renderer.frame_outline(), outline);
+    renderer.set_mode(glint::FrameMode::Naive);
+    renderer.render([&plain, &boxed], view, &lights, &mut target).expect("naive frame");
+    assert_eq!(
+        renderer.frame_outline(),
+        ["frame 4", "frame 4 › shadows", "frame 4 › forward (naive)", "frame 4 › post"]
+    );
 }

@@ -281,6 +281,17 @@ impl Gpu {
         self.uncaptured.clone()
     }
 
+    /// Whether command encoders take debug groups. Not lavapipe before Mesa 23
+    /// on Vulkan: 22.3.6 crashes in `vkCmdBeginDebugUtilsLabelEXT` once a
+    /// command buffer holds two groups (one alone is fine; GL's llvmpipe takes
+    /// them all).
+    pub fn debug_groups(&self) -> bool {
+        let info = &self.info;
+        let mesa = info.driver_info.strip_prefix("Mesa ").and_then(|v| v.split('.').next()?.parse::<u32>().ok());
+        let old_lavapipe = info.backend == wgpu::Backend::Vulkan && info.driver == "llvmpipe";
+        !(old_lavapipe && mesa.is_some_and(|major| major < 23))
+    }
+
     /// Adapter name, backend and driver, for logs and benchmark reports.
     pub fn info(&self) -> &wgpu::AdapterInfo {
         &self.info

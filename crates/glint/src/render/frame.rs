@@ -2,11 +2,10 @@
 //! [`Renderer::flush`] is one view's frame, whose stages [`Renderer::run_frame`]
 //! calls in order (prepare → cull → queue → sort → batch → upload → encode →
 //! compose → submit) after [`Renderer::shadow_pass`] has drawn that view's
-//! shadow maps. A frame is one command encoder and one submission. Its passes
-//! are labelled after the outline ("light n cascade c", "cull instances",
-//! "forward pass: early", "depth pyramid", "post: …"); debug groups around
-//! them are left out, as lavapipe (Mesa 22.3) crashes in
-//! `vkCmdBeginDebugUtilsLabelEXT` when one command buffer holds them.
+//! shadow maps. A frame is one command encoder and one submission. Debug groups
+//! nest like the outline (`outline.rs`: frame › view k › shadows, forward,
+//! post), around passes labelled "light n cascade c", "cull instances",
+//! "forward pass: early", "depth pyramid", "post: …".
 
 use super::post::ChainImages;
 use super::shadow_pass::{Shadows, ShadowsDrawn};
@@ -70,12 +69,15 @@ impl Renderer {
         let mut stats = match frame {
             Ok(stats) => stats,
             Err(e) => {
-                self.encoder = None;
+                self.drop_frame();
                 return Err(e);
             }
         };
         let t = Instant::now();
-        let commands = self.encoder.take().map(wgpu::CommandEncoder::finish);
+        let commands = self.encoder.take().map(|mut encoder| {
+            self.outline.finish(&mut encoder);
+            encoder.finish()
+        });
         self.queue.submit(std::mem::take(&mut self.registry.mip_blits).into_iter().chain(commands));
         if let Some(timer) = &mut self.gpu_timer {
             timer.submitted();
@@ -148,7 +150,7 @@ impl Renderer {
                 Ok(frame) => stats[k] = frame,
                 Err(e) => {
                     // The earlier views' commands go with the failed frame.
-                    self.encoder = None;
+                    self.drop_frame();
                     return Err(e);
                 }
             }
@@ -191,7 +193,9 @@ impl Renderer {
         let kept = self.kept_views[slot].take().unwrap_or_else(|| self.view.sibling(&self.shared()));
         let single = std::mem::replace(&mut self.view, kept);
         self.refresh_view();
+        self.enter_group(&format!("view {slot}"));
         let result = draw(self);
+        self.leave_group();
         self.kept_views[slot] = Some(std::mem::replace(&mut self.view, single));
         self.refresh_view();
         result
@@ -251,13 +255,43 @@ impl Renderer {
         self.encoder = Some(encoder);
     }
 
-    /// The frame's command encoder, begun when this is the frame's first
-    /// command; put it back in `self.encoder`.
+    /// The frame's command encoder, begun (with its "frame N" debug group)
+    /// when this is the frame's first command; put it back in `self.encoder`.
     pub(super) fn take_encoder(&mut self) -> wgpu::CommandEncoder {
         self.encoder.take().unwrap_or_else(|| {
             let label = Some("renderer: frame");
-            self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label })
+            let mut encoder = self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label });
+            self.outline.enter(&mut encoder, &format!("frame {}", self.frame_index));
+            encoder
         })
+    }
+
+    /// Open the debug group `name` in the frame's encoder.
+    pub(super) fn enter_group(&mut self, name: &str) {
+        let mut encoder = self.take_encoder();
+        self.outline.enter(&mut encoder, name);
+        self.encoder = Some(encoder);
+    }
+
+    /// Close the innermost debug group, unless the frame was dropped.
+    pub(super) fn leave_group(&mut self) {
+        if let Some(encoder) = &mut self.encoder {
+            self.outline.leave(encoder);
+        }
+    }
+
+    /// Drop the frame's commands (a stage failed) and its debug groups.
+    fn drop_frame(&mut self) {
+        self.encoder = None;
+        self.outline.drop_frame();
+    }
+
+    /// Every debug group the last submitted frame opened, in order, each as its
+    /// path: "frame 3", "frame 3 › view 1", "frame 3 › view 1 › shadows", …
+    /// (the outline a capture tool shows, where the driver takes debug groups:
+    /// [`Gpu::debug_groups`](crate::Gpu::debug_groups)).
+    pub fn frame_outline(&self) -> &[String] {
+        self.outline.last()
     }
 
     /// Draw everything submitted since the last flush, seen by `view` (or a
@@ -397,6 +431,7 @@ impl Renderer {
             ),
             Compose::Post { chain, images } => {
                 let t = Instant::now();
+                self.outline.enter(encoder, "post");
                 let (device, queue, index, timer) =
                     (&self.device, &self.queue, self.frame_index, self.gpu_timer.as_mut());
                 let (params, pool) = (&mut self.view.post_params, &mut self.targets);
@@ -404,6 +439,7 @@ impl Renderer {
                     self.post.encode((device, queue), (params, pool), encoder, chain, images, (index, timer))?;
                 stats.draws += stats.passes.post.draws;
                 stats.draw_calls += stats.passes.post.draw_calls;
+                self.outline.leave(encoder);
                 stats.passes.post.cpu_ms = ms_since(t);
             }
         }
@@ -445,6 +481,8 @@ impl Renderer {
         // The frame's encoder, given back once this view's commands are in it
         // (a failed view drops it, and the frame).
         let mut encoder = self.take_encoder();
+        let forward = if self.mode == FrameMode::Naive { "forward (naive)" } else { "forward" };
+        self.outline.enter(&mut encoder, forward);
         match self.mode {
             FrameMode::Naive => {
                 stats.culling = Culling::Off;
@@ -477,6 +515,7 @@ impl Renderer {
                 stats.cpu_ms.encode = lap.next();
             }
         }
+        self.outline.leave(&mut encoder);
         self.compose(&mut encoder, compose, &mut stats)?;
         self.encoder = Some(encoder);
         stats.bytes_uploaded.finish();

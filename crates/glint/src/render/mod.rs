@@ -40,6 +40,7 @@ mod materials;
 mod mesh_pool;
 mod naive;
 mod occlusion;
+mod outline;
 mod pipelines;
 pub(crate) mod place;
 mod post;
@@ -132,6 +133,8 @@ pub struct Renderer {
     /// shadow pass, a view, the clear of a target the views do not cover) to
     /// the frame's one submission.
     encoder: Option<wgpu::CommandEncoder>,
+    /// The debug groups open in `encoder`, and the last frame's.
+    outline: outline::Outline,
     /// The queue's submission count when the last flush ended.
     submits_counted: u64,
     shadow_maps: ShadowMaps,
@@ -217,6 +220,7 @@ impl Renderer {
             view,
             kept_views: Vec::new(),
             encoder: None,
+            outline: outline::Outline::new(gpu.debug_groups()),
             shadow_maps,
             shadow_maps_generation: 0,
             frame_variant: FrameVariant::default(),

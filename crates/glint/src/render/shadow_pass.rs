@@ -130,7 +130,9 @@ impl Renderer {
             let ranges = self.batch_shadow_views((&views, &draws_with), frame.culling, &mut drawn.prepared)?;
             self.upload_shadow_views(&views, &mut drawn.prepared)?;
             let mut encoder = self.take_encoder();
+            self.outline.enter(&mut encoder, "shadows");
             self.encode_shadow_views(&mut encoder, (&views, &names), &ranges, &mut drawn.cost);
+            self.outline.leave(&mut encoder);
             self.encoder = Some(encoder);
         }
         drawn.cost.cpu_ms = ms_since(start);

@@ -1,0 +1,63 @@
+//! The frame's debug groups, nested like its outline: "frame N" › "view k"
+//! (with `render_views`) › "shadows" (a pass per "light n cascade c" or "light
+//! n face f"), "forward" (the cull pass, then the forward passes), "post".
+//! Capture tools show them where the driver takes them
+//! ([`Gpu::debug_groups`](crate::Gpu::debug_groups));
+//! [`Renderer::frame_outline`](super::Renderer::frame_outline) lists them everywhere.
+
+/// The groups open in the frame's encoder and those it has opened so far,
+/// each as its path ("frame 3 › view 1 › shadows").
+pub(super) struct Outline {
+    /// Whether the groups go to the driver.
+    driver: bool,
+    open: Vec<String>,
+    opened: Vec<String>,
+    /// The groups of the last frame submitted.
+    last: Vec<String>,
+}
+
+impl Outline {
+    pub(super) fn new(driver: bool) -> Self {
+        Self { driver, open: Vec::new(), opened: Vec::new(), last: Vec::new() }
+    }
+
+    /// Open the group `name` inside the open ones.
+    pub(super) fn enter(&mut self, encoder: &mut wgpu::CommandEncoder, name: &str) {
+        if self.driver {
+            encoder.push_debug_group(name);
+        }
+        let path = match self.open.last() {
+            Some(outer) => format!("{outer} › {name}"),
+            None => name.to_owned(),
+        };
+        self.opened.push(path.clone());
+        self.open.push(path);
+    }
+
+    /// Close the innermost open group.
+    pub(super) fn leave(&mut self, encoder: &mut wgpu::CommandEncoder) {
+        if self.open.pop().is_some() && self.driver {
+            encoder.pop_debug_group();
+        }
+    }
+
+    /// Close every open group before the frame's encoder is finished, and keep
+    /// its outline as the last frame's.
+    pub(super) fn finish(&mut self, encoder: &mut wgpu::CommandEncoder) {
+        while !self.open.is_empty() {
+            self.leave(encoder);
+        }
+        self.last = std::mem::take(&mut self.opened);
+    }
+
+    /// Forget a frame whose encoder was dropped.
+    pub(super) fn drop_frame(&mut self) {
+        self.open.clear();
+        self.opened.clear();
+    }
+
+    /// Every group the last submitted frame opened, in order.
+    pub(super) fn last(&self) -> &[String] {
+        &self.last
+    }
+}
