@@ -104,6 +104,8 @@ pub struct BenchConfig {
     pub msaa: u32,
     /// Degrees the camera turns about its target (around the up axis) each frame.
     pub orbit: f32,
+    /// Milliseconds to sleep before each frame's flush, outside its times.
+    pub settle_ms: u64,
 }
 
 /// The view a bench draws: the scene's first camera with its post chain, or
@@ -185,9 +187,13 @@ pub fn run_mode(
         }
         let shadows = renderer.shadow_pass(view, desc.lighting(), &target)?;
         let _ = gpu.device.poll(wgpu::PollType::wait_indefinitely());
+        // `--settle`: the flush's CPU stages start from the same state whatever
+        // the GPU's last work took (the thread asleep that long).
+        let settle = std::time::Duration::from_millis(config.settle_ms);
+        std::thread::sleep(settle);
         let stats = renderer.flush(view, desc.lighting(), &shadows, &mut target)?;
         let _ = gpu.device.poll(wgpu::PollType::wait_indefinitely());
-        let whole = frame_start.elapsed().as_secs_f64() * 1e3;
+        let whole = (frame_start.elapsed() - settle).as_secs_f64() * 1e3;
         let frame_gpu = renderer.read_gpu_times();
         if i >= config.warmup {
             frames.push(stats);

@@ -88,6 +88,12 @@ enum Command {
         /// Turn the camera this many degrees about its target each frame (0..=360).
         #[arg(long, default_value_t = 0.0, value_parser = parse_orbit)]
         orbit: f32,
+        /// Sleep this many milliseconds (0..=2000) before each frame's flush,
+        /// outside its times, so scenes of every size start their CPU stages
+        /// from the same state: on a CPU rasterizer the thread otherwise sleeps
+        /// as long as the last GPU work took, and wakes slower the longer it slept.
+        #[arg(long, default_value_t = 0, value_parser = clap::value_parser!(u64).range(0..=2000))]
+        settle: u64,
         /// Image size, WIDTHxHEIGHT.
         #[arg(long, default_value = "1280x720", value_parser = parse_size)]
         size: (u32, u32),
@@ -252,7 +258,7 @@ fn run_bench(
     post: Option<Vec<glint::scene::PostEffect>>,
     options: LoadOptions,
 ) -> Result<(), Error> {
-    let bench::BenchConfig { frames, warmup, size, msaa, orbit } = *config;
+    let bench::BenchConfig { frames, warmup, size, msaa, orbit, settle_ms } = *config;
     if frames == 0 {
         return Err(glint::Diagnostic::file(scene, "--frames must be at least 1").into());
     }
@@ -288,6 +294,7 @@ fn run_bench(
             "msaa": msaa,
             "adapter": format!("{} ({:?})", gpu.info().name, gpu.info().backend),
             "orbit_degrees_per_frame": orbit,
+            "settle_ms": settle_ms,
             "modes": modes,
             "speedup": speedup,
             "ratios": ratios.iter().map(|(name, frame, cpu)| serde_json::json!({"runs": name, "frame": frame, "cpu": cpu})).collect::<Vec<_>>(),
@@ -589,9 +596,15 @@ fn main() -> ExitCode {
                 view::run(args, desc)
             })
         }
-        Command::Bench { scene, frames, warmup, mode, cull, orbit, size, msaa, json, plot, post } => {
-            let config =
-                bench::BenchConfig { frames: *frames, warmup: *warmup, size: *size, msaa: *msaa, orbit: *orbit };
+        Command::Bench { scene, frames, warmup, mode, cull, orbit, settle, size, msaa, json, plot, post } => {
+            let config = bench::BenchConfig {
+                frames: *frames,
+                warmup: *warmup,
+                size: *size,
+                msaa: *msaa,
+                orbit: *orbit,
+                settle_ms: *settle,
+            };
             let output = BenchOutput { json: *json, plot: plot.as_deref() };
             run_bench(scene, &config, (*mode, *cull), output, post.clone().map(|p| p.0), options)
         }

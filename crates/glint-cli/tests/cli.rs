@@ -265,7 +265,8 @@ fn render_draws_every_camera_with_a_viewport_unless_one_is_picked() {
 #[test]
 fn bench_reports_naive_cpu_culled_and_gpu_culled_side_by_side_as_json() {
     let scene = repo("tests/scenes/ortho.scn");
-    let args = ["bench", scene.to_str().expect("path"), "--frames", "3", "--warmup", "1", "--size", "64x64", "--json"];
+    let scene = scene.to_str().expect("path");
+    let args = ["bench", scene, "--frames", "3", "--warmup", "1", "--size", "64x64", "--settle", "1", "--json"];
     let out = glint(&args);
     if out.status.code() == Some(2) && std::env::var("GLINT_REQUIRE_ADAPTER").as_deref() != Ok("1") {
         eprintln!("skipping: no GPU adapter");
@@ -273,7 +274,7 @@ fn bench_reports_naive_cpu_culled_and_gpu_culled_side_by_side_as_json() {
     }
     assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
     let report: serde_json::Value = serde_json::from_slice(&out.stdout).expect("one JSON object");
-    assert_eq!(report["frames"], 3);
+    assert_eq!((&report["frames"], &report["settle_ms"]), (&3.into(), &1.into()));
     assert!(report["scene"].as_str().expect("scene").ends_with("ortho.scn"));
     for mode in ["naive", "cpu-culled", "gpu-culled"] {
         let m = &report["modes"][mode];
@@ -322,7 +323,7 @@ fn bench_reports_naive_cpu_culled_and_gpu_culled_side_by_side_as_json() {
     let one: serde_json::Value = serde_json::from_slice(&out.stdout).expect("one JSON object");
     assert_eq!(one["modes"].as_object().map(|m| m.len()), Some(1));
     assert_eq!(one["modes"]["optimized"]["stats"]["culling"], "cpu");
-    assert_eq!(glint(&["bench", scene.to_str().expect("path"), "--frames", "0"]).status.code(), Some(1));
+    assert_eq!(glint(&["bench", scene, "--frames", "0"]).status.code(), Some(1));
 }
 
 #[test]
@@ -746,6 +747,7 @@ fn count_arguments_are_bounded_with_a_one_line_error() {
         (&["bench", scene, "--frames", "9223372036854775807"][..], "1..=100000"),
         (&["bench", scene, "--frames", "0"], "1..=100000"),
         (&["bench", scene, "--warmup", "18446744073709551615"], "0..=100000"),
+        (&["bench", scene, "--settle", "2001"], "0..=2000"),
         (&["render", scene, "-o", "/nonexistent/x.png", "--frames", "100001"], "1..=100000"),
         (&["render", scene, "-o", "/nonexistent/x.png", "--fps", "1e-30"], "0.001..=1000"),
         (&["render", scene, "-o", "/nonexistent/x.png", "--fps", "inf"], "0.001..=1000"),
