@@ -25,7 +25,8 @@ fn culling_gpu() -> Option<&'static Gpu> {
 
 /// A random scene around the origin: cubes and spheres, opaque, alpha-tested
 /// and blended, in entities of one to 3,000 instances, some of them with NaN
-/// transforms; its lights cast shadows (a sun's cascades, a spot light and a
+/// transforms, every fourth in tiles of random sizes drawn at a random
+/// density; its lights cast shadows (a sun's cascades, a spot light and a
 /// point light's six faces).
 struct RandomScene {
     entities: Vec<Entity>,
@@ -68,7 +69,19 @@ fn scene_of(gpu: &Gpu, seed: u64, blended: bool) -> RandomScene {
                     Mat4::from_scale_rotation_translation(Vec3::splat(rng.random_range(0.2..2.5)), rotation, p)
                 })
                 .collect();
-            Entity::instanced(shapes[k % 2], materials[k % 3], transforms)
+            let entity = Entity::instanced(shapes[k % 2], materials[k % 3], transforms);
+            if k % 4 != 3 {
+                return entity;
+            }
+            let mut left = count;
+            let sizes = std::iter::from_fn(|| {
+                let n = rng.random_range(0..=left.min(300));
+                left -= n;
+                (left > 0 || n > 0).then_some(n)
+            });
+            let mut tiled = entity.with_tiles(glint::Tiles::from_sizes(sizes.collect::<Vec<_>>(), 0.5));
+            tiled.density = rng.random_range(0.3..1.0);
+            tiled
         })
         .collect();
     let shadows = ShadowSettings { map_size: 256, ..ShadowSettings::default() };
@@ -152,6 +165,8 @@ fn gpu_culled_counts_come_back_a_frame_or_two_late_and_equal_the_cpu_counts() {
     assert_eq!(counted.instances_invalid, expected.instances_invalid);
     assert_eq!(counted.passes.shadow.instances, expected.passes.shadow.instances);
     assert!(expected.instances_culled > 0 && expected.instances_invalid > 0);
+    assert_eq!((counted.tiles_tested, counted.tiles_drawn), (expected.tiles_tested, expected.tiles_drawn));
+    assert!(expected.tiles_drawn > 0 && expected.tiles_drawn < expected.tiles_tested, "{expected:?}");
 }
 
 #[test]

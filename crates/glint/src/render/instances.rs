@@ -11,13 +11,18 @@
 //! demo's tiled instancing). The order inside an entity's range is the store's
 //! business: nothing outside it names instances by position.
 //!
+//! An entity with [`Tiles`] keeps its own order instead: each of its tiles is
+//! a cluster, its valid instances first, and every instance's box is its tile's
+//! (grown by the padding), so every test of an instance, on the CPU or the GPU,
+//! is its tile's test: a tile is culled as a whole.
+//!
 //! A skinned entity's range holds its instances, then its joint matrices in the
 //! same record format; each instance records how far ahead its joints start, so
 //! the range can move (compaction) without rewriting it.
 
 use super::blocks::InstanceGpu;
 use super::cull::{transform_aabb, Boxes};
-use crate::scene::{Aabb, Entity, MaterialId, ShapeId};
+use crate::scene::{Aabb, Entity, MaterialId, ShapeId, Tiles};
 use glam::{Mat4, Vec3A};
 use std::collections::HashMap;
 use std::ops::Range;
@@ -45,9 +50,11 @@ pub(crate) struct Slot {
     /// Instances whose transform has NaN or infinity: stored as zero matrices (after
     /// the valid ones), never drawn.
     pub invalid: u32,
-    /// Bounds of each run of [`CLUSTER`] instances of the range (empty when the
-    /// entity has no more than one run); a run with no valid instance never visible.
-    pub clusters: Vec<(Vec3A, Vec3A)>,
+    /// The range's clusters: its runs of [`CLUSTER`] instances (none when the
+    /// entity has no more than one run), or its tiles.
+    pub clusters: Vec<Cluster>,
+    /// Whether the clusters are the entity's tiles.
+    pub tiled: bool,
     /// Frame in which the entity was last submitted.
     last_frame: u64,
 }
@@ -108,6 +115,7 @@ impl InstanceStore {
                     bounds: None,
                     invalid: 0,
                     clusters: Vec::new(),
+                    tiled: false,
                     last_frame: frame,
                 });
                 self.by_key.insert(entity.key(), self.slots.len() - 1);
@@ -143,6 +151,7 @@ impl InstanceStore {
             slot.bounds = written.bounds;
             slot.invalid = written.invalid;
             slot.clusters = written.clusters;
+            slot.tiled = entity.tiles().is_some();
             self.dirty.push(range.start as u32..range.end as u32);
         }
         index
@@ -206,18 +215,33 @@ impl InstanceStore {
 /// Instances per tile: the culler's unit above single instances.
 pub(crate) const CLUSTER: usize = 64;
 
+/// A run of an entity's instances culled by one box: a Morton run of
+/// [`CLUSTER`], or one of the entity's [`Tiles`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Cluster {
+    /// Its first instance, counted from the entity's first.
+    pub first: u32,
+    /// Its valid instances, which come first (a cluster without any is never visible).
+    pub valid: u32,
+    /// Its box: centre and half extent.
+    pub center: Vec3A,
+    pub extent: Vec3A,
+}
+
 /// What [`write_range`] found.
 struct Written {
     bounds: Option<(Vec3A, Vec3A)>,
     invalid: u32,
-    clusters: Vec<(Vec3A, Vec3A)>,
+    clusters: Vec<Cluster>,
 }
 
-/// Copy an entity's transforms into the store with its material, in Morton order
-/// of their world positions with the invalid ones last, and compute each
-/// instance's world box (boxes from `first` on) and each tile's; then its joint
-/// matrices. Invalid (non-finite) transforms and joints become zero matrices with
-/// a never-visible box, so NaN never reaches the GPU or the culler.
+/// Copy an entity's transforms into the store with its material, and compute
+/// each instance's world box (boxes from `first` on) and each cluster's: in
+/// Morton order of their world positions with the invalid ones last, or, with
+/// tiles, tile by tile with each tile's invalid ones last and every box its
+/// tile's; then its joint matrices. Invalid (non-finite) transforms and joints
+/// become zero matrices with a never-visible box, so NaN never reaches the GPU
+/// or the culler.
 ///
 /// A skinned entity's local box is the union of the shape's box moved by each
 /// joint: every skinned vertex is a weighted average of points in those boxes.
@@ -234,30 +258,37 @@ fn write_range(entity: &Entity, local: Aabb, records: &mut [InstanceGpu], boxes:
             (lo.min(c - e), hi.max(c + e))
         });
     let invalid = world.iter().filter(|w| w.is_none()).count() as u32;
-    let bounds = (invalid < src.len() as u32).then(|| ((lo + hi) * 0.5, (hi - lo) * 0.5));
-    let mut order: Vec<u32> = (0..src.len() as u32).collect();
-    // Sorted when there are tiles to make or invalid instances to move last.
-    if src.len() > CLUSTER || invalid > 0 {
-        let scale = 1023.0 / (hi - lo).max(Vec3A::splat(1e-6));
-        let key = |i: &u32| match world[*i as usize] {
-            Some((c, _)) => morton3(((c - lo) * scale).as_uvec3().min(glam::UVec3::splat(1023))),
-            None => u32::MAX,
+    let mut bounds = (invalid < src.len() as u32).then(|| ((lo + hi) * 0.5, (hi - lo) * 0.5));
+    let (order, groups) = match entity.tiles() {
+        Some(tiles) => tile_order(tiles, &world),
+        None => morton_order(&world, (lo, hi)),
+    };
+    let padding = Vec3A::splat(entity.tiles().map_or(0.0, Tiles::padding));
+    let mut clusters = Vec::with_capacity(groups.len());
+    for group in groups {
+        let run = &order[group.start as usize..group.end as usize];
+        let valid = run.iter().filter(|&&i| world[i as usize].is_some()).count() as u32;
+        let (lo, hi) = run
+            .iter()
+            .filter_map(|&i| world[i as usize])
+            .fold((Vec3A::splat(f32::INFINITY), Vec3A::splat(f32::NEG_INFINITY)), |(lo, hi), (c, e)| {
+                (lo.min(c - e), hi.max(c + e))
+            });
+        let (center, extent) = match valid {
+            0 => (Vec3A::ZERO, Vec3A::splat(super::cull::NEVER_VISIBLE_EXTENT)),
+            _ => ((lo + hi) * 0.5, (hi - lo) * 0.5 + padding),
         };
-        radsort::sort_by_key(&mut order, key);
-    }
-    let mut clusters = Vec::new();
-    for (tile, run) in order.chunks(CLUSTER).enumerate() {
-        let (mut lo, mut hi) = (Vec3A::splat(f32::INFINITY), Vec3A::splat(f32::NEG_INFINITY));
         for (k, &i) in run.iter().enumerate() {
-            let at = tile * CLUSTER + k;
+            let at = group.start as usize + k;
             match world[i as usize] {
                 Some((c, e)) => {
                     let joints = joint_records.len() as u32;
                     let offset = if joints > 0 { (src.len() - at) as u32 } else { 0 };
                     instances[at] = InstanceGpu::new(&src[i as usize], material, receive).with_joints(offset, joints);
-                    boxes.set(first + at, c, e);
-                    lo = lo.min(c - e);
-                    hi = hi.max(c + e);
+                    match entity.tiles() {
+                        Some(_) => boxes.set(first + at, center, extent),
+                        None => boxes.set(first + at, c, e),
+                    }
                 }
                 None => {
                     instances[at] = InstanceGpu::new(&Mat4::ZERO, material, receive);
@@ -265,13 +296,12 @@ fn write_range(entity: &Entity, local: Aabb, records: &mut [InstanceGpu], boxes:
                 }
             }
         }
-        clusters.push(if lo.x <= hi.x {
-            ((lo + hi) * 0.5, (hi - lo) * 0.5)
-        } else {
-            (Vec3A::ZERO, Vec3A::splat(super::cull::NEVER_VISIBLE_EXTENT))
-        });
+        clusters.push(Cluster { first: group.start, valid, center, extent });
     }
-    if clusters.len() < 2 {
+    if entity.tiles().is_some() {
+        // The entity's box holds its tiles' padding too.
+        bounds = bounds.map(|(c, e)| (c, e + padding));
+    } else if clusters.len() < 2 {
         clusters.clear();
     }
     for (k, (record, joint)) in joint_records.iter_mut().zip(entity.joints()).enumerate() {
@@ -280,6 +310,36 @@ fn write_range(entity: &Entity, local: Aabb, records: &mut [InstanceGpu], boxes:
         boxes.set_never_visible(first + src.len() + k);
     }
     Written { bounds, invalid, clusters }
+}
+
+/// The order to store instances in (indices into `world`) and its runs of
+/// [`CLUSTER`]: Morton order of their positions in the box `lo ..= hi`, the
+/// invalid ones (no box) last.
+fn morton_order(world: &[Option<(Vec3A, Vec3A)>], (lo, hi): (Vec3A, Vec3A)) -> (Vec<u32>, Vec<Range<u32>>) {
+    let n = world.len() as u32;
+    let mut order: Vec<u32> = (0..n).collect();
+    // Sorted when there are runs to make or invalid instances to move last.
+    if world.len() > CLUSTER || world.iter().any(Option::is_none) {
+        let scale = 1023.0 / (hi - lo).max(Vec3A::splat(1e-6));
+        let key = |i: &u32| match world[*i as usize] {
+            Some((c, _)) => morton3(((c - lo) * scale).as_uvec3().min(glam::UVec3::splat(1023))),
+            None => u32::MAX,
+        };
+        radsort::sort_by_key(&mut order, key);
+    }
+    let runs = (0..n).step_by(CLUSTER).map(|s| s..(s + CLUSTER as u32).min(n)).collect();
+    (order, runs)
+}
+
+/// The order to store a tiled entity's instances in and its tiles: the given
+/// order, each tile's invalid instances (no box) after its valid ones.
+fn tile_order(tiles: &Tiles, world: &[Option<(Vec3A, Vec3A)>]) -> (Vec<u32>, Vec<Range<u32>>) {
+    let ranges: Vec<Range<u32>> = tiles.ranges(world.len() as u32).collect();
+    let mut order: Vec<u32> = (0..world.len() as u32).collect();
+    for range in &ranges {
+        order[range.start as usize..range.end as usize].sort_by_key(|&i| world[i as usize].is_none());
+    }
+    (order, ranges)
 }
 
 /// Centre and half extent of the local box `local` as skinned by `joints` (the
@@ -401,7 +461,8 @@ mod tests {
         // Each tile's box holds its instances, and Morton order keeps tiles small:
         // 16 tiles over a 200 × 200 field average far less than the whole field.
         let mut area = 0.0;
-        for (k, &(c, e)) in clusters.iter().enumerate() {
+        for (k, &Cluster { first, valid, center: c, extent: e }) in clusters.iter().enumerate() {
+            assert_eq!((first as usize, valid as usize), (k * CLUSTER, CLUSTER.min(1000 - k * CLUSTER)));
             for i in k * CLUSTER..((k + 1) * CLUSTER).min(1000) {
                 let (bc, be) = (store.bounds.center(i), store.bounds.extent(i));
                 assert!((bc - be).cmpge(c - e - 1e-3).all() && (bc + be).cmple(c + e + 1e-3).all());
@@ -409,6 +470,35 @@ mod tests {
             area += 4.0 * e.x * e.z;
         }
         assert!(area / (clusters.len() as f32) < 0.2 * 200.0 * 200.0, "mean tile area {area}");
+    }
+
+    #[test]
+    fn tiles_keep_their_order_and_give_every_instance_the_tile_box() {
+        // Two tiles of three: x = 0, NaN, 2 and x = 10, 11, 12; padding 0.25.
+        let mut e = entity(6);
+        e.set_transform(1, Mat4::from_translation(Vec3::NAN));
+        for (k, x) in [(3, 10.0), (4, 11.0), (5, 12.0)] {
+            e.set_transform(k, Mat4::from_translation(Vec3::X * x));
+        }
+        let e = e.with_tiles(Tiles::from_sizes([3, 3], 0.25));
+        let mut store = InstanceStore::default();
+        let index = store.submit(&e, unit(), 0);
+        let slot = store.slot(index).clone();
+        assert!(slot.tiled);
+        let xs: Vec<f32> = store.instances.iter().map(|i| i.transform().w_axis.x).collect();
+        assert_eq!(xs, [0.0, 2.0, 0.0, 10.0, 11.0, 12.0], "given order, the invalid one last in its tile (zeroed)");
+        let tiles: Vec<(u32, u32)> = slot.clusters.iter().map(|c| (c.first, c.valid)).collect();
+        assert_eq!(tiles, [(0, 2), (3, 3)]);
+        let pad = 0.25;
+        assert_eq!(slot.clusters[0].center, Vec3A::new(1.0, 0.0, 0.0));
+        assert_eq!(slot.clusters[0].extent, Vec3A::new(1.5 + pad, 0.5 + pad, 0.5 + pad), "x -0.5..2.5, grown");
+        for i in [0, 1, 3, 4, 5] {
+            let tile = &slot.clusters[usize::from(i >= 3)];
+            assert_eq!((store.bounds.center(i), store.bounds.extent(i)), (tile.center, tile.extent), "instance {i}");
+        }
+        assert!(!store.bounds.is_valid(2));
+        let (c, ext) = slot.bounds.expect("valid instances");
+        assert!((c.x - 6.0).abs() < 1e-5 && (ext.x - (6.5 + pad)).abs() < 1e-5, "padded union {c} ± {ext}");
     }
 
     #[test]

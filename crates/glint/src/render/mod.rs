@@ -88,6 +88,8 @@ struct Submitted {
     material: MaterialId,
     render_order: Option<u8>,
     cast_shadows: bool,
+    /// The fraction of each tile drawn: the entity's density times the renderer's.
+    density: f32,
 }
 
 /// How a frame is built.
@@ -170,6 +172,8 @@ pub struct Renderer {
     last_frame_had_views: bool,
     /// The last prepared table and what it was made for.
     last_prepared: Option<(prepare::PrepareKey, Vec<prepare::Prepared>)>,
+    /// Every tiled entity's density is multiplied by this ([`Renderer::set_density`]).
+    density: f32,
 }
 
 fn ms_since(t: Instant) -> f64 {
@@ -236,6 +240,7 @@ impl Renderer {
             post: post::PostChain::new(&gpu.device),
             last_frame_had_views: false,
             last_prepared: None,
+            density: 1.0,
             cull_pipelines: gpu
                 .culls_on_gpu()
                 .then(|| gpu_cull::CullPipelines::new(&gpu.device, gpu.occlusion_culls())),
@@ -351,6 +356,13 @@ impl Renderer {
         self.mode = mode;
     }
 
+    /// Multiply every tiled entity's [`density`](Entity::density) by `density`
+    /// (clamped to 0..=1; default 1) from the next submission on: a scene-wide
+    /// control that changes no GPU data.
+    pub fn set_density(&mut self, density: f32) {
+        self.density = if density.is_nan() { 1.0 } else { density.clamp(0.0, 1.0) };
+    }
+
     /// Queue `entity` for the next [`flush`](Self::flush). Its transforms are kept
     /// on the GPU between frames and copied again only when its version changed
     /// (see [`Entity::transforms_mut`]). A shape id that is not this renderer's is
@@ -368,6 +380,7 @@ impl Renderer {
             material: entity.material,
             render_order: entity.render_order,
             cast_shadows: entity.cast_shadows,
+            density: entity.density * self.density,
         });
     }
 }

@@ -150,6 +150,12 @@ pub struct FrameStats {
     pub instances_culled: u64,
     /// Instances skipped because their transform has NaN or infinity.
     pub instances_invalid: u64,
+    /// Tiles of tiled entities ([`Tiles`](crate::Tiles)) whose box this view
+    /// tested against its frustum (an entity wholly inside or outside tests none).
+    pub tiles_tested: u64,
+    /// Tiles of which this view draws any instance (culled on the GPU: sent to
+    /// the GPU's test, which keeps or culls a tile whole).
+    pub tiles_drawn: u64,
     /// Instances drawn. Culled on the GPU, the count of the newest earlier
     /// frame of this view whose count came back (a frame or two before; read
     /// without waiting), plus the blended instances culled on the CPU; 0 until

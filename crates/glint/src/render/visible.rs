@@ -4,7 +4,7 @@
 //! instances tested one by one.
 
 use super::cull::{self, Containment, Frustum};
-use super::instances::{self, InstanceStore};
+use super::instances::{InstanceStore, Slot};
 use super::view::ViewFrame;
 use super::{FrameStats, Renderer, Submitted};
 use crate::scene::Culling;
@@ -36,8 +36,24 @@ pub(super) struct Visible {
     /// One run per entity with any instance visible.
     pub runs: Vec<VisibleRun>,
     /// Culled on the GPU: one run per entity with any valid instance, `start`
-    /// its first in the store (blended entities are culled on the CPU).
+    /// its first in the store (blended entities are culled on the CPU); per
+    /// tile for tiled entities, the tiles the frustum sees.
     pub candidates: Vec<VisibleRun>,
+    /// Tiles tested and drawn.
+    pub tiles: TileCounts,
+}
+
+/// Tiles tested against a frustum, and tiles with any instance kept.
+#[derive(Clone, Copy, Debug, Default)]
+pub(super) struct TileCounts {
+    pub tested: u64,
+    pub drawn: u64,
+}
+
+impl std::ops::AddAssign for TileCounts {
+    fn add_assign(&mut self, other: Self) {
+        (self.tested, self.drawn) = (self.tested + other.tested, self.drawn + other.drawn);
+    }
 }
 
 impl Renderer {
@@ -50,6 +66,7 @@ impl Renderer {
         let store = &self.store;
         stats.instances_invalid = self.submitted.iter().map(|s| u64::from(store.slot(s.slot).invalid)).sum();
         stats.instances_culled = stats.instances_submitted - stats.instances_invalid - visible.instances.len() as u64;
+        (stats.tiles_tested, stats.tiles_drawn) = (visible.tiles.tested, visible.tiles.drawn);
         stats.culling = frame.culling;
     }
 
@@ -66,6 +83,7 @@ impl Renderer {
         out.instances.clear();
         out.runs.clear();
         out.candidates.clear();
+        out.tiles = TileCounts::default();
         let store = &self.store;
         // Per material (captured by the parallel culler below, so plain data).
         let gpu: Vec<bool> = (0..self.registry.materials.len() as u32)
@@ -74,13 +92,18 @@ impl Renderer {
         let on_gpu = |s: &Submitted| gpu[s.material.0 as usize];
         for (entry, s) in self.submitted.iter().enumerate().filter(|(_, s)| on_gpu(s) && wanted(s)) {
             let slot = store.slot(s.slot);
-            if slot.count > slot.invalid {
-                out.candidates.push(VisibleRun { entry, start: slot.first, len: slot.count - slot.invalid });
+            let candidates = &mut out.candidates;
+            if slot.tiled {
+                out.tiles += visible_tiles(frustum, true, slot, s.density, |r| {
+                    candidates.push(VisibleRun { entry, start: r.start, len: r.end - r.start });
+                });
+            } else if slot.count > slot.invalid {
+                candidates.push(VisibleRun { entry, start: slot.first, len: slot.count - slot.invalid });
             }
         }
         let wanted = |s: &Submitted| !on_gpu(s) && wanted(s);
         let culling = culling != Culling::Off;
-        let Visible { instances: visible, runs, .. } = out;
+        let Visible { instances: visible, runs, tiles, .. } = out;
         let mut push_run = |entry: usize, visible: &mut Vec<u32>, start: usize| {
             let len = (visible.len() - start) as u32;
             if len > 0 {
@@ -89,27 +112,29 @@ impl Renderer {
         };
         if self.submitted.len() > 1 && self.instances_submitted >= PARALLEL_ENTITY_CULL_THRESHOLD {
             // Many instances: entities culled on all cores, results kept in submission order.
-            let lists: Vec<Vec<u32>> = self
+            let lists: Vec<(Vec<u32>, TileCounts)> = self
                 .submitted
                 .par_iter()
                 .map(|s| {
                     let mut list = Vec::new();
+                    let mut counts = TileCounts::default();
                     if wanted(s) {
-                        visible_instances(frustum, culling, store, s.slot, &mut list);
+                        counts = visible_instances(frustum, culling, store.slot(s.slot), s.density, (store, &mut list));
                     }
-                    list
+                    (list, counts)
                 })
                 .collect();
-            for (entry, list) in lists.into_iter().enumerate() {
+            for (entry, (list, counts)) in lists.into_iter().enumerate() {
                 let start = visible.len();
                 visible.extend_from_slice(&list);
                 push_run(entry, visible, start);
+                *tiles += counts;
             }
         } else {
             for (entry, s) in self.submitted.iter().enumerate() {
                 let start = visible.len();
                 if wanted(s) {
-                    visible_instances(frustum, culling, store, s.slot, visible);
+                    *tiles += visible_instances(frustum, culling, store.slot(s.slot), s.density, (store, visible));
                 }
                 push_run(entry, visible, start);
             }
@@ -117,36 +142,86 @@ impl Renderer {
     }
 }
 
-/// tested one by one. Invalid instances are stored last and never appended.
-fn visible_instances(frustum: &Frustum, culling: bool, store: &InstanceStore, slot: usize, out: &mut Vec<u32>) {
-    let slot = store.slot(slot);
+/// Append the instances of `slot` (an entity's range) that `frustum` sees to
+/// `out`, as store indices; with `culling` off, every valid one. An entity box
+/// wholly inside or outside decides at once, else its clusters are tested, and
+/// only the instances of clusters crossing a plane one by one. A tiled entity's
+/// tiles are culled whole, `density` of each drawn ([`visible_tiles`]).
+/// Invalid instances are never appended.
+fn visible_instances(
+    frustum: &Frustum,
+    culling: bool,
+    slot: &Slot,
+    density: f32,
+    (store, out): (&InstanceStore, &mut Vec<u32>),
+) -> TileCounts {
+    if slot.tiled {
+        return visible_tiles(frustum, culling, slot, density, |range| out.extend(range));
+    }
     let valid = slot.first..slot.first + slot.count - slot.invalid;
-    let containment = match slot.bounds {
-        None => Containment::Outside,
-        Some(_) if !culling => Containment::Inside,
-        Some((c, e)) => frustum.classify(c, e),
-    };
     let test = |range: std::ops::Range<u32>, out: &mut Vec<u32>| {
         cull::cull_boxes(frustum, &store.bounds, range.start as usize..range.end as usize, out);
     };
-    match containment {
+    match containment(frustum, culling, slot) {
         Containment::Outside => {}
         Containment::Inside => out.extend(valid),
         Containment::Intersecting if slot.clusters.is_empty() => test(valid, out),
         Containment::Intersecting => {
-            for (k, &(c, e)) in slot.clusters.iter().enumerate() {
-                let start = slot.first + (k * instances::CLUSTER) as u32;
-                let tile = start..(start + instances::CLUSTER as u32).min(valid.end);
-                if tile.is_empty() {
-                    break;
-                }
-                match frustum.classify(c, e) {
+            for cluster in &slot.clusters {
+                let start = slot.first + cluster.first;
+                let run = start..start + cluster.valid;
+                match frustum.classify(cluster.center, cluster.extent) {
                     Containment::Outside => {}
-                    Containment::Inside => out.extend(tile),
-                    Containment::Intersecting => test(tile, out),
+                    Containment::Inside => out.extend(run),
+                    Containment::Intersecting => test(run, out),
                 }
             }
         }
+    }
+    TileCounts::default()
+}
+
+/// Give `keep` the store range of each tile of tiled `slot` that `frustum`
+/// sees (every tile with `culling` off), cut to its first ⌈valid × `density`⌉
+/// instances; empty ones are not given. Returns the tiles tested and kept.
+fn visible_tiles(
+    frustum: &Frustum,
+    culling: bool,
+    slot: &Slot,
+    density: f32,
+    mut keep: impl FnMut(std::ops::Range<u32>),
+) -> TileCounts {
+    let mut counts = TileCounts::default();
+    let whole = match containment(frustum, culling, slot) {
+        Containment::Outside => return counts,
+        Containment::Inside => true,
+        Containment::Intersecting => false,
+    };
+    for tile in &slot.clusters {
+        let drawn = crate::scene::Tiles::drawn(tile.valid, density);
+        if drawn == 0 {
+            continue;
+        }
+        if !whole {
+            counts.tested += 1;
+            if frustum.classify(tile.center, tile.extent) == Containment::Outside {
+                continue;
+            }
+        }
+        counts.drawn += 1;
+        let start = slot.first + tile.first;
+        keep(start..start + drawn);
+    }
+    counts
+}
+
+/// Where `slot`'s entity box lies (inside with `culling` off; outside when it
+/// has no valid instance).
+fn containment(frustum: &Frustum, culling: bool, slot: &Slot) -> Containment {
+    match slot.bounds {
+        None => Containment::Outside,
+        Some(_) if !culling => Containment::Inside,
+        Some((c, e)) => frustum.classify(c, e),
     }
 }
 
@@ -184,7 +259,7 @@ mod tests {
             let camera = Camera::perspective(60.0, 0.5, 80.0).looking_at(eye, target);
             let frustum = Frustum::from_view_proj(camera.projection(1.5) * camera.view());
             let mut tiled = Vec::new();
-            visible_instances(&frustum, true, &store, slot, &mut tiled);
+            visible_instances(&frustum, true, store.slot(slot), 1.0, (&store, &mut tiled));
             tiled.sort_unstable();
             let each: Vec<u32> = (0..5000u32)
                 .filter(|&i| store.bounds.is_valid(i as usize))
@@ -192,6 +267,118 @@ mod tests {
                 .collect();
             assert!(!each.is_empty() && each.len() < 4900, "a partial view: {}", each.len());
             assert_eq!(tiled, each);
+        }
+    }
+
+    /// A box: centre and half extent.
+    type Box3 = (glam::Vec3A, glam::Vec3A);
+
+    /// 20,000 unit cubes at random over 200 × 200 (one in 97 invalid), sorted
+    /// into 8 × 8 tiles in random order inside each: the entity and each
+    /// instance's own box.
+    fn tiled_field(padding: f32) -> (Entity, Vec<Option<Box3>>, Vec<u32>) {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_pcg::Pcg32::seed_from_u64(11);
+        let mut placed: Vec<(u32, Vec3)> = (0..20_000)
+            .map(|_| {
+                let p = Vec3::new(rng.random_range(-100.0..100.0), 0.0, rng.random_range(-100.0..100.0));
+                let cell = |v: f32| (((v + 100.0) / 25.0) as u32).min(7);
+                (cell(p.x) + 8 * cell(p.z), p)
+            })
+            .collect();
+        placed.sort_by_key(|&(tile, _)| tile);
+        let mut sizes = vec![0u32; 64];
+        placed.iter().for_each(|&(tile, _)| sizes[tile as usize] += 1);
+        let mut transforms: Vec<Mat4> = placed.iter().map(|&(_, p)| Mat4::from_translation(p)).collect();
+        for k in (0..transforms.len()).step_by(97) {
+            transforms[k] = Mat4::from_translation(Vec3::NAN);
+        }
+        let own = transforms
+            .iter()
+            .map(|m| m.is_finite().then(|| (glam::Vec3A::from(m.w_axis.truncate()), glam::Vec3A::splat(0.5))))
+            .collect();
+        let tiles = crate::scene::Tiles::from_sizes(sizes.iter().copied(), padding);
+        (Entity::instanced(ShapeId(0), MaterialId(0), transforms).with_tiles(tiles), own, sizes)
+    }
+
+    #[test]
+    fn tiles_keep_what_each_instance_keeps_plus_their_padding_whole() {
+        let padding = 1.0;
+        let (e, own, sizes) = tiled_field(padding);
+        let cube = crate::scene::Aabb { min: Vec3::splat(-0.5), max: Vec3::splat(0.5) };
+        let mut store = InstanceStore::default();
+        let slot = store.submit(&e, cube, 0);
+        let first = store.slot(slot).first;
+        // Which tile each stored instance is in (the store keeps the given order
+        // inside a tile, moving invalid ones last: same tile either way).
+        let tile_of: Vec<usize> =
+            (sizes.iter().enumerate()).flat_map(|(t, &n)| std::iter::repeat_n(t, n as usize)).collect();
+        let camera =
+            Camera::perspective(50.0, 0.5, 90.0).looking_at(Vec3::new(-30.0, 20.0, -60.0), Vec3::new(10.0, 0.0, 0.0));
+        let frustum = Frustum::from_view_proj(camera.projection(1.5) * camera.view());
+        let mut kept = Vec::new();
+        let counts = visible_instances(&frustum, true, store.slot(slot), 1.0, (&store, &mut kept));
+        let kept: std::collections::BTreeSet<u32> = kept.into_iter().map(|i| i - first).collect();
+        // Each tile's box from the instances' own boxes, grown by the padding.
+        let mut boxes = vec![(glam::Vec3A::splat(f32::INFINITY), glam::Vec3A::splat(f32::NEG_INFINITY)); 64];
+        for (i, b) in own.iter().enumerate() {
+            if let Some((c, e)) = b {
+                let t = &mut boxes[tile_of[i]];
+                (t.0, t.1) = (t.0.min(c - e), t.1.max(c + e));
+            }
+        }
+        let seen: Vec<bool> =
+            boxes.iter().map(|(lo, hi)| frustum.intersects((lo + hi) * 0.5, (hi - lo) * 0.5 + padding)).collect();
+        let store_index = |i: usize| -> u32 {
+            // Stored position of given instance i: its tile's start, then valid first.
+            let start: u32 = sizes[..tile_of[i]].iter().sum();
+            let before = (start as usize..i).filter(|&k| own[k].is_some()).count() as u32;
+            start + before
+        };
+        let mut expected = std::collections::BTreeSet::new();
+        let mut each = 0;
+        for (i, b) in own.iter().enumerate() {
+            let Some((c, e)) = *b else { continue };
+            if frustum.intersects(c, e) {
+                each += 1;
+                assert!(seen[tile_of[i]], "instance {i} seen alone, its tile too");
+            }
+            if seen[tile_of[i]] {
+                expected.insert(store_index(i));
+            }
+        }
+        assert!(each > 500 && each < 15_000, "a partial view: {each}");
+        assert_eq!(kept, expected, "whole tiles: every valid instance of each tile seen");
+        let drawn = seen.iter().filter(|&&s| s).count() as u64;
+        assert_eq!((counts.tested, counts.drawn), (64, drawn));
+        assert!(drawn < 64, "some tiles culled whole");
+    }
+
+    #[test]
+    fn density_keeps_the_first_fraction_of_every_tile() {
+        let (e, own, sizes) = tiled_field(0.0);
+        let cube = crate::scene::Aabb { min: Vec3::splat(-0.5), max: Vec3::splat(0.5) };
+        let mut store = InstanceStore::default();
+        let slot = store.submit(&e, cube, 0);
+        let frustum = Frustum::from_view_proj(Mat4::IDENTITY);
+        let valid = own.iter().filter(|b| b.is_some()).count() as f64;
+        for density in [1.0, 0.5, 0.25, 0.0] {
+            let mut kept = Vec::new();
+            let counts = visible_instances(&frustum, false, store.slot(slot), density, (&store, &mut kept));
+            let mut start = 0;
+            let mut expected = Vec::new();
+            for (tile, &n) in store.slot(slot).clusters.iter().zip(&sizes) {
+                assert_eq!(tile.first, start);
+                let drawn = (f64::from(tile.valid) * f64::from(density)).ceil() as u32;
+                expected.extend(tile.first..tile.first + drawn);
+                start += n;
+            }
+            let kept: Vec<u32> = kept.into_iter().map(|i| i - store.slot(slot).first).collect();
+            assert_eq!(kept, expected, "density {density}");
+            let wanted = valid * f64::from(density);
+            assert!((kept.len() as f64 - wanted).abs() <= 64.0, "{} for {wanted}", kept.len());
+            assert_eq!(counts.tested, 0, "culling off tests no tile");
+            assert_eq!(counts.drawn, if density > 0.0 { 64 } else { 0 });
         }
     }
 }

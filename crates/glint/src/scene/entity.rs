@@ -1,4 +1,4 @@
-use super::{MaterialId, ShapeId};
+use super::{MaterialId, ShapeId, Tiles};
 use glam::Mat4;
 use std::sync::atomic::{AtomicU64, Ordering};
 
@@ -28,6 +28,11 @@ pub struct Entity {
     pub cast_shadows: bool,
     /// Darkened where shadow-casting lights are blocked (default true).
     pub receive_shadows: bool,
+    tiles: Option<Tiles>,
+    /// With tiles, the fraction of every tile drawn (0..=1, default 1): its
+    /// first ⌈len × density⌉ instances, in every view and shadow view, with no
+    /// upload. Without tiles, every instance is drawn.
+    pub density: f32,
 }
 
 /// Source of entity identities: each entity (clones included) gets its own.
@@ -46,6 +51,8 @@ impl Clone for Entity {
             render_order: self.render_order,
             cast_shadows: self.cast_shadows,
             receive_shadows: self.receive_shadows,
+            tiles: self.tiles.clone(),
+            density: self.density,
         }
     }
 }
@@ -68,6 +75,8 @@ impl Entity {
             render_order: None,
             cast_shadows: true,
             receive_shadows: true,
+            tiles: None,
+            density: 1.0,
         }
     }
 
@@ -81,6 +90,19 @@ impl Entity {
     pub fn with_shadows(mut self, cast: bool, receive: bool) -> Self {
         (self.cast_shadows, self.receive_shadows) = (cast, receive);
         self
+    }
+
+    /// The same entity with its instances grouped into tiles (see [`Tiles`]),
+    /// each culled as a whole and drawn as one range.
+    pub fn with_tiles(mut self, tiles: Tiles) -> Self {
+        self.version += 1;
+        self.tiles = Some(tiles);
+        self
+    }
+
+    /// The tiles of its instances, if grouped.
+    pub fn tiles(&self) -> Option<&Tiles> {
+        self.tiles.as_ref()
     }
 
     /// The same entity with joint matrices, for a skinned shape (see

@@ -16,6 +16,7 @@ mod mesh;
 mod post;
 pub(crate) mod shadow_layout;
 mod states;
+mod tiles;
 mod view;
 mod view_order;
 
@@ -30,6 +31,7 @@ pub use mesh::{smooth_normals, smooth_normals_in_groups, Aabb, BoundingSphere, M
 pub use post::{PostEffect, Tonemap, MAX_POST_EFFECTS};
 pub use shadow_layout::{ShadowLayout, MAX_CUBES, MAX_SHADOW_MAP_BYTES};
 pub use states::{BlendState, Compare, Cull, DepthState, RasterState, RenderStates, StencilOp, StencilState};
+pub use tiles::Tiles;
 pub use view::{Culling, View, Viewport};
 pub use view_order::draw_order;
 
