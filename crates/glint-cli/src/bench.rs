@@ -106,6 +106,8 @@ pub struct BenchConfig {
     pub orbit: f32,
     /// Milliseconds to sleep before each frame's flush, outside its times.
     pub settle_ms: u64,
+    /// Share of every tile drawn ([`Renderer::set_density`]).
+    pub density: f32,
 }
 
 /// The view a bench draws: the scene's first camera with its post chain, or
@@ -157,6 +159,7 @@ pub fn run_mode(
     let (width, height) = config.size;
     let mut target = OffscreenTarget::new(gpu, width, height, config.msaa)?;
     let mut renderer = Renderer::new(gpu);
+    renderer.set_density(config.density);
     let view = &match run {
         BenchRun::Naive => {
             renderer.set_mode(FrameMode::Naive);

@@ -85,6 +85,10 @@ enum Command {
         /// the camera's "cull" says.
         #[arg(long, value_enum)]
         cull: Option<CullArg>,
+        /// Draw this share (0..=1) of every tile of tiled instances (times each
+        /// block's own "density").
+        #[arg(long, default_value_t = 1.0, value_parser = parse_density)]
+        density: f32,
         /// Turn the camera this many degrees about its target each frame (0..=360).
         #[arg(long, default_value_t = 0.0, value_parser = parse_orbit)]
         orbit: f32,
@@ -184,6 +188,10 @@ struct Picture {
     /// default; the CPU's way where the adapter cannot, as on GL).
     #[arg(long, value_enum)]
     cull: Option<CullArg>,
+    /// Draw this share (0..=1) of every tile of tiled instances (times each
+    /// block's own "density").
+    #[arg(long, default_value_t = 1.0, value_parser = parse_density)]
+    density: f32,
 }
 
 /// `--cull`.
@@ -258,7 +266,7 @@ fn run_bench(
     post: Option<Vec<glint::scene::PostEffect>>,
     options: LoadOptions,
 ) -> Result<(), Error> {
-    let bench::BenchConfig { frames, warmup, size, msaa, orbit, settle_ms } = *config;
+    let bench::BenchConfig { frames, warmup, size, msaa, orbit, settle_ms, density } = *config;
     if frames == 0 {
         return Err(glint::Diagnostic::file(scene, "--frames must be at least 1").into());
     }
@@ -295,6 +303,7 @@ fn run_bench(
             "adapter": format!("{} ({:?})", gpu.info().name, gpu.info().backend),
             "orbit_degrees_per_frame": orbit,
             "settle_ms": settle_ms,
+            "density": density,
             "modes": modes,
             "speedup": speedup,
             "ratios": ratios.iter().map(|(name, frame, cpu)| serde_json::json!({"runs": name, "frame": frame, "cpu": cpu})).collect::<Vec<_>>(),
@@ -332,6 +341,14 @@ fn parse_size(s: &str) -> Result<(u32, u32), String> {
     match (side(w), side(h)) {
         (Some(w), Some(h)) => Ok((w, h)),
         _ => Err(format!("'{s}': each side must be a whole number in 1..=16384")),
+    }
+}
+
+/// `--density`: a share, 0..=1.
+fn parse_density(s: &str) -> Result<f32, String> {
+    match s.parse::<f32>() {
+        Ok(d) if (0.0..=1.0).contains(&d) => Ok(d),
+        _ => Err(format!("expected a share of every tile from 0 to 1, found {s:?}")),
     }
 }
 
@@ -404,6 +421,7 @@ struct RenderArgs<'a> {
     camera: Option<usize>,
     stats: bool,
     cull: Option<CullArg>,
+    density: f32,
     time: f32,
     frames: u32,
     fps: f32,
@@ -411,8 +429,20 @@ struct RenderArgs<'a> {
 }
 
 fn render(args: RenderArgs) -> Result<(), Error> {
-    let RenderArgs { scene, output, size: (width, height), msaa, camera, stats, cull, time, frames, fps, options } =
-        args;
+    let RenderArgs {
+        scene,
+        output,
+        size: (width, height),
+        msaa,
+        camera,
+        stats,
+        cull,
+        density,
+        time,
+        frames,
+        fps,
+        options,
+    } = args;
     let desc = load(scene, options)?;
     check_camera(&desc, scene, camera)?;
     if frames > 1 && !output.to_string_lossy().contains('%') {
@@ -432,6 +462,7 @@ fn render(args: RenderArgs) -> Result<(), Error> {
     };
     let mut target = OffscreenTarget::new(&gpu, width, height, msaa)?;
     let mut renderer = Renderer::new(&gpu);
+    renderer.set_density(density);
     let mut world = World::place(desc, &mut renderer);
     let views = culled(world.views(camera), cull);
     let progress = (frames > 1).then(|| {
@@ -567,6 +598,7 @@ fn main() -> ExitCode {
             camera: picture.camera,
             stats: *stats,
             cull: picture.cull,
+            density: picture.density,
             time: *time,
             frames: *frames,
             fps: *fps,
@@ -588,6 +620,7 @@ fn main() -> ExitCode {
                     msaa: picture.msaa,
                     camera: picture.camera,
                     cull: picture.cull,
+                    density: picture.density,
                     frames: *frames,
                     screenshot: screenshot.clone(),
                     script: at.clone(),
@@ -596,7 +629,7 @@ fn main() -> ExitCode {
                 view::run(args, desc)
             })
         }
-        Command::Bench { scene, frames, warmup, mode, cull, orbit, settle, size, msaa, json, plot, post } => {
+        Command::Bench { scene, frames, warmup, mode, cull, density, orbit, settle, size, msaa, json, plot, post } => {
             let config = bench::BenchConfig {
                 frames: *frames,
                 warmup: *warmup,
@@ -604,6 +637,7 @@ fn main() -> ExitCode {
                 msaa: *msaa,
                 orbit: *orbit,
                 settle_ms: *settle,
+                density: *density,
             };
             let output = BenchOutput { json: *json, plot: plot.as_deref() };
             run_bench(scene, &config, (*mode, *cull), output, post.clone().map(|p| p.0), options)

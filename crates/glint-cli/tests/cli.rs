@@ -232,6 +232,41 @@ fn render_writes_the_png_and_prints_stats_json() {
 }
 
 #[test]
+fn density_scales_every_tile_on_both_culling_paths() {
+    // tiles.scn: 6,000 cones in 8 × 8 tiles, its block drawing half of each.
+    let dir = tempfile::tempdir().expect("tempdir");
+    let png = dir.path().join("tiles.png");
+    let (scene, png) = (repo("tests/scenes/tiles.scn"), png.to_str().expect("path").to_owned());
+    let stats = |density: &str, cull: &str| {
+        let args = ["render", scene.to_str().expect("path"), "-o", &png, "--size", "64x64", "--stats"];
+        let out = glint(&[&args[..], &["--density", density, "--cull", cull]].concat());
+        assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+        let s: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+        let n = |key: &str| s[key].as_u64().expect(key);
+        // The ground plane is one instance more, untiled.
+        (n("instances_drawn") - 1, n("tiles_tested"), n("tiles_drawn"))
+    };
+    if glint(&["render", scene.to_str().expect("path"), "-o", &png, "--size", "8x8"]).status.code() == Some(2)
+        && std::env::var("GLINT_REQUIRE_ADAPTER").as_deref() != Ok("1")
+    {
+        eprintln!("skipping: no GPU adapter");
+        return;
+    }
+    let (half, tested, drawn) = stats("1", "off");
+    assert!((2_968..=3_032).contains(&half), "half of each tile, within one a tile: {half}");
+    assert_eq!((tested, drawn), (0, 64), "culling off tests no tile");
+    let (quarter, _, _) = stats("0.5", "off");
+    assert!((1_436..=1_564).contains(&quarter), "a quarter: {quarter}");
+    assert_eq!(stats("0", "off").0, 0);
+    let on_cpu = stats("0.5", "cpu");
+    assert!(on_cpu.0 < quarter && on_cpu.1 == 64 && on_cpu.2 < 64, "{on_cpu:?}");
+    assert_eq!(stats("0.5", "gpu"), on_cpu, "counted on the GPU, the same");
+    let out = glint(&["render", scene.to_str().expect("path"), "-o", &png, "--density", "1.5"]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(stderr(&out).contains("from 0 to 1"), "{}", stderr(&out));
+}
+
+#[test]
 fn render_draws_every_camera_with_a_viewport_unless_one_is_picked() {
     let dir = tempfile::tempdir().expect("tempdir");
     let (png, picked) = (dir.path().join("split.png"), dir.path().join("picked.png"));

@@ -41,6 +41,17 @@ fn instancing_700_instances_in_two_draws() {
 }
 
 #[test]
+fn tiles_culled_whole_and_half_of_each_drawn() {
+    let Some(gpu) = common::gpu() else { return };
+    let (image, stats) = common::render_scene(gpu, "tiles", 256);
+    // Ground, cones (one batch, whatever the tiles), sky.
+    assert_eq!(stats.draws, 3);
+    assert!(stats.tiles_drawn > 8 && stats.tiles_drawn < stats.tiles_tested, "{stats:?}");
+    assert_eq!(stats.tiles_tested, 64);
+    common::assert_matches_reference("tiles", &image);
+}
+
+#[test]
 fn orthographic_camera() {
     check("ortho", 2);
 }
@@ -56,7 +67,7 @@ fn render_states_fog_and_unlit_variants() {
 fn every_scene_matches_its_reference_culled_on_the_cpu_too() {
     // The tests above cull on the GPU where the adapter can (the default).
     let Some(gpu) = common::gpu() else { return };
-    for name in ["shapes", "textures", "alpha", "lights", "instancing", "ortho", "states"] {
+    for name in ["shapes", "textures", "alpha", "lights", "instancing", "ortho", "states", "tiles"] {
         let path = common::repo_root().join("tests/scenes").join(format!("{name}.scn"));
         let (image, stats) = common::render_file(gpu, &path, 256, glint::Culling::Cpu);
         assert_eq!(stats.culling, glint::Culling::Cpu);
@@ -67,7 +78,7 @@ fn every_scene_matches_its_reference_culled_on_the_cpu_too() {
 #[test]
 fn every_scene_matches_its_reference_on_gl_which_culls_on_the_cpu() {
     let Some(gl) = common::gl_gpu() else { return };
-    for name in ["shapes", "textures", "alpha", "lights", "instancing", "ortho", "states"] {
+    for name in ["shapes", "textures", "alpha", "lights", "instancing", "ortho", "states", "tiles"] {
         let path = common::repo_root().join("tests/scenes").join(format!("{name}.scn"));
         let (image, stats) = common::render_file(gl, &path, 256, glint::Culling::Gpu);
         assert_eq!((stats.culling, stats.occlusion), (glint::Culling::Cpu, false), "{name}");

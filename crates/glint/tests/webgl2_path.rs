@@ -11,7 +11,7 @@ use glint::asset::ShapeKind;
 use glint::{Camera, Entity, Gpu, Light, Material, OffscreenTarget, Renderer};
 
 /// The reference scenes of `tests/scenes`, with their draws.
-const SCENES: [(&str, u32); 8] = [
+const SCENES: [(&str, u32); 9] = [
     ("shapes", 7),
     ("textures", 2),
     ("alpha", 4),
@@ -20,6 +20,7 @@ const SCENES: [(&str, u32); 8] = [
     ("ortho", 2),
     ("states", 6),
     ("pbr", 25),
+    ("tiles", 3),
 ];
 
 fn reference_scenes(gpu: &Gpu) {

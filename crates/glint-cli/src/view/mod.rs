@@ -62,6 +62,8 @@ pub struct ViewArgs {
     pub camera: Option<usize>,
     /// How every view culls, where given (else as its camera says).
     pub cull: Option<crate::CullArg>,
+    /// Share of every tile drawn ([`Renderer::set_density`]).
+    pub density: f32,
     /// Quit after this many frames.
     pub frames: Option<u32>,
     /// Write the last frame here on quitting.
@@ -121,8 +123,9 @@ struct Scene {
 impl Scene {
     /// `desc` placed in a new renderer, showing camera `camera` (see
     /// [`World::views`]), culled as `cull` says where given.
-    fn new(gpu: &Gpu, desc: SceneDesc, camera: Option<usize>, cull: Option<crate::CullArg>) -> Self {
+    fn new(gpu: &Gpu, desc: SceneDesc, camera: Option<usize>, (cull, density): (Option<crate::CullArg>, f32)) -> Self {
         let mut renderer = Renderer::new(gpu);
+        renderer.set_density(density);
         let world = World::place(desc, &mut renderer);
         let views = crate::culled(world.views(camera), cull);
         Self { world, renderer, views }
@@ -188,7 +191,7 @@ impl App {
         let surface = WindowSurface::new(&gpu, surface, size.width, size.height)?;
         let msaa = if gpu.supports_msaa(self.args.msaa) { self.args.msaa } else { 1 };
         let target = OffscreenTarget::new(&gpu, size.width.max(1), size.height.max(1), msaa)?;
-        let scene = Scene::new(&gpu, desc, self.args.camera, self.args.cull);
+        let scene = Scene::new(&gpu, desc, self.args.camera, (self.args.cull, self.args.density));
         let camera = scene.camera();
         eprintln!("glint view: {} on {} ({:?})", self.args.scene.display(), gpu.info().name, gpu.info().backend);
         let now = Instant::now();
@@ -223,7 +226,7 @@ impl View {
 
     /// Load the scene again if its file changed; a bad file is reported and the
     /// current scene stays.
-    fn reload_if_changed(&mut self, path: &Path, camera_index: Option<usize>, cull: Option<crate::CullArg>) {
+    fn reload_if_changed(&mut self, path: &Path, camera_index: Option<usize>, cull: (Option<crate::CullArg>, f32)) {
         if self.last_watch.elapsed() < WATCH_INTERVAL {
             return;
         }
@@ -454,7 +457,7 @@ impl App {
         for step in self.args.script.iter().filter(|s| s.frame == frame) {
             view.do_action(&step.action)?;
         }
-        view.reload_if_changed(&self.args.scene, self.args.camera, self.args.cull);
+        view.reload_if_changed(&self.args.scene, self.args.camera, (self.args.cull, self.args.density));
         if draw {
             view.draw()?;
         }

@@ -255,6 +255,8 @@ impl Model {
                 material: None,
                 draw: Default::default(),
                 transforms: vec![Mat4::IDENTITY],
+                tiles: None,
+                density: 1.0,
             }],
             cloths: Vec::new(),
             models: vec![self],

@@ -1,6 +1,7 @@
 //! Core layer: where the copies of an `instances` block go.
 
 use glam::{Mat4, Quat, Vec3};
+use rand::seq::SliceRandom;
 use rand::{Rng, SeedableRng};
 
 /// Place `count` instances in the box `origin ± extent/2`: on an evenly spaced grid
@@ -44,9 +45,71 @@ pub(crate) fn place_instances(
         .collect()
 }
 
+/// Sort `transforms` into `n` × `n` tiles over the box `origin ± extent/2`
+/// (by x and z; a tile holds the instances whose position falls in its cell,
+/// the box's edges clamped), tile by tile with x fastest, each tile's
+/// instances shuffled (PCG32 from `seed`), so any first share of a tile is
+/// spread over it. Returns each tile's size.
+pub(crate) fn sort_into_tiles(transforms: &mut Vec<Mat4>, n: u32, origin: Vec3, extent: Vec3, seed: u64) -> Vec<u32> {
+    let corner = origin - extent * 0.5;
+    let cell = |v: f32, lo: f32, size: f32| match size > 0.0 {
+        true => (((v - lo) / size * n as f32).floor().max(0.0) as u32).min(n - 1),
+        false => 0,
+    };
+    let tile = |m: &Mat4| {
+        let p = m.w_axis;
+        cell(p.x, corner.x, extent.x) + n * cell(p.z, corner.z, extent.z)
+    };
+    let mut sizes = vec![0u32; (n * n) as usize];
+    let mut keyed: Vec<(u32, Mat4)> = transforms.drain(..).map(|m| (tile(&m), m)).collect();
+    keyed.iter().for_each(|&(t, _)| sizes[t as usize] += 1);
+    radsort::sort_by_key(&mut keyed, |&(t, _)| t);
+    let mut rng = rand_pcg::Pcg32::seed_from_u64(seed);
+    let mut start = 0;
+    for &size in &sizes {
+        keyed[start..start + size as usize].shuffle(&mut rng);
+        start += size as usize;
+    }
+    transforms.extend(keyed.into_iter().map(|(_, m)| m));
+    sizes
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn tiles_hold_their_cells_instances_shuffled() {
+        let (origin, extent) = (Vec3::new(5.0, 0.0, 0.0), Vec3::new(40.0, 0.0, 20.0));
+        let placed = place_instances(4000, true, origin, extent, 9, (1.0, 1.0), false);
+        let mut tiled = placed.clone();
+        let sizes = sort_into_tiles(&mut tiled, 4, origin, extent, 2);
+        assert_eq!(sizes.len(), 16);
+        assert_eq!(sizes.iter().sum::<u32>(), 4000);
+        assert!(sizes.iter().all(|&s| s > 150), "about 250 each: {sizes:?}");
+        let mut start = 0;
+        for (t, &size) in sizes.iter().enumerate() {
+            let (col, row) = ((t % 4) as f32, (t / 4) as f32);
+            let run = &tiled[start..start + size as usize];
+            for m in run {
+                let p = m.w_axis;
+                assert!(p.x >= -15.0 + 10.0 * col && p.x <= -15.0 + 10.0 * (col + 1.0), "tile {t}: x {}", p.x);
+                assert!(p.z >= -10.0 + 5.0 * row && p.z <= -10.0 + 5.0 * (row + 1.0), "tile {t}: z {}", p.z);
+            }
+            // Shuffled: the first half of a tile is spread over it, not its own corner.
+            let mean_x = |r: &[Mat4]| r.iter().map(|m| m.w_axis.x).sum::<f32>() / r.len() as f32;
+            assert!((mean_x(&run[..run.len() / 2]) - mean_x(run)).abs() < 1.5, "tile {t}");
+            start += size as usize;
+        }
+        let key = |m: &Mat4| m.w_axis.to_array().map(f32::to_bits);
+        let (mut a, mut b): (Vec<_>, Vec<_>) = (placed.iter().map(key).collect(), tiled.iter().map(key).collect());
+        a.sort_unstable();
+        b.sort_unstable();
+        assert_eq!(a, b, "the same instances");
+        let mut again = placed.clone();
+        sort_into_tiles(&mut again, 4, origin, extent, 2);
+        assert_eq!(again, tiled, "the same seed, the same order");
+    }
 
     #[test]
     fn same_seed_same_placement_and_grid_is_even() {

@@ -2,7 +2,7 @@
 //! reference) turned into a [`SceneDesc`], checked without a GPU, and placed into
 //! a [`Renderer`](crate::Renderer) with [`Renderer::place_scene`](crate::Renderer::place_scene).
 
-use super::placement::place_instances;
+use super::placement::{place_instances, sort_into_tiles};
 use super::procedural::{blob_vertex_count, MAX_SCENE_BLOB_VERTICES};
 use super::scn_cloth::{self, ClothDesc};
 use super::scn_fields::{numbers, Fields};
@@ -26,6 +26,9 @@ use std::path::{Path, PathBuf};
 /// instance records fill 122 MiB, inside the 128 MiB storage binding every
 /// adapter offers (wgpu's default limit), so any adapter can draw them.
 pub const MAX_INSTANCES: u64 = 2_000_000;
+
+/// Most tiles along each side of an `instances` block (`tiles`): 65,536 tiles.
+pub const MAX_TILES: i64 = 256;
 
 /// Most cameras (each a view of the frame) one scene may have: each is a pass
 /// over the scene every frame.
@@ -105,6 +108,10 @@ pub struct EntityDesc {
     pub draw: DrawOptions,
     /// One transform per instance.
     pub transforms: Vec<Mat4>,
+    /// The instances' tiles (an `instances` block with `tiles`).
+    pub tiles: Option<crate::scene::Tiles>,
+    /// With tiles, the fraction of each tile drawn (see [`Entity::density`]).
+    pub density: f32,
 }
 
 /// How an `entity` or `instances` block's instances draw: keys `render_order`,
@@ -316,6 +323,8 @@ struct Placement {
     material: Option<(String, usize)>,
     draw: DrawOptions,
     transforms: Vec<Mat4>,
+    /// Tiles and density: an entity of its own.
+    tiles: Option<(crate::scene::Tiles, f32)>,
 }
 
 struct Loader<'a> {
@@ -701,7 +710,7 @@ impl Loader<'_> {
         self.count_instances(1, f.block.line)?;
         let transform = Mat4::from_scale_rotation_translation(scale, rotation(angles), origin);
         let draw = Self::draw_options(f)?;
-        self.placements.push(Placement { mesh, material, draw, transforms: vec![transform] });
+        self.placements.push(Placement { mesh, material, draw, transforms: vec![transform], tiles: None });
         Ok(())
     }
 
@@ -753,9 +762,23 @@ impl Loader<'_> {
             return Err(Diagnostic::at(self.path, f.block.line, "\"scale\" must be min max with 0 < min <= max"));
         }
         let random_yaw = f.flag("random_yaw")?.unwrap_or(false);
-        let transforms = place_instances(count as usize, random, origin, extent, seed, (lo, hi), random_yaw);
+        let mut transforms = place_instances(count as usize, random, origin, extent, seed, (lo, hi), random_yaw);
+        let tiles = f.integer("tiles", 1..=MAX_TILES)?;
+        let padding = f.number("tile_padding", 0.0..=1e6)?;
+        let density = f.number("density", 0.0..=1.0)?;
+        let tiles = match tiles {
+            Some(n) => {
+                let sizes = sort_into_tiles(&mut transforms, n as u32, origin, extent, seed.wrapping_add(1));
+                Some((crate::scene::Tiles::from_sizes(sizes, padding.unwrap_or(0.0)), density.unwrap_or(1.0)))
+            }
+            None if density.is_some() || padding.is_some() => {
+                let message = "\"density\" and \"tile_padding\" need \"tiles\": without tiles every instance is drawn";
+                return Err(Diagnostic::at(self.path, f.block.line, message));
+            }
+            None => None,
+        };
         let draw = Self::draw_options(f)?;
-        self.placements.push(Placement { mesh, material, draw, transforms });
+        self.placements.push(Placement { mesh, material, draw, transforms, tiles });
         Ok(())
     }
 
@@ -770,15 +793,20 @@ impl Loader<'_> {
     /// Resolve material names and gather placements into one task per (mesh, material, render order).
     fn finish(mut self) -> Result<SceneDesc, Diagnostic> {
         self.scene.textures = std::mem::replace(&mut self.textures, TextureCache::new(0)).into_textures();
-        let mut tasks: HashMap<(MeshRef, Option<usize>, DrawOptions), usize> = HashMap::new();
-        for placement in std::mem::take(&mut self.placements) {
+        // Tiled blocks are entities of their own (keyed by their place).
+        let mut tasks: HashMap<(MeshRef, Option<usize>, DrawOptions, Option<usize>), usize> = HashMap::new();
+        for (k, placement) in std::mem::take(&mut self.placements).into_iter().enumerate() {
             let material = self.material_index(placement.material)?;
-            let task = *tasks.entry((placement.mesh, material, placement.draw)).or_insert_with(|| {
+            let own = placement.tiles.is_some().then_some(k);
+            let task = *tasks.entry((placement.mesh, material, placement.draw, own)).or_insert_with(|| {
+                let (tiles, density) = placement.tiles.map_or((None, 1.0), |(t, d)| (Some(t), d));
                 self.scene.entities.push(EntityDesc {
                     mesh: placement.mesh,
                     material,
                     draw: placement.draw,
                     transforms: Vec::new(),
+                    tiles,
+                    density,
                 });
                 self.scene.entities.len() - 1
             });

@@ -95,6 +95,35 @@ fn unknown_keys_warn_with_their_line() {
     assert!(scene.warnings[0].message.contains("unknown key \"colour\""));
 }
 
+/// An `instances` block of 100 cubes with `extra` on its fifth line.
+fn tiled(extra: &str) -> String {
+    format!("{{\n\"classname\" \"instances\"\n\"mesh\" \"cube\"\n\"count\" \"100\"\n{extra}\n}}")
+}
+
+#[test]
+fn tiled_instances_are_an_entity_of_their_own_with_their_tiles_and_density() {
+    let both = format!(
+        "{}\n{}",
+        tiled("\"tiles\" \"4\"\n\"density\" \"0.5\"\n\"tile_padding\" \"0.25\"\n\"layout\" \"random\""),
+        tiled("\"layout\" \"random\"")
+    );
+    let scene = parse(&both).unwrap();
+    assert_eq!(scene.entities.len(), 2, "the tiled block is not gathered with the other");
+    let e = &scene.entities[0];
+    let tiles = e.tiles.as_ref().expect("tiles");
+    assert_eq!((e.density, tiles.padding(), e.transforms.len()), (0.5, 0.25, 100));
+    let ranges: Vec<_> = tiles.ranges(100).collect();
+    assert_eq!((ranges.len(), ranges.last().map(|r| r.end)), (16, Some(100)));
+    // The default extent is 10 × 10 around the origin: 2.5 × 2.5 cells.
+    for (t, range) in ranges.iter().enumerate() {
+        for m in &e.transforms[range.start as usize..range.end as usize] {
+            let (col, row) = ((m.w_axis.x + 5.0) / 2.5, (m.w_axis.z + 5.0) / 2.5);
+            assert_eq!((col.floor() as usize).min(3) + 4 * (row.floor() as usize).min(3), t);
+        }
+    }
+    assert!(scene.entities[1].tiles.is_none() && scene.entities[1].density == 1.0);
+}
+
 #[test]
 fn semantic_errors_name_file_line_and_expectation() {
     let cases = [
@@ -148,6 +177,11 @@ fn semantic_errors_name_file_line_and_expectation() {
         ("{\n\"classname\" \"camera\"\n\"exposure\" \"40\"\n}", 3, "expected a value in -20..=20"),
         ("{\n\"classname\" \"camera\"\n\"vignette\" \"2\"\n}", 3, "expected a value in 0..=1"),
         ("{\n\"classname\" \"light_point\"\n\"origin\" \"0 0 inf\"\n}", 3, "not a finite number"),
+        (&tiled("\"tiles\" \"0\""), 5, "\"tiles\" is '0', expected a whole number in 1..=256"),
+        (&tiled("\"tiles\" \"257\""), 5, "expected a whole number in 1..=256"),
+        (&tiled("\"tiles\" \"4\"\n\"density\" \"1.5\""), 6, "\"density\" is 1.5, expected a value in 0..=1"),
+        (&tiled("\"tiles\" \"4\"\n\"tile_padding\" \"-1\""), 6, "expected a value in 0..=1000000"),
+        (&tiled("\"density\" \"0.5\""), 1, "\"density\" and \"tile_padding\" need \"tiles\""),
     ];
     for (text, line, want) in cases {
         let err = parse(text).unwrap_err();

@@ -86,6 +86,10 @@ impl Renderer {
             }
             for entity in &mut entities[first..] {
                 e.draw.apply(entity);
+                if let Some(tiles) = &e.tiles {
+                    entity.set_tiles(tiles.clone());
+                    entity.density = e.density;
+                }
             }
         }
         for cloth in &desc.cloths {

@@ -95,9 +95,15 @@ impl Entity {
     /// The same entity with its instances grouped into tiles (see [`Tiles`]),
     /// each culled as a whole and drawn as one range.
     pub fn with_tiles(mut self, tiles: Tiles) -> Self {
+        self.set_tiles(tiles);
+        self
+    }
+
+    /// Group its instances into `tiles` (see [`with_tiles`](Self::with_tiles));
+    /// marks the entity for re-upload.
+    pub fn set_tiles(&mut self, tiles: Tiles) {
         self.version += 1;
         self.tiles = Some(tiles);
-        self
     }
 
     /// The tiles of its instances, if grouped.
