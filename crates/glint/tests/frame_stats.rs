@@ -3,7 +3,7 @@
 
 mod common;
 
-use glam::{Mat4, Vec3};
+use glam::{Mat4, Quat, Vec3};
 use glint::asset::ShapeKind;
 use glint::scene::MAX_LIGHTS;
 use glint::{
@@ -433,4 +433,37 @@ fn one_submission_nested_like_the_outline(gpu: &glint::Gpu) {
         renderer.frame_outline(),
         ["frame 4", "frame 4 › shadows", "frame 4 › forward (naive)", "frame 4 › post"]
     );
+}
+
+#[test]
+fn whole_tiles_culled_on_the_cpu_write_no_draw_index_per_instance() {
+    // 20,000 cubes in 8 × 8 tiles of a 40 × 40 field around the origin.
+    let Some(gpu) = common::gpu() else { return };
+    let (mut renderer, cube, material) = renderer_with_cube(gpu);
+    let (side, cells) = (141usize, 8usize);
+    let mut tiles: Vec<Vec<Mat4>> = vec![Vec::new(); cells * cells];
+    for k in 0..side * side {
+        let (x, z) = ((k % side) as f32 / side as f32 * 40.0 - 20.0, (k / side) as f32 / side as f32 * 40.0 - 20.0);
+        let cell = |v: f32| (((v + 20.0) / 40.0 * cells as f32) as usize).min(cells - 1);
+        tiles[cell(x) + cells * cell(z)].push(Mat4::from_scale_rotation_translation(
+            Vec3::splat(0.1),
+            Quat::IDENTITY,
+            Vec3::new(x, 0.0, z),
+        ));
+    }
+    let sizes = glint::Tiles::from_sizes(tiles.iter().map(|t| t.len() as u32), 0.0);
+    let field = Entity::instanced(cube, material, tiles.concat()).with_tiles(sizes);
+    let mut target = OffscreenTarget::new(gpu, 64, 64, 1).expect("target");
+    let mut draw = |r: &mut Renderer, eye: Vec3| {
+        let view = glint::View::new(Camera::perspective(50.0, 0.1, 100.0).looking_at(eye, Vec3::ZERO));
+        r.render([&field], view.with_culling(glint::Culling::Cpu), &sun(), &mut target).expect("frame")
+    };
+    let first = draw(&mut renderer, Vec3::new(0.0, 8.0, 30.0));
+    assert!(first.tiles_drawn > 0 && first.tiles_drawn < 64, "{first:?}");
+    assert_eq!(first.bytes_uploaded.draw_indices, 4 * 32_768, "the ramp, once: {:?}", first.bytes_uploaded);
+    let moved = draw(&mut renderer, Vec3::new(12.0, 8.0, 28.0));
+    assert_ne!(moved.instances_drawn, first.instances_drawn, "the camera moved");
+    assert_eq!(moved.bytes_uploaded.draw_indices, 0, "whole tiles need no index each: {:?}", moved.bytes_uploaded);
+    // Each visible run of contiguous tiles is one batch: fewer batches than tiles.
+    assert!(moved.draws <= 1 + moved.tiles_drawn as u32, "{moved:?}");
 }

@@ -25,28 +25,33 @@ pub struct Batch {
 /// `batches`, and append their instance indices (from `visible`) to
 /// `draw_indices` in draw order, so each batch is one contiguous range.
 pub fn merge(items: &[DrawItem], visible: &[u32], draw_indices: &mut Vec<u32>, batches: &mut Vec<Batch>) {
-    merge_placed(items, batches, |item, _, _| {
+    let place = |item: &DrawItem, _, _| {
         let at = draw_indices.len() as u32;
         draw_indices.extend_from_slice(&visible[item.first as usize..(item.first + item.count) as usize]);
         at
-    });
+    };
+    merge_placed(items, batches, place, |_, _| true);
 }
 
 /// [`merge`], with `place` putting each item's instances where its batch
 /// (given by index, and whether the item begins it) draws them: it returns
 /// where the item's first goes, right after the batch's earlier items' when
-/// the item joins a batch.
+/// the item joins a batch. An equal item joins the batch of the one before
+/// it only where `follows(before, item)` allows.
 pub(crate) fn merge_placed(
     items: &[DrawItem],
     batches: &mut Vec<Batch>,
     mut place: impl FnMut(&DrawItem, usize, bool) -> u32,
+    follows: impl Fn(&DrawItem, &DrawItem) -> bool,
 ) {
     let first_batch = batches.len();
+    let mut before: Option<&DrawItem> = None;
     for item in items {
         let stage = stage_of(item.key);
         let joins = batches[first_batch..].last().is_some_and(|b| {
             b.stage == stage && b.pipeline == item.pipeline && b.material == item.material && b.shape == item.shape
-        });
+        }) && before.is_some_and(|b| follows(b, item));
+        before = Some(item);
         if !joins {
             batches.push(Batch {
                 stage,

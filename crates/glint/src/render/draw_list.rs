@@ -4,9 +4,12 @@
 //! indices in draw order, one indirect command per batch, and the buffers those
 //! live in. Each list uploads only what differs from its last frame.
 //!
-//! Draw-index buffer layout: the instances of batches culled on the CPU, in
-//! draw order, then (lists culled on the GPU, `gpu_cull.rs`) a region the cull
-//! pass fills, one stretch per GPU-culled batch as long as its candidates.
+//! Draw-index buffer layout: a ramp `0, 1, 2, …` over the instance store
+//! (once a list draws whole tiles, which index it by their store range, so
+//! the CPU writes nothing per instance for them), then the instances of
+//! batches culled on the CPU, in draw order, then (lists culled on the GPU,
+//! `gpu_cull.rs`) a region the cull pass fills, one stretch per GPU-culled
+//! batch as long as its candidates. The ramp is written when it grows.
 
 use super::batch::{self, Batch};
 use super::cull::Frustum;
@@ -16,6 +19,7 @@ use super::mesh_pool::MeshRange;
 use super::occlusion::{late_commands, LateInput};
 use super::queue::DrawItem;
 use super::resources::GrowBuffer;
+use super::visible::Placed;
 use super::RenderError;
 
 /// What a list may rely on: indirect drawing, storage buffers, GPU culling.
@@ -54,6 +58,15 @@ pub(crate) struct DrawList {
     gpu_region: u32,
     /// Whether each batch is culled on the GPU.
     on_gpu: Vec<bool>,
+    /// Whether each batch draws whole tiles (indexed through the ramp).
+    whole: Vec<bool>,
+    /// The ramp's length this frame needs: the end of the last whole tile drawn.
+    ramp_needed: u32,
+    /// The ramp's length, a power of two (it never shrinks, so the regions
+    /// after it stay put).
+    ramp: u32,
+    /// How much of the ramp the GPU holds.
+    ramp_uploaded: u32,
     /// Each view's frustum (the ranges' and runs' `frustum` index it).
     pub frustums: Vec<Frustum>,
     /// One command per batch, when the device draws indirect.
@@ -97,6 +110,10 @@ impl DrawList {
             cull_ranges: Vec::new(),
             gpu_region: 0,
             on_gpu: Vec::new(),
+            whole: Vec::new(),
+            ramp_needed: 0,
+            ramp: 0,
+            ramp_uploaded: 0,
             frustums: Vec::new(),
             indirect_args: Vec::new(),
             uploaded_draw_indices: Vec::new(),
@@ -118,8 +135,22 @@ impl DrawList {
         self.cull_ranges.clear();
         self.gpu_region = 0;
         self.on_gpu.clear();
+        self.whole.clear();
+        self.ramp_needed = 0;
         self.frustums.clear();
         self.indirect_args.clear();
+    }
+
+    /// The draw indices as the CPU wrote them, from the start of the buffer:
+    /// the ramp, then the CPU-culled instances.
+    pub(crate) fn cpu_indices(&self) -> Vec<u32> {
+        (0..self.ramp).chain(self.draw_indices.iter().copied()).collect()
+    }
+
+    /// Instances the batches not culled on the GPU draw (listed and whole tiles).
+    pub(crate) fn cpu_instances(&self) -> u64 {
+        let cpu = self.batches.iter().zip(&self.on_gpu).filter(|(_, &gpu)| !gpu);
+        cpu.map(|(b, _)| u64::from(b.instance_count)).sum()
     }
 
     /// Whether this frame's list is culled on the GPU (it has candidates there).
@@ -129,30 +160,45 @@ impl DrawList {
 
     /// Merge the items from `first_item` on (sorted), seen by a view whose
     /// frustum is `frustum`, into batches appended to the list, and those into
-    /// runs. An item `on_gpu` says is culled on the GPU names store instances
-    /// (`first ..`), which all become its batch's candidates; any other names
-    /// entries of `visible`. `draw_of` says what the batch an item begins
-    /// draws with. Returns the range of runs they became.
+    /// runs. Where `placed` says an item is culled on the GPU, it names store
+    /// instances (`first ..`), which all become its batch's candidates; where
+    /// it is a whole tile, store instances drawn as they are (joining a batch
+    /// only right after the store instances before it); else entries of
+    /// `visible`. `draw_of` says what the batch an item begins draws with.
+    /// Returns the range of runs they became.
     pub(crate) fn build(
         &mut self,
         first_item: usize,
         visible: &[u32],
         frustum: Frustum,
         draw_of: impl Fn(&DrawItem) -> BatchDraw,
-        on_gpu: impl Fn(&DrawItem) -> bool,
+        placed: impl Fn(&DrawItem) -> Placed,
     ) -> std::ops::Range<usize> {
         let (first_batch, first_run, first_range) = (self.batches.len(), self.runs.len(), self.cull_ranges.len());
         let view = self.frustums.len() as u32;
         self.frustums.push(frustum);
-        let Self { items, batches, draws, draw_indices, cull_ranges, gpu_region, .. } = self;
-        batch::merge_placed(&items[first_item..], batches, |item, batch, begins| {
+        let Self { items, batches, draws, draw_indices, cull_ranges, gpu_region, whole, ramp_needed, .. } = self;
+        let follows = |before: &DrawItem, item: &DrawItem| match (placed(before), placed(item)) {
+            (Placed::Whole, Placed::Whole) => before.first + before.count == item.first,
+            (a, b) => a == b,
+        };
+        let place = |item: &DrawItem, batch: usize, begins: bool| {
             if begins {
                 draws.push(draw_of(item));
             }
-            if !on_gpu(item) {
-                let at = draw_indices.len() as u32;
-                draw_indices.extend_from_slice(&visible[item.first as usize..(item.first + item.count) as usize]);
-                return at;
+            match placed(item) {
+                Placed::Listed => {
+                    let at = draw_indices.len() as u32;
+                    draw_indices.extend_from_slice(&visible[item.first as usize..(item.first + item.count) as usize]);
+                    return at;
+                }
+                Placed::Whole => {
+                    whole.resize(batch + 1, false);
+                    whole[batch] = true;
+                    *ramp_needed = (*ramp_needed).max(item.first + item.count);
+                    return item.first;
+                }
+                Placed::OnGpu => {}
             }
             // The pass places each visible instance after its batch's others:
             // every range of a batch writes from the batch's first place.
@@ -170,8 +216,10 @@ impl DrawList {
             });
             *gpu_region += item.count;
             at
-        });
+        };
+        batch::merge_placed(&items[first_item..], batches, place, follows);
         self.on_gpu.resize(self.batches.len(), false);
+        self.whole.resize(self.batches.len(), false);
         for r in &self.cull_ranges[first_range..] {
             self.on_gpu[r.batch as usize] = true;
         }
@@ -196,6 +244,7 @@ impl DrawList {
         self.batches.push(batch);
         self.draws.push(draw);
         self.on_gpu.push(false);
+        self.whole.push(false);
         self.draw_indices.push(instance);
     }
 
@@ -210,7 +259,9 @@ impl DrawList {
         if self.draw_index_buffer.reserve(device, 4, self.draw_indices.len())? {
             self.rebind(device, layout, instances);
         }
+        // Written over the ramp's place.
         self.uploaded_draw_indices.clear();
+        (self.ramp, self.ramp_uploaded) = (0, 0);
         let each = (0..self.draw_indices.len())
             .map(|k| self.draw_index_buffer.write(queue, k as u64, &self.draw_indices[k..=k]));
         Ok(each.sum())
@@ -224,16 +275,24 @@ impl DrawList {
         }
     }
 
-    /// Place the GPU-culled region after the CPU-culled indices and make one
-    /// indirect command per batch (a GPU-culled one counting no instance: the
-    /// cull pass counts them).
+    /// Place the CPU-culled indices after the ramp and the GPU-culled region
+    /// after them, and make one indirect command per batch (a GPU-culled one
+    /// counting no instance: the cull pass counts them).
     fn finish(&mut self) {
-        let base = self.draw_indices.len() as u32;
+        if self.ramp_needed > self.ramp {
+            // Grown to a power of two, so a moving view rarely grows it again.
+            self.ramp = self.ramp_needed.next_power_of_two();
+        }
+        let base = self.ramp + self.draw_indices.len() as u32;
         for r in &mut self.cull_ranges {
             r.out += base;
         }
-        for (b, _) in self.batches.iter_mut().zip(&self.on_gpu).filter(|(_, &gpu)| gpu) {
-            b.first_instance += base;
+        for ((b, &gpu), &whole) in self.batches.iter_mut().zip(&self.on_gpu).zip(&self.whole) {
+            match (gpu, whole) {
+                (true, _) => b.first_instance += base,
+                (false, false) => b.first_instance += self.ramp,
+                (false, true) => {}
+            }
         }
         if self.indirect.is_some() {
             let commands = self.batches.iter().zip(&self.draws).zip(&self.on_gpu);
@@ -264,13 +323,21 @@ impl DrawList {
         let occlusion = occlusion.filter(|_| gpu.is_some_and(|(p, _)| p.occlusion()) && self.culled_on_gpu());
         // Occlusion culling places the late phase's instances after the early ones'.
         let regions = if occlusion.is_some() { 2 } else { 1 };
-        let capacity = self.draw_indices.len() + regions * self.gpu_region as usize;
+        let capacity = self.ramp as usize + self.draw_indices.len() + regions * self.gpu_region as usize;
         if self.draw_index_buffer.reserve(device, 4, capacity)? {
             self.uploaded_draw_indices.clear();
+            self.ramp_uploaded = 0;
             self.rebind(device, layout, instances);
         }
+        if self.ramp_uploaded < self.ramp {
+            let rest: Vec<u32> = (self.ramp_uploaded..self.ramp).collect();
+            written.draw_indices += self.draw_index_buffer.write(queue, self.ramp_uploaded.into(), &rest);
+            self.ramp_uploaded = self.ramp;
+            // The indices after it moved.
+            self.uploaded_draw_indices.clear();
+        }
         if self.draw_indices != self.uploaded_draw_indices {
-            written.draw_indices = self.draw_index_buffer.write(queue, 0, &self.draw_indices);
+            written.draw_indices += self.draw_index_buffer.write(queue, self.ramp.into(), &self.draw_indices);
             self.uploaded_draw_indices.clone_from(&self.draw_indices);
         }
         if let Some(indirect) = &mut self.indirect {

@@ -12,14 +12,14 @@ use glam::Vec3A;
 
 impl Renderer {
     /// Stage 3: one draw item per visible run, or per visible instance for blended
-    /// materials so that they can be sorted far to near one by one; culled on
-    /// the GPU, one per entity's candidates. Depth is the view distance of the
+    /// materials so that they can be sorted far to near one by one; one per run
+    /// of store instances (an entity's candidates culled on the GPU, a whole tile). Depth is the view distance of the
     /// run's (or instance's, or entity's) box centre over the far plane.
     pub(super) fn build_queue(&mut self, frame: &ViewFrame, visible: &Visible, prepared: &[Prepared]) {
         let far = frame.camera.far();
         let depth = |center: Vec3A| -frame.view.transform_point3a(center).z / far;
-        let runs = visible.runs.iter().map(|r| (r, false)).chain(visible.candidates.iter().map(|r| (r, true)));
-        for (run, candidates) in runs {
+        let runs = visible.runs.iter().map(|r| (r, false)).chain(visible.ranges.iter().map(|r| (r, true)));
+        for (run, of_store) in runs {
             let s = &self.submitted[run.entry];
             let material = &self.registry.materials[s.material.0 as usize];
             let Prepared { pipeline, draw, .. } = prepared[run.entry];
@@ -40,7 +40,7 @@ impl Renderer {
                 count,
                 entry: run.entry as u32,
             };
-            if blended && !candidates {
+            if blended && !of_store {
                 for k in run.start..run.start + run.len {
                     let instance = visible.instances[k as usize] as usize;
                     self.view.forward.items.push(item(k, 1, depth(self.store.bounds.center(instance))));
@@ -75,7 +75,7 @@ impl Renderer {
         stats.occlusion = list.gpu.as_ref().is_some_and(|g| g.occluding);
         bytes.draw_indices += written.draw_indices;
         bytes.indirect += written.indirect;
-        stats.instances_drawn = self.view.forward.draw_indices.len() as u64;
+        stats.instances_drawn = self.view.forward.cpu_instances();
         if self.view.forward.culled_on_gpu() {
             // Counted on the GPU (blended instances included), a frame or two late.
             let submits = self.queue.submits();

@@ -503,10 +503,9 @@ impl Renderer {
                 stats.cpu_ms.queue = lap.next();
                 queue::sort(&mut self.view.forward.items);
                 stats.cpu_ms.sort = lap.next();
-                let registry = &self.registry;
-                let on_gpu = |item: &queue::DrawItem| frame.culling == Culling::Gpu && !registry.blended(item.material);
+                let placed = |item: &queue::DrawItem| visible.placed[item.entry as usize];
                 let draw_of = |item: &queue::DrawItem| prepared[item.entry as usize].draw;
-                self.view.forward.build(0, &visible.instances, frame.frustum, draw_of, on_gpu);
+                self.view.forward.build(0, &visible.instances, frame.frustum, draw_of, placed);
                 stats.cpu_ms.batch = lap.next();
                 self.visible = visible;
                 self.upload(frame, (lighting, shadowed), target, &mut stats)?;

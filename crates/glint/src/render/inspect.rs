@@ -33,10 +33,9 @@ impl Renderer {
                 }
                 (indices, phases)
             }
-            _ => (
-                list.draw_indices.clone(),
-                vec![list.batches.iter().map(|b| (b.first_instance, b.instance_count)).collect()],
-            ),
+            _ => {
+                (list.cpu_indices(), vec![list.batches.iter().map(|b| (b.first_instance, b.instance_count)).collect()])
+            }
         };
         for run in &list.runs {
             for b in run.batches() {

@@ -217,7 +217,7 @@ impl Renderer {
                 ViewTarget::CubeFace { .. } => PassKind::ShadowDistance,
             };
             let first_item = self.view.shadows.items.len();
-            for &VisibleRun { entry, start, len } in visible.runs.iter().chain(&visible.candidates) {
+            for &VisibleRun { entry, start, len } in visible.runs.iter().chain(&visible.ranges) {
                 let material = self.submitted[entry].material;
                 let pipeline = match self.registry.shadow_pipeline(material, &prepared[entry], pass, stats) {
                     Ok(pipeline) => pipeline,
@@ -248,10 +248,9 @@ impl Renderer {
                 });
             }
             queue::sort(&mut self.view.shadows.items[first_item..]);
-            // Blended materials cast no shadow: culled on the GPU, every item is.
-            let on_gpu = culling == Culling::Gpu;
             let draw_of = |item: &DrawItem| prepared[item.entry as usize].draw;
-            ranges.push(self.view.shadows.build(first_item, &visible.instances, frustum, draw_of, |_| on_gpu));
+            let placed = |item: &DrawItem| visible.placed[item.entry as usize];
+            ranges.push(self.view.shadows.build(first_item, &visible.instances, frustum, draw_of, placed));
         }
         self.visible = visible;
         Ok(ranges)
@@ -324,7 +323,7 @@ impl Renderer {
         }
         cost.draw_calls = stats.draw_calls;
         cost.draws = stats.draws;
-        cost.instances = self.view.shadows.draw_indices.len() as u64;
+        cost.instances = self.view.shadows.cpu_instances();
         if self.view.shadows.culled_on_gpu() {
             // Counted on the GPU, a frame or two late (0 before the first count comes back).
             let submits = self.queue.submits();

@@ -35,12 +35,38 @@ pub(super) struct Visible {
     pub instances: Vec<u32>,
     /// One run per entity with any instance visible.
     pub runs: Vec<VisibleRun>,
-    /// Culled on the GPU: one run per entity with any valid instance, `start`
-    /// its first in the store (blended entities are culled on the CPU); per
-    /// tile for tiled entities, the tiles the frustum sees.
-    pub candidates: Vec<VisibleRun>,
+    /// Runs of store instances, `start` the first in the store: culled on the
+    /// GPU, one per entity with any valid instance, or per tile the frustum
+    /// sees of a tiled entity ([`Placed::OnGpu`]); culled on the CPU, the
+    /// visible tiles of tiled entities, each drawn whole ([`Placed::Whole`]).
+    pub ranges: Vec<VisibleRun>,
+    /// How each submitted entity's instances reach the draw list, by entry.
+    pub placed: Vec<Placed>,
     /// Tiles tested and drawn.
     pub tiles: TileCounts,
+}
+
+/// How a submitted entity's instances reach a draw list: which of
+/// [`Visible`]'s lists holds them.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub(crate) enum Placed {
+    /// Its visible instances, listed one by one in `instances` (culled on the
+    /// CPU; blended ones always, to be sorted).
+    #[default]
+    Listed,
+    /// Runs of store instances in `ranges`, which the GPU culls.
+    OnGpu,
+    /// Runs of store instances in `ranges` drawn whole: a tiled entity's
+    /// visible tiles, culled on the CPU.
+    Whole,
+}
+
+impl Visible {
+    /// Instances kept: listed, and in whole tiles.
+    pub(super) fn kept(&self) -> u64 {
+        let whole = self.ranges.iter().filter(|r| self.placed[r.entry] == Placed::Whole);
+        self.instances.len() as u64 + whole.map(|r| u64::from(r.len)).sum::<u64>()
+    }
 }
 
 /// Tiles tested against a frustum, and tiles with any instance kept.
@@ -65,14 +91,15 @@ impl Renderer {
         self.collect_visible(&frame.frustum, frame.culling, |_| true, visible);
         let store = &self.store;
         stats.instances_invalid = self.submitted.iter().map(|s| u64::from(store.slot(s.slot).invalid)).sum();
-        stats.instances_culled = stats.instances_submitted - stats.instances_invalid - visible.instances.len() as u64;
+        stats.instances_culled = stats.instances_submitted - stats.instances_invalid - visible.kept();
         (stats.tiles_tested, stats.tiles_drawn) = (visible.tiles.tested, visible.tiles.drawn);
         stats.culling = frame.culling;
     }
 
     /// Fill `out` with the instances of the submitted entities `wanted` keeps
-    /// that `frustum` sees (every valid one when `culling` is off); culling on
-    /// the GPU, with the candidates of those not blended.
+    /// that `frustum` sees (every valid one when `culling` is off): listed, or
+    /// as runs of store instances (whole tiles; culling on the GPU, the
+    /// candidates of the entities not blended), as `out.placed` says.
     pub(super) fn collect_visible(
         &self,
         frustum: &Frustum,
@@ -82,28 +109,38 @@ impl Renderer {
     ) {
         out.instances.clear();
         out.runs.clear();
-        out.candidates.clear();
+        out.ranges.clear();
         out.tiles = TileCounts::default();
         let store = &self.store;
-        // Per material (captured by the parallel culler below, so plain data).
-        let gpu: Vec<bool> = (0..self.registry.materials.len() as u32)
-            .map(|m| culling == Culling::Gpu && !self.registry.blended(crate::scene::MaterialId(m)))
+        let blended: Vec<bool> = (0..self.registry.materials.len() as u32)
+            .map(|m| self.registry.blended(crate::scene::MaterialId(m)))
             .collect();
-        let on_gpu = |s: &Submitted| gpu[s.material.0 as usize];
-        for (entry, s) in self.submitted.iter().enumerate().filter(|(_, s)| on_gpu(s) && wanted(s)) {
+        out.placed.clear();
+        out.placed.extend(self.submitted.iter().map(|s| match blended[s.material.0 as usize] {
+            true => Placed::Listed,
+            false if culling == Culling::Gpu => Placed::OnGpu,
+            false if store.slot(s.slot).tiled => Placed::Whole,
+            false => Placed::Listed,
+        }));
+        let frustum_on = culling != Culling::Off;
+        for (entry, s) in
+            self.submitted.iter().enumerate().filter(|&(k, s)| out.placed[k] != Placed::Listed && wanted(s))
+        {
             let slot = store.slot(s.slot);
-            let candidates = &mut out.candidates;
+            let ranges = &mut out.ranges;
             if slot.tiled {
-                out.tiles += visible_tiles(frustum, true, slot, s.density, |r| {
-                    candidates.push(VisibleRun { entry, start: r.start, len: r.end - r.start });
+                // The GPU culls by the same boxes: every instance carries its tile's.
+                out.tiles += visible_tiles(frustum, frustum_on, slot, s.density, |r| {
+                    ranges.push(VisibleRun { entry, start: r.start, len: r.end - r.start });
                 });
             } else if slot.count > slot.invalid {
-                candidates.push(VisibleRun { entry, start: slot.first, len: slot.count - slot.invalid });
+                ranges.push(VisibleRun { entry, start: slot.first, len: slot.count - slot.invalid });
             }
         }
-        let wanted = |s: &Submitted| !on_gpu(s) && wanted(s);
-        let culling = culling != Culling::Off;
-        let Visible { instances: visible, runs, tiles, .. } = out;
+        let placed = &out.placed;
+        let listed = |entry: usize, s: &Submitted| placed[entry] == Placed::Listed && wanted(s);
+        let culling = frustum_on;
+        let (visible, runs, tiles) = (&mut out.instances, &mut out.runs, &mut out.tiles);
         let mut push_run = |entry: usize, visible: &mut Vec<u32>, start: usize| {
             let len = (visible.len() - start) as u32;
             if len > 0 {
@@ -115,10 +152,11 @@ impl Renderer {
             let lists: Vec<(Vec<u32>, TileCounts)> = self
                 .submitted
                 .par_iter()
-                .map(|s| {
+                .enumerate()
+                .map(|(entry, s)| {
                     let mut list = Vec::new();
                     let mut counts = TileCounts::default();
-                    if wanted(s) {
+                    if listed(entry, s) {
                         counts = visible_instances(frustum, culling, store.slot(s.slot), s.density, (store, &mut list));
                     }
                     (list, counts)
@@ -133,7 +171,7 @@ impl Renderer {
         } else {
             for (entry, s) in self.submitted.iter().enumerate() {
                 let start = visible.len();
-                if wanted(s) {
+                if listed(entry, s) {
                     *tiles += visible_instances(frustum, culling, store.slot(s.slot), s.density, (store, visible));
                 }
                 push_run(entry, visible, start);
