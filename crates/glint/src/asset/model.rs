@@ -236,7 +236,7 @@ impl Model {
         let environment = Environment {
             background: Background::Gradient { top: Vec3::new(0.25, 0.35, 0.55), bottom: Vec3::new(0.75, 0.78, 0.8) },
             ambient: Vec3::splat(0.3),
-            fog: None,
+            ..Environment::default()
         };
         let sun = Light::directional(Vec3::new(-0.4, -1.0, -0.6), Vec3::ONE, 1.0);
         let fill = Light::directional(Vec3::new(0.6, -0.3, 0.8), Vec3::ONE, 0.35);

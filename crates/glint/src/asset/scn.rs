@@ -432,6 +432,17 @@ impl Loader<'_> {
             });
             env.fog = Some(Fog { color, density: density.unwrap_or(0.02) });
         }
+        if let Some(strength) = f.number("wind", 0.0..=crate::scene::MAX_WIND)? {
+            env.wind.strength = strength;
+        }
+        if let Some(pair) = f.get("wind_direction") {
+            let [x, z] = super::scn_fields::numbers::<2>(self.path, pair, "2 numbers (x z)")?;
+            let direction = glam::Vec2::new(x, z);
+            if direction.length() < 1e-6 {
+                return Err(Diagnostic::at(self.path, pair.line, "\"wind_direction\" must not be 0 0"));
+            }
+            env.wind.direction = direction.normalize();
+        }
         Ok(())
     }
 

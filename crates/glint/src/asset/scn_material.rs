@@ -3,7 +3,7 @@
 
 use super::scn_fields::{numbers, Fields};
 use super::Diagnostic;
-use crate::scene::{AlphaMode, BlendState, Compare, Cull, Material, RenderStates, ShadingModel, StencilOp};
+use crate::scene::{AlphaMode, BlendState, Compare, Cull, Material, Motion, RenderStates, ShadingModel, StencilOp};
 use glam::{Vec3, Vec4};
 
 const COMPARES: [&str; 8] = ["never", "less", "less_equal", "equal", "greater_equal", "greater", "not_equal", "always"];
@@ -83,10 +83,75 @@ pub(crate) fn material_fields(f: &mut Fields, base: Material) -> Result<Material
         roughness: f.number("roughness", 0.0..=1.0)?.unwrap_or(base.roughness),
         emissive: f.color("emissive")?.unwrap_or(base.emissive),
         fog: f.flag("fog")?.unwrap_or(base.fog),
+        motion: motion_fields(f, base.motion)?,
         ..base.clone()
     };
     let states = render_states(f, material.render_states())?.or(base.states);
     Ok(Material { states, ..material })
+}
+
+/// The keys of each motion (`motion` names one): the others are errors.
+const MOTION_KEYS: [(&str, &[&str]); 3] = [
+    ("wind", &["sway", "sway_base"]),
+    ("flap", &["flap_amplitude", "flap_rate"]),
+    ("circle", &["walk_radius", "walk_speed"]),
+];
+
+/// A material's [`Motion`]: `motion` (`none`, `wind`, `flap`, `circle`; else
+/// `base`'s) and its keys, each over `base`'s value where `base` moves the
+/// same way, else over its default.
+fn motion_fields(f: &mut Fields, base: Option<Motion>) -> Result<Option<Motion>, Diagnostic> {
+    let kind = match f.choice("motion", &["none", "wind", "flap", "circle"])? {
+        Some((0, _)) => None,
+        Some((k, _)) => Some(k - 1),
+        None => base.map(|m| match m {
+            Motion::Wind { .. } => 0,
+            Motion::Flap { .. } => 1,
+            Motion::Circle { .. } => 2,
+        }),
+    };
+    for (k, (name, keys)) in MOTION_KEYS.iter().enumerate() {
+        if let Some(pair) = keys.iter().find_map(|key| f.get(key)).filter(|_| kind != Some(k)) {
+            let message = format!("{} is a key of \"motion\" \"{name}\", which this material does not have", pair.key);
+            return Err(Diagnostic::at(f.path, pair.line, message));
+        }
+    }
+    Ok(match kind {
+        None => None,
+        Some(0) => {
+            let (sway, base) = match base {
+                Some(Motion::Wind { sway, base }) => (sway, base),
+                _ => (0.3, 0.0),
+            };
+            let sway = f.number("sway", 0.0..=100.0)?.unwrap_or(sway);
+            Some(Motion::Wind { sway, base: f.number("sway_base", -1e4..=1e4)?.unwrap_or(base) })
+        }
+        Some(1) => {
+            let (amplitude, rate) = match base {
+                Some(Motion::Flap { amplitude, rate }) => (amplitude, rate),
+                _ => (0.8, 6.0),
+            };
+            let amplitude = f.number("flap_amplitude", 0.0..=10.0)?.unwrap_or(amplitude);
+            Some(Motion::Flap { amplitude, rate: f.number("flap_rate", 0.0..=100.0)?.unwrap_or(rate) })
+        }
+        Some(_) => {
+            let (radius, speed) = match base {
+                Some(Motion::Circle { radius, speed }) => (radius, speed),
+                _ => (glam::Vec2::new(1.0, 2.0), 0.5),
+            };
+            let radius = match f.get("walk_radius") {
+                None => radius,
+                Some(pair) => match numbers::<2>(f.path, pair, "2 numbers (min max)")? {
+                    [lo, hi] if (0.0..=hi).contains(&lo) && hi <= 1e4 => glam::Vec2::new(lo, hi),
+                    _ => {
+                        let message = "\"walk_radius\" must be min max with 0 <= min <= max <= 10000";
+                        return Err(Diagnostic::at(f.path, pair.line, message));
+                    }
+                },
+            };
+            Some(Motion::Circle { radius, speed: f.number("walk_speed", 0.0..=1000.0)?.unwrap_or(speed) })
+        }
+    })
 }
 
 /// A material's explicit render states: `None` when no state key is given, else

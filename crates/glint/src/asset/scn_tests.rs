@@ -2,7 +2,7 @@
 //! what a valid file becomes.
 
 use super::*;
-use crate::scene::{AlphaMode, BlendState, Compare, Cull, ShadingModel};
+use crate::scene::{AlphaMode, BlendState, Compare, Cull, Motion, ShadingModel};
 
 fn parse(text: &str) -> Result<SceneDesc, Diagnostic> {
     parse_scene(Path::new("dir/t.scn"), text)
@@ -95,6 +95,33 @@ fn unknown_keys_warn_with_their_line() {
     assert!(scene.warnings[0].message.contains("unknown key \"colour\""));
 }
 
+/// A `material` block named m with `extra` from its fourth line.
+fn motion(extra: &str) -> String {
+    format!("{{\n\"classname\" \"material\"\n\"name\" \"m\"\n{extra}\n}}")
+}
+
+#[test]
+fn materials_move_with_their_keys_and_the_world_sets_the_wind() {
+    let text = format!(
+        "{{ \"classname\" \"world\"\n\"wind\" \"0.5\"\n\"wind_direction\" \"0 2\" }}\n{}\n{}\n{}",
+        motion("\"motion\" \"wind\"\n\"sway_base\" \"-0.5\""),
+        motion("\"motion\" \"flap\"\n\"flap_rate\" \"3\"").replace("\"m\"", "\"f\""),
+        motion("\"motion\" \"circle\"\n\"walk_radius\" \"1 4\"\n\"walk_speed\" \"2\"").replace("\"m\"", "\"c\""),
+    );
+    let scene = parse(&text).unwrap();
+    let motions: Vec<_> = scene.materials.iter().map(|m| m.material.motion).collect();
+    assert_eq!(
+        motions,
+        [
+            Some(Motion::Wind { sway: 0.3, base: -0.5 }),
+            Some(Motion::Flap { amplitude: 0.8, rate: 3.0 }),
+            Some(Motion::Circle { radius: glam::Vec2::new(1.0, 4.0), speed: 2.0 }),
+        ]
+    );
+    let wind = scene.environment.wind;
+    assert_eq!((wind.strength, wind.direction), (0.5, glam::Vec2::Y));
+}
+
 /// An `instances` block of 100 cubes with `extra` on its fifth line.
 fn tiled(extra: &str) -> String {
     format!("{{\n\"classname\" \"instances\"\n\"mesh\" \"cube\"\n\"count\" \"100\"\n{extra}\n}}")
@@ -182,6 +209,13 @@ fn semantic_errors_name_file_line_and_expectation() {
         (&tiled("\"tiles\" \"4\"\n\"density\" \"1.5\""), 6, "\"density\" is 1.5, expected a value in 0..=1"),
         (&tiled("\"tiles\" \"4\"\n\"tile_padding\" \"-1\""), 6, "expected a value in 0..=1000000"),
         (&tiled("\"density\" \"0.5\""), 1, "\"density\" and \"tile_padding\" need \"tiles\""),
+        (&motion("\"motion\" \"swim\""), 4, "expected one of: none, wind, flap, circle"),
+        (&motion("\"sway\" \"0.2\""), 4, "sway is a key of \"motion\" \"wind\", which this material does not have"),
+        (&motion("\"motion\" \"wind\"\n\"flap_rate\" \"2\""), 5, "flap_rate is a key of \"motion\" \"flap\""),
+        (&motion("\"motion\" \"circle\"\n\"walk_radius\" \"2 1\""), 5, "0 <= min <= max <= 10000"),
+        (&motion("\"motion\" \"flap\"\n\"flap_rate\" \"-1\""), 5, "expected a value in 0..=100"),
+        ("{\n\"classname\" \"world\"\n\"wind\" \"3\"\n}", 3, "\"wind\" is 3, expected a value in 0..=2"),
+        ("{\n\"classname\" \"world\"\n\"wind_direction\" \"0 0\"\n}", 3, "must not be 0 0"),
     ];
     for (text, line, want) in cases {
         let err = parse(text).unwrap_err();

@@ -93,7 +93,7 @@ impl SceneGpu {
     }
 }
 
-/// The Camera block, `@group(1) @binding(0)` (208 bytes).
+/// The Camera block, `@group(1) @binding(0)` (224 bytes).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub(crate) struct CameraGpu {
@@ -101,8 +101,9 @@ pub(crate) struct CameraGpu {
     view: [f32; 16],          // 64
     inv_view_proj: [f32; 16], // 64
     position: [f32; 4],       // 16
+    motion: [f32; 4],         // 16: scene time (s), wind strength, wind direction x, z
 }
-const _: () = assert!(std::mem::size_of::<CameraGpu>() == 208);
+const _: () = assert!(std::mem::size_of::<CameraGpu>() == 224);
 
 impl Camera {
     /// The shader's view of this camera for a target of `aspect` = width / height.
@@ -114,6 +115,7 @@ impl Camera {
             view: view.to_cols_array(),
             inv_view_proj: view_proj.inverse().to_cols_array(),
             position: self.eye.extend(1.0).to_array(),
+            motion: [0.0; 4],
         }
     }
 }
@@ -128,7 +130,17 @@ impl CameraGpu {
             view: view.view.to_cols_array(),
             inv_view_proj: view_proj.inverse().to_cols_array(),
             position: view.eye.extend(view.distance_scale).to_array(),
+            motion: [0.0; 4],
         }
+    }
+
+    /// The record with `environment`'s time and wind, which move the vertices
+    /// of materials with a [`Motion`](crate::scene::Motion): in the Camera block
+    /// because shadow passes, which bind no Scene block, move them too.
+    pub(crate) fn with_motion(self, environment: &crate::scene::Environment) -> Self {
+        let [strength, x, z] = environment.wind.to_gpu();
+        let time = if environment.time.is_finite() { environment.time } else { 0.0 };
+        Self { motion: [time, strength, x, z], ..self }
     }
 }
 
@@ -139,8 +151,8 @@ impl CameraGpu {
 pub(crate) struct MaterialGpu {
     base_color: [f32; 4], // 16
     coeffs: [f32; 4],     // 16: ambient, diffuse, specular, Blinn-Phong exponent
-    pbr: [f32; 4],        // 16: metallic, roughness, 2 reserved
-    emissive: [f32; 4],   // 16: rgb, reserved
+    pbr: [f32; 4],        // 16: metallic, roughness, motion parameters 0 and 1
+    emissive: [f32; 4],   // 16: rgb, motion parameter 2
     uv_x: [f32; 3],       // 12: first row of the 2×3 uv transform
     alpha_cutoff: f32,    // 4
     uv_y: [f32; 3],       // 12: second row
@@ -158,11 +170,12 @@ impl Material {
         };
         let exponent = (1.0 + 11.0 * self.smoothness.clamp(0.0, 1.0)).exp2();
         let (s, c) = self.uv_rotation.sin_cos();
+        let [m0, m1, m2] = self.motion.map_or([0.0; 3], crate::scene::Motion::params);
         MaterialGpu {
             base_color: self.base_color.to_array(),
             coeffs: Vec4::new(self.ambient, self.diffuse, self.specular, exponent).to_array(),
-            pbr: [self.metallic.clamp(0.0, 1.0), self.roughness.clamp(0.0, 1.0), 0.0, 0.0],
-            emissive: self.emissive.extend(0.0).to_array(),
+            pbr: [self.metallic.clamp(0.0, 1.0), self.roughness.clamp(0.0, 1.0), m0, m1],
+            emissive: self.emissive.extend(m2).to_array(),
             uv_x: [c * self.uv_scale.x, -s * self.uv_scale.y, self.uv_offset.x],
             alpha_cutoff: cutoff,
             uv_y: [s * self.uv_scale.x, c * self.uv_scale.y, self.uv_offset.y],

@@ -99,7 +99,8 @@ impl Renderer {
     ) -> Result<(), RenderError> {
         let scene = SceneGpu::new(&lighting.environment, lighting.lights, shadowed);
         bytes.scene += self.view.scene_block.update(&self.queue, scene);
-        bytes.camera += self.view.blocks.update(&self.queue, 0, frame.camera.to_gpu(frame.aspect));
+        let camera = frame.camera.to_gpu(frame.aspect).with_motion(&lighting.environment);
+        bytes.camera += self.view.blocks.update(&self.queue, 0, camera);
         self.upload_instances(bytes)
     }
 

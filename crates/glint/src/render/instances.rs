@@ -36,8 +36,8 @@ pub(crate) struct Slot {
     material: MaterialId,
     /// Whether the records say the entity receives shadows.
     receive_shadows: bool,
-    /// The shape's local box when the range was written.
-    local: Aabb,
+    /// How far the instances reached when the range was written.
+    reach: Reach,
     /// First instance in the store.
     pub first: u32,
     /// Instance count.
@@ -96,7 +96,8 @@ impl InstanceStore {
 
     /// Record `entity` as submitted in `frame`, writing its transforms and bounds if
     /// they changed (or it is new, or its shape, the shape's box or its material changed). Returns its slot index.
-    pub(crate) fn submit(&mut self, entity: &Entity, local: Aabb, frame: u64) -> usize {
+    pub(crate) fn submit(&mut self, entity: &Entity, reach: impl Into<Reach>, frame: u64) -> usize {
+        let reach = reach.into();
         let count = entity.transforms().len() as u32;
         let joints = entity.joints().len() as u32;
         let index = match self.by_key.get(&entity.key()) {
@@ -108,7 +109,7 @@ impl InstanceStore {
                     shape: entity.shape,
                     material: entity.material,
                     receive_shadows: entity.receive_shadows,
-                    local,
+                    reach,
                     first: self.instances.len() as u32,
                     count: 0,
                     joints: 0,
@@ -139,15 +140,15 @@ impl InstanceStore {
             || slot.shape != entity.shape
             || slot.material != entity.material
             || slot.receive_shadows != entity.receive_shadows
-            || slot.local != local
+            || slot.reach != reach
         {
             slot.receive_shadows = entity.receive_shadows;
             slot.version = entity.version();
-            slot.local = local;
+            slot.reach = reach;
             slot.shape = entity.shape;
             slot.material = entity.material;
             let range = slot.first as usize..slot.first as usize + slot.len();
-            let written = write_range(entity, local, &mut self.instances[range.clone()], &mut self.bounds, range.start);
+            let written = write_range(entity, reach, &mut self.instances[range.clone()], &mut self.bounds, range.start);
             slot.bounds = written.bounds;
             slot.invalid = written.invalid;
             slot.clusters = written.clusters;
@@ -215,6 +216,35 @@ impl InstanceStore {
 /// Instances per tile: the culler's unit above single instances.
 pub(crate) const CLUSTER: usize = 64;
 
+/// How far an entity's instances reach: the shape's local box (grown by its
+/// material's [`Motion`](crate::scene::Motion)), and the radius each walks
+/// around its placed position in world units (0: none).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Reach {
+    pub local: Aabb,
+    pub walk: f32,
+}
+
+impl From<Aabb> for Reach {
+    fn from(local: Aabb) -> Self {
+        Self { local, walk: 0.0 }
+    }
+}
+
+impl Reach {
+    /// The world box `(c, e)` of an instance placed by `m`, grown to hold it
+    /// anywhere on its walk facing any way: around its placed position, out to
+    /// the walk's radius plus the box's own reach from there in x and z.
+    fn walked(self, m: &Mat4, (c, e): (Vec3A, Vec3A)) -> (Vec3A, Vec3A) {
+        if self.walk <= 0.0 {
+            return (c, e);
+        }
+        let o = Vec3A::from(m.w_axis.truncate());
+        let side = self.walk + (e.x * e.x + e.z * e.z).sqrt() + (c - o).truncate().length();
+        (Vec3A::new(o.x, c.y, o.z), Vec3A::new(side, e.y, side))
+    }
+}
+
 /// A run of an entity's instances culled by one box: a Morton run of
 /// [`CLUSTER`], or one of the entity's [`Tiles`].
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -245,12 +275,12 @@ struct Written {
 ///
 /// A skinned entity's local box is the union of the shape's box moved by each
 /// joint: every skinned vertex is a weighted average of points in those boxes.
-fn write_range(entity: &Entity, local: Aabb, records: &mut [InstanceGpu], boxes: &mut Boxes, first: usize) -> Written {
+fn write_range(entity: &Entity, reach: Reach, records: &mut [InstanceGpu], boxes: &mut Boxes, first: usize) -> Written {
     let (src, material, receive) = (entity.transforms(), entity.material, entity.receive_shadows);
     let (instances, joint_records) = records.split_at_mut(src.len());
-    let (lc, le) = skinned_box(entity.joints(), local);
+    let (lc, le) = skinned_box(entity.joints(), reach.local);
     let world: Vec<Option<(Vec3A, Vec3A)>> =
-        src.iter().map(|m| m.is_finite().then(|| transform_aabb(m, lc, le))).collect();
+        src.iter().map(|m| m.is_finite().then(|| reach.walked(m, transform_aabb(m, lc, le)))).collect();
     let (lo, hi) = world
         .iter()
         .flatten()

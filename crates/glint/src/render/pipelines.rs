@@ -345,7 +345,8 @@ impl Pipelines {
             | ShaderFeatures::DIFFUSE_MAP
             | ShaderFeatures::VERTEX_COLOR
             | ShaderFeatures::UV1
-            | ShaderFeatures::SKINNED;
+            | ShaderFeatures::SKINNED
+            | ShaderFeatures::MOTION;
         let mask = forward.features.contains(ShaderFeatures::ALPHA_MASK);
         let features =
             if mask { forward.features & kept } else { forward.features & !ShaderFeatures::ALPHA_MASK & kept };

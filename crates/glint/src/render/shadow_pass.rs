@@ -128,7 +128,7 @@ impl Renderer {
         };
         if !views.is_empty() {
             let ranges = self.batch_shadow_views((&views, &draws_with), frame.culling, &mut drawn.prepared)?;
-            self.upload_shadow_views(&views, &mut drawn.prepared)?;
+            self.upload_shadow_views(&views, &lighting.environment, &mut drawn.prepared)?;
             let mut encoder = self.take_encoder();
             self.outline.enter(&mut encoder, "shadows");
             self.encode_shadow_views(&mut encoder, (&views, &names), &ranges, &mut drawn.cost);
@@ -258,11 +258,17 @@ impl Renderer {
 
     /// Write the instances that changed, each view's Camera record, the Shadow
     /// block, and the shadow list's indices and commands.
-    fn upload_shadow_views(&mut self, views: &[ShadowView], stats: &mut FrameStats) -> Result<(), RenderError> {
+    fn upload_shadow_views(
+        &mut self,
+        views: &[ShadowView],
+        environment: &crate::scene::Environment,
+        stats: &mut FrameStats,
+    ) -> Result<(), RenderError> {
         let bytes = &mut stats.bytes_uploaded;
         self.upload_instances(bytes)?;
         for (k, view) in views.iter().enumerate() {
-            bytes.camera += self.view.blocks.update(&self.queue, 1 + k, CameraGpu::for_shadow(view));
+            let record = CameraGpu::for_shadow(view).with_motion(environment);
+            bytes.camera += self.view.blocks.update(&self.queue, 1 + k, record);
         }
         let block = ShadowGpu::new(views, self.shadow_maps.size_2d, self.shadow_maps.size_cube);
         bytes.scene += self.view.shadow_block.update(&self.queue, block);

@@ -32,10 +32,21 @@ pub struct Environment {
     pub ambient: Vec3,
     /// Distance fog over materials that accept it.
     pub fog: Option<Fog>,
+    /// The scene time in seconds, which moves materials with a
+    /// [`Motion`](super::Motion) (the same time draws the same picture).
+    pub time: f32,
+    /// The wind [`Motion::Wind`](super::Motion::Wind) materials bend in.
+    pub wind: super::Wind,
 }
 
 impl Default for Environment {
     fn default() -> Self {
-        Self { background: Background::Color(Vec3::new(0.05, 0.05, 0.06)), ambient: Vec3::splat(0.1), fog: None }
+        Self {
+            background: Background::Color(Vec3::new(0.05, 0.05, 0.06)),
+            ambient: Vec3::splat(0.1),
+            fog: None,
+            time: 0.0,
+            wind: super::Wind::default(),
+        }
     }
 }

@@ -113,6 +113,8 @@ pub struct Material {
     /// Explicit render states; `None` derives them from `alpha_mode` and
     /// `double_sided` (see [`Material::render_states`]).
     pub states: Option<RenderStates>,
+    /// Vertex animation with the scene time, if any.
+    pub motion: Option<super::Motion>,
 }
 
 impl Default for Material {
@@ -142,6 +144,7 @@ impl Default for Material {
             shading: ShadingModel::BlinnPhong,
             fog: true,
             states: None,
+            motion: None,
         }
     }
 }

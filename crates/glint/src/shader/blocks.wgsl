@@ -31,6 +31,9 @@ struct CameraBlock {
     view: mat4x4<f32>,
     inv_view_proj: mat4x4<f32>,
     position: vec4<f32>,
+    // x: the scene time in seconds; y: wind strength; zw: wind direction (x, z),
+    // unit (here rather than in the Scene block: shadow passes bind no Scene block).
+    motion: vec4<f32>,
 }
 
 // Directional lights' cascades (src/scene/light.rs CASCADES).

@@ -7,9 +7,11 @@ struct MaterialBlock {
     base_color: vec4<f32>,
     // x: ambient, y: diffuse, z: specular, w: Blinn-Phong exponent.
     coeffs: vec4<f32>,
-    // x: metallic, y: roughness (metallic-roughness shading).
+    // x: metallic, y: roughness (metallic-roughness shading); zw: motion
+    // parameters 0 and 1 (scene/motion.rs: wind sway and base, flap amplitude
+    // and rate, circle radii).
     pbr: vec4<f32>,
-    // rgb: emissive colour.
+    // rgb: emissive colour; w: motion parameter 2 (circle speed).
     emissive: vec4<f32>,
     // Texture coordinates are (dot(uv_x, (u, v, 1)), dot(uv_y, (u, v, 1))).
     uv_x: vec3<f32>,
@@ -200,6 +202,63 @@ fn skin_matrix(at: u32, instance: Instance, joints: vec4<u32>, weights: vec4<f32
 }
 #endif
 
+// A number in 0..1 fixed per instance, from its placed position: the phase
+// of its motion (no instance data needed).
+fn instance_hash(p: vec3<f32>) -> f32 {
+    var q = fract(p * vec3<f32>(0.1127, 0.1361, 0.0959));
+    q += dot(q, q.zyx + 31.71);
+    return fract((q.x + q.y) * q.z);
+}
+
+const TAU: f32 = 6.2831853;
+
+#ifdef WIND
+// How far a vertex `h` object units above the model's base moves in the world
+// (x, z) in the wind: sway · h² along the wind, times its strength and a gust
+// varying with time, the instance's phase and a noise term (the bounds allow
+// for 0.6 + 0.4 + 0.15 at most: scene/motion.rs).
+fn wind_offset(h: f32, material: MaterialBlock, origin: vec3<f32>, scale: f32) -> vec2<f32> {
+    let t = camera.motion.x;
+    let phase = instance_hash(origin) * TAU;
+    let gust = 0.6 + 0.4 * sin(1.7 * t + phase) + 0.15 * sin(4.3 * t + 3.0 * phase + 0.37 * (origin.x + origin.z));
+    let lean = material.pbr.z * h * h * gust * camera.motion.y * scale;
+    return camera.motion.zw * lean;
+}
+#endif
+
+#ifdef FLAP
+// A wing beat: vertices |x| object units off the model's YZ plane rise and
+// fall by amplitude · |x|, at the material's rate varied ±20 % per instance.
+fn flap_lift(x: f32, material: MaterialBlock, origin: vec3<f32>) -> f32 {
+    let k = instance_hash(origin);
+    let beat = sin(TAU * (camera.motion.x * material.pbr.w * (0.8 + 0.4 * k) + k));
+    return material.pbr.z * abs(x) * beat;
+}
+#endif
+
+#ifdef CIRCLE
+// Where an instance placed at `origin` walks: around a circle of a radius
+// between the material's two, at its speed, clockwise or not per instance,
+// turned to face along the path. Returns the turn and the new origin.
+struct Walk {
+    turn: mat3x3<f32>,
+    origin: vec3<f32>,
+}
+
+fn walk(material: MaterialBlock, origin: vec3<f32>) -> Walk {
+    let k = instance_hash(origin);
+    let radius = max(mix(material.pbr.z, material.pbr.w, k), 1e-3);
+    let turning = select(-1.0, 1.0, fract(k * 7.31) < 0.5);
+    let a = turning * camera.motion.x * material.emissive.w / radius + k * TAU;
+    let along = turning * vec2<f32>(-sin(a), cos(a));
+    // A turn about +Y taking +Z (the model's front) to `along`.
+    let c = along.y;
+    let s = along.x;
+    let turn = mat3x3<f32>(vec3<f32>(c, 0.0, -s), vec3<f32>(0.0, 1.0, 0.0), vec3<f32>(s, 0.0, c));
+    return Walk(turn, origin + radius * vec3<f32>(cos(a), 0.0, sin(a)));
+}
+#endif
+
 @vertex
 fn vs_main(v: VertexIn, @builtin(instance_index) draw_instance: u32) -> VertexOut {
     let at = draw_index_at(draw_instance);
@@ -220,7 +279,16 @@ fn vs_main(v: VertexIn, @builtin(instance_index) draw_instance: u32) -> VertexOu
     tangent = skin3 * tangent;
 #endif
 #endif
-    let world = model * position;
+#ifdef FLAP
+    position.y += flap_lift(position.x, material_at(instance.material), model[3].xyz);
+#endif
+    var world = model * position;
+#ifdef WIND
+    let scale = length(model[1].xyz);
+    let height = max(position.y - material_at(instance.material).pbr.w, 0.0);
+    let lean = wind_offset(height, material_at(instance.material), model[3].xyz, scale);
+    world += vec4<f32>(lean.x, 0.0, lean.y, 0.0);
+#endif
     // Normals transform by the inverse transpose, which is the cofactor matrix over
     // the determinant: only the determinant's sign matters once normalised. This is
     // right for non-uniform scale and mirroring without a matrix inverse.
@@ -228,14 +296,22 @@ fn vs_main(v: VertexIn, @builtin(instance_index) draw_instance: u32) -> VertexOu
     let cofactor = mat3x3<f32>(cross(m[1], m[2]), cross(m[2], m[0]), cross(m[0], m[1]));
     let det_sign = select(-1.0, 1.0, dot(m[0], cofactor[0]) >= 0.0);
     var out: VertexOut;
+    out.normal = cofactor * normal * det_sign;
+#ifdef CIRCLE
+    let walked = walk(material_at(instance.material), model[3].xyz);
+    world = vec4<f32>(walked.origin + walked.turn * (world.xyz - model[3].xyz), 1.0);
+    out.normal = walked.turn * out.normal;
+#endif
     out.clip = camera.view_proj * world;
     out.world_position = world.xyz;
-    out.normal = cofactor * normal * det_sign;
 #ifdef TEXCOORDS
     out.uv = uv_transform(material_at(instance.material), v.uv);
 #endif
 #ifdef NORMAL_MAP
     out.tangent = vec4<f32>(m * tangent, v.tangent.w * det_sign);
+#ifdef CIRCLE
+    out.tangent = vec4<f32>(walked.turn * out.tangent.xyz, out.tangent.w);
+#endif
 #endif
     out.material = instance.material;
 #ifdef SHADOWS

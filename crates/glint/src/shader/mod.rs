@@ -30,8 +30,12 @@ bitflags::bitflags! {
     /// | 13 | `SKINNED` | move vertices by the weighted sum of four joint matrices (set by the mesh) |
     /// | 14 | `SHADOWS` | look up the shadow maps (set by the frame, only when it has drawn some: untaken, the lookups still cost llvmpipe four times the rest of a simple frame) |
     /// | 15 | `SHADOW_CUBES` | look up point lights' shadow cubes too (set by the frame, only when it has drawn some: while a forward shader holding the cube lookup draws, lavapipe's resident memory grows every frame) |
+    /// | 16 | `WIND` | bend vertices in the wind with the scene time ([`Motion::Wind`](crate::scene::Motion::Wind)) |
+    /// | 17 | `FLAP` | swing vertices far from the YZ plane up and down ([`Motion::Flap`](crate::scene::Motion::Flap)) |
+    /// | 18 | `CIRCLE` | walk each instance around a circle ([`Motion::Circle`](crate::scene::Motion::Circle)) |
     ///
-    /// Bits 16–31 are free for more (shadow receiving comes with shadow maps).
+    /// Bits 19–31 are free for more (shadow receiving comes with shadow maps).
+    /// The motion bits stay in shadow passes' variants, so shadows move too.
     ///
     /// One def follows from the bits rather than being one: `TEXCOORDS`, set with
     /// any map ([`MAPS`](Self::MAPS)), passes texture coordinates to the fragment
@@ -70,6 +74,12 @@ bitflags::bitflags! {
         const SHADOWS = 1 << 14;
         /// `SHADOW_CUBES`.
         const SHADOW_CUBES = 1 << 15;
+        /// `WIND`.
+        const WIND = 1 << 16;
+        /// `FLAP`.
+        const FLAP = 1 << 17;
+        /// `CIRCLE`.
+        const CIRCLE = 1 << 18;
     }
 }
 
@@ -97,8 +107,17 @@ impl ShaderFeatures {
         f.set(Self::OCCLUSION_MAP, material.occlusion_map.is_some());
         f.set(Self::EMISSIVE_MAP, material.emissive_map.is_some());
         f.set(Self::FOG, material.fog && environment.fog.is_some());
+        f |= match material.motion {
+            None => Self::empty(),
+            Some(crate::scene::Motion::Wind { .. }) => Self::WIND,
+            Some(crate::scene::Motion::Flap { .. }) => Self::FLAP,
+            Some(crate::scene::Motion::Circle { .. }) => Self::CIRCLE,
+        };
         f
     }
+
+    /// The vertex-animation bits: kept in shadow passes.
+    pub const MOTION: Self = Self::WIND.union(Self::FLAP).union(Self::CIRCLE);
 
     /// The naga_oil shader defs of this set: one boolean def per bit that is set,
     /// and `TEXCOORDS` with any map.

@@ -57,9 +57,15 @@ impl World {
         &self.placed.entities
     }
 
-    /// Its lights under its environment, for each frame.
+    /// Its lights under its environment, for each frame: at the time of the
+    /// last pose where a material moves with time (elsewhere the Scene block
+    /// stays the same from frame to frame, and is not uploaded again).
     pub fn lighting(&self) -> Lighting<'_> {
-        self.desc.lighting()
+        let mut lighting = self.desc.lighting();
+        if self.desc.materials.iter().any(|m| m.material.motion.is_some()) {
+            lighting.environment.time = self.time;
+        }
+        lighting
     }
 
     /// The meshes of cloth `index` (in file order) as of the last pose: its
