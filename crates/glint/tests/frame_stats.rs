@@ -154,7 +154,7 @@ fn moving_one_entity_reuploads_only_its_transforms() {
     moving.material = other;
     let stats = frame(&mut r, gpu, &[&still, &moving], &sun());
     assert_eq!(stats.bytes_uploaded.instances, 5 * 64);
-    assert_eq!(stats.bytes_uploaded.material, 96, "the new material's table entry");
+    assert_eq!(stats.bytes_uploaded.material, 128, "the new material's table entry");
     assert_eq!(stats.draws, 2);
 }
 
@@ -199,9 +199,9 @@ fn only_the_changed_block_is_uploaded() {
     let (mut r, cube, m) = renderer_with_cube(gpu);
     let e = Entity::new(cube, m, Mat4::IDENTITY);
     frame(&mut r, gpu, &[&e], &sun());
-    // A material edit rewrites that material's 96-byte block, nothing else.
+    // A material edit rewrites that material's 128-byte block, nothing else.
     r.material_mut(m).expect("material").base_color.x = 0.1;
-    assert_eq!(frame(&mut r, gpu, &[&e], &sun()).bytes_uploaded.uniforms, 96);
+    assert_eq!(frame(&mut r, gpu, &[&e], &sun()).bytes_uploaded.uniforms, 128);
     // A new light rewrites the scene block (80 + 64 × 64 bytes), nothing else.
     let mut lights = sun();
     lights.push(Light::point(Vec3::Y, Vec3::ONE, 1.0, 5.0));
@@ -260,7 +260,7 @@ fn a_sky_with_only_blended_entities_and_the_naive_mode_draw() {
     let naive = frame(&mut r, gpu, &[&e], sky);
     assert_eq!((naive.draw_calls, naive.draws), (1 + 3, 1 + 3));
     assert_eq!(naive.instances_culled, 0);
-    assert_eq!(naive.bytes_uploaded.material, 3 * 96, "the material block before every draw");
+    assert_eq!(naive.bytes_uploaded.material, 3 * 128, "the material block before every draw");
     assert_eq!(naive.bytes_uploaded.draw_indices, 3 * 4);
 }
 

@@ -84,6 +84,16 @@ pub(crate) fn material_fields(f: &mut Fields, base: Material) -> Result<Material
         emissive: f.color("emissive")?.unwrap_or(base.emissive),
         fog: f.flag("fog")?.unwrap_or(base.fog),
         motion: motion_fields(f, base.motion)?,
+        edge_fade: match f.get("edge_fade") {
+            None => base.edge_fade,
+            Some(pair) => match numbers::<2>(f.path, pair, "2 numbers (inner outer)")? {
+                [inner, outer] if inner >= 0.0 && outer > inner && outer <= 1e6 => Some((inner, outer)),
+                _ => {
+                    let message = "\"edge_fade\" must be inner outer with 0 <= inner < outer <= 1000000";
+                    return Err(Diagnostic::at(f.path, pair.line, message));
+                }
+            },
+        },
         ..base.clone()
     };
     let states = render_states(f, material.render_states())?.or(base.states);

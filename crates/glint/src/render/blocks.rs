@@ -151,14 +151,16 @@ impl CameraGpu {
 pub(crate) struct MaterialGpu {
     base_color: [f32; 4], // 16
     coeffs: [f32; 4],     // 16: ambient, diffuse, specular, Blinn-Phong exponent
-    pbr: [f32; 4],        // 16: metallic, roughness, motion parameters 0 and 1
-    emissive: [f32; 4],   // 16: rgb, motion parameter 2
+    pbr: [f32; 4],        // 16: metallic, roughness, 2 reserved
+    emissive: [f32; 4],   // 16: rgb, reserved
     uv_x: [f32; 3],       // 12: first row of the 2×3 uv transform
     alpha_cutoff: f32,    // 4
     uv_y: [f32; 3],       // 12: second row
     uv1_maps: u32,        // 4: MapSlots reading the second uv set
+    motion: [f32; 4],     // 16: the Motion's parameters (scene/motion.rs), reserved
+    fade: [f32; 4],       // 16: edge fade's inner and outer radius, 2 reserved
 }
-const _: () = assert!(std::mem::size_of::<MaterialGpu>() == 96);
+const _: () = assert!(std::mem::size_of::<MaterialGpu>() == 128);
 
 impl Material {
     /// The shader's view of this material (what it does with them is the variant's
@@ -171,11 +173,14 @@ impl Material {
         let exponent = (1.0 + 11.0 * self.smoothness.clamp(0.0, 1.0)).exp2();
         let (s, c) = self.uv_rotation.sin_cos();
         let [m0, m1, m2] = self.motion.map_or([0.0; 3], crate::scene::Motion::params);
+        let (inner, outer) = self.edge_fade.unwrap_or((0.0, 0.0));
         MaterialGpu {
             base_color: self.base_color.to_array(),
             coeffs: Vec4::new(self.ambient, self.diffuse, self.specular, exponent).to_array(),
-            pbr: [self.metallic.clamp(0.0, 1.0), self.roughness.clamp(0.0, 1.0), m0, m1],
-            emissive: self.emissive.extend(m2).to_array(),
+            pbr: [self.metallic.clamp(0.0, 1.0), self.roughness.clamp(0.0, 1.0), 0.0, 0.0],
+            emissive: self.emissive.extend(0.0).to_array(),
+            motion: [m0, m1, m2, 0.0],
+            fade: [inner, outer, 0.0, 0.0],
             uv_x: [c * self.uv_scale.x, -s * self.uv_scale.y, self.uv_offset.x],
             alpha_cutoff: cutoff,
             uv_y: [s * self.uv_scale.x, c * self.uv_scale.y, self.uv_offset.y],

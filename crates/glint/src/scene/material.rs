@@ -115,6 +115,10 @@ pub struct Material {
     pub states: Option<RenderStates>,
     /// Vertex animation with the scene time, if any.
     pub motion: Option<super::Motion>,
+    /// Fade to transparent from `inner` to `outer` world units from the
+    /// instance's placed position in x and z (the seed's ground, whose edges
+    /// blend into the sky): shows with [`AlphaMode::Blend`].
+    pub edge_fade: Option<(f32, f32)>,
 }
 
 impl Default for Material {
@@ -145,6 +149,7 @@ impl Default for Material {
             fog: true,
             states: None,
             motion: None,
+            edge_fade: None,
         }
     }
 }

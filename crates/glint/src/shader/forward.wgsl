@@ -7,11 +7,9 @@ struct MaterialBlock {
     base_color: vec4<f32>,
     // x: ambient, y: diffuse, z: specular, w: Blinn-Phong exponent.
     coeffs: vec4<f32>,
-    // x: metallic, y: roughness (metallic-roughness shading); zw: motion
-    // parameters 0 and 1 (scene/motion.rs: wind sway and base, flap amplitude
-    // and rate, circle radii).
+    // x: metallic, y: roughness (metallic-roughness shading).
     pbr: vec4<f32>,
-    // rgb: emissive colour; w: motion parameter 2 (circle speed).
+    // rgb: emissive colour.
     emissive: vec4<f32>,
     // Texture coordinates are (dot(uv_x, (u, v, 1)), dot(uv_y, (u, v, 1))).
     uv_x: vec3<f32>,
@@ -19,6 +17,11 @@ struct MaterialBlock {
     uv_y: vec3<f32>,
     // MapSlots bits: maps that read the second uv set.
     uv1_maps: u32,
+    // xyz: the Motion's parameters (scene/motion.rs: wind sway and base, flap
+    // amplitude and rate, walk radii and speed).
+    motion: vec4<f32>,
+    // x, y: edge fade's inner and outer radius (world units, in x and z).
+    fade: vec4<f32>,
 }
 
 // MapSlots bits (scene/material.rs).
@@ -76,7 +79,7 @@ fn texel(array: texture_2d<u32>, i: u32) -> vec4<u32> {
 }
 
 fn material_at(i: u32) -> MaterialBlock {
-    let at = 6u * i;
+    let at = 8u * i;
     let uv_x = texel(material_texels, at + 4u);
     let uv_y = texel(material_texels, at + 5u);
     var m: MaterialBlock;
@@ -88,6 +91,8 @@ fn material_at(i: u32) -> MaterialBlock {
     m.alpha_cutoff = bitcast<f32>(uv_x.w);
     m.uv_y = bitcast<vec3<f32>>(uv_y.xyz);
     m.uv1_maps = uv_y.w;
+    m.motion = bitcast<vec4<f32>>(texel(material_texels, at + 6u));
+    m.fade = bitcast<vec4<f32>>(texel(material_texels, at + 7u));
     return m;
 }
 
@@ -174,6 +179,10 @@ struct VertexOut {
 #ifdef SHADOWS
     @location(8) @interpolate(flat) receive_shadows: u32,
 #endif
+#ifdef EDGE_FADE
+    // The instance's placed position in x and z, where its fade is measured from.
+    @location(9) @interpolate(flat) origin: vec2<f32>,
+#endif
 }
 
 fn record_matrix(r: Instance) -> mat4x4<f32> {
@@ -221,7 +230,7 @@ fn wind_offset(h: f32, material: MaterialBlock, origin: vec3<f32>, scale: f32) -
     let t = camera.motion.x;
     let phase = instance_hash(origin) * TAU;
     let gust = 0.6 + 0.4 * sin(1.7 * t + phase) + 0.15 * sin(4.3 * t + 3.0 * phase + 0.37 * (origin.x + origin.z));
-    let lean = material.pbr.z * h * h * gust * camera.motion.y * scale;
+    let lean = material.motion.x * h * h * gust * camera.motion.y * scale;
     return camera.motion.zw * lean;
 }
 #endif
@@ -231,8 +240,8 @@ fn wind_offset(h: f32, material: MaterialBlock, origin: vec3<f32>, scale: f32) -
 // fall by amplitude · |x|, at the material's rate varied ±20 % per instance.
 fn flap_lift(x: f32, material: MaterialBlock, origin: vec3<f32>) -> f32 {
     let k = instance_hash(origin);
-    let beat = sin(TAU * (camera.motion.x * material.pbr.w * (0.8 + 0.4 * k) + k));
-    return material.pbr.z * abs(x) * beat;
+    let beat = sin(TAU * (camera.motion.x * material.motion.y * (0.8 + 0.4 * k) + k));
+    return material.motion.x * abs(x) * beat;
 }
 #endif
 
@@ -247,9 +256,9 @@ struct Walk {
 
 fn walk(material: MaterialBlock, origin: vec3<f32>) -> Walk {
     let k = instance_hash(origin);
-    let radius = max(mix(material.pbr.z, material.pbr.w, k), 1e-3);
+    let radius = max(mix(material.motion.x, material.motion.y, k), 1e-3);
     let turning = select(-1.0, 1.0, fract(k * 7.31) < 0.5);
-    let a = turning * camera.motion.x * material.emissive.w / radius + k * TAU;
+    let a = turning * camera.motion.x * material.motion.z / radius + k * TAU;
     let along = turning * vec2<f32>(-sin(a), cos(a));
     // A turn about +Y taking +Z (the model's front) to `along`.
     let c = along.y;
@@ -285,7 +294,7 @@ fn vs_main(v: VertexIn, @builtin(instance_index) draw_instance: u32) -> VertexOu
     var world = model * position;
 #ifdef WIND
     let scale = length(model[1].xyz);
-    let height = max(position.y - material_at(instance.material).pbr.w, 0.0);
+    let height = max(position.y - material_at(instance.material).motion.y, 0.0);
     let lean = wind_offset(height, material_at(instance.material), model[3].xyz, scale);
     world += vec4<f32>(lean.x, 0.0, lean.y, 0.0);
 #endif
@@ -316,6 +325,9 @@ fn vs_main(v: VertexIn, @builtin(instance_index) draw_instance: u32) -> VertexOu
     out.material = instance.material;
 #ifdef SHADOWS
     out.receive_shadows = instance.flags & 1u;
+#endif
+#ifdef EDGE_FADE
+    out.origin = model[3].xz;
 #endif
 #ifdef VERTEX_COLOR
     out.color = v.color;
@@ -612,6 +624,9 @@ fn fs_main(in: VertexOut, @builtin(front_facing) front: bool) -> @location(0) ve
 #endif
 #ifdef DIFFUSE_MAP
     base *= textureSample(diffuse_map, material_sampler, map_uv(in, SLOT_DIFFUSE));
+#endif
+#ifdef EDGE_FADE
+    base.a *= 1.0 - smoothstep(material.fade.x, material.fade.y, distance(in.world_position.xz, in.origin));
 #endif
 #ifdef ALPHA_MASK
     if base.a < material.alpha_cutoff {

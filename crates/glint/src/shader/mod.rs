@@ -33,8 +33,9 @@ bitflags::bitflags! {
     /// | 16 | `WIND` | bend vertices in the wind with the scene time ([`Motion::Wind`](crate::scene::Motion::Wind)) |
     /// | 17 | `FLAP` | swing vertices far from the YZ plane up and down ([`Motion::Flap`](crate::scene::Motion::Flap)) |
     /// | 18 | `CIRCLE` | walk each instance around a circle ([`Motion::Circle`](crate::scene::Motion::Circle)) |
+    /// | 19 | `EDGE_FADE` | fade alpha with the distance from the instance's placed position ([`Material::edge_fade`]) |
     ///
-    /// Bits 19–31 are free for more (shadow receiving comes with shadow maps).
+    /// Bits 20–31 are free for more (shadow receiving comes with shadow maps).
     /// The motion bits stay in shadow passes' variants, so shadows move too.
     ///
     /// One def follows from the bits rather than being one: `TEXCOORDS`, set with
@@ -80,6 +81,8 @@ bitflags::bitflags! {
         const FLAP = 1 << 17;
         /// `CIRCLE`.
         const CIRCLE = 1 << 18;
+        /// `EDGE_FADE`.
+        const EDGE_FADE = 1 << 19;
     }
 }
 
@@ -107,6 +110,7 @@ impl ShaderFeatures {
         f.set(Self::OCCLUSION_MAP, material.occlusion_map.is_some());
         f.set(Self::EMISSIVE_MAP, material.emissive_map.is_some());
         f.set(Self::FOG, material.fog && environment.fog.is_some());
+        f.set(Self::EDGE_FADE, material.edge_fade.is_some());
         f |= match material.motion {
             None => Self::empty(),
             Some(crate::scene::Motion::Wind { .. }) => Self::WIND,
