@@ -192,6 +192,18 @@ struct Picture {
     /// block's own "density").
     #[arg(long, default_value_t = 1.0, value_parser = parse_density)]
     density: f32,
+    /// Move the sun, sky and glare to this hour (0..=24), whatever the scene's
+    /// "time_of_day" says (scene files).
+    #[arg(long, value_parser = parse_hours)]
+    time_of_day: Option<f32>,
+}
+
+/// `--time-of-day`: hours, 0..=24.
+fn parse_hours(s: &str) -> Result<f32, String> {
+    match s.parse::<f32>() {
+        Ok(h) if (0.0..=24.0).contains(&h) => Ok(h),
+        _ => Err(format!("expected an hour of the day from 0 to 24, found {s:?}")),
+    }
 }
 
 /// `--cull`.
@@ -235,7 +247,7 @@ pub(crate) fn check_camera(desc: &SceneDesc, scene: &Path, camera: Option<usize>
 impl Picture {
     /// `options` with this picture's cloth solve.
     fn load_options(&self, options: LoadOptions) -> LoadOptions {
-        LoadOptions { cloth_solve: self.solve.map(Into::into), ..options }
+        LoadOptions { cloth_solve: self.solve.map(Into::into), time_of_day: self.time_of_day, ..options }
     }
 }
 

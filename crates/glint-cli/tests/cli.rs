@@ -267,6 +267,27 @@ fn density_scales_every_tile_on_both_culling_paths() {
 }
 
 #[test]
+fn time_of_day_overrides_the_scene_s_hour() {
+    // glare.scn is set at 17.2; at noon it draws the library's noon reference.
+    let dir = tempfile::tempdir().expect("tempdir");
+    let png = dir.path().join("noon.png");
+    let (scene, png) = (repo("tests/scenes/glare.scn"), png.to_str().expect("path").to_owned());
+    let args = ["render", scene.to_str().expect("path"), "-o", &png, "--size", "256x256", "--time", "0.5"];
+    let out = glint(&[&args[..], &["--time-of-day", "12"]].concat());
+    if out.status.code() == Some(2) && std::env::var("GLINT_REQUIRE_ADAPTER").as_deref() != Ok("1") {
+        eprintln!("skipping: no GPU adapter");
+        return;
+    }
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let reference = repo("tests/reference/glare_noon.png");
+    let compared = glint(&["compare", reference.to_str().expect("path"), &png]);
+    assert_eq!(compared.status.code(), Some(0), "{}", stderr(&compared));
+    let out = glint(&[&args[..], &["--time-of-day", "25"]].concat());
+    assert_eq!(out.status.code(), Some(1));
+    assert!(stderr(&out).contains("from 0 to 24"), "{}", stderr(&out));
+}
+
+#[test]
 fn render_draws_every_camera_with_a_viewport_unless_one_is_picked() {
     let dir = tempfile::tempdir().expect("tempdir");
     let (png, picked) = (dir.path().join("split.png"), dir.path().join("picked.png"));

@@ -44,7 +44,7 @@ use std::path::{Path, PathBuf};
 
 /// How model and scene files are read: which folders the paths inside them may
 /// name (see `docs/limits.md`).
-#[derive(Clone, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct LoadOptions {
     /// Let files name assets outside their asset roots (absolute paths, `..` that
     /// leaves them, symlinks out, `file:` URIs). Off by default: a scene or model
@@ -59,6 +59,9 @@ pub struct LoadOptions {
     pub texture_memory: u64,
     /// How every cloth is solved, whatever its scene block says (`None`: as it says).
     pub cloth_solve: Option<crate::sim::cloth::Solve>,
+    /// A scene file's time of day, whatever its world block says (`None`: as
+    /// it says; see [`SceneDesc::set_time_of_day`]).
+    pub time_of_day: Option<f32>,
     /// Where the files are read (default: the file system).
     pub files: Files,
 }
@@ -70,6 +73,7 @@ impl Default for LoadOptions {
             asset_roots: Vec::new(),
             texture_memory: MAX_TEXTURE_MEMORY,
             cloth_solve: None,
+            time_of_day: None,
             files: Files::Disk,
         }
     }

@@ -307,7 +307,9 @@ pub fn parse_scene_with(path: &Path, text: &str, options: LoadOptions) -> Result
         instances: 0,
         camera_lines: Vec::new(),
         targets: scn_targets::Targets::default(),
+        time_of_day: None,
     };
+    loader.time_of_day = loader.options.time_of_day;
     // Render targets first, so cameras and materials may name one defined
     // anywhere in the file (as materials are named by entities).
     let is_target = |b: &&Block| b.pairs.iter().any(|p| p.key == "classname" && p.value.trim() == "render_target");
@@ -353,6 +355,8 @@ struct Loader<'a> {
     camera_lines: Vec<usize>,
     /// The `render_target` blocks so far, by name.
     targets: scn_targets::Targets,
+    /// The world's `time_of_day`, applied once every light is read.
+    time_of_day: Option<f32>,
 }
 
 /// Rotation from Quake-style angles in degrees: pitch about X, yaw about Y, roll about Z.
@@ -432,6 +436,11 @@ impl Loader<'_> {
             });
             env.fog = Some(Fog { color, density: density.unwrap_or(0.02) });
         }
+        if let Some(glare) = f.number("glare", 0.0..=4.0)? {
+            env.glare = glare;
+        }
+        let hours = f.number("time_of_day", 0.0..=24.0)?;
+        self.time_of_day = self.time_of_day.or(hours);
         if let Some(strength) = f.number("wind", 0.0..=crate::scene::MAX_WIND)? {
             env.wind.strength = strength;
         }
@@ -803,6 +812,9 @@ impl Loader<'_> {
 
     /// Resolve material names and gather placements into one task per (mesh, material, render order).
     fn finish(mut self) -> Result<SceneDesc, Diagnostic> {
+        if let Some(hours) = self.time_of_day {
+            self.scene.set_time_of_day(hours);
+        }
         self.scene.textures = std::mem::replace(&mut self.textures, TextureCache::new(0)).into_textures();
         // Tiled blocks are entities of their own (keyed by their place).
         let mut tasks: HashMap<(MeshRef, Option<usize>, DrawOptions, Option<usize>), usize> = HashMap::new();

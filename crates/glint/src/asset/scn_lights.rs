@@ -65,6 +65,31 @@ fn range(f: &mut Fields) -> Result<f32, Diagnostic> {
     Ok(f.number("range", 1e-3..=1e9)?.unwrap_or(10.0))
 }
 
+impl super::SceneDesc {
+    /// Move the sun (the first directional light; one is added when there is
+    /// none), the sky gradient and the ambient light to `hours` of the day
+    /// ([`Daylight::at`](crate::scene::Daylight::at)): the world's
+    /// `time_of_day`. The glare follows the sun, whose direction and colour it takes.
+    pub fn set_time_of_day(&mut self, hours: f32) {
+        let day = crate::scene::Daylight::at(hours);
+        let directional = |l: &Light| matches!(l.kind, crate::scene::LightKind::Directional { .. });
+        match self.lights.iter().position(directional) {
+            Some(k) => {
+                let sun = &mut self.lights[k];
+                sun.kind = crate::scene::LightKind::Directional { direction: day.sun_direction };
+                (sun.color, sun.intensity) = (day.sun_color, day.sun_intensity);
+            }
+            None if self.lights.len() < crate::scene::MAX_LIGHTS => {
+                self.lights.insert(0, Light::directional(day.sun_direction, day.sun_color, day.sun_intensity));
+            }
+            None => {}
+        }
+        let env = &mut self.environment;
+        env.background = crate::scene::Background::Gradient { top: day.sky_top, bottom: day.sky_bottom };
+        env.ambient = day.ambient;
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use crate::asset::{parse_scene, SceneDesc};

@@ -122,6 +122,25 @@ fn materials_move_with_their_keys_and_the_world_sets_the_wind() {
     assert_eq!((wind.strength, wind.direction), (0.5, glam::Vec2::Y));
 }
 
+#[test]
+fn time_of_day_moves_the_first_directional_light_and_the_sky_or_adds_a_sun() {
+    let day = crate::scene::Daylight::at(9.0);
+    let lit = parse(
+        "{ \"classname\" \"light_point\"\n\"origin\" \"0 1 0\" }\n\
+         { \"classname\" \"light_directional\"\n\"direction\" \"0 -1 0\" }\n\
+         { \"classname\" \"world\"\n\"time_of_day\" \"9\"\n\"glare\" \"2\" }",
+    )
+    .unwrap();
+    assert_eq!(lit.lights.len(), 2);
+    assert_eq!(lit.lights[1].kind, crate::scene::LightKind::Directional { direction: day.sun_direction });
+    assert_eq!((lit.lights[1].color, lit.lights[1].intensity), (day.sun_color, day.sun_intensity));
+    assert_eq!(lit.environment.background, Background::Gradient { top: day.sky_top, bottom: day.sky_bottom });
+    assert_eq!((lit.environment.ambient, lit.environment.glare), (day.ambient, 2.0));
+    let unlit = parse("{ \"classname\" \"world\"\n\"time_of_day\" \"9\" }").unwrap();
+    assert_eq!(unlit.lights.len(), 1, "a sun is added");
+    assert!(matches!(unlit.lights[0].kind, crate::scene::LightKind::Directional { .. }));
+}
+
 /// An `instances` block of 100 cubes with `extra` on its fifth line.
 fn tiled(extra: &str) -> String {
     format!("{{\n\"classname\" \"instances\"\n\"mesh\" \"cube\"\n\"count\" \"100\"\n{extra}\n}}")
@@ -216,6 +235,9 @@ fn semantic_errors_name_file_line_and_expectation() {
         (&motion("\"motion\" \"flap\"\n\"flap_rate\" \"-1\""), 5, "expected a value in 0..=100"),
         ("{\n\"classname\" \"world\"\n\"wind\" \"3\"\n}", 3, "\"wind\" is 3, expected a value in 0..=2"),
         ("{\n\"classname\" \"world\"\n\"wind_direction\" \"0 0\"\n}", 3, "must not be 0 0"),
+        ("{\n\"classname\" \"world\"\n\"glare\" \"5\"\n}", 3, "\"glare\" is 5, expected a value in 0..=4"),
+        ("{\n\"classname\" \"world\"\n\"time_of_day\" \"25\"\n}", 3, "expected a value in 0..=24"),
+        (&motion("\"edge_fade\" \"5 2\""), 4, "0 <= inner < outer <= 1000000"),
     ];
     for (text, line, want) in cases {
         let err = parse(text).unwrap_err();

@@ -55,7 +55,7 @@ impl Light {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub(crate) struct SceneGpu {
-    ambient: [f32; 4],              // 16
+    ambient: [f32; 4],              // 16: rgb, w glare
     sky_top: [f32; 4],              // 16
     sky_bottom: [f32; 4],           // 16
     fog: [f32; 4],                  // 16: rgb colour, w density
@@ -75,7 +75,7 @@ impl SceneGpu {
             Background::Gradient { top, bottom } => (top, bottom),
         };
         let mut block = Self {
-            ambient: env.ambient.extend(0.0).to_array(),
+            ambient: env.ambient.extend(if env.glare.is_finite() { env.glare.max(0.0) } else { 0.0 }).to_array(),
             sky_top: top.extend(1.0).to_array(),
             sky_bottom: bottom.extend(1.0).to_array(),
             fog: env.fog.map_or([0.0; 4], |f| f.color.extend(f.density).to_array()),

@@ -11,12 +11,13 @@
 
 use super::draw_list::{run_stage, DrawList};
 use super::gpu_cull::{Run, COMMAND_BYTES};
+use super::pipelines::SkyPass;
 use super::queue::{Queue, SKY_STAGE};
 use super::timer::Timed;
 use super::views::ViewBlocks;
 use super::{FrameStats, Renderer};
 use crate::gpu::OffscreenTarget;
-use crate::scene::Background;
+use crate::scene::{Background, Environment};
 
 /// Which part of a view's forward pass a render pass is.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -45,9 +46,10 @@ impl Renderer {
         &mut self,
         encoder: &mut wgpu::CommandEncoder,
         target: &OffscreenTarget,
-        background: Background,
+        environment: &Environment,
         stats: &mut FrameStats,
     ) {
+        let background = environment.background;
         let list = &self.view.forward;
         let sky_at = list.runs.partition_point(|r| run_stage(list, r) < SKY_STAGE);
         if let Some(pipelines) = &self.cull_pipelines {
@@ -84,6 +86,7 @@ impl Renderer {
                 bound = Bound { stencil_reference: bound.stencil_reference, ..Bound::default() };
             }
             self.draw_stages(&self.view.forward, &mut pass, (sky_at..end, after_sky), &mut bound, stats);
+            self.draw_glare(&mut pass, target, environment, stats);
         }
         if let Some(timer) = &mut self.gpu_timer {
             timer.resolve(encoder, Timed::Forward, self.frame_index);
@@ -128,6 +131,26 @@ impl Renderer {
         pass
     }
 
+    /// Draw the sun glare of `environment` over everything (none at glare 0),
+    /// the pass's last draw.
+    pub(super) fn draw_glare(
+        &self,
+        pass: &mut wgpu::RenderPass<'_>,
+        target: &OffscreenTarget,
+        environment: &Environment,
+        stats: &mut FrameStats,
+    ) {
+        let glare = self.registry.pipelines.sky_built(target.format(), SkyPass::Glare);
+        let Some(glare) = glare.filter(|_| environment.glare > 0.0) else { return };
+        pass.push_debug_group("glare");
+        pass.set_pipeline(glare);
+        pass.draw(0..3, 0..1);
+        pass.pop_debug_group();
+        stats.pipelines_bound += 1;
+        stats.draw_calls += 1;
+        stats.draws += 1;
+    }
+
     /// Draw the gradient sky of `background` (none for a plain colour); returns
     /// whether it drew, after which only groups 0, 1 and 3 are bound.
     pub(super) fn draw_sky(
@@ -138,7 +161,7 @@ impl Renderer {
         stats: &mut FrameStats,
     ) -> bool {
         let sky = match background {
-            Background::Gradient { .. } => self.registry.pipelines.sky_built(target.format()),
+            Background::Gradient { .. } => self.registry.pipelines.sky_built(target.format(), SkyPass::Gradient),
             Background::Color(_) => None,
         };
         let Some(sky) = sky else { return false };

@@ -510,7 +510,7 @@ impl Renderer {
                 self.visible = visible;
                 self.upload(frame, (lighting, shadowed), target, &mut stats)?;
                 stats.cpu_ms.upload = lap.next();
-                self.encode(&mut encoder, target, lighting.environment.background, &mut stats);
+                self.encode(&mut encoder, target, &lighting.environment, &mut stats);
                 stats.cpu_ms.encode = lap.next();
             }
         }

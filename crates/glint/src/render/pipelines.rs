@@ -101,6 +101,14 @@ impl VertexLayout {
 /// where the map is read).
 const SHADOW_SLOPE_BIAS: f32 = 1.5;
 
+/// The full-screen passes of the sky shader: the gradient sky, drawn behind
+/// what the opaque stages drew, and the sun glare, added over everything.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub(crate) enum SkyPass {
+    Gradient,
+    Glare,
+}
+
 /// What a pipeline draws into.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub(crate) enum PassKind {
@@ -141,7 +149,7 @@ pub(crate) struct Pipelines {
     forward_cache: Vec<(PipelineKey, wgpu::RenderPipeline)>,
     forward_index: HashMap<PipelineKey, u16>,
     /// Sky pipelines by sample count.
-    sky_cache: HashMap<TargetFormat, wgpu::RenderPipeline>,
+    sky_cache: HashMap<(TargetFormat, SkyPass), wgpu::RenderPipeline>,
 }
 
 fn uniform_entry(binding: u32, visibility: wgpu::ShaderStages, dynamic: bool) -> wgpu::BindGroupLayoutEntry {
@@ -411,14 +419,20 @@ impl Pipelines {
         self.forward_cache[id as usize].0.states.stencil.reference.into()
     }
 
-    /// The sky pipeline for `target`, if [`Self::build_sky`] built it.
-    pub(crate) fn sky_built(&self, target: TargetFormat) -> Option<&wgpu::RenderPipeline> {
-        self.sky_cache.get(&target)
+    /// The sky or glare pipeline for `target`, if [`Self::build_sky`] built it.
+    pub(crate) fn sky_built(&self, target: TargetFormat, pass: SkyPass) -> Option<&wgpu::RenderPipeline> {
+        self.sky_cache.get(&(target, pass))
     }
 
-    /// Build the sky pipeline for `target` unless it exists; returns whether it was built now.
-    pub(crate) fn build_sky(&mut self, device: &wgpu::Device, target: TargetFormat) -> Result<bool, ShaderError> {
-        if self.sky_cache.contains_key(&target) {
+    /// Build the sky or glare pipeline for `target` unless it exists; returns
+    /// whether it was built now.
+    pub(crate) fn build_sky(
+        &mut self,
+        device: &wgpu::Device,
+        target: TargetFormat,
+        pass: SkyPass,
+    ) -> Result<bool, ShaderError> {
+        if self.sky_cache.contains_key(&(target, pass)) {
             return Ok(false);
         }
         let scope = DriverErrors::watch(device);
@@ -427,12 +441,24 @@ impl Pipelines {
             self.sky_module = Some(shader_module(device, "renderer: sky shader", module));
         }
         let module = self.sky_module.as_ref().expect("built above");
-        let states = RenderStates {
-            depth: crate::scene::DepthState { compare: Compare::LessEqual, write: false },
-            ..Default::default()
+        // The sky behind what was drawn; the glare added over everything.
+        let (compare, entry, blend) = match pass {
+            SkyPass::Gradient => (Compare::LessEqual, "fs_sky", None),
+            SkyPass::Glare => {
+                let add = wgpu::BlendComponent {
+                    src_factor: wgpu::BlendFactor::One,
+                    dst_factor: wgpu::BlendFactor::One,
+                    operation: wgpu::BlendOperation::Add,
+                };
+                (Compare::Always, "fs_glare", Some(wgpu::BlendState { color: add, alpha: add }))
+            }
         };
+        let states = RenderStates { depth: crate::scene::DepthState { compare, write: false }, ..Default::default() };
         let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("renderer: sky pipeline"),
+            label: Some(match pass {
+                SkyPass::Gradient => "renderer: sky pipeline",
+                SkyPass::Glare => "renderer: glare pipeline",
+            }),
             layout: Some(&self.sky_layout),
             vertex: wgpu::VertexState {
                 module,
@@ -445,9 +471,13 @@ impl Pipelines {
             multisample: wgpu::MultisampleState { count: target.samples, ..Default::default() },
             fragment: Some(wgpu::FragmentState {
                 module,
-                entry_point: Some("fs_sky"),
+                entry_point: Some(entry),
                 compilation_options: Default::default(),
-                targets: &[Some(target.color.into())],
+                targets: &[Some(wgpu::ColorTargetState {
+                    format: target.color,
+                    blend,
+                    write_mask: wgpu::ColorWrites::ALL,
+                })],
             }),
             multiview_mask: None,
             cache: None,
@@ -456,7 +486,7 @@ impl Pipelines {
             self.sky_module = None;
             return Err(ShaderError::refused("renderer: sky shader", &error));
         }
-        self.sky_cache.insert(target, pipeline);
+        self.sky_cache.insert((target, pass), pipeline);
         Ok(true)
     }
 

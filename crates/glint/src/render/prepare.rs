@@ -3,7 +3,7 @@
 //! pipelines), and [`Renderer::precompile`], which does it before the first frame.
 
 use super::draw_list::BatchDraw;
-use super::pipelines::VertexLayout;
+use super::pipelines::{SkyPass, VertexLayout};
 use super::{FrameStats, FrameVariant, Registry, RenderError, Renderer};
 use crate::gpu::TargetFormat;
 use crate::scene::{Background, Entity, Environment, Lighting, MaterialId, ShapeId, MAX_LIGHTS};
@@ -18,6 +18,7 @@ pub(super) struct PrepareKey {
     variant: FrameVariant,
     fog: bool,
     sky: bool,
+    glare: bool,
 }
 
 /// What a submitted entity draws with, as stage 1 made it: its forward
@@ -72,6 +73,7 @@ impl Renderer {
             variant: self.frame_variant,
             fog: environment.fog.is_some(),
             sky: matches!(environment.background, Background::Gradient { .. }),
+            glare: environment.glare > 0.0,
         };
         if let Some((_, table)) = self.last_prepared.as_ref().filter(|(k, _)| *k == key) {
             return Ok(table.clone());
@@ -151,7 +153,10 @@ impl Registry {
             prepared.push(Prepared { pipeline, layout, draw: BatchDraw { mesh, texture_set } });
         }
         if matches!(environment.background, Background::Gradient { .. }) {
-            stats.pipelines_compiled += u32::from(self.pipelines.build_sky(&self.device, target)?);
+            stats.pipelines_compiled += u32::from(self.pipelines.build_sky(&self.device, target, SkyPass::Gradient)?);
+        }
+        if environment.glare > 0.0 {
+            stats.pipelines_compiled += u32::from(self.pipelines.build_sky(&self.device, target, SkyPass::Glare)?);
         }
         Ok(prepared)
     }

@@ -37,6 +37,10 @@ pub struct Environment {
     pub time: f32,
     /// The wind [`Motion::Wind`](super::Motion::Wind) materials bend in.
     pub wind: super::Wind,
+    /// Sun glare (0: none): an additive sphere around the view in the first
+    /// directional light's direction and colour, drawn after everything else
+    /// without a depth test, so the view brightens against the sun.
+    pub glare: f32,
 }
 
 impl Default for Environment {
@@ -47,6 +51,7 @@ impl Default for Environment {
             fog: None,
             time: 0.0,
             wind: super::Wind::default(),
+            glare: 0.0,
         }
     }
 }

@@ -6,6 +6,7 @@
 //! owns the GPU twins and turns submitted entities into draws.
 
 mod camera;
+mod daylight;
 mod entity;
 mod environment;
 mod fly;
@@ -22,6 +23,7 @@ mod view;
 mod view_order;
 
 pub use camera::{Camera, Projection};
+pub use daylight::Daylight;
 pub use entity::Entity;
 pub use environment::{Background, Environment, Fog};
 pub use fly::{FlyCamera, FlyInput};

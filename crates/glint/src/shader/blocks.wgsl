@@ -16,6 +16,7 @@ struct Light {
 }
 
 struct SceneBlock {
+    // rgb: ambient light; w: sun glare (0: none; sky.wgsl fs_glare).
     ambient: vec4<f32>,
     sky_top: vec4<f32>,
     sky_bottom: vec4<f32>,
