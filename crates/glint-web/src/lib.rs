@@ -24,7 +24,8 @@ use wasm_bindgen::prelude::*;
 use wasm_bindgen::JsCast;
 
 /// The demo scenes the picker offers, under the page.
-const SCENES: [&str; 4] = ["scenes/showcase.scn", "scenes/split.scn", "scenes/monitor.scn", "scenes/tablecloth.scn"];
+const SCENES: [&str; 5] =
+    ["scenes/showcase.scn", "scenes/split.scn", "scenes/monitor.scn", "scenes/tablecloth.scn", "scenes/meadow.scn"];
 
 thread_local! {
     /// The page's one viewer, for [`read_frame`].
@@ -77,6 +78,8 @@ struct Query {
     scene: String,
     backend: Option<String>,
     size: Option<(u32, u32)>,
+    /// The share of every tile of tiled instances drawn (`Renderer::set_density`).
+    density: f32,
 }
 
 impl Query {
@@ -89,7 +92,13 @@ impl Query {
             Some((w.parse().ok()?, h.parse().ok()?))
                 .filter(|&(w, h): &(u32, u32)| (1..=4096).contains(&w) && (1..=4096).contains(&h))
         });
-        Self { scene: get("scene").unwrap_or_else(|| SCENES[0].into()), backend: get("backend"), size }
+        let density = get("density").and_then(|d| d.parse::<f32>().ok()).filter(|d| (0.0..=1.0).contains(d));
+        Self {
+            scene: get("scene").unwrap_or_else(|| SCENES[0].into()),
+            backend: get("backend"),
+            size,
+            density: density.unwrap_or(1.0),
+        }
     }
 }
 
@@ -114,6 +123,7 @@ struct Viewer {
     msaa: u32,
     backend: &'static str,
     fixed_size: Option<(u32, u32)>,
+    density: f32,
     shown: Option<Shown>,
     input: Input,
     frames: u64,
@@ -147,6 +157,7 @@ async fn run() -> Result<(), String> {
         msaa,
         backend,
         fixed_size: query.size,
+        density: query.density,
         shown: None,
         input: Input::default(),
         frames: 0,
@@ -216,6 +227,7 @@ async fn show(viewer: &Rc<RefCell<Viewer>>, scene: &str) {
     clear_error();
     let mut v = viewer.borrow_mut();
     let mut renderer = Renderer::new(&v.gpu);
+    renderer.set_density(v.density);
     let world = World::place(desc, &mut renderer);
     let views = world.views(None);
     let Some(flown) = views.iter().find(|view| view.output.is_none()) else {

@@ -58,3 +58,24 @@ fn gl_and_the_webgl2_path_move_them_alike() {
         common::assert_matches_reference("motion_late", &late);
     }
 }
+
+#[test]
+fn a_model_whose_material_moves_is_drawn_at_the_scene_time_mid_flap() {
+    // The wing material moves through an `mtl.` override of the model's own.
+    let Some(gpu) = common::gpu() else { return };
+    let desc = common::load_scene(&common::repo_root().join("tests/scenes/butterflies.scn"));
+    assert!(desc.warnings.is_empty(), "{:?}", desc.warnings);
+    let mut renderer = Renderer::new(gpu);
+    let mut world = World::place(desc, &mut renderer);
+    let mut pictures = Vec::new();
+    // A quarter beat (wings up) and three quarters (down), at one beat a second.
+    for time in [0.25, 0.75] {
+        world.pose(time, &mut renderer).expect("posed");
+        assert_eq!(world.lighting().environment.time, time);
+        let mut target = OffscreenTarget::new(gpu, 128, 128, 4).expect("target");
+        world.draw(&mut renderer, &world.views(None), &mut target).expect("frame");
+        pictures.push(target.read_rgba8(gpu).expect("readback"));
+    }
+    assert!(common::max_difference(&pictures[0], &pictures[1]) > 64, "the wings moved");
+    common::assert_matches_reference("butterflies_mid_flap", &pictures[0]);
+}

@@ -62,7 +62,8 @@ impl World {
     /// stays the same from frame to frame, and is not uploaded again).
     pub fn lighting(&self) -> Lighting<'_> {
         let mut lighting = self.desc.lighting();
-        if self.desc.materials.iter().any(|m| m.material.motion.is_some()) {
+        let models = self.desc.models.iter().flat_map(|m| &m.materials);
+        if self.desc.materials.iter().chain(models).any(|m| m.material.motion.is_some()) {
             lighting.environment.time = self.time;
         }
         lighting
