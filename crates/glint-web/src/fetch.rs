@@ -12,9 +12,11 @@ use std::sync::Arc;
 use wasm_bindgen::JsCast;
 use wasm_bindgen_futures::JsFuture;
 
-/// Rounds of fetching: a scene, its models and textures, the models' own files,
-/// their material libraries' textures. More is a loop.
-const MAX_ROUNDS: usize = 8;
+/// Rounds of fetching. A load stops at the first file the set lacks, so each
+/// round may find one more: the meadow's five models and their material
+/// libraries take eleven. Every round fetches a file not asked for before, so
+/// the rounds end; this bounds how many files one scene may name.
+const MAX_ROUNDS: usize = 64;
 
 /// Largest file fetched at all (the loader's largest limit, a model or buffer).
 const MAX_FETCH_BYTES: f64 = (1u64 << 30) as f64;

@@ -141,14 +141,9 @@ impl Renderer {
         stats: &mut FrameStats,
     ) {
         let glare = self.registry.pipelines.sky_built(target.format(), SkyPass::Glare);
-        let Some(glare) = glare.filter(|_| environment.glare > 0.0) else { return };
-        pass.push_debug_group("glare");
-        pass.set_pipeline(glare);
-        pass.draw(0..3, 0..1);
-        pass.pop_debug_group();
-        stats.pipelines_bound += 1;
-        stats.draw_calls += 1;
-        stats.draws += 1;
+        if let Some(glare) = glare.filter(|_| environment.glare > 0.0) {
+            full_screen(pass, glare, "glare", stats);
+        }
     }
 
     /// Draw the gradient sky of `background` (none for a plain colour); returns
@@ -165,13 +160,7 @@ impl Renderer {
             Background::Color(_) => None,
         };
         let Some(sky) = sky else { return false };
-        pass.push_debug_group("sky");
-        pass.set_pipeline(sky);
-        pass.draw(0..3, 0..1);
-        pass.pop_debug_group();
-        stats.pipelines_bound += 1;
-        stats.draw_calls += 1;
-        stats.draws += 1;
+        full_screen(pass, sky, "sky", stats);
         stats.passes.sky = super::PassStats { draw_calls: 1, draws: 1, instances: 1, cpu_ms: 0.0 };
         // The sky's layout has groups 0–1 only: bind the forward groups again.
         pass.set_bind_group(3, &self.view.forward.bind_group, &[]);
@@ -288,4 +277,16 @@ fn stage_name(stage: u8) -> String {
         s if s == Queue::Transparent.stage() => "transparent".into(),
         s => format!("render_order {s}"),
     }
+}
+
+/// Draw one full-screen triangle with `pipeline` (the sky shader's passes),
+/// in a debug group `name`.
+fn full_screen(pass: &mut wgpu::RenderPass<'_>, pipeline: &wgpu::RenderPipeline, name: &str, stats: &mut FrameStats) {
+    pass.push_debug_group(name);
+    pass.set_pipeline(pipeline);
+    pass.draw(0..3, 0..1);
+    pass.pop_debug_group();
+    stats.pipelines_bound += 1;
+    stats.draw_calls += 1;
+    stats.draws += 1;
 }
