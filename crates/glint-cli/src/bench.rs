@@ -66,6 +66,9 @@ pub struct ModeReport {
     pub post_gpu_ms_median: Vec<f64>,
     /// Median CPU time per submitted instance, ns.
     pub ns_per_instance: f64,
+    /// Bytes of instance records on the GPU per submitted instance
+    /// (`FrameStats::instance_bytes`): 64, or 16 for compact instances.
+    pub instance_bytes_per_instance: f64,
     /// Median of cull + queue + sort + batch + upload per submitted instance, ns.
     pub ns_per_instance_cull_sort_batch_upload: f64,
     /// Median CPU time of each stage, ms.
@@ -248,6 +251,7 @@ pub fn run_mode(
         post: view.post.iter().map(|e| e.name()).collect(),
         post_gpu_ms_median: post_gpu_ms.iter_mut().filter_map(|all| median(all)).collect(),
         ns_per_instance: percentile(&totals, 0.5) * 1e6 / instances,
+        instance_bytes_per_instance: last.instance_bytes as f64 / instances,
         ns_per_instance_cull_sort_batch_upload: median_of(&frames, per_instance_stages) * 1e6 / instances,
         stage_ms_median,
         resident_mib_frame_100: resident_frame_100,

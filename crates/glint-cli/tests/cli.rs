@@ -336,6 +336,7 @@ fn bench_reports_naive_cpu_culled_and_gpu_culled_side_by_side_as_json() {
         let m = &report["modes"][mode];
         let own = m["own_cpu_ms_median"].as_f64().expect("own_cpu_ms_median");
         assert!(own > 0.0 && own <= m["cpu_ms_median"].as_f64().expect("cpu"), "{mode}: {m}");
+        assert_eq!(m["instance_bytes_per_instance"], 64.0, "full instances: {m}");
         for key in ["cpu_ms_median", "cpu_ms_p95", "ns_per_instance"] {
             assert!(m[key].as_f64().expect(key) > 0.0, "{mode}.{key}: {m}");
         }

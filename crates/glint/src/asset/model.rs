@@ -257,6 +257,7 @@ impl Model {
                 transforms: vec![Mat4::IDENTITY],
                 tiles: None,
                 density: 1.0,
+                compact: false,
             }],
             cloths: Vec::new(),
             models: vec![self],

@@ -112,6 +112,8 @@ pub struct EntityDesc {
     pub tiles: Option<crate::scene::Tiles>,
     /// With tiles, the fraction of each tile drawn (see [`Entity::density`]).
     pub density: f32,
+    /// With tiles, 16-byte instances (see [`Entity::with_compact_instances`]).
+    pub compact: bool,
 }
 
 /// How an `entity` or `instances` block's instances draw: keys `render_order`,
@@ -325,8 +327,8 @@ struct Placement {
     material: Option<(String, usize)>,
     draw: DrawOptions,
     transforms: Vec<Mat4>,
-    /// Tiles and density: an entity of its own.
-    tiles: Option<(crate::scene::Tiles, f32)>,
+    /// Tiles, density and compact instances: an entity of its own.
+    tiles: Option<(crate::scene::Tiles, f32, bool)>,
 }
 
 struct Loader<'a> {
@@ -786,13 +788,15 @@ impl Loader<'_> {
         let tiles = f.integer("tiles", 1..=MAX_TILES)?;
         let padding = f.number("tile_padding", 0.0..=1e6)?;
         let density = f.number("density", 0.0..=1.0)?;
+        let compact = f.flag("compact")?;
         let tiles = match tiles {
             Some(n) => {
                 let sizes = sort_into_tiles(&mut transforms, n as u32, origin, extent, seed.wrapping_add(1));
-                Some((crate::scene::Tiles::from_sizes(sizes, padding.unwrap_or(0.0)), density.unwrap_or(1.0)))
+                let tiles = crate::scene::Tiles::from_sizes(sizes, padding.unwrap_or(0.0));
+                Some((tiles, density.unwrap_or(1.0), compact.unwrap_or(false)))
             }
-            None if density.is_some() || padding.is_some() => {
-                let message = "\"density\" and \"tile_padding\" need \"tiles\": without tiles every instance is drawn";
+            None if density.is_some() || padding.is_some() || compact.is_some() => {
+                let message = "\"density\", \"tile_padding\" and \"compact\" need \"tiles\": without tiles every instance is drawn and stored in full";
                 return Err(Diagnostic::at(self.path, f.block.line, message));
             }
             None => None,
@@ -822,7 +826,7 @@ impl Loader<'_> {
             let material = self.material_index(placement.material)?;
             let own = placement.tiles.is_some().then_some(k);
             let task = *tasks.entry((placement.mesh, material, placement.draw, own)).or_insert_with(|| {
-                let (tiles, density) = placement.tiles.map_or((None, 1.0), |(t, d)| (Some(t), d));
+                let (tiles, density, compact) = placement.tiles.map_or((None, 1.0, false), |(t, d, c)| (Some(t), d, c));
                 self.scene.entities.push(EntityDesc {
                     mesh: placement.mesh,
                     material,
@@ -830,6 +834,7 @@ impl Loader<'_> {
                     transforms: Vec::new(),
                     tiles,
                     density,
+                    compact,
                 });
                 self.scene.entities.len() - 1
             });

@@ -168,6 +168,9 @@ fn tiled_instances_are_an_entity_of_their_own_with_their_tiles_and_density() {
         }
     }
     assert!(scene.entities[1].tiles.is_none() && scene.entities[1].density == 1.0);
+    assert!(!e.compact && !scene.entities[1].compact);
+    let compact = parse(&tiled("\"tiles\" \"2\"\n\"compact\" \"1\"")).unwrap();
+    assert!(compact.entities[0].compact);
 }
 
 #[test]
@@ -227,7 +230,9 @@ fn semantic_errors_name_file_line_and_expectation() {
         (&tiled("\"tiles\" \"257\""), 5, "expected a whole number in 1..=256"),
         (&tiled("\"tiles\" \"4\"\n\"density\" \"1.5\""), 6, "\"density\" is 1.5, expected a value in 0..=1"),
         (&tiled("\"tiles\" \"4\"\n\"tile_padding\" \"-1\""), 6, "expected a value in 0..=1000000"),
-        (&tiled("\"density\" \"0.5\""), 1, "\"density\" and \"tile_padding\" need \"tiles\""),
+        (&tiled("\"density\" \"0.5\""), 1, "\"density\", \"tile_padding\" and \"compact\" need \"tiles\""),
+        (&tiled("\"compact\" \"1\""), 1, "need \"tiles\""),
+        (&tiled("\"tiles\" \"2\"\n\"compact\" \"yes\""), 6, "\"compact\""),
         (&motion("\"motion\" \"swim\""), 4, "expected one of: none, wind, flap, circle"),
         (&motion("\"sway\" \"0.2\""), 4, "sway is a key of \"motion\" \"wind\", which this material does not have"),
         (&motion("\"motion\" \"wind\"\n\"flap_rate\" \"2\""), 5, "flap_rate is a key of \"motion\" \"flap\""),

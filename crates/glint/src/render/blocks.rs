@@ -234,6 +234,42 @@ impl InstanceGpu {
     }
 }
 
+/// A compact instance (16 bytes), four to a 64-byte record of the instance
+/// buffer: `x` and `z` of its position (f32), its `y` and scale (two half
+/// floats), then its turn about +Y (the low 16 bits, 1/65536 of a turn), its
+/// material (15 bits) and whether it receives shadows (the top bit).
+/// `forward.wgsl`'s `compact_instance` reads it back.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub(crate) struct CompactGpu(pub(crate) [u32; 4]);
+
+/// Materials a compact instance can name (15 bits).
+pub(crate) const COMPACT_MATERIALS: u32 = 1 << 15;
+
+impl CompactGpu {
+    /// `transform`'s position, scale (its Y axis's length) and turn about +Y
+    /// (of its Z axis), with `material` (below [`COMPACT_MATERIALS`]); a
+    /// transform that is not finite draws nothing (scale 0).
+    pub(crate) fn new(transform: &Mat4, material: MaterialId, receive_shadows: bool) -> Self {
+        if !transform.is_finite() {
+            return Self::default();
+        }
+        let p = transform.w_axis;
+        let scale = transform.y_axis.truncate().length();
+        let z = transform.z_axis;
+        let turn = z.x.atan2(z.z).rem_euclid(std::f32::consts::TAU) / std::f32::consts::TAU;
+        let turn = ((turn * 65536.0).round() as u32) & 0xffff;
+        let half = |v: f32| u32::from(half::f16::from_f32(v).to_bits());
+        let ids = turn | (material.0 & (COMPACT_MATERIALS - 1)) << 16 | u32::from(receive_shadows) << 31;
+        Self([p.x.to_bits(), p.z.to_bits(), half(p.y) | half(scale) << 16, ids])
+    }
+
+    /// Four of them as one record of the instance buffer.
+    pub(crate) fn record(four: [Self; 4]) -> InstanceGpu {
+        bytemuck::cast(four)
+    }
+}
+
 /// A uniform buffer holding one block, rewritten only when its bytes change.
 pub(crate) struct UniformBlock<T: bytemuck::Pod + PartialEq> {
     pub(crate) buffer: wgpu::Buffer,
@@ -285,5 +321,20 @@ mod tests {
         );
         // Each keeps the shadow view of its place in the caller's list.
         assert_eq!([block.lights[0].params[1], block.lights[1].params[1], block.lights[2].params[1]], [-1.0, 2.0, 7.0]);
+    }
+
+    #[test]
+    fn a_compact_instance_keeps_position_scale_turn_material_and_shadow_flag() {
+        let turn = 2.5_f32;
+        let (scale, rotation) = (Vec3::splat(0.7), glam::Quat::from_rotation_y(turn));
+        let m = Mat4::from_scale_rotation_translation(scale, rotation, Vec3::new(12.5, 0.3, -7.25));
+        let CompactGpu([x, z, ys, ids]) = CompactGpu::new(&m, MaterialId(300), true);
+        assert_eq!((f32::from_bits(x), f32::from_bits(z)), (12.5, -7.25), "x and z exact");
+        let (y, scale) = (half::f16::from_bits(ys as u16).to_f32(), half::f16::from_bits((ys >> 16) as u16).to_f32());
+        assert!((y - 0.3).abs() < 3e-4 && (scale - 0.7).abs() < 5e-4, "y {y}, scale {scale}");
+        let back = (ids & 0xffff) as f32 / 65536.0 * std::f32::consts::TAU;
+        assert!((back - turn).abs() < 1e-4, "turn {back}");
+        assert_eq!(((ids >> 16) & 0x7fff, ids >> 31), (300, 1));
+        assert_eq!(CompactGpu::new(&Mat4::from_translation(Vec3::NAN), MaterialId(1), true), CompactGpu::default());
     }
 }

@@ -56,10 +56,9 @@ pub(crate) struct DrawList {
     pub cull_ranges: Vec<CullRange>,
     /// Length of the GPU-culled region of the draw-index buffer.
     gpu_region: u32,
-    /// Whether each batch is culled on the GPU.
-    on_gpu: Vec<bool>,
-    /// Whether each batch draws whole tiles (indexed through the ramp).
-    whole: Vec<bool>,
+    /// How each batch's instances are placed: listed, culled on the GPU, or
+    /// whole tiles (through the ramp, or compact instances by their number).
+    pub placed: Vec<Placed>,
     /// The ramp's length this frame needs: the end of the last whole tile drawn.
     ramp_needed: u32,
     /// The ramp's length, a power of two (it never shrinks, so the regions
@@ -109,8 +108,7 @@ impl DrawList {
             draw_indices: Vec::new(),
             cull_ranges: Vec::new(),
             gpu_region: 0,
-            on_gpu: Vec::new(),
-            whole: Vec::new(),
+            placed: Vec::new(),
             ramp_needed: 0,
             ramp: 0,
             ramp_uploaded: 0,
@@ -134,8 +132,7 @@ impl DrawList {
         self.draw_indices.clear();
         self.cull_ranges.clear();
         self.gpu_region = 0;
-        self.on_gpu.clear();
-        self.whole.clear();
+        self.placed.clear();
         self.ramp_needed = 0;
         self.frustums.clear();
         self.indirect_args.clear();
@@ -149,7 +146,7 @@ impl DrawList {
 
     /// Instances the batches not culled on the GPU draw (listed and whole tiles).
     pub(crate) fn cpu_instances(&self) -> u64 {
-        let cpu = self.batches.iter().zip(&self.on_gpu).filter(|(_, &gpu)| !gpu);
+        let cpu = self.batches.iter().zip(&self.placed).filter(|(_, &p)| p != Placed::OnGpu);
         cpu.map(|(b, _)| u64::from(b.instance_count)).sum()
     }
 
@@ -174,30 +171,34 @@ impl DrawList {
         draw_of: impl Fn(&DrawItem) -> BatchDraw,
         placed: impl Fn(&DrawItem) -> Placed,
     ) -> std::ops::Range<usize> {
-        let (first_batch, first_run, first_range) = (self.batches.len(), self.runs.len(), self.cull_ranges.len());
+        let (first_batch, first_run) = (self.batches.len(), self.runs.len());
         let view = self.frustums.len() as u32;
         self.frustums.push(frustum);
-        let Self { items, batches, draws, draw_indices, cull_ranges, gpu_region, whole, ramp_needed, .. } = self;
+        let Self { items, batches, draws, draw_indices, cull_ranges, gpu_region, placed: kinds, ramp_needed, .. } =
+            self;
         let follows = |before: &DrawItem, item: &DrawItem| match (placed(before), placed(item)) {
-            (Placed::Whole, Placed::Whole) => before.first + before.count == item.first,
+            (a @ (Placed::Whole | Placed::Compact), b) if a == b => before.first + before.count == item.first,
             (a, b) => a == b,
         };
         let place = |item: &DrawItem, batch: usize, begins: bool| {
             if begins {
                 draws.push(draw_of(item));
             }
-            match placed(item) {
+            let kind = placed(item);
+            kinds.resize(batch + 1, Placed::Listed);
+            kinds[batch] = kind;
+            match kind {
                 Placed::Listed => {
                     let at = draw_indices.len() as u32;
                     draw_indices.extend_from_slice(&visible[item.first as usize..(item.first + item.count) as usize]);
                     return at;
                 }
                 Placed::Whole => {
-                    whole.resize(batch + 1, false);
-                    whole[batch] = true;
                     *ramp_needed = (*ramp_needed).max(item.first + item.count);
                     return item.first;
                 }
+                // The COMPACT variant draws its instances by their number.
+                Placed::Compact => return item.first,
                 Placed::OnGpu => {}
             }
             // The pass places each visible instance after its batch's others:
@@ -218,11 +219,7 @@ impl DrawList {
             at
         };
         batch::merge_placed(&items[first_item..], batches, place, follows);
-        self.on_gpu.resize(self.batches.len(), false);
-        self.whole.resize(self.batches.len(), false);
-        for r in &self.cull_ranges[first_range..] {
-            self.on_gpu[r.batch as usize] = true;
-        }
+        self.placed.resize(self.batches.len(), Placed::Listed);
         let key = |k: usize| {
             let (b, d) = (&self.batches[k], &self.draws[k]);
             (b.stage, b.pipeline, d.texture_set, d.mesh.page)
@@ -243,8 +240,7 @@ impl DrawList {
         self.runs.push(Run::new(self.batches.len(), 1, 0));
         self.batches.push(batch);
         self.draws.push(draw);
-        self.on_gpu.push(false);
-        self.whole.push(false);
+        self.placed.push(Placed::Listed);
         self.draw_indices.push(instance);
     }
 
@@ -287,16 +283,17 @@ impl DrawList {
         for r in &mut self.cull_ranges {
             r.out += base;
         }
-        for ((b, &gpu), &whole) in self.batches.iter_mut().zip(&self.on_gpu).zip(&self.whole) {
-            match (gpu, whole) {
-                (true, _) => b.first_instance += base,
-                (false, false) => b.first_instance += self.ramp,
-                (false, true) => {}
+        for (b, &placed) in self.batches.iter_mut().zip(&self.placed) {
+            match placed {
+                Placed::OnGpu => b.first_instance += base,
+                Placed::Listed => b.first_instance += self.ramp,
+                Placed::Whole | Placed::Compact => {}
             }
         }
         if self.indirect.is_some() {
-            let commands = self.batches.iter().zip(&self.draws).zip(&self.on_gpu);
-            self.indirect_args.extend(commands.map(|((b, d), &gpu)| wgpu::util::DrawIndexedIndirectArgs {
+            let on_gpu = self.placed.iter().map(|&p| p == Placed::OnGpu);
+            let commands = self.batches.iter().zip(&self.draws).zip(on_gpu);
+            self.indirect_args.extend(commands.map(|((b, d), gpu)| wgpu::util::DrawIndexedIndirectArgs {
                 index_count: d.mesh.index_count,
                 instance_count: if gpu { 0 } else { b.instance_count },
                 first_index: d.mesh.first_index,
@@ -360,7 +357,8 @@ impl DrawList {
                 frustums: &self.frustums,
                 commands: self.batches.len(),
             };
-            let template = occlusion.map(|_| late_commands(&self.indirect_args, &self.on_gpu, self.gpu_region));
+            let on_gpu: Vec<bool> = self.placed.iter().map(|&p| p == Placed::OnGpu).collect();
+            let template = occlusion.map(|_| late_commands(&self.indirect_args, &on_gpu, self.gpu_region));
             let late = occlusion.zip(template.as_deref()).map(|((view_proj, depth), template)| LateInput {
                 view_proj,
                 depth,

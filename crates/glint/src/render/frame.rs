@@ -467,9 +467,11 @@ impl Renderer {
         if lighting.lights.len() > MAX_LIGHTS {
             return Err(RenderError::TooManyLights(lighting.lights.len()));
         }
+        let records: usize = self.submitted.iter().map(|s| self.store.slot(s.slot).len()).sum();
         let mut stats = FrameStats {
             entities_submitted: self.submitted.len() as u32,
             instances_submitted: self.instances_submitted,
+            instance_bytes: (records * std::mem::size_of::<super::blocks::InstanceGpu>()) as u64,
             ..Default::default()
         };
         // Each stage's CPU time is the lap that ends on its line.

@@ -11,7 +11,8 @@ impl Renderer {
     /// view's. Culled on the GPU, read back from what the cull pass wrote
     /// (waiting for the GPU); culled on the CPU, from the lists. Store indices
     /// are the renderer's own business, but two renderers given the same
-    /// entities in the same order number them alike.
+    /// entities in the same order number them alike. Compact instances are
+    /// left out.
     #[doc(hidden)]
     pub fn drawn_instances(&self) -> Result<Vec<Vec<u32>>, RenderError> {
         let mut views = self.read_list(&self.view.forward)?;
@@ -38,7 +39,8 @@ impl Renderer {
             }
         };
         for run in &list.runs {
-            for b in run.batches() {
+            // Compact instances are numbered apart from the store's: left out.
+            for b in run.batches().filter(|&b| list.placed[b] != super::visible::Placed::Compact) {
                 for phase in &phases {
                     let (first, count) = (phase[b].0 as usize, phase[b].1 as usize);
                     views[run.frustum as usize].extend_from_slice(&indices[first..first + count]);

@@ -20,7 +20,7 @@
 //! same record format; each instance records how far ahead its joints start, so
 //! the range can move (compaction) without rewriting it.
 
-use super::blocks::InstanceGpu;
+use super::blocks::{CompactGpu, InstanceGpu, COMPACT_MATERIALS};
 use super::cull::{transform_aabb, Boxes};
 use crate::scene::{Aabb, Entity, MaterialId, ShapeId, Tiles};
 use glam::{Mat4, Vec3A};
@@ -55,14 +55,32 @@ pub(crate) struct Slot {
     pub clusters: Vec<Cluster>,
     /// Whether the clusters are the entity's tiles.
     pub tiled: bool,
+    /// Whether its instances are stored compactly, four to a record
+    /// ([`CompactGpu`]): then `first` counts records and each instance is
+    /// numbered `4 · first + k` (see [`Slot::instance_base`]).
+    pub compact: bool,
     /// Frame in which the entity was last submitted.
     last_frame: u64,
 }
 
 impl Slot {
-    /// Records the entity occupies: instances, then joints.
-    fn len(&self) -> usize {
-        (self.count + self.joints) as usize
+    /// Records the entity occupies: instances, then joints; compact, a quarter
+    /// record each.
+    pub(crate) fn len(&self) -> usize {
+        match self.compact {
+            true => self.count.div_ceil(4) as usize,
+            false => (self.count + self.joints) as usize,
+        }
+    }
+
+    /// The number of its first instance as draws name it: its first record,
+    /// or compact, its first quarter record.
+    pub(crate) fn instance_base(&self) -> u32 {
+        if self.compact {
+            4 * self.first
+        } else {
+            self.first
+        }
     }
 }
 
@@ -117,20 +135,23 @@ impl InstanceStore {
                     invalid: 0,
                     clusters: Vec::new(),
                     tiled: false,
+                    compact: false,
                     last_frame: frame,
                 });
                 self.by_key.insert(entity.key(), self.slots.len() - 1);
                 self.slots.len() - 1
             }
         };
+        let compact = stored_compactly(entity);
         let slot = &mut self.slots[index];
         slot.last_frame = frame;
-        if slot.count != count || slot.joints != joints {
+        if (slot.count, slot.joints, slot.compact) != (count, joints, compact) {
             // A new size needs a new range at the end; the old one becomes garbage.
             self.garbage += slot.len();
             slot.first = self.instances.len() as u32;
             slot.count = count;
             slot.joints = joints;
+            slot.compact = compact;
             let new_len = self.instances.len() + slot.len();
             self.instances.resize(new_len, InstanceGpu::default());
             self.bounds.resize(new_len);
@@ -148,7 +169,8 @@ impl InstanceStore {
             slot.shape = entity.shape;
             slot.material = entity.material;
             let range = slot.first as usize..slot.first as usize + slot.len();
-            let written = write_range(entity, reach, &mut self.instances[range.clone()], &mut self.bounds, range.start);
+            let records = &mut self.instances[range.clone()];
+            let written = write_range(entity, (reach, compact), records, &mut self.bounds, range.start);
             slot.bounds = written.bounds;
             slot.invalid = written.invalid;
             slot.clusters = written.clusters;
@@ -258,6 +280,15 @@ pub(crate) struct Cluster {
     pub extent: Vec3A,
 }
 
+/// Whether `entity`'s instances are stored compactly: asked for, tiled, not
+/// skinned, and its material one a compact record can name.
+pub(crate) fn stored_compactly(entity: &Entity) -> bool {
+    entity.compact_instances()
+        && entity.tiles().is_some()
+        && entity.joints().is_empty()
+        && entity.material.0 < COMPACT_MATERIALS
+}
+
 /// What [`write_range`] found.
 struct Written {
     bounds: Option<(Vec3A, Vec3A)>,
@@ -275,9 +306,14 @@ struct Written {
 ///
 /// A skinned entity's local box is the union of the shape's box moved by each
 /// joint: every skinned vertex is a weighted average of points in those boxes.
-fn write_range(entity: &Entity, reach: Reach, records: &mut [InstanceGpu], boxes: &mut Boxes, first: usize) -> Written {
+fn write_range(
+    entity: &Entity,
+    (reach, compact): (Reach, bool),
+    records: &mut [InstanceGpu],
+    boxes: &mut Boxes,
+    first: usize,
+) -> Written {
     let (src, material, receive) = (entity.transforms(), entity.material, entity.receive_shadows);
-    let (instances, joint_records) = records.split_at_mut(src.len());
     let (lc, le) = skinned_box(entity.joints(), reach.local);
     let world: Vec<Option<(Vec3A, Vec3A)>> =
         src.iter().map(|m| m.is_finite().then(|| reach.walked(m, transform_aabb(m, lc, le)))).collect();
@@ -295,6 +331,19 @@ fn write_range(entity: &Entity, reach: Reach, records: &mut [InstanceGpu], boxes
     };
     let padding = Vec3A::splat(entity.tiles().map_or(0.0, Tiles::padding));
     let mut clusters = Vec::with_capacity(groups.len());
+    if compact {
+        // Four to a record; the tiles are culled on the CPU only, so no record
+        // has a box of its own.
+        let compacts: Vec<CompactGpu> =
+            order.iter().map(|&i| CompactGpu::new(&src[i as usize], material, receive)).collect();
+        for (k, (record, four)) in records.iter_mut().zip(compacts.chunks(4)).enumerate() {
+            let mut lanes = [CompactGpu::default(); 4];
+            lanes[..four.len()].copy_from_slice(four);
+            *record = CompactGpu::record(lanes);
+            boxes.set_never_visible(first + k);
+        }
+    }
+    let (instances, joint_records) = records.split_at_mut(if compact { 0 } else { src.len() });
     for group in groups {
         let run = &order[group.start as usize..group.end as usize];
         let valid = run.iter().filter(|&&i| world[i as usize].is_some()).count() as u32;
@@ -308,7 +357,7 @@ fn write_range(entity: &Entity, reach: Reach, records: &mut [InstanceGpu], boxes
             0 => (Vec3A::ZERO, Vec3A::splat(super::cull::NEVER_VISIBLE_EXTENT)),
             _ => ((lo + hi) * 0.5, (hi - lo) * 0.5 + padding),
         };
-        for (k, &i) in run.iter().enumerate() {
+        for (k, &i) in run.iter().enumerate().filter(|_| !compact) {
             let at = group.start as usize + k;
             match world[i as usize] {
                 Some((c, e)) => {
@@ -529,6 +578,27 @@ mod tests {
         assert!(!store.bounds.is_valid(2));
         let (c, ext) = slot.bounds.expect("valid instances");
         assert!((c.x - 6.0).abs() < 1e-5 && (ext.x - (6.5 + pad)).abs() < 1e-5, "padded union {c} ± {ext}");
+    }
+
+    #[test]
+    fn compact_instances_take_a_quarter_record_each_in_tile_order() {
+        let e = entity(10).with_tiles(Tiles::from_sizes([6, 4], 0.0)).with_compact_instances();
+        let mut store = InstanceStore::default();
+        store.submit(&entity(2), unit(), 0);
+        let index = store.submit(&e, unit(), 0);
+        let slot = store.slot(index).clone();
+        assert!(slot.compact && slot.tiled);
+        assert_eq!((slot.first, slot.len(), store.len()), (2, 3, 5), "ten in three records after two full ones");
+        assert_eq!(slot.instance_base(), 8, "numbered by quarter records");
+        let tiles: Vec<(u32, u32)> = slot.clusters.iter().map(|c| (c.first, c.valid)).collect();
+        assert_eq!(tiles, [(0, 6), (6, 4)]);
+        // Instance 5 (x = 5) is the second record's second quarter.
+        let record: [CompactGpu; 4] = bytemuck::cast(store.instances[3]);
+        assert_eq!(f32::from_bits(record[1].0[0]), 5.0);
+        assert!((2..5).all(|k| !store.bounds.is_valid(k)), "compact records have no box of their own");
+        // Not tiled, the request is not taken.
+        let index = store.submit(&entity(10).with_compact_instances(), unit(), 0);
+        assert!(!store.slot(index).compact);
     }
 
     #[test]

@@ -63,8 +63,9 @@ impl Stream {
     }
 }
 
-/// Which vertex streams a mesh has (the base stream always): a pipeline reads
-/// exactly these, and each optional one sets its shader feature bit.
+/// What a draw reads besides its material: which vertex streams its mesh has
+/// (the base stream always; a pipeline reads exactly these, and each optional
+/// one sets its shader feature bit), and how its instances are stored.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub(crate) struct VertexLayout {
     /// Vertex colours ([`ShaderFeatures::VERTEX_COLOR`]).
@@ -73,20 +74,25 @@ pub(crate) struct VertexLayout {
     pub uv1: bool,
     /// Joints and weights ([`ShaderFeatures::SKINNED`]).
     pub skin: bool,
+    /// Compact instances, 16 bytes each ([`ShaderFeatures::COMPACT`]).
+    pub compact: bool,
 }
 
 impl VertexLayout {
     /// The layout a mesh's streams need.
     pub(crate) fn of(mesh: &Mesh) -> Self {
-        Self { colors: mesh.colors().is_some(), uv1: mesh.uv1().is_some(), skin: mesh.skin().is_some() }
+        Self { colors: mesh.colors().is_some(), uv1: mesh.uv1().is_some(), skin: mesh.skin().is_some(), compact: false }
     }
 
     /// How many layouts there are ([`VertexLayout::index`] is below this).
-    pub(crate) const COUNT: usize = 8;
+    pub(crate) const COUNT: usize = 16;
 
     /// A dense number for the layout, for per-layout tables.
     pub(crate) fn index(self) -> usize {
-        usize::from(self.colors) | usize::from(self.uv1) << 1 | usize::from(self.skin) << 2
+        usize::from(self.colors)
+            | usize::from(self.uv1) << 1
+            | usize::from(self.skin) << 2
+            | usize::from(self.compact) << 3
     }
 
     /// The streams, in buffer-slot order.
@@ -333,6 +339,7 @@ impl Pipelines {
         features.set(ShaderFeatures::VERTEX_COLOR, vertex_layout.colors);
         features.set(ShaderFeatures::UV1, vertex_layout.uv1);
         features.set(ShaderFeatures::SKINNED, vertex_layout.skin);
+        features.set(ShaderFeatures::COMPACT, vertex_layout.compact);
         PipelineKey {
             pass: PassKind::Forward,
             features,
@@ -354,6 +361,7 @@ impl Pipelines {
             | ShaderFeatures::VERTEX_COLOR
             | ShaderFeatures::UV1
             | ShaderFeatures::SKINNED
+            | ShaderFeatures::COMPACT
             | ShaderFeatures::MOTION;
         let mask = forward.features.contains(ShaderFeatures::ALPHA_MASK);
         let features =

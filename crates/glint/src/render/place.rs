@@ -89,6 +89,7 @@ impl Renderer {
                 if let Some(tiles) = &e.tiles {
                     entity.set_tiles(tiles.clone());
                     entity.density = e.density;
+                    entity.set_compact_instances(e.compact);
                 }
             }
         }

@@ -48,7 +48,8 @@ impl Renderer {
         }
         self.frame_variant = FrameVariant::expected(lighting.lights);
         let mut stats = FrameStats::default();
-        let uses: Vec<_> = entities.iter().map(|e| (e.shape, e.material)).collect();
+        let uses: Vec<_> =
+            entities.iter().map(|e| (e.shape, e.material, super::instances::stored_compactly(e))).collect();
         let target = TargetFormat { color: crate::gpu::COLOR_FORMAT, samples };
         self.registry.prepare_uses(&uses, target, (&lighting.environment, self.frame_variant), &mut stats)?;
         Ok(stats.pipelines_compiled)
@@ -102,7 +103,8 @@ impl Renderer {
                 s.slot = remap[s.slot];
             }
         }
-        let uses: Vec<_> = self.submitted.iter().map(|s| (s.shape, s.material)).collect();
+        let uses: Vec<_> =
+            self.submitted.iter().map(|s| (s.shape, s.material, self.store.slot(s.slot).compact)).collect();
         self.registry.prepare_uses(&uses, target, (environment, self.frame_variant), stats)
     }
 }
@@ -113,7 +115,7 @@ impl Registry {
     /// `environment` in a frame of variant `frame`. Returns what each use draws with.
     pub(super) fn prepare_uses(
         &mut self,
-        uses: &[(ShapeId, MaterialId)],
+        uses: &[(ShapeId, MaterialId, bool)],
         target: TargetFormat,
         (environment, frame): (&Environment, FrameVariant),
         stats: &mut FrameStats,
@@ -128,7 +130,7 @@ impl Registry {
             }
         }
         let mut prepared = Vec::with_capacity(uses.len());
-        for &(shape, material) in uses {
+        for &(shape, material, compact) in uses {
             let slot = self.shapes.get_mut(shape.0 as usize).ok_or(RenderError::UnknownShape(shape))?;
             let mesh = match slot.gpu {
                 Some(range) => range,
@@ -147,7 +149,7 @@ impl Registry {
             if std::mem::take(&mut slot.rewrite) {
                 stats.bytes_uploaded.meshes += self.mesh_pool.rewrite_vertices(&self.queue, mesh, &slot.mesh);
             }
-            let layout = slot.layout;
+            let layout = VertexLayout { compact, ..slot.layout };
             let (pipeline, texture_set) =
                 self.prepare_material(material, layout, target, (environment, frame), stats)?;
             prepared.push(Prepared { pipeline, layout, draw: BatchDraw { mesh, texture_set } });

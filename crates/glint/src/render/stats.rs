@@ -150,6 +150,10 @@ pub struct FrameStats {
     pub instances_culled: u64,
     /// Instances skipped because their transform has NaN or infinity.
     pub instances_invalid: u64,
+    /// Bytes the submitted entities' instance records take on the GPU: 64 an
+    /// instance or joint, 16 a compact instance
+    /// ([`Entity::with_compact_instances`](crate::Entity::with_compact_instances)).
+    pub instance_bytes: u64,
     /// Tiles of tiled entities ([`Tiles`](crate::Tiles)) whose box this view
     /// tested against its frustum (an entity wholly inside or outside tests none).
     pub tiles_tested: u64,

@@ -59,12 +59,16 @@ pub(crate) enum Placed {
     /// Runs of store instances in `ranges` drawn whole: a tiled entity's
     /// visible tiles, culled on the CPU.
     Whole,
+    /// Runs of compact instances in `ranges` (numbered by quarter records,
+    /// [`Slot::instance_base`]), drawn whole: a compact entity's visible tiles,
+    /// culled on the CPU whatever the culling path.
+    Compact,
 }
 
 impl Visible {
     /// Instances kept: listed, and in whole tiles.
     pub(super) fn kept(&self) -> u64 {
-        let whole = self.ranges.iter().filter(|r| self.placed[r.entry] == Placed::Whole);
+        let whole = self.ranges.iter().filter(|r| matches!(self.placed[r.entry], Placed::Whole | Placed::Compact));
         self.instances.len() as u64 + whole.map(|r| u64::from(r.len)).sum::<u64>()
     }
 }
@@ -117,6 +121,7 @@ impl Renderer {
             .collect();
         out.placed.clear();
         out.placed.extend(self.submitted.iter().map(|s| match blended[s.material.0 as usize] {
+            _ if store.slot(s.slot).compact => Placed::Compact,
             true => Placed::Listed,
             false if culling == Culling::Gpu => Placed::OnGpu,
             false if store.slot(s.slot).tiled => Placed::Whole,
@@ -129,7 +134,8 @@ impl Renderer {
             let slot = store.slot(s.slot);
             let ranges = &mut out.ranges;
             if slot.tiled {
-                // The GPU culls by the same boxes: every instance carries its tile's.
+                // The GPU culls by the same boxes: every instance carries its
+                // tile's (compact ones are culled here alone).
                 out.tiles += visible_tiles(frustum, frustum_on, slot, s.density, |r| {
                     ranges.push(VisibleRun { entry, start: r.start, len: r.end - r.start });
                 });
@@ -247,7 +253,7 @@ fn visible_tiles(
             }
         }
         counts.drawn += 1;
-        let start = slot.first + tile.first;
+        let start = slot.instance_base() + tile.first;
         keep(start..start + drawn);
     }
     counts

@@ -29,6 +29,7 @@ pub struct Entity {
     /// Darkened where shadow-casting lights are blocked (default true).
     pub receive_shadows: bool,
     tiles: Option<Tiles>,
+    compact: bool,
     /// With tiles, the fraction of every tile drawn (0..=1, default 1): its
     /// first ⌈len × density⌉ instances, in every view and shadow view, with no
     /// upload. Without tiles, every instance is drawn.
@@ -52,6 +53,7 @@ impl Clone for Entity {
             cast_shadows: self.cast_shadows,
             receive_shadows: self.receive_shadows,
             tiles: self.tiles.clone(),
+            compact: self.compact,
             density: self.density,
         }
     }
@@ -76,6 +78,7 @@ impl Entity {
             cast_shadows: true,
             receive_shadows: true,
             tiles: None,
+            compact: false,
             density: 1.0,
         }
     }
@@ -109,6 +112,32 @@ impl Entity {
     /// The tiles of its instances, if grouped.
     pub fn tiles(&self) -> Option<&Tiles> {
         self.tiles.as_ref()
+    }
+
+    /// The same entity with its instances stored in 16 bytes each on the GPU
+    /// instead of 64 (vegetation): position (x and z exact, y as a half
+    /// float), one scale (half float) and a turn about +Y (1/65536 of a turn);
+    /// what else a transform holds (tilt, uneven scale) is lost. Takes effect
+    /// for a tiled entity (see [`with_tiles`](Self::with_tiles)) without
+    /// joints and with a material index below 32768; its tiles are then always
+    /// culled on the CPU and drawn whole, blended or not.
+    pub fn with_compact_instances(mut self) -> Self {
+        self.set_compact_instances(true);
+        self
+    }
+
+    /// Store its instances compactly or not (see
+    /// [`with_compact_instances`](Self::with_compact_instances)); marks the
+    /// entity for re-upload.
+    pub fn set_compact_instances(&mut self, compact: bool) {
+        self.version += 1;
+        self.compact = compact;
+    }
+
+    /// Whether its instances are to be stored compactly (see
+    /// [`with_compact_instances`](Self::with_compact_instances)).
+    pub fn compact_instances(&self) -> bool {
+        self.compact
     }
 
     /// The same entity with joint matrices, for a skinned shape (see

@@ -112,6 +112,11 @@ fn instance_at(i: u32) -> Instance {
 fn draw_index_at(i: u32) -> u32 {
     return texel(draw_index_texels, i).x;
 }
+
+// Compact instance `q`: a quarter of the instance records, one texel.
+fn compact_at(q: u32) -> vec4<u32> {
+    return texel(instance_texels, q);
+}
 #else
 @group(3) @binding(0) var<storage, read> instances: array<Instance>;
 @group(3) @binding(1) var<storage, read> draw_indices: array<u32>;
@@ -122,6 +127,25 @@ fn material_at(i: u32) -> MaterialBlock {
 
 fn instance_at(i: u32) -> Instance {
     return instances[i];
+}
+
+// Compact instance `q`: quarter q % 4 of record q / 4.
+fn compact_at(q: u32) -> vec4<u32> {
+    let r = instances[q / 4u];
+    switch q % 4u {
+        case 0u: {
+            return bitcast<vec4<u32>>(r.row_x);
+        }
+        case 1u: {
+            return bitcast<vec4<u32>>(r.row_y);
+        }
+        case 2u: {
+            return bitcast<vec4<u32>>(r.row_z);
+        }
+        default: {
+            return vec4<u32>(r.material, r.joints, r.joint_count, r.flags);
+        }
+    }
 }
 
 fn draw_index_at(i: u32) -> u32 {
@@ -211,6 +235,42 @@ fn skin_matrix(at: u32, instance: Instance, joints: vec4<u32>, weights: vec4<f32
 }
 #endif
 
+#ifdef COMPACT
+// The half float whose bits are `h` (unpack2x16float needs a capability not
+// every device has). Exact: a half is a power of two times its mantissa.
+fn half_float(h: u32) -> f32 {
+    let sign = select(1.0, -1.0, (h & 0x8000u) != 0u);
+    let e = (h >> 10u) & 0x1fu;
+    let m = f32(h & 0x3ffu);
+    if e == 0u {
+        return sign * m * exp2(-24.0);
+    }
+    return sign * (1.0 + m / 1024.0) * exp2(f32(e) - 15.0);
+}
+
+// Compact instance `q` (render/blocks.rs CompactGpu) as a full one: x and z,
+// y and scale (half floats), a turn about +Y in 1/65536 of a turn, its
+// material (15 bits) and its shadow flag (the top bit); never skinned.
+fn compact_instance(q: u32) -> Instance {
+    let c = compact_at(q);
+    let ys = vec2<f32>(half_float(c.z & 0xffffu), half_float(c.z >> 16u));
+    let turn = f32(c.w & 0xffffu) * (TAU / 65536.0);
+    let s = ys.y * sin(turn);
+    let k = ys.y * cos(turn);
+    let x = bitcast<f32>(c.x);
+    let z = bitcast<f32>(c.y);
+    return Instance(
+        vec4<f32>(k, 0.0, s, x),
+        vec4<f32>(0.0, ys.y, 0.0, ys.x),
+        vec4<f32>(-s, 0.0, k, z),
+        (c.w >> 16u) & 0x7fffu,
+        0u,
+        0u,
+        c.w >> 31u,
+    );
+}
+#endif
+
 // A number in 0..1 fixed per instance, from its placed position: the phase
 // of its motion (no instance data needed).
 fn instance_hash(p: vec3<f32>) -> f32 {
@@ -270,8 +330,14 @@ fn walk(material: MaterialBlock, origin: vec3<f32>) -> Walk {
 
 @vertex
 fn vs_main(v: VertexIn, @builtin(instance_index) draw_instance: u32) -> VertexOut {
+#ifdef COMPACT
+    // Drawn by their number: whole tiles, no draw indices (and never skinned).
+    let at = draw_instance;
+    let instance = compact_instance(at);
+#else
     let at = draw_index_at(draw_instance);
     let instance = instance_at(at);
+#endif
     let model = record_matrix(instance);
     var position = vec4<f32>(v.position, 1.0);
     var normal = v.normal;

@@ -34,8 +34,9 @@ bitflags::bitflags! {
     /// | 17 | `FLAP` | swing vertices far from the YZ plane up and down ([`Motion::Flap`](crate::scene::Motion::Flap)) |
     /// | 18 | `CIRCLE` | walk each instance around a circle ([`Motion::Circle`](crate::scene::Motion::Circle)) |
     /// | 19 | `EDGE_FADE` | fade alpha with the distance from the instance's placed position ([`Material::edge_fade`]) |
+    /// | 20 | `COMPACT` | read each instance from a 16-byte compact record, numbered by the draw (set by the entity: [`Entity::with_compact_instances`](crate::Entity::with_compact_instances)) |
     ///
-    /// Bits 20–31 are free for more (shadow receiving comes with shadow maps).
+    /// Bits 21–31 are free for more (shadow receiving comes with shadow maps).
     /// The motion bits stay in shadow passes' variants, so shadows move too.
     ///
     /// One def follows from the bits rather than being one: `TEXCOORDS`, set with
@@ -83,6 +84,8 @@ bitflags::bitflags! {
         const CIRCLE = 1 << 18;
         /// `EDGE_FADE`.
         const EDGE_FADE = 1 << 19;
+        /// `COMPACT`.
+        const COMPACT = 1 << 20;
     }
 }
 
