@@ -893,3 +893,51 @@ fn compare_says_whether_two_images_match_within_the_reference_tolerance() {
         ["error: tests/reference/monitor.png: 160x90, but tests/reference/split.png is 192x96"]
     );
 }
+
+#[test]
+fn the_viewer_changes_density_and_time_of_day_per_frame() {
+    let required = std::env::var("GLINT_REQUIRE_ADAPTER").as_deref() == Ok("1");
+    if Command::new("xvfb-run").arg("--help").output().is_err() {
+        assert!(!required, "GLINT_REQUIRE_ADAPTER=1 but xvfb-run is missing (apt-get install xvfb xauth)");
+        eprintln!("skipping: no xvfb-run (apt-get install xvfb xauth)");
+        return;
+    }
+    let dir = tempfile::tempdir().expect("tempdir");
+    let shot = |name: &str| dir.path().join(format!("{name}.png"));
+    let scene = repo("tests/scenes/tiles.scn");
+    let out = Command::new("xvfb-run")
+        .args(["-a", "-s", "-screen 0 640x480x24", env!("CARGO_BIN_EXE_glint"), "view"])
+        .arg(&scene)
+        .args(["--size", "96x64", "--msaa", "1", "--frames", "7"])
+        .arg("--at")
+        .arg(format!("2:screenshot={}", shot("full").display()))
+        .args(["--at", "3:density=0"])
+        .arg("--at")
+        .arg(format!("4:screenshot={}", shot("bare").display()))
+        .args(["--at", "5:time_of_day=23"])
+        .arg("--at")
+        .arg(format!("6:screenshot={}", shot("night").display()))
+        .env("NODEVICE_SELECT", "1")
+        .output()
+        .expect("run xvfb-run");
+    if out.status.code() == Some(2) && !required {
+        eprintln!("skipping: no GPU adapter ({})", stderr(&out));
+        return;
+    }
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    assert!(stderr(&out).contains("density 0.0") && stderr(&out).contains("time of day 23:00"), "{}", stderr(&out));
+    let [full, bare, night] = ["full", "bare", "night"].map(|n| image::open(shot(n)).expect("png").into_rgb8());
+    let green = |i: &image::RgbImage| {
+        i.pixels()
+            .filter(|p| u16::from(p.0[1]) > u16::from(p.0[0]) + 30 && u16::from(p.0[1]) > u16::from(p.0[2]) + 30)
+            .count()
+    };
+    assert!(
+        green(&full) > 96 * 64 / 8 && green(&bare) < green(&full) / 20,
+        "cones gone: {} then {}",
+        green(&full),
+        green(&bare)
+    );
+    let light = |i: &image::RgbImage| i.pixels().map(|p| p.0.iter().map(|&c| u64::from(c)).sum::<u64>()).sum::<u64>();
+    assert!(light(&night) * 2 < light(&bare), "night falls");
+}

@@ -33,6 +33,8 @@ Keys:
   right mouse   hold and move the mouse to look around
   mouse wheel   faster or slower
   Shift         move 4x faster while held
+  [ ]           draw less or more of every tile of tiled instances (density)
+  , .           move the sun and sky half an hour back or on (time of day)
   F12           save a screenshot (glint-NNNN.png in the current folder)
   Esc           quit
 
@@ -110,6 +112,8 @@ struct View {
     /// Frames counted so far (drawn or skipped while the window has no area).
     frames: u32,
     last_title: Instant,
+    /// The share of every tile drawn (`[` and `]`).
+    density: f32,
 }
 
 /// A loaded scene placed in its own renderer, and the views it shows (the fly
@@ -209,6 +213,7 @@ impl App {
             last_frame: now,
             frames: 0,
             last_title: now,
+            density: self.args.density,
             gpu,
         })
     }
@@ -292,8 +297,29 @@ impl View {
             Action::Minimize => self.window.set_minimized(true),
             Action::Restore => self.window.set_minimized(false),
             Action::Screenshot(path) => self.screenshot(path)?,
+            Action::Density(d) => self.set_density(*d),
+            Action::TimeOfDay(h) => self.set_time_of_day(*h),
         }
         Ok(())
+    }
+
+    /// Draw `density` (clamped to 0..=1) of every tile from the next frame on.
+    fn set_density(&mut self, density: f32) {
+        self.density = density.clamp(0.0, 1.0);
+        self.scene.renderer.set_density(self.density);
+        eprintln!("density {:.1}", self.density);
+    }
+
+    /// Move the sun and sky to `hours` (wrapped to 0..24) from the next frame on.
+    fn set_time_of_day(&mut self, hours: f32) {
+        let hours = hours.rem_euclid(24.0);
+        self.scene.world.set_time_of_day(hours);
+        eprintln!("time of day {:02}:{:02}", hours as u32, (hours.fract() * 60.0).round() as u32);
+    }
+
+    /// The hour the scene's sun was last set to (noon where it never was).
+    fn time_of_day(&self) -> f32 {
+        self.scene.world.desc().time_of_day.unwrap_or(12.0)
     }
 
     /// Start or stop looking around: the cursor hides and stays put while the right
@@ -374,6 +400,16 @@ impl ApplicationHandler for App {
                                 Ok(())
                             }
                             KeyCode::F12 if !event.repeat => view.screenshot(&next_screenshot_path()),
+                            KeyCode::BracketLeft | KeyCode::BracketRight => {
+                                let step = if code == KeyCode::BracketLeft { -0.1 } else { 0.1 };
+                                view.set_density(view.density + step);
+                                Ok(())
+                            }
+                            KeyCode::Comma | KeyCode::Period => {
+                                let step = if code == KeyCode::Comma { -0.5 } else { 0.5 };
+                                view.set_time_of_day(view.time_of_day() + step);
+                                Ok(())
+                            }
                             _ => Ok(()),
                         }
                     }
@@ -457,7 +493,8 @@ impl App {
         for step in self.args.script.iter().filter(|s| s.frame == frame) {
             view.do_action(&step.action)?;
         }
-        view.reload_if_changed(&self.args.scene, self.args.camera, (self.args.cull, self.args.density));
+        let density = view.density;
+        view.reload_if_changed(&self.args.scene, self.args.camera, (self.args.cull, density));
         if draw {
             view.draw()?;
         }

@@ -1,5 +1,6 @@
 //! `glint view --at FRAME:ACTION`: window actions at given frames, so a run
-//! under a virtual display (CI) can resize, minimise and take screenshots.
+//! under a virtual display (CI) can resize, minimise and take screenshots, and
+//! change what the keys change (density, time of day).
 
 use std::path::PathBuf;
 
@@ -14,6 +15,10 @@ pub enum Action {
     Restore,
     /// Write the last drawn frame to this PNG.
     Screenshot(PathBuf),
+    /// Draw this share of every tile (`[` and `]`).
+    Density(f32),
+    /// Move the sun and sky to this hour (`,` and `.`).
+    TimeOfDay(f32),
 }
 
 /// An [`Action`] and the frame (counted from 1) before which it happens.
@@ -25,9 +30,11 @@ pub struct Scripted {
     pub action: Action,
 }
 
-/// Parse `FRAME:resize=WxH`, `FRAME:minimize`, `FRAME:restore` or `FRAME:screenshot=PATH`.
+/// Parse `FRAME:resize=WxH`, `FRAME:minimize`, `FRAME:restore`,
+/// `FRAME:screenshot=PATH`, `FRAME:density=D` or `FRAME:time_of_day=H`.
 pub fn parse_at(s: &str) -> Result<Scripted, String> {
-    let expected = "expected FRAME:resize=WxH, FRAME:minimize, FRAME:restore or FRAME:screenshot=PATH";
+    let expected = "expected FRAME:resize=WxH, FRAME:minimize, FRAME:restore, FRAME:screenshot=PATH, \
+                    FRAME:density=D or FRAME:time_of_day=H";
     let (frame, action) = s.split_once(':').ok_or_else(|| format!("'{s}': {expected}"))?;
     let frame = frame
         .trim()
@@ -43,6 +50,8 @@ pub fn parse_at(s: &str) -> Result<Scripted, String> {
             let (w, h) = crate::parse_size(size)?;
             Action::Resize(w, h)
         }
+        Some(("density", d)) => Action::Density(crate::parse_density(d)?),
+        Some(("time_of_day", h)) => Action::TimeOfDay(crate::parse_hours(h)?),
         _ => return Err(format!("'{s}': {expected}")),
     };
     Ok(Scripted { frame, action })
@@ -58,7 +67,18 @@ mod tests {
         assert_eq!(parse_at("1:minimize").map(|s| s.action), Ok(Action::Minimize));
         assert_eq!(parse_at("9:restore").map(|s| s.action), Ok(Action::Restore));
         assert_eq!(parse_at("4:screenshot=a:b.png").map(|s| s.action), Ok(Action::Screenshot("a:b.png".into())));
-        for bad in ["resize=2x2", "0:minimize", "x:minimize", "2:shrink", "2:resize=0x5", "2:screenshot="] {
+        assert_eq!(parse_at("2:density=0.25").map(|s| s.action), Ok(Action::Density(0.25)));
+        assert_eq!(parse_at("2:time_of_day=18.5").map(|s| s.action), Ok(Action::TimeOfDay(18.5)));
+        for bad in [
+            "resize=2x2",
+            "0:minimize",
+            "x:minimize",
+            "2:shrink",
+            "2:resize=0x5",
+            "2:screenshot=",
+            "2:density=2",
+            "2:time_of_day=25",
+        ] {
             assert!(parse_at(bad).is_err(), "{bad}");
         }
     }

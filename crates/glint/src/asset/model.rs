@@ -260,6 +260,7 @@ impl Model {
                 compact: false,
             }],
             cloths: Vec::new(),
+            time_of_day: None,
             models: vec![self],
         }
     }

@@ -182,6 +182,8 @@ pub struct SceneDesc {
     pub cloths: Vec<ClothDesc>,
     /// Non-fatal problems (unknown keys, repeated keys), `path:line: message`.
     pub warnings: Vec<Diagnostic>,
+    /// The hour its sun and sky were last set to ([`SceneDesc::set_time_of_day`]).
+    pub time_of_day: Option<f32>,
 }
 
 /// How a camera of a scene draws: where in the image, and its post chain.
@@ -295,6 +297,7 @@ pub fn parse_scene_with(path: &Path, text: &str, options: LoadOptions) -> Result
             entities: Vec::new(),
             cloths: Vec::new(),
             warnings: Vec::new(),
+            time_of_day: None,
         },
         textures: TextureCache::new(options.texture_memory),
         model_index: HashMap::new(),

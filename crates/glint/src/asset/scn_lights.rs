@@ -72,6 +72,7 @@ impl super::SceneDesc {
     /// `time_of_day`. The glare follows the sun, whose direction and colour it takes.
     pub fn set_time_of_day(&mut self, hours: f32) {
         let day = crate::scene::Daylight::at(hours);
+        self.time_of_day = Some(hours);
         let directional = |l: &Light| matches!(l.kind, crate::scene::LightKind::Directional { .. });
         match self.lights.iter().position(directional) {
             Some(k) => {

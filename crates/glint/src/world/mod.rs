@@ -149,6 +149,13 @@ impl World {
         Ok(())
     }
 
+    /// Move its sun, sky and glare to `hours` of the day
+    /// ([`SceneDesc::set_time_of_day`]), from the next frame's
+    /// [`lighting`](Self::lighting) on.
+    pub fn set_time_of_day(&mut self, hours: f32) {
+        self.desc.set_time_of_day(hours);
+    }
+
     /// Draw `views` of it into `target` ([`Renderer::render_views`]) and return
     /// each view's statistics.
     pub fn draw(
