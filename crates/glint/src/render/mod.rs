@@ -5,9 +5,9 @@
 //! | group | block | written when | holds |
 //! | --- | --- | --- | --- |
 //! | 0 | Scene | lights or environment change | ambient, sky colours, light count, `lights[64]` |
-//! | 1 | Camera | the camera or target aspect changes | view, view-projection, its inverse, eye position |
+//! | 1 | Camera | the camera, target aspect or scene time changes | view, view-projection, its inverse, eye position, scene time and wind (shadow passes bind it too) |
 //! | 2 | Material | a material is added or edited | `materials: array<MaterialBlock>` (the table, indexed by material id), one texture set: diffuse / normal / specular maps, sampler, metallic-roughness / occlusion / emissive maps |
-//! | 3 | Renderer | instances: where entities changed; draw indices: when the visible set changed, one write | `instances: array<Instance>` (transform rows + material index, persistent), `draw_indices: array<u32>` (visible instances in draw order) |
+//! | 3 | Renderer | instances: where entities changed; draw indices: when the visible set changed, one write | `instances: array<Instance>` (transform rows + material index, persistent; a compact entity's 16-byte instances four to a record), `draw_indices: array<u32>` (an identity ramp for whole tiles, then visible instances in draw order) |
 //!
 //! Where vertex shaders cannot read storage buffers (WebGL2, some GLES drivers;
 //! [`Gpu::vertex_storage`](crate::Gpu::vertex_storage)), the material table and
