@@ -102,8 +102,9 @@ impl Renderer {
 
     /// Fill `out` with the instances of the submitted entities `wanted` keeps
     /// that `frustum` sees (every valid one when `culling` is off): listed, or
-    /// as runs of store instances (whole tiles; culling on the GPU, the
-    /// candidates of the entities not blended), as `out.placed` says.
+    /// as runs of instances (whole tiles, compact ones whatever the culling;
+    /// culling on the GPU, the candidates of the entities not blended), as
+    /// `out.placed` says.
     pub(super) fn collect_visible(
         &self,
         frustum: &Frustum,
