@@ -563,36 +563,46 @@ fn check_refuses_shadow_maps_that_render_would_refuse() {
     }
 }
 
-/// The viewer under a virtual X display (`xvfb-run`): a few frames, a resize,
-/// minimise and restore, a screenshot on the way and one on quitting.
-#[test]
-fn view_runs_under_xvfb_resizes_and_takes_screenshots() {
+/// `glint view SCENE ARGS…` under a virtual X display (`xvfb-run`), or `None`
+/// (with a message) where there is no xvfb-run or no GPU adapter and
+/// `GLINT_REQUIRE_ADAPTER=1` does not ask for them.
+fn view_under_xvfb(scene: &Path, args: &[String]) -> Option<std::process::Output> {
     let required = std::env::var("GLINT_REQUIRE_ADAPTER").as_deref() == Ok("1");
     if Command::new("xvfb-run").arg("--help").output().is_err() {
         assert!(!required, "GLINT_REQUIRE_ADAPTER=1 but xvfb-run is missing (apt-get install xvfb xauth)");
         eprintln!("skipping: no xvfb-run (apt-get install xvfb xauth)");
-        return;
+        return None;
     }
-    let dir = tempfile::tempdir().expect("tempdir");
-    let (mid, last, offscreen) =
-        (dir.path().join("mid.png"), dir.path().join("last.png"), dir.path().join("offscreen.png"));
-    let scene = repo("tests/scenes/lights.scn");
-    let scene = scene.to_str().expect("path");
     let out = Command::new("xvfb-run")
-        .args(["-a", "-s", "-screen 0 640x480x24", env!("CARGO_BIN_EXE_glint"), "view", scene])
-        .args(["--size", "96x64", "--msaa", "1", "--frames", "10"])
-        .args(["--at", "3:resize=120x80", "--at", "5:minimize", "--at", "7:restore"])
-        .arg("--at")
-        .arg(format!("8:screenshot={}", mid.display()))
-        .arg("--screenshot")
-        .arg(&last)
+        .args(["-a", "-s", "-screen 0 640x480x24", env!("CARGO_BIN_EXE_glint"), "view"])
+        .arg(scene)
+        .args(args)
         .env("NODEVICE_SELECT", "1")
         .output()
         .expect("run xvfb-run");
     if out.status.code() == Some(2) && !required {
         eprintln!("skipping: no GPU adapter ({})", stderr(&out));
-        return;
+        return None;
     }
+    Some(out)
+}
+
+/// The viewer under a virtual X display: a few frames, a resize, minimise and
+/// restore, a screenshot on the way and one on quitting.
+#[test]
+fn view_runs_under_xvfb_resizes_and_takes_screenshots() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let (mid, last, offscreen) =
+        (dir.path().join("mid.png"), dir.path().join("last.png"), dir.path().join("offscreen.png"));
+    let scene = repo("tests/scenes/lights.scn");
+    let args = ["--size", "96x64", "--msaa", "1", "--frames", "10"]
+        .into_iter()
+        .chain(["--at", "3:resize=120x80", "--at", "5:minimize", "--at", "7:restore"])
+        .map(str::to_owned)
+        .chain(["--at".into(), format!("8:screenshot={}", mid.display())])
+        .chain(["--screenshot".into(), last.display().to_string()]);
+    let Some(out) = view_under_xvfb(&scene, &args.collect::<Vec<_>>()) else { return };
+    let scene = scene.to_str().expect("path");
     assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
     // On quitting it says how fast the scene played: at most real time.
     let summary = stderr(&out).lines().find(|l| l.contains("frames drawn in")).map(str::to_owned);
@@ -896,34 +906,18 @@ fn compare_says_whether_two_images_match_within_the_reference_tolerance() {
 
 #[test]
 fn the_viewer_changes_density_and_time_of_day_per_frame() {
-    let required = std::env::var("GLINT_REQUIRE_ADAPTER").as_deref() == Ok("1");
-    if Command::new("xvfb-run").arg("--help").output().is_err() {
-        assert!(!required, "GLINT_REQUIRE_ADAPTER=1 but xvfb-run is missing (apt-get install xvfb xauth)");
-        eprintln!("skipping: no xvfb-run (apt-get install xvfb xauth)");
-        return;
-    }
     let dir = tempfile::tempdir().expect("tempdir");
     let shot = |name: &str| dir.path().join(format!("{name}.png"));
-    let scene = repo("tests/scenes/tiles.scn");
-    let out = Command::new("xvfb-run")
-        .args(["-a", "-s", "-screen 0 640x480x24", env!("CARGO_BIN_EXE_glint"), "view"])
-        .arg(&scene)
-        .args(["--size", "96x64", "--msaa", "1", "--frames", "7"])
-        .arg("--at")
-        .arg(format!("2:screenshot={}", shot("full").display()))
-        .args(["--at", "3:density=0"])
-        .arg("--at")
-        .arg(format!("4:screenshot={}", shot("bare").display()))
-        .args(["--at", "5:time_of_day=23"])
-        .arg("--at")
-        .arg(format!("6:screenshot={}", shot("night").display()))
-        .env("NODEVICE_SELECT", "1")
-        .output()
-        .expect("run xvfb-run");
-    if out.status.code() == Some(2) && !required {
-        eprintln!("skipping: no GPU adapter ({})", stderr(&out));
-        return;
-    }
+    let at = |frame: u32, action: String| ["--at".to_owned(), format!("{frame}:{action}")];
+    let args = ["--size", "96x64", "--msaa", "1", "--frames", "7"]
+        .map(str::to_owned)
+        .into_iter()
+        .chain(at(2, format!("screenshot={}", shot("full").display())))
+        .chain(at(3, "density=0".into()))
+        .chain(at(4, format!("screenshot={}", shot("bare").display())))
+        .chain(at(5, "time_of_day=23".into()))
+        .chain(at(6, format!("screenshot={}", shot("night").display())));
+    let Some(out) = view_under_xvfb(&repo("tests/scenes/tiles.scn"), &args.collect::<Vec<_>>()) else { return };
     assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
     assert!(stderr(&out).contains("density 0.0") && stderr(&out).contains("time of day 23:00"), "{}", stderr(&out));
     let [full, bare, night] = ["full", "bare", "night"].map(|n| image::open(shot(n)).expect("png").into_rgb8());
