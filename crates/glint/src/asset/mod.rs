@@ -13,6 +13,7 @@ mod model;
 mod obj;
 mod placement;
 pub mod procedural;
+mod scene_desc;
 mod scn;
 mod scn_cloth;
 mod scn_fields;
@@ -31,10 +32,8 @@ pub use files::{
 };
 pub use model::{Model, ModelPart, Morph, Skin};
 pub use procedural::ShapeKind;
-pub use scn::{
-    load_scene, load_scene_with, parse_scene, parse_scene_with, CameraView, DrawOptions, EntityDesc, MaterialDesc,
-    MeshRef, SceneDesc, TextureRef, MAX_CAMERAS, MAX_INSTANCES,
-};
+pub use scene_desc::{CameraView, DrawOptions, EntityDesc, MaterialDesc, MeshRef, SceneDesc, TextureRef};
+pub use scn::{load_scene, load_scene_with, parse_scene, parse_scene_with, MAX_CAMERAS, MAX_INSTANCES};
 pub use scn_cloth::{ClothDesc, ClothSetup, MAX_POSE_STEPS};
 pub use scn_targets::{RenderTargetDesc, MAX_RENDER_TARGETS, MAX_RENDER_TARGET_BYTES, MAX_RENDER_TARGET_SIDE};
 pub use texture::{load_image, load_texture, Texture, MAX_TEXTURE_MEMORY, MAX_TEXTURE_SIDE};

@@ -1,0 +1,240 @@
+//! What a loaded scene is: [`SceneDesc`] and the descriptions it holds
+//! (materials, render tasks, cameras' views), checked and ready to place into a
+//! renderer ([`Renderer::place_scene`](crate::Renderer::place_scene)). The `.scn`
+//! loader (`scn.rs`) and the model loaders make them.
+
+use super::scn_cloth::ClothDesc;
+use super::scn_targets::RenderTargetDesc;
+use super::{Diagnostic, Model, ShapeKind, Texture};
+use crate::scene::{
+    Camera, Culling, Entity, Environment, Light, Lighting, Material, PostEffect, RenderTargetId, TextureId, View,
+    Viewport,
+};
+use glam::Mat4;
+use std::path::PathBuf;
+
+/// A texture a material uses: index into [`SceneDesc::textures`].
+pub type TextureRef = usize;
+
+/// A material from a `material` block, its maps as indices into [`SceneDesc::textures`].
+#[derive(Clone, Debug, Default)]
+pub struct MaterialDesc {
+    /// Everything but the texture ids.
+    pub material: Material,
+    /// `diffuse_map` (sRGB).
+    pub diffuse_map: Option<TextureRef>,
+    /// `normal_map` (linear).
+    pub normal_map: Option<TextureRef>,
+    /// `specular_map` (linear).
+    pub specular_map: Option<TextureRef>,
+    /// Metallic-roughness map (linear).
+    pub metallic_roughness_map: Option<TextureRef>,
+    /// Occlusion map (linear).
+    pub occlusion_map: Option<TextureRef>,
+    /// Emissive map (sRGB).
+    pub emissive_map: Option<TextureRef>,
+}
+
+impl MaterialDesc {
+    /// The material with its texture references turned into `textures`' ids
+    /// (`textures[i]` is the renderer's id of texture `i`).
+    pub fn resolve(&self, textures: &[TextureId]) -> Material {
+        Material {
+            diffuse_map: self.diffuse_map.map(|i| textures[i]),
+            normal_map: self.normal_map.map(|i| textures[i]),
+            specular_map: self.specular_map.map(|i| textures[i]),
+            metallic_roughness_map: self.metallic_roughness_map.map(|i| textures[i]),
+            occlusion_map: self.occlusion_map.map(|i| textures[i]),
+            emissive_map: self.emissive_map.map(|i| textures[i]),
+            ..self.material.clone()
+        }
+    }
+
+    /// Its maps, in [`Material::maps`]' order.
+    pub fn maps(&self) -> [Option<TextureRef>; 6] {
+        [
+            self.diffuse_map,
+            self.normal_map,
+            self.specular_map,
+            self.metallic_roughness_map,
+            self.occlusion_map,
+            self.emissive_map,
+        ]
+    }
+
+    /// The same, to change.
+    pub fn maps_mut(&mut self) -> [&mut Option<TextureRef>; 6] {
+        [
+            &mut self.diffuse_map,
+            &mut self.normal_map,
+            &mut self.specular_map,
+            &mut self.metallic_roughness_map,
+            &mut self.occlusion_map,
+            &mut self.emissive_map,
+        ]
+    }
+}
+
+/// One render task: every instance of one mesh with one material, gathered from
+/// all `entity` and `instances` blocks that use that pair.
+#[derive(Clone, Debug)]
+pub struct EntityDesc {
+    /// The shape or model.
+    pub mesh: MeshRef,
+    /// Index into [`SceneDesc::materials`]; `None` for the default material.
+    pub material: Option<usize>,
+    /// Draw order and shadow flags.
+    pub draw: DrawOptions,
+    /// One transform per instance.
+    pub transforms: Vec<Mat4>,
+    /// The instances' tiles (an `instances` block with `tiles`).
+    pub tiles: Option<crate::scene::Tiles>,
+    /// With tiles, the fraction of each tile drawn (see [`Entity::density`]).
+    pub density: f32,
+    /// With tiles, 16-byte instances (see [`Entity::with_compact_instances`]).
+    pub compact: bool,
+}
+
+/// How an `entity` or `instances` block's instances draw: keys `render_order`,
+/// `cast_shadows` and `receive_shadows` (see the same fields of [`Entity`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct DrawOptions {
+    /// Draw-order override (see [`Entity::render_order`]).
+    pub render_order: Option<u8>,
+    /// Whether the instances cast shadows (default true).
+    pub cast_shadows: bool,
+    /// Whether shadows fall on the instances (default true).
+    pub receive_shadows: bool,
+}
+
+impl Default for DrawOptions {
+    fn default() -> Self {
+        Self { render_order: None, cast_shadows: true, receive_shadows: true }
+    }
+}
+
+impl DrawOptions {
+    /// Set these options on `entity`.
+    pub fn apply(self, entity: &mut Entity) {
+        entity.render_order = self.render_order;
+        entity.cast_shadows = self.cast_shadows;
+        entity.receive_shadows = self.receive_shadows;
+    }
+}
+
+/// What an entity draws: a procedural shape, or a model file (every part of it).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum MeshRef {
+    /// A procedural shape.
+    Shape(ShapeKind),
+    /// Index into [`SceneDesc::models`].
+    Model(usize),
+}
+
+/// A parsed and validated scene file, ready to place into a renderer.
+#[derive(Clone, Debug)]
+pub struct SceneDesc {
+    /// The file it came from.
+    pub path: PathBuf,
+    /// Background and ambient light.
+    pub environment: Environment,
+    /// Cameras in file order (a default one when the file has none).
+    pub cameras: Vec<Camera>,
+    /// Each camera's `viewport`, post chain and `output` (the same order).
+    pub camera_views: Vec<CameraView>,
+    /// `render_target` blocks in file order: render target k's texture comes
+    /// after the file textures in material maps, and placing the scene gives
+    /// its id ([`PlacedScene::render_targets`](crate::render::PlacedScene::render_targets)).
+    pub render_targets: Vec<RenderTargetDesc>,
+    /// Lights in file order.
+    pub lights: Vec<Light>,
+    /// Materials in file order.
+    pub materials: Vec<MaterialDesc>,
+    /// Decoded textures, each file once.
+    pub textures: Vec<Texture>,
+    /// Models named by `mesh` keys, each file once, plus a copy per entity that
+    /// overrides its materials (`mtl.NAME.key`).
+    pub models: Vec<Model>,
+    /// Render tasks, one per (mesh, material, draw options), in first-use order.
+    pub entities: Vec<EntityDesc>,
+    /// Simulated cloths in file order; their entities follow the render tasks'.
+    pub cloths: Vec<ClothDesc>,
+    /// Non-fatal problems (unknown keys, repeated keys), `path:line: message`.
+    pub warnings: Vec<Diagnostic>,
+    /// The hour its sun and sky were last set to ([`SceneDesc::set_time_of_day`]).
+    pub time_of_day: Option<f32>,
+}
+
+/// How a camera of a scene draws: where in the image, and its post chain.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct CameraView {
+    /// `viewport`: its rectangle of the image (`None`: drawn only alone).
+    pub viewport: Option<Viewport>,
+    /// `post`: its effects, in order.
+    pub post: Vec<PostEffect>,
+    /// `output`: the render target it draws into (an index of
+    /// [`SceneDesc::render_targets`]), rather than the image.
+    pub output: Option<usize>,
+    /// `cull`: how it culls (`off`, `cpu` or `gpu`, the default).
+    pub culling: Culling,
+}
+
+impl SceneDesc {
+    /// The views `glint render` draws: the cameras that draw into render
+    /// targets ([`SceneDesc::target_views`]), then every other camera that has a
+    /// viewport, in file order, or else the first other camera alone over the image.
+    pub fn views(&self, targets: &[RenderTargetId]) -> Vec<View> {
+        let into_image: Vec<usize> =
+            (0..self.cameras.len()).filter(|&k| self.camera_views[k].output.is_none()).collect();
+        let placed: Vec<View> = (into_image.iter())
+            .filter_map(|&k| self.camera_views[k].viewport.map(|v| self.camera_view(k).with_viewport(v)))
+            .collect();
+        let image = match (placed.is_empty(), into_image.first()) {
+            (true, Some(&first)) => vec![self.camera_view(first)],
+            _ => placed,
+        };
+        self.target_views(targets).into_iter().chain(image).collect()
+    }
+
+    /// The cameras that draw into render targets, as views into them;
+    /// `targets` is each render target's id in the renderer the scene was
+    /// placed into (a camera whose target has none is left out).
+    pub fn target_views(&self, targets: &[RenderTargetId]) -> Vec<View> {
+        (0..self.cameras.len())
+            .filter_map(|k| {
+                let c = &self.camera_views[k];
+                let view = self.camera_view(k).with_viewport(c.viewport.unwrap_or_default());
+                c.output.and_then(|t| targets.get(t)).map(|&id| view.with_output(id))
+            })
+            .collect()
+    }
+
+    /// The scene's lights under its environment, for each frame.
+    pub fn lighting(&self) -> Lighting<'_> {
+        Lighting::new(&self.lights, self.environment)
+    }
+
+    /// Camera `index` over the whole image, with its post chain.
+    pub fn camera_view(&self, index: usize) -> View {
+        let c = &self.camera_views[index];
+        View::new(self.cameras[index]).with_post(c.post.clone()).with_culling(c.culling)
+    }
+
+    /// Total instances over all render tasks.
+    pub fn instance_count(&self) -> usize {
+        self.entities.iter().map(|e| e.transforms.len()).sum()
+    }
+
+    /// Check, without stepping, that posing at `time` stays within the cloth
+    /// limits ([`MAX_POSE_STEPS`](super::MAX_POSE_STEPS) per cloth, 10⁹
+    /// node²-steps over all of them; see `docs/limits.md`): the error names the
+    /// cloth block that goes over. Posing at an earlier time takes no more work.
+    pub fn check_pose(&self, time: f32) -> Result<(), Diagnostic> {
+        let mut work = 0u64;
+        for cloth in &self.cloths {
+            cloth.check_pose(time, work, &self.path)?;
+            work = work.saturating_add(cloth.pose_work(time));
+        }
+        Ok(())
+    }
+}
