@@ -357,8 +357,7 @@ impl DrawList {
                 frustums: &self.frustums,
                 commands: self.batches.len(),
             };
-            let on_gpu: Vec<bool> = self.placed.iter().map(|&p| p == Placed::OnGpu).collect();
-            let template = occlusion.map(|_| late_commands(&self.indirect_args, &on_gpu, self.gpu_region));
+            let template = occlusion.map(|_| late_commands(&self.indirect_args, &self.placed, self.gpu_region));
             let late = occlusion.zip(template.as_deref()).map(|((view_proj, depth), template)| LateInput {
                 view_proj,
                 depth,

@@ -372,13 +372,9 @@ impl Renderer {
             self.submit_error.get_or_insert(RenderError::UnknownShape(entity.shape));
             return;
         };
-        let local = shape.mesh.aabb();
         let motion = self.registry.material(entity.material).and_then(|m| m.motion);
-        let reach = motion.map_or(local.into(), |m| {
-            let (local, walk) = m.reach(local);
-            instances::Reach { local, walk }
-        });
-        let slot = self.store.submit(entity, reach, self.frame_index);
+        let (local, walk) = motion.map_or((shape.mesh.aabb(), 0.0), |m| m.reach(shape.mesh.aabb()));
+        let slot = self.store.submit(entity, instances::Reach { local, walk }, self.frame_index);
         self.instances_submitted += entity.transforms().len() as u64;
         self.submitted.push(Submitted {
             slot,

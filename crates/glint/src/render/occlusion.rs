@@ -19,6 +19,7 @@
 
 use super::gpu_cull::{Run, COMMAND_BYTES};
 use super::resources::GrowBuffer;
+use super::visible::Placed;
 use super::RenderError;
 
 /// The pyramid's compute pipelines.
@@ -296,16 +297,20 @@ impl LatePhase {
 }
 
 /// The late commands of a list's batches: none of their instances yet, and a
-/// GPU-culled batch's places after the early ones (`gpu_region` further on).
+/// GPU-culled batch's places after the early ones (`gpu_region` further on);
+/// `placed` says how each batch's instances are placed.
 pub(crate) fn late_commands(
     early: &[wgpu::util::DrawIndexedIndirectArgs],
-    on_gpu: &[bool],
+    placed: &[Placed],
     gpu_region: u32,
 ) -> Vec<wgpu::util::DrawIndexedIndirectArgs> {
-    (early.iter().zip(on_gpu))
-        .map(|(c, &gpu)| wgpu::util::DrawIndexedIndirectArgs {
+    (early.iter().zip(placed))
+        .map(|(c, &placed)| wgpu::util::DrawIndexedIndirectArgs {
             instance_count: 0,
-            first_instance: if gpu { c.first_instance + gpu_region } else { c.first_instance },
+            first_instance: match placed {
+                Placed::OnGpu => c.first_instance + gpu_region,
+                _ => c.first_instance,
+            },
             ..*c
         })
         .collect()

@@ -154,7 +154,7 @@ pub(crate) struct Pipelines {
     /// Forward and shadow pipelines; a key's index is its id in sort keys.
     forward_cache: Vec<(PipelineKey, wgpu::RenderPipeline)>,
     forward_index: HashMap<PipelineKey, u16>,
-    /// Sky pipelines by sample count.
+    /// The sky shader's pipelines by target and pass.
     sky_cache: HashMap<(TargetFormat, SkyPass), wgpu::RenderPipeline>,
 }
 

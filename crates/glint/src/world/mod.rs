@@ -35,6 +35,9 @@ pub struct World {
     placed: PlacedScene,
     cloths: Vec<ClothSim>,
     time: f32,
+    /// Whether a material moves with time ([`Material::motion`](crate::Material::motion)),
+    /// so the frames need the scene time.
+    moves: bool,
 }
 
 impl World {
@@ -44,7 +47,9 @@ impl World {
     pub fn place(desc: SceneDesc, renderer: &mut Renderer) -> Self {
         let placed = renderer.place_scene(&desc);
         let cloths = desc.cloths.iter().map(ClothSim::new).collect();
-        Self { desc, placed, cloths, time: 0.0 }
+        let models = desc.models.iter().flat_map(|m| &m.materials);
+        let moves = desc.materials.iter().chain(models).any(|m| m.material.motion.is_some());
+        Self { desc, placed, cloths, time: 0.0, moves }
     }
 
     /// The scene as its file described it.
@@ -62,8 +67,7 @@ impl World {
     /// stays the same from frame to frame, and is not uploaded again).
     pub fn lighting(&self) -> Lighting<'_> {
         let mut lighting = self.desc.lighting();
-        let models = self.desc.models.iter().flat_map(|m| &m.materials);
-        if self.desc.materials.iter().chain(models).any(|m| m.material.motion.is_some()) {
+        if self.moves {
             lighting.environment.time = self.time;
         }
         lighting
