@@ -200,9 +200,14 @@ struct Picture {
 
 /// `--time-of-day`: hours, 0..=24.
 fn parse_hours(s: &str) -> Result<f32, String> {
+    number_in(s, 0.0..=24.0, "an hour of the day")
+}
+
+/// `s` as a number in `range`, else "expected `what` from LO to HI, found "s"".
+fn number_in(s: &str, range: std::ops::RangeInclusive<f32>, what: &str) -> Result<f32, String> {
     match s.parse::<f32>() {
-        Ok(h) if (0.0..=24.0).contains(&h) => Ok(h),
-        _ => Err(format!("expected an hour of the day from 0 to 24, found {s:?}")),
+        Ok(v) if range.contains(&v) => Ok(v),
+        _ => Err(format!("expected {what} from {} to {}, found {s:?}", range.start(), range.end())),
     }
 }
 
@@ -358,18 +363,12 @@ fn parse_size(s: &str) -> Result<(u32, u32), String> {
 
 /// `--density`: a share, 0..=1.
 fn parse_density(s: &str) -> Result<f32, String> {
-    match s.parse::<f32>() {
-        Ok(d) if (0.0..=1.0).contains(&d) => Ok(d),
-        _ => Err(format!("expected a share of every tile from 0 to 1, found {s:?}")),
-    }
+    number_in(s, 0.0..=1.0, "a share of every tile")
 }
 
 /// `--orbit`: degrees per frame, 0..=360.
 fn parse_orbit(s: &str) -> Result<f32, String> {
-    match s.parse::<f32>() {
-        Ok(d) if (0.0..=360.0).contains(&d) => Ok(d),
-        _ => Err(format!("expected degrees per frame from 0 to 360, found {s:?}")),
-    }
+    number_in(s, 0.0..=360.0, "degrees per frame")
 }
 
 fn parse_time(s: &str) -> Result<f32, String> {
