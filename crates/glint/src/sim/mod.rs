@@ -1,4 +1,6 @@
 //! Simulation: cloth as Discrete Elastic Plates, integrated implicitly with
-//! Newton's method on a sparse system.
+//! Newton's method on a sparse system; fish schooling after Reynolds on a
+//! uniform grid, on the CPU and with compute shaders.
 
 pub mod cloth;
+pub mod school;

@@ -1,0 +1,138 @@
+//! A uniform grid over a school's bounds, rebuilt every step by counting sort:
+//! each fish's cell, the fish per cell, their running sum (each cell's first
+//! slot) and the fish in cell order. Cells are at least the view radius wide,
+//! so a fish's neighbours lie in its own cell and the 26 around it; fish
+//! outside the bounds count in the nearest border cell, which keeps that true
+//! (clamping never moves two points further apart in cells).
+
+use crate::scene::Aabb;
+use glam::{IVec3, UVec3, Vec3};
+use rayon::prelude::*;
+
+/// Most cells a grid has: wider cells beyond that (the counting sort's
+/// running sum is over cells, and the GPU's scan covers 2²⁰).
+pub const MAX_CELLS: u32 = 1 << 20;
+
+/// The grid's shape: where it starts, its cell width and its cells per axis.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GridShape {
+    /// The corner of cell (0, 0, 0): the bounds' smallest corner less one cell.
+    pub origin: Vec3,
+    /// Cell width, at least the view radius.
+    pub cell: f32,
+    /// Cells along x, y and z.
+    pub dims: UVec3,
+}
+
+impl GridShape {
+    /// The grid over `bounds` (plus one cell each side) whose cells are
+    /// `radius` wide, or wider where that would take more than `max_cells`.
+    pub fn new(bounds: Aabb, radius: f32, max_cells: u32) -> Self {
+        let extent = (bounds.max - bounds.min).max(Vec3::ZERO);
+        let mut cell = radius.max(1e-3);
+        loop {
+            let dims = (extent / cell).ceil().as_uvec3().max(UVec3::ONE) + 2;
+            let cells = dims.x as u64 * dims.y as u64 * dims.z as u64;
+            if cells <= max_cells.max(27) as u64 {
+                return Self { origin: bounds.min - cell, cell, dims };
+            }
+            cell *= 1.25;
+        }
+    }
+
+    /// How many cells.
+    pub fn cells(&self) -> u32 {
+        self.dims.x * self.dims.y * self.dims.z
+    }
+
+    /// The cell (x, y, z) holding `p`, border cells for points outside.
+    pub fn coords(&self, p: Vec3) -> IVec3 {
+        let c = ((p - self.origin) / self.cell).floor();
+        // NaN clamps to the first cell too.
+        let c = c.max(Vec3::ZERO).min((self.dims - 1).as_vec3());
+        c.as_ivec3()
+    }
+
+    /// The index of cell `c`, x fastest.
+    pub fn index(&self, c: IVec3) -> u32 {
+        (c.x as u32) + self.dims.x * ((c.y as u32) + self.dims.y * (c.z as u32))
+    }
+}
+
+/// The fish sorted by cell: `order[start[c]..start[c + 1]]` are cell `c`'s
+/// fish, in the order they were numbered.
+#[derive(Clone, Debug, Default)]
+pub struct Grid {
+    /// Its shape.
+    pub shape: Option<GridShape>,
+    /// Each cell's first slot in `order`, and one past the end.
+    pub start: Vec<u32>,
+    /// Fish numbers, cell by cell.
+    pub order: Vec<u32>,
+    /// Each fish's cell.
+    cell_of: Vec<u32>,
+}
+
+impl Grid {
+    /// Sort `positions` into `shape`'s cells: cells found in parallel, then
+    /// counted, summed and scattered (a stable counting sort, O(n + cells)).
+    pub fn rebuild(&mut self, shape: GridShape, positions: &[Vec3]) {
+        let cells = shape.cells() as usize;
+        self.shape = Some(shape);
+        self.cell_of.clear();
+        self.cell_of.par_extend(positions.par_iter().map(|&p| shape.index(shape.coords(p))));
+        self.start.clear();
+        self.start.resize(cells + 1, 0);
+        for &c in &self.cell_of {
+            self.start[c as usize + 1] += 1;
+        }
+        for c in 0..cells {
+            self.start[c + 1] += self.start[c];
+        }
+        self.order.resize(positions.len(), 0);
+        let mut next = self.start[..cells].to_vec();
+        for (i, &c) in self.cell_of.iter().enumerate() {
+            self.order[next[c as usize] as usize] = i as u32;
+            next[c as usize] += 1;
+        }
+    }
+
+    /// The slots of `order` for the cells around (and including) the one
+    /// holding `p`: up to 27 ranges, x-runs of three cells merged into one.
+    pub fn around(&self, p: Vec3) -> impl Iterator<Item = std::ops::Range<usize>> + '_ {
+        let shape = self.shape.expect("grid built");
+        let c = shape.coords(p);
+        let hi = shape.dims.as_ivec3() - 1;
+        let (x0, x1) = ((c.x - 1).max(0), (c.x + 1).min(hi.x));
+        (-1..=1).flat_map(move |dz| (-1..=1).map(move |dy| (dy, dz))).filter_map(move |(dy, dz)| {
+            let (y, z) = (c.y + dy, c.z + dz);
+            if y < 0 || z < 0 || y > hi.y || z > hi.z {
+                return None;
+            }
+            let first = shape.index(IVec3::new(x0, y, z)) as usize;
+            let last = shape.index(IVec3::new(x1, y, z)) as usize;
+            Some(self.start[first] as usize..self.start[last + 1] as usize)
+        })
+    }
+
+    /// Every fish `j != i` within `radius` of fish `i` (strictly closer), by
+    /// the grid, in ascending order.
+    pub fn neighbours(&self, positions: &[Vec3], i: usize, radius: f32) -> Vec<u32> {
+        let p = positions[i];
+        let mut found: Vec<u32> = self
+            .around(p)
+            .flat_map(|slots| self.order[slots].iter().copied())
+            .filter(|&j| j as usize != i && positions[j as usize].distance_squared(p) < radius * radius)
+            .collect();
+        found.sort_unstable();
+        found
+    }
+}
+
+/// The same search by testing every pair: the grid's reference in tests.
+pub fn brute_neighbours(positions: &[Vec3], i: usize, radius: f32) -> Vec<u32> {
+    let p = positions[i];
+    (0..positions.len() as u32)
+        .filter(|&j| j as usize != i && positions[j as usize].distance_squared(p) < radius * radius)
+        .collect()
+}

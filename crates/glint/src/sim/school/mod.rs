@@ -1,0 +1,412 @@
+//! Fish schooling after Reynolds: every fish steers by separation, alignment
+//! and cohesion with the neighbours it sees (within a view radius and angle),
+//! stays inside bounds, keeps off obstacles and the floor, and flees a
+//! predator that hunts the nearest fish. Neighbours come from a uniform grid
+//! rebuilt every step by counting sort ([`grid`]): nothing is O(n²).
+//!
+//! [`School`] steps on the CPU with rayon; [`GpuSchool`] steps the same rules
+//! with compute shaders. Both start from [`School::new`]'s state for a seed.
+
+pub mod grid;
+mod rules;
+#[cfg(test)]
+mod tests;
+
+pub use rules::Forces;
+
+use crate::scene::Aabb;
+use glam::{Mat3, Mat4, Vec3};
+use grid::{Grid, GridShape};
+use rand::{Rng, SeedableRng};
+use rayon::prelude::*;
+use rules::{confine, limit_speed, Seen};
+
+/// Most fish a school holds.
+pub const MAX_FISH: usize = 1 << 22;
+
+/// How strongly each rule steers: accelerations per unit of [`Forces`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Weights {
+    /// Keep apart.
+    pub separation: f32,
+    /// Swim the way the neighbours swim.
+    pub alignment: f32,
+    /// Swim to the neighbours' middle.
+    pub cohesion: f32,
+    /// Stay inside the bounds.
+    pub bounds: f32,
+    /// Keep off obstacles and the floor.
+    pub avoid: f32,
+    /// Flee the predator.
+    pub flee: f32,
+}
+
+impl Default for Weights {
+    fn default() -> Self {
+        Self { separation: 1.5, alignment: 1.0, cohesion: 0.6, bounds: 8.0, avoid: 12.0, flee: 20.0 }
+    }
+}
+
+/// A sphere fish swim around.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Obstacle {
+    /// Its centre.
+    pub center: Vec3,
+    /// Its radius.
+    pub radius: f32,
+}
+
+/// The predator: it swims at `speed` towards the nearest fish, and fish
+/// closer than `fear` flee it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Hunter {
+    /// Where it starts.
+    pub start: Vec3,
+    /// Its cruising speed, world units a second.
+    pub speed: f32,
+    /// How fast it turns: the most its velocity changes a second.
+    pub accel: f32,
+    /// Fish closer than this flee.
+    pub fear: f32,
+}
+
+/// Everything a school is made from.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SchoolParams {
+    /// How many fish.
+    pub count: usize,
+    /// The box the fish stay in.
+    pub bounds: Aabb,
+    /// How far a fish sees its neighbours (also the margin the bounds,
+    /// obstacles and floor push within).
+    pub radius: f32,
+    /// The view cone's whole angle, degrees (360: all round).
+    pub view_angle: f32,
+    /// The rules' weights.
+    pub weights: Weights,
+    /// Slowest a fish swims.
+    pub min_speed: f32,
+    /// Fastest a fish swims.
+    pub max_speed: f32,
+    /// The most a fish's velocity changes a second.
+    pub max_accel: f32,
+    /// Spheres to swim around.
+    pub obstacles: Vec<Obstacle>,
+    /// A floor height to keep above, if any.
+    pub floor: Option<f32>,
+    /// The predator, if any.
+    pub predator: Option<Hunter>,
+    /// Tail beats a second at top speed (fewer when slower).
+    pub beat_rate: f32,
+    /// The random start's seed.
+    pub seed: u64,
+}
+
+impl Default for SchoolParams {
+    fn default() -> Self {
+        Self {
+            count: 1000,
+            bounds: Aabb { min: Vec3::splat(-10.0), max: Vec3::splat(10.0) },
+            radius: 1.5,
+            view_angle: 270.0,
+            weights: Weights::default(),
+            min_speed: 1.0,
+            max_speed: 3.0,
+            max_accel: 12.0,
+            obstacles: Vec::new(),
+            floor: None,
+            predator: None,
+            beat_rate: 3.0,
+            seed: 1,
+        }
+    }
+}
+
+impl SchoolParams {
+    /// The distance within which the bounds, obstacles and floor push.
+    pub fn margin(&self) -> f32 {
+        self.radius
+    }
+
+    /// The cosine of half the view angle (−1: sees all round).
+    pub(crate) fn cos_half_view(&self) -> f32 {
+        if self.view_angle >= 360.0 {
+            -1.0
+        } else {
+            (self.view_angle.to_radians() * 0.5).cos()
+        }
+    }
+
+    /// Why these parameters cannot make a school, if they cannot.
+    pub fn check(&self) -> Result<(), String> {
+        let finite = |v: Vec3| v.is_finite();
+        if self.count == 0 || self.count > MAX_FISH {
+            return Err(format!("count must be 1 to {MAX_FISH}, got {}", self.count));
+        }
+        let b = self.bounds;
+        if !finite(b.min) || !finite(b.max) || b.min.cmpge(b.max).any() {
+            return Err("bounds must be finite with min below max on every axis".into());
+        }
+        if !(self.radius.is_finite() && self.radius > 0.0) {
+            return Err(format!("radius must be positive, got {}", self.radius));
+        }
+        if !(self.view_angle > 0.0 && self.view_angle <= 360.0) {
+            return Err(format!("view angle must be in (0, 360] degrees, got {}", self.view_angle));
+        }
+        let speeds = self.min_speed >= 0.0 && self.min_speed <= self.max_speed && self.max_speed.is_finite();
+        if !speeds || self.max_speed <= 0.0 {
+            return Err(format!("speeds must satisfy 0 <= min <= max, max > 0, got {} {}", self.min_speed, self.max_speed));
+        }
+        let w = self.weights;
+        let weights = [w.separation, w.alignment, w.cohesion, w.bounds, w.avoid, w.flee];
+        if weights.iter().any(|w| !w.is_finite() || *w < 0.0) || !(self.max_accel.is_finite() && self.max_accel > 0.0) {
+            return Err("weights must be finite and non-negative, and the acceleration positive".into());
+        }
+        if self.obstacles.iter().any(|o| !finite(o.center) || !(o.radius.is_finite() && o.radius > 0.0)) {
+            return Err("obstacles need a finite centre and a positive radius".into());
+        }
+        if self.floor.is_some_and(|f| !f.is_finite()) || !(self.beat_rate.is_finite() && self.beat_rate >= 0.0) {
+            return Err("the floor and beat rate must be finite".into());
+        }
+        if let Some(h) = self.predator {
+            let ok = finite(h.start) && [h.speed, h.accel, h.fear].iter().all(|x| x.is_finite() && *x > 0.0);
+            if !ok {
+                return Err("the predator needs a finite start and positive speed, turn and fear radius".into());
+            }
+        }
+        Ok(())
+    }
+}
+
+/// One swimmer's state.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Swimmer {
+    /// Where it is.
+    pub position: Vec3,
+    /// How it moves, world units a second.
+    pub velocity: Vec3,
+    /// Its tail beat, a fraction of a cycle.
+    pub phase: f32,
+}
+
+impl Swimmer {
+    /// Its model matrix: placed at its position, its front (+Z) along its
+    /// velocity with +Y as near up as it can be, scaled by `scale`.
+    pub fn transform(&self, scale: f32) -> Mat4 {
+        let z = self.velocity.try_normalize().unwrap_or(Vec3::Z);
+        let x = Vec3::Y.cross(z).try_normalize().unwrap_or(Vec3::X);
+        let y = z.cross(x);
+        Mat4::from_scale_rotation_translation(Vec3::splat(scale), glam::Quat::from_mat3(&Mat3::from_cols(x, y, z)), self.position)
+    }
+
+    /// Advance the tail beat by `dt` at `rate` beats a second at `top` speed
+    /// (0.4 of it when still).
+    fn beat(&mut self, dt: f32, rate: f32, top: f32) {
+        let pace = 0.4 + 0.6 * (self.velocity.length() / top.max(1e-6)).min(1.5);
+        self.phase = (self.phase + dt * rate * pace).fract();
+    }
+}
+
+/// What a school looks like as a whole, to compare runs.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct SchoolStats {
+    /// Mean speed.
+    pub mean_speed: f32,
+    /// Length of the mean heading: 1 when all swim one way, near 0 when random.
+    pub polarisation: f32,
+    /// Mean distance to the nearest other fish, capped at the view radius.
+    pub nearest: f32,
+    /// Mean distance to the predator (0 without one).
+    pub predator_distance: f32,
+}
+
+/// A school on the CPU.
+pub struct School {
+    params: SchoolParams,
+    fish: Vec<Swimmer>,
+    predator: Option<Swimmer>,
+    shape: GridShape,
+    grid: Grid,
+    /// Positions and velocities in the grid's order, rebuilt each step.
+    sorted: Vec<(Vec3, Vec3)>,
+    next: Vec<Swimmer>,
+    steps: u64,
+}
+
+impl School {
+    /// `params.count` fish spread at random through the bounds (off the
+    /// obstacles where they can be), swimming random ways at random speeds
+    /// between the limits; the predator, if any, at its start. Errors with
+    /// [`SchoolParams::check`]'s reason.
+    pub fn new(params: SchoolParams) -> Result<Self, String> {
+        params.check()?;
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(params.seed);
+        let (lo, hi) = (params.bounds.min, params.bounds.max);
+        let inset = ((hi - lo) * 0.25).min(Vec3::splat(params.margin()));
+        let fish = (0..params.count)
+            .map(|_| {
+                let mut p = lo;
+                for _ in 0..8 {
+                    p = Vec3::new(
+                        rng.random_range(lo.x + inset.x..=hi.x - inset.x),
+                        rng.random_range(lo.y + inset.y..=hi.y - inset.y),
+                        rng.random_range(lo.z + inset.z..=hi.z - inset.z),
+                    );
+                    if params.obstacles.iter().all(|o| p.distance(o.center) > o.radius) {
+                        break;
+                    }
+                }
+                let dir = loop {
+                    let d = Vec3::new(rng.random_range(-1.0..1.0), rng.random_range(-0.3..0.3), rng.random_range(-1.0..1.0));
+                    if let Some(d) = d.try_normalize() {
+                        break d;
+                    }
+                };
+                let speed = rng.random_range(params.min_speed..=params.max_speed);
+                let (position, velocity) = confine(p, dir * speed, &params);
+                Swimmer { position, velocity, phase: rng.random_range(0.0..1.0) }
+            })
+            .collect();
+        let predator = params.predator.map(|h| Swimmer { position: h.start, velocity: Vec3::Z * h.speed, phase: 0.0 });
+        Ok(Self::from_state(params, fish, predator))
+    }
+
+    /// A school in the given state (tests build small cases by hand).
+    pub fn from_state(params: SchoolParams, fish: Vec<Swimmer>, predator: Option<Swimmer>) -> Self {
+        let shape = GridShape::new(params.bounds, params.radius, grid::MAX_CELLS.min(2 * fish.len() as u32 + 4096));
+        Self { params, fish, predator, shape, grid: Grid::default(), sorted: Vec::new(), next: Vec::new(), steps: 0 }
+    }
+
+    /// Its parameters.
+    pub fn params(&self) -> &SchoolParams {
+        &self.params
+    }
+
+    /// Every fish.
+    pub fn fish(&self) -> &[Swimmer] {
+        &self.fish
+    }
+
+    /// The predator, if it has one.
+    pub fn predator(&self) -> Option<&Swimmer> {
+        self.predator.as_ref()
+    }
+
+    /// Steps taken.
+    pub fn steps(&self) -> u64 {
+        self.steps
+    }
+
+    /// The grid's shape.
+    pub fn grid_shape(&self) -> GridShape {
+        self.shape
+    }
+
+    fn rebuild_grid(&mut self) {
+        let positions: Vec<Vec3> = self.fish.par_iter().map(|f| f.position).collect();
+        self.grid.rebuild(self.shape, &positions);
+        let fish = &self.fish;
+        self.sorted.clear();
+        self.sorted.par_extend(self.grid.order.par_iter().map(|&i| {
+            let f = &fish[i as usize];
+            (f.position, f.velocity)
+        }));
+    }
+
+    /// What fish `i` feels now: each rule's pull, from the neighbours the
+    /// grid finds.
+    pub fn forces(&mut self, i: usize) -> Forces {
+        self.rebuild_grid();
+        self.forces_of(&self.fish[i])
+    }
+
+    fn forces_of(&self, f: &Swimmer) -> Forces {
+        let p = &self.params;
+        let (r2, cos_half) = (p.radius * p.radius, p.cos_half_view());
+        let ahead = f.velocity.normalize_or_zero();
+        let mut seen = Seen::default();
+        for slots in self.grid.around(f.position) {
+            for &(q, w) in &self.sorted[slots] {
+                seen.add(f.position, ahead, r2, cos_half, q, w);
+            }
+        }
+        seen.forces(p, f.position, f.velocity, self.predator.map(|h| h.position))
+    }
+
+    /// Advance every fish and the predator by `dt` seconds, all from the
+    /// state at the step's start.
+    pub fn step(&mut self, dt: f32) {
+        self.rebuild_grid();
+        let mut next = std::mem::take(&mut self.next);
+        next.clear();
+        let this = &*self;
+        let p = &this.params;
+        next.par_extend(this.fish.par_iter().map(|f| {
+            let a = this.forces_of(f).acceleration(p);
+            let v = limit_speed(f.velocity + a * dt, f.velocity, p);
+            let (position, velocity) = confine(f.position + v * dt, v, p);
+            let velocity = limit_speed(velocity, v, p);
+            let mut moved = Swimmer { position, velocity, phase: f.phase };
+            moved.beat(dt, p.beat_rate, p.max_speed);
+            moved
+        }));
+        if let (Some(h), Some(hunter)) = (self.predator, self.params.predator) {
+            self.predator = Some(hunt(h, hunter, &self.fish, &self.params, dt));
+        }
+        self.next = std::mem::replace(&mut self.fish, next);
+        self.steps += 1;
+    }
+
+    /// The school's statistics now.
+    pub fn stats(&mut self) -> SchoolStats {
+        self.rebuild_grid();
+        let positions: Vec<Vec3> = self.fish.iter().map(|f| f.position).collect();
+        let r = self.params.radius;
+        let this = &*self;
+        let nearest: f32 = (0..positions.len())
+            .into_par_iter()
+            .map(|i| {
+                let p = positions[i];
+                this.grid
+                    .around(p)
+                    .flat_map(|s| this.grid.order[s].iter())
+                    .filter(|&&j| j as usize != i)
+                    .map(|&j| positions[j as usize].distance(p))
+                    .fold(r, f32::min)
+            })
+            .sum();
+        stats_of(&self.fish, self.predator.map(|h| h.position), nearest)
+    }
+}
+
+/// Mean speed, polarisation and predator distance of `fish`, with the sum
+/// of their nearest distances.
+pub(crate) fn stats_of(fish: &[Swimmer], predator: Option<Vec3>, nearest_sum: f32) -> SchoolStats {
+    let n = fish.len().max(1) as f32;
+    let speed: f32 = fish.iter().map(|f| f.velocity.length()).sum();
+    let heading: Vec3 = fish.iter().map(|f| f.velocity.normalize_or_zero()).sum();
+    let predator_distance = predator.map_or(0.0, |q| fish.iter().map(|f| f.position.distance(q)).sum::<f32>() / n);
+    SchoolStats { mean_speed: speed / n, polarisation: heading.length() / n, nearest: nearest_sum / n, predator_distance }
+}
+
+/// The predator after `dt`: turned towards the nearest fish (lowest number
+/// on ties) at most `accel` a second, at its cruising speed, inside the bounds.
+fn hunt(mut h: Swimmer, hunter: Hunter, fish: &[Swimmer], params: &SchoolParams, dt: f32) -> Swimmer {
+    let nearest = fish
+        .par_iter()
+        .enumerate()
+        .map(|(i, f)| (f.position.distance_squared(h.position), i))
+        .min_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+    if let Some((_, i)) = nearest {
+        let want = (fish[i].position - h.position).normalize_or_zero() * hunter.speed;
+        h.velocity += (want - h.velocity).clamp_length_max(hunter.accel * dt);
+    }
+    let s = h.velocity.length();
+    let dir = if s > 1e-6 { h.velocity / s } else { Vec3::Z };
+    let v = dir * s.clamp(hunter.speed * 0.5, hunter.speed * 1.2);
+    let (position, velocity) = confine(h.position + v * dt, v, params);
+    h.position = position;
+    h.velocity = velocity;
+    h.beat(dt, params.beat_rate * 0.5, hunter.speed);
+    h
+}
