@@ -4,6 +4,7 @@ mod bench;
 mod compare;
 mod output;
 mod plot;
+mod school;
 mod sim;
 mod view;
 
@@ -134,7 +135,7 @@ enum Command {
         #[arg(long, value_name = "FRAME:ACTION", value_parser = view::parse_at)]
         at: Vec<view::Scripted>,
     },
-    /// Run a simulation without a GPU (see `glint sim cloth --help`).
+    /// Run a simulation (see `glint sim cloth --help`, `glint sim school --help`).
     #[command(subcommand, after_help = EXIT_CODES)]
     Sim(SimCommand),
     /// Parse and validate a .scn scene without a GPU, and summarise it.
@@ -162,6 +163,9 @@ enum SimCommand {
     /// Discrete Elastic Plates cloth: write its trajectory as CSV, or benchmark it.
     #[command(after_help = EXIT_CODES)]
     Cloth(sim::ClothArgs),
+    /// Fish schooling: step a school and print its statistics, or benchmark it.
+    #[command(after_help = EXIT_CODES)]
+    School(school::SchoolArgs),
 }
 
 /// Size, samples and camera of `render` and `view`.
@@ -622,6 +626,7 @@ fn main() -> ExitCode {
             Err(e) => Err(e),
         },
         Command::Sim(SimCommand::Cloth(args)) => sim::cloth(args),
+        Command::Sim(SimCommand::School(args)) => school::school(args),
         Command::View { scene, picture, frames, screenshot, at } => {
             let options = picture.load_options(options);
             load(scene, options.clone()).and_then(|desc| {

@@ -257,8 +257,8 @@ impl<'p> Trajectory<'p> {
     }
 }
 
-fn usage(message: &str) -> Error {
-    Diagnostic::file(Path::new("glint sim cloth"), message).into()
+pub(crate) fn usage(message: &str) -> Error {
+    Diagnostic::file(Path::new("glint sim"), message).into()
 }
 
 fn parse_pair<T: std::str::FromStr>(s: &str) -> Result<(T, T), String> {
@@ -275,6 +275,11 @@ fn positive(s: &str) -> Result<f64, String> {
         .ok()
         .filter(|v| v.is_finite() && *v > 0.0)
         .ok_or(format!("'{s}': expected a number above 0"))
+}
+
+/// A number above 0, for `f32` options.
+pub(crate) fn positive_f32(s: &str) -> Result<f32, String> {
+    positive(s).map(|v| v as f32)
 }
 
 fn non_negative(s: &str) -> Result<f64, String> {

@@ -276,6 +276,16 @@ impl Gpu {
         self.uncaptured.take().map_or(Ok(()), |m| Err(GpuError::Failed(m)))
     }
 
+    /// Wait until the GPU has finished everything submitted so far.
+    pub fn wait(&self) -> Result<(), GpuError> {
+        self.device.poll(wgpu::PollType::wait_indefinitely()).map(drop).map_err(|e| GpuError::Readback(e.to_string()))
+    }
+
+    /// The bytes of `buffer` (which allows `COPY_SRC`), waiting for the GPU.
+    pub fn read_buffer(&self, buffer: &wgpu::Buffer) -> Result<Vec<u8>, GpuError> {
+        read_buffer(&self.device, &self.queue, buffer)
+    }
+
     /// The handle the renderer checks after each frame.
     pub(crate) fn uncaptured(&self) -> super::errors::UncapturedErrors {
         self.uncaptured.clone()
@@ -366,4 +376,29 @@ async fn choose_adapter(
         .request_adapter(&options)
         .await
         .map_err(|e| GpuError::NoAdapter(format!(" for backends {backends:?} ({e})")))
+}
+
+/// The bytes of `buffer` (which allows `COPY_SRC`), copied to a mapped buffer
+/// and read once the GPU is done.
+pub(crate) fn read_buffer(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    buffer: &wgpu::Buffer,
+) -> Result<Vec<u8>, GpuError> {
+    let staging = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("readback"),
+        size: buffer.size(),
+        usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+        mapped_at_creation: false,
+    });
+    let mut encoder = device.create_command_encoder(&Default::default());
+    encoder.copy_buffer_to_buffer(buffer, 0, &staging, 0, buffer.size());
+    queue.submit([encoder.finish()]);
+    let (sender, receiver) = std::sync::mpsc::channel();
+    staging.map_async(wgpu::MapMode::Read, .., move |r| drop(sender.send(r)));
+    let failed = |e: &dyn std::fmt::Display| GpuError::Readback(e.to_string());
+    device.poll(wgpu::PollType::wait_indefinitely()).map_err(|e| failed(&e))?;
+    receiver.recv().map_err(|e| failed(&e))?.map_err(|e| failed(&e))?;
+    let bytes = staging.get_mapped_range(..).map_err(|e| failed(&e))?.to_vec();
+    Ok(bytes)
 }

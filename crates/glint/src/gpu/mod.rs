@@ -13,6 +13,7 @@ mod submit;
 mod target;
 mod window;
 
+pub(crate) use context::read_buffer;
 pub use context::{Gpu, GpuError, WindowHandles};
 pub use heap::keep_freed_heap_memory;
 pub use target::{OffscreenTarget, Readback, TargetFormat};

@@ -53,21 +53,8 @@ impl Renderer {
 
     /// The words of `buffer`, waiting for the GPU.
     fn read_words(&self, buffer: &wgpu::Buffer) -> Result<Vec<u32>, RenderError> {
-        let staging = self.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("renderer: inspection readback"),
-            size: buffer.size(),
-            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-            mapped_at_creation: false,
-        });
-        let mut encoder = self.device.create_command_encoder(&Default::default());
-        encoder.copy_buffer_to_buffer(buffer, 0, &staging, 0, buffer.size());
-        self.queue.submit([encoder.finish()]);
-        let (sender, receiver) = std::sync::mpsc::channel();
-        staging.map_async(wgpu::MapMode::Read, .., move |r| drop(sender.send(r)));
-        let failed = |message: String| RenderError::Device { what: "an inspection readback", message };
-        self.device.poll(wgpu::PollType::wait_indefinitely()).map_err(|e| failed(e.to_string()))?;
-        receiver.recv().map_err(|e| failed(e.to_string()))?.map_err(|e| failed(e.to_string()))?;
-        let words = staging.get_mapped_range(..).map_err(|e| failed(e.to_string()))?;
-        Ok(bytemuck::cast_slice(&words).to_vec())
+        let bytes = crate::gpu::read_buffer(&self.device, &self.queue, buffer)
+            .map_err(|e| RenderError::Device { what: "an inspection readback", message: e.to_string() })?;
+        Ok(bytemuck::pod_collect_to_vec(&bytes))
     }
 }

@@ -60,6 +60,7 @@ mod views;
 mod visible;
 
 pub use crate::scene::{ShadowLayout, MAX_CUBES, MAX_SHADOW_MAP_BYTES};
+pub(crate) use cull_pipelines::compute_pipeline;
 pub use error::RenderError;
 pub use gpu_cull::SKIP_UNPAID_OCCLUSION;
 pub use mesh_pool::MeshTooLarge;

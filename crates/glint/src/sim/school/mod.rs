@@ -7,16 +7,19 @@
 //! [`School`] steps on the CPU with rayon; [`GpuSchool`] steps the same rules
 //! with compute shaders. Both start from [`School::new`]'s state for a seed.
 
+mod gpu;
 pub mod grid;
 mod rules;
 #[cfg(test)]
 mod tests;
 
+pub use gpu::{GpuSchool, MAX_GPU_OBSTACLES};
 pub use rules::Forces;
 
 use crate::scene::Aabb;
 use glam::{Mat3, Mat4, Vec3};
-use grid::{Grid, GridShape};
+use grid::Grid;
+pub use grid::GridShape;
 use rand::{Rng, SeedableRng};
 use rayon::prelude::*;
 use rules::{confine, limit_speed, Seen};
@@ -155,14 +158,17 @@ impl SchoolParams {
         }
         let speeds = self.min_speed >= 0.0 && self.min_speed <= self.max_speed && self.max_speed.is_finite();
         if !speeds || self.max_speed <= 0.0 {
-            return Err(format!("speeds must satisfy 0 <= min <= max, max > 0, got {} {}", self.min_speed, self.max_speed));
+            return Err(format!(
+                "speeds must satisfy 0 <= min <= max, max > 0, got {} {}",
+                self.min_speed, self.max_speed
+            ));
         }
         let w = self.weights;
         let weights = [w.separation, w.alignment, w.cohesion, w.bounds, w.avoid, w.flee];
         if weights.iter().any(|w| !w.is_finite() || *w < 0.0) || !(self.max_accel.is_finite() && self.max_accel > 0.0) {
             return Err("weights must be finite and non-negative, and the acceleration positive".into());
         }
-        if self.obstacles.iter().any(|o| !finite(o.center) || !(o.radius.is_finite() && o.radius > 0.0)) {
+        if self.obstacles.iter().any(|o| !(finite(o.center) && o.radius.is_finite() && o.radius > 0.0)) {
             return Err("obstacles need a finite centre and a positive radius".into());
         }
         if self.floor.is_some_and(|f| !f.is_finite()) || !(self.beat_rate.is_finite() && self.beat_rate >= 0.0) {
@@ -196,7 +202,11 @@ impl Swimmer {
         let z = self.velocity.try_normalize().unwrap_or(Vec3::Z);
         let x = Vec3::Y.cross(z).try_normalize().unwrap_or(Vec3::X);
         let y = z.cross(x);
-        Mat4::from_scale_rotation_translation(Vec3::splat(scale), glam::Quat::from_mat3(&Mat3::from_cols(x, y, z)), self.position)
+        Mat4::from_scale_rotation_translation(
+            Vec3::splat(scale),
+            glam::Quat::from_mat3(&Mat3::from_cols(x, y, z)),
+            self.position,
+        )
     }
 
     /// Advance the tail beat by `dt` at `rate` beats a second at `top` speed
@@ -257,7 +267,11 @@ impl School {
                     }
                 }
                 let dir = loop {
-                    let d = Vec3::new(rng.random_range(-1.0..1.0), rng.random_range(-0.3..0.3), rng.random_range(-1.0..1.0));
+                    let d = Vec3::new(
+                        rng.random_range(-1.0..1.0),
+                        rng.random_range(-0.3..0.3),
+                        rng.random_range(-1.0..1.0),
+                    );
                     if let Some(d) = d.try_normalize() {
                         break d;
                     }
@@ -386,7 +400,12 @@ pub(crate) fn stats_of(fish: &[Swimmer], predator: Option<Vec3>, nearest_sum: f3
     let speed: f32 = fish.iter().map(|f| f.velocity.length()).sum();
     let heading: Vec3 = fish.iter().map(|f| f.velocity.normalize_or_zero()).sum();
     let predator_distance = predator.map_or(0.0, |q| fish.iter().map(|f| f.position.distance(q)).sum::<f32>() / n);
-    SchoolStats { mean_speed: speed / n, polarisation: heading.length() / n, nearest: nearest_sum / n, predator_distance }
+    SchoolStats {
+        mean_speed: speed / n,
+        polarisation: heading.length() / n,
+        nearest: nearest_sum / n,
+        predator_distance,
+    }
 }
 
 /// The predator after `dt`: turned towards the nearest fish (lowest number

@@ -27,14 +27,22 @@ fn the_grid_finds_exactly_the_neighbours_brute_force_finds() {
         // across them), scattered, and some outside the bounds.
         let mut points: Vec<Vec3> = (0..400)
             .map(|_| {
-                let cell = Vec3::new(rng.random_range(0..8) as f32, rng.random_range(0..8) as f32, rng.random_range(0..8) as f32);
+                let cell = Vec3::new(
+                    rng.random_range(0..8) as f32,
+                    rng.random_range(0..8) as f32,
+                    rng.random_range(0..8) as f32,
+                );
                 shape.origin + cell * shape.cell
             })
             .collect();
         let across: Vec<Vec3> = (0..100).map(|k| points[k] + Vec3::X * radius).collect();
         let just_within: Vec<Vec3> = (0..100).map(|k| points[k] + Vec3::new(0.0, radius * 0.999, 0.0)).collect();
         points.extend(across.into_iter().chain(just_within));
-        points.extend((0..600).map(|_| Vec3::new(rng.random_range(-6.0..6.0), rng.random_range(-6.0..6.0), rng.random_range(-6.0..7.0))));
+        points.extend(
+            (0..600).map(|_| {
+                Vec3::new(rng.random_range(-6.0..6.0), rng.random_range(-6.0..6.0), rng.random_range(-6.0..7.0))
+            }),
+        );
         let mut grid = Grid::default();
         grid.rebuild(shape, &points);
         let mut total = 0;
@@ -63,7 +71,10 @@ fn separation_pushes_apart_and_cohesion_pulls_together() {
     let mut school = case(&[(Vec3::ZERO, ahead), (Vec3::new(0.5, 0.0, 0.0), ahead)], |_| {});
     let f = school.forces(0);
     assert_eq!(f.neighbours, 1);
-    assert!(f.separation.x < 0.0 && f.separation.y.abs() + f.separation.z.abs() < 1e-6, "away from the fish at +x: {f:?}");
+    assert!(
+        f.separation.x < 0.0 && f.separation.y.abs() + f.separation.z.abs() < 1e-6,
+        "away from the fish at +x: {f:?}"
+    );
     assert!(f.cohesion.x > 0.0 && (f.cohesion.x - 0.5).abs() < 1e-6, "towards the middle: {f:?}");
     assert_eq!(f.alignment, Vec3::ZERO, "already aligned");
     // Closer neighbours push harder.
@@ -93,7 +104,12 @@ fn alignment_turns_a_fish_towards_its_neighbours_heading() {
 
 #[test]
 fn fish_see_only_within_their_radius_and_view_cone() {
-    let fish = [(Vec3::ZERO, Vec3::Z), (Vec3::new(0.0, 0.0, -1.0), Vec3::Z), (Vec3::new(0.0, 0.0, 1.0), Vec3::Z), (Vec3::new(0.0, 0.0, 2.0), Vec3::Z)];
+    let fish = [
+        (Vec3::ZERO, Vec3::Z),
+        (Vec3::new(0.0, 0.0, -1.0), Vec3::Z),
+        (Vec3::new(0.0, 0.0, 1.0), Vec3::Z),
+        (Vec3::new(0.0, 0.0, 2.0), Vec3::Z),
+    ];
     let all_round = case(&fish, |_| {}).forces(0);
     assert_eq!(all_round.neighbours, 2, "the fish 2 away is out of reach");
     let ahead_only = case(&fish, |p| p.view_angle = 180.0).forces(0);

@@ -1,0 +1,243 @@
+//! [`GpuSchool`]: a [`School`] stepped by compute shaders (`school.wgsl`),
+//! its state kept on the GPU between steps and read back on request.
+
+use super::{School, SchoolParams, Swimmer};
+use crate::gpu::GpuError;
+use crate::Gpu;
+use glam::Vec3;
+
+/// Obstacles the GPU's parameter block holds.
+pub const MAX_GPU_OBSTACLES: usize = 64;
+const WORKGROUP: u32 = 256;
+
+/// The uniform block `Params` of `school.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct ParamsGpu {
+    origin: [f32; 3],
+    cell: f32,
+    dims: [u32; 3],
+    count: u32,
+    bounds_min: [f32; 3],
+    radius: f32,
+    bounds_max: [f32; 3],
+    cos_half: f32,
+    weights: [f32; 4],
+    more: [f32; 4],
+    speed: [f32; 4],
+    hunter: [f32; 4],
+    flags: [u32; 4],
+    obstacles: [[f32; 4]; MAX_GPU_OBSTACLES],
+}
+
+/// One fish as `school.wgsl` stores it (32 bytes).
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct FishGpu {
+    position: [f32; 3],
+    phase: f32,
+    velocity: [f32; 3],
+    pad: f32,
+}
+
+impl From<&Swimmer> for FishGpu {
+    fn from(f: &Swimmer) -> Self {
+        Self { position: f.position.into(), phase: f.phase, velocity: f.velocity.into(), pad: 0.0 }
+    }
+}
+
+impl From<&FishGpu> for Swimmer {
+    fn from(f: &FishGpu) -> Self {
+        Self { position: f.position.into(), velocity: f.velocity.into(), phase: f.phase }
+    }
+}
+
+/// The predator's `Hunt` state (48 bytes with the nearest fish's search).
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct HuntGpu {
+    fish: FishGpu,
+    nearest_bits: u32,
+    nearest: u32,
+    pad: [u32; 2],
+}
+
+/// The passes of one step, in order, and how many threads each runs.
+const PASSES: [&str; 8] = ["clear", "count", "scan_blocks", "scan_sums", "scan_add", "scatter", "steer", "hunt"];
+
+/// A school whose steps run as compute passes. Needs compute shaders and
+/// eight storage buffers a stage ([`Gpu::culls_on_gpu`]); elsewhere (GL,
+/// WebGL2) [`GpuSchool::new`] says so and the CPU [`School`] steps instead.
+pub struct GpuSchool {
+    params: SchoolParams,
+    block: ParamsGpu,
+    uniform: wgpu::Buffer,
+    fish: [wgpu::Buffer; 2],
+    hunt: wgpu::Buffer,
+    /// Bind groups reading fish buffer 0 then 1.
+    groups: [wgpu::BindGroup; 2],
+    pipelines: Vec<wgpu::ComputePipeline>,
+    /// Which fish buffer holds the current state.
+    current: usize,
+    cells: u32,
+}
+
+impl GpuSchool {
+    /// Upload `school`'s state. Errors where the device has no compute path,
+    /// or the school has more than [`MAX_GPU_OBSTACLES`] obstacles.
+    pub fn new(gpu: &Gpu, school: &School) -> Result<Self, GpuError> {
+        if !gpu.culls_on_gpu() {
+            return Err(GpuError::Failed(format!(
+                "GPU schooling needs compute shaders and 8 storage buffers a stage, which {} ({:?}) lacks; step the school on the CPU",
+                gpu.info().name,
+                gpu.info().backend
+            )));
+        }
+        let params = school.params().clone();
+        if params.obstacles.len() > MAX_GPU_OBSTACLES {
+            return Err(GpuError::Failed(format!("GPU schooling takes at most {MAX_GPU_OBSTACLES} obstacles")));
+        }
+        let device = &gpu.device;
+        let shape = school.grid_shape();
+        let cells = shape.cells();
+        let n = school.fish().len();
+        let block = params_block(&params, shape, n as u32, 0.0);
+        let storage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST;
+        let buffer = |label: &str, size: u64| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: size.max(16),
+                usage: storage,
+                mapped_at_creation: false,
+            })
+        };
+        let fish_bytes = 32 * n as u64;
+        let fish = [buffer("school: fish a", fish_bytes), buffer("school: fish b", fish_bytes)];
+        let fish_data: Vec<FishGpu> = school.fish().iter().map(FishGpu::from).collect();
+        gpu.queue.write_buffer(&fish[0], 0, bytemuck::cast_slice(&fish_data));
+        let sorted = buffer("school: fish by cell", fish_bytes);
+        let keys = buffer("school: cell and rank", 8 * n as u64);
+        let counts = buffer("school: fish per cell", 4 * (cells as u64 + 1));
+        let starts = buffer("school: first slot per cell", 4 * (cells as u64 + 1));
+        let sums = buffer("school: scan blocks", 4 * u64::from(cells / WORKGROUP + 1));
+        let hunt = buffer("school: predator", std::mem::size_of::<HuntGpu>() as u64);
+        let predator = school.predator().copied().unwrap_or_default();
+        let hunt_data = HuntGpu { fish: FishGpu::from(&predator), nearest_bits: 0, nearest: 0, pad: [0; 2] };
+        gpu.queue.write_buffer(&hunt, 0, bytemuck::bytes_of(&hunt_data));
+        let uniform = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("school: parameters"),
+            size: std::mem::size_of::<ParamsGpu>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let layout = bind_group_layout(device);
+        let group = |from: usize| {
+            let buffers = [&uniform, &fish[from], &fish[1 - from], &sorted, &keys, &counts, &starts, &sums, &hunt];
+            let entries: Vec<wgpu::BindGroupEntry> = buffers
+                .iter()
+                .enumerate()
+                .map(|(k, b)| wgpu::BindGroupEntry { binding: k as u32, resource: b.as_entire_binding() })
+                .collect();
+            device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("school"),
+                layout: &layout,
+                entries: &entries,
+            })
+        };
+        let groups = [group(0), group(1)];
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("school.wgsl"),
+            source: wgpu::ShaderSource::Wgsl(include_str!("school.wgsl").into()),
+        });
+        let pipelines = PASSES
+            .iter()
+            .map(|entry| crate::render::compute_pipeline(device, &module, entry, &[Some(&layout)]))
+            .collect();
+        Ok(Self { params, block, uniform, fish, hunt, groups, pipelines, current: 0, cells })
+    }
+
+    /// Record and submit one step of `dt` seconds (not waited for).
+    pub fn step(&mut self, gpu: &Gpu, dt: f32) {
+        if self.block.more[3] != dt {
+            self.block.more[3] = dt;
+            gpu.queue.write_buffer(&self.uniform, 0, bytemuck::bytes_of(&self.block));
+        }
+        let mut encoder =
+            gpu.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("school step") });
+        self.encode(&mut encoder);
+        gpu.queue.submit([encoder.finish()]);
+    }
+
+    /// The step's eight passes into `encoder`, after which the other fish
+    /// buffer holds the state.
+    fn encode(&mut self, encoder: &mut wgpu::CommandEncoder) {
+        let fish_groups = (self.block.count).div_ceil(WORKGROUP);
+        let cell_groups = (self.cells + 1).div_ceil(WORKGROUP);
+        let threads = [cell_groups, fish_groups, cell_groups, 1, cell_groups, fish_groups, fish_groups, 1];
+        let mut pass = encoder
+            .begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("school step"), timestamp_writes: None });
+        pass.set_bind_group(0, &self.groups[self.current], &[]);
+        for (pipeline, groups) in self.pipelines.iter().zip(threads) {
+            pass.set_pipeline(pipeline);
+            pass.dispatch_workgroups(groups, 1, 1);
+        }
+        drop(pass);
+        self.current = 1 - self.current;
+    }
+
+    /// The state now, as a CPU [`School`] (waiting for the GPU).
+    pub fn read(&self, gpu: &Gpu) -> Result<School, GpuError> {
+        let bytes = gpu.read_buffer(&self.fish[self.current])?;
+        let fish: Vec<Swimmer> =
+            bytemuck::pod_collect_to_vec::<u8, FishGpu>(&bytes).iter().map(Swimmer::from).collect();
+        let hunt: HuntGpu =
+            bytemuck::pod_read_unaligned(&gpu.read_buffer(&self.hunt)?[..std::mem::size_of::<HuntGpu>()]);
+        let predator = self.params.predator.map(|_| Swimmer::from(&hunt.fish));
+        Ok(School::from_state(self.params.clone(), fish, predator))
+    }
+}
+
+/// `params` for `count` fish on grid `shape`, stepping `dt` seconds.
+fn params_block(params: &SchoolParams, shape: super::GridShape, count: u32, dt: f32) -> ParamsGpu {
+    let w = params.weights;
+    let mut obstacles = [[0.0; 4]; MAX_GPU_OBSTACLES];
+    for (slot, o) in obstacles.iter_mut().zip(&params.obstacles) {
+        *slot = [o.center.x, o.center.y, o.center.z, o.radius];
+    }
+    let hunter = params.predator.map_or([0.0; 4], |h| [h.speed, h.accel, h.fear, 1.0]);
+    ParamsGpu {
+        origin: shape.origin.into(),
+        cell: shape.cell,
+        dims: shape.dims.into(),
+        count,
+        bounds_min: params.bounds.min.into(),
+        radius: params.radius,
+        bounds_max: params.bounds.max.into(),
+        cos_half: params.cos_half_view(),
+        weights: [w.separation, w.alignment, w.cohesion, w.bounds],
+        more: [w.avoid, w.flee, params.max_accel, dt],
+        speed: [params.min_speed, params.max_speed, params.beat_rate, params.floor.unwrap_or(Vec3::ZERO.y)],
+        hunter,
+        flags: [u32::from(params.floor.is_some()), params.obstacles.len() as u32, shape.cells(), 0],
+        obstacles,
+    }
+}
+
+/// One uniform block and eight storage buffers, all for compute.
+fn bind_group_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
+    let entry = |binding: u32| wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Buffer {
+            ty: match binding {
+                0 => wgpu::BufferBindingType::Uniform,
+                _ => wgpu::BufferBindingType::Storage { read_only: false },
+            },
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    };
+    let entries: Vec<_> = (0..9).map(entry).collect();
+    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some("school"), entries: &entries })
+}

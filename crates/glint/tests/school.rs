@@ -1,0 +1,80 @@
+//! Fish schooling with compute shaders against the CPU's: the same start,
+//! the same rules, statistics that agree (sums run in a different order on
+//! the GPU, so not bit for bit), and the GPU's counting sort found complete.
+
+mod common;
+
+use glam::Vec3;
+use glint::scene::Aabb;
+use glint::sim::school::{GpuSchool, Hunter, Obstacle, School, SchoolParams};
+
+fn params() -> SchoolParams {
+    SchoolParams {
+        count: 3000,
+        bounds: Aabb { min: Vec3::new(-9.0, -4.0, -9.0), max: Vec3::new(9.0, 5.0, 9.0) },
+        obstacles: vec![Obstacle { center: Vec3::new(2.0, -3.0, 1.0), radius: 2.0 }],
+        floor: Some(-3.5),
+        predator: Some(Hunter { start: Vec3::new(-5.0, 0.0, 0.0), speed: 3.5, accel: 6.0, fear: 4.0 }),
+        seed: 21,
+        ..SchoolParams::default()
+    }
+}
+
+#[test]
+fn gpu_and_cpu_schooling_agree_statistically() {
+    let Some(gpu) = common::gpu() else { return };
+    if !gpu.culls_on_gpu() {
+        let err = GpuSchool::new(gpu, &School::new(params()).unwrap()).err().expect("refused without compute");
+        assert!(err.to_string().contains("CPU"), "{err}");
+        return;
+    }
+    let mut cpu = School::new(params()).unwrap();
+    let mut on_gpu = GpuSchool::new(gpu, &cpu).unwrap();
+    let start = cpu.stats();
+    let dt = 1.0 / 30.0;
+    for _ in 0..120 {
+        cpu.step(dt);
+        on_gpu.step(gpu, dt);
+    }
+    let mut from_gpu = on_gpu.read(gpu).unwrap();
+    let (a, b) = (cpu.stats(), from_gpu.stats());
+    println!("start {start:?}\ncpu   {a:?}\ngpu   {b:?}");
+    let close = |x: f32, y: f32, tol: f32| (x - y).abs() <= tol * x.abs().max(y.abs()).max(1e-3);
+    assert!(close(a.mean_speed, b.mean_speed, 0.05), "mean speed {a:?} vs {b:?}");
+    assert!((a.polarisation - b.polarisation).abs() < 0.08, "polarisation {a:?} vs {b:?}");
+    assert!(close(a.nearest, b.nearest, 0.05), "nearest neighbour {a:?} vs {b:?}");
+    assert!(close(a.predator_distance, b.predator_distance, 0.25), "predator distance {a:?} vs {b:?}");
+    // The school changed: the statistics compare something.
+    assert!((a.polarisation - start.polarisation).abs() > 0.05 || (a.nearest - start.nearest).abs() > 0.05);
+    // Every fish came back, inside the bounds and above the floor.
+    let p = params();
+    assert_eq!(from_gpu.fish().len(), 3000);
+    for f in from_gpu.fish() {
+        assert!(f.position.cmpge(p.bounds.min).all() && f.position.cmple(p.bounds.max).all() && f.position.y >= -3.5);
+        assert!((0.0..1.0).contains(&f.phase));
+    }
+}
+
+#[test]
+fn one_gpu_step_matches_the_cpu_step_closely() {
+    // One step from the same state: the GPU's grid must find the same
+    // neighbours, or some fish would steer differently by far more than
+    // rounding.
+    let Some(gpu) = common::gpu() else { return };
+    if !gpu.culls_on_gpu() {
+        return;
+    }
+    let mut cpu = School::new(params()).unwrap();
+    for _ in 0..30 {
+        cpu.step(1.0 / 30.0);
+    }
+    let mut on_gpu = GpuSchool::new(gpu, &cpu).unwrap();
+    cpu.step(1.0 / 30.0);
+    on_gpu.step(gpu, 1.0 / 30.0);
+    let stepped = on_gpu.read(gpu).unwrap();
+    let worst =
+        cpu.fish().iter().zip(stepped.fish()).map(|(a, b)| (a.velocity - b.velocity).length()).fold(0.0, f32::max);
+    assert!(worst < 1e-3, "largest velocity difference {worst}");
+    let (a, b) = (cpu.predator().unwrap(), stepped.predator().unwrap());
+    assert!((a.position - b.position).length() < 1e-4, "the predator hunts the same fish: {a:?} vs {b:?}");
+}
