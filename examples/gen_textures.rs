@@ -62,6 +62,39 @@ fn main() -> Result<(), image::ImageError> {
         }
     });
     leaf.save(dir.join("leaf.png"))?;
-    println!("wrote tiles.png, tiles_normal.png, leaf.png to {}", dir.display());
+
+    // The underwater scene's fish skin: u runs nose (0) to tail (1), v top (0)
+    // to belly (1): a dark back, bright flanks with vertical bands, a pale belly.
+    let fish = RgbaImage::from_fn(128, 64, |x, y| {
+        let (u, v) = (x as f32 / 127.0, y as f32 / 63.0);
+        let band = ((u * 5.0 * std::f32::consts::PI).sin() > 0.55 && u > 0.15 && u < 0.8) as u8 as f32;
+        let back = [20.0, 50.0, 90.0];
+        let flank = [235.0, 170.0, 40.0];
+        let belly = [245.0, 240.0, 220.0];
+        let mix = |a: [f32; 3], b: [f32; 3], t: f32| [0, 1, 2].map(|i| a[i] + (b[i] - a[i]) * t.clamp(0.0, 1.0));
+        let mut c = if v < 0.5 { mix(back, flank, v * 3.0) } else { mix(flank, belly, (v - 0.6) * 3.0) };
+        c = mix(c, [250.0, 250.0, 250.0], band * 0.8 * (1.0 - (v - 0.5).abs() * 1.6));
+        let eye = ((u - 0.08).powi(2) * 4.0 + (v - 0.42).powi(2)).sqrt() < 0.05;
+        let c = if eye { [10.0, 10.0, 10.0] } else { c };
+        Rgba([c[0] as u8, c[1] as u8, c[2] as u8, 255])
+    });
+    // Beside the fish model, which may only read textures in its own folder.
+    let underwater = dir.join("../underwater");
+    std::fs::create_dir_all(&underwater).map_err(image::ImageError::IoError)?;
+    fish.save(underwater.join("fish.png"))?;
+
+    // Sand: pale grains and gentle ripples.
+    let sand = RgbaImage::from_fn(SIZE, SIZE, |x, y| {
+        let (fx, fy) = (x as f32, y as f32);
+        let ripple = 0.5 + 0.5 * (fx * 0.19 + (fy * 0.05).sin() * 3.0).sin();
+        let grain = ((x.wrapping_mul(73_856_093) ^ y.wrapping_mul(19_349_663)) % 97) as f32 / 97.0;
+        let l = 0.78 + 0.1 * ripple + 0.12 * (grain - 0.5);
+        Rgba([(225.0 * l) as u8, (200.0 * l) as u8, (150.0 * l) as u8, 255])
+    });
+    sand.save(dir.join("sand.png"))?;
+    println!(
+        "wrote tiles.png, tiles_normal.png, leaf.png, sand.png to {} and fish.png beside the underwater models",
+        dir.display()
+    );
     Ok(())
 }

@@ -78,3 +78,44 @@ fn one_gpu_step_matches_the_cpu_step_closely() {
     let (a, b) = (cpu.predator().unwrap(), stepped.predator().unwrap());
     assert!((a.position - b.position).length() < 1e-4, "the predator hunts the same fish: {a:?} vs {b:?}");
 }
+
+/// `tests/scenes/school.scn` posed at `time` on `gpu`, 256 × 256 with 4× MSAA.
+fn school_at(gpu: &glint::Gpu, time: f32) -> (image::RgbaImage, glint::World) {
+    let desc = common::load_scene(&common::repo_root().join("tests/scenes/school.scn"));
+    assert!(desc.warnings.is_empty(), "{:?}", desc.warnings);
+    let mut renderer = glint::Renderer::new(gpu);
+    let mut world = glint::World::place(desc, &mut renderer);
+    world.pose(time, &mut renderer).expect("posed");
+    let mut target = glint::OffscreenTarget::new(gpu, 256, 256, 4).expect("target");
+    world.draw(&mut renderer, &world.views(None), &mut target).expect("frame");
+    (target.read_rgba8(gpu).expect("readback"), world)
+}
+
+fn sun(world: &glint::World) -> Vec3 {
+    match world.lighting().lights[0].kind {
+        glint::scene::LightKind::Directional { direction } => direction,
+        _ => unreachable!("the scene's first light is the sun"),
+    }
+}
+
+#[test]
+fn a_school_scene_draws_the_same_picture_at_the_same_time_and_its_sun_sways() {
+    let Some(gpu) = common::gpu() else { return };
+    let (picture, world) = school_at(gpu, 3.0);
+    let (again, _) = school_at(gpu, 3.0);
+    assert_eq!(picture, again, "the same time, the same picture");
+    let (later, later_world) = school_at(gpu, 3.5);
+    assert!(common::max_difference(&picture, &later) > 64, "the fish swam on");
+    let (a, b) = (sun(&world), sun(&later_world));
+    let turned = a.angle_between(b).to_degrees();
+    assert!(turned > 0.5 && turned < 2.0 * 8.0 * 1.5, "the sun swayed {turned}° (sway 8° either way)");
+    common::assert_matches_reference("school", &picture);
+}
+
+#[test]
+fn gl_draws_the_school_alike() {
+    // The school steps on the CPU on every path, so GL's picture is Vulkan's.
+    let Some(gl) = common::gl_gpu() else { return };
+    let (picture, _) = school_at(gl, 3.0);
+    common::assert_matches_reference("school", &picture);
+}

@@ -20,6 +20,7 @@ mod scn_fields;
 mod scn_lights;
 mod scn_material;
 mod scn_post;
+mod scn_school;
 mod scn_syntax;
 mod scn_targets;
 mod texture;
@@ -32,9 +33,10 @@ pub use files::{
 };
 pub use model::{Model, ModelPart, Morph, Skin};
 pub use procedural::ShapeKind;
-pub use scene_desc::{CameraView, DrawOptions, EntityDesc, MaterialDesc, MeshRef, SceneDesc, TextureRef};
+pub use scene_desc::{CameraView, DrawOptions, EntityDesc, LightSway, MaterialDesc, MeshRef, SceneDesc, TextureRef};
 pub use scn::{load_scene, load_scene_with, parse_scene, parse_scene_with, MAX_CAMERAS, MAX_INSTANCES};
 pub use scn_cloth::{ClothDesc, ClothSetup, MAX_POSE_STEPS};
+pub use scn_school::{SchoolDesc, MAX_POSE_FISH_STEPS};
 pub use scn_targets::{RenderTargetDesc, MAX_RENDER_TARGETS, MAX_RENDER_TARGET_BYTES, MAX_RENDER_TARGET_SIDE};
 pub use texture::{load_image, load_texture, Texture, MAX_TEXTURE_MEMORY, MAX_TEXTURE_SIDE};
 

@@ -260,6 +260,8 @@ impl Model {
                 compact: false,
             }],
             cloths: Vec::new(),
+            schools: Vec::new(),
+            light_sways: Vec::new(),
             time_of_day: None,
             models: vec![self],
         }

@@ -159,10 +159,27 @@ pub struct SceneDesc {
     pub entities: Vec<EntityDesc>,
     /// Simulated cloths in file order; their entities follow the render tasks'.
     pub cloths: Vec<ClothDesc>,
+    /// Fish schools in file order; each draws with entities of its own.
+    pub schools: Vec<super::SchoolDesc>,
+    /// Directional lights whose direction sways with the scene time.
+    pub light_sways: Vec<LightSway>,
     /// Non-fatal problems (unknown keys, repeated keys), `path:line: message`.
     pub warnings: Vec<Diagnostic>,
     /// The hour its sun and sky were last set to ([`SceneDesc::set_time_of_day`]).
     pub time_of_day: Option<f32>,
+}
+
+/// A directional light whose direction sways with time (`sway` in `.scn`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct LightSway {
+    /// The light, an index into [`SceneDesc::lights`].
+    pub light: usize,
+    /// Its direction at rest.
+    pub base: glam::Vec3,
+    /// How far it swings either way, degrees.
+    pub degrees: f32,
+    /// Seconds a swing.
+    pub period: f32,
 }
 
 /// How a camera of a scene draws: where in the image, and its post chain.
@@ -227,14 +244,15 @@ impl SceneDesc {
 
     /// Check, without stepping, that posing at `time` stays within the cloth
     /// limits ([`MAX_POSE_STEPS`](super::MAX_POSE_STEPS) per cloth, 10⁹
-    /// node²-steps over all of them; see `docs/limits.md`): the error names the
-    /// cloth block that goes over. Posing at an earlier time takes no more work.
+    /// node²-steps over all of them; see `docs/limits.md`) and the schools'
+    /// ([`MAX_POSE_FISH_STEPS`](super::MAX_POSE_FISH_STEPS)): the error names
+    /// the block that goes over. Posing at an earlier time takes no more work.
     pub fn check_pose(&self, time: f32) -> Result<(), Diagnostic> {
         let mut work = 0u64;
         for cloth in &self.cloths {
             cloth.check_pose(time, work, &self.path)?;
             work = work.saturating_add(cloth.pose_work(time));
         }
-        Ok(())
+        super::scn_school::check_pose(&self.schools, time, &self.path)
     }
 }

@@ -9,6 +9,7 @@ use super::scn_cloth::{self, ClothDesc};
 use super::scn_fields::{numbers, Fields};
 use super::scn_lights;
 use super::scn_material::material_fields;
+use super::scn_school::{self, SchoolDesc};
 use super::scn_syntax::{decode_scene_text, parse_blocks, Block, Pair};
 use super::scn_targets;
 use super::texture::read_texture;
@@ -70,6 +71,8 @@ pub fn parse_scene_with(path: &Path, text: &str, options: LoadOptions) -> Result
             models: Vec::new(),
             entities: Vec::new(),
             cloths: Vec::new(),
+            schools: Vec::new(),
+            light_sways: Vec::new(),
             warnings: Vec::new(),
             time_of_day: None,
         },
@@ -83,6 +86,7 @@ pub fn parse_scene_with(path: &Path, text: &str, options: LoadOptions) -> Result
         options,
         placements: Vec::new(),
         cloths: Vec::new(),
+        schools: Vec::new(),
         instances: 0,
         camera_lines: Vec::new(),
         targets: scn_targets::Targets::default(),
@@ -106,6 +110,8 @@ struct Placement {
     transforms: Vec<Mat4>,
     /// Tiles, density and compact instances: an entity of its own.
     tiles: Option<(crate::scene::Tiles, f32, bool)>,
+    /// An entity of its own without tiles (a school's fish, its predator).
+    alone: bool,
 }
 
 struct Loader<'a> {
@@ -130,6 +136,8 @@ struct Loader<'a> {
     /// Cloths with their material names, resolved in [`Loader::finish`].
     cloths: Vec<(ClothDesc, Option<(String, usize)>)>,
     instances: u64,
+    /// Schools, their entities' places in `placements` until resolved.
+    schools: Vec<SchoolDesc>,
     /// Each camera's block line, for errors found once the file is read.
     camera_lines: Vec<usize>,
     /// The `render_target` blocks so far, by name.
@@ -161,11 +169,16 @@ impl Loader<'_> {
             }
             "light_directional" | "light_point" | "light_spot" => {
                 let light = scn_lights::light(class, &mut f, &mut self.scene.warnings)?;
+                if let crate::scene::LightKind::Directional { direction } = light.kind {
+                    let sway = scn_lights::sway(&mut f, direction, self.scene.lights.len())?;
+                    self.scene.light_sways.extend(sway);
+                }
                 self.add_light(&f, light)?
             }
             "material" => self.material(&mut f)?,
             "entity" => self.entity(&mut f)?,
             "instances" => self.instances(&mut f)?,
+            "school" => self.school(&mut f)?,
             "cloth" => {
                 let nodes: u64 = self.cloths.iter().map(|(c, _)| c.setup.mesh.nodes.len() as u64).sum();
                 let mut cloth = scn_cloth::parse(&mut f, &self.assets, nodes)?;
@@ -180,7 +193,7 @@ impl Loader<'_> {
                 return Err(Diagnostic::at(
                     self.path,
                     class_pair.line,
-                    format!("unknown classname {}, expected one of: world, camera, light_directional, light_point, light_spot, material, entity, instances, cloth, render_target", quote(other)),
+                    format!("unknown classname {}, expected one of: world, camera, light_directional, light_point, light_spot, material, entity, instances, school, cloth, render_target", quote(other)),
                 ))
             }
         }
@@ -357,19 +370,19 @@ impl Loader<'_> {
         Ok(())
     }
 
-    /// The `mesh` key: a procedural shape, or a model file (`.obj`, `.gltf`, `.glb`, relative to the
+    /// The `key` key (`mesh`, `predator_mesh`): a procedural shape, or a model file (`.obj`, `.gltf`, `.glb`, relative to the
     /// scene) whose materials `mtl.NAME.key` pairs may override for this block.
-    fn mesh(&mut self, f: &mut Fields) -> Result<MeshRef, Diagnostic> {
-        let pair = f.require("mesh")?;
+    fn mesh(&mut self, f: &mut Fields, key: &str) -> Result<MeshRef, Diagnostic> {
+        let pair = f.require(key)?;
         let value = pair.value.trim();
         if !Model::is_model_path(Path::new(value)) {
-            let kind = f.mesh()?;
+            let kind = f.mesh(key)?;
             if let ShapeKind::Blob { detail, seed } = kind {
                 self.count_blob(detail, seed, pair.line)?;
             }
             return Ok(MeshRef::Shape(kind));
         }
-        let at = |m: String| Diagnostic::at(self.path, pair.line, format!("\"mesh\": {m}"));
+        let at = |m: String| Diagnostic::at(self.path, pair.line, format!("\"{key}\": {m}"));
         let file = self.assets.resolve(value, self.path).map_err(|e| at(e.message))?;
         let index = match self.model_index.get(&file) {
             Some(&i) => i,
@@ -386,20 +399,21 @@ impl Loader<'_> {
                 self.scene.models.len() - 1
             }
         };
-        self.model_overrides(f, index).map(MeshRef::Model)
+        self.model_overrides(f, index, &format!("{}.", key.replace("mesh", "mtl"))).map(MeshRef::Model)
     }
 
-    /// Apply this block's `mtl.NAME.key` pairs to a copy of model `index`; returns
-    /// the copy's index, or `index` when there are none.
-    fn model_overrides(&mut self, f: &mut Fields, index: usize) -> Result<usize, Diagnostic> {
+    /// Apply this block's `mtl.NAME.key` pairs (`prefix` `mtl.`; a school's
+    /// predator takes `predator_mtl.`) to a copy of model `index`; returns the
+    /// copy's index, or `index` when there are none.
+    fn model_overrides(&mut self, f: &mut Fields, index: usize, prefix: &str) -> Result<usize, Diagnostic> {
         // In first-mention order, found by name in constant time.
         let mut by_material: Vec<(String, Vec<Pair>)> = Vec::new();
         let mut slot: HashMap<&str, usize> = HashMap::new();
         for (i, pair) in f.block.pairs.iter().enumerate() {
-            let Some(rest) = pair.key.strip_prefix("mtl.") else { continue };
+            let Some(rest) = pair.key.strip_prefix(prefix) else { continue };
             f.used[i] = true;
             let (name, key) = rest.rsplit_once('.').ok_or_else(|| {
-                Diagnostic::at(self.path, pair.line, format!("\"{}\": expected mtl.MATERIAL.key", pair.key))
+                Diagnostic::at(self.path, pair.line, format!("\"{}\": expected {prefix}MATERIAL.key", pair.key))
             })?;
             let stripped = Pair { key: key.to_string(), value: pair.value.clone(), line: pair.line };
             match slot.get(name) {
@@ -501,7 +515,7 @@ impl Loader<'_> {
     }
 
     fn entity(&mut self, f: &mut Fields) -> Result<(), Diagnostic> {
-        let mesh = self.mesh(f)?;
+        let mesh = self.mesh(f, "mesh")?;
         let material = Self::material_ref(f);
         let origin = f.vec3("origin")?.unwrap_or(Vec3::ZERO);
         let angles = f.vec3("angles")?.unwrap_or(Vec3::ZERO);
@@ -509,12 +523,19 @@ impl Loader<'_> {
         self.count_instances(1, f.block.line)?;
         let transform = Mat4::from_scale_rotation_translation(scale, rotation(angles), origin);
         let draw = Self::draw_options(f)?;
-        self.placements.push(Placement { mesh, material, draw, transforms: vec![transform], tiles: None });
+        self.placements.push(Placement {
+            mesh,
+            material,
+            draw,
+            transforms: vec![transform],
+            tiles: None,
+            alone: false,
+        });
         Ok(())
     }
 
     fn instances(&mut self, f: &mut Fields) -> Result<(), Diagnostic> {
-        let mesh = self.mesh(f)?;
+        let mesh = self.mesh(f, "mesh")?;
         let material = Self::material_ref(f);
         let count_pair = f.require("count")?;
         let count: i64 = count_pair.value.trim().parse().map_err(|_| {
@@ -579,7 +600,51 @@ impl Loader<'_> {
             None => None,
         };
         let draw = Self::draw_options(f)?;
-        self.placements.push(Placement { mesh, material, draw, transforms, tiles });
+        self.placements.push(Placement { mesh, material, draw, transforms, tiles, alone: false });
+        Ok(())
+    }
+
+    /// A `school` block: the simulation ([`scn_school::parse`]), and two
+    /// placements of their own, the fish (`mesh`, `material`) at the start
+    /// and the predator (`predator_mesh`, `predator_material`).
+    fn school(&mut self, f: &mut Fields) -> Result<(), Diagnostic> {
+        let line = f.block.line;
+        let mesh = self.mesh(f, "mesh")?;
+        let material = Self::material_ref(f);
+        let predator_mesh = match f.get("predator_mesh") {
+            Some(_) => Some(self.mesh(f, "predator_mesh")?),
+            None => None,
+        };
+        let predator_material = f.get("predator_material").map(|p| (p.value.trim().to_string(), p.line));
+        let (params, dt, size, predator_size) = scn_school::parse(f, line)?;
+        self.count_instances(params.count as u64 + u64::from(predator_mesh.is_some()), line)?;
+        let draw = Self::draw_options(f)?;
+        let mut school = SchoolDesc {
+            line,
+            params,
+            dt,
+            size,
+            predator_size,
+            fish_entity: self.placements.len(),
+            predator_entity: None,
+        };
+        let start =
+            crate::sim::school::School::new(school.params.clone()).map_err(|m| Diagnostic::at(self.path, line, m))?;
+        let transforms = start.fish().iter().enumerate().map(|(i, f)| f.transform(school.fish_scale(i))).collect();
+        self.placements.push(Placement { mesh, material, draw, transforms, tiles: None, alone: true });
+        if let (Some(mesh), Some(hunter)) = (predator_mesh, start.predator()) {
+            school.predator_entity = Some(self.placements.len());
+            let transforms = vec![hunter.transform(predator_size)];
+            self.placements.push(Placement {
+                mesh,
+                material: predator_material,
+                draw,
+                transforms,
+                tiles: None,
+                alone: true,
+            });
+        }
+        self.schools.push(school);
         Ok(())
     }
 
@@ -599,9 +664,10 @@ impl Loader<'_> {
         self.scene.textures = std::mem::replace(&mut self.textures, TextureCache::new(0)).into_textures();
         // Tiled blocks are entities of their own (keyed by their place).
         let mut tasks: HashMap<(MeshRef, Option<usize>, DrawOptions, Option<usize>), usize> = HashMap::new();
+        let mut task_of = Vec::with_capacity(self.placements.len());
         for (k, placement) in std::mem::take(&mut self.placements).into_iter().enumerate() {
             let material = self.material_index(placement.material)?;
-            let own = placement.tiles.is_some().then_some(k);
+            let own = (placement.tiles.is_some() || placement.alone).then_some(k);
             let task = *tasks.entry((placement.mesh, material, placement.draw, own)).or_insert_with(|| {
                 let (tiles, density, compact) = placement.tiles.map_or((None, 1.0, false), |(t, d, c)| (Some(t), d, c));
                 self.scene.entities.push(EntityDesc {
@@ -616,6 +682,12 @@ impl Loader<'_> {
                 self.scene.entities.len() - 1
             });
             self.scene.entities[task].transforms.extend(placement.transforms);
+            task_of.push(task);
+        }
+        for mut school in std::mem::take(&mut self.schools) {
+            school.fish_entity = task_of[school.fish_entity];
+            school.predator_entity = school.predator_entity.map(|k| task_of[k]);
+            self.scene.schools.push(school);
         }
         for (mut cloth, material) in std::mem::take(&mut self.cloths) {
             cloth.material = self.material_index(material)?;

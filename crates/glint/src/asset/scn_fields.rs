@@ -148,8 +148,8 @@ impl<'b> Fields<'b> {
         }
     }
 
-    pub(crate) fn mesh(&mut self) -> Result<ShapeKind, Diagnostic> {
-        let pair = self.require("mesh")?;
+    pub(crate) fn mesh(&mut self, key: &str) -> Result<ShapeKind, Diagnostic> {
+        let pair = self.require(key)?;
         if pair.value.trim() == "blob" {
             let detail = self.integer("detail", 3..=1024)?.unwrap_or(32) as u32;
             let seed = self.integer("mesh_seed", 0..=i64::from(u32::MAX))?.unwrap_or(0) as u32;

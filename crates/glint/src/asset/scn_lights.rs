@@ -48,6 +48,23 @@ pub(super) fn light(class: &str, f: &mut Fields, warnings: &mut Vec<Diagnostic>)
     Ok(if on { light.with_shadows(settings) } else { light })
 }
 
+/// A directional light's `sway` key: "DEGREES PERIOD", its direction
+/// swinging that far either way with that period in seconds, like sunlight
+/// through waves (Tiny Graphics' underwater scene).
+pub(super) fn sway(f: &mut Fields, direction: Vec3, light: usize) -> Result<Option<super::LightSway>, Diagnostic> {
+    let Some(pair) = f.get("sway") else { return Ok(None) };
+    match numbers::<2>(f.path, pair, "2 numbers (degrees period)")? {
+        [degrees, period] if (0.0..=90.0).contains(&degrees) && (0.01..=1e6).contains(&period) => {
+            Ok(Some(super::LightSway { light, base: direction, degrees, period }))
+        }
+        _ => Err(Diagnostic::at(
+            f.path,
+            pair.line,
+            "\"sway\" must be degrees period with 0 <= degrees <= 90, period 0.01 to 1000000 s",
+        )),
+    }
+}
+
 fn direction(f: &mut Fields) -> Result<Vec3, Diagnostic> {
     let pair = f.require("direction")?;
     let direction = Vec3::from(numbers::<3>(f.path, pair, "3 numbers (x y z)")?);
@@ -88,6 +105,22 @@ impl super::SceneDesc {
         let env = &mut self.environment;
         env.background = crate::scene::Background::Gradient { top: day.sky_top, bottom: day.sky_bottom };
         env.ambient = day.ambient;
+    }
+}
+
+impl super::LightSway {
+    /// Its light's direction at `time` seconds: the base direction turned
+    /// about two axes across it, by `degrees` · sin(2πt / period) and half as
+    /// far at a period 0.7 times as long, so the shadows wander rather than
+    /// swing on one line.
+    pub fn direction_at(&self, time: f32) -> Vec3 {
+        let base = self.base.normalize_or(Vec3::NEG_Y);
+        let across = base.cross(Vec3::Y).try_normalize().unwrap_or(Vec3::X);
+        let other = base.cross(across);
+        let tau = std::f32::consts::TAU;
+        let a = self.degrees.to_radians() * (tau * time / self.period).sin();
+        let b = 0.5 * self.degrees.to_radians() * (tau * time / (0.7 * self.period) + 1.0).sin();
+        glam::Quat::from_axis_angle(other, b) * (glam::Quat::from_axis_angle(across, a) * base)
     }
 }
 

@@ -101,23 +101,25 @@ pub(crate) fn material_fields(f: &mut Fields, base: Material) -> Result<Material
 }
 
 /// The keys of each motion (`motion` names one): the others are errors.
-const MOTION_KEYS: [(&str, &[&str]); 3] = [
+const MOTION_KEYS: [(&str, &[&str]); 4] = [
     ("wind", &["sway", "sway_base"]),
     ("flap", &["flap_amplitude", "flap_rate"]),
     ("circle", &["walk_radius", "walk_speed"]),
+    ("swim", &["swim_amplitude", "swim_pivot"]),
 ];
 
-/// A material's [`Motion`]: `motion` (`none`, `wind`, `flap`, `circle`; else
+/// A material's [`Motion`]: `motion` (`none`, `wind`, `flap`, `circle`, `swim`; else
 /// `base`'s) and its keys, each over `base`'s value where `base` moves the
 /// same way, else over its default.
 fn motion_fields(f: &mut Fields, base: Option<Motion>) -> Result<Option<Motion>, Diagnostic> {
-    let kind = match f.choice("motion", &["none", "wind", "flap", "circle"])? {
+    let kind = match f.choice("motion", &["none", "wind", "flap", "circle", "swim"])? {
         Some((0, _)) => None,
         Some((k, _)) => Some(k - 1),
         None => base.map(|m| match m {
             Motion::Wind { .. } => 0,
             Motion::Flap { .. } => 1,
             Motion::Circle { .. } => 2,
+            Motion::Swim { .. } => 3,
         }),
     };
     for (k, (name, keys)) in MOTION_KEYS.iter().enumerate() {
@@ -143,6 +145,14 @@ fn motion_fields(f: &mut Fields, base: Option<Motion>) -> Result<Option<Motion>,
             };
             let amplitude = f.number("flap_amplitude", 0.0..=10.0)?.unwrap_or(amplitude);
             Some(Motion::Flap { amplitude, rate: f.number("flap_rate", 0.0..=100.0)?.unwrap_or(rate) })
+        }
+        Some(3) => {
+            let (amplitude, pivot) = match base {
+                Some(Motion::Swim { amplitude, pivot }) => (amplitude, pivot),
+                _ => (0.15, 0.0),
+            };
+            let amplitude = f.number("swim_amplitude", 0.0..=10.0)?.unwrap_or(amplitude);
+            Some(Motion::Swim { amplitude, pivot: f.number("swim_pivot", -1e4..=1e4)?.unwrap_or(pivot) })
         }
         Some(_) => {
             let (radius, speed) = match base {

@@ -204,7 +204,8 @@ pub(crate) struct InstanceGpu {
     pub(crate) joints: u32, // 4
     /// How many joint matrices the entity has.
     pub(crate) joint_count: u32, // 4
-    /// Bit 0: receives shadows.
+    /// Bit 0: receives shadows; bits 16–31: the instance's motion phase in
+    /// 1/65536 cycles ([`Entity::phases`](crate::Entity::phases)).
     flags: u32, // 4
 }
 const _: () = assert!(std::mem::size_of::<InstanceGpu>() == 64);
@@ -220,6 +221,13 @@ impl InstanceGpu {
             flags: u32::from(receive_shadows),
             ..Self::default()
         }
+    }
+
+    /// This instance at motion phase `phase` (a fraction of a cycle).
+    pub(crate) fn with_phase(mut self, phase: f32) -> Self {
+        let steps = (phase.rem_euclid(1.0) * 65536.0) as u32 & 0xffff;
+        self.flags = (self.flags & 0xffff) | steps << 16;
+        self
     }
 
     /// This instance skinned by `count` joint matrices stored `offset` records after it.

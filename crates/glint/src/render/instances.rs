@@ -363,7 +363,10 @@ fn write_range(
                 Some((c, e)) => {
                     let joints = joint_records.len() as u32;
                     let offset = if joints > 0 { (src.len() - at) as u32 } else { 0 };
-                    instances[at] = InstanceGpu::new(&src[i as usize], material, receive).with_joints(offset, joints);
+                    let phase = entity.phases().get(i as usize).copied().unwrap_or(0.0);
+                    instances[at] = InstanceGpu::new(&src[i as usize], material, receive)
+                        .with_joints(offset, joints)
+                        .with_phase(phase);
                     match entity.tiles() {
                         Some(_) => boxes.set(first + at, center, extent),
                         None => boxes.set(first + at, c, e),

@@ -20,6 +20,7 @@ pub struct Entity {
     pub material: MaterialId,
     transforms: Vec<Mat4>,
     joints: Vec<Mat4>,
+    phases: Vec<f32>,
     /// Draw-order override: entities with a `render_order` are drawn in increasing
     /// order of it, before (values below 128) or after (128 and above) the sky,
     /// instead of in their material's queue. `None`: the material's queue decides.
@@ -49,6 +50,7 @@ impl Clone for Entity {
             material: self.material,
             transforms: self.transforms.clone(),
             joints: self.joints.clone(),
+            phases: self.phases.clone(),
             render_order: self.render_order,
             cast_shadows: self.cast_shadows,
             receive_shadows: self.receive_shadows,
@@ -74,6 +76,7 @@ impl Entity {
             material,
             transforms,
             joints: Vec::new(),
+            phases: Vec::new(),
             render_order: None,
             cast_shadows: true,
             receive_shadows: true,
@@ -161,6 +164,19 @@ impl Entity {
         &mut self.joints
     }
 
+    /// Each instance's motion phase, a fraction of a cycle, for materials whose
+    /// motion follows it ([`Motion::Swim`](super::Motion::Swim)); missing
+    /// entries are 0. Stored in 1/65536 steps.
+    pub fn phases(&self) -> &[f32] {
+        &self.phases
+    }
+
+    /// Change the phases; marks the instances for re-upload.
+    pub fn phases_mut(&mut self) -> &mut Vec<f32> {
+        self.version += 1;
+        &mut self.phases
+    }
+
     /// Object-to-world transform of each instance.
     pub fn transforms(&self) -> &[Mat4] {
         &self.transforms
@@ -184,7 +200,7 @@ impl Entity {
         self.key
     }
 
-    /// Bumped on every change to the transforms or joints.
+    /// Bumped on every change to the transforms, joints or phases.
     pub(crate) fn version(&self) -> u64 {
         self.version
     }

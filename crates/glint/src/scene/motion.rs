@@ -1,9 +1,10 @@
 //! Core layer: vertex animation a material gives its instances, computed in
 //! the vertex shader from the scene time ([`Environment::time`]), in every
 //! view and shadow view; each kind is a shader-variant bit (`WIND`, `FLAP`,
-//! `CIRCLE`). A per-instance phase comes from a hash of the instance's placed
-//! position, so instances of one draw do not move in lockstep and no instance
-//! data is added. The culler's boxes grow to cover the motion ([`Motion::reach`]).
+//! `CIRCLE`, `SWIM`). A per-instance phase comes from a hash of the
+//! instance's placed position, so instances of one draw do not move in
+//! lockstep and no instance data is added; a swimming fish's tail follows the
+//! phase its entity gives it ([`Entity::phases`](crate::Entity::phases)). The culler's boxes grow to cover the motion ([`Motion::reach`]).
 //!
 //! [`Environment::time`]: super::Environment::time
 
@@ -72,6 +73,17 @@ pub enum Motion {
         /// World units a second along the circle.
         speed: f32,
     },
+    /// A fish's tail: a vertex `d = pivot − z` object units behind the pivot
+    /// (the model faces +Z) swings sideways (x) by `amplitude · d²` times a
+    /// wave `sin(2π·phase − 2·d)` running down the body, where `phase` is the
+    /// instance's own ([`Entity::phases`](crate::Entity::phases)): a school
+    /// beats each fish's tail at its own pace.
+    Swim {
+        /// Sideways travel per squared unit behind the pivot.
+        amplitude: f32,
+        /// Object-space z in front of which nothing moves.
+        pivot: f32,
+    },
 }
 
 impl Motion {
@@ -81,6 +93,7 @@ impl Motion {
             Self::Wind { sway, base } => [sway, base, 0.0],
             Self::Flap { amplitude, rate } => [amplitude, rate, 0.0],
             Self::Circle { radius, speed } => [radius.x, radius.y, speed],
+            Self::Swim { amplitude, pivot } => [amplitude, pivot, 0.0],
         }
     }
 
@@ -99,6 +112,11 @@ impl Motion {
                 (Aabb { min: local.min - Vec3::Y * d, max: local.max + Vec3::Y * d }, 0.0)
             }
             Self::Circle { radius, .. } => (local, radius.x.abs().max(radius.y.abs())),
+            Self::Swim { amplitude, pivot } => {
+                let behind = (pivot - local.min.z).max(0.0);
+                let d = amplitude.abs() * behind * behind;
+                (Aabb { min: local.min - Vec3::X * d, max: local.max + Vec3::X * d }, 0.0)
+            }
         }
     }
 }

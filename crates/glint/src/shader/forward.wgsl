@@ -328,6 +328,17 @@ fn walk(material: MaterialBlock, origin: vec3<f32>) -> Walk {
 }
 #endif
 
+#ifdef SWIM
+// A tail's sideways swing: vertices d = pivot - z behind the pivot move by
+// amplitude · d² along x, a wave running down the body at the instance's
+// phase (flags bits 16-31).
+fn swim_offset(z: f32, material: MaterialBlock, flags: u32) -> f32 {
+    let d = max(material.motion.y - z, 0.0);
+    let phase = f32(flags >> 16u) / 65536.0;
+    return material.motion.x * d * d * sin(TAU * phase - 2.0 * d);
+}
+#endif
+
 @vertex
 fn vs_main(v: VertexIn, @builtin(instance_index) draw_instance: u32) -> VertexOut {
 #ifdef COMPACT
@@ -353,6 +364,9 @@ fn vs_main(v: VertexIn, @builtin(instance_index) draw_instance: u32) -> VertexOu
 #ifdef NORMAL_MAP
     tangent = skin3 * tangent;
 #endif
+#endif
+#ifdef SWIM
+    position.x += swim_offset(position.z, material_at(instance.material), instance.flags);
 #endif
 #ifdef FLAP
     position.y += flap_lift(position.x, material_at(instance.material), model[3].xyz);

@@ -35,6 +35,7 @@ bitflags::bitflags! {
     /// | 18 | `CIRCLE` | walk each instance around a circle ([`Motion::Circle`](crate::scene::Motion::Circle)) |
     /// | 19 | `EDGE_FADE` | fade alpha with the distance from the instance's placed position ([`Material::edge_fade`]) |
     /// | 20 | `COMPACT` | read each instance from a 16-byte compact record, numbered by the draw (set by the entity: [`Entity::with_compact_instances`](crate::Entity::with_compact_instances)) |
+    /// | 21 | `SWIM` | swing a fish's tail with its instance's phase ([`Motion::Swim`](crate::scene::Motion::Swim)) |
     ///
     /// Bits 21–31 are free for more (shadow receiving comes with shadow maps).
     /// The motion bits stay in shadow passes' variants, so shadows move too.
@@ -86,6 +87,8 @@ bitflags::bitflags! {
         const EDGE_FADE = 1 << 19;
         /// `COMPACT`.
         const COMPACT = 1 << 20;
+        /// `SWIM`.
+        const SWIM = 1 << 21;
     }
 }
 
@@ -119,12 +122,13 @@ impl ShaderFeatures {
             Some(crate::scene::Motion::Wind { .. }) => Self::WIND,
             Some(crate::scene::Motion::Flap { .. }) => Self::FLAP,
             Some(crate::scene::Motion::Circle { .. }) => Self::CIRCLE,
+            Some(crate::scene::Motion::Swim { .. }) => Self::SWIM,
         };
         f
     }
 
     /// The vertex-animation bits: kept in shadow passes.
-    pub const MOTION: Self = Self::WIND.union(Self::FLAP).union(Self::CIRCLE);
+    pub const MOTION: Self = Self::WIND.union(Self::FLAP).union(Self::CIRCLE).union(Self::SWIM);
 
     /// The naga_oil shader defs of this set: one boolean def per bit that is set,
     /// and `TEXCOORDS` with any map.

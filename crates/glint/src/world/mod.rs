@@ -1,7 +1,7 @@
 //! Core layer, above [`asset`](crate::asset) and [`render`](crate::render): a
 //! [`World`] is a loaded scene placed in a renderer and run. It holds what the
 //! file described ([`SceneDesc`]: cameras, lights, environment, materials,
-//! models, cloth blocks), the entities that draw it, its running simulations
+//! models, cloth and school blocks), the entities that draw it, its running simulations
 //! and the time it was last posed at. The `glint` CLI, the viewer and the web
 //! page each hold one:
 //!
@@ -21,6 +21,7 @@
 //! ```
 
 mod cloth;
+mod school;
 
 use crate::asset::{MeshRef, SceneDesc};
 use crate::render::{place, PlacedScene};
@@ -28,12 +29,16 @@ use crate::scene::{Entity, Lighting, View};
 use crate::sim::cloth::ClothView;
 use crate::{FrameStats, OffscreenTarget, RenderError, Renderer};
 use cloth::ClothSim;
+use school::SchoolSim;
 
 /// A scene placed in a renderer, with its simulations and clock.
 pub struct World {
     desc: SceneDesc,
     placed: PlacedScene,
     cloths: Vec<ClothSim>,
+    schools: Vec<SchoolSim>,
+    /// The placed entities of each entity block of `desc`.
+    ranges: Vec<std::ops::Range<usize>>,
     time: f32,
     /// Whether a material moves with time ([`Material::motion`](crate::Material::motion)),
     /// so the frames need the scene time.
@@ -47,9 +52,16 @@ impl World {
     pub fn place(desc: SceneDesc, renderer: &mut Renderer) -> Self {
         let placed = renderer.place_scene(&desc);
         let cloths = desc.cloths.iter().map(ClothSim::new).collect();
+        let schools: Vec<SchoolSim> = desc.schools.iter().map(SchoolSim::new).collect();
+        let ranges = school::entity_ranges(&desc);
+        let mut placed = placed;
+        for (sim, school) in schools.iter().zip(&desc.schools) {
+            // Each fish's own tail beat from the first frame.
+            sim.show(school, &desc, &ranges, &mut placed.entities);
+        }
         let models = desc.models.iter().flat_map(|m| &m.materials);
         let moves = desc.materials.iter().chain(models).any(|m| m.material.motion.is_some());
-        Self { desc, placed, cloths, time: 0.0, moves }
+        Self { desc, placed, cloths, schools, ranges, time: 0.0, moves }
     }
 
     /// The scene as its file described it.
@@ -96,8 +108,8 @@ impl World {
     }
 
     /// Pose every model at `time` seconds ([`Model::pose`](crate::asset::Model::pose)),
-    /// advance every cloth to `time`, and move the matching entities along: only
-    /// entities of animated models and moved cloths change, so only they are
+    /// advance every cloth and school to `time`, turn swaying lights, and move the matching entities
+    /// along: only entities of animated models, moved cloths and schools change, so only they are
     /// uploaded again; morphed meshes and cloth surfaces replace their shapes in
     /// `renderer` (one vertex-buffer write each).
     ///
@@ -148,6 +160,14 @@ impl World {
                 }
             }
             next += count;
+        }
+        for sway in &desc.light_sways {
+            desc.lights[sway.light].kind = crate::scene::LightKind::Directional { direction: sway.direction_at(time) };
+        }
+        for (sim, school) in self.schools.iter_mut().zip(&desc.schools) {
+            if sim.pose(school, time) {
+                sim.show(school, desc, &self.ranges, entities);
+            }
         }
         self.time = time;
         Ok(())
