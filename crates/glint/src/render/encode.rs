@@ -41,7 +41,8 @@ pub(super) struct Bound {
 
 impl Renderer {
     /// Stage 7: record the forward pass, cleared to `background`: opaque →
-    /// alpha-test → sky → transparent (or as `render_order` stages say).
+    /// alpha-test → sky → transparent (or as `render_order` stages say) →
+    /// particles → glare.
     pub(super) fn encode(
         &mut self,
         encoder: &mut wgpu::CommandEncoder,
@@ -86,6 +87,7 @@ impl Renderer {
                 bound = Bound { stencil_reference: bound.stencil_reference, ..Bound::default() };
             }
             self.draw_stages(&self.view.forward, &mut pass, (sky_at..end, after_sky), &mut bound, stats);
+            self.draw_particles(&mut pass, target.format(), stats);
             self.draw_glare(&mut pass, target, environment, stats);
         }
         if let Some(timer) = &mut self.gpu_timer {

@@ -478,6 +478,7 @@ impl Renderer {
         let mut lap = Laps::start();
         self.frame_variant = FrameVariant::after(drawn, lighting.lights);
         let prepared = self.prepare(target.format(), &lighting.environment, &mut stats)?;
+        self.prepare_particles(target.format(), &mut stats)?;
         stats.cpu_ms.prepare = lap.next();
         let shadowed = drawn.map_or(&[][..], |d| d.first_view.as_slice());
         // The frame's encoder, given back once this view's commands are in it

@@ -41,6 +41,7 @@ mod mesh_pool;
 mod naive;
 mod occlusion;
 mod outline;
+mod particles;
 mod pipelines;
 pub(crate) mod place;
 mod post;
@@ -64,6 +65,7 @@ pub(crate) use cull_pipelines::compute_pipeline;
 pub use error::RenderError;
 pub use gpu_cull::SKIP_UNPAID_OCCLUSION;
 pub use mesh_pool::MeshTooLarge;
+pub use particles::{ParticleBlend, ParticleGpu, ParticleLook, ParticlesId, MAX_LAYER_PARTICLES};
 pub use place::PlacedScene;
 pub use registry::Registry;
 pub use shadow_pass::Shadows;
@@ -175,6 +177,9 @@ pub struct Renderer {
     last_prepared: Option<(prepare::PrepareKey, Vec<prepare::Prepared>)>,
     /// Every tiled entity's density is multiplied by this ([`Renderer::set_density`]).
     density: f32,
+    /// Particle layers ([`Renderer::add_particles`]), drawn in every view.
+    particle_layers: Vec<particles::ParticleLayer>,
+    particle_pipelines: particles::ParticlePipelines,
 }
 
 fn ms_since(t: Instant) -> f64 {
@@ -215,7 +220,11 @@ impl Renderer {
         let paths =
             ListPaths { indirect: gpu.draws_indirect(), storage: gpu.vertex_storage(), gpu_cull: gpu.culls_on_gpu() };
         let view = ViewGpu::new(&shared, paths);
+        let particle_pipelines =
+            particles::ParticlePipelines::new(&device, &pipelines.scene_layout, &pipelines.camera_layout);
         Self {
+            particle_layers: Vec::new(),
+            particle_pipelines,
             submits_counted: queue.submits(),
             uncaptured: gpu.uncaptured(),
             device,

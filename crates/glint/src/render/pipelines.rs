@@ -148,7 +148,7 @@ pub(crate) struct Pipelines {
     layout: wgpu::PipelineLayout,
     shadow_layout: wgpu::PipelineLayout,
     sky_layout: wgpu::PipelineLayout,
-    library: ShaderLibrary,
+    pub(crate) library: ShaderLibrary,
     modules: HashMap<(ShaderFeatures, LightCounts), wgpu::ShaderModule>,
     sky_module: Option<wgpu::ShaderModule>,
     /// Forward and shadow pipelines; a key's index is its id in sort keys.
@@ -206,7 +206,7 @@ fn blend(b: BlendState) -> Option<wgpu::BlendState> {
     }
 }
 
-fn depth_stencil(states: &RenderStates, format: wgpu::TextureFormat) -> wgpu::DepthStencilState {
+pub(crate) fn depth_stencil(states: &RenderStates, format: wgpu::TextureFormat) -> wgpu::DepthStencilState {
     let s = &states.stencil;
     let face = wgpu::StencilFaceState {
         compare: compare(s.compare),
@@ -556,7 +556,7 @@ impl Pipelines {
     }
 }
 
-fn shader_module(device: &wgpu::Device, label: &str, module: wgpu::naga::Module) -> wgpu::ShaderModule {
+pub(crate) fn shader_module(device: &wgpu::Device, label: &str, module: wgpu::naga::Module) -> wgpu::ShaderModule {
     device.create_shader_module(wgpu::ShaderModuleDescriptor {
         label: Some(label),
         source: wgpu::ShaderSource::Naga(Cow::Owned(module)),

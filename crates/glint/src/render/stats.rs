@@ -165,6 +165,15 @@ pub struct FrameStats {
     /// without waiting), plus the blended instances culled on the CPU; 0 until
     /// the first comes back.
     pub instances_drawn: u64,
+    /// Particle billboards this view drew (every record of every particle
+    /// layer written from the CPU; a layer written on the GPU counts its whole
+    /// pool, dead slots drawing nothing).
+    pub particles_drawn: u32,
+    /// Particles alive in the scene's emitters at this frame's time, from
+    /// their schedules (filled in by [`World::draw`](crate::World::draw)).
+    pub particles_alive: u64,
+    /// Particles the scene's emitters spawned since the previous frame's time.
+    pub particles_spawned: u64,
     /// How the view was culled: [`Culling::Gpu`] only where the device can
     /// (else [`Culling::Cpu`], whatever the view asked for).
     pub culling: Culling,

@@ -254,6 +254,11 @@ impl ShaderLibrary {
     pub(crate) fn sky(&mut self) -> Result<wgpu::naga::Module, ShaderError> {
         self.compose("glint/shader/sky.wgsl", include_str!("sky.wgsl"), HashMap::new())
     }
+
+    /// The particle billboards' module: `vs_particle` / `fs_particle`.
+    pub(crate) fn particles(&mut self) -> Result<wgpu::naga::Module, ShaderError> {
+        self.compose("glint/shader/particles.wgsl", include_str!("particles.wgsl"), HashMap::new())
+    }
 }
 
 /// Mip blit shader: `vs_blit` / `fs_blit`, its own group 0.

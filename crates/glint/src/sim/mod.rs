@@ -1,6 +1,8 @@
 //! Simulation: cloth as Discrete Elastic Plates, integrated implicitly with
 //! Newton's method on a sparse system; fish schooling after Reynolds on a
-//! uniform grid, on the CPU and with compute shaders.
+//! uniform grid, and particles from emitters; the last two on the CPU and
+//! with compute shaders.
 
 pub mod cloth;
+pub mod particles;
 pub mod school;

@@ -1,0 +1,46 @@
+// Particle billboards (render/particles.rs): one instance a particle, four
+// vertices of a strip each, facing the camera; the sprite times the
+// particle's colour, under the scene's fog. A record of size 0 draws nothing.
+
+#import glint::blocks::{scene, camera}
+
+@group(2) @binding(0) var sprite: texture_2d<f32>;
+@group(2) @binding(1) var sprite_sampler: sampler;
+
+struct ParticleIn {
+    // xyz: centre; w: side in world units.
+    @location(0) center_size: vec4<f32>,
+    @location(1) color: vec4<f32>,
+}
+
+struct ParticleOut {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) uv: vec2<f32>,
+    @location(1) color: vec4<f32>,
+    @location(2) world_position: vec3<f32>,
+}
+
+@vertex
+fn vs_particle(@builtin(vertex_index) corner: u32, p: ParticleIn) -> ParticleOut {
+    let uv = vec2<f32>(f32(corner & 1u), f32(corner >> 1u));
+    let offset = (uv - 0.5) * p.center_size.w;
+    // The camera's right and up in the world: the view matrix's first two rows.
+    let right = vec3<f32>(camera.view[0].x, camera.view[1].x, camera.view[2].x);
+    let up = vec3<f32>(camera.view[0].y, camera.view[1].y, camera.view[2].y);
+    let world = p.center_size.xyz + right * offset.x + up * offset.y;
+    var out: ParticleOut;
+    out.clip = camera.view_proj * vec4<f32>(world, 1.0);
+    out.uv = vec2<f32>(uv.x, 1.0 - uv.y);
+    out.color = p.color;
+    out.world_position = world;
+    return out;
+}
+
+@fragment
+fn fs_particle(in: ParticleOut) -> @location(0) vec4<f32> {
+    var color = textureSample(sprite, sprite_sampler, in.uv) * in.color;
+    // Fog thins the particle towards nothing (what is behind already has it).
+    let distance = length(camera.position.xyz - in.world_position) * scene.fog.w;
+    color.a = color.a * exp(-distance * distance);
+    return color;
+}
