@@ -150,7 +150,7 @@ impl EmitterParams {
         if !(positive(lo) && positive(hi) && lo <= hi) {
             return Err(format!("lifetime must be min max with 0 < min <= max, got {lo} {hi}"));
         }
-        if !(self.rate.is_finite() && self.rate >= 0.0) || !(self.burst.every.is_finite() && self.burst.every >= 0.0) {
+        if !(self.rate.is_finite() && self.rate >= 0.0 && self.burst.every.is_finite() && self.burst.every >= 0.0) {
             return Err("rate and burst period must be 0 or more".into());
         }
         if self.rate == 0.0 && self.burst.count == 0 {
