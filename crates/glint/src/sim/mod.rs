@@ -5,4 +5,5 @@
 
 pub mod cloth;
 pub mod particles;
+mod scan;
 pub mod school;

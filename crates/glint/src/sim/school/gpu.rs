@@ -3,6 +3,7 @@
 
 use super::{School, SchoolParams, Swimmer};
 use crate::gpu::GpuError;
+use crate::sim::scan::{GpuScan, ScanGroup};
 use crate::Gpu;
 use glam::Vec3;
 
@@ -62,8 +63,9 @@ struct HuntGpu {
     pad: [u32; 2],
 }
 
-/// The passes of one step, in order, and how many threads each runs.
-const PASSES: [&str; 8] = ["clear", "count", "scan_blocks", "scan_sums", "scan_add", "scatter", "steer", "hunt"];
+/// The passes of one step before the scan, and after it.
+const BEFORE_SCAN: [&str; 2] = ["clear", "count"];
+const AFTER_SCAN: [&str; 3] = ["scatter", "steer", "hunt"];
 
 /// A school whose steps run as compute passes. Needs compute shaders and
 /// eight storage buffers a stage ([`Gpu::culls_on_gpu`]); elsewhere (GL,
@@ -77,6 +79,8 @@ pub struct GpuSchool {
     /// Bind groups reading fish buffer 0 then 1.
     groups: [wgpu::BindGroup; 2],
     pipelines: Vec<wgpu::ComputePipeline>,
+    scan: GpuScan,
+    scan_group: ScanGroup,
     /// Which fish buffer holds the current state.
     current: usize,
     cells: u32,
@@ -119,7 +123,6 @@ impl GpuSchool {
         let keys = buffer("school: cell and rank", 8 * n as u64);
         let counts = buffer("school: fish per cell", 4 * (cells as u64 + 1));
         let starts = buffer("school: first slot per cell", 4 * (cells as u64 + 1));
-        let sums = buffer("school: scan blocks", 4 * u64::from(cells / WORKGROUP + 1));
         let hunt = buffer("school: predator", std::mem::size_of::<HuntGpu>() as u64);
         let predator = school.predator().copied().unwrap_or_default();
         let hunt_data = HuntGpu { fish: FishGpu::from(&predator), nearest_bits: 0, nearest: 0, pad: [0; 2] };
@@ -132,7 +135,7 @@ impl GpuSchool {
         });
         let layout = bind_group_layout(device);
         let group = |from: usize| {
-            let buffers = [&uniform, &fish[from], &fish[1 - from], &sorted, &keys, &counts, &starts, &sums, &hunt];
+            let buffers = [&uniform, &fish[from], &fish[1 - from], &sorted, &keys, &counts, &starts, &hunt];
             let entries: Vec<wgpu::BindGroupEntry> = buffers
                 .iter()
                 .enumerate()
@@ -149,11 +152,14 @@ impl GpuSchool {
             label: Some("school.wgsl"),
             source: wgpu::ShaderSource::Wgsl(include_str!("school.wgsl").into()),
         });
-        let pipelines = PASSES
+        let pipelines = BEFORE_SCAN
             .iter()
+            .chain(&AFTER_SCAN)
             .map(|entry| crate::render::compute_pipeline(device, &module, entry, &[Some(&layout)]))
             .collect();
-        Ok(Self { params, block, uniform, fish, hunt, groups, pipelines, current: 0, cells })
+        let scan = GpuScan::new(device);
+        let scan_group = scan.group(device, &counts, &starts, cells + 1);
+        Ok(Self { params, block, uniform, fish, hunt, groups, pipelines, scan, scan_group, current: 0, cells })
     }
 
     /// Record and submit one step of `dt` seconds (not waited for).
@@ -168,16 +174,21 @@ impl GpuSchool {
         gpu.queue.submit([encoder.finish()]);
     }
 
-    /// The step's eight passes into `encoder`, after which the other fish
-    /// buffer holds the state.
+    /// The step's passes into `encoder`, after which the other fish buffer
+    /// holds the state.
     fn encode(&mut self, encoder: &mut wgpu::CommandEncoder) {
         let fish_groups = (self.block.count).div_ceil(WORKGROUP);
         let cell_groups = (self.cells + 1).div_ceil(WORKGROUP);
-        let threads = [cell_groups, fish_groups, cell_groups, 1, cell_groups, fish_groups, fish_groups, 1];
+        let threads = [cell_groups, fish_groups, fish_groups, fish_groups, 1];
         let mut pass = encoder
             .begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("school step"), timestamp_writes: None });
-        pass.set_bind_group(0, &self.groups[self.current], &[]);
-        for (pipeline, groups) in self.pipelines.iter().zip(threads) {
+        for (k, (pipeline, groups)) in self.pipelines.iter().zip(threads).enumerate() {
+            if k == BEFORE_SCAN.len() {
+                self.scan.encode(&mut pass, &self.scan_group);
+            }
+            if k == 0 || k == BEFORE_SCAN.len() {
+                pass.set_bind_group(0, &self.groups[self.current], &[]);
+            }
             pass.set_pipeline(pipeline);
             pass.dispatch_workgroups(groups, 1, 1);
         }
@@ -223,7 +234,7 @@ fn params_block(params: &SchoolParams, shape: super::GridShape, count: u32, dt: 
     }
 }
 
-/// One uniform block and eight storage buffers, all for compute.
+/// One uniform block and seven storage buffers, all for compute.
 fn bind_group_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
     let entry = |binding: u32| wgpu::BindGroupLayoutEntry {
         binding,
@@ -238,6 +249,6 @@ fn bind_group_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
         },
         count: None,
     };
-    let entries: Vec<_> = (0..9).map(entry).collect();
+    let entries: Vec<_> = (0..8).map(entry).collect();
     device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some("school"), entries: &entries })
 }

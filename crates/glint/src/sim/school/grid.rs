@@ -12,7 +12,7 @@ use rayon::prelude::*;
 /// Most cells a grid has: wider cells beyond that (the counting sort's
 /// running sum is over cells, and the GPU's scan covers 2²⁰ entries, one
 /// past the last cell).
-pub const MAX_CELLS: u32 = (1 << 20) - 1;
+pub const MAX_CELLS: u32 = crate::sim::scan::MAX_SCAN - 1;
 
 /// The grid's shape: where it starts, its cell width and its cells per axis.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -1,18 +1,12 @@
 // Fish schooling on the GPU: the same rules as sim/school/rules.rs, stepped
-// by eight compute passes (gpu.rs records them in this order):
+// by these compute passes (gpu.rs records them in this order):
 //   clear    every cell's count to 0, and the predator's nearest fish
 //   count    each fish's cell and rank in it (an atomic add); the predator's
 //            nearest distance (an atomic min of the squared distance's bits)
-//   scan_blocks, scan_sums, scan_add
-//            the counts' exclusive running sum: each cell's first slot
+//   (sim/scan.wgsl: the counts' exclusive running sum, each cell's first slot)
 //   scatter  each fish to its slot, in cell order; the nearest fish's number
 //   steer    every fish from the sorted copy: rules, speed limits, confinement
 //   hunt     the predator, one thread, after the fish read where it was
-
-const WORKGROUP: u32 = 256u;
-// Cells a workgroup of scan_blocks sums; scan_sums covers 16 blocks a thread.
-const SCAN_BLOCK: u32 = 256u;
-const SUMS_PER_THREAD: u32 = 16u;
 
 struct Params {
     origin: vec3<f32>,
@@ -60,8 +54,7 @@ struct Hunt {
 @group(0) @binding(5) var<storage, read_write> counts: array<atomic<u32>>;
 // cells + 1 entries: each cell's first slot, then the fish count.
 @group(0) @binding(6) var<storage, read_write> starts: array<u32>;
-@group(0) @binding(7) var<storage, read_write> block_sums: array<u32>;
-@group(0) @binding(8) var<storage, read_write> hunt_state: Hunt;
+@group(0) @binding(7) var<storage, read_write> hunt_state: Hunt;
 
 fn coords(p: vec3<f32>) -> vec3<i32> {
     let c = floor((p - params.origin) / params.cell);
@@ -96,70 +89,6 @@ fn count(@builtin(global_invocation_id) id: vec3<u32>) {
     if params.hunter.w > 0.0 {
         let d = p - hunt_state.position;
         atomicMin(&hunt_state.nearest_bits, bitcast<u32>(dot(d, d)));
-    }
-}
-
-var<workgroup> scratch: array<u32, 256>;
-
-// An exclusive scan of `scratch` by the workgroup (Hillis–Steele, then
-// shifted); returns the total.
-fn scan_scratch(lane: u32) -> u32 {
-    for (var step = 1u; step < WORKGROUP; step = step * 2u) {
-        workgroupBarrier();
-        var add = 0u;
-        if lane >= step {
-            add = scratch[lane - step];
-        }
-        workgroupBarrier();
-        scratch[lane] = scratch[lane] + add;
-    }
-    workgroupBarrier();
-    return scratch[WORKGROUP - 1u];
-}
-
-@compute @workgroup_size(256)
-fn scan_blocks(@builtin(global_invocation_id) id: vec3<u32>, @builtin(local_invocation_index) lane: u32, @builtin(workgroup_id) block: vec3<u32>) {
-    let n = params.flags.z + 1u;
-    var own = 0u;
-    if id.x < n {
-        own = atomicLoad(&counts[id.x]);
-    }
-    scratch[lane] = own;
-    let total = scan_scratch(lane);
-    if id.x < n {
-        starts[id.x] = scratch[lane] - own;
-    }
-    if lane == 0u {
-        block_sums[block.x] = total;
-    }
-}
-
-@compute @workgroup_size(256)
-fn scan_sums(@builtin(local_invocation_index) lane: u32) {
-    let blocks = (params.flags.z + SCAN_BLOCK) / SCAN_BLOCK;
-    let first = lane * SUMS_PER_THREAD;
-    var run = 0u;
-    for (var k = 0u; k < SUMS_PER_THREAD; k = k + 1u) {
-        if first + k < blocks {
-            run = run + block_sums[first + k];
-        }
-    }
-    scratch[lane] = run;
-    _ = scan_scratch(lane);
-    var before = scratch[lane] - run;
-    for (var k = 0u; k < SUMS_PER_THREAD; k = k + 1u) {
-        if first + k < blocks {
-            let own = block_sums[first + k];
-            block_sums[first + k] = before;
-            before = before + own;
-        }
-    }
-}
-
-@compute @workgroup_size(256)
-fn scan_add(@builtin(global_invocation_id) id: vec3<u32>, @builtin(workgroup_id) block: vec3<u32>) {
-    if id.x <= params.flags.z {
-        starts[id.x] = starts[id.x] + block_sums[block.x];
     }
 }
 

@@ -1,0 +1,94 @@
+//! [`GpuScan`]: an exclusive running sum on the GPU (`scan.wgsl`), the middle
+//! of the counting sorts that rebuild the school's grid and order particles
+//! by depth: count into buckets, sum, scatter.
+
+/// Most entries a scan covers: 256 blocks of 256, 16 block totals a thread.
+pub const MAX_SCAN: u32 = 256 * 256 * 16;
+const WORKGROUP: u32 = 256;
+
+/// The scan's three pipelines and their bind group layout.
+pub(crate) struct GpuScan {
+    layout: wgpu::BindGroupLayout,
+    pipelines: [wgpu::ComputePipeline; 3],
+}
+
+/// One scan's buffers: `n` counts in, their running sum out.
+pub(crate) struct ScanGroup {
+    group: wgpu::BindGroup,
+    n: u32,
+}
+
+impl GpuScan {
+    pub(crate) fn new(device: &wgpu::Device) -> Self {
+        let entry = |binding: u32| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: wgpu::ShaderStages::COMPUTE,
+            ty: wgpu::BindingType::Buffer {
+                ty: match binding {
+                    0 => wgpu::BufferBindingType::Uniform,
+                    _ => wgpu::BufferBindingType::Storage { read_only: false },
+                },
+                has_dynamic_offset: false,
+                min_binding_size: None,
+            },
+            count: None,
+        };
+        let entries: Vec<_> = (0..4).map(entry).collect();
+        let layout = device
+            .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some("scan"), entries: &entries });
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("scan.wgsl"),
+            source: wgpu::ShaderSource::Wgsl(include_str!("scan.wgsl").into()),
+        });
+        let pipeline = |entry| crate::render::compute_pipeline(device, &module, entry, &[Some(&layout)]);
+        let pipelines = [pipeline("scan_blocks"), pipeline("scan_sums"), pipeline("scan_add")];
+        Self { layout, pipelines }
+    }
+
+    /// The buffers of a scan of the first `n` (at most [`MAX_SCAN`]) words of
+    /// `counts` into `starts`; makes its own uniform and block totals.
+    pub(crate) fn group(
+        &self,
+        device: &wgpu::Device,
+        counts: &wgpu::Buffer,
+        starts: &wgpu::Buffer,
+        n: u32,
+    ) -> ScanGroup {
+        use wgpu::util::DeviceExt;
+        assert!(n <= MAX_SCAN, "a scan covers at most {MAX_SCAN} entries");
+        let size = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("scan: size"),
+            contents: bytemuck::cast_slice(&[n, 0, 0, 0]),
+            usage: wgpu::BufferUsages::UNIFORM,
+        });
+        let sums = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("scan: block totals"),
+            size: 4 * u64::from(n.div_ceil(WORKGROUP).max(4)),
+            usage: wgpu::BufferUsages::STORAGE,
+            mapped_at_creation: false,
+        });
+        let buffers = [&size, counts, starts, &sums];
+        let entries: Vec<_> = buffers
+            .iter()
+            .enumerate()
+            .map(|(k, b)| wgpu::BindGroupEntry { binding: k as u32, resource: b.as_entire_binding() })
+            .collect();
+        let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("scan"),
+            layout: &self.layout,
+            entries: &entries,
+        });
+        ScanGroup { group, n }
+    }
+
+    /// Record the scan of `group` into `pass` (which the caller's own bind
+    /// group must be set on again afterwards).
+    pub(crate) fn encode(&self, pass: &mut wgpu::ComputePass<'_>, group: &ScanGroup) {
+        let blocks = group.n.div_ceil(WORKGROUP);
+        pass.set_bind_group(0, &group.group, &[]);
+        for (pipeline, groups) in self.pipelines.iter().zip([blocks, 1, blocks]) {
+            pass.set_pipeline(pipeline);
+            pass.dispatch_workgroups(groups, 1, 1);
+        }
+    }
+}
