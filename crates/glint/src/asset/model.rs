@@ -262,6 +262,7 @@ impl Model {
             cloths: Vec::new(),
             schools: Vec::new(),
             light_sways: Vec::new(),
+            emitters: Vec::new(),
             time_of_day: None,
             models: vec![self],
         }

@@ -161,6 +161,8 @@ pub struct SceneDesc {
     pub cloths: Vec<ClothDesc>,
     /// Fish schools in file order; each draws with entities of its own.
     pub schools: Vec<super::SchoolDesc>,
+    /// Particle emitters in file order; each draws in a particle layer of its own.
+    pub emitters: Vec<super::EmitterDesc>,
     /// Directional lights whose direction sways with the scene time.
     pub light_sways: Vec<LightSway>,
     /// Non-fatal problems (unknown keys, repeated keys), `path:line: message`.
@@ -245,7 +247,8 @@ impl SceneDesc {
     /// Check, without stepping, that posing at `time` stays within the cloth
     /// limits ([`MAX_POSE_STEPS`](super::MAX_POSE_STEPS) per cloth, 10⁹
     /// node²-steps over all of them; see `docs/limits.md`) and the schools'
-    /// ([`MAX_POSE_FISH_STEPS`](super::MAX_POSE_FISH_STEPS)): the error names
+    /// ([`MAX_POSE_FISH_STEPS`](super::MAX_POSE_FISH_STEPS)) and emitters'
+    /// ([`MAX_POSE_PARTICLE_STEPS`](super::MAX_POSE_PARTICLE_STEPS)): the error names
     /// the block that goes over. Posing at an earlier time takes no more work.
     pub fn check_pose(&self, time: f32) -> Result<(), Diagnostic> {
         let mut work = 0u64;
@@ -253,6 +256,7 @@ impl SceneDesc {
             cloth.check_pose(time, work, &self.path)?;
             work = work.saturating_add(cloth.pose_work(time));
         }
-        super::scn_school::check_pose(&self.schools, time, &self.path)
+        super::scn_school::check_pose(&self.schools, time, &self.path)?;
+        super::scn_emitter::check_pose(&self.emitters, time, &self.path)
     }
 }

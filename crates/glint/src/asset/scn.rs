@@ -6,6 +6,7 @@ use super::placement::{place_instances, sort_into_tiles};
 use super::procedural::{blob_vertex_count, MAX_SCENE_BLOB_VERTICES};
 use super::scene_desc::{CameraView, DrawOptions, EntityDesc, MaterialDesc, MeshRef, SceneDesc, TextureRef};
 use super::scn_cloth::{self, ClothDesc};
+use super::scn_emitter;
 use super::scn_fields::{numbers, Fields};
 use super::scn_lights;
 use super::scn_material::material_fields;
@@ -73,6 +74,7 @@ pub fn parse_scene_with(path: &Path, text: &str, options: LoadOptions) -> Result
             cloths: Vec::new(),
             schools: Vec::new(),
             light_sways: Vec::new(),
+            emitters: Vec::new(),
             warnings: Vec::new(),
             time_of_day: None,
         },
@@ -179,6 +181,14 @@ impl Loader<'_> {
             "entity" => self.entity(&mut f)?,
             "instances" => self.instances(&mut f)?,
             "school" => self.school(&mut f)?,
+            "emitter" => {
+                let (params, blend, dt) = scn_emitter::parse(&mut f, block.line)?;
+                if f.get("texture").is_some_and(|p| self.targets.map(self.path, p.line, &p.value).is_some()) {
+                    return Err(Diagnostic::at(self.path, block.line, "\"texture\": particles show an image file, not a render target"));
+                }
+                let texture = self.texture(&mut f, "texture", true)?;
+                self.scene.emitters.push(scn_emitter::EmitterDesc { line: block.line, params, blend, texture, dt });
+            }
             "cloth" => {
                 let nodes: u64 = self.cloths.iter().map(|(c, _)| c.setup.mesh.nodes.len() as u64).sum();
                 let mut cloth = scn_cloth::parse(&mut f, &self.assets, nodes)?;
@@ -193,7 +203,7 @@ impl Loader<'_> {
                 return Err(Diagnostic::at(
                     self.path,
                     class_pair.line,
-                    format!("unknown classname {}, expected one of: world, camera, light_directional, light_point, light_spot, material, entity, instances, school, cloth, render_target", quote(other)),
+                    format!("unknown classname {}, expected one of: world, camera, light_directional, light_point, light_spot, material, entity, instances, school, emitter, cloth, render_target", quote(other)),
                 ))
             }
         }

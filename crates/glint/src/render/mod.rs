@@ -53,6 +53,7 @@ mod resources;
 mod shadow_maps;
 mod shadow_pass;
 mod shadow_views;
+mod simulate;
 mod stats;
 mod target_pool;
 mod timer;
@@ -69,6 +70,7 @@ pub use particles::{ParticleBlend, ParticleGpu, ParticleLook, ParticlesId, MAX_L
 pub use place::PlacedScene;
 pub use registry::Registry;
 pub use shadow_pass::Shadows;
+pub use simulate::GpuSimulation;
 pub use stats::{FrameStats, PassStats, Passes, StageTimes, UploadStats};
 pub use timer::GpuTimes;
 

@@ -109,10 +109,11 @@ impl ParticlePipelines {
         let module = self.module.as_ref().expect("built above");
         let color = match blend {
             ParticleBlend::Additive => wgpu::BlendComponent {
-                src_factor: wgpu::BlendFactor::SrcAlpha,
+                src_factor: wgpu::BlendFactor::One,
                 dst_factor: wgpu::BlendFactor::One,
                 operation: wgpu::BlendOperation::Add,
             },
+            // The shader's colour is premultiplied by its alpha.
             ParticleBlend::Alpha => wgpu::BlendComponent::OVER,
         };
         let keep_alpha = wgpu::BlendComponent {

@@ -42,5 +42,6 @@ fn fs_particle(in: ParticleOut) -> @location(0) vec4<f32> {
     // Fog thins the particle towards nothing (what is behind already has it).
     let distance = length(camera.position.xyz - in.world_position) * scene.fog.w;
     color.a = color.a * exp(-distance * distance);
-    return color;
+    // Premultiplied: added as is (additive), or over what is behind (alpha).
+    return vec4<f32>(color.rgb * color.a, color.a);
 }

@@ -1,7 +1,7 @@
 //! Core layer, above [`asset`](crate::asset) and [`render`](crate::render): a
 //! [`World`] is a loaded scene placed in a renderer and run. It holds what the
 //! file described ([`SceneDesc`]: cameras, lights, environment, materials,
-//! models, cloth and school blocks), the entities that draw it, its running simulations
+//! models, cloth, school and emitter blocks), the entities that draw it, its running simulations
 //! and the time it was last posed at. The `glint` CLI, the viewer and the web
 //! page each hold one:
 //!
@@ -21,6 +21,7 @@
 //! ```
 
 mod cloth;
+mod particles;
 mod school;
 
 use crate::asset::{MeshRef, SceneDesc};
@@ -29,6 +30,7 @@ use crate::scene::{Entity, Lighting, View};
 use crate::sim::cloth::ClothView;
 use crate::{FrameStats, OffscreenTarget, RenderError, Renderer};
 use cloth::ClothSim;
+use particles::EmitterSim;
 use school::SchoolSim;
 
 /// A scene placed in a renderer, with its simulations and clock.
@@ -37,6 +39,10 @@ pub struct World {
     placed: PlacedScene,
     cloths: Vec<ClothSim>,
     schools: Vec<SchoolSim>,
+    emitters: Vec<EmitterSim>,
+    /// The time of the last frame drawn (−1 before the first), for the
+    /// particles spawned since.
+    drawn_at: f32,
     /// The placed entities of each entity block of `desc`.
     ranges: Vec<std::ops::Range<usize>>,
     time: f32,
@@ -54,6 +60,7 @@ impl World {
         let cloths = desc.cloths.iter().map(ClothSim::new).collect();
         let schools: Vec<SchoolSim> = desc.schools.iter().map(SchoolSim::new).collect();
         let ranges = school::entity_ranges(&desc);
+        let emitters = desc.emitters.iter().map(|e| EmitterSim::new(e, &desc, renderer)).collect();
         let mut placed = placed;
         for (sim, school) in schools.iter().zip(&desc.schools) {
             // Each fish's own tail beat from the first frame.
@@ -61,7 +68,7 @@ impl World {
         }
         let models = desc.models.iter().flat_map(|m| &m.materials);
         let moves = desc.materials.iter().chain(models).any(|m| m.material.motion.is_some());
-        Self { desc, placed, cloths, schools, ranges, time: 0.0, moves }
+        Self { desc, placed, cloths, schools, emitters, drawn_at: -1.0, ranges, time: 0.0, moves }
     }
 
     /// The scene as its file described it.
@@ -164,6 +171,9 @@ impl World {
         for sway in &desc.light_sways {
             desc.lights[sway.light].kind = crate::scene::LightKind::Directional { direction: sway.direction_at(time) };
         }
+        for (sim, emitter) in self.emitters.iter_mut().zip(&desc.emitters) {
+            sim.pose(emitter, time);
+        }
         for (sim, school) in self.schools.iter_mut().zip(&desc.schools) {
             if sim.pose(school, time) {
                 sim.show(school, desc, &self.ranges, entities);
@@ -181,13 +191,30 @@ impl World {
     }
 
     /// Draw `views` of it into `target` ([`Renderer::render_views`]) and return
-    /// each view's statistics.
+    /// each view's statistics, with the scene's particles alive and spawned
+    /// since the last frame drawn. Its emitters' billboards go first: written
+    /// from the CPU, or stepped to the time of the last pose by compute passes
+    /// in the frame's simulate stage; alpha-blended ones sorted back to front
+    /// from the last view's camera (the picture's own, after any views into
+    /// render targets).
     pub fn draw(
-        &self,
+        &mut self,
         renderer: &mut Renderer,
         views: &[View],
         target: &mut OffscreenTarget,
     ) -> Result<Vec<FrameStats>, RenderError> {
-        renderer.render_views(&self.placed.entities, views, self.lighting(), target)
+        let eye = views.last().map_or(glam::Vec3::ZERO, |v| v.camera.eye);
+        for (sim, emitter) in self.emitters.iter_mut().zip(&self.desc.emitters) {
+            sim.draw(emitter, self.time, eye, renderer);
+        }
+        let mut stats = renderer.render_views(&self.placed.entities, views, self.lighting(), target)?;
+        particles::count(&self.desc.emitters, (self.drawn_at, self.time), &mut stats);
+        self.drawn_at = self.time;
+        Ok(stats)
+    }
+
+    /// Whether its emitters step with compute shaders (else on the CPU).
+    pub fn particles_on_gpu(&self) -> bool {
+        self.emitters.iter().any(EmitterSim::on_gpu)
     }
 }

@@ -12,10 +12,12 @@
 //! updates on its own ([`ParticleSystem`] on the CPU with rayon,
 //! [`GpuParticles`] with a compute shader).
 
+mod gpu;
 mod schedule;
 #[cfg(test)]
 mod tests;
 
+pub use gpu::GpuParticles;
 pub use schedule::Schedule;
 
 use crate::render::ParticleGpu;

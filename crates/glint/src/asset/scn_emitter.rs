@@ -1,0 +1,207 @@
+//! The `.scn` `emitter` class: a particle emitter ([`EmitterParams`]) and how
+//! its particles look. A [`World`](crate::World) steps it to the scene time:
+//! with compute shaders where the device has them, else on the CPU, from
+//! the same description and seed.
+
+use super::scn_fields::{numbers, Fields};
+use super::scn_syntax::Pair;
+use super::{Diagnostic, TextureRef};
+use crate::render::ParticleBlend;
+use crate::sim::particles::{Burst, EmitterParams, Schedule, SpawnShape, MAX_PARTICLES};
+use crate::text::quote;
+use glam::{Vec3, Vec4};
+use std::path::Path;
+
+/// Most particle-steps one pose may take over a scene's emitters (slots ×
+/// steps to the time): a far `--time` is an error rather than minutes.
+pub const MAX_POSE_PARTICLE_STEPS: u64 = 4_000_000_000;
+
+/// An `emitter` block.
+#[derive(Clone, Debug)]
+pub struct EmitterDesc {
+    /// The block's line.
+    pub line: usize,
+    /// The emitter.
+    pub params: EmitterParams,
+    /// How its particles blend.
+    pub blend: ParticleBlend,
+    /// The sprite each particle shows (a scene texture), if any.
+    pub texture: Option<TextureRef>,
+    /// Seconds a step.
+    pub dt: f32,
+}
+
+impl EmitterDesc {
+    /// Steps from time 0 to `time`.
+    pub fn steps_to(&self, time: f32) -> u64 {
+        (f64::from(time.max(0.0)) / f64::from(self.dt)).round() as u64
+    }
+
+    /// Particle-steps posing at `time` takes (every slot, every step).
+    pub fn pose_work(&self, time: f32) -> u64 {
+        self.steps_to(time).saturating_mul(Schedule::new(&self.params).slots())
+    }
+}
+
+/// One number, or two (min max); the one number is both.
+fn range(f: &mut Fields, key: &str, default: (f32, f32), most: f32) -> Result<(f32, f32), Diagnostic> {
+    let Some(pair) = f.get(key) else { return Ok(default) };
+    let values: Vec<f32> = pair.value.split_whitespace().map(|w| w.parse().unwrap_or(f32::NAN)).collect();
+    let (lo, hi) = match values[..] {
+        [v] => (v, v),
+        [lo, hi] => (lo, hi),
+        _ => (f32::NAN, f32::NAN),
+    };
+    if !(0.0..=most).contains(&lo) || !(lo..=most).contains(&hi) {
+        let message =
+            format!("\"{key}\" is {}, expected one number or min max, 0 <= min <= max <= {most}", quote(&pair.value));
+        return Err(Diagnostic::at(f.path, pair.line, message));
+    }
+    Ok((lo, hi))
+}
+
+/// A colour: r g b, or r g b a.
+fn rgba(f: &mut Fields, key: &str, default: Vec4) -> Result<Vec4, Diagnostic> {
+    let Some(pair) = f.get(key) else { return Ok(default) };
+    let values: Vec<f32> = pair.value.split_whitespace().map(|w| w.parse().unwrap_or(f32::NAN)).collect();
+    match values[..] {
+        [r, g, b] if [r, g, b].iter().all(|c| (0.0..=1e4).contains(c)) => Ok(Vec4::new(r, g, b, 1.0)),
+        [r, g, b, a] if [r, g, b].iter().all(|c| (0.0..=1e4).contains(c)) && (0.0..=1.0).contains(&a) => {
+            Ok(Vec4::new(r, g, b, a))
+        }
+        _ => Err(Diagnostic::at(
+            f.path,
+            pair.line,
+            format!("\"{key}\" is {}, expected r g b or r g b a (a in 0..1)", quote(&pair.value)),
+        )),
+    }
+}
+
+/// The `shape` key: `point`, `sphere R`, `box X Y Z` (half extents) or `cone R`.
+fn shape(f: &mut Fields) -> Result<SpawnShape, Diagnostic> {
+    let Some(pair) = f.get("shape") else { return Ok(SpawnShape::Point) };
+    let mut words = pair.value.split_whitespace();
+    let kind = words.next().unwrap_or("");
+    let rest = Pair { key: pair.key.clone(), value: words.collect::<Vec<_>>().join(" "), line: pair.line };
+    let bad = |m: &str| Diagnostic::at(f.path, pair.line, format!("\"shape\": {m}"));
+    let size = |v: f32| if (0.0..=1e5).contains(&v) { Ok(v) } else { Err(bad("sizes must be 0 to 100000")) };
+    match kind {
+        "point" if rest.value.is_empty() => Ok(SpawnShape::Point),
+        "sphere" => Ok(SpawnShape::Sphere(size(numbers::<1>(f.path, &rest, "sphere RADIUS")?[0])?)),
+        "cone" => Ok(SpawnShape::Cone(size(numbers::<1>(f.path, &rest, "cone RADIUS")?[0])?)),
+        "box" => {
+            let [x, y, z] = numbers::<3>(f.path, &rest, "box X Y Z (half extents)")?;
+            Ok(SpawnShape::Box(Vec3::new(size(x)?, size(y)?, size(z)?)))
+        }
+        _ => Err(bad(&format!("{} is not point, sphere R, box X Y Z or cone R", quote(&pair.value)))),
+    }
+}
+
+/// An emitter block's keys but `texture` (the loader's): the emitter, its
+/// blend and step.
+pub(crate) fn parse(f: &mut Fields, line: usize) -> Result<(EmitterParams, ParticleBlend, f32), Diagnostic> {
+    let d = EmitterParams::default();
+    let rate = f.number("rate", 0.0..=1e8)?.unwrap_or(d.rate);
+    let burst = match f.get("burst") {
+        None => d.burst,
+        Some(pair) => {
+            let values: Vec<f32> = pair.value.split_whitespace().map(|w| w.parse().unwrap_or(f32::NAN)).collect();
+            match values[..] {
+                [n] if (0.0..=MAX_PARTICLES as f32).contains(&n) && n.fract() == 0.0 => {
+                    Burst { count: n as u32, every: 0.0 }
+                }
+                [n, every]
+                    if (0.0..=MAX_PARTICLES as f32).contains(&n)
+                        && n.fract() == 0.0
+                        && (0.01..=1e6).contains(&every) =>
+                {
+                    Burst { count: n as u32, every }
+                }
+                _ => {
+                    let m = format!(
+                        "\"burst\" is {}, expected COUNT or COUNT EVERY (a whole count, every 0.01..1000000 s)",
+                        quote(&pair.value)
+                    );
+                    return Err(Diagnostic::at(f.path, pair.line, m));
+                }
+            }
+        }
+    };
+    let lifetime = range(f, "lifetime", d.lifetime, 1e4)?;
+    let speed = range(f, "speed", d.speed, 1e5)?;
+    let noise = match f.numbers::<2>("noise", "2 numbers (strength scale)")? {
+        Some([strength, scale]) if (0.0..=1e4).contains(&strength) && (1e-3..=1e5).contains(&scale) => {
+            (strength, scale)
+        }
+        Some(_) => {
+            return Err(Diagnostic::at(f.path, line, "\"noise\" must be strength scale, 0..10000 and 0.001..100000"))
+        }
+        None => (d.noise, d.noise_scale),
+    };
+    let ground = match f.get("ground") {
+        None => None,
+        Some(pair) => {
+            let values: Vec<f32> = pair.value.split_whitespace().map(|w| w.parse().unwrap_or(f32::NAN)).collect();
+            match values[..] {
+                [y] if y.abs() <= 1e5 => Some((y, 0.3)),
+                [y, bounce] if y.abs() <= 1e5 && (0.0..=1.0).contains(&bounce) => Some((y, bounce)),
+                _ => {
+                    return Err(Diagnostic::at(
+                        f.path,
+                        pair.line,
+                        "\"ground\" must be Y or Y BOUNCE (|Y| <= 100000, bounce 0..1)",
+                    ))
+                }
+            }
+        }
+    };
+    let blend = match f.choice("blend", &["additive", "alpha"])? {
+        Some((1, _)) => ParticleBlend::Alpha,
+        _ => ParticleBlend::Additive,
+    };
+    let size = f.number("size", 0.0..=1e4)?.unwrap_or(d.size);
+    let params = EmitterParams {
+        origin: f.bounded_vec3("origin", 1e5)?.unwrap_or(d.origin),
+        direction: f.bounded_vec3("direction", 1e5)?.unwrap_or(d.direction),
+        rate,
+        burst,
+        lifetime,
+        shape: shape(f)?,
+        speed,
+        spread: f.number("spread", 0.0..=180.0)?.unwrap_or(d.spread),
+        gravity: f.bounded_vec3("gravity", 1e5)?.unwrap_or(d.gravity),
+        drag: f.number("drag", 0.0..=1e4)?.unwrap_or(d.drag),
+        noise: noise.0,
+        noise_scale: noise.1,
+        color: rgba(f, "color", d.color)?,
+        color_end: rgba(f, "color_end", d.color_end)?,
+        size,
+        size_end: f.number("size_end", 0.0..=1e4)?.unwrap_or(size),
+        ground,
+        seed: f.integer("seed", 0..=i64::from(u32::MAX))?.unwrap_or(1) as u32,
+    };
+    if params.direction.length_squared() < 1e-12 {
+        return Err(Diagnostic::at(f.path, line, "\"direction\" must not be zero"));
+    }
+    let dt = f.number("dt", 1e-4..=1.0)?.unwrap_or(1.0 / 60.0);
+    params.check().map_err(|m| Diagnostic::at(f.path, line, format!("emitter: {m}")))?;
+    Ok((params, blend, dt))
+}
+
+/// Check that posing every emitter at `time` stays within
+/// [`MAX_POSE_PARTICLE_STEPS`], without stepping.
+pub(crate) fn check_pose(emitters: &[EmitterDesc], time: f32, scene: &Path) -> Result<(), Diagnostic> {
+    let mut work = 0u64;
+    for e in emitters {
+        work = work.saturating_add(e.pose_work(time));
+        if work > MAX_POSE_PARTICLE_STEPS {
+            let message = format!(
+                "emitter: time {time} s is {} steps of {} particle slots, more than the {MAX_POSE_PARTICLE_STEPS} particle-steps a pose may take",
+                e.steps_to(time),
+                Schedule::new(&e.params).slots()
+            );
+            return Err(Diagnostic::at(scene, e.line, message));
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,103 @@
+//! Core layer: a scene's emitters as they run. Each draws in a particle layer
+//! of its own; it steps with compute shaders in the frame's simulate stage
+//! where the renderer computes ([`Renderer::computes`]), else on the CPU (GL,
+//! WebGL2), from the same description and seed.
+
+use crate::asset::{EmitterDesc, SceneDesc};
+use crate::render::{ParticleBlend, ParticleLook, ParticlesId};
+use crate::sim::particles::{GpuParticles, ParticleSystem};
+use crate::{FrameStats, Renderer};
+use glam::Vec3;
+
+/// Where an emitter steps.
+enum Run {
+    Cpu(Box<ParticleSystem>),
+    Gpu(Box<GpuParticles>),
+}
+
+/// One emitter's run and the layer it draws in.
+pub(crate) struct EmitterSim {
+    run: Run,
+    layer: ParticlesId,
+}
+
+impl EmitterSim {
+    /// `desc`'s emitter at time 0, with a layer in `renderer` (its sprite
+    /// one of `scene`'s textures).
+    pub(crate) fn new(desc: &EmitterDesc, scene: &SceneDesc, renderer: &mut Renderer) -> Self {
+        let slots = crate::sim::particles::Schedule::new(&desc.params).slots() as u32;
+        let texture = desc.texture.and_then(|i| scene.textures.get(i)).cloned();
+        let layer = renderer.add_particles(slots, ParticleLook { blend: desc.blend, texture });
+        let cpu = || {
+            Run::Cpu(Box::new(ParticleSystem::new(desc.params.clone(), desc.dt).expect("checked as the scene loaded")))
+        };
+        let run = match (renderer.computes(), renderer.particle_buffer(layer)) {
+            (true, Some((buffer, capacity))) => {
+                let buffer = buffer.clone();
+                let on_gpu = GpuParticles::new(
+                    renderer.device_and_queue(),
+                    desc.params.clone(),
+                    desc.dt,
+                    (&buffer, capacity),
+                    desc.blend,
+                );
+                on_gpu.map_or_else(|_| cpu(), |g| Run::Gpu(Box::new(g)))
+            }
+            _ => cpu(),
+        };
+        Self { run, layer }
+    }
+
+    /// On the CPU, step (or restart and step) to `time`; on the GPU the steps
+    /// wait for the frame ([`EmitterSim::draw`]).
+    pub(crate) fn pose(&mut self, desc: &EmitterDesc, time: f32) {
+        if let Run::Cpu(system) = &mut self.run {
+            let target = desc.steps_to(time);
+            if system.steps() > target {
+                **system = ParticleSystem::new(desc.params.clone(), desc.dt).expect("checked as the scene loaded");
+            }
+            while system.steps() < target {
+                system.step();
+            }
+        }
+    }
+
+    /// Before the frame's views: its billboards into its layer, sorted from
+    /// `eye` when alpha-blended (written from the CPU, or stepped to `time`
+    /// and written by compute passes in the frame's simulate stage).
+    pub(crate) fn draw(&mut self, desc: &EmitterDesc, time: f32, eye: Vec3, renderer: &mut Renderer) {
+        let eye_if_sorted = (desc.blend == ParticleBlend::Alpha).then_some(eye);
+        match &mut self.run {
+            Run::Cpu(system) => renderer.write_particles(self.layer, &system.records(eye_if_sorted)),
+            Run::Gpu(on_gpu) => {
+                on_gpu.advance_to(renderer.device_and_queue().1, time, eye);
+                renderer.simulate(on_gpu.as_mut());
+                renderer.set_particle_count(self.layer, on_gpu.slots());
+            }
+        }
+    }
+
+    /// Whether it steps with compute shaders.
+    pub(crate) fn on_gpu(&self) -> bool {
+        matches!(self.run, Run::Gpu(_))
+    }
+}
+
+/// Fill `stats` with the scene's particles alive at `time` and spawned since
+/// `previous`, from each emitter's schedule.
+pub(crate) fn count(emitters: &[EmitterDesc], (previous, time): (f32, f32), stats: &mut [FrameStats]) {
+    let (mut alive, mut spawned) = (0, 0);
+    for e in emitters {
+        let schedule = crate::sim::particles::Schedule::new(&e.params);
+        let snap = |t: f32| (e.steps_to(t) as f64 * f64::from(e.dt)) as f32;
+        alive += schedule.alive_at(&e.params, snap(time));
+        spawned += schedule.spawned_at(snap(time)).saturating_sub(if previous < 0.0 {
+            0
+        } else {
+            schedule.spawned_at(snap(previous))
+        });
+    }
+    for s in stats {
+        (s.particles_alive, s.particles_spawned) = (alive, spawned);
+    }
+}
