@@ -205,3 +205,59 @@ pub(crate) fn check_pose(emitters: &[EmitterDesc], time: f32, scene: &Path) -> R
     }
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use crate::asset::{parse_scene, Diagnostic, SceneDesc};
+    use crate::render::ParticleBlend;
+    use crate::sim::particles::SpawnShape;
+    use glam::Vec3;
+    use std::path::Path;
+
+    fn emitter(body: &str) -> Result<SceneDesc, Diagnostic> {
+        parse_scene(Path::new("e.scn"), &format!("{{\n\"classname\" \"emitter\"\n{body}}}\n"))
+    }
+
+    fn error(body: &str) -> String {
+        emitter(body).unwrap_err().to_string()
+    }
+
+    #[test]
+    fn every_emitter_key_is_read() {
+        let scene = emitter(
+            "\"origin\" \"1 2 3\"\n\"direction\" \"0 0 1\"\n\"rate\" \"50\"\n\"burst\" \"20 0.5\"\n\"lifetime\" \"1 2\"\n\
+             \"shape\" \"box 0.1 0.2 0.3\"\n\"speed\" \"2 3\"\n\"spread\" \"30\"\n\"gravity\" \"0 -9.8 0\"\n\"drag\" \"0.2\"\n\
+             \"noise\" \"0.5 2\"\n\"color\" \"1 0.5 0\"\n\"color_end\" \"0 0 1 0.5\"\n\"size\" \"0.2\"\n\"size_end\" \"0.4\"\n\
+             \"ground\" \"-1 0.6\"\n\"blend\" \"alpha\"\n\"seed\" \"9\"\n\"dt\" \"0.02\"\n",
+        )
+        .unwrap();
+        assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+        let e = &scene.emitters[0];
+        let p = &e.params;
+        assert_eq!((p.origin, p.direction, p.rate), (Vec3::new(1.0, 2.0, 3.0), Vec3::Z, 50.0));
+        assert_eq!((p.burst.count, p.burst.every, p.lifetime, p.speed), (20, 0.5, (1.0, 2.0), (2.0, 3.0)));
+        assert_eq!(p.shape, SpawnShape::Box(Vec3::new(0.1, 0.2, 0.3)));
+        assert_eq!((p.spread, p.drag, p.noise, p.noise_scale, p.seed), (30.0, 0.2, 0.5, 2.0, 9));
+        assert_eq!((p.color.w, p.color_end.w, p.size, p.size_end, p.ground), (1.0, 0.5, 0.2, 0.4, Some((-1.0, 0.6))));
+        assert_eq!((e.blend, e.dt, e.texture), (ParticleBlend::Alpha, 0.02, None));
+        assert_eq!(emitter("").unwrap().emitters[0].params.shape, SpawnShape::Point);
+    }
+
+    #[test]
+    fn bad_emitter_keys_are_errors_at_their_line() {
+        assert!(error("\"lifetime\" \"2 1\"\n").starts_with("e.scn:3: \"lifetime\""));
+        assert!(error("\"shape\" \"torus 1\"\n").contains("not point, sphere R, box X Y Z or cone R"));
+        assert!(error("\"shape\" \"box 1 2\"\n").starts_with("e.scn:3:"));
+        assert!(error("\"burst\" \"2.5\"\n").contains("COUNT or COUNT EVERY"));
+        assert!(error("\"rate\" \"0\"\n").contains("needs a rate or a burst"));
+        assert!(error("\"rate\" \"1e8\"\n\"lifetime\" \"100\"\n").contains("alive at once"));
+        assert!(error("\"color\" \"1 1 1 2\"\n").contains("r g b or r g b a"));
+        assert!(error("\"direction\" \"0 0 0\"\n").contains("must not be zero"));
+        assert!(error("\"blend\" \"multiply\"\n").contains("blend"));
+        assert!(error("\"ground\" \"0 2\"\n").contains("BOUNCE"));
+        assert!(error("\"texture\" \"missing.png\"\n").starts_with("e.scn:3: \"texture\""));
+        let many = emitter("\"rate\" \"1000000\"\n\"lifetime\" \"4\"\n").unwrap();
+        assert!(many.check_pose(100.0).unwrap_err().to_string().contains("particle-steps"));
+        assert!(many.check_pose(1.0).is_ok());
+    }
+}

@@ -301,6 +301,8 @@ impl Renderer {
     /// lights ([`Shadows::none`] draws without shadows).
     ///
     /// The frame of one view, one stage per line (`Renderer::draw_view`):
+    /// 0. simulate — before any view, GPU simulations' compute passes
+    ///    ([`simulate`](Self::simulate): particles stepping and sorting into their layers)
     /// 1. prepare — GPU twins for new shapes, textures, materials and pipelines; edited materials rewritten
     /// 2. cull — each entity's world box, then its instances', against the view's frustum;
     ///    culled on the GPU ([`Culling::Gpu`]), every valid instance of each entity not blended
@@ -310,7 +312,7 @@ impl Renderer {
     /// 5. batch — equal (stage, pipeline, material, shape) runs merged into instanced draws, one indirect command each
     /// 6. upload — Scene and Camera blocks if changed, changed instances, draw indices and indirect commands if changed
     /// 7. encode — culled on the GPU, the cull pass first; one pass: opaque → alpha-test → sky →
-    ///    transparent (or as `render_order` says); batches sharing pipeline, texture set and
+    ///    transparent (or as `render_order` says) → particle layers → glare; batches sharing pipeline, texture set and
     ///    mesh page go in one multi-draw-indirect call. Occlusion culling splits the pass
     ///    around its depth pyramid and late cull (`render/occlusion.rs`)
     /// 8. compose — a view drawn into a target of its own (a view of part of the

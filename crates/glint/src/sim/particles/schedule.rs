@@ -28,7 +28,7 @@ impl Schedule {
         let life_max = params.lifetime.1.max(params.lifetime.0);
         let rate = f64::from(params.rate.max(0.0));
         let stream =
-            if rate > 0.0 { (rate * f64::from(life_max)).ceil().min(f64::from(u32::MAX)) as u32 + 1 } else { 0 };
+            if rate > 0.0 { (rate * f64::from(life_max)).ceil().min(f64::from(u32::MAX - 1)) as u32 + 1 } else { 0 };
         let every = f64::from(params.burst.every.max(0.0));
         let bursts_alive = match (params.burst.count, every > 0.0) {
             (0, _) => 0,
