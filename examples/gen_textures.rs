@@ -83,6 +83,17 @@ fn main() -> Result<(), image::ImageError> {
     std::fs::create_dir_all(&underwater).map_err(image::ImageError::IoError)?;
     fish.save(underwater.join("fish.png"))?;
 
+    // A bubble: clear inside, a bright rim and a highlight up and to the left.
+    let bubble = RgbaImage::from_fn(64, 64, |x, y| {
+        let (u, v) = (x as f32 / 31.5 - 1.0, y as f32 / 31.5 - 1.0);
+        let r = (u * u + v * v).sqrt();
+        let rim = (1.0 - ((r - 0.85).abs() / 0.12)).clamp(0.0, 1.0);
+        let glint = (1.0 - (((u + 0.35).powi(2) + (v + 0.35).powi(2)).sqrt() / 0.22)).clamp(0.0, 1.0);
+        let a = if r > 1.0 { 0.0 } else { (0.12 + 0.8 * rim + glint).min(1.0) };
+        Rgba([255, 255, 255, (a * 255.0) as u8])
+    });
+    bubble.save(underwater.join("bubble.png"))?;
+
     // Sand: pale grains and gentle ripples.
     let sand = RgbaImage::from_fn(SIZE, SIZE, |x, y| {
         let (fx, fy) = (x as f32, y as f32);
@@ -93,7 +104,7 @@ fn main() -> Result<(), image::ImageError> {
     });
     sand.save(dir.join("sand.png"))?;
     println!(
-        "wrote tiles.png, tiles_normal.png, leaf.png, sand.png to {} and fish.png beside the underwater models",
+        "wrote tiles.png, tiles_normal.png, leaf.png, sand.png to {} and fish.png, bubble.png beside the underwater models",
         dir.display()
     );
     Ok(())

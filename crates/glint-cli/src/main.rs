@@ -1,8 +1,10 @@
 //! The `glint` command-line tool.
 
 mod bench;
+mod bench_live;
 mod compare;
 mod output;
+mod particles;
 mod plot;
 mod school;
 mod sim;
@@ -116,6 +118,14 @@ enum Command {
         /// for none.
         #[arg(long, value_parser = parse_post)]
         post: Option<PostArg>,
+        /// Run the scene as it plays instead (its fish, particles and cloth
+        /// stepping, as in the viewer), FPS frames a second of scene time
+        /// from --time: the whole frame, posing included.
+        #[arg(long, value_name = "FPS", value_parser = parse_fps)]
+        live: Option<f32>,
+        /// With --live: the scene time of the first frame, seconds.
+        #[arg(long, default_value_t = 0.0, requires = "live", value_parser = parse_time)]
+        time: f32,
     },
     /// Open a window onto a .scn scene (or a model file) and fly through it.
     #[command(after_help = view::KEYS)]
@@ -166,6 +176,9 @@ enum SimCommand {
     /// Fish schooling: step a school and print its statistics, or benchmark it.
     #[command(after_help = EXIT_CODES)]
     School(school::SchoolArgs),
+    /// Particles: step an emitter of about N living particles and time it.
+    #[command(after_help = EXIT_CODES)]
+    Particles(particles::ParticleArgs),
 }
 
 /// Size, samples and camera of `render` and `view`.
@@ -277,6 +290,43 @@ enum BenchMode {
 struct BenchOutput<'a> {
     json: bool,
     plot: Option<&'a Path>,
+}
+
+/// `glint bench --live`: the whole frame of the scene as it plays.
+fn run_live(
+    scene: &Path,
+    config: &bench::BenchConfig,
+    timing: (f32, f32),
+    json: bool,
+    options: LoadOptions,
+) -> Result<(), Error> {
+    let desc = load(scene, options)?;
+    let end = timing.0 + timing.1 * (config.frames + config.warmup) as f32;
+    desc.check_pose(end)?;
+    let gpu = Gpu::headless()?;
+    let adapter = format!("{} ({:?})", gpu.info().name, gpu.info().backend);
+    let r = bench_live::run(&gpu, desc, config, timing)?;
+    let text = match json {
+        true => format!("{}\n", serde_json::json!({"scene": scene.display().to_string(), "adapter": adapter, "size": format!("{}x{}", config.size.0, config.size.1), "live": r})),
+        false => format!(
+            "{} on {adapter}, {}x{}, {} frames from {} s, {:.4} s a frame\n  frame {:.2} ms median ({:.2} p95): pose {:.2} ms, draw (CPU) {:.2} ms, forward pass (GPU) {}\n  particles on the {}: {} alive; {} instances\n",
+            scene.display(),
+            config.size.0,
+            config.size.1,
+            r.frames,
+            r.start,
+            r.step,
+            r.frame_ms_median,
+            r.frame_ms_p95,
+            r.pose_ms_median,
+            r.draw_cpu_ms_median,
+            r.forward_gpu_ms_median.map_or("n/a".into(), |ms| format!("{ms:.2} ms")),
+            if r.particles_on_gpu { "GPU" } else { "CPU" },
+            r.particles_alive,
+            r.instances
+        ),
+    };
+    Ok(output::print(&text)?)
 }
 
 fn run_bench(
@@ -627,6 +677,7 @@ fn main() -> ExitCode {
         },
         Command::Sim(SimCommand::Cloth(args)) => sim::cloth(args),
         Command::Sim(SimCommand::School(args)) => school::school(args),
+        Command::Sim(SimCommand::Particles(args)) => particles::particles(args),
         Command::View { scene, picture, frames, screenshot, at } => {
             let options = picture.load_options(options);
             load(scene, options.clone()).and_then(|desc| {
@@ -645,7 +696,34 @@ fn main() -> ExitCode {
                 view::run(args, desc)
             })
         }
-        Command::Bench { scene, frames, warmup, mode, cull, density, orbit, settle, size, msaa, json, plot, post } => {
+        Command::Bench { scene, frames, warmup, size, msaa, json, density, live: Some(fps), time, .. } => {
+            let config = bench::BenchConfig {
+                frames: *frames,
+                warmup: *warmup,
+                size: *size,
+                msaa: *msaa,
+                orbit: 0.0,
+                settle_ms: 0,
+                density: *density,
+            };
+            run_live(scene, &config, (*time, 1.0 / *fps), *json, options)
+        }
+        Command::Bench {
+            scene,
+            frames,
+            warmup,
+            mode,
+            cull,
+            density,
+            orbit,
+            settle,
+            size,
+            msaa,
+            json,
+            plot,
+            post,
+            ..
+        } => {
             let config = bench::BenchConfig {
                 frames: *frames,
                 warmup: *warmup,

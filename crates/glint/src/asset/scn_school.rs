@@ -112,6 +112,18 @@ pub(crate) fn parse(f: &mut Fields, line: usize) -> Result<(SchoolParams, f32, f
     let floor = f.number("floor", -1e5..=1e5)?;
     let beat_rate = f.number("beat_rate", 0.0..=100.0)?.unwrap_or(3.0);
     let seed = f.integer("seed", 0..=i64::MAX)?.unwrap_or(1) as u64;
+    let clusters = match f.numbers::<2>("clusters", "2 numbers (count radius)")? {
+        None => None,
+        Some([n, r]) if (1.0..=1e4).contains(&n) && n.fract() == 0.0 && (1e-3..=1e5).contains(&r) => {
+            Some((n as u32, r))
+        }
+        Some(_) => {
+            return Err(at(
+                line,
+                "\"clusters\" must be count radius, a whole count 1..10000 and a radius 0.001..100000".into(),
+            ))
+        }
+    };
     let dt = f.number("dt", 1e-4..=1.0)?.unwrap_or(1.0 / 60.0);
     let size = f.number("size", 1e-4..=1e4)?.unwrap_or(1.0);
     let predator_size = f.number("predator_size", 1e-4..=1e4)?.unwrap_or(1.0);
@@ -137,6 +149,7 @@ pub(crate) fn parse(f: &mut Fields, line: usize) -> Result<(SchoolParams, f32, f
         floor,
         predator,
         beat_rate,
+        clusters,
         seed,
     };
     params.check().map_err(|m| at(line, format!("school: {m}")))?;

@@ -101,6 +101,9 @@ pub struct SchoolParams {
     pub predator: Option<Hunter>,
     /// Tail beats a second at top speed (fewer when slower).
     pub beat_rate: f32,
+    /// Start the fish in this many balls of this radius at random places
+    /// (schools already), instead of spread through the bounds.
+    pub clusters: Option<(u32, f32)>,
     /// The random start's seed.
     pub seed: u64,
 }
@@ -120,6 +123,7 @@ impl Default for SchoolParams {
             floor: None,
             predator: None,
             beat_rate: 3.0,
+            clusters: None,
             seed: 1,
         }
     }
@@ -173,6 +177,9 @@ impl SchoolParams {
         }
         if self.floor.is_some_and(|f| !f.is_finite()) || !(self.beat_rate.is_finite() && self.beat_rate >= 0.0) {
             return Err("the floor and beat rate must be finite".into());
+        }
+        if self.clusters.is_some_and(|(n, r)| n == 0 || !(r.is_finite() && r > 0.0)) {
+            return Err("clusters need a count of 1 or more and a positive radius".into());
         }
         if let Some(h) = self.predator {
             let ok = finite(h.start) && [h.speed, h.accel, h.fear].iter().all(|x| x.is_finite() && *x > 0.0);
@@ -253,15 +260,37 @@ impl School {
         let mut rng = rand_pcg::Pcg64::seed_from_u64(params.seed);
         let (lo, hi) = (params.bounds.min, params.bounds.max);
         let inset = ((hi - lo) * 0.25).min(Vec3::splat(params.margin()));
+        let anywhere = |rng: &mut rand_pcg::Pcg64| {
+            Vec3::new(
+                rng.random_range(lo.x + inset.x..=hi.x - inset.x),
+                rng.random_range(lo.y + inset.y..=hi.y - inset.y),
+                rng.random_range(lo.z + inset.z..=hi.z - inset.z),
+            )
+        };
+        let centers: Vec<Vec3> = match params.clusters {
+            Some((n, _)) => (0..n).map(|_| anywhere(&mut rng)).collect(),
+            None => Vec::new(),
+        };
         let fish = (0..params.count)
-            .map(|_| {
+            .map(|i| {
                 let mut p = lo;
                 for _ in 0..8 {
-                    p = Vec3::new(
-                        rng.random_range(lo.x + inset.x..=hi.x - inset.x),
-                        rng.random_range(lo.y + inset.y..=hi.y - inset.y),
-                        rng.random_range(lo.z + inset.z..=hi.z - inset.z),
-                    );
+                    p = match params.clusters {
+                        Some((n, radius)) => {
+                            let ball = loop {
+                                let v = Vec3::new(
+                                    rng.random_range(-1.0..1.0),
+                                    rng.random_range(-1.0..1.0),
+                                    rng.random_range(-1.0..1.0),
+                                );
+                                if v.length_squared() <= 1.0 {
+                                    break v;
+                                }
+                            };
+                            centers[i % n as usize] + ball * radius
+                        }
+                        None => anywhere(&mut rng),
+                    };
                     if params.obstacles.iter().all(|o| p.distance(o.center) > o.radius) {
                         break;
                     }
