@@ -137,6 +137,35 @@ for (const backend of backends) {
   }
 }
 
+// The aquarium runs live: its fish school and bubbles step with the page's
+// clock (the bubbles with compute shaders on WebGPU, on the CPU on WebGL2), so
+// two frames a while apart differ.
+for (const backend of backends) {
+  const { page, state, logs } = await open("scenes/aquarium.scn", backend);
+  try {
+    if (state.error) {
+      report(false, `the aquarium on ${backend}`, `${state.error}\n  ${logs.join("\n  ")}`);
+      continue;
+    }
+    const moved = await page.evaluate(async () => {
+      const canvas = document.getElementById("glint");
+      const a = await window.glintReadFrame();
+      const from = +canvas.dataset.frames;
+      while (+canvas.dataset.frames < from + 3) await new Promise((r) => requestAnimationFrame(r));
+      const b = await window.glintReadFrame();
+      let changed = 0;
+      for (let i = 0; i < a.data.length; i += 4) {
+        if (Math.abs(a.data[i] - b.data[i]) + Math.abs(a.data[i + 1] - b.data[i + 1]) + Math.abs(a.data[i + 2] - b.data[i + 2]) > 48) changed++;
+      }
+      return changed / (a.width * a.height);
+    });
+    report(moved > 0.002, `the aquarium on ${backend}`,
+      `first frame ${Math.round(state.first)} ms after navigation; ${(100 * moved).toFixed(1)} % of pixels moved over 3 frames`);
+  } finally {
+    await page.close();
+  }
+}
+
 // A broken scene shows its error, with the file and line, on the page.
 for (const backend of backends) {
   const { page, state } = await open("scenes/broken.scn", backend);

@@ -10,9 +10,15 @@ use std::process::Command;
 
 #[test]
 fn help_lists_every_subcommand_and_the_exit_codes() {
-    for args in
-        [&["--help"][..], &["render", "--help"], &["check", "--help"], &["view", "--help"], &["sim", "cloth", "--help"]]
-    {
+    for args in [
+        &["--help"][..],
+        &["render", "--help"],
+        &["check", "--help"],
+        &["view", "--help"],
+        &["sim", "cloth", "--help"],
+        &["sim", "school", "--help"],
+        &["sim", "particles", "--help"],
+    ] {
         let out = glint(args);
         assert_eq!(out.status.code(), Some(0), "{args:?}");
         let text = String::from_utf8_lossy(&out.stdout);
@@ -934,4 +940,79 @@ fn the_viewer_changes_density_and_time_of_day_per_frame() {
     );
     let light = |i: &image::RgbImage| i.pixels().map(|p| p.0.iter().map(|&c| u64::from(c)).sum::<u64>()).sum::<u64>();
     assert!(light(&night) * 2 < light(&bare), "night falls");
+}
+
+#[test]
+fn every_shipped_scene_checks_without_a_gpu() {
+    let mut checked = 0;
+    for dir in ["scenes", "scenes/bench"] {
+        let mut names: Vec<_> = std::fs::read_dir(repo(dir)).expect("scenes").flatten().map(|e| e.path()).collect();
+        names.sort();
+        for path in names.iter().filter(|p| p.extension().is_some_and(|e| e == "scn")) {
+            let name = path.to_str().expect("utf-8 path");
+            let out = glint(&["check", name]);
+            assert_eq!(out.status.code(), Some(0), "{name}: {}", stderr(&out));
+            checked += 1;
+        }
+    }
+    assert!(checked >= 15, "{checked} scenes");
+}
+
+#[test]
+fn sim_school_prints_its_statistics_and_benchmark_as_json() {
+    let out = glint(&["sim", "school", "--fish", "3000", "--steps", "20", "--bench", "--json"]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let r: serde_json::Value = serde_json::from_slice(&out.stdout).expect("one JSON object");
+    assert_eq!((r["fish"].as_u64(), r["steps"].as_u64(), r["path"].as_str()), (Some(3000), Some(20), Some("cpu")));
+    let (ms, rate) = (r["ms_per_step"].as_f64().unwrap(), r["steps_per_second"].as_f64().unwrap());
+    assert!(ms > 0.0 && (rate * ms - 1000.0).abs() < 1e-6 * rate * ms, "{r}");
+    assert!(r["mean_speed"].as_f64().unwrap() >= 1.0 - 1e-6, "{r}");
+    let plain = glint(&["sim", "school", "--fish", "500", "--steps", "5", "--predator"]);
+    assert!(String::from_utf8_lossy(&plain.stdout).starts_with("500 fish after 5 steps: mean speed"));
+    assert_eq!(glint(&["sim", "school", "--fish", "0"]).status.code(), Some(1));
+    assert_eq!(glint(&["sim", "school", "--json"]).status.code(), Some(1), "--json needs --bench");
+}
+
+#[test]
+fn sim_particles_times_an_emitter_on_the_cpu() {
+    let out = glint(&["sim", "particles", "--alive", "20000", "--steps", "5", "--alpha", "--json"]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let r: serde_json::Value = serde_json::from_slice(&out.stdout).expect("one JSON object");
+    assert_eq!((r["path"].as_str(), r["blend"].as_str()), (Some("cpu"), Some("alpha")));
+    // Rate × lifetime, within a particle of the schedule's rounding.
+    assert!((r["alive"].as_i64().unwrap() - 20000).abs() <= 1, "{r}");
+    assert!(r["ms_per_step"].as_f64().unwrap() > 0.0);
+}
+
+#[test]
+fn bench_live_runs_a_scene_as_it_plays() {
+    let scene = repo("tests/scenes/emitter.scn");
+    let args = [
+        "bench",
+        scene.to_str().unwrap(),
+        "--live",
+        "30",
+        "--time",
+        "1",
+        "--frames",
+        "3",
+        "--warmup",
+        "1",
+        "--size",
+        "64x64",
+        "--json",
+    ];
+    let out = glint(&args);
+    if out.status.code() == Some(2) {
+        eprintln!("skipped: no GPU adapter");
+        return;
+    }
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let r: serde_json::Value = serde_json::from_slice(&out.stdout).expect("one JSON object");
+    let live = &r["live"];
+    assert_eq!((live["frames"].as_u64(), live["start"].as_f64()), (Some(3), Some(1.0)));
+    assert!(live["particles_alive"].as_u64().unwrap() > 300, "{r}");
+    assert!(live["frame_ms_median"].as_f64().unwrap() > 0.0);
+    let far = ["bench", scene.to_str().unwrap(), "--live", "60", "--time", "1e9", "--frames", "1"];
+    assert_eq!(glint(&far).status.code(), Some(1), "a pose past the budget is bad input");
 }

@@ -24,8 +24,14 @@ use wasm_bindgen::prelude::*;
 use wasm_bindgen::JsCast;
 
 /// The demo scenes the picker offers, under the page.
-const SCENES: [&str; 5] =
-    ["scenes/showcase.scn", "scenes/split.scn", "scenes/monitor.scn", "scenes/tablecloth.scn", "scenes/meadow.scn"];
+const SCENES: [&str; 6] = [
+    "scenes/showcase.scn",
+    "scenes/split.scn",
+    "scenes/monitor.scn",
+    "scenes/tablecloth.scn",
+    "scenes/meadow.scn",
+    "scenes/aquarium.scn",
+];
 
 thread_local! {
     /// The page's one viewer, for [`read_frame`].

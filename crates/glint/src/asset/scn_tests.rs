@@ -233,7 +233,7 @@ fn semantic_errors_name_file_line_and_expectation() {
         (&tiled("\"density\" \"0.5\""), 1, "\"density\", \"tile_padding\" and \"compact\" need \"tiles\""),
         (&tiled("\"compact\" \"1\""), 1, "need \"tiles\""),
         (&tiled("\"tiles\" \"2\"\n\"compact\" \"yes\""), 6, "\"compact\""),
-        (&motion("\"motion\" \"swim\""), 4, "expected one of: none, wind, flap, circle"),
+        (&motion("\"motion\" \"dance\""), 4, "expected one of: none, wind, flap, circle, swim"),
         (&motion("\"sway\" \"0.2\""), 4, "sway is a key of \"motion\" \"wind\", which this material does not have"),
         (&motion("\"motion\" \"wind\"\n\"flap_rate\" \"2\""), 5, "flap_rate is a key of \"motion\" \"flap\""),
         (&motion("\"motion\" \"circle\"\n\"walk_radius\" \"2 1\""), 5, "0 <= min <= max <= 10000"),
