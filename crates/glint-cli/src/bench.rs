@@ -123,7 +123,8 @@ pub fn bench_view(desc: &SceneDesc, post: Option<Vec<glint::scene::PostEffect>>)
     }
 }
 
-fn percentile(sorted: &[f64], p: f64) -> f64 {
+/// The `p` quantile (0..=1) of `sorted`, 0 when empty.
+pub(crate) fn percentile(sorted: &[f64], p: f64) -> f64 {
     if sorted.is_empty() {
         return 0.0;
     }
@@ -132,7 +133,7 @@ fn percentile(sorted: &[f64], p: f64) -> f64 {
 }
 
 /// The median of `values` (sorted in place), `None` when empty.
-fn median(values: &mut [f64]) -> Option<f64> {
+pub(crate) fn median(values: &mut [f64]) -> Option<f64> {
     values.sort_by(f64::total_cmp);
     (!values.is_empty()).then(|| percentile(values, 0.5))
 }

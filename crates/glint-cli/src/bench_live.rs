@@ -38,8 +38,7 @@ pub struct LiveReport {
 }
 
 fn median(values: &mut [f64]) -> f64 {
-    values.sort_by(f64::total_cmp);
-    values.get(values.len() / 2).copied().unwrap_or(0.0)
+    crate::bench::median(values).unwrap_or(0.0)
 }
 
 /// Run `desc` live from `start` seconds, `step` seconds a frame.
@@ -71,17 +70,13 @@ pub fn run(gpu: &Gpu, desc: SceneDesc, config: &BenchConfig, (start, step): (f32
         }
     }
     let last = last.unwrap_or_default();
-    let p95 = {
-        let mut sorted = frame_ms.clone();
-        sorted.sort_by(f64::total_cmp);
-        sorted[((sorted.len() - 1) as f64 * 0.95).round() as usize]
-    };
+    let frame_ms_median = median(&mut frame_ms);
     Ok(LiveReport {
         frames: config.frames,
         start,
         step,
-        frame_ms_median: median(&mut frame_ms),
-        frame_ms_p95: p95,
+        frame_ms_median,
+        frame_ms_p95: crate::bench::percentile(&frame_ms, 0.95),
         pose_ms_median: median(&mut pose_ms),
         draw_cpu_ms_median: median(&mut draw_ms),
         forward_gpu_ms_median: (timed && !gpu_ms.is_empty()).then(|| median(&mut gpu_ms)),

@@ -113,16 +113,16 @@ pub fn particles(args: &ParticleArgs) -> Result<(), Error> {
             .collect();
         (times, system.schedule().alive_at(&params, system.time()), system.schedule().slots())
     };
-    times.sort_by(f64::total_cmp);
+    let median = crate::bench::median(&mut times).unwrap_or(0.0);
     let report = Report {
         path: if args.gpu { "gpu" } else { "cpu" },
         blend: if args.alpha { "alpha" } else { "additive" },
         alive,
         slots,
         steps: args.steps,
-        ms_per_step: times[times.len() / 2],
-        ms_per_step_min: times[0],
-        ms_per_step_max: times[times.len() - 1],
+        ms_per_step: median,
+        ms_per_step_min: crate::bench::percentile(&times, 0.0),
+        ms_per_step_max: crate::bench::percentile(&times, 1.0),
         threads: rayon::current_num_threads(),
     };
     if args.json {

@@ -79,17 +79,16 @@ pub fn school(args: &SchoolArgs) -> Result<(), Error> {
         );
         return Ok(());
     }
-    let mut sorted = times.clone();
-    sorted.sort_by(f64::total_cmp);
-    let median = sorted[sorted.len() / 2];
+    let mut sorted = times;
+    let median = crate::bench::median(&mut sorted).unwrap_or(0.0);
     let report = BenchReport {
         fish: args.fish,
         steps: args.steps,
         path: if args.gpu { "gpu" } else { "cpu" },
         threads: rayon::current_num_threads(),
         ms_per_step: median,
-        ms_per_step_min: sorted[0],
-        ms_per_step_max: sorted[sorted.len() - 1],
+        ms_per_step_min: crate::bench::percentile(&sorted, 0.0),
+        ms_per_step_max: crate::bench::percentile(&sorted, 1.0),
         steps_per_second: 1000.0 / median,
         mean_speed: stats.mean_speed,
         polarisation: stats.polarisation,

@@ -57,9 +57,9 @@ fn gpu_and_cpu_schooling_agree_statistically() {
 
 #[test]
 fn one_gpu_step_matches_the_cpu_step_closely() {
-    // One step from the same state: the GPU's grid must find the same
-    // neighbours, or some fish would steer differently by far more than
-    // rounding.
+    // One step from the same state, in a frame's simulate stage: the GPU's
+    // grid must find the same neighbours, or some fish would steer
+    // differently by far more than rounding.
     let Some(gpu) = common::gpu() else { return };
     if !gpu.culls_on_gpu() {
         return;
@@ -70,7 +70,15 @@ fn one_gpu_step_matches_the_cpu_step_closely() {
     }
     let mut on_gpu = GpuSchool::new(gpu, &cpu).unwrap();
     cpu.step(1.0 / 30.0);
-    on_gpu.step(gpu, 1.0 / 30.0);
+    // The step goes through a frame's simulate stage, before an empty view.
+    let mut renderer = glint::Renderer::new(gpu);
+    on_gpu.advance(&gpu.queue, 1, 1.0 / 30.0);
+    renderer.simulate(&mut on_gpu);
+    let mut target = glint::OffscreenTarget::new(gpu, 32, 32, 1).unwrap();
+    let views = [glint::View::new(glint::Camera::perspective(60.0, 0.1, 10.0))];
+    let nothing: &[glint::Entity] = &[];
+    renderer.render_views(nothing, &views, glint::Lighting::new(&[], Default::default()), &mut target).unwrap();
+    assert!(renderer.frame_outline().iter().any(|g| g.ends_with("› simulate")), "{:?}", renderer.frame_outline());
     let stepped = on_gpu.read(gpu).unwrap();
     let worst =
         cpu.fish().iter().zip(stepped.fish()).map(|(a, b)| (a.velocity - b.velocity).length()).fold(0.0, f32::max);

@@ -256,7 +256,26 @@ impl SceneDesc {
             cloth.check_pose(time, work, &self.path)?;
             work = work.saturating_add(cloth.pose_work(time));
         }
-        super::scn_school::check_pose(&self.schools, time, &self.path)?;
-        super::scn_emitter::check_pose(&self.emitters, time, &self.path)
+        let fish = super::scn_school::pose_work(&self.schools, time);
+        within(&self.path, (super::MAX_POSE_FISH_STEPS, "fish-steps"), fish)?;
+        let particles = super::scn_emitter::pose_work(&self.emitters, time);
+        within(&self.path, (super::MAX_POSE_PARTICLE_STEPS, "particle-steps"), particles)
     }
+}
+
+/// An error at the first of `blocks` (line, work, what it is) where the work
+/// so far passes `limit` (of `unit`), else `Ok`.
+fn within(
+    scene: &std::path::Path,
+    (limit, unit): (u64, &str),
+    blocks: impl Iterator<Item = (usize, u64, String)>,
+) -> Result<(), Diagnostic> {
+    let mut work = 0u64;
+    for (line, more, what) in blocks {
+        work = work.saturating_add(more);
+        if work > limit {
+            return Err(Diagnostic::at(scene, line, format!("{what}, more than the {limit} {unit} a pose may take")));
+        }
+    }
+    Ok(())
 }

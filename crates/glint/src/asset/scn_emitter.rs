@@ -10,7 +10,6 @@ use crate::render::ParticleBlend;
 use crate::sim::particles::{Burst, EmitterParams, Schedule, SpawnShape, MAX_PARTICLES};
 use crate::text::quote;
 use glam::{Vec3, Vec4};
-use std::path::Path;
 
 /// Most particle-steps one pose may take over a scene's emitters (slots ×
 /// steps to the time): a far `--time` is an error rather than minutes.
@@ -188,22 +187,14 @@ pub(crate) fn parse(f: &mut Fields, line: usize) -> Result<(EmitterParams, Parti
     Ok((params, blend, dt))
 }
 
-/// Check that posing every emitter at `time` stays within
-/// [`MAX_POSE_PARTICLE_STEPS`], without stepping.
-pub(crate) fn check_pose(emitters: &[EmitterDesc], time: f32, scene: &Path) -> Result<(), Diagnostic> {
-    let mut work = 0u64;
-    for e in emitters {
-        work = work.saturating_add(e.pose_work(time));
-        if work > MAX_POSE_PARTICLE_STEPS {
-            let message = format!(
-                "emitter: time {time} s is {} steps of {} particle slots, more than the {MAX_POSE_PARTICLE_STEPS} particle-steps a pose may take",
-                e.steps_to(time),
-                Schedule::new(&e.params).slots()
-            );
-            return Err(Diagnostic::at(scene, e.line, message));
-        }
-    }
-    Ok(())
+/// What posing every emitter at `time` takes, for [`SceneDesc::check_pose`](super::SceneDesc::check_pose):
+/// each block's line, particle-steps, and what they are.
+pub(crate) fn pose_work(emitters: &[EmitterDesc], time: f32) -> impl Iterator<Item = (usize, u64, String)> + '_ {
+    emitters.iter().map(move |e| {
+        let slots = Schedule::new(&e.params).slots();
+        let what = format!("emitter: time {time} s is {} steps of {slots} particle slots", e.steps_to(time));
+        (e.line, e.pose_work(time), what)
+    })
 }
 
 #[cfg(test)]

@@ -8,7 +8,6 @@ use super::Diagnostic;
 use crate::scene::Aabb;
 use crate::sim::school::{Hunter, Obstacle, SchoolParams, Weights, MAX_FISH};
 use glam::Vec3;
-use std::path::Path;
 
 /// Most fish-steps one pose may take over a scene's schools (fish × steps to
 /// the time): about ten minutes of stepping on the 2-core reference machine
@@ -156,22 +155,13 @@ pub(crate) fn parse(f: &mut Fields, line: usize) -> Result<(SchoolParams, f32, f
     Ok((params, dt, size, predator_size))
 }
 
-/// Check that posing every school at `time` stays within
-/// [`MAX_POSE_FISH_STEPS`], without stepping.
-pub(crate) fn check_pose(schools: &[SchoolDesc], time: f32, scene: &Path) -> Result<(), Diagnostic> {
-    let mut work = 0u64;
-    for s in schools {
-        work = work.saturating_add(s.pose_work(time));
-        if work > MAX_POSE_FISH_STEPS {
-            let message = format!(
-                "school: time {time} s is {} steps of {} fish, more than the {MAX_POSE_FISH_STEPS} fish-steps a pose may take",
-                s.steps_to(time),
-                s.params.count
-            );
-            return Err(Diagnostic::at(scene, s.line, message));
-        }
-    }
-    Ok(())
+/// What posing every school at `time` takes, for [`SceneDesc::check_pose`](super::SceneDesc::check_pose):
+/// each block's line, fish-steps, and what they are.
+pub(crate) fn pose_work(schools: &[SchoolDesc], time: f32) -> impl Iterator<Item = (usize, u64, String)> + '_ {
+    schools.iter().map(move |s| {
+        let what = format!("school: time {time} s is {} steps of {} fish", s.steps_to(time), s.params.count);
+        (s.line, s.pose_work(time), what)
+    })
 }
 
 #[cfg(test)]

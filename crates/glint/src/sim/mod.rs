@@ -4,6 +4,7 @@
 //! with compute shaders.
 
 pub mod cloth;
+mod compute;
 pub mod particles;
 mod scan;
 pub mod school;

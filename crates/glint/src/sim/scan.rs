@@ -20,22 +20,7 @@ pub(crate) struct ScanGroup {
 
 impl GpuScan {
     pub(crate) fn new(device: &wgpu::Device) -> Self {
-        let entry = |binding: u32| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: wgpu::ShaderStages::COMPUTE,
-            ty: wgpu::BindingType::Buffer {
-                ty: match binding {
-                    0 => wgpu::BufferBindingType::Uniform,
-                    _ => wgpu::BufferBindingType::Storage { read_only: false },
-                },
-                has_dynamic_offset: false,
-                min_binding_size: None,
-            },
-            count: None,
-        };
-        let entries: Vec<_> = (0..4).map(entry).collect();
-        let layout = device
-            .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some("scan"), entries: &entries });
+        let layout = super::compute::layout(device, "scan", 4, 1, None);
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("scan.wgsl"),
             source: wgpu::ShaderSource::Wgsl(include_str!("scan.wgsl").into()),
@@ -68,16 +53,7 @@ impl GpuScan {
             mapped_at_creation: false,
         });
         let buffers = [&size, counts, starts, &sums];
-        let entries: Vec<_> = buffers
-            .iter()
-            .enumerate()
-            .map(|(k, b)| wgpu::BindGroupEntry { binding: k as u32, resource: b.as_entire_binding() })
-            .collect();
-        let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("scan"),
-            layout: &self.layout,
-            entries: &entries,
-        });
+        let group = super::compute::bind(device, "scan", &self.layout, buffers.iter().map(|b| b.as_entire_binding()));
         ScanGroup { group, n }
     }
 

@@ -112,7 +112,9 @@ impl GpuParticles {
         };
         let emitter = uniform("particles: emitter", std::mem::size_of::<EmitterGpu>() as u64);
         queue.write_buffer(&emitter, 0, bytemuck::bytes_of(&emitter_block(&params, &schedule)));
-        let layout = bind_group_layout(device);
+        // The emitter and step blocks, the slots, the layer's records, the
+        // sort's keys, counts and starts.
+        let layout = crate::sim::compute::layout(device, "particles", 7, 2, Some(1));
         let bound = [emitter, state.clone(), records.clone(), keys, counts.clone(), starts.clone()];
         let step_buffer = step_buffer(device, FIRST_STEP_BLOCKS);
         let group = bind_group(device, &layout, &bound, &step_buffer);
@@ -276,12 +278,10 @@ fn bind_group(
         offset: 0,
         size: wgpu::BufferSize::new(std::mem::size_of::<StepGpu>() as u64),
     };
-    let mut entries = vec![wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::Buffer(step) }];
-    for (k, buffer) in bound.iter().enumerate() {
-        let binding = if k == 0 { 0 } else { k as u32 + 1 };
-        entries.push(wgpu::BindGroupEntry { binding, resource: buffer.as_entire_binding() });
-    }
-    device.create_bind_group(&wgpu::BindGroupDescriptor { label: Some("particles"), layout, entries: &entries })
+    let resources = std::iter::once(bound[0].as_entire_binding())
+        .chain([wgpu::BindingResource::Buffer(step)])
+        .chain(bound[1..].iter().map(|b| b.as_entire_binding()));
+    crate::sim::compute::bind(device, "particles", layout, resources)
 }
 
 /// The `Emitter` block of `params`.
@@ -315,23 +315,4 @@ fn emitter_block(params: &EmitterParams, schedule: &Schedule) -> EmitterGpu {
         look: [params.size, params.size_end, params.noise_scale, f32::from(u8::from(params.ground.is_some()))],
         ground: [ground, bounce, bursts_alive as f32, schedule.slots() as f32],
     }
-}
-
-/// The emitter and step blocks, the slots, the layer's records, the sort's keys, counts and starts.
-fn bind_group_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
-    let entry = |binding: u32| wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::Buffer {
-            ty: match binding {
-                0 | 1 => wgpu::BufferBindingType::Uniform,
-                _ => wgpu::BufferBindingType::Storage { read_only: false },
-            },
-            has_dynamic_offset: binding == 1,
-            min_binding_size: None,
-        },
-        count: None,
-    };
-    let entries: Vec<_> = (0..7).map(entry).collect();
-    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some("particles"), entries: &entries })
 }

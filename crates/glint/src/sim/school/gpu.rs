@@ -3,6 +3,7 @@
 
 use super::{School, SchoolParams, Swimmer};
 use crate::gpu::GpuError;
+use crate::render::GpuSimulation;
 use crate::sim::scan::{GpuScan, ScanGroup};
 use crate::Gpu;
 use glam::Vec3;
@@ -84,6 +85,8 @@ pub struct GpuSchool {
     /// Which fish buffer holds the current state.
     current: usize,
     cells: u32,
+    /// Steps [`GpuSimulation::encode`] records next.
+    pending: u32,
 }
 
 impl GpuSchool {
@@ -133,19 +136,10 @@ impl GpuSchool {
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let layout = bind_group_layout(device);
+        let layout = crate::sim::compute::layout(device, "school", 8, 1, None);
         let group = |from: usize| {
             let buffers = [&uniform, &fish[from], &fish[1 - from], &sorted, &keys, &counts, &starts, &hunt];
-            let entries: Vec<wgpu::BindGroupEntry> = buffers
-                .iter()
-                .enumerate()
-                .map(|(k, b)| wgpu::BindGroupEntry { binding: k as u32, resource: b.as_entire_binding() })
-                .collect();
-            device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("school"),
-                layout: &layout,
-                entries: &entries,
-            })
+            crate::sim::compute::bind(device, "school", &layout, buffers.iter().map(|b| b.as_entire_binding()))
         };
         let groups = [group(0), group(1)];
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
@@ -159,24 +153,45 @@ impl GpuSchool {
             .collect();
         let scan = GpuScan::new(device);
         let scan_group = scan.group(device, &counts, &starts, cells + 1);
-        Ok(Self { params, block, uniform, fish, hunt, groups, pipelines, scan, scan_group, current: 0, cells })
+        Ok(Self {
+            params,
+            block,
+            uniform,
+            fish,
+            hunt,
+            groups,
+            pipelines,
+            scan,
+            scan_group,
+            current: 0,
+            cells,
+            pending: 0,
+        })
     }
 
     /// Record and submit one step of `dt` seconds (not waited for).
     pub fn step(&mut self, gpu: &Gpu, dt: f32) {
-        if self.block.more[3] != dt {
-            self.block.more[3] = dt;
-            gpu.queue.write_buffer(&self.uniform, 0, bytemuck::bytes_of(&self.block));
-        }
+        self.advance(&gpu.queue, 1, dt);
         let mut encoder =
             gpu.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("school step") });
-        self.encode(&mut encoder);
+        self.encode(&gpu.device, &gpu.queue, &mut encoder);
         gpu.queue.submit([encoder.finish()]);
     }
 
-    /// The step's passes into `encoder`, after which the other fish buffer
+    /// Have the next [`GpuSimulation::encode`] (a frame's simulate stage,
+    /// [`Renderer::simulate`](crate::Renderer::simulate)) record `steps` more
+    /// steps of `dt` seconds.
+    pub fn advance(&mut self, queue: &wgpu::Queue, steps: u32, dt: f32) {
+        if self.block.more[3] != dt {
+            self.block.more[3] = dt;
+            queue.write_buffer(&self.uniform, 0, bytemuck::bytes_of(&self.block));
+        }
+        self.pending += steps;
+    }
+
+    /// One step's passes into `encoder`, after which the other fish buffer
     /// holds the state.
-    fn encode(&mut self, encoder: &mut wgpu::CommandEncoder) {
+    fn encode_step(&mut self, encoder: &mut wgpu::CommandEncoder) {
         let fish_groups = (self.block.count).div_ceil(WORKGROUP);
         let cell_groups = (self.cells + 1).div_ceil(WORKGROUP);
         let threads = [cell_groups, fish_groups, fish_groups, fish_groups, 1];
@@ -208,6 +223,14 @@ impl GpuSchool {
     }
 }
 
+impl GpuSimulation for GpuSchool {
+    fn encode(&mut self, _: &wgpu::Device, _: &wgpu::Queue, encoder: &mut wgpu::CommandEncoder) {
+        for _ in 0..std::mem::take(&mut self.pending) {
+            self.encode_step(encoder);
+        }
+    }
+}
+
 /// `params` for `count` fish on grid `shape`, stepping `dt` seconds.
 fn params_block(params: &SchoolParams, shape: super::GridShape, count: u32, dt: f32) -> ParamsGpu {
     let w = params.weights;
@@ -232,23 +255,4 @@ fn params_block(params: &SchoolParams, shape: super::GridShape, count: u32, dt: 
         flags: [u32::from(params.floor.is_some()), params.obstacles.len() as u32, shape.cells(), 0],
         obstacles,
     }
-}
-
-/// One uniform block and seven storage buffers, all for compute.
-fn bind_group_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
-    let entry = |binding: u32| wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::Buffer {
-            ty: match binding {
-                0 => wgpu::BufferBindingType::Uniform,
-                _ => wgpu::BufferBindingType::Storage { read_only: false },
-            },
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        },
-        count: None,
-    };
-    let entries: Vec<_> = (0..8).map(entry).collect();
-    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some("school"), entries: &entries })
 }
