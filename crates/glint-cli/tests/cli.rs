@@ -583,6 +583,7 @@ fn view_under_xvfb(scene: &Path, args: &[String]) -> Option<std::process::Output
         .args(["-a", "-s", "-screen 0 640x480x24", env!("CARGO_BIN_EXE_glint"), "view"])
         .arg(scene)
         .args(args)
+        .current_dir(repo(""))
         .env("NODEVICE_SELECT", "1")
         .output()
         .expect("run xvfb-run");
@@ -1015,4 +1016,23 @@ fn bench_live_runs_a_scene_as_it_plays() {
     assert!(live["frame_ms_median"].as_f64().unwrap() > 0.0);
     let far = ["bench", scene.to_str().unwrap(), "--live", "60", "--time", "1e9", "--frames", "1"];
     assert_eq!(glint(&far).status.code(), Some(1), "a pose past the budget is bad input");
+}
+
+/// The viewer runs a scene's fish and bubbles live: two screenshots some
+/// frames apart differ.
+#[test]
+fn view_runs_the_aquarium_live() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let (early, late) = (dir.path().join("early.png"), dir.path().join("late.png"));
+    let args: Vec<String> = ["--size", "96x64", "--msaa", "1", "--frames", "12", "--at"]
+        .into_iter()
+        .map(str::to_owned)
+        .chain([format!("2:screenshot={}", early.display()), "--screenshot".into(), late.display().to_string()])
+        .collect();
+    let Some(out) = view_under_xvfb(&repo("scenes/aquarium.scn"), &args) else { return };
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let (a, b) = (image::open(&early).expect("png").into_rgb8(), image::open(&late).expect("png").into_rgb8());
+    let moved =
+        a.pixels().zip(b.pixels()).filter(|(p, q)| p.0.iter().zip(q.0).any(|(x, y)| x.abs_diff(y) > 24)).count();
+    assert!(moved > 20, "the fish swam: {moved} pixels changed");
 }
