@@ -88,7 +88,8 @@ fn gpu_particles_match_the_cpu_slot_for_slot() {
     let dt = 1.0 / 60.0;
     let mut cpu = ParticleSystem::new(params.clone(), dt).unwrap();
     let slots = cpu.schedule().slots() as u32;
-    let layer = renderer.add_particles(slots, ParticleLook { blend: ParticleBlend::Additive, texture: None });
+    let layer =
+        renderer.add_particles(slots, ParticleLook { blend: ParticleBlend::Additive, texture: None, soft: 0.0 });
     let (buffer, capacity) = renderer.particle_buffer(layer).map(|(b, c)| (b.clone(), c)).unwrap();
     let mut on_gpu =
         GpuParticles::new(renderer.device_and_queue(), params, dt, (&buffer, capacity), ParticleBlend::Additive)
@@ -111,4 +112,45 @@ fn gpu_particles_match_the_cpu_slot_for_slot() {
         alive += usize::from(a.id > 0 && a.age < cpu.params().life(a.id - 1));
     }
     assert!(alive > 300, "{alive} alive compared");
+}
+
+/// `tests/scenes/soft.scn` at 3 s on `gpu`, with its emitter's soft distance
+/// set to `soft`.
+fn soft_at(gpu: &glint::Gpu, soft: f32) -> image::RgbaImage {
+    let mut desc = common::load_scene(&common::repo_root().join("tests/scenes/soft.scn"));
+    assert!(desc.warnings.is_empty(), "{:?}", desc.warnings);
+    desc.emitters[0].soft = soft;
+    let mut renderer = Renderer::new(gpu);
+    let mut world = World::place(desc, &mut renderer);
+    world.pose(3.0, &mut renderer).expect("posed");
+    let mut target = OffscreenTarget::new(gpu, 256, 256, 4).expect("target");
+    let views = world.views(None);
+    world.draw(&mut renderer, &views, &mut target).expect("frame");
+    target.read_rgba8(gpu).expect("readback")
+}
+
+#[test]
+fn soft_particles_fade_where_they_meet_the_floor() {
+    let Some(gpu) = common::gpu() else { return };
+    let (soft, hard) = (soft_at(gpu, 0.6), soft_at(gpu, 0.0));
+    let differs = |(a, b): (&image::Rgba<u8>, &image::Rgba<u8>)| a.0.iter().zip(b.0).any(|(x, y)| x.abs_diff(y) > 6);
+    let changed = soft.pixels().zip(hard.pixels()).filter(|&p| differs(p)).count();
+    if !gpu.occlusion_culls() {
+        // No readable depth here: soft layers meet geometry hard.
+        assert_eq!(changed, 0);
+        return;
+    }
+    assert!(changed > 2000, "the puffs thin out over the floor: {changed} pixels");
+    // Above the floor line (the top rows) nothing is near geometry: the same.
+    let top = (0..256 * 40)
+        .filter(|&i| differs((soft.get_pixel(i % 256, i / 256), hard.get_pixel(i % 256, i / 256))))
+        .count();
+    assert_eq!(top, 0, "only where particles meet geometry");
+    common::assert_matches_reference("soft", &soft);
+}
+
+#[test]
+fn soft_layers_meet_geometry_hard_on_gl() {
+    let Some(gl) = common::gl_gpu() else { return };
+    assert!(common::max_difference(&soft_at(gl, 0.6), &soft_at(gl, 0.0)) <= 1);
 }

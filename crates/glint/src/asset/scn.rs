@@ -182,12 +182,13 @@ impl Loader<'_> {
             "instances" => self.instances(&mut f)?,
             "school" => self.school(&mut f)?,
             "emitter" => {
-                let (params, blend, dt) = scn_emitter::parse(&mut f, block.line)?;
+                let (params, looks, dt) = scn_emitter::parse(&mut f, block.line)?;
                 if f.get("texture").is_some_and(|p| self.targets.map(self.path, p.line, &p.value).is_some()) {
                     return Err(Diagnostic::at(self.path, block.line, "\"texture\": particles show an image file, not a render target"));
                 }
                 let texture = self.texture(&mut f, "texture", true)?;
-                self.scene.emitters.push(scn_emitter::EmitterDesc { line: block.line, params, blend, texture, dt });
+                let (blend, soft) = (looks.blend, looks.soft);
+                self.scene.emitters.push(scn_emitter::EmitterDesc { line: block.line, params, blend, soft, texture, dt });
             }
             "cloth" => {
                 let nodes: u64 = self.cloths.iter().map(|(c, _)| c.setup.mesh.nodes.len() as u64).sum();

@@ -24,6 +24,8 @@ pub struct EmitterDesc {
     pub params: EmitterParams,
     /// How its particles blend.
     pub blend: ParticleBlend,
+    /// World units over which its particles fade in front of geometry (0: none).
+    pub soft: f32,
     /// The sprite each particle shows (a scene texture), if any.
     pub texture: Option<TextureRef>,
     /// Seconds a step.
@@ -96,9 +98,15 @@ fn shape(f: &mut Fields) -> Result<SpawnShape, Diagnostic> {
     }
 }
 
+/// How an emitter block's particles look, but their texture (the loader's).
+pub(crate) struct Looks {
+    pub blend: ParticleBlend,
+    pub soft: f32,
+}
+
 /// An emitter block's keys but `texture` (the loader's): the emitter, its
-/// blend and step.
-pub(crate) fn parse(f: &mut Fields, line: usize) -> Result<(EmitterParams, ParticleBlend, f32), Diagnostic> {
+/// looks and step.
+pub(crate) fn parse(f: &mut Fields, line: usize) -> Result<(EmitterParams, Looks, f32), Diagnostic> {
     let d = EmitterParams::default();
     let rate = f.number("rate", 0.0..=1e8)?.unwrap_or(d.rate);
     let burst = match f.get("burst") {
@@ -184,7 +192,8 @@ pub(crate) fn parse(f: &mut Fields, line: usize) -> Result<(EmitterParams, Parti
     }
     let dt = f.number("dt", 1e-4..=1.0)?.unwrap_or(1.0 / 60.0);
     params.check().map_err(|m| Diagnostic::at(f.path, line, format!("emitter: {m}")))?;
-    Ok((params, blend, dt))
+    let soft = f.number("soft", 0.0..=1e4)?.unwrap_or(0.0);
+    Ok((params, Looks { blend, soft }, dt))
 }
 
 /// What posing every emitter at `time` takes, for [`SceneDesc::check_pose`](super::SceneDesc::check_pose):
@@ -230,7 +239,9 @@ mod tests {
         assert_eq!(p.shape, SpawnShape::Box(Vec3::new(0.1, 0.2, 0.3)));
         assert_eq!((p.spread, p.drag, p.noise, p.noise_scale, p.seed), (30.0, 0.2, 0.5, 2.0, 9));
         assert_eq!((p.color.w, p.color_end.w, p.size, p.size_end, p.ground), (1.0, 0.5, 0.2, 0.4, Some((-1.0, 0.6))));
-        assert_eq!((e.blend, e.dt, e.texture), (ParticleBlend::Alpha, 0.02, None));
+        assert_eq!((e.blend, e.dt, e.texture, e.soft), (ParticleBlend::Alpha, 0.02, None, 0.0));
+        assert_eq!(emitter("\"soft\" \"0.5\"\n").unwrap().emitters[0].soft, 0.5);
+        assert!(error("\"soft\" \"-1\"\n").starts_with("e.scn:3: \"soft\""));
         assert_eq!(emitter("").unwrap().emitters[0].params.shape, SpawnShape::Point);
     }
 

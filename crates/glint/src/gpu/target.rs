@@ -217,6 +217,35 @@ impl OffscreenTarget {
         (color, depth)
     }
 
+    /// The attachments of a pass between two others: colour, depth and
+    /// stencil loaded and kept (not resolved yet).
+    pub(crate) fn middle_of_three(
+        &self,
+    ) -> (wgpu::RenderPassColorAttachment<'_>, wgpu::RenderPassDepthStencilAttachment<'_>) {
+        let (color, depth) = self.first_of_two(wgpu::Color::BLACK);
+        let keep = |ops: Option<wgpu::Operations<_>>| ops.map(|o| wgpu::Operations { load: wgpu::LoadOp::Load, ..o });
+        let color = wgpu::RenderPassColorAttachment {
+            ops: wgpu::Operations { load: wgpu::LoadOp::Load, ..color.ops },
+            ..color
+        };
+        let depth = wgpu::RenderPassDepthStencilAttachment {
+            depth_ops: keep(depth.depth_ops),
+            stencil_ops: depth.stencil_ops.map(|o| wgpu::Operations { load: wgpu::LoadOp::Load, ..o }),
+            ..depth
+        };
+        (color, depth)
+    }
+
+    /// The attachments of a last pass that reads the depth it is tested
+    /// against ([`depth_only_view`](Self::depth_only_view)): as
+    /// [`second_of_two`](Self::second_of_two), depth and stencil read-only.
+    pub(crate) fn last_reading_depth(
+        &self,
+    ) -> (wgpu::RenderPassColorAttachment<'_>, wgpu::RenderPassDepthStencilAttachment<'_>) {
+        let (color, depth) = self.second_of_two();
+        (color, wgpu::RenderPassDepthStencilAttachment { depth_ops: None, stencil_ops: None, ..depth })
+    }
+
     /// The depth aspect alone, to read in a shader; `None` unless the target
     /// was made for occlusion culling.
     pub(crate) fn depth_only_view(&self) -> Option<&wgpu::TextureView> {

@@ -28,6 +28,10 @@ pub(super) enum Part {
     First,
     /// Its late draws, the sky and what follows.
     Second,
+    /// What comes before soft particles, after occlusion culling's early draws.
+    Middle,
+    /// Soft particles and the glare, reading the depth they are tested against.
+    Particles,
 }
 
 /// What the pass has bound, to skip redundant state changes.
@@ -75,8 +79,15 @@ impl Renderer {
             }
             _ => (Part::Whole, &[false][..]),
         };
+        // Soft particles read the depth: they and the glare get a pass of their own.
+        let particle_depth = self.particle_depth(target);
+        let part = match (late, &particle_depth) {
+            (Part::Whole, Some(_)) => Part::First,
+            (Part::Second, Some(_)) => Part::Middle,
+            (part, _) => part,
+        };
         {
-            let mut pass = self.begin_forward_pass(encoder, target, (background, late), stats);
+            let mut pass = self.begin_forward_pass(encoder, target, (background, part), stats);
             if late == Part::Second {
                 bound = Bound::default();
                 self.draw_stages(&self.view.forward, &mut pass, (0..sky_at, &[true]), &mut bound, stats);
@@ -87,7 +98,14 @@ impl Renderer {
                 bound = Bound { stencil_reference: bound.stencil_reference, ..Bound::default() };
             }
             self.draw_stages(&self.view.forward, &mut pass, (sky_at..end, after_sky), &mut bound, stats);
-            self.draw_particles(&mut pass, target.format(), stats);
+            if particle_depth.is_none() {
+                self.draw_particles(&mut pass, target.format(), None, stats);
+                self.draw_glare(&mut pass, target, environment, stats);
+            }
+        }
+        if let Some(depth) = &particle_depth {
+            let mut pass = self.begin_forward_pass(encoder, target, (background, Part::Particles), stats);
+            self.draw_particles(&mut pass, target.format(), Some(depth), stats);
             self.draw_glare(&mut pass, target, environment, stats);
         }
         if let Some(timer) = &mut self.gpu_timer {
@@ -113,13 +131,18 @@ impl Renderer {
             Part::Whole => (target.color_attachment(clear), target.depth_attachment()),
             Part::First => target.first_of_two(clear),
             Part::Second => target.second_of_two(),
+            Part::Middle => target.middle_of_three(),
+            Part::Particles => target.last_reading_depth(),
         };
-        let (begins, ends) = (part != Part::Second, part != Part::First);
+        let (begins, ends) =
+            (matches!(part, Part::Whole | Part::First), matches!(part, Part::Whole | Part::Second | Part::Particles));
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some(match part {
                 Part::Whole => "forward pass",
                 Part::First => "forward pass: early",
                 Part::Second => "forward pass: late",
+                Part::Middle => "forward pass: before soft particles",
+                Part::Particles => "forward pass: soft particles",
             }),
             color_attachments: &[Some(color)],
             depth_stencil_attachment: Some(depth),

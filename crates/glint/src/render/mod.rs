@@ -222,8 +222,8 @@ impl Renderer {
         let paths =
             ListPaths { indirect: gpu.draws_indirect(), storage: gpu.vertex_storage(), gpu_cull: gpu.culls_on_gpu() };
         let view = ViewGpu::new(&shared, paths);
-        let particle_pipelines =
-            particles::ParticlePipelines::new(&device, &pipelines.scene_layout, &pipelines.camera_layout);
+        let layouts = (&pipelines.scene_layout, &pipelines.camera_layout);
+        let particle_pipelines = particles::ParticlePipelines::new(&device, layouts, gpu.occlusion_culls());
         Self {
             particle_layers: Vec::new(),
             particle_pipelines,

@@ -120,7 +120,7 @@ impl Renderer {
                 pass.draw_indexed(indices, base_vertex, b.first_instance..b.first_instance + 1);
             }
             pass.pop_debug_group();
-            self.draw_particles(&mut pass, target.format(), stats);
+            self.draw_particles(&mut pass, target.format(), None, stats);
             self.draw_glare(&mut pass, target, &lighting.environment, stats);
             let n = list.batches.len() as u32;
             (stats.pipelines_bound, stats.bind_groups_set) = (stats.pipelines_bound + n, stats.bind_groups_set + n);

@@ -1,6 +1,8 @@
 //! Core layer: particle layers, drawn as camera-facing billboards at the end
 //! of every view's forward pass (after the transparent stages, before the
-//! glare), depth-tested against the scene without writing depth. A layer is a
+//! glare), depth-tested against the scene without writing depth; a soft
+//! layer fades in front of geometry where the target's depth is readable (a
+//! pass of their own then: `encode.rs`). A layer is a
 //! buffer of [`ParticleGpu`] records, one instance of a four-vertex strip
 //! each: written from the CPU ([`Renderer::write_particles`]) or by a compute
 //! shader ([`Renderer::particle_buffer`], `sim/particles`). Alpha-blended
@@ -44,6 +46,11 @@ pub struct ParticleLook {
     /// The sprite each billboard shows, times its colour (a soft round spot
     /// without one).
     pub texture: Option<Texture>,
+    /// World units over which a particle fades out in front of geometry
+    /// (0: none). Soft where the target's depth is readable (the devices that
+    /// occlusion-cull: [`Gpu::occlusion_culls`](crate::Gpu::occlusion_culls));
+    /// elsewhere (GL, WebGL2) particles meet geometry hard.
+    pub soft: f32,
 }
 
 /// A particle layer of a [`Renderer`] ([`Renderer::add_particles`]).
@@ -56,15 +63,25 @@ pub(crate) struct ParticleLayer {
     capacity: u32,
     count: u32,
     blend: ParticleBlend,
+    soft: f32,
     group: wgpu::BindGroup,
 }
 
-/// The particle pipelines (one per target format and blend) and their sprite layout.
+/// A particle pipeline: for a target, a blend, and whether it reads depth.
+type PipelineKey = (TargetFormat, ParticleBlend, bool);
+
+/// The particle pipelines and their layouts: the sprite group, and for soft
+/// layers the scene's depth (single-sampled or multisampled).
 pub(crate) struct ParticlePipelines {
     texture_layout: wgpu::BindGroupLayout,
-    layout: wgpu::PipelineLayout,
-    module: Option<wgpu::ShaderModule>,
-    cache: HashMap<(TargetFormat, ParticleBlend), wgpu::RenderPipeline>,
+    depth_layouts: [wgpu::BindGroupLayout; 2],
+    /// Hard; soft on one sample; soft on several.
+    layouts: [wgpu::PipelineLayout; 3],
+    modules: HashMap<Option<bool>, wgpu::ShaderModule>,
+    cache: HashMap<PipelineKey, wgpu::RenderPipeline>,
+    /// Whether targets' depth is readable here (the devices that
+    /// occlusion-cull; GL's shaders cannot load from depth textures).
+    soft: bool,
 }
 
 /// The soft round spot a layer without a texture shows.
@@ -78,35 +95,76 @@ fn spot() -> Texture {
 }
 
 impl ParticlePipelines {
-    pub(crate) fn new(device: &wgpu::Device, scene: &wgpu::BindGroupLayout, camera: &wgpu::BindGroupLayout) -> Self {
+    pub(crate) fn new(
+        device: &wgpu::Device,
+        (scene, camera): (&wgpu::BindGroupLayout, &wgpu::BindGroupLayout),
+        soft: bool,
+    ) -> Self {
+        let look = wgpu::BindGroupLayoutEntry {
+            binding: 2,
+            visibility: wgpu::ShaderStages::FRAGMENT,
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Uniform,
+                has_dynamic_offset: false,
+                min_binding_size: None,
+            },
+            count: None,
+        };
         let texture_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("renderer: particle sprite layout (group 2)"),
-            entries: &[crate::gpu::texture_entry(0), crate::gpu::sampler_entry(1)],
+            entries: &[crate::gpu::texture_entry(0), crate::gpu::sampler_entry(1), look],
         });
-        let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("renderer: particle pipeline layout"),
-            bind_group_layouts: &[Some(scene), Some(camera), Some(&texture_layout)],
-            immediate_size: 0,
-        });
-        Self { texture_layout, layout, module: None, cache: HashMap::new() }
+        let depth_layout = |multisampled: bool| {
+            device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some("renderer: particle scene depth layout (group 3)"),
+                entries: &[wgpu::BindGroupLayoutEntry {
+                    binding: 0,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Depth,
+                        view_dimension: wgpu::TextureViewDimension::D2,
+                        multisampled,
+                    },
+                    count: None,
+                }],
+            })
+        };
+        let depth_layouts = [depth_layout(false), depth_layout(true)];
+        let layout = |depth: Option<&wgpu::BindGroupLayout>| {
+            device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("renderer: particle pipeline layout"),
+                bind_group_layouts: &[Some(scene), Some(camera), Some(&texture_layout), depth],
+                immediate_size: 0,
+            })
+        };
+        let layouts = [layout(None), layout(Some(&depth_layouts[0])), layout(Some(&depth_layouts[1]))];
+        Self { texture_layout, depth_layouts, layouts, modules: HashMap::new(), cache: HashMap::new(), soft }
     }
 
-    /// Build the pipeline for `target` and `blend` unless it exists; returns
-    /// whether it was built now.
+    /// Build the pipeline of `key` unless it exists; returns whether it was
+    /// built now.
     fn build(
         &mut self,
         device: &wgpu::Device,
         library: &mut crate::shader::ShaderLibrary,
-        (target, blend): (TargetFormat, ParticleBlend),
+        (target, blend, soft): PipelineKey,
     ) -> Result<bool, RenderError> {
-        if self.cache.contains_key(&(target, blend)) {
+        if self.cache.contains_key(&(target, blend, soft)) {
             return Ok(false);
         }
-        if self.module.is_none() {
-            let module = library.particles().map_err(RenderError::Shader)?;
-            self.module = Some(super::pipelines::shader_module(device, "renderer: particle shader", module));
-        }
-        let module = self.module.as_ref().expect("built above");
+        let variant = soft.then_some(target.samples > 1);
+        let module = match self.modules.entry(variant) {
+            std::collections::hash_map::Entry::Occupied(built) => built.into_mut(),
+            std::collections::hash_map::Entry::Vacant(slot) => {
+                let module = library.particles(variant).map_err(RenderError::Shader)?;
+                slot.insert(super::pipelines::shader_module(device, "renderer: particle shader", module))
+            }
+        };
+        let layout = &self.layouts[match variant {
+            None => 0,
+            Some(false) => 1,
+            Some(true) => 2,
+        }];
         let color = match blend {
             ParticleBlend::Additive => wgpu::BlendComponent {
                 src_factor: wgpu::BlendFactor::One,
@@ -128,7 +186,7 @@ impl ParticlePipelines {
         let attributes = wgpu::vertex_attr_array![0 => Float32x4, 1 => Float32x4];
         let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
             label: Some("renderer: particle pipeline"),
-            layout: Some(&self.layout),
+            layout: Some(layout),
             vertex: wgpu::VertexState {
                 module,
                 entry_point: Some("vs_particle"),
@@ -155,7 +213,7 @@ impl ParticlePipelines {
             multiview_mask: None,
             cache: None,
         });
-        self.cache.insert((target, blend), pipeline);
+        self.cache.insert((target, blend, soft), pipeline);
         Ok(true)
     }
 }
@@ -175,6 +233,15 @@ impl Renderer {
             },
             mapped_at_creation: false,
         });
+        let soft = if look.soft.is_finite() { look.soft.max(0.0) } else { 0.0 };
+        let look_block = wgpu::util::DeviceExt::create_buffer_init(
+            &registry.device,
+            &wgpu::util::BufferInitDescriptor {
+                label: Some("renderer: particle look"),
+                contents: bytemuck::cast_slice(&[soft, 0.0, 0.0, 0.0]),
+                usage: wgpu::BufferUsages::UNIFORM,
+            },
+        );
         let sprite = look.texture.unwrap_or_else(spot);
         let (view, _, blits) = registry.uploader.upload(&registry.device, &registry.queue, &sprite);
         registry.mip_blits.extend(blits);
@@ -184,9 +251,10 @@ impl Renderer {
             entries: &[
                 wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(&view) },
                 wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::Sampler(&registry.sampler) },
+                wgpu::BindGroupEntry { binding: 2, resource: look_block.as_entire_binding() },
             ],
         });
-        self.particle_layers.push(ParticleLayer { buffer, capacity, count: 0, blend: look.blend, group });
+        self.particle_layers.push(ParticleLayer { buffer, capacity, count: 0, blend: look.blend, soft, group });
         ParticlesId(self.particle_layers.len() as u32 - 1)
     }
 
@@ -211,7 +279,8 @@ impl Renderer {
         }
     }
 
-    /// Stage 1 for particles: the pipelines of every layer for `target`.
+    /// Stage 1 for particles: the pipelines of every layer for `target` (a
+    /// soft layer's both ways where depth is readable: a view's target may not be).
     pub(super) fn prepare_particles(
         &mut self,
         target: TargetFormat,
@@ -219,28 +288,54 @@ impl Renderer {
     ) -> Result<(), RenderError> {
         let registry = &mut self.registry;
         for layer in self.particle_layers.iter().filter(|l| l.count > 0) {
-            let built = self.particle_pipelines.build(
-                &registry.device,
-                &mut registry.pipelines.library,
-                (target, layer.blend),
-            )?;
-            stats.pipelines_compiled += u32::from(built);
+            for soft in [false, layer.soft > 0.0 && self.particle_pipelines.soft] {
+                let key = (target, layer.blend, soft);
+                let built = self.particle_pipelines.build(&registry.device, &mut registry.pipelines.library, key)?;
+                stats.pipelines_compiled += u32::from(built);
+            }
         }
         Ok(())
     }
 
+    /// The scene depth a frame's soft layers read from `target`, when some
+    /// layer to draw is soft and the depth is readable; the frame then draws
+    /// its particles in a pass of their own.
+    pub(super) fn particle_depth(&self, target: &crate::OffscreenTarget) -> Option<wgpu::BindGroup> {
+        let depth = target.depth_only_view().filter(|_| self.particle_pipelines.soft)?;
+        self.particle_layers.iter().any(|l| l.count > 0 && l.soft > 0.0).then(|| {
+            self.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("renderer: particle scene depth"),
+                layout: &self.particle_pipelines.depth_layouts[usize::from(target.samples() > 1)],
+                entries: &[wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(depth) }],
+            })
+        })
+    }
+
     /// Stage 7's last draws before the glare: every layer with records, one
-    /// draw each. Leaves groups 0 and 1 bound.
-    pub(super) fn draw_particles(&self, pass: &mut wgpu::RenderPass<'_>, target: TargetFormat, stats: &mut FrameStats) {
+    /// draw each, soft ones reading `depth` when given (group 3). Leaves
+    /// groups 0 and 1 bound.
+    pub(super) fn draw_particles(
+        &self,
+        pass: &mut wgpu::RenderPass<'_>,
+        target: TargetFormat,
+        depth: Option<&wgpu::BindGroup>,
+        stats: &mut FrameStats,
+    ) {
         for layer in self.particle_layers.iter().filter(|l| l.count > 0) {
-            let Some(pipeline) = self.particle_pipelines.cache.get(&(target, layer.blend)) else { continue };
+            let soft = depth.filter(|_| layer.soft > 0.0);
+            let Some(pipeline) = self.particle_pipelines.cache.get(&(target, layer.blend, soft.is_some())) else {
+                continue;
+            };
             pass.set_pipeline(pipeline);
             pass.set_bind_group(2, &layer.group, &[]);
+            if let Some(depth) = soft {
+                pass.set_bind_group(3, depth, &[]);
+            }
             pass.set_vertex_buffer(0, layer.buffer.slice(..));
             pass.draw(0..4, 0..layer.count);
             stats.draw_calls += 1;
             stats.draws += 1;
-            stats.bind_groups_set += 1;
+            stats.bind_groups_set += 1 + u32::from(soft.is_some());
             stats.particles_drawn += layer.count;
         }
     }

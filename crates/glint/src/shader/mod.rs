@@ -255,9 +255,17 @@ impl ShaderLibrary {
         self.compose("glint/shader/sky.wgsl", include_str!("sky.wgsl"), HashMap::new())
     }
 
-    /// The particle billboards' module: `vs_particle` / `fs_particle`.
-    pub(crate) fn particles(&mut self) -> Result<wgpu::naga::Module, ShaderError> {
-        self.compose("glint/shader/particles.wgsl", include_str!("particles.wgsl"), HashMap::new())
+    /// The particle billboards' module: `vs_particle` / `fs_particle`; with
+    /// `soft`, reading the scene's depth (multisampled when `soft` says so).
+    pub(crate) fn particles(&mut self, soft: Option<bool>) -> Result<wgpu::naga::Module, ShaderError> {
+        let defs = match soft {
+            None => HashMap::new(),
+            Some(msaa) => std::iter::once("SOFT")
+                .chain(msaa.then_some("SOFT_MSAA"))
+                .map(|d| (d.to_string(), ShaderDefValue::Bool(true)))
+                .collect(),
+        };
+        self.compose("glint/shader/particles.wgsl", include_str!("particles.wgsl"), defs)
     }
 }
 

@@ -1,11 +1,34 @@
 // Particle billboards (render/particles.rs): one instance a particle, four
 // vertices of a strip each, facing the camera; the sprite times the
 // particle's colour, under the scene's fog. A record of size 0 draws nothing.
+// SOFT (SOFT_MSAA for a multisampled target): the scene's depth is read, and
+// a particle fades out over its layer's soft distance in front of geometry.
 
 #import glint::blocks::{scene, camera}
 
 @group(2) @binding(0) var sprite: texture_2d<f32>;
 @group(2) @binding(1) var sprite_sampler: sampler;
+// x: the soft distance, world units.
+@group(2) @binding(2) var<uniform> look: vec4<f32>;
+
+#ifdef SOFT
+#ifdef SOFT_MSAA
+@group(3) @binding(0) var scene_depth: texture_depth_multisampled_2d;
+#else
+@group(3) @binding(0) var scene_depth: texture_depth_2d;
+#endif
+
+// How far behind the particle's fragment at `clip` the scene's surface is.
+fn depth_behind(clip: vec4<f32>, world: vec3<f32>) -> f32 {
+    let pixel = vec2<i32>(clip.xy);
+    let depth = textureLoad(scene_depth, pixel, 0);
+    let size = vec2<f32>(textureDimensions(scene_depth));
+    let ndc = vec2<f32>(clip.x / size.x * 2.0 - 1.0, 1.0 - clip.y / size.y * 2.0);
+    let surface = camera.inv_view_proj * vec4<f32>(ndc, depth, 1.0);
+    let eye = camera.position.xyz;
+    return length(surface.xyz / surface.w - eye) - length(world - eye);
+}
+#endif
 
 struct ParticleIn {
     // xyz: centre; w: side in world units.
@@ -42,6 +65,9 @@ fn fs_particle(in: ParticleOut) -> @location(0) vec4<f32> {
     // Fog thins the particle towards nothing (what is behind already has it).
     let distance = length(camera.position.xyz - in.world_position) * scene.fog.w;
     color.a = color.a * exp(-distance * distance);
+#ifdef SOFT
+    color.a = color.a * clamp(depth_behind(in.clip, in.world_position) / max(look.x, 1e-4), 0.0, 1.0);
+#endif
     // Premultiplied: added as is (additive), or over what is behind (alpha).
     return vec4<f32>(color.rgb * color.a, color.a);
 }

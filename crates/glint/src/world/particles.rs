@@ -27,7 +27,7 @@ impl EmitterSim {
     pub(crate) fn new(desc: &EmitterDesc, scene: &SceneDesc, renderer: &mut Renderer) -> Self {
         let slots = crate::sim::particles::Schedule::new(&desc.params).slots() as u32;
         let texture = desc.texture.and_then(|i| scene.textures.get(i)).cloned();
-        let layer = renderer.add_particles(slots, ParticleLook { blend: desc.blend, texture });
+        let layer = renderer.add_particles(slots, ParticleLook { blend: desc.blend, texture, soft: desc.soft });
         let cpu = || {
             Run::Cpu(Box::new(ParticleSystem::new(desc.params.clone(), desc.dt).expect("checked as the scene loaded")))
         };
