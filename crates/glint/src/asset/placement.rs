@@ -1,5 +1,9 @@
-//! Core layer: where the copies of an `instances` block go.
+//! Core layer: where the copies of an `instances` block go, and the block itself.
 
+use super::scn::{Loader, Placement, MAX_INSTANCES, MAX_TILES};
+use super::scn_fields::Fields;
+use super::Diagnostic;
+use crate::text::quote;
 use glam::{Mat4, Quat, Vec3};
 use rand::seq::SliceRandom;
 use rand::{Rng, SeedableRng};
@@ -72,6 +76,80 @@ pub(crate) fn sort_into_tiles(transforms: &mut Vec<Mat4>, n: u32, origin: Vec3, 
     }
     transforms.extend(keyed.into_iter().map(|(_, m)| m));
     sizes
+}
+
+impl Loader<'_> {
+    /// An `instances` block: `count` copies of a mesh placed on a grid or at
+    /// random in a box, optionally sorted into tiles.
+    pub(super) fn instances(&mut self, f: &mut Fields) -> Result<(), Diagnostic> {
+        let mesh = self.mesh(f, "mesh")?;
+        let material = Self::material_ref(f);
+        let count_pair = f.require("count")?;
+        let count: i64 = count_pair.value.trim().parse().map_err(|_| {
+            Diagnostic::at(
+                self.path,
+                count_pair.line,
+                format!("\"count\" is {}, expected a whole number", quote(&count_pair.value)),
+            )
+        })?;
+        if count < 0 {
+            return Err(Diagnostic::at(
+                self.path,
+                count_pair.line,
+                format!("\"count\" is {count}, expected 0 or more"),
+            ));
+        }
+        let count = count as u64;
+        if count > MAX_INSTANCES {
+            return Err(Diagnostic::at(
+                self.path,
+                count_pair.line,
+                format!("\"count\" is {count}, more than glint allows in one file ({MAX_INSTANCES})"),
+            ));
+        }
+        self.count_instances(count, count_pair.line)?;
+        let random = matches!(f.choice("layout", &["grid", "random"])?, Some((1, _)));
+        let origin = f.vec3("origin")?.unwrap_or(Vec3::ZERO);
+        let extent = f.vec3("extent")?.unwrap_or(Vec3::new(10.0, 0.0, 10.0));
+        if extent.min_element() < 0.0 {
+            return Err(Diagnostic::at(self.path, f.block.line, "\"extent\" must not be negative"));
+        }
+        let seed = match f.get("seed") {
+            None => 1,
+            Some(p) => p.value.trim().parse::<u64>().map_err(|_| {
+                Diagnostic::at(
+                    self.path,
+                    p.line,
+                    format!("\"seed\" is {}, expected a whole number 0 or more", quote(&p.value)),
+                )
+            })?,
+        };
+        let [lo, hi] = f.numbers::<2>("scale", "2 numbers (min max)")?.unwrap_or([1.0, 1.0]);
+        if lo <= 0.0 || hi < lo {
+            return Err(Diagnostic::at(self.path, f.block.line, "\"scale\" must be min max with 0 < min <= max"));
+        }
+        let random_yaw = f.flag("random_yaw")?.unwrap_or(false);
+        let mut transforms = place_instances(count as usize, random, origin, extent, seed, (lo, hi), random_yaw);
+        let tiles = f.integer("tiles", 1..=MAX_TILES)?;
+        let padding = f.number("tile_padding", 0.0..=1e6)?;
+        let density = f.number("density", 0.0..=1.0)?;
+        let compact = f.flag("compact")?;
+        let tiles = match tiles {
+            Some(n) => {
+                let sizes = sort_into_tiles(&mut transforms, n as u32, origin, extent, seed.wrapping_add(1));
+                let tiles = crate::scene::Tiles::from_sizes(sizes, padding.unwrap_or(0.0));
+                Some((tiles, density.unwrap_or(1.0), compact.unwrap_or(false)))
+            }
+            None if density.is_some() || padding.is_some() || compact.is_some() => {
+                let message = "\"density\", \"tile_padding\" and \"compact\" need \"tiles\": without tiles every instance is drawn and stored in full";
+                return Err(Diagnostic::at(self.path, f.block.line, message));
+            }
+            None => None,
+        };
+        let draw = Self::draw_options(f)?;
+        self.placements.push(Placement { mesh, material, draw, transforms, tiles, alone: false });
+        Ok(())
+    }
 }
 
 #[cfg(test)]

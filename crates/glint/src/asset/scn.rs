@@ -2,7 +2,6 @@
 //! reference) turned into a [`SceneDesc`], checked without a GPU, and placed into
 //! a [`Renderer`](crate::Renderer) with [`Renderer::place_scene`](crate::Renderer::place_scene).
 
-use super::placement::{place_instances, sort_into_tiles};
 use super::procedural::{blob_vertex_count, MAX_SCENE_BLOB_VERTICES};
 use super::scene_desc::{CameraView, DrawOptions, EntityDesc, MaterialDesc, MeshRef, SceneDesc, TextureRef};
 use super::scn_cloth::{self, ClothDesc};
@@ -10,7 +9,7 @@ use super::scn_emitter;
 use super::scn_fields::{numbers, Fields};
 use super::scn_lights;
 use super::scn_material::material_fields;
-use super::scn_school::{self, SchoolDesc};
+use super::scn_school::SchoolDesc;
 use super::scn_syntax::{decode_scene_text, parse_blocks, Block, Pair};
 use super::scn_targets;
 use super::texture::read_texture;
@@ -105,19 +104,19 @@ pub fn parse_scene_with(path: &Path, text: &str, options: LoadOptions) -> Result
 }
 
 /// An `entity` or `instances` block before material names are resolved.
-struct Placement {
-    mesh: MeshRef,
-    material: Option<(String, usize)>,
-    draw: DrawOptions,
-    transforms: Vec<Mat4>,
+pub(super) struct Placement {
+    pub(super) mesh: MeshRef,
+    pub(super) material: Option<(String, usize)>,
+    pub(super) draw: DrawOptions,
+    pub(super) transforms: Vec<Mat4>,
     /// Tiles, density and compact instances: an entity of its own.
-    tiles: Option<(crate::scene::Tiles, f32, bool)>,
+    pub(super) tiles: Option<(crate::scene::Tiles, f32, bool)>,
     /// An entity of its own without tiles (a school's fish, its predator).
-    alone: bool,
+    pub(super) alone: bool,
 }
 
-struct Loader<'a> {
-    path: &'a Path,
+pub(super) struct Loader<'a> {
+    pub(super) path: &'a Path,
     assets: AssetFolder,
     scene: SceneDesc,
     textures: TextureCache<PathBuf>,
@@ -134,12 +133,12 @@ struct Loader<'a> {
     model_bytes: Vec<u64>,
     bytes_read: u64,
     options: LoadOptions,
-    placements: Vec<Placement>,
+    pub(super) placements: Vec<Placement>,
     /// Cloths with their material names, resolved in [`Loader::finish`].
     cloths: Vec<(ClothDesc, Option<(String, usize)>)>,
     instances: u64,
     /// Schools, their entities' places in `placements` until resolved.
-    schools: Vec<SchoolDesc>,
+    pub(super) schools: Vec<SchoolDesc>,
     /// Each camera's block line, for errors found once the file is read.
     camera_lines: Vec<usize>,
     /// The `render_target` blocks so far, by name.
@@ -383,7 +382,7 @@ impl Loader<'_> {
 
     /// The `key` key (`mesh`, `predator_mesh`): a procedural shape, or a model file (`.obj`, `.gltf`, `.glb`, relative to the
     /// scene) whose materials `mtl.NAME.key` pairs may override for this block.
-    fn mesh(&mut self, f: &mut Fields, key: &str) -> Result<MeshRef, Diagnostic> {
+    pub(super) fn mesh(&mut self, f: &mut Fields, key: &str) -> Result<MeshRef, Diagnostic> {
         let pair = f.require(key)?;
         let value = pair.value.trim();
         if !Model::is_model_path(Path::new(value)) {
@@ -464,7 +463,7 @@ impl Loader<'_> {
     }
 
     /// The `render_order`, `cast_shadows` and `receive_shadows` keys.
-    fn draw_options(f: &mut Fields) -> Result<DrawOptions, Diagnostic> {
+    pub(super) fn draw_options(f: &mut Fields) -> Result<DrawOptions, Diagnostic> {
         Ok(DrawOptions {
             render_order: f.integer("render_order", 0..=255)?.map(|v| v as u8),
             cast_shadows: f.flag("cast_shadows")?.unwrap_or(DrawOptions::default().cast_shadows),
@@ -472,7 +471,7 @@ impl Loader<'_> {
         })
     }
 
-    fn material_ref(f: &mut Fields) -> Option<(String, usize)> {
+    pub(super) fn material_ref(f: &mut Fields) -> Option<(String, usize)> {
         f.get("material").map(|p| (p.value.trim().to_string(), p.line))
     }
 
@@ -495,7 +494,7 @@ impl Loader<'_> {
         Ok(())
     }
 
-    fn count_instances(&mut self, n: u64, line: usize) -> Result<(), Diagnostic> {
+    pub(super) fn count_instances(&mut self, n: u64, line: usize) -> Result<(), Diagnostic> {
         self.instances += n;
         if self.instances > MAX_INSTANCES {
             return Err(Diagnostic::at(
@@ -542,120 +541,6 @@ impl Loader<'_> {
             tiles: None,
             alone: false,
         });
-        Ok(())
-    }
-
-    fn instances(&mut self, f: &mut Fields) -> Result<(), Diagnostic> {
-        let mesh = self.mesh(f, "mesh")?;
-        let material = Self::material_ref(f);
-        let count_pair = f.require("count")?;
-        let count: i64 = count_pair.value.trim().parse().map_err(|_| {
-            Diagnostic::at(
-                self.path,
-                count_pair.line,
-                format!("\"count\" is {}, expected a whole number", quote(&count_pair.value)),
-            )
-        })?;
-        if count < 0 {
-            return Err(Diagnostic::at(
-                self.path,
-                count_pair.line,
-                format!("\"count\" is {count}, expected 0 or more"),
-            ));
-        }
-        let count = count as u64;
-        if count > MAX_INSTANCES {
-            return Err(Diagnostic::at(
-                self.path,
-                count_pair.line,
-                format!("\"count\" is {count}, more than glint allows in one file ({MAX_INSTANCES})"),
-            ));
-        }
-        self.count_instances(count, count_pair.line)?;
-        let random = matches!(f.choice("layout", &["grid", "random"])?, Some((1, _)));
-        let origin = f.vec3("origin")?.unwrap_or(Vec3::ZERO);
-        let extent = f.vec3("extent")?.unwrap_or(Vec3::new(10.0, 0.0, 10.0));
-        if extent.min_element() < 0.0 {
-            return Err(Diagnostic::at(self.path, f.block.line, "\"extent\" must not be negative"));
-        }
-        let seed = match f.get("seed") {
-            None => 1,
-            Some(p) => p.value.trim().parse::<u64>().map_err(|_| {
-                Diagnostic::at(
-                    self.path,
-                    p.line,
-                    format!("\"seed\" is {}, expected a whole number 0 or more", quote(&p.value)),
-                )
-            })?,
-        };
-        let [lo, hi] = f.numbers::<2>("scale", "2 numbers (min max)")?.unwrap_or([1.0, 1.0]);
-        if lo <= 0.0 || hi < lo {
-            return Err(Diagnostic::at(self.path, f.block.line, "\"scale\" must be min max with 0 < min <= max"));
-        }
-        let random_yaw = f.flag("random_yaw")?.unwrap_or(false);
-        let mut transforms = place_instances(count as usize, random, origin, extent, seed, (lo, hi), random_yaw);
-        let tiles = f.integer("tiles", 1..=MAX_TILES)?;
-        let padding = f.number("tile_padding", 0.0..=1e6)?;
-        let density = f.number("density", 0.0..=1.0)?;
-        let compact = f.flag("compact")?;
-        let tiles = match tiles {
-            Some(n) => {
-                let sizes = sort_into_tiles(&mut transforms, n as u32, origin, extent, seed.wrapping_add(1));
-                let tiles = crate::scene::Tiles::from_sizes(sizes, padding.unwrap_or(0.0));
-                Some((tiles, density.unwrap_or(1.0), compact.unwrap_or(false)))
-            }
-            None if density.is_some() || padding.is_some() || compact.is_some() => {
-                let message = "\"density\", \"tile_padding\" and \"compact\" need \"tiles\": without tiles every instance is drawn and stored in full";
-                return Err(Diagnostic::at(self.path, f.block.line, message));
-            }
-            None => None,
-        };
-        let draw = Self::draw_options(f)?;
-        self.placements.push(Placement { mesh, material, draw, transforms, tiles, alone: false });
-        Ok(())
-    }
-
-    /// A `school` block: the simulation ([`scn_school::parse`]), and two
-    /// placements of their own, the fish (`mesh`, `material`) at the start
-    /// and the predator (`predator_mesh`, `predator_material`).
-    fn school(&mut self, f: &mut Fields) -> Result<(), Diagnostic> {
-        let line = f.block.line;
-        let mesh = self.mesh(f, "mesh")?;
-        let material = Self::material_ref(f);
-        let predator_mesh = match f.get("predator_mesh") {
-            Some(_) => Some(self.mesh(f, "predator_mesh")?),
-            None => None,
-        };
-        let predator_material = f.get("predator_material").map(|p| (p.value.trim().to_string(), p.line));
-        let (params, dt, size, predator_size) = scn_school::parse(f, line)?;
-        self.count_instances(params.count as u64 + u64::from(predator_mesh.is_some()), line)?;
-        let draw = Self::draw_options(f)?;
-        let mut school = SchoolDesc {
-            line,
-            params,
-            dt,
-            size,
-            predator_size,
-            fish_entity: self.placements.len(),
-            predator_entity: None,
-        };
-        let start =
-            crate::sim::school::School::new(school.params.clone()).map_err(|m| Diagnostic::at(self.path, line, m))?;
-        let transforms = start.fish().iter().enumerate().map(|(i, f)| f.transform(school.fish_scale(i))).collect();
-        self.placements.push(Placement { mesh, material, draw, transforms, tiles: None, alone: true });
-        if let (Some(mesh), Some(hunter)) = (predator_mesh, start.predator()) {
-            school.predator_entity = Some(self.placements.len());
-            let transforms = vec![hunter.transform(predator_size)];
-            self.placements.push(Placement {
-                mesh,
-                material: predator_material,
-                draw,
-                transforms,
-                tiles: None,
-                alone: true,
-            });
-        }
-        self.schools.push(school);
         Ok(())
     }
 

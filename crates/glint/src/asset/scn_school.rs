@@ -3,6 +3,7 @@
 //! This is what the block says; a [`World`](crate::World) steps the school to
 //! the requested time from its seeded start, deterministically.
 
+use super::scn::{Loader, Placement};
 use super::scn_fields::{numbers, Fields};
 use super::Diagnostic;
 use crate::scene::Aabb;
@@ -153,6 +154,52 @@ pub(crate) fn parse(f: &mut Fields, line: usize) -> Result<(SchoolParams, f32, f
     };
     params.check().map_err(|m| at(line, format!("school: {m}")))?;
     Ok((params, dt, size, predator_size))
+}
+
+impl Loader<'_> {
+    /// A `school` block: the simulation ([`parse`]), and two
+    /// placements of their own, the fish (`mesh`, `material`) at the start
+    /// and the predator (`predator_mesh`, `predator_material`).
+    pub(super) fn school(&mut self, f: &mut Fields) -> Result<(), Diagnostic> {
+        let line = f.block.line;
+        let mesh = self.mesh(f, "mesh")?;
+        let material = Self::material_ref(f);
+        let predator_mesh = match f.get("predator_mesh") {
+            Some(_) => Some(self.mesh(f, "predator_mesh")?),
+            None => None,
+        };
+        let predator_material = f.get("predator_material").map(|p| (p.value.trim().to_string(), p.line));
+        let (params, dt, size, predator_size) = parse(f, line)?;
+        self.count_instances(params.count as u64 + u64::from(predator_mesh.is_some()), line)?;
+        let draw = Self::draw_options(f)?;
+        let mut school = SchoolDesc {
+            line,
+            params,
+            dt,
+            size,
+            predator_size,
+            fish_entity: self.placements.len(),
+            predator_entity: None,
+        };
+        let start =
+            crate::sim::school::School::new(school.params.clone()).map_err(|m| Diagnostic::at(self.path, line, m))?;
+        let transforms = start.fish().iter().enumerate().map(|(i, f)| f.transform(school.fish_scale(i))).collect();
+        self.placements.push(Placement { mesh, material, draw, transforms, tiles: None, alone: true });
+        if let (Some(mesh), Some(hunter)) = (predator_mesh, start.predator()) {
+            school.predator_entity = Some(self.placements.len());
+            let transforms = vec![hunter.transform(predator_size)];
+            self.placements.push(Placement {
+                mesh,
+                material: predator_material,
+                draw,
+                transforms,
+                tiles: None,
+                alone: true,
+            });
+        }
+        self.schools.push(school);
+        Ok(())
+    }
 }
 
 /// What posing every school at `time` takes, for [`SceneDesc::check_pose`](super::SceneDesc::check_pose):
