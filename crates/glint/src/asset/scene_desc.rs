@@ -248,7 +248,8 @@ impl SceneDesc {
     /// limits ([`MAX_POSE_STEPS`](super::MAX_POSE_STEPS) per cloth, 10⁹
     /// node²-steps over all of them; see `docs/limits.md`) and the schools'
     /// ([`MAX_POSE_FISH_STEPS`](super::MAX_POSE_FISH_STEPS)) and emitters'
-    /// ([`MAX_POSE_PARTICLE_STEPS`](super::MAX_POSE_PARTICLE_STEPS)): the error names
+    /// ([`MAX_POSE_PARTICLE_STEPS`](super::MAX_POSE_PARTICLE_STEPS)), each at most
+    /// [`MAX_POSE_STEPS`](super::MAX_POSE_STEPS) steps too: the error names
     /// the block that goes over. Posing at an earlier time takes no more work.
     pub fn check_pose(&self, time: f32) -> Result<(), Diagnostic> {
         let mut work = 0u64;
@@ -263,15 +264,20 @@ impl SceneDesc {
     }
 }
 
-/// An error at the first of `blocks` (line, work, what it is) where the work
-/// so far passes `limit` (of `unit`), else `Ok`.
+/// An error at the first of `blocks` (line, steps, work, what it is) that
+/// takes more than [`MAX_POSE_STEPS`](super::MAX_POSE_STEPS) steps, or where
+/// the work so far passes `limit` (of `unit`); else `Ok`.
 fn within(
     scene: &std::path::Path,
     (limit, unit): (u64, &str),
-    blocks: impl Iterator<Item = (usize, u64, String)>,
+    blocks: impl Iterator<Item = (usize, u64, u64, String)>,
 ) -> Result<(), Diagnostic> {
     let mut work = 0u64;
-    for (line, more, what) in blocks {
+    for (line, steps, more, what) in blocks {
+        let most = super::MAX_POSE_STEPS;
+        if steps > most {
+            return Err(Diagnostic::at(scene, line, format!("{what}, more than the {most} steps one pose may take")));
+        }
         work = work.saturating_add(more);
         if work > limit {
             return Err(Diagnostic::at(scene, line, format!("{what}, more than the {limit} {unit} a pose may take")));

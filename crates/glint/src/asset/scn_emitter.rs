@@ -197,12 +197,12 @@ pub(crate) fn parse(f: &mut Fields, line: usize) -> Result<(EmitterParams, Looks
 }
 
 /// What posing every emitter at `time` takes, for [`SceneDesc::check_pose`](super::SceneDesc::check_pose):
-/// each block's line, particle-steps, and what they are.
-pub(crate) fn pose_work(emitters: &[EmitterDesc], time: f32) -> impl Iterator<Item = (usize, u64, String)> + '_ {
+/// each block's line, steps, particle-steps, and what they are.
+pub(crate) fn pose_work(emitters: &[EmitterDesc], time: f32) -> impl Iterator<Item = (usize, u64, u64, String)> + '_ {
     emitters.iter().map(move |e| {
         let slots = Schedule::new(&e.params).slots();
         let what = format!("emitter: time {time} s is {} steps of {slots} particle slots", e.steps_to(time));
-        (e.line, e.pose_work(time), what)
+        (e.line, e.steps_to(time), e.pose_work(time), what)
     })
 }
 
@@ -261,5 +261,7 @@ mod tests {
         let many = emitter("\"rate\" \"1000000\"\n\"lifetime\" \"4\"\n").unwrap();
         assert!(many.check_pose(100.0).unwrap_err().to_string().contains("particle-steps"));
         assert!(many.check_pose(1.0).is_ok());
+        let one = emitter("\"rate\" \"0\"\n\"burst\" \"1\"\n").unwrap();
+        assert!(one.check_pose(1e4).unwrap_err().to_string().ends_with("more than the 100000 steps one pose may take"));
     }
 }

@@ -203,11 +203,11 @@ impl Loader<'_> {
 }
 
 /// What posing every school at `time` takes, for [`SceneDesc::check_pose`](super::SceneDesc::check_pose):
-/// each block's line, fish-steps, and what they are.
-pub(crate) fn pose_work(schools: &[SchoolDesc], time: f32) -> impl Iterator<Item = (usize, u64, String)> + '_ {
+/// each block's line, steps, fish-steps, and what they are.
+pub(crate) fn pose_work(schools: &[SchoolDesc], time: f32) -> impl Iterator<Item = (usize, u64, u64, String)> + '_ {
     schools.iter().map(move |s| {
         let what = format!("school: time {time} s is {} steps of {} fish", s.steps_to(time), s.params.count);
-        (s.line, s.pose_work(time), what)
+        (s.line, s.steps_to(time), s.pose_work(time), what)
     })
 }
 
@@ -280,5 +280,9 @@ mod tests {
             err.starts_with("s.scn:1: school: time 1000000 s is ") && err.contains("steps of 100000 fish"),
             "{err}"
         );
+        // One fish is little work, but not a million steps.
+        let one = school("\"count\" \"1\"\n").unwrap();
+        let err = one.check_pose(1e4).unwrap_err().to_string();
+        assert!(err.ends_with("more than the 100000 steps one pose may take"), "{err}");
     }
 }

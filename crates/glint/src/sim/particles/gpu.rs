@@ -13,6 +13,8 @@ const WORKGROUP: u32 = 256;
 const BUCKETS: u32 = 4096;
 /// Bytes between steps' blocks in the step buffer (the dynamic-offset alignment).
 const STEP_STRIDE: u64 = 256;
+/// Steps one frame records at most (a 25.6 MB step buffer).
+const MAX_STEPS_PER_FRAME: u64 = crate::asset::MAX_POSE_STEPS;
 /// Step blocks the step buffer holds to begin with (it grows to a frame's steps).
 const FIRST_STEP_BLOCKS: u64 = 64;
 
@@ -209,7 +211,8 @@ impl GpuParticles {
 
 impl GpuSimulation for GpuParticles {
     fn encode(&mut self, device: &wgpu::Device, queue: &wgpu::Queue, encoder: &mut wgpu::CommandEncoder) {
-        let steps = self.target.saturating_sub(self.steps) as u32;
+        // A longer jump (the API's; scenes' poses are capped alike) goes on next frame.
+        let steps = self.target.saturating_sub(self.steps).min(MAX_STEPS_PER_FRAME) as u32;
         // Every step's block, and the last one again for the sort.
         if self.step_buffer.size() < STEP_STRIDE * u64::from(steps + 1) {
             self.step_buffer = step_buffer(device, u64::from(steps + 1).next_power_of_two());

@@ -250,7 +250,7 @@ fn params_block(params: &SchoolParams, shape: super::GridShape, count: u32, dt: 
         cos_half: params.cos_half_view(),
         weights: [w.separation, w.alignment, w.cohesion, w.bounds],
         more: [w.avoid, w.flee, params.max_accel, dt],
-        speed: [params.min_speed, params.max_speed, params.beat_rate, params.floor.unwrap_or(Vec3::ZERO.y)],
+        speed: [params.min_speed, params.max_speed, params.beat_rate, params.floor.unwrap_or(0.0)],
         hunter,
         flags: [u32::from(params.floor.is_some()), params.obstacles.len() as u32, shape.cells(), 0],
         obstacles,
