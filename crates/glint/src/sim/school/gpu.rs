@@ -6,7 +6,6 @@ use crate::gpu::GpuError;
 use crate::render::GpuSimulation;
 use crate::sim::scan::{GpuScan, ScanGroup};
 use crate::Gpu;
-use glam::Vec3;
 
 /// Obstacles the GPU's parameter block holds.
 pub const MAX_GPU_OBSTACLES: usize = 64;
