@@ -135,6 +135,32 @@ mod tests {
     }
 
     #[test]
+    fn a_swaying_sun_turns_within_its_swing_and_bad_sways_are_errors() {
+        let light = |sway: &str| {
+            parse(&format!(
+                "{{\n\"classname\" \"light_directional\"\n\"direction\" \"0 -1 0.2\"\n\"sway\" \"{sway}\"\n}}\n"
+            ))
+        };
+        let scene = light("10 4").unwrap();
+        let sway = &scene.light_sways[0];
+        assert_eq!((sway.light, sway.degrees, sway.period), (0, 10.0, 4.0));
+        let base = sway.base.normalize();
+        let mut most: f32 = 0.0;
+        for k in 0..200 {
+            let d = sway.direction_at(k as f32 * 0.05);
+            assert!((d.length() - 1.0).abs() < 1e-4);
+            most = most.max(d.angle_between(base).to_degrees());
+        }
+        // 10° about one axis and 5° about the other at most.
+        assert!(most > 8.0 && most < 11.5, "{most}");
+        assert_ne!(sway.direction_at(0.0), sway.direction_at(1.0));
+        for bad in ["91 4", "10 0", "10", "x 4"] {
+            let err = light(bad).unwrap_err();
+            assert!(err.starts_with("t.scn:4: \"sway\""), "{bad}: {err}");
+        }
+    }
+
+    #[test]
     fn shadow_keys_on_lights() {
         let scene = parse(
             "{ \"classname\" \"light_directional\"\n\"direction\" \"0 -1 0\"\n\"shadows\" \"1\"\n\"shadow_map_size\" \"2048\"\n\"shadow_bias\" \"2\"\n\"shadow_normal_bias\" \"0.5\"\n\"shadow_distance\" \"40\" }\n\
