@@ -53,15 +53,15 @@ pub struct World {
 
 impl World {
     /// Add `desc`'s textures, render targets, materials, shapes and models to
-    /// `renderer` ([`Renderer::place_scene`]) and start its clock at 0, every
-    /// cloth at rest.
+    /// `renderer` ([`Renderer::place_scene`]), a particle layer for each
+    /// emitter, and start its clock at 0: every cloth at rest, every school
+    /// at its seeded start, no particle spawned.
     pub fn place(desc: SceneDesc, renderer: &mut Renderer) -> Self {
-        let placed = renderer.place_scene(&desc);
+        let mut placed = renderer.place_scene(&desc);
         let cloths = desc.cloths.iter().map(ClothSim::new).collect();
         let schools: Vec<SchoolSim> = desc.schools.iter().map(SchoolSim::new).collect();
         let ranges = school::entity_ranges(&desc);
         let emitters = desc.emitters.iter().map(|e| EmitterSim::new(e, &desc, renderer)).collect();
-        let mut placed = placed;
         for (sim, school) in schools.iter().zip(&desc.schools) {
             // Each fish's own tail beat from the first frame.
             sim.show(school, &desc, &ranges, &mut placed.entities);
