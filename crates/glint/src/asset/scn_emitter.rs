@@ -6,7 +6,7 @@
 use super::scn_fields::{numbers, Fields};
 use super::scn_syntax::Pair;
 use super::{Diagnostic, TextureRef};
-use crate::render::ParticleBlend;
+use crate::scene::ParticleBlend;
 use crate::sim::particles::{Burst, EmitterParams, Schedule, SpawnShape, MAX_PARTICLES};
 use crate::text::quote;
 use glam::{Vec3, Vec4};
@@ -209,7 +209,7 @@ pub(crate) fn pose_work(emitters: &[EmitterDesc], time: f32) -> impl Iterator<It
 #[cfg(test)]
 mod tests {
     use crate::asset::{parse_scene, Diagnostic, SceneDesc};
-    use crate::render::ParticleBlend;
+    use crate::scene::ParticleBlend;
     use crate::sim::particles::SpawnShape;
     use glam::Vec3;
     use std::path::Path;

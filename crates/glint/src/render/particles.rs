@@ -12,6 +12,7 @@
 use super::{RenderError, Renderer};
 use crate::asset::Texture;
 use crate::gpu::TargetFormat;
+pub use crate::scene::ParticleBlend;
 use crate::FrameStats;
 use std::collections::HashMap;
 
@@ -27,15 +28,6 @@ pub struct ParticleGpu {
     pub center_size: [f32; 4],
     /// Linear RGB and alpha.
     pub color: [f32; 4],
-}
-
-/// How a layer's particles blend into the picture.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum ParticleBlend {
-    /// Added to what is behind (fire, sparks, glow): no order needed.
-    Additive,
-    /// Over what is behind by their alpha (smoke, bubbles): written back to front.
-    Alpha,
 }
 
 /// What a layer's particles look like.

@@ -34,7 +34,9 @@ pub use mesh::{smooth_normals, smooth_normals_in_groups, Aabb, BoundingSphere, M
 pub use motion::{Motion, Wind, MAX_WIND};
 pub use post::{PostEffect, Tonemap, MAX_POST_EFFECTS};
 pub use shadow_layout::{ShadowLayout, MAX_CUBES, MAX_SHADOW_MAP_BYTES};
-pub use states::{BlendState, Compare, Cull, DepthState, RasterState, RenderStates, StencilOp, StencilState};
+pub use states::{
+    BlendState, Compare, Cull, DepthState, ParticleBlend, RasterState, RenderStates, StencilOp, StencilState,
+};
 pub use tiles::Tiles;
 pub use view::{Culling, View, Viewport};
 pub use view_order::draw_order;

@@ -138,3 +138,12 @@ pub struct RenderStates {
     /// Culling and depth bias.
     pub raster: RasterState,
 }
+
+/// How a particle layer's billboards blend into the picture.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum ParticleBlend {
+    /// Added to what is behind (fire, sparks, glow): no order needed.
+    Additive,
+    /// Over what is behind by their alpha (smoke, bubbles): written back to front.
+    Alpha,
+}
