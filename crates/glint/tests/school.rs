@@ -127,3 +127,20 @@ fn gl_draws_the_school_alike() {
     let (picture, _) = school_at(gl, 3.0);
     common::assert_matches_reference("school", &picture);
 }
+
+#[test]
+fn a_school_or_emitter_broken_after_loading_is_an_error_when_posed_not_a_panic() {
+    let Some(gpu) = common::gpu() else { return };
+    let mut desc = common::load_scene(&common::repo_root().join("tests/scenes/school.scn"));
+    desc.schools[0].params.count = 0;
+    let mut renderer = glint::Renderer::new(gpu);
+    let mut world = glint::World::place(desc, &mut renderer);
+    let err = world.pose(1.0, &mut renderer).unwrap_err();
+    assert_eq!(err.exit_code(), 1);
+    assert!(err.to_string().contains("school.scn:38: school: count must be 1"), "{err}");
+    let mut desc = common::load_scene(&common::repo_root().join("tests/scenes/emitter.scn"));
+    desc.emitters[1].params.lifetime = (2.0, 1.0);
+    let mut world = glint::World::place(desc, &mut renderer);
+    let err = world.pose(1.0, &mut renderer).unwrap_err().to_string();
+    assert!(err.contains("emitter.scn:35: emitter: lifetime must be min max"), "{err}");
+}

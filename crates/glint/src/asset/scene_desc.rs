@@ -251,11 +251,24 @@ impl SceneDesc {
     /// ([`MAX_POSE_PARTICLE_STEPS`](super::MAX_POSE_PARTICLE_STEPS)), each at most
     /// [`MAX_POSE_STEPS`](super::MAX_POSE_STEPS) steps too: the error names
     /// the block that goes over. Posing at an earlier time takes no more work.
+    /// A school's or emitter's parameters changed since loading are checked
+    /// again ([`SchoolParams::check`](crate::sim::school::SchoolParams::check),
+    /// [`EmitterParams::check`](crate::sim::particles::EmitterParams::check)).
     pub fn check_pose(&self, time: f32) -> Result<(), Diagnostic> {
         let mut work = 0u64;
         for cloth in &self.cloths {
             cloth.check_pose(time, work, &self.path)?;
             work = work.saturating_add(cloth.pose_work(time));
+        }
+        // A description changed after loading is checked again.
+        for s in &self.schools {
+            s.params.check().map_err(|m| Diagnostic::at(&self.path, s.line, format!("school: {m}")))?;
+        }
+        for e in &self.emitters {
+            let dt = (e.dt.is_finite() && e.dt > 0.0)
+                .then_some(())
+                .ok_or_else(|| format!("dt must be above 0, got {}", e.dt));
+            e.params.check().and(dt).map_err(|m| Diagnostic::at(&self.path, e.line, format!("emitter: {m}")))?;
         }
         let fish = super::scn_school::pose_work(&self.schools, time);
         within(&self.path, (super::MAX_POSE_FISH_STEPS, "fish-steps"), fish)?;

@@ -15,9 +15,11 @@ enum Run {
     Gpu(Box<GpuParticles>),
 }
 
-/// One emitter's run and the layer it draws in.
+/// One emitter's run and the layer it draws in; no run for parameters that
+/// cannot make an emitter (a description changed after loading:
+/// [`SceneDesc::check_pose`] refuses to pose it).
 pub(crate) struct EmitterSim {
-    run: Run,
+    run: Option<Run>,
     layer: ParticlesId,
 }
 
@@ -28,9 +30,7 @@ impl EmitterSim {
         let slots = crate::sim::particles::Schedule::new(&desc.params).slots() as u32;
         let texture = desc.texture.and_then(|i| scene.textures.get(i)).cloned();
         let layer = renderer.add_particles(slots, ParticleLook { blend: desc.blend, texture, soft: desc.soft });
-        let cpu = || {
-            Run::Cpu(Box::new(ParticleSystem::new(desc.params.clone(), desc.dt).expect("checked as the scene loaded")))
-        };
+        let cpu = || ParticleSystem::new(desc.params.clone(), desc.dt).ok().map(|s| Run::Cpu(Box::new(s)));
         let run = match (renderer.computes(), renderer.particle_buffer(layer)) {
             (true, Some((buffer, capacity))) => {
                 let buffer = buffer.clone();
@@ -41,7 +41,7 @@ impl EmitterSim {
                     (&buffer, capacity),
                     desc.blend,
                 );
-                on_gpu.map_or_else(|_| cpu(), |g| Run::Gpu(Box::new(g)))
+                on_gpu.map_or_else(|_| cpu(), |g| Some(Run::Gpu(Box::new(g))))
             }
             _ => cpu(),
         };
@@ -51,10 +51,13 @@ impl EmitterSim {
     /// On the CPU, step (or restart and step) to `time`; on the GPU the steps
     /// wait for the frame ([`EmitterSim::draw`]).
     pub(crate) fn pose(&mut self, desc: &EmitterDesc, time: f32) {
-        if let Run::Cpu(system) = &mut self.run {
+        if let Some(Run::Cpu(system)) = &mut self.run {
             let target = desc.steps_to(time);
             if system.steps() > target {
-                **system = ParticleSystem::new(desc.params.clone(), desc.dt).expect("checked as the scene loaded");
+                // The parameters made it once: they make it again.
+                if let Ok(fresh) = ParticleSystem::new(desc.params.clone(), desc.dt) {
+                    **system = fresh;
+                }
             }
             while system.steps() < target {
                 system.step();
@@ -68,8 +71,9 @@ impl EmitterSim {
     pub(crate) fn draw(&mut self, desc: &EmitterDesc, time: f32, eye: Vec3, renderer: &mut Renderer) {
         let eye_if_sorted = (desc.blend == ParticleBlend::Alpha).then_some(eye);
         match &mut self.run {
-            Run::Cpu(system) => renderer.write_particles(self.layer, &system.records(eye_if_sorted)),
-            Run::Gpu(on_gpu) => {
+            None => {}
+            Some(Run::Cpu(system)) => renderer.write_particles(self.layer, &system.records(eye_if_sorted)),
+            Some(Run::Gpu(on_gpu)) => {
                 on_gpu.advance_to(renderer.device_and_queue().1, time, eye);
                 renderer.simulate(on_gpu.as_mut());
                 renderer.set_particle_count(self.layer, on_gpu.slots());
@@ -79,7 +83,7 @@ impl EmitterSim {
 
     /// Whether it steps with compute shaders.
     pub(crate) fn on_gpu(&self) -> bool {
-        matches!(self.run, Run::Gpu(_))
+        matches!(self.run, Some(Run::Gpu(_)))
     }
 }
 

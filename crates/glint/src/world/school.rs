@@ -8,28 +8,31 @@ use crate::sim::school::School;
 use crate::Entity;
 use std::ops::Range;
 
-/// One school's run, from its start.
+/// One school's run, from its start; none for parameters that cannot make a
+/// school (a description changed after loading: [`SceneDesc::check_pose`]
+/// refuses to pose it).
 pub(crate) struct SchoolSim {
-    school: School,
+    school: Option<School>,
 }
 
 impl SchoolSim {
-    /// At its start (the scene checked its parameters as it loaded).
+    /// At its start.
     pub(crate) fn new(desc: &SchoolDesc) -> Self {
-        Self { school: School::new(desc.params.clone()).expect("checked as the scene loaded") }
+        Self { school: School::new(desc.params.clone()).ok() }
     }
 
     /// Advance (or restart and advance) to `time`; returns whether it moved.
-    /// The posing budget was checked before ([`SceneDesc::check_pose`]).
+    /// The posing budget and parameters were checked before ([`SceneDesc::check_pose`]).
     pub(crate) fn pose(&mut self, desc: &SchoolDesc, time: f32) -> bool {
         let target = desc.steps_to(time);
-        let restarted = self.school.steps() > target;
+        let restarted = self.school.as_ref().is_some_and(|s| s.steps() > target);
         if restarted {
             *self = Self::new(desc);
         }
-        let moved = restarted || self.school.steps() < target;
-        while self.school.steps() < target {
-            self.school.step(desc.dt);
+        let Some(school) = &mut self.school else { return false };
+        let moved = restarted || school.steps() < target;
+        while school.steps() < target {
+            school.step(desc.dt);
         }
         moved
     }
@@ -37,7 +40,7 @@ impl SchoolSim {
     /// Put its fish and predator into their entities: `ranges` are the placed
     /// entities of each of `scene`'s entity blocks (a model's parts each have one).
     pub(crate) fn show(&self, desc: &SchoolDesc, scene: &SceneDesc, ranges: &[Range<usize>], entities: &mut [Entity]) {
-        let school = &self.school;
+        let Some(school) = &self.school else { return };
         let fish: Vec<_> = school.fish().iter().enumerate().map(|(i, f)| f.transform(desc.fish_scale(i))).collect();
         let phases: Vec<f32> = school.fish().iter().map(|f| f.phase).collect();
         place(scene, desc.fish_entity, &fish, &phases, &ranges[desc.fish_entity], entities);

@@ -99,20 +99,24 @@ impl Grid {
     }
 
     /// The slots of `order` for the cells around (and including) the one
-    /// holding `p`: up to 27 ranges, x-runs of three cells merged into one.
+    /// holding `p`: up to 9 ranges, x-runs of three cells merged into one
+    /// (none before the first rebuild).
     pub fn around(&self, p: Vec3) -> impl Iterator<Item = std::ops::Range<usize>> + '_ {
-        let shape = self.shape.expect("grid built");
-        let c = shape.coords(p);
-        let hi = shape.dims.as_ivec3() - 1;
-        let (x0, x1) = ((c.x - 1).max(0), (c.x + 1).min(hi.x));
-        (-1..=1).flat_map(move |dz| (-1..=1).map(move |dy| (dy, dz))).filter_map(move |(dy, dz)| {
-            let (y, z) = (c.y + dy, c.z + dz);
-            if y < 0 || z < 0 || y > hi.y || z > hi.z {
-                return None;
-            }
-            let first = shape.index(IVec3::new(x0, y, z)) as usize;
-            let last = shape.index(IVec3::new(x1, y, z)) as usize;
-            Some(self.start[first] as usize..self.start[last + 1] as usize)
+        // Before the first rebuild there are no cells, and no ranges.
+        let rows = (-1..=1).flat_map(|dz| (-1..=1).map(move |dy| (dy, dz)));
+        self.shape.into_iter().flat_map(move |shape| {
+            let c = shape.coords(p);
+            let hi = shape.dims.as_ivec3() - 1;
+            let (x0, x1) = ((c.x - 1).max(0), (c.x + 1).min(hi.x));
+            rows.clone().filter_map(move |(dy, dz)| {
+                let (y, z) = (c.y + dy, c.z + dz);
+                if y < 0 || z < 0 || y > hi.y || z > hi.z {
+                    return None;
+                }
+                let first = shape.index(IVec3::new(x0, y, z)) as usize;
+                let last = shape.index(IVec3::new(x1, y, z)) as usize;
+                Some(self.start[first] as usize..self.start[last + 1] as usize)
+            })
         })
     }
 
