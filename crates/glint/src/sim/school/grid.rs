@@ -62,10 +62,10 @@ impl GridShape {
 
 /// The fish sorted by cell: `order[start[c]..start[c + 1]]` are cell `c`'s
 /// fish, in the order they were numbered.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug)]
 pub struct Grid {
     /// Its shape.
-    pub shape: Option<GridShape>,
+    pub shape: GridShape,
     /// Each cell's first slot in `order`, and one past the end.
     pub start: Vec<u32>,
     /// Fish numbers, cell by cell.
@@ -75,11 +75,17 @@ pub struct Grid {
 }
 
 impl Grid {
-    /// Sort `positions` into `shape`'s cells: cells found in parallel, then
+    /// A grid of `shape` holding no fish yet.
+    pub fn new(shape: GridShape) -> Self {
+        let start = vec![0; shape.cells() as usize + 1];
+        Self { shape, start, order: Vec::new(), cell_of: Vec::new() }
+    }
+
+    /// Sort `positions` into its cells: cells found in parallel, then
     /// counted, summed and scattered (a stable counting sort, O(n + cells)).
-    pub fn rebuild(&mut self, shape: GridShape, positions: &[Vec3]) {
+    pub fn rebuild(&mut self, positions: &[Vec3]) {
+        let shape = self.shape;
         let cells = shape.cells() as usize;
-        self.shape = Some(shape);
         self.cell_of.clear();
         self.cell_of.par_extend(positions.par_iter().map(|&p| shape.index(shape.coords(p))));
         self.start.clear();
@@ -99,24 +105,20 @@ impl Grid {
     }
 
     /// The slots of `order` for the cells around (and including) the one
-    /// holding `p`: up to 9 ranges, x-runs of three cells merged into one
-    /// (none before the first rebuild).
+    /// holding `p`: up to 9 ranges, x-runs of three cells merged into one.
     pub fn around(&self, p: Vec3) -> impl Iterator<Item = std::ops::Range<usize>> + '_ {
-        // Before the first rebuild there are no cells, and no ranges.
-        let rows = (-1..=1).flat_map(|dz| (-1..=1).map(move |dy| (dy, dz)));
-        self.shape.into_iter().flat_map(move |shape| {
-            let c = shape.coords(p);
-            let hi = shape.dims.as_ivec3() - 1;
-            let (x0, x1) = ((c.x - 1).max(0), (c.x + 1).min(hi.x));
-            rows.clone().filter_map(move |(dy, dz)| {
-                let (y, z) = (c.y + dy, c.z + dz);
-                if y < 0 || z < 0 || y > hi.y || z > hi.z {
-                    return None;
-                }
-                let first = shape.index(IVec3::new(x0, y, z)) as usize;
-                let last = shape.index(IVec3::new(x1, y, z)) as usize;
-                Some(self.start[first] as usize..self.start[last + 1] as usize)
-            })
+        let shape = self.shape;
+        let c = shape.coords(p);
+        let hi = shape.dims.as_ivec3() - 1;
+        let (x0, x1) = ((c.x - 1).max(0), (c.x + 1).min(hi.x));
+        (-1..=1).flat_map(move |dz| (-1..=1).map(move |dy| (dy, dz))).filter_map(move |(dy, dz)| {
+            let (y, z) = (c.y + dy, c.z + dz);
+            if y < 0 || z < 0 || y > hi.y || z > hi.z {
+                return None;
+            }
+            let first = shape.index(IVec3::new(x0, y, z)) as usize;
+            let last = shape.index(IVec3::new(x1, y, z)) as usize;
+            Some(self.start[first] as usize..self.start[last + 1] as usize)
         })
     }
 

@@ -242,7 +242,6 @@ pub struct School {
     params: SchoolParams,
     fish: Vec<Swimmer>,
     predator: Option<Swimmer>,
-    shape: GridShape,
     grid: Grid,
     /// Positions and velocities in the grid's order, rebuilt each step.
     sorted: Vec<(Vec3, Vec3)>,
@@ -317,7 +316,7 @@ impl School {
     /// A school in the given state (tests build small cases by hand).
     pub fn from_state(params: SchoolParams, fish: Vec<Swimmer>, predator: Option<Swimmer>) -> Self {
         let shape = GridShape::new(params.bounds, params.radius, grid::MAX_CELLS.min(2 * fish.len() as u32 + 4096));
-        Self { params, fish, predator, shape, grid: Grid::default(), sorted: Vec::new(), next: Vec::new(), steps: 0 }
+        Self { params, fish, predator, grid: Grid::new(shape), sorted: Vec::new(), next: Vec::new(), steps: 0 }
     }
 
     /// Its parameters.
@@ -342,12 +341,12 @@ impl School {
 
     /// The grid's shape.
     pub fn grid_shape(&self) -> GridShape {
-        self.shape
+        self.grid.shape
     }
 
     fn rebuild_grid(&mut self) {
         let positions: Vec<Vec3> = self.fish.par_iter().map(|f| f.position).collect();
-        self.grid.rebuild(self.shape, &positions);
+        self.grid.rebuild(&positions);
         let fish = &self.fish;
         self.sorted.clear();
         self.sorted.par_extend(self.grid.order.par_iter().map(|&i| {

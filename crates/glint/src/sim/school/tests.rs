@@ -43,8 +43,8 @@ fn the_grid_finds_exactly_the_neighbours_brute_force_finds() {
                 Vec3::new(rng.random_range(-6.0..6.0), rng.random_range(-6.0..6.0), rng.random_range(-6.0..7.0))
             }),
         );
-        let mut grid = Grid::default();
-        grid.rebuild(shape, &points);
+        let mut grid = Grid::new(shape);
+        grid.rebuild(&points);
         let mut total = 0;
         for i in 0..points.len() {
             let want = brute_neighbours(&points, i, radius);
@@ -59,8 +59,8 @@ fn the_grid_finds_exactly_the_neighbours_brute_force_finds() {
 fn the_counting_sort_is_stable_and_complete() {
     let shape = GridShape::new(Aabb { min: Vec3::ZERO, max: Vec3::splat(3.0) }, 1.0, grid::MAX_CELLS);
     let points = [Vec3::splat(0.5), Vec3::splat(2.5), Vec3::splat(0.6), Vec3::splat(0.4)];
-    let mut grid = Grid::default();
-    grid.rebuild(shape, &points);
+    let mut grid = Grid::new(shape);
+    grid.rebuild(&points);
     assert_eq!(grid.order, [0, 2, 3, 1], "one cell's fish keep their order");
     assert_eq!(*grid.start.last().unwrap(), 4);
 }
