@@ -42,11 +42,12 @@ fn an_emitter_scene_draws_its_particles_the_same_at_the_same_time() {
 }
 
 #[test]
-fn gl_steps_the_particles_on_the_cpu_and_draws_them_alike() {
-    let Some(gl) = common::gl_gpu() else { return };
-    let (pictures, _, world, _) = emitter_at(gl, &[2.0]);
-    assert!(!world.particles_on_gpu(), "GL has no compute path here");
-    common::assert_matches_reference("emitter", &pictures[0]);
+fn gl_and_the_webgl2_path_step_the_particles_on_the_cpu_and_draw_them_alike() {
+    for gpu in [common::gl_gpu(), common::webgl2_gpu(), common::gl_webgl2_gpu()].into_iter().flatten() {
+        let (pictures, _, world, _) = emitter_at(gpu, &[2.0]);
+        assert!(!world.particles_on_gpu(), "no compute path here");
+        common::assert_matches_reference("emitter", &pictures[0]);
+    }
 }
 
 #[test]

@@ -121,11 +121,14 @@ fn a_school_scene_draws_the_same_picture_at_the_same_time_and_its_sun_sways() {
 }
 
 #[test]
-fn gl_draws_the_school_alike() {
-    // The school steps on the CPU on every path, so GL's picture is Vulkan's.
-    let Some(gl) = common::gl_gpu() else { return };
-    let (picture, _) = school_at(gl, 3.0);
-    common::assert_matches_reference("school", &picture);
+fn gl_and_the_webgl2_path_draw_the_school_alike_and_refuse_the_gpu_school() {
+    // The school steps on the CPU on every path, so their pictures are Vulkan's.
+    for gpu in [common::gl_gpu(), common::webgl2_gpu()].into_iter().flatten() {
+        let (picture, _) = school_at(gpu, 3.0);
+        common::assert_matches_reference("school", &picture);
+        let err = GpuSchool::new(gpu, &School::new(params()).unwrap()).err().expect("no compute path here");
+        assert!(err.to_string().contains("step the school on the CPU"), "{err}");
+    }
 }
 
 #[test]
