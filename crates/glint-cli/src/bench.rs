@@ -144,14 +144,6 @@ fn median_of(frames: &[FrameStats], f: impl Fn(&FrameStats) -> f64) -> f64 {
     percentile(&v, 0.5)
 }
 
-/// `view` with its camera turned `degrees` about its target, around its up axis.
-fn orbited(view: &glint::View, degrees: f32) -> glint::View {
-    let camera = view.camera;
-    let turn = glam::Quat::from_axis_angle(camera.up.normalize_or(glam::Vec3::Y), degrees.to_radians());
-    let eye = camera.target + turn * (camera.eye - camera.target);
-    glint::View { camera: camera.looking_at(eye, camera.target), ..view.clone() }
-}
-
 /// Run `config.frames` frames of `desc` built as `run` says and summarise them.
 pub fn run_mode(
     gpu: &Gpu,
@@ -182,7 +174,7 @@ pub fn run_mode(
     let mut frame_ms = Vec::with_capacity(config.frames);
     let mut resident_frame_100 = None;
     for i in 0..config.warmup + config.frames {
-        let view = &orbited(view, config.orbit * i as f32);
+        let view = &crate::render::turned(view, config.orbit * i as f32);
         let frame_start = std::time::Instant::now();
         // The frame's three calls, with the GPU let finish after the shadow pass and
         // after flush, outside the measured CPU times: a CPU rasterizer's threads

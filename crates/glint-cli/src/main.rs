@@ -6,13 +6,14 @@ mod compare;
 mod output;
 mod particles;
 mod plot;
+mod render;
 mod school;
 mod sim;
 mod view;
 
 use clap::{Parser, Subcommand, ValueEnum};
 use glint::asset::{load_scene_with, LoadOptions, Model, SceneDesc};
-use glint::{Error, Gpu, OffscreenTarget, Renderer, World};
+use glint::{Error, Gpu};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -62,12 +63,25 @@ enum Command {
         /// Pose animated models at this time, in seconds (their first animation).
         #[arg(long, default_value_t = 0.0, value_parser = parse_time)]
         time: f32,
-        /// Render this many frames from --time on, -o naming them with %04d.
+        /// A sequence of this many frames from --time on: -o names them with
+        /// %04d, or is one animation (-o clip.gif, or -o clip.png --apng).
         #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=100_000))]
         frames: u32,
         /// Frames per second of the sequence (0.001..=1000).
         #[arg(long, default_value_t = 30.0, value_parser = parse_fps)]
         fps: f32,
+        /// Render only frames FIRST up to (not including) END of the --frames
+        /// sequence, numbered and posed as in the whole run, so machines of a
+        /// render farm can each take a part.
+        #[arg(long, value_name = "FIRST..END", value_parser = render::parse_range)]
+        frame_range: Option<std::ops::Range<u32>>,
+        /// Write the frames as one animated PNG (-o clip.png) rather than numbered PNGs.
+        #[arg(long)]
+        apng: bool,
+        /// Orbit the camera once around its target over the --frames sequence
+        /// (for models without animation).
+        #[arg(long)]
+        turntable: bool,
     },
     /// Measure a scene's steady-state frame cost: the naive baseline, and the
     /// optimized frame culled on the CPU and on the GPU, side by side.
@@ -461,7 +475,7 @@ fn parse_msaa(s: &str) -> Result<u32, String> {
 /// A scene file, or a model file shown alone with a framing camera and lights.
 /// More lights than a frame can use (a glTF's `KHR_lights_punctual` may hold
 /// any number) is an error naming the file, for `check` as for `render`.
-fn load(scene: &Path, options: LoadOptions) -> Result<SceneDesc, Error> {
+pub(crate) fn load(scene: &Path, options: LoadOptions) -> Result<SceneDesc, Error> {
     let desc = if Model::is_model_path(scene) {
         Model::load_with(scene, options)?.into_scene()
     } else {
@@ -475,122 +489,6 @@ fn load(scene: &Path, options: LoadOptions) -> Result<SceneDesc, Error> {
         return Err(glint::Diagnostic::file(scene, message).into());
     }
     Ok(desc)
-}
-
-/// What `glint render` was asked for.
-struct RenderArgs<'a> {
-    scene: &'a Path,
-    output: &'a Path,
-    size: (u32, u32),
-    msaa: u32,
-    camera: Option<usize>,
-    stats: bool,
-    cull: Option<CullArg>,
-    density: f32,
-    time: f32,
-    frames: u32,
-    fps: f32,
-    options: LoadOptions,
-}
-
-fn render(args: RenderArgs) -> Result<(), Error> {
-    let RenderArgs {
-        scene,
-        output,
-        size: (width, height),
-        msaa,
-        camera,
-        stats,
-        cull,
-        density,
-        time,
-        frames,
-        fps,
-        options,
-    } = args;
-    let desc = load(scene, options)?;
-    check_camera(&desc, scene, camera)?;
-    if frames > 1 && !output.to_string_lossy().contains('%') {
-        let message = "--frames needs a numbered output such as -o frames/%04d.png";
-        return Err(glint::Diagnostic::file(output, message).into());
-    }
-    numbered(output, 0).map_err(|m| glint::Diagnostic::file(output, m))?;
-    // Refuse cloth work over the limits before starting a GPU: posing at the
-    // last frame's time is the most work any frame takes.
-    desc.check_pose(time + (frames - 1) as f32 / fps)?;
-    let gpu = Gpu::headless()?;
-    let msaa = if gpu.supports_msaa(msaa) {
-        msaa
-    } else {
-        eprintln!("warning: {} cannot do {msaa}x MSAA; rendering without it", gpu.info().name);
-        1
-    };
-    let mut target = OffscreenTarget::new(&gpu, width, height, msaa)?;
-    let mut renderer = Renderer::new(&gpu);
-    renderer.set_density(density);
-    let mut world = World::place(desc, &mut renderer);
-    let views = culled(world.views(camera), cull);
-    let progress = (frames > 1).then(|| {
-        let bar = indicatif::ProgressBar::new(frames.into());
-        let style = indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} frames, {elapsed} ({eta} left)");
-        bar.set_style(style.expect("valid template"));
-        bar
-    });
-    for k in 0..frames {
-        world.pose(time + k as f32 / fps, &mut renderer)?;
-        let mut frame = world.draw(&mut renderer, &views, &mut target)?;
-        let path = numbered(output, k).map_err(|m| glint::Diagnostic::file(output, m))?;
-        if let Some(dir) = path.parent().filter(|d| frames > 1 && !d.as_os_str().is_empty()) {
-            std::fs::create_dir_all(dir)
-                .map_err(|e| glint::Diagnostic::file(dir, format!("cannot create the frames folder: {e}")))?;
-        }
-        output::save_png(&gpu, &target, &path)?;
-        gpu.check()?;
-        if let Some(bar) = &progress {
-            bar.inc(1);
-        }
-        if stats {
-            // The counts of views culled on the GPU, which a running frame loop reads a frame or two late.
-            renderer.wait_for_counts(&mut frame);
-            let info = gpu.info();
-            // One view: its statistics; several: each view's, in order.
-            let mut json = match frame.as_slice() {
-                [one] => serde_json::to_value(one),
-                all => serde_json::to_value(serde_json::json!({ "views": all })),
-            }
-            .expect("FrameStats serialises");
-            json["adapter"] = format!("{} ({:?})", info.name, info.backend).into();
-            json["size"] = format!("{width}x{height}").into();
-            json["msaa"] = msaa.into();
-            output::print(&format!("{json}\n"))?;
-        }
-    }
-    if let Some(bar) = progress {
-        bar.finish();
-    }
-    Ok(())
-}
-
-/// Widest frame number `%0Nd` may ask for: more digits than any frame count
-/// needs, and far below what a file name can hold.
-const MAX_FRAME_DIGITS: usize = 32;
-
-/// `pattern` with its `%d` or `%0Nd` replaced by `k` (the pattern itself when it has none).
-fn numbered(pattern: &Path, k: u32) -> Result<PathBuf, String> {
-    let text = pattern.to_string_lossy();
-    let Some(at) = text.find('%') else { return Ok(pattern.to_path_buf()) };
-    let rest = &text[at + 1..];
-    let Some(end) = rest.find('d') else { return Err("expected %d or %0Nd in the output name".into()) };
-    let expected = format!("expected %d or %0Nd with N at most {MAX_FRAME_DIGITS}");
-    let width = match &rest[..end] {
-        "" => 0,
-        w if w.starts_with('0') => match w[1..].parse::<usize>() {
-            Ok(n) if n <= MAX_FRAME_DIGITS => n,
-            _ => return Err(format!("bad frame-number format: {expected}")),
-        },
-        _ => return Err(format!("bad frame-number format: {expected}")),
-    };
-    Ok(PathBuf::from(format!("{}{k:0width$}{}", &text[..at], &rest[end + 1..])))
 }
 
 fn check(scene: &Path, options: LoadOptions) -> Result<(), Error> {
@@ -655,20 +553,25 @@ fn main() -> ExitCode {
         ..LoadOptions::default()
     };
     let result = match &cli.command {
-        Command::Render { scene, output, picture, stats, time, frames, fps } => render(RenderArgs {
-            scene,
-            output,
-            size: picture.size,
-            msaa: picture.msaa,
-            camera: picture.camera,
-            stats: *stats,
-            cull: picture.cull,
-            density: picture.density,
-            time: *time,
-            frames: *frames,
-            fps: *fps,
-            options: picture.load_options(options),
-        }),
+        Command::Render { scene, output, picture, stats, time, frames, fps, frame_range, apng, turntable } => {
+            render::render(render::RenderArgs {
+                scene,
+                output,
+                size: picture.size,
+                msaa: picture.msaa,
+                camera: picture.camera,
+                stats: *stats,
+                cull: picture.cull,
+                density: picture.density,
+                time: *time,
+                frames: *frames,
+                range: frame_range.clone(),
+                fps: *fps,
+                turntable: *turntable,
+                apng: *apng,
+                options: picture.load_options(options),
+            })
+        }
         Command::Check { scene } => check(scene, options),
         Command::Compare { expected, actual, diff } => match compare::run(expected, actual, diff.as_deref()) {
             Ok(true) => Ok(()),

@@ -1,0 +1,161 @@
+//! `glint render` sequences: animated GIF and PNG output, the turntable camera,
+//! and frame ranges that a render farm can split a sequence into.
+
+mod common;
+
+use common::*;
+use std::path::Path;
+
+/// Render `scene` with `args` added, or `None` where no adapter lets it run.
+fn render(scene: &str, out: &Path, args: &[&str]) -> Option<std::process::Output> {
+    let mut all = vec!["render", scene, "-o", out.to_str().expect("path"), "--msaa", "1"];
+    all.extend_from_slice(args);
+    let out = glint(&all);
+    if no_adapter(&out) {
+        return None;
+    }
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    Some(out)
+}
+
+fn rgba(path: &Path) -> image::RgbaImage {
+    image::open(path).unwrap_or_else(|e| panic!("{}: {e}", path.display())).to_rgba8()
+}
+
+/// The frames of an animation file, decoded.
+fn frames_of(decoder: impl image::AnimationDecoder<'static>) -> Vec<image::Frame> {
+    decoder.into_frames().collect_frames().expect("the animation decodes")
+}
+
+fn open(path: &Path) -> std::io::BufReader<std::fs::File> {
+    std::io::BufReader::new(std::fs::File::open(path).expect("written"))
+}
+
+/// Mean absolute difference of the colour channels, 0..=255.
+fn mean_difference(a: &image::RgbaImage, b: &image::RgbaImage) -> f64 {
+    assert_eq!(a.dimensions(), b.dimensions());
+    let sum: u64 =
+        a.pixels().zip(b.pixels()).flat_map(|(p, q)| (0..3).map(move |c| u64::from(p.0[c].abs_diff(q.0[c])))).sum();
+    sum as f64 / (3 * a.width() * a.height()) as f64
+}
+
+#[test]
+fn gif_and_apng_hold_the_frames_rendered_one_by_one() {
+    let model = repo("tests/models/animated.gltf");
+    let model = model.to_str().expect("path");
+    let dir = tempfile::tempdir().expect("temp dir");
+    let sequence = ["--size", "48x32", "--frames", "4", "--fps", "4"];
+    let Some(_) = render(model, &dir.path().join("f/%d.png"), &sequence) else { return };
+    let pngs: Vec<_> = (0..4).map(|k| rgba(&dir.path().join(format!("f/{k}.png")))).collect();
+    assert_ne!(pngs[0], pngs[3], "the model moves over the sequence");
+
+    render(model, &dir.path().join("clip.png"), &[&sequence[..], &["--apng"]].concat()).expect("adapter");
+    let apng = image::codecs::png::PngDecoder::new(open(&dir.path().join("clip.png"))).expect("a PNG");
+    assert!(apng.is_apng().expect("readable"), "an animated PNG");
+    let frames = frames_of(apng.apng().expect("APNG frames"));
+    assert_eq!(frames.len(), 4);
+    for (k, frame) in frames.iter().enumerate() {
+        assert_eq!(frame.buffer(), &pngs[k], "APNG frame {k} is the PNG rendered alone, pixel for pixel");
+        assert_eq!(frame.delay().numer_denom_ms(), (250, 1), "a quarter second each at 4 fps");
+    }
+
+    render(model, &dir.path().join("clip.gif"), &sequence).expect("adapter");
+    let gif = image::codecs::gif::GifDecoder::new(open(&dir.path().join("clip.gif"))).expect("a GIF");
+    let frames = frames_of(gif);
+    assert_eq!(frames.len(), 4);
+    for (k, frame) in frames.iter().enumerate() {
+        // A GIF has 256 colours a frame: each frame is near its own PNG, and
+        // nearer to it than to any other frame.
+        let own = mean_difference(frame.buffer(), &pngs[k]);
+        assert!(own < 3.0, "GIF frame {k} is {own:.2} from its PNG");
+        for (j, other) in pngs.iter().enumerate().filter(|(j, p)| *j != k && **p != pngs[k]) {
+            assert!(mean_difference(frame.buffer(), other) > own, "GIF frame {k} is nearer PNG {j}");
+        }
+        assert_eq!(frame.delay().numer_denom_ms(), (250, 1));
+    }
+}
+
+#[test]
+fn a_turntable_orbits_the_camera_once_over_the_sequence() {
+    let model = repo("tests/models/cutout.obj");
+    let model = model.to_str().expect("path");
+    let dir = tempfile::tempdir().expect("temp dir");
+    let png = |k: u32| rgba(&dir.path().join(format!("t/{k}.png")));
+    let args = ["--size", "40x40", "--frames", "4", "--turntable"];
+    let Some(_) = render(model, &dir.path().join("t/%d.png"), &args) else { return };
+    render(model, &dir.path().join("still.png"), &["--size", "40x40"]).expect("adapter");
+    assert_eq!(png(0), rgba(&dir.path().join("still.png")), "frame 0 is the camera as the scene puts it");
+    let turned = (1..4).map(|k| mean_difference(&png(0), &png(k))).collect::<Vec<_>>();
+    assert!(turned.iter().all(|&d| d > 0.5), "each quarter turn shows the model from another side: {turned:?}");
+    // Frame 2 alone (the half turn) is turned by its place in the whole sequence.
+    let half = dir.path().join("half/%d.png");
+    render(model, &half, &["--size", "40x40", "--frames", "4", "--frame-range", "2..3", "--turntable"])
+        .expect("adapter");
+    assert_eq!(rgba(&dir.path().join("half/2.png")), png(2), "a turntable's range is posed as the whole run");
+}
+
+/// Render frames `0..6` of `scene` whole and as the ranges 0..2, 2..5 and 5..6
+/// into separate folders: every frame is the same, numbered the same.
+fn split_ranges_equal_the_whole_run(scene: &str, time: &str) {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let sequence = ["--size", "48x48", "--frames", "6", "--fps", "5", "--time", time];
+    let Some(_) = render(scene, &dir.path().join("whole/%02d.png"), &sequence) else { return };
+    for (k, range) in ["0..2", "2..5", "5..6"].iter().enumerate() {
+        let folder = dir.path().join(format!("part{k}/%02d.png"));
+        render(scene, &folder, &[&sequence[..], &["--frame-range", range]].concat()).expect("adapter");
+    }
+    let whole: Vec<_> = (0..6).map(|f| rgba(&dir.path().join(format!("whole/{f:02}.png")))).collect();
+    assert_ne!(whole[0], whole[5], "{scene}: the scene moves over the sequence");
+    for (part, frames) in [(0, 0..2), (1, 2..5), (2, 5..6)] {
+        let listed = std::fs::read_dir(dir.path().join(format!("part{part}"))).expect("folder").count();
+        assert_eq!(listed, frames.len(), "{scene}: part {part} holds only its frames");
+        for f in frames {
+            let got = rgba(&dir.path().join(format!("part{part}/{f:02}.png")));
+            assert!(got == whole[f], "{scene}: frame {f} of part {part} differs from the whole run's");
+        }
+    }
+}
+
+#[test]
+fn a_split_cloth_sequence_equals_the_whole_run() {
+    split_ranges_equal_the_whole_run("tests/scenes/cloth_debug.scn", "0");
+}
+
+#[test]
+fn a_split_particle_sequence_equals_the_whole_run() {
+    split_ranges_equal_the_whole_run("tests/scenes/emitter.scn", "0.5");
+}
+
+#[test]
+fn a_split_school_sequence_equals_the_whole_run() {
+    split_ranges_equal_the_whole_run("tests/scenes/school.scn", "0");
+}
+
+#[test]
+fn sequence_arguments_are_checked_before_any_frame() {
+    let model = repo("tests/models/animated.gltf");
+    let model = model.to_str().expect("path");
+    let dir = tempfile::tempdir().expect("temp dir");
+    let out = |name: &str| dir.path().join(name).to_str().expect("path").to_owned();
+    let cases: [(&[&str], &str); 5] = [
+        (&["-o", &out("a.gif"), "--apng"], "--apng writes a PNG"),
+        (&["-o", &out("a.png"), "--frames", "3"], "several frames need a numbered output"),
+        (&["-o", &out("%d.png"), "--frames", "3", "--frame-range", "2..4"], "of the sequence's 3 frames"),
+        (&["-o", &out("%d.png"), "--frames", "3", "--frame-range", "2..2"], "expected FIRST..END"),
+        (&["-o", "/nonexistent/dir/a.gif", "--frames", "2"], "/nonexistent/dir/a.gif: cannot create"),
+    ];
+    for (args, want) in cases {
+        let o = glint(&[&["render", model, "--size", "8x8"], args].concat());
+        if no_adapter(&o) {
+            return;
+        }
+        assert_eq!(o.status.code(), Some(1), "{args:?}: {}", stderr(&o));
+        assert!(!stderr(&o).contains("panicked"), "{}", stderr(&o));
+        assert!(stderr(&o).contains(want), "{args:?}: '{}' should say '{want}'", stderr(&o));
+    }
+    // A full device is a write error naming it, not a panic or an exit 0.
+    if Path::new("/dev/full").exists() {
+        let o = glint(&["render", model, "--size", "8x8", "--frames", "2", "-o", "/dev/full", "--apng"]);
+        assert_write_failed(&o, "/dev/full");
+    }
+}
