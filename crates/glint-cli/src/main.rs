@@ -3,6 +3,7 @@
 mod bench;
 mod bench_live;
 mod compare;
+mod explain;
 mod output;
 mod particles;
 mod plot;
@@ -158,6 +159,36 @@ enum Command {
         /// screenshot=PATH. Repeatable; for scripted runs such as CI.
         #[arg(long, value_name = "FRAME:ACTION", value_parser = view::parse_at)]
         at: Vec<view::Scripted>,
+    },
+    /// Explain a frame as the GPU receives it: each pass, each draw call in
+    /// order with its decoded sort key, the state it changed and kept, its
+    /// instances and triangles, and the stage costs (no window needed).
+    #[command(after_help = EXIT_CODES)]
+    Explain {
+        /// The scene file.
+        scene: PathBuf,
+        /// Explain the naive frame too, beside the optimized one, with the ratios of their costs.
+        #[arg(long)]
+        naive: bool,
+        /// Print one JSON object: the frame's `stats` and its `passes`, each
+        /// holding its `draw_calls` in encoding order (and `naive` likewise).
+        #[arg(long)]
+        json: bool,
+        /// Which view of the frame (0 = the first).
+        #[arg(long, default_value_t = 0)]
+        view: usize,
+        /// Use only this camera of the scene (0 = the first).
+        #[arg(long)]
+        camera: Option<usize>,
+        /// Cull every view this way, whatever its camera's "cull" says.
+        #[arg(long, value_enum)]
+        cull: Option<CullArg>,
+        /// Image size, WIDTHxHEIGHT.
+        #[arg(long, default_value = "640x360", value_parser = parse_size)]
+        size: (u32, u32),
+        /// Pose the scene at this time, in seconds.
+        #[arg(long, default_value_t = 0.0, value_parser = parse_time)]
+        time: f32,
     },
     /// Run a simulation (see `glint sim cloth --help`, `glint sim school --help`).
     #[command(subcommand, after_help = EXIT_CODES)]
@@ -573,6 +604,19 @@ fn main() -> ExitCode {
             })
         }
         Command::Check { scene } => check(scene, options),
+        Command::Explain { scene, naive, json, view, camera, cull, size, time } => {
+            explain::explain(explain::ExplainArgs {
+                scene,
+                naive: *naive,
+                json: *json,
+                view: *view,
+                camera: *camera,
+                cull: *cull,
+                size: *size,
+                time: *time,
+                options,
+            })
+        }
         Command::Compare { expected, actual, diff } => match compare::run(expected, actual, diff.as_deref()) {
             Ok(true) => Ok(()),
             Ok(false) => return ExitCode::from(4),

@@ -7,6 +7,8 @@ use crate::scene::{MaterialId, ShapeId};
 /// material and shape.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Batch {
+    /// The sort key of its first item.
+    pub key: u64,
     /// Draw stage (top byte of the sort key).
     pub stage: u8,
     /// Forward pipeline id.
@@ -54,6 +56,7 @@ pub(crate) fn merge_placed(
         before = Some(item);
         if !joins {
             batches.push(Batch {
+                key: item.key,
                 stage,
                 pipeline: item.pipeline,
                 material: item.material,

@@ -10,6 +10,7 @@
 //! `naive.rs`.)
 
 use super::draw_list::{run_stage, DrawList};
+use super::explain::{queue_name, state, DrawCall, PassType};
 use super::gpu_cull::{Run, COMMAND_BYTES};
 use super::pipelines::SkyPass;
 use super::queue::{Queue, SKY_STAGE};
@@ -58,6 +59,9 @@ impl Renderer {
         let list = &self.view.forward;
         let sky_at = list.runs.partition_point(|r| run_stage(list, r) < SKY_STAGE);
         if let Some(pipelines) = &self.cull_pipelines {
+            if self.view.forward.culled_on_gpu() {
+                self.outline.pass("cull instances", PassType::Compute, &[]);
+            }
             self.view.forward.record_cull(encoder, pipelines, self.queue.submits());
         }
         let depth = target.depth_only_view().filter(|_| self.view.forward.gpu.as_ref().is_some_and(|g| g.occluding));
@@ -73,6 +77,8 @@ impl Renderer {
                     self.draw_stages(&self.view.forward, &mut pass, (0..sky_at, &[false]), &mut bound, stats);
                 }
                 if let Some(gpu) = &mut self.view.forward.gpu {
+                    self.outline.pass("depth pyramid", PassType::Compute, &[]);
+                    self.outline.pass("cull instances: late", PassType::Compute, &[]);
                     gpu.record_late((&self.device, encoder), pipelines, depth, self.queue.submits());
                 }
                 (Part::Second, &[false, true][..])
@@ -136,14 +142,15 @@ impl Renderer {
         };
         let (begins, ends) =
             (matches!(part, Part::Whole | Part::First), matches!(part, Part::Whole | Part::Second | Part::Particles));
+        let label = match part {
+            Part::Whole => "forward pass",
+            Part::First => "forward pass: early",
+            Part::Second => "forward pass: late",
+            Part::Middle => "forward pass: before soft particles",
+            Part::Particles => "forward pass: soft particles",
+        };
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some(match part {
-                Part::Whole => "forward pass",
-                Part::First => "forward pass: early",
-                Part::Second => "forward pass: late",
-                Part::Middle => "forward pass: before soft particles",
-                Part::Particles => "forward pass: soft particles",
-            }),
+            label: Some(label),
             color_attachments: &[Some(color)],
             depth_stencil_attachment: Some(depth),
             timestamp_writes: self.gpu_timer.as_ref().and_then(|t| t.pass_writes(Timed::Forward, begins, ends)),
@@ -153,6 +160,8 @@ impl Renderer {
         pass.set_bind_group(1, &self.view.blocks.bind_group, &[ViewBlocks::offset(0)]);
         pass.set_bind_group(3, &self.view.forward.bind_group, &[]);
         stats.bind_groups_set += 3;
+        let bound = ["bind group 0 (scene)", "bind group 1 (camera)", "bind group 3 (instances, draw indices)"];
+        self.outline.pass(label, PassType::Render, &bound);
         pass
     }
 
@@ -168,6 +177,7 @@ impl Renderer {
         let glare = self.registry.pipelines.sky_built(target.format(), SkyPass::Glare);
         if let Some(glare) = glare.filter(|_| environment.glare > 0.0) {
             full_screen(pass, glare, "glare", stats);
+            self.outline.call(|| DrawCall::single("glare", "draw", (1, 1), &["pipeline"]));
         }
     }
 
@@ -186,6 +196,7 @@ impl Renderer {
         };
         let Some(sky) = sky else { return false };
         full_screen(pass, sky, "sky", stats);
+        self.outline.call(|| DrawCall::single("sky", "draw", (1, 1), &["pipeline"]));
         stats.passes.sky = super::PassStats { draw_calls: 1, draws: 1, instances: 1, cpu_ms: 0.0 };
         // The sky's layout has groups 0–1 only: bind the forward groups again.
         pass.set_bind_group(3, &self.view.forward.bind_group, &[]);
@@ -208,7 +219,7 @@ impl Renderer {
         for stage in list.runs[range].chunk_by(|a, b| run_stage(list, a) == run_stage(list, b)) {
             let (start, calls, draws) = (web_time::Instant::now(), stats.draw_calls, stats.draws);
             let name = run_stage(list, &stage[0]);
-            pass.push_debug_group(&stage_name(name));
+            pass.push_debug_group(&queue_name(name));
             for &late in phases {
                 for (k, run) in stage.iter().enumerate() {
                     self.draw_run(list, pass, (at + k, late), run, bound, stats);
@@ -242,27 +253,32 @@ impl Renderer {
         stats: &mut FrameStats,
     ) {
         let (first, draw) = (&list.batches[run.first as usize], &list.draws[run.first as usize]);
+        let mut changed = 0;
         let reference = self.registry.pipelines.stencil_reference(first.pipeline);
         if bound.stencil_reference != reference {
             pass.set_stencil_reference(reference);
             bound.stencil_reference = reference;
+            changed |= state::STENCIL;
         }
         if bound.pipeline != Some(first.pipeline) {
             pass.set_pipeline(self.registry.pipelines.forward(first.pipeline));
             bound.pipeline = Some(first.pipeline);
             stats.pipelines_bound += 1;
+            changed |= state::PIPELINE;
         }
         if bound.texture_set != Some(draw.texture_set) {
             pass.set_bind_group(2, &self.registry.texture_sets[draw.texture_set as usize].bind_group, &[]);
             bound.texture_set = Some(draw.texture_set);
             stats.bind_groups_set += 1;
+            changed |= state::TEXTURES;
         }
         let page = draw.mesh.page;
         if bound.page != Some(page) && self.base_vertex {
             self.registry.mesh_pool.bind(pass, page);
             bound.page = Some(page);
+            changed |= state::VERTICES;
         }
-        match (&list.indirect, &list.gpu, &self.cull_pipelines) {
+        let command = match (&list.indirect, &list.gpu, &self.cull_pipelines) {
             (_, Some(gpu), Some(pipelines)) if list.culled_on_gpu() => {
                 gpu.draw_run(pipelines, pass, (k, late), run);
                 // A batch is one draw, in one phase or both; the late calls apart.
@@ -270,10 +286,15 @@ impl Renderer {
                     true => stats.late_draw_calls += 1,
                     false => (stats.draws, stats.draw_calls) = (stats.draws + run.len, stats.draw_calls + 1),
                 }
+                match pipelines.draw_count {
+                    true => "multi_draw_indexed_indirect_count",
+                    false => "multi_draw_indexed_indirect",
+                }
             }
             (Some(indirect), ..) => {
                 pass.multi_draw_indexed_indirect(&indirect.buffer, u64::from(run.first) * COMMAND_BYTES, run.len);
                 (stats.draws, stats.draw_calls) = (stats.draws + run.len, stats.draw_calls + 1);
+                "multi_draw_indexed_indirect"
             }
             _ => {
                 for (b, draw) in list.batches[run.batches()].iter().zip(&list.draws[run.batches()]) {
@@ -289,18 +310,10 @@ impl Renderer {
                     pass.draw_indexed(indices, base_vertex, b.first_instance..b.first_instance + b.instance_count);
                 }
                 (stats.draws, stats.draw_calls) = (stats.draws + run.len, stats.draw_calls + run.len);
+                "draw_indexed"
             }
-        }
-    }
-}
-
-/// Debug-group name of a stage: its queue, or the render order that put it there.
-fn stage_name(stage: u8) -> String {
-    match stage {
-        s if s == Queue::Opaque.stage() => "opaque".into(),
-        s if s == Queue::AlphaTest.stage() => "alpha-test".into(),
-        s if s == Queue::Transparent.stage() => "transparent".into(),
-        s => format!("render_order {s}"),
+        };
+        self.outline.calls(|| self.run_calls(list, run, (command, late), changed));
     }
 }
 

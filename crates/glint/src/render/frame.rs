@@ -437,8 +437,8 @@ impl Renderer {
                 let (device, queue, index, timer) =
                     (&self.device, &self.queue, self.frame_index, self.gpu_timer.as_mut());
                 let (params, pool) = (&mut self.view.post_params, &mut self.targets);
-                stats.passes.post =
-                    self.post.encode((device, queue), (params, pool), encoder, chain, images, (index, timer))?;
+                let frame = (index, timer, &self.outline);
+                stats.passes.post = self.post.encode((device, queue), (params, pool), encoder, chain, images, frame)?;
                 stats.draws += stats.passes.post.draws;
                 stats.draw_calls += stats.passes.post.draw_calls;
                 self.outline.leave(encoder);

@@ -9,8 +9,10 @@
 
 use super::batch::Batch;
 use super::encode::Part;
+use super::explain::state;
+use super::gpu_cull::Run;
 use super::prepare::Prepared;
-use super::queue::Queue;
+use super::queue::{sort_key, Queue};
 use super::timer::Timed;
 use super::view::ViewFrame;
 use super::{FrameStats, Laps, RenderError, Renderer};
@@ -47,8 +49,15 @@ impl Renderer {
             stats.instances_invalid += u64::from(slot.invalid);
             for i in slot.first..slot.first + slot.count {
                 if self.store.bounds.is_valid(i as usize) {
+                    let stage = Queue::Opaque.stage();
+                    // Keyed as the optimized frame keys it (blended materials far
+                    // to near), though the naive frame draws in submission order.
+                    let features = self.registry.pipelines.key_of(pipeline).features;
+                    let blended = features.contains(crate::shader::ShaderFeatures::ALPHA_BLEND);
+                    let key = sort_key(stage, blended, pipeline, draw.texture_set, s.material, s.shape, 0.0);
                     let batch = Batch {
-                        stage: Queue::Opaque.stage(),
+                        key,
+                        stage,
                         pipeline,
                         material: s.material,
                         shape: s.shape,
@@ -119,6 +128,13 @@ impl Renderer {
                 let indices = mesh.first_index..mesh.first_index + mesh.index_count;
                 pass.draw_indexed(indices, base_vertex, b.first_instance..b.first_instance + 1);
             }
+            self.outline.calls(|| {
+                let every = state::STENCIL | state::PIPELINE | state::TEXTURES | state::VERTICES;
+                let run = |k: usize| Run::new(k, 1, 0);
+                (0..list.batches.len())
+                    .flat_map(|k| self.run_calls(list, &run(k), ("draw_indexed", false), every))
+                    .collect()
+            });
             pass.pop_debug_group();
             self.draw_particles(&mut pass, target.format(), None, stats);
             self.draw_glare(&mut pass, target, &lighting.environment, stats);

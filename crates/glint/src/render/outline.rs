@@ -5,8 +5,11 @@
 //! ([`Gpu::debug_groups`](crate::Gpu::debug_groups));
 //! [`Renderer::frame_outline`](super::Renderer::frame_outline) lists them everywhere.
 
+use super::explain::{DrawCall, FrameCalls, PassType, Tape};
+
 /// The groups open in the frame's encoder and those it has opened so far,
-/// each as its path ("frame 3 › view 1 › shadows").
+/// each as its path ("frame 3 › view 1 › shadows"); while explaining, the
+/// passes and draw calls recorded in them too.
 pub(super) struct Outline {
     /// Whether the groups go to the driver.
     driver: bool,
@@ -14,11 +17,45 @@ pub(super) struct Outline {
     opened: Vec<String>,
     /// The groups of the last frame submitted.
     last: Vec<String>,
+    /// The passes and calls of the frame being recorded, while explaining.
+    tape: Option<Tape>,
+    /// The last submitted frame's, while explaining.
+    last_calls: Option<FrameCalls>,
 }
 
 impl Outline {
     pub(super) fn new(driver: bool) -> Self {
-        Self { driver, open: Vec::new(), opened: Vec::new(), last: Vec::new() }
+        Self { driver, open: Vec::new(), opened: Vec::new(), last: Vec::new(), tape: None, last_calls: None }
+    }
+
+    /// Start (with a tape) or stop explaining frames.
+    pub(super) fn set_tape(&mut self, tape: Option<Tape>) {
+        self.last_calls = None;
+        self.tape = tape;
+    }
+
+    /// Write down the call `call` builds in the pass begun last, while explaining.
+    pub(super) fn call(&self, call: impl FnOnce() -> DrawCall) {
+        self.calls(|| vec![call()]);
+    }
+
+    /// Write down the calls `calls` builds, while explaining.
+    pub(super) fn calls(&self, calls: impl FnOnce() -> Vec<DrawCall>) {
+        if let Some(tape) = &self.tape {
+            calls().into_iter().for_each(|c| tape.call(c));
+        }
+    }
+
+    /// The last submitted frame's passes and calls, while explaining.
+    pub(super) fn last_calls(&self) -> Option<&FrameCalls> {
+        self.last_calls.as_ref()
+    }
+
+    /// Write down a pass begun in the innermost open group, while explaining.
+    pub(super) fn pass(&self, name: &str, kind: PassType, bound: &[&str]) {
+        if let Some(tape) = &self.tape {
+            tape.pass(name, kind, self.open.last().map_or("", String::as_str), bound);
+        }
     }
 
     /// Open the group `name` inside the open ones.
@@ -48,12 +85,18 @@ impl Outline {
             self.leave(encoder);
         }
         self.last = std::mem::take(&mut self.opened);
+        if let Some(tape) = &self.tape {
+            self.last_calls = Some(tape.take());
+        }
     }
 
     /// Forget a frame whose encoder was dropped.
     pub(super) fn drop_frame(&mut self) {
         self.open.clear();
         self.opened.clear();
+        if let Some(tape) = &self.tape {
+            tape.take();
+        }
     }
 
     /// Every group the last submitted frame opened, in order.

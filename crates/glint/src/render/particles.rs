@@ -9,6 +9,7 @@
 //! layers must be written back to front; additive ones in any order. One draw
 //! call a layer, whatever its count.
 
+use super::explain::DrawCall;
 use super::{RenderError, Renderer};
 use crate::asset::Texture;
 use crate::gpu::TargetFormat;
@@ -325,6 +326,17 @@ impl Renderer {
             }
             pass.set_vertex_buffer(0, layer.buffer.slice(..));
             pass.draw(0..4, 0..layer.count);
+            self.outline.call(|| {
+                let what = format!(
+                    "particles ({}{})",
+                    format!("{:?}", layer.blend).to_lowercase(),
+                    if soft.is_some() { ", soft" } else { "" }
+                );
+                let mut changed = vec!["pipeline", "bind group 2 (particle layer)", "vertex buffer 0 (records)"];
+                changed.extend(soft.map(|_| "bind group 3 (scene depth)"));
+                let count = u64::from(layer.count);
+                DrawCall::single(&what, "draw", (count, 2 * count), &changed)
+            });
             stats.draw_calls += 1;
             stats.draws += 1;
             stats.bind_groups_set += 1 + u32::from(soft.is_some());

@@ -71,7 +71,9 @@ impl Renderer {
             let first = entities.len();
             match e.mesh {
                 MeshRef::Shape(kind) => {
-                    let shape = *shapes.entry(kind).or_insert_with(|| registry.add_shape(kind.mesh()));
+                    let shape = *shapes
+                        .entry(kind)
+                        .or_insert_with(|| registry.add_named_shape(kind.mesh(), kind.name().into()));
                     let material = match e.material {
                         Some(i) => materials[i],
                         None => *default_material.get_or_insert_with(|| registry.add_material(Material::default())),
@@ -98,7 +100,7 @@ impl Renderer {
             // Cloth is thin: both sides show, whatever the named material says.
             let look = cloth.material.map_or_else(Material::default, |i| desc.materials[i].resolve(&textures));
             let material = registry.add_material(Material { double_sided: true, ..look });
-            let surface = registry.add_shape(cloth.view.surface.clone());
+            let surface = registry.add_named_shape(cloth.view.surface.clone(), "cloth".into());
             entities.push(Entity::new(surface, material, Mat4::IDENTITY));
             if let Some(edges) = &cloth.view.edges {
                 let ink = Material {
@@ -106,7 +108,8 @@ impl Renderer {
                     double_sided: true,
                     ..Material::color("cloth edges", 0.02, 0.02, 0.03)
                 };
-                let (ink, edges) = (registry.add_material(ink), registry.add_shape(edges.clone()));
+                let edges = registry.add_named_shape(edges.clone(), "cloth edges".into());
+                let ink = registry.add_material(ink);
                 entities.push(Entity::new(edges, ink, Mat4::IDENTITY));
                 if !cloth.view.pins.is_empty() {
                     let red =
@@ -114,7 +117,7 @@ impl Renderer {
                     let red = registry.add_material(red);
                     let ball = *shapes
                         .entry(ShapeKind::Sphere)
-                        .or_insert_with(|| registry.add_shape(ShapeKind::Sphere.mesh()));
+                        .or_insert_with(|| registry.add_named_shape(ShapeKind::Sphere.mesh(), "sphere".into()));
                     entities.push(Entity::instanced(ball, red, pin_transforms(&cloth.view)));
                 }
             }
@@ -140,7 +143,11 @@ impl Registry {
                     Some(&m) => m,
                     None => *default_material.get_or_insert_with(|| self.add_material(Material::default())),
                 };
-                (self.add_shape(part.mesh.clone()), material)
+                let file = model
+                    .path
+                    .file_name()
+                    .map_or_else(|| model.path.display().to_string(), |f| f.to_string_lossy().into());
+                (self.add_named_shape(part.mesh.clone(), format!("{file}: {}", part.name)), material)
             })
             .collect();
         ModelIds { parts }

@@ -214,7 +214,7 @@ impl PostChain {
         encoder: &mut wgpu::CommandEncoder,
         chain: &[PostEffect],
         images: &ChainImages,
-        (frame_index, mut timer): (u64, Option<&mut GpuTimer>),
+        (frame_index, mut timer, outline): (u64, Option<&mut GpuTimer>, &super::outline::Outline),
     ) -> Result<PassStats, RenderError> {
         if chain.len() > MAX_POST_EFFECTS {
             return Err(RenderError::PostChainTooLong(chain.len()));
@@ -262,8 +262,9 @@ impl PostChain {
             let last = steps.get(k + 1).is_none_or(|(next, _)| next != effect);
             let writes = timer.as_ref().and_then(|t| t.pass_writes(Timed::Post(*effect as u8), first, last));
             let format = if step.target == Image::Output { images.output_format } else { HDR_FORMAT };
+            let label = format!("post: {} ({})", chain[*effect].name(), step.pass.entry_point());
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some(&format!("post: {} ({})", chain[*effect].name(), step.pass.entry_point())),
+                label: Some(&label),
                 color_attachments: &[Some(wgpu::RenderPassColorAttachment {
                     view: self.view(step.target, images, pool)?,
                     depth_slice: None,
@@ -281,6 +282,9 @@ impl PostChain {
             pass.set_bind_group(0, &bind_group, &[(PARAMS_STRIDE * k as u64) as u32]);
             pass.draw(0..3, 0..1);
             drop(pass);
+            outline.pass(&label, super::explain::PassType::Render, &[]);
+            let changed = ["pipeline", "bind group 0 (the step's images and parameters)"];
+            outline.call(|| super::explain::DrawCall::single(&label, "draw", (1, 1), &changed));
             if last {
                 if let Some(timer) = timer.as_deref_mut() {
                     timer.resolve(encoder, Timed::Post(*effect as u8), frame_index);

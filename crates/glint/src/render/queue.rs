@@ -117,6 +117,48 @@ pub fn sort_key(
     }
 }
 
+/// The fields of a sort key ([`decode_key`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct KeyFields {
+    /// The stage.
+    pub stage: u8,
+    /// The pipeline id (binned keys only).
+    pub pipeline: Option<u16>,
+    /// The texture set (binned keys only).
+    pub texture_set: Option<u16>,
+    /// The material id, masked to its field.
+    pub material: u32,
+    /// The shape id, masked to its field.
+    pub shape: u32,
+    /// The depth over the far plane, to the field's precision.
+    pub depth: f32,
+}
+
+/// The fields of `key`, built by [`sort_key`] with `blended` as given.
+pub fn decode_key(key: u64, blended: bool) -> KeyFields {
+    let field = |shift: u32, bits: u32| (key >> shift) & mask(bits);
+    if blended {
+        let d = field(SORTED_DEPTH_SHIFT, SORTED_DEPTH_BITS) as f64 / mask(SORTED_DEPTH_BITS) as f64;
+        KeyFields {
+            stage: stage_of(key),
+            pipeline: None,
+            texture_set: None,
+            material: field(SORTED_MATERIAL_SHIFT, MATERIAL_BITS) as u32,
+            shape: field(0, SHAPE_BITS) as u32,
+            depth: (1.0 - d) as f32,
+        }
+    } else {
+        KeyFields {
+            stage: stage_of(key),
+            pipeline: Some(field(PIPELINE_SHIFT, PIPELINE_BITS) as u16),
+            texture_set: Some(field(TEXTURE_SET_SHIFT, TEXTURE_SET_BITS) as u16),
+            material: field(BINNED_MATERIAL_SHIFT, BINNED_MATERIAL_BITS) as u32,
+            shape: field(BINNED_SHAPE_SHIFT, BINNED_SHAPE_BITS) as u32,
+            depth: (field(0, BINNED_DEPTH_BITS) as f64 / mask(BINNED_DEPTH_BITS) as f64) as f32,
+        }
+    }
+}
+
 /// The stage of a key.
 pub fn stage_of(key: u64) -> u8 {
     (key >> STAGE_SHIFT) as u8
@@ -214,6 +256,20 @@ mod tests {
         // Material 4096 wraps to 0 in the binned key: same bin, still the same stage.
         assert_eq!(k(MaterialId(1 << 12), 0.5), k(M0, 0.5));
         assert_eq!(stage_of(sort_key(255, true, u16::MAX, 0, MaterialId(u32::MAX), ShapeId(u32::MAX), 0.0)), 255);
+    }
+
+    #[test]
+    fn decoding_a_key_gives_back_every_field() {
+        let binned = decode_key(sort_key(96, false, 1234, 567, MaterialId(890), ShapeId(321), 0.25), false);
+        assert_eq!((binned.stage, binned.pipeline, binned.texture_set), (96, Some(1234), Some(567)));
+        assert_eq!((binned.material, binned.shape), (890, 321));
+        assert!((binned.depth - 0.25).abs() < 1.0 / 4095.0, "{}", binned.depth);
+        let sorted = decode_key(sort_key(192, true, 9, 9, MaterialId(40_000), ShapeId(65_000), 0.75), true);
+        assert_eq!((sorted.stage, sorted.pipeline, sorted.texture_set), (192, None, None));
+        assert_eq!((sorted.material, sorted.shape), (40_000, 65_000));
+        assert!((sorted.depth - 0.75).abs() < 1e-6, "{}", sorted.depth);
+        // Wider ids are masked, as in the key.
+        assert_eq!(decode_key(sort_key(64, false, 0, 0, MaterialId(4096 + 5), S0, 0.0), false).material, 5);
     }
 
     #[test]

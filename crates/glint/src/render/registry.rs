@@ -15,6 +15,9 @@ use crate::scene::{Material, MaterialId, Mesh, RenderTargetId, ShapeId, TextureI
 
 pub(super) struct ShapeSlot {
     pub(super) mesh: Mesh,
+    /// Its name where it came from a scene or model ("cube", "fish.obj: body"),
+    /// else "shape N".
+    pub(super) name: String,
     pub(super) layout: VertexLayout,
     /// Where the mesh lives in the pool, once uploaded.
     pub(super) gpu: Option<MeshRange>,
@@ -142,7 +145,13 @@ impl Registry {
 
     /// Add a shape; its buffers are created the first time an entity using it is drawn.
     pub fn add_shape(&mut self, mesh: Mesh) -> ShapeId {
-        self.shapes.push(ShapeSlot { layout: VertexLayout::of(&mesh), mesh, gpu: None, rewrite: false });
+        let name = format!("shape {}", self.shapes.len());
+        self.add_named_shape(mesh, name)
+    }
+
+    /// [`add_shape`](Self::add_shape), named (as `glint explain` shows it).
+    pub(crate) fn add_named_shape(&mut self, mesh: Mesh, name: String) -> ShapeId {
+        self.shapes.push(ShapeSlot { layout: VertexLayout::of(&mesh), mesh, name, gpu: None, rewrite: false });
         ShapeId(self.shapes.len() as u32 - 1)
     }
 

@@ -11,6 +11,7 @@
 use super::blocks::CameraGpu;
 use super::cull::Frustum;
 use super::encode::Bound;
+use super::explain::PassType;
 use super::pipelines::PassKind;
 use super::prepare::Prepared;
 use super::queue::{self, DrawItem, Queue};
@@ -291,6 +292,9 @@ impl Renderer {
         cost: &mut PassStats,
     ) {
         if let Some(pipelines) = &self.cull_pipelines {
+            if self.view.shadows.culled_on_gpu() {
+                self.outline.pass("cull instances", PassType::Compute, &[]);
+            }
             self.view.shadows.record_cull(encoder, pipelines, self.queue.submits());
         }
         let mut stats = FrameStats::default();
@@ -316,6 +320,8 @@ impl Renderer {
             pass.set_bind_group(1, &self.view.blocks.bind_group, &[ViewBlocks::offset(1 + k)]);
             pass.set_bind_group(3, &self.view.shadows.bind_group, &[]);
             stats.bind_groups_set += 2;
+            let bound = ["bind group 1 (the light's camera)", "bind group 3 (instances, draw indices)"];
+            self.outline.pass(&names[k], PassType::Render, &bound);
             self.draw_stages(
                 &self.view.shadows,
                 &mut pass,

@@ -22,6 +22,7 @@ impl Renderer {
     pub fn simulate(&mut self, sim: &mut dyn GpuSimulation) {
         let mut encoder = self.take_encoder();
         self.outline.enter(&mut encoder, "simulate");
+        self.outline.pass("simulate", super::explain::PassType::Compute, &[]);
         sim.encode(&self.device, &self.queue, &mut encoder);
         self.outline.leave(&mut encoder);
         self.encoder = Some(encoder);

@@ -1,0 +1,236 @@
+//! `glint explain`: a frame as the GPU receives it, for people. Each pass
+//! (compute and render) in encoding order, then each of its draw calls with
+//! the batches it draws (sort keys decoded: queue, pipeline variant and its
+//! shader features, material and mesh by name), the state set before it and
+//! the state it kept, its instances and triangles; then the stage costs. With
+//! `--naive`, the naive frame of the same view beside it.
+
+use crate::{check_camera, culled, load, output, CullArg};
+use glint::asset::LoadOptions;
+use glint::render::{FrameCalls, FrameMode, PassCalls};
+use glint::{Diagnostic, Error, FrameStats, Gpu, OffscreenTarget, Renderer, World};
+use serde::Serialize;
+use std::fmt::Write;
+use std::path::Path;
+
+/// Frames drawn before the explained one: pipelines are built by the first,
+/// and counts culled on the GPU come back a frame or two late.
+const WARMUP_FRAMES: usize = 3;
+
+/// Frames whose CPU costs are taken (median), the explained one last.
+const COSTED_FRAMES: usize = 5;
+
+/// What `glint explain` was asked for.
+pub struct ExplainArgs<'a> {
+    pub scene: &'a Path,
+    pub naive: bool,
+    pub json: bool,
+    /// The view of the frame to explain.
+    pub view: usize,
+    pub camera: Option<usize>,
+    pub cull: Option<CullArg>,
+    pub size: (u32, u32),
+    pub time: f32,
+    pub options: LoadOptions,
+}
+
+/// One way of building the frame, explained.
+#[derive(Serialize)]
+struct Explained {
+    /// "optimized" or "naive".
+    mode: &'static str,
+    /// The view's statistics for the explained frame.
+    stats: FrameStats,
+    /// Median CPU time of the whole flush over the costed frames, ms.
+    cpu_ms_median: f64,
+    /// The view's passes, in encoding order.
+    passes: Vec<PassCalls>,
+}
+
+/// Explain the frame as `args` says and print it.
+pub fn explain(args: ExplainArgs) -> Result<(), Error> {
+    let desc = load(args.scene, args.options.clone())?;
+    check_camera(&desc, args.scene, args.camera)?;
+    desc.check_pose(args.time)?;
+    let gpu = Gpu::headless()?;
+    let mut modes = vec![explain_mode(&gpu, &desc, &args, FrameMode::Optimized)?];
+    if args.naive {
+        modes.push(explain_mode(&gpu, &desc, &args, FrameMode::Naive)?);
+    }
+    let adapter = format!("{} ({:?})", gpu.info().name, gpu.info().backend);
+    let (width, height) = args.size;
+    let text = if args.json {
+        let mut json = serde_json::to_value(&modes[0]).expect("explanations serialise");
+        json["scene"] = args.scene.display().to_string().into();
+        json["adapter"] = adapter.into();
+        json["size"] = format!("{width}x{height}").into();
+        json["view"] = args.view.into();
+        if let Some(naive) = modes.get(1) {
+            json["naive"] = serde_json::to_value(naive).expect("explanations serialise");
+            json["ratios"] = serde_json::to_value(Ratios::of(&modes[0], naive)).expect("ratios serialise");
+        }
+        format!("{json}\n")
+    } else {
+        let mut text = format!("{}, view {}, {width}x{height} on {adapter}\n", args.scene.display(), args.view);
+        for mode in &modes {
+            text.push_str(&describe(mode));
+        }
+        if let Some(naive) = modes.get(1) {
+            let r = Ratios::of(&modes[0], naive);
+            let _ = writeln!(
+                text,
+                "\nnaive / optimized: {:.1}x the draw calls, {:.1}x the pipelines bound, {:.1}x the bind groups set, {:.1}x the CPU time",
+                r.draw_calls, r.pipelines_bound, r.bind_groups_set, r.cpu
+            );
+        }
+        text
+    };
+    Ok(output::print(&text)?)
+}
+
+/// The naive frame's costs over the optimized one's.
+#[derive(Serialize)]
+struct Ratios {
+    draw_calls: f64,
+    pipelines_bound: f64,
+    bind_groups_set: f64,
+    /// Median CPU time of the flush.
+    cpu: f64,
+}
+
+impl Ratios {
+    fn of(optimized: &Explained, naive: &Explained) -> Self {
+        let over = |n: u32, o: u32| f64::from(n) / f64::from(o.max(1));
+        let (o, n) = (&optimized.stats, &naive.stats);
+        Self {
+            draw_calls: over(n.draw_calls, o.draw_calls),
+            pipelines_bound: over(n.pipelines_bound, o.pipelines_bound),
+            bind_groups_set: over(n.bind_groups_set, o.bind_groups_set),
+            cpu: naive.cpu_ms_median / optimized.cpu_ms_median.max(1e-9),
+        }
+    }
+}
+
+/// Draw the scene's frame built as `mode` a few times while explaining, and
+/// keep the last one's passes for the asked view.
+fn explain_mode(
+    gpu: &Gpu,
+    desc: &glint::asset::SceneDesc,
+    args: &ExplainArgs,
+    mode: FrameMode,
+) -> Result<Explained, Error> {
+    let mut target = OffscreenTarget::new(gpu, args.size.0, args.size.1, 1)?;
+    let mut renderer = Renderer::new(gpu);
+    renderer.set_mode(mode);
+    renderer.set_explaining(true);
+    let mut world = World::place(desc.clone(), &mut renderer);
+    let views = culled(world.views(args.camera), args.cull);
+    if args.view >= views.len() {
+        let message = format!("--view {} requested, but the frame has {} views", args.view, views.len());
+        return Err(Diagnostic::file(args.scene, message).into());
+    }
+    world.pose(args.time, &mut renderer)?;
+    let mut totals = Vec::new();
+    let mut last = Vec::new();
+    for _ in 0..WARMUP_FRAMES + COSTED_FRAMES {
+        last = world.draw(&mut renderer, &views, &mut target)?;
+        gpu.check()?;
+        // Each frame starts with the GPU idle, so no submission waits on an
+        // earlier frame's work (a CPU rasterizer's queue is short).
+        gpu.wait()?;
+        totals.push(last[args.view].cpu_ms.total);
+    }
+    renderer.wait_for_counts(&mut last);
+    let mut costed = totals.split_off(WARMUP_FRAMES);
+    costed.sort_by(f64::total_cmp);
+    let calls: &FrameCalls = renderer.explained().expect("explaining");
+    let passes = calls.of_view(args.view).into_iter().cloned().collect();
+    let mode = match mode {
+        FrameMode::Naive => "naive",
+        _ => "optimized",
+    };
+    Ok(Explained { mode, stats: last.swap_remove(args.view), cpu_ms_median: costed[costed.len() / 2], passes })
+}
+
+/// A draw call's lines, after its number.
+fn call_text(call: &glint::render::DrawCall) -> String {
+    let mut t = String::new();
+    let late = if call.late { " (late phase)" } else { "" };
+    let _ = writeln!(
+        t,
+        "{} of {}{late}: {} draws, {} instances, {} triangles",
+        call.command, call.what, call.draws, call.instances, call.triangles
+    );
+    let list = |l: &[String]| if l.is_empty() { "nothing".to_owned() } else { l.join(", ") };
+    let _ = writeln!(t, "    set: {}; kept: {}", list(&call.changed), list(&call.kept));
+    for b in &call.batches {
+        let textures = b.texture_set.map_or(String::new(), |s| format!(" texture set {s},"));
+        let _ = writeln!(
+            t,
+            "    key {}: {} (stage {}){}, pipeline {} [{}],{textures} material {} '{}', mesh {} '{}', depth {:.3}: {} instances, {} triangles",
+            b.key,
+            b.queue,
+            b.stage,
+            if b.blended { " far to near" } else { "" },
+            b.pipeline,
+            b.features.join(" "),
+            b.material,
+            b.material_name,
+            b.mesh,
+            b.mesh_name,
+            b.depth,
+            b.instances,
+            b.triangles
+        );
+    }
+    t
+}
+
+/// The text of one explained frame.
+fn describe(e: &Explained) -> String {
+    let s = &e.stats;
+    let mut t = String::new();
+    let _ = writeln!(t, "\n== {} frame ({})", e.mode, s.culled());
+    let _ = writeln!(
+        t,
+        "{} draw calls ({} draws, {} late), {} pipelines bound, {} bind groups set; instances {} submitted, {} drawn, {} culled; {} shadow views",
+        s.draw_calls,
+        s.draws,
+        s.late_draw_calls,
+        s.pipelines_bound,
+        s.bind_groups_set,
+        s.instances_submitted,
+        s.instances_drawn,
+        s.instances_culled,
+        s.shadow_views
+    );
+    for (k, pass) in e.passes.iter().enumerate() {
+        let kind = match pass.kind {
+            glint::render::PassType::Compute => "compute",
+            glint::render::PassType::Render => "render",
+        };
+        let _ = writeln!(t, "pass {k}: {kind} '{}' in {}", pass.name, pass.group);
+        if !pass.bound.is_empty() {
+            let _ = writeln!(t, "  bound at its start: {}", pass.bound.join(", "));
+        }
+        // Runs of calls that read the same (the naive frame's instances of
+        // one entity) are printed once, with their count.
+        let mut c = 0;
+        while c < pass.draw_calls.len() {
+            let text = call_text(&pass.draw_calls[c]);
+            let same = pass.draw_calls[c + 1..].iter().take_while(|d| call_text(d) == text).count();
+            match same {
+                0 => t.push_str(&format!("  call {c}: {text}")),
+                n => t.push_str(&format!("  calls {c}–{}, each: {text}", c + n)),
+            }
+            c += 1 + same;
+        }
+    }
+    let c = &s.cpu_ms;
+    let _ = writeln!(
+        t,
+        "CPU ms (this frame): prepare {:.3}, cull {:.3}, queue {:.3}, sort {:.3}, batch {:.3}, upload {:.3}, encode {:.3}, submit {:.3}; whole flush {:.3} (median of {COSTED_FRAMES} frames {:.3})",
+        c.prepare, c.cull, c.queue, c.sort, c.batch, c.upload, c.encode, c.submit, c.total, e.cpu_ms_median
+    );
+    t
+}

@@ -1,0 +1,101 @@
+//! `glint explain` as a user meets it: the text is stable (a snapshot of a
+//! small scene), the JSON's passes hold the draw calls that add up to the
+//! frame's statistics, and `--naive` puts the naive frame beside it.
+
+mod common;
+
+use common::*;
+
+/// Run glint on Vulkan (the snapshot's backend), or `None` without an adapter.
+fn glint_vulkan(args: &[&str]) -> Option<std::process::Output> {
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_glint"))
+        .args(args)
+        .current_dir(repo(""))
+        .env("NODEVICE_SELECT", "1")
+        .env("WGPU_BACKEND", "vulkan")
+        .output()
+        .expect("run glint");
+    if no_adapter(&out) {
+        return None;
+    }
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    Some(out)
+}
+
+/// The text without what changes from run to run and machine to machine: the
+/// first line (it names the adapter) and the CPU times.
+fn stable(text: &str) -> String {
+    text.lines().skip(1).filter(|l| !l.starts_with("CPU ms")).map(|l| format!("{l}\n")).collect()
+}
+
+#[test]
+fn the_text_of_a_small_scene_is_stable() {
+    let args = ["explain", "tests/scenes/states.scn", "--cull", "cpu", "--size", "64x64", "--naive"];
+    let Some(out) = glint_vulkan(&args) else { return };
+    let text = String::from_utf8(out.stdout).expect("UTF-8");
+    let snapshot = repo("tests/snapshots/explain_states.txt");
+    // The calls a device records depend on what it can do (multi-draw-indirect
+    // and its count): the snapshot is lavapipe's, the CI machine's.
+    if !text.lines().next().is_some_and(|l| l.contains("llvmpipe") && l.contains("Vulkan")) {
+        eprintln!("skipping the snapshot: it is lavapipe's, and this is {}", text.lines().next().unwrap_or(""));
+        return;
+    }
+    if std::env::var("GLINT_BLESS").as_deref() == Ok("1") {
+        std::fs::write(&snapshot, stable(&text)).expect("snapshot written");
+    }
+    let expected =
+        std::fs::read_to_string(&snapshot).expect("tests/snapshots/explain_states.txt (GLINT_BLESS=1 writes it)");
+    assert_eq!(stable(&text), expected, "glint explain's text changed; GLINT_BLESS=1 writes the new one");
+    for want in [
+        "key 0x",
+        "opaque (stage 64)",
+        "transparent (stage 192) far to near",
+        "'glow'",
+        "mesh 3 'sphere'",
+        "[ALPHA_BLEND FOG]",
+        "set: ",
+        "kept: ",
+        "naive / optimized: ",
+    ] {
+        assert!(text.contains(want), "'{want}' in:\n{text}");
+    }
+}
+
+#[test]
+fn json_passes_hold_the_draw_calls_that_make_the_frame_s_counts() {
+    let args = ["explain", "scenes/showcase.scn", "--size", "96x64", "--json", "--naive"];
+    let Some(out) = glint_vulkan(&args) else { return };
+    let json: serde_json::Value = serde_json::from_slice(&out.stdout).expect("one JSON object");
+    for frame in [&json, &json["naive"]] {
+        let passes = frame["passes"].as_array().expect("passes");
+        let stats = &frame["stats"];
+        let forward_calls = passes
+            .iter()
+            .filter(|p| !p["group"].as_str().expect("group").contains("shadows"))
+            .flat_map(|p| p["draw_calls"].as_array().expect("draw_calls"))
+            .filter(|c| c["late"] == false)
+            .count();
+        assert_eq!(forward_calls as u64, stats["draw_calls"].as_u64().expect("count"), "{}", frame["mode"]);
+        for pass in passes {
+            assert!(pass["kind"] == "compute" || pass["kind"] == "render", "{pass}");
+        }
+    }
+    assert_eq!(json["mode"], "optimized");
+    assert_eq!(json["naive"]["mode"], "naive");
+    let ratios = &json["ratios"];
+    assert!(
+        ratios["draw_calls"].as_f64().expect("ratio") > 100.0,
+        "the naive showcase makes hundreds of times the calls: {ratios}"
+    );
+    assert!(ratios["cpu"].as_f64().expect("ratio") > 1.0, "{ratios}");
+}
+
+#[test]
+fn a_view_the_frame_lacks_is_an_error() {
+    let out = glint(&["explain", "tests/scenes/states.scn", "--view", "3", "--size", "16x16"]);
+    if no_adapter(&out) {
+        return;
+    }
+    assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
+    assert!(stderr(&out).contains("--view 3 requested, but the frame has 1 views"), "{}", stderr(&out));
+}
