@@ -569,74 +569,6 @@ fn check_refuses_shadow_maps_that_render_would_refuse() {
     }
 }
 
-/// `glint view SCENE ARGS…` under a virtual X display (`xvfb-run`), or `None`
-/// (with a message) where there is no xvfb-run or no GPU adapter and
-/// `GLINT_REQUIRE_ADAPTER=1` does not ask for them.
-fn view_under_xvfb(scene: &Path, args: &[String]) -> Option<std::process::Output> {
-    let required = std::env::var("GLINT_REQUIRE_ADAPTER").as_deref() == Ok("1");
-    if Command::new("xvfb-run").arg("--help").output().is_err() {
-        assert!(!required, "GLINT_REQUIRE_ADAPTER=1 but xvfb-run is missing (apt-get install xvfb xauth)");
-        eprintln!("skipping: no xvfb-run (apt-get install xvfb xauth)");
-        return None;
-    }
-    let out = Command::new("xvfb-run")
-        .args(["-a", "-s", "-screen 0 640x480x24", env!("CARGO_BIN_EXE_glint"), "view"])
-        .arg(scene)
-        .args(args)
-        .current_dir(repo(""))
-        .env("NODEVICE_SELECT", "1")
-        .output()
-        .expect("run xvfb-run");
-    if out.status.code() == Some(2) && !required {
-        eprintln!("skipping: no GPU adapter ({})", stderr(&out));
-        return None;
-    }
-    Some(out)
-}
-
-/// The viewer under a virtual X display: a few frames, a resize, minimise and
-/// restore, a screenshot on the way and one on quitting.
-#[test]
-fn view_runs_under_xvfb_resizes_and_takes_screenshots() {
-    let dir = tempfile::tempdir().expect("tempdir");
-    let (mid, last, offscreen) =
-        (dir.path().join("mid.png"), dir.path().join("last.png"), dir.path().join("offscreen.png"));
-    let scene = repo("tests/scenes/lights.scn");
-    let args = ["--size", "96x64", "--msaa", "1", "--frames", "10"]
-        .into_iter()
-        .chain(["--at", "3:resize=120x80", "--at", "5:minimize", "--at", "7:restore"])
-        .map(str::to_owned)
-        .chain(["--at".into(), format!("8:screenshot={}", mid.display())])
-        .chain(["--screenshot".into(), last.display().to_string()]);
-    let Some(out) = view_under_xvfb(&scene, &args.collect::<Vec<_>>()) else { return };
-    let scene = scene.to_str().expect("path");
-    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
-    // On quitting it says how fast the scene played: at most real time.
-    let summary = stderr(&out).lines().find(|l| l.contains("frames drawn in")).map(str::to_owned);
-    let summary = summary.unwrap_or_else(|| panic!("no summary: {}", stderr(&out)));
-    let speed: f64 = summary
-        .rsplit(", ")
-        .next()
-        .and_then(|s| s.strip_suffix("x real time"))
-        .expect(&summary)
-        .parse()
-        .expect(&summary);
-    assert!(summary.starts_with("glint view: ") && (0.0..=1.001).contains(&speed), "{summary}");
-    for png in [&mid, &last] {
-        let image = image::open(png).unwrap_or_else(|e| panic!("{}: {e}\n{}", png.display(), stderr(&out))).into_rgb8();
-        assert_eq!(image.dimensions(), (120, 80), "{}: the frame follows the resized window", png.display());
-    }
-    // Untouched, the fly camera starts as the scene's camera: the viewer's frame is
-    // what `glint render` draws at that size.
-    let args = ["render", scene, "-o", offscreen.to_str().expect("path"), "--size", "120x80", "--msaa", "1"];
-    assert_eq!(glint(&args).status.code(), Some(0));
-    let (a, b) = (image::open(&last).expect("png").into_rgb8(), image::open(&offscreen).expect("png").into_rgb8());
-    let differing = a.pixels().zip(b.pixels()).filter(|(p, q)| p.0.iter().zip(q.0).any(|(x, y)| x.abs_diff(y) > 8));
-    assert!(differing.count() < 20, "the viewer's last frame differs from glint render's");
-    let lit = a.pixels().filter(|p| p.0.iter().any(|&c| c > 60)).count();
-    assert!(lit > 120 * 80 / 4, "the frame shows the lit floor: {lit} bright pixels");
-}
-
 #[test]
 fn results_on_a_full_stdout_are_an_error_not_a_panic_or_success() {
     let scene = repo("tests/scenes/ortho.scn");
@@ -787,38 +719,6 @@ fn compare_says_whether_two_images_match_within_the_reference_tolerance() {
 }
 
 #[test]
-fn the_viewer_changes_density_and_time_of_day_per_frame() {
-    let dir = tempfile::tempdir().expect("tempdir");
-    let shot = |name: &str| dir.path().join(format!("{name}.png"));
-    let at = |frame: u32, action: String| ["--at".to_owned(), format!("{frame}:{action}")];
-    let args = ["--size", "96x64", "--msaa", "1", "--frames", "7"]
-        .map(str::to_owned)
-        .into_iter()
-        .chain(at(2, format!("screenshot={}", shot("full").display())))
-        .chain(at(3, "density=0".into()))
-        .chain(at(4, format!("screenshot={}", shot("bare").display())))
-        .chain(at(5, "time_of_day=23".into()))
-        .chain(at(6, format!("screenshot={}", shot("night").display())));
-    let Some(out) = view_under_xvfb(&repo("tests/scenes/tiles.scn"), &args.collect::<Vec<_>>()) else { return };
-    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
-    assert!(stderr(&out).contains("density 0.0") && stderr(&out).contains("time of day 23:00"), "{}", stderr(&out));
-    let [full, bare, night] = ["full", "bare", "night"].map(|n| image::open(shot(n)).expect("png").into_rgb8());
-    let green = |i: &image::RgbImage| {
-        i.pixels()
-            .filter(|p| u16::from(p.0[1]) > u16::from(p.0[0]) + 30 && u16::from(p.0[1]) > u16::from(p.0[2]) + 30)
-            .count()
-    };
-    assert!(
-        green(&full) > 96 * 64 / 8 && green(&bare) < green(&full) / 20,
-        "cones gone: {} then {}",
-        green(&full),
-        green(&bare)
-    );
-    let light = |i: &image::RgbImage| i.pixels().map(|p| p.0.iter().map(|&c| u64::from(c)).sum::<u64>()).sum::<u64>();
-    assert!(light(&night) * 2 < light(&bare), "night falls");
-}
-
-#[test]
 fn every_shipped_scene_checks_without_a_gpu() {
     let mut checked = 0;
     for dir in ["scenes", "scenes/bench"] {
@@ -865,23 +765,4 @@ fn bench_live_runs_a_scene_as_it_plays() {
     assert!(live["frame_ms_median"].as_f64().unwrap() > 0.0);
     let far = ["bench", scene.to_str().unwrap(), "--live", "60", "--time", "1e9", "--frames", "1"];
     assert_eq!(glint(&far).status.code(), Some(1), "a pose past the budget is bad input");
-}
-
-/// The viewer runs a scene's fish and bubbles live: two screenshots some
-/// frames apart differ.
-#[test]
-fn view_runs_the_aquarium_live() {
-    let dir = tempfile::tempdir().expect("tempdir");
-    let (early, late) = (dir.path().join("early.png"), dir.path().join("late.png"));
-    let args: Vec<String> = ["--size", "96x64", "--msaa", "1", "--frames", "12", "--at"]
-        .into_iter()
-        .map(str::to_owned)
-        .chain([format!("2:screenshot={}", early.display()), "--screenshot".into(), late.display().to_string()])
-        .collect();
-    let Some(out) = view_under_xvfb(&repo("scenes/aquarium.scn"), &args) else { return };
-    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
-    let (a, b) = (image::open(&early).expect("png").into_rgb8(), image::open(&late).expect("png").into_rgb8());
-    let moved =
-        a.pixels().zip(b.pixels()).filter(|(p, q)| p.0.iter().zip(q.0).any(|(x, y)| x.abs_diff(y) > 24)).count();
-    assert!(moved > 20, "the fish swam: {moved} pixels changed");
 }

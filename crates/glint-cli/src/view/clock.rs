@@ -53,10 +53,11 @@ pub struct SceneClock {
 }
 
 impl SceneClock {
-    /// Advance by a frame that took `real` (at most [`MAX_FRAME_ADVANCE`] of
-    /// scene time); returns the new scene time.
-    pub fn tick(&mut self, real: Duration) -> f32 {
-        let advance = real.as_secs_f32().min(MAX_FRAME_ADVANCE);
+    /// Advance by a frame that took `real`, moving scene time as `advance`
+    /// says of the frame's share of it (at most [`MAX_FRAME_ADVANCE`]): the
+    /// controls' pause and speed; returns the new scene time.
+    pub fn tick(&mut self, real: Duration, advance: impl FnOnce(f32) -> f32) -> f32 {
+        let advance = advance(real.as_secs_f32().min(MAX_FRAME_ADVANCE));
         self.time += advance;
         self.total.add(real.as_secs_f64(), f64::from(advance));
         self.recent.add(real.as_secs_f64(), f64::from(advance));
@@ -82,7 +83,7 @@ mod tests {
     fn fast_frames_play_at_real_time_and_slow_ones_in_slow_motion() {
         let mut clock = SceneClock::default();
         for _ in 0..10 {
-            clock.tick(Duration::from_millis(20));
+            clock.tick(Duration::from_millis(20), |s| s);
         }
         assert!((clock.time - 0.2).abs() < 1e-5);
         assert!((clock.total.speed() - 1.0).abs() < 1e-5);
@@ -90,12 +91,17 @@ mod tests {
         assert_eq!(recent.frames, 10);
         assert!((recent.frame_ms() - 20.0).abs() < 1e-9);
         // A 100 ms frame advances the scene a thirtieth of a second: a third of real time.
-        clock.tick(Duration::from_millis(100));
+        clock.tick(Duration::from_millis(100), |s| s);
         let slow = clock.take_recent();
         assert!((slow.speed() - 1.0 / 3.0).abs() < 1e-5, "{slow:?}");
         assert!((clock.time - (0.2 + MAX_FRAME_ADVANCE)).abs() < 1e-5);
         assert_eq!(clock.total.frames, 11);
         clock.restart();
         assert_eq!((clock.time, clock.total), (0.0, Played::default()));
+        // Paused, frames pass and the scene stays; at twice the speed it runs ahead.
+        clock.tick(Duration::from_millis(20), |_| 0.0);
+        assert_eq!((clock.time, clock.total.frames), (0.0, 1));
+        clock.tick(Duration::from_millis(20), |s| 2.0 * s);
+        assert!((clock.time - 0.04).abs() < 1e-6);
     }
 }

@@ -3,6 +3,7 @@
 //! them (into an offscreen target) and then shown in the window.
 
 mod clock;
+mod overlay;
 mod script;
 mod watch;
 
@@ -12,7 +13,9 @@ use clock::SceneClock;
 use glam::Vec2;
 use glint::asset::{LoadOptions, SceneDesc};
 use glint::scene::{FlyCamera, FlyInput};
-use glint::{Camera, Error, Gpu, GpuError, OffscreenTarget, Renderer, WindowSurface, World};
+use glint::world::Controls;
+use glint::{Camera, Error, FrameStats, Gpu, GpuError, OffscreenTarget, Renderer, WindowSurface, World};
+use overlay::Overlay;
 use std::collections::HashSet;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -35,6 +38,10 @@ Keys:
   Shift         move 4x faster while held
   [ ]           draw less or more of every tile of tiled instances (density)
   , .           move the sun and sky half an hour back or on (time of day)
+  Enter         switch between the free camera and the scene's camera
+  Space         pause or play the scene
+  H             hide or show the overlay: the scene's controls and the frame's
+                statistics (and, opened, its draw calls)
   F12           save a screenshot (glint-NNNN.png in the current folder)
   Esc           quit
 
@@ -112,8 +119,18 @@ struct View {
     /// Frames counted so far (drawn or skipped while the window has no area).
     frames: u32,
     last_title: Instant,
-    /// The share of every tile drawn (`[` and `]`).
-    density: f32,
+    /// What the user chose: camera, culling, shadows, post effects, density,
+    /// time of day, pause and speed.
+    controls: Controls,
+    /// The scene camera shown when the free camera is not (`None`: free).
+    shown_camera: Option<usize>,
+    /// The camera the free camera's views start from (`--camera`).
+    free_start: Option<usize>,
+    overlay: Overlay,
+    /// CPU time of each frame's overlay, ms.
+    overlay_ms: Vec<f64>,
+    /// The last frame's statistics, per view.
+    stats: Vec<FrameStats>,
 }
 
 /// A loaded scene placed in its own renderer, and the views it shows (the fly
@@ -130,6 +147,8 @@ impl Scene {
     fn new(gpu: &Gpu, desc: SceneDesc, camera: Option<usize>, (cull, density): (Option<crate::CullArg>, f32)) -> Self {
         let mut renderer = Renderer::new(gpu);
         renderer.set_density(density);
+        // The overlay shows each pass's GPU time, where the device can tell.
+        renderer.enable_gpu_timing();
         let world = World::place(desc, &mut renderer);
         let views = crate::culled(world.views(camera), cull);
         Self { world, renderer, views }
@@ -195,8 +214,10 @@ impl App {
         let surface = WindowSurface::new(&gpu, surface, size.width, size.height)?;
         let msaa = if gpu.supports_msaa(self.args.msaa) { self.args.msaa } else { 1 };
         let target = OffscreenTarget::new(&gpu, size.width.max(1), size.height.max(1), msaa)?;
+        let controls = free_controls(&desc, self.args.density);
         let scene = Scene::new(&gpu, desc, self.args.camera, (self.args.cull, self.args.density));
         let camera = scene.camera();
+        let overlay = Overlay::new(&window, &gpu, target.format().color);
         eprintln!("glint view: {} on {} ({:?})", self.args.scene.display(), gpu.info().name, gpu.info().backend);
         let now = Instant::now();
         Ok(View {
@@ -213,7 +234,12 @@ impl App {
             last_frame: now,
             frames: 0,
             last_title: now,
-            density: self.args.density,
+            controls,
+            shown_camera: None,
+            free_start: self.args.camera,
+            overlay,
+            overlay_ms: Vec::new(),
+            stats: Vec::new(),
             gpu,
         })
     }
@@ -244,7 +270,10 @@ impl View {
                     eprintln!("warning: {warning}");
                 }
                 // The views come from the new file (the chosen camera, or all
-                // views when it has no longer one); the fly camera's place stays.
+                // views when it has no longer one); the fly camera's place
+                // stays, and so do the density and the free camera.
+                self.controls = free_controls(&desc, self.controls.density());
+                self.shown_camera = None;
                 self.scene = Scene::new(&self.gpu, desc, camera_index, cull);
                 // Animations and cloths start again from the beginning, rather
                 // than a new cloth stepping all the way to the old time at once.
@@ -262,14 +291,40 @@ impl View {
         if self.input.wheel != 0.0 {
             self.fly.change_speed(std::mem::take(&mut self.input.wheel));
         }
-        self.fly.update(dt.as_secs_f32().min(0.25), &self.input.take());
+        let input = self.input.take();
+        if self.controls.free_camera() {
+            self.fly.update(dt.as_secs_f32().min(0.25), &input);
+        }
+        self.show_chosen_camera();
         let scene = &mut self.scene;
-        let time = self.clock.tick(dt);
+        let controls = &mut self.controls;
+        let mut restart = false;
+        let mut time = self.clock.tick(dt, |share| {
+            let (advance, pressed) = controls.advance(share);
+            restart = pressed;
+            advance
+        });
+        if restart {
+            // Animations and simulations start again from the beginning.
+            self.clock.restart();
+            time = 0.0;
+        }
+        controls.apply(&mut scene.world, &mut scene.renderer);
         scene.world.pose(time, &mut scene.renderer)?;
-        let mut views = scene.views.clone();
-        let flown = scene.flown();
-        views[flown].camera = self.fly.apply(&views[flown].camera);
+        let mut views = controls.views(scene.views.clone());
+        if controls.free_camera() {
+            let flown = scene.flown();
+            views[flown].camera = self.fly.apply(&views[flown].camera);
+        }
+        scene.renderer.set_explaining(self.overlay.visible && self.overlay.calls_open);
         let stats = scene.world.draw(&mut scene.renderer, &views, &mut self.target)?;
+        self.overlay.record(dt.as_secs_f32() * 1e3);
+        let start = Instant::now();
+        let calls = scene.renderer.explained();
+        self.overlay.draw((&self.window, &self.gpu), &self.target, controls, (&stats, calls));
+        if self.overlay.visible {
+            self.overlay_ms.push(start.elapsed().as_secs_f64() * 1e3);
+        }
         self.surface.present(&self.gpu, &self.target);
         if self.last_title.elapsed() >= TITLE_INTERVAL {
             let recent = self.clock.take_recent();
@@ -282,7 +337,23 @@ impl View {
             ));
             self.last_title = Instant::now();
         }
+        self.stats = stats;
         Ok(())
+    }
+
+    /// Show the scene camera the controls chose, or go back to the free
+    /// camera's views, when the choice changed.
+    fn show_chosen_camera(&mut self) {
+        let chosen = self.controls.scene_camera();
+        if chosen == self.shown_camera {
+            return;
+        }
+        self.shown_camera = chosen;
+        let scene = &mut self.scene;
+        scene.views = scene.world.views(chosen.or(self.free_start));
+        // The free camera starts again from the scene camera shown.
+        let camera = scene.camera();
+        self.fly = FlyCamera::from_camera(&camera, 0.5 * (camera.target - camera.eye).length().max(1.0));
     }
 
     fn do_action(&mut self, action: &Action) -> Result<(), Error> {
@@ -299,27 +370,37 @@ impl View {
             Action::Screenshot(path) => self.screenshot(path)?,
             Action::Density(d) => self.set_density(*d),
             Action::TimeOfDay(h) => self.set_time_of_day(*h),
+            Action::Overlay(on) => self.overlay.visible = *on,
+            Action::Set(id, value) => {
+                let scene = &self.scene.world.desc().path;
+                self.controls.set(id, *value).map_err(|e| glint::Diagnostic::file(scene, e))?;
+                eprintln!("{id} set to {value}");
+            }
+            Action::Stats(path) => {
+                let json = serde_json::json!({ "time": self.clock.time, "overlay": self.overlay.visible, "views": self.stats });
+                crate::output::write_file(path, format!("{json}\n").as_bytes())?;
+            }
         }
         Ok(())
     }
 
     /// Draw `density` (clamped to 0..=1) of every tile from the next frame on.
     fn set_density(&mut self, density: f32) {
-        self.density = density.clamp(0.0, 1.0);
-        self.scene.renderer.set_density(self.density);
-        eprintln!("density {:.1}", self.density);
+        let density = density.clamp(0.0, 1.0);
+        self.controls.set_density(density);
+        eprintln!("density {density:.1}");
     }
 
     /// Move the sun and sky to `hours` (wrapped to 0..24) from the next frame on.
     fn set_time_of_day(&mut self, hours: f32) {
         let hours = hours.rem_euclid(24.0);
-        self.scene.world.set_time_of_day(hours);
+        self.controls.set_time_of_day(hours);
         eprintln!("time of day {:02}:{:02}", hours as u32, (hours.fract() * 60.0).round() as u32);
     }
 
     /// The hour the scene's sun was last set to (noon where it never was).
     fn time_of_day(&self) -> f32 {
-        self.scene.world.desc().time_of_day.unwrap_or(12.0)
+        self.controls.time_of_day().unwrap_or(12.0)
     }
 
     /// Start or stop looking around: the cursor hides and stays put while the right
@@ -357,6 +438,20 @@ fn view_counts(stats: &[glint::FrameStats]) -> String {
     }
 }
 
+/// The median of `values`, if any.
+fn median(values: &[f64]) -> Option<f64> {
+    let mut sorted = values.to_vec();
+    sorted.sort_by(f64::total_cmp);
+    sorted.get(sorted.len() / 2).copied()
+}
+
+/// The controls of `desc` with the free camera chosen, as the viewer starts.
+fn free_controls(desc: &SceneDesc, density: f32) -> Controls {
+    let mut controls = Controls::new(desc, density);
+    controls.toggle_free_camera();
+    controls
+}
+
 /// The first `glint-NNNN.png` in the current folder that does not exist yet.
 fn next_screenshot_path() -> PathBuf {
     (1..=9999)
@@ -379,7 +474,14 @@ impl ApplicationHandler for App {
 
     fn window_event(&mut self, event_loop: &ActiveEventLoop, _id: WindowId, event: WindowEvent) {
         let Some(view) = &mut self.view else { return };
+        // What the overlay uses (a click on a panel, a drag of a slider) moves nothing else.
+        let used = view.overlay.on_event(&view.window, &event);
         let result = match event {
+            WindowEvent::KeyboardInput { .. } | WindowEvent::MouseInput { .. } | WindowEvent::MouseWheel { .. }
+                if used =>
+            {
+                Ok(())
+            }
             WindowEvent::CloseRequested => {
                 event_loop.exit();
                 Ok(())
@@ -400,9 +502,21 @@ impl ApplicationHandler for App {
                                 Ok(())
                             }
                             KeyCode::F12 if !event.repeat => view.screenshot(&next_screenshot_path()),
+                            KeyCode::KeyH if !event.repeat => {
+                                view.overlay.visible = !view.overlay.visible;
+                                Ok(())
+                            }
+                            KeyCode::Enter if !event.repeat => {
+                                view.controls.toggle_free_camera();
+                                Ok(())
+                            }
+                            KeyCode::Space if !event.repeat => {
+                                view.controls.toggle_pause();
+                                Ok(())
+                            }
                             KeyCode::BracketLeft | KeyCode::BracketRight => {
                                 let step = if code == KeyCode::BracketLeft { -0.1 } else { 0.1 };
-                                view.set_density(view.density + step);
+                                view.set_density(view.controls.density() + step);
                                 Ok(())
                             }
                             KeyCode::Comma | KeyCode::Period => {
@@ -458,6 +572,12 @@ impl ApplicationHandler for App {
                 played.scene,
                 played.speed()
             );
+            if let Some(ms) = median(&view.overlay_ms) {
+                eprintln!(
+                    "glint view: the overlay took {ms:.3} ms of CPU a frame (median of {} frames shown with it)",
+                    view.overlay_ms.len()
+                );
+            }
         }
         if let (Some(view), Some(path), Ok(())) = (&self.view, &self.args.screenshot, &self.result) {
             if let Err(e) = view.screenshot(path) {
@@ -493,7 +613,7 @@ impl App {
         for step in self.args.script.iter().filter(|s| s.frame == frame) {
             view.do_action(&step.action)?;
         }
-        let density = view.density;
+        let density = view.controls.density();
         view.reload_if_changed(&self.args.scene, self.args.camera, (self.args.cull, density));
         if draw {
             view.draw()?;

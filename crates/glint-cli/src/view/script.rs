@@ -19,6 +19,12 @@ pub enum Action {
     Density(f32),
     /// Move the sun and sky to this hour (`,` and `.`).
     TimeOfDay(f32),
+    /// Show or hide the overlay (`H`).
+    Overlay(bool),
+    /// Set a control of the scene (as its panel would) to a value.
+    Set(String, f32),
+    /// Write the last frame's statistics (each view's) and the scene time as JSON.
+    Stats(PathBuf),
 }
 
 /// An [`Action`] and the frame (counted from 1) before which it happens.
@@ -31,10 +37,12 @@ pub struct Scripted {
 }
 
 /// Parse `FRAME:resize=WxH`, `FRAME:minimize`, `FRAME:restore`,
-/// `FRAME:screenshot=PATH`, `FRAME:density=D` or `FRAME:time_of_day=H`.
+/// `FRAME:screenshot=PATH`, `FRAME:density=D`, `FRAME:time_of_day=H`,
+/// `FRAME:overlay=on|off`, `FRAME:set=CONTROL=VALUE` or `FRAME:stats=PATH`.
 pub fn parse_at(s: &str) -> Result<Scripted, String> {
     let expected = "expected FRAME:resize=WxH, FRAME:minimize, FRAME:restore, FRAME:screenshot=PATH, \
-                    FRAME:density=D or FRAME:time_of_day=H";
+                    FRAME:density=D, FRAME:time_of_day=H, FRAME:overlay=on|off, FRAME:set=CONTROL=VALUE \
+                    or FRAME:stats=PATH";
     let (frame, action) = s.split_once(':').ok_or_else(|| format!("'{s}': {expected}"))?;
     let frame = frame
         .trim()
@@ -52,6 +60,16 @@ pub fn parse_at(s: &str) -> Result<Scripted, String> {
         }
         Some(("density", d)) => Action::Density(crate::parse_density(d)?),
         Some(("time_of_day", h)) => Action::TimeOfDay(crate::parse_hours(h)?),
+        Some(("overlay", "on")) => Action::Overlay(true),
+        Some(("overlay", "off")) => Action::Overlay(false),
+        Some(("stats", path)) if !path.is_empty() => Action::Stats(PathBuf::from(path)),
+        Some(("set", setting)) => match setting.split_once('=') {
+            Some((id, value)) if !id.is_empty() => match value.parse::<f32>() {
+                Ok(v) if v.is_finite() => Action::Set(id.to_owned(), v),
+                _ => return Err(format!("'{s}': the value of a control must be a number")),
+            },
+            _ => return Err(format!("'{s}': {expected}")),
+        },
         _ => return Err(format!("'{s}': {expected}")),
     };
     Ok(Scripted { frame, action })
@@ -69,6 +87,9 @@ mod tests {
         assert_eq!(parse_at("4:screenshot=a:b.png").map(|s| s.action), Ok(Action::Screenshot("a:b.png".into())));
         assert_eq!(parse_at("2:density=0.25").map(|s| s.action), Ok(Action::Density(0.25)));
         assert_eq!(parse_at("2:time_of_day=18.5").map(|s| s.action), Ok(Action::TimeOfDay(18.5)));
+        assert_eq!(parse_at("5:overlay=off").map(|s| s.action), Ok(Action::Overlay(false)));
+        assert_eq!(parse_at("5:set=post.0.1.on=0").map(|s| s.action), Ok(Action::Set("post.0.1.on".into(), 0.0)));
+        assert_eq!(parse_at("6:stats=s.json").map(|s| s.action), Ok(Action::Stats("s.json".into())));
         for bad in [
             "resize=2x2",
             "0:minimize",
@@ -78,6 +99,11 @@ mod tests {
             "2:screenshot=",
             "2:density=2",
             "2:time_of_day=25",
+            "2:overlay=maybe",
+            "2:set=shadows",
+            "2:set=shadows=yes",
+            "2:set==1",
+            "2:stats=",
         ] {
             assert!(parse_at(bad).is_err(), "{bad}");
         }

@@ -145,8 +145,10 @@ impl OffscreenTarget {
         &self.resolved
     }
 
-    /// The single-sample colour texture holding the last frame (for blits).
-    pub(crate) fn color_view(&self) -> &wgpu::TextureView {
+    /// The single-sample colour texture holding the last frame (its format is
+    /// [`format`](Self::format)'s colour): for blits, and for drawing over the
+    /// frame (a user interface) before it is shown or read back.
+    pub fn color_view(&self) -> &wgpu::TextureView {
         &self.resolved_view
     }
 

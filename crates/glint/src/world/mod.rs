@@ -21,6 +21,7 @@
 //! ```
 
 mod cloth;
+mod controls;
 mod particles;
 mod school;
 
@@ -32,6 +33,8 @@ use crate::{FrameStats, OffscreenTarget, RenderError, Renderer};
 use cloth::ClothSim;
 use particles::EmitterSim;
 use school::SchoolSim;
+
+pub use controls::{Control, ControlKind, Controls};
 
 /// A scene placed in a renderer, with its simulations and clock.
 pub struct World {
@@ -49,6 +52,8 @@ pub struct World {
     /// Whether a material moves with time ([`Material::motion`](crate::Material::motion)),
     /// so the frames need the scene time.
     moves: bool,
+    /// Each light's shadows while they are turned off ([`World::set_shadows`]).
+    shadows_off: Option<Vec<Option<crate::scene::ShadowSettings>>>,
 }
 
 impl World {
@@ -68,7 +73,7 @@ impl World {
         }
         let models = desc.models.iter().flat_map(|m| &m.materials);
         let moves = desc.materials.iter().chain(models).any(|m| m.material.motion.is_some());
-        Self { desc, placed, cloths, schools, emitters, drawn_at: -1.0, ranges, time: 0.0, moves }
+        Self { desc, placed, cloths, schools, emitters, drawn_at: -1.0, ranges, time: 0.0, moves, shadows_off: None }
     }
 
     /// The scene as its file described it.
@@ -188,6 +193,18 @@ impl World {
     /// [`lighting`](Self::lighting) on.
     pub fn set_time_of_day(&mut self, hours: f32) {
         self.desc.set_time_of_day(hours);
+    }
+
+    /// Turn every light's shadows off (keeping their settings) or back on,
+    /// from the next frame's [`lighting`](Self::lighting) on.
+    pub fn set_shadows(&mut self, on: bool) {
+        match (on, self.shadows_off.take()) {
+            (false, None) => {
+                self.shadows_off = Some(self.desc.lights.iter_mut().map(|l| l.shadows.take()).collect());
+            }
+            (true, Some(saved)) => self.desc.lights.iter_mut().zip(saved).for_each(|(l, s)| l.shadows = s),
+            (_, kept) => self.shadows_off = kept,
+        }
     }
 
     /// Draw `views` of it into `target` ([`Renderer::render_views`]) and return

@@ -1,0 +1,401 @@
+//! What a user can change in a running scene, described once for every front
+//! end: the viewer draws [`Controls::list`] with egui, the web page as HTML
+//! controls beside its canvas. Each [`Control`] has a stable id; a front end
+//! shows its kind and value, and hands a new value back to [`Controls::set`]
+//! as a number (a toggle 0 or 1, a choice its index, a button anything).
+//!
+//! The choices take effect through three calls a frame loop makes:
+//! [`Controls::apply`] (density, time of day and shadows, into the world and
+//! renderer), [`Controls::views`] (the chosen camera, culling, post effects
+//! and exposure) and [`Controls::advance`] (pause, speed and restart of the
+//! scene clock).
+
+use super::World;
+use crate::asset::SceneDesc;
+use crate::scene::{Camera, Culling, PostEffect, Tonemap, View};
+use crate::Renderer;
+use serde::Serialize;
+
+/// One thing a user can change.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Control {
+    /// Stable id, for [`Controls::set`]: "camera", "post.0.1.intensity", ….
+    pub id: String,
+    /// The section it belongs in: "View", "Scene", "Time", "Post: view 0".
+    pub section: String,
+    /// What it is called on screen.
+    pub label: String,
+    /// Its kind and current value.
+    pub kind: ControlKind,
+}
+
+/// A control's kind and current value.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+#[serde(tag = "kind", rename_all = "lowercase")]
+pub enum ControlKind {
+    /// On or off.
+    Toggle {
+        /// Whether it is on.
+        on: bool,
+    },
+    /// A number in a range.
+    Slider {
+        /// The value.
+        value: f32,
+        /// Least value.
+        min: f32,
+        /// Greatest value.
+        max: f32,
+        /// Step between values.
+        step: f32,
+    },
+    /// One of a list.
+    Choice {
+        /// The chosen one's index.
+        index: usize,
+        /// The options.
+        options: Vec<String>,
+    },
+    /// An action.
+    Button,
+}
+
+/// The culling choices, after "as the scene says".
+const CULLINGS: [(Culling, &str); 3] = [(Culling::Off, "off"), (Culling::Cpu, "CPU"), (Culling::Gpu, "GPU")];
+
+/// The tonemap operators, in the order shown.
+const TONEMAPS: [(Tonemap, &str); 4] =
+    [(Tonemap::None, "none"), (Tonemap::Reinhard, "Reinhard"), (Tonemap::Aces, "ACES"), (Tonemap::Agx, "AgX")];
+
+/// The clock speeds offered, times real time.
+const SPEED_RANGE: (f32, f32) = (0.0, 4.0);
+
+/// Everything a user has chosen for one scene.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Controls {
+    /// The scene's cameras (a view's post controls are its camera's).
+    scene_cameras: Vec<Camera>,
+    /// How many cameras there are to choose from (at least one), before the free camera.
+    cameras: usize,
+    /// The chosen camera: one of the scene's, or `cameras` for the free one.
+    camera: usize,
+    /// 0 for as each camera says, else 1 + an index of [`CULLINGS`].
+    culling: usize,
+    /// Whether the scene has shadow-casting lights, and whether they cast.
+    has_shadows: bool,
+    shadows: bool,
+    /// EV added to every tonemap's exposure (where any view tonemaps).
+    has_tonemap: bool,
+    exposure: f32,
+    /// Whether the scene has tiled instances, and the share drawn.
+    has_tiles: bool,
+    density: f32,
+    /// The hour of the sun and sky, where the scene has one.
+    time_of_day: Option<f32>,
+    paused: bool,
+    speed: f32,
+    restart: bool,
+    /// Each camera's post effects (as the scene gave them), and which are on.
+    post: Vec<Vec<(PostEffect, bool)>>,
+}
+
+impl Controls {
+    /// The controls of the scene `desc` describes, everything as it says, its
+    /// first camera chosen, drawing `density` of every tile.
+    pub fn new(desc: &SceneDesc, density: f32) -> Self {
+        let chains = desc.camera_views.iter().map(|c| &c.post);
+        let has_tonemap = chains.clone().flatten().any(|e| matches!(e, PostEffect::Tonemap { .. }));
+        Self {
+            scene_cameras: desc.cameras.clone(),
+            cameras: desc.cameras.len().max(1),
+            camera: 0,
+            culling: 0,
+            has_shadows: desc.lights.iter().any(|l| l.shadows.is_some()),
+            shadows: true,
+            has_tonemap,
+            exposure: 0.0,
+            has_tiles: desc.entities.iter().any(|e| e.tiles.is_some()),
+            density,
+            time_of_day: desc.time_of_day,
+            paused: false,
+            speed: 1.0,
+            restart: false,
+            post: chains.map(|chain| chain.iter().map(|&e| (e, true)).collect()).collect(),
+        }
+    }
+
+    /// Every control, in the order shown.
+    pub fn list(&self) -> Vec<Control> {
+        let mut list = Vec::new();
+        let mut add = |id: String, section: &str, label: &str, kind| {
+            list.push(Control { id, section: section.into(), label: label.into(), kind });
+        };
+        let mut cameras: Vec<String> = (0..self.cameras).map(|k| format!("camera {k}")).collect();
+        cameras.push("free camera (Enter)".into());
+        add("camera".into(), "View", "camera", ControlKind::Choice { index: self.camera, options: cameras });
+        let mut cullings = vec!["as the scene says".to_owned()];
+        cullings.extend(CULLINGS.iter().map(|(_, n)| (*n).to_owned()));
+        add("culling".into(), "View", "culling", ControlKind::Choice { index: self.culling, options: cullings });
+        if self.has_shadows {
+            add("shadows".into(), "Scene", "shadows", ControlKind::Toggle { on: self.shadows });
+        }
+        if self.has_tonemap {
+            let kind = ControlKind::Slider { value: self.exposure, min: -4.0, max: 4.0, step: 0.1 };
+            add("exposure".into(), "Scene", "exposure (EV)", kind);
+        }
+        if self.has_tiles {
+            let kind = ControlKind::Slider { value: self.density, min: 0.0, max: 1.0, step: 0.05 };
+            add("density".into(), "Scene", "density", kind);
+        }
+        if let Some(hours) = self.time_of_day {
+            let kind = ControlKind::Slider { value: hours, min: 0.0, max: 24.0, step: 0.25 };
+            add("time_of_day".into(), "Scene", "time of day (h)", kind);
+        }
+        add("paused".into(), "Time", "paused (Space)", ControlKind::Toggle { on: self.paused });
+        let (min, max) = SPEED_RANGE;
+        add("speed".into(), "Time", "speed", ControlKind::Slider { value: self.speed, min, max, step: 0.05 });
+        add("restart".into(), "Time", "restart", ControlKind::Button);
+        for (v, effects) in self.post.iter().enumerate() {
+            let section = format!("Post: camera {v}");
+            for (k, (effect, on)) in effects.iter().enumerate() {
+                let id = |name: &str| format!("post.{v}.{k}.{name}");
+                add(id("on"), &section, effect.name(), ControlKind::Toggle { on: *on });
+                for (name, value, min, max) in parameters(effect) {
+                    add(id(name), &section, name, ControlKind::Slider { value, min, max, step: (max - min) / 100.0 });
+                }
+                if let PostEffect::Tonemap { operator, .. } = effect {
+                    let index = TONEMAPS.iter().position(|(t, _)| t == operator).unwrap_or(0);
+                    let options = TONEMAPS.iter().map(|(_, n)| (*n).to_owned()).collect();
+                    add(id("operator"), &section, "operator", ControlKind::Choice { index, options });
+                }
+            }
+        }
+        list
+    }
+
+    /// Set control `id` to `value` (clamped to its range; a toggle is on for
+    /// anything but 0, a choice takes the index, a button is pressed).
+    /// Errors name what was expected, for an id or value from a page or script.
+    pub fn set(&mut self, id: &str, value: f32) -> Result<(), String> {
+        if !value.is_finite() {
+            return Err(format!("{id}: {value} is not a number"));
+        }
+        let control = self.list().into_iter().find(|c| c.id == id).ok_or_else(|| format!("no control '{id}'"))?;
+        let on = value != 0.0;
+        let clamp = |v: f32| match &control.kind {
+            ControlKind::Slider { min, max, .. } => v.clamp(*min, *max),
+            _ => v,
+        };
+        let index = |options: usize| (value.max(0.0) as usize).min(options.saturating_sub(1));
+        match (id, &control.kind) {
+            ("camera", ControlKind::Choice { options, .. }) => self.camera = index(options.len()),
+            ("culling", ControlKind::Choice { options, .. }) => self.culling = index(options.len()),
+            ("shadows", _) => self.shadows = on,
+            ("exposure", _) => self.exposure = clamp(value),
+            ("density", _) => self.density = clamp(value),
+            ("time_of_day", _) => self.time_of_day = Some(clamp(value)),
+            ("paused", _) => self.paused = on,
+            ("speed", _) => self.speed = clamp(value),
+            ("restart", _) => self.restart = true,
+            (post, kind) => self.set_post(post, kind, value, on)?,
+        }
+        Ok(())
+    }
+
+    /// Set a "post.V.K.NAME" control.
+    fn set_post(&mut self, id: &str, kind: &ControlKind, value: f32, on: bool) -> Result<(), String> {
+        let mut parts = id.split('.').skip(1);
+        let (v, k, name) = match (parts.next(), parts.next(), parts.next()) {
+            (Some(v), Some(k), Some(name)) => (v.parse::<usize>(), k.parse::<usize>(), name),
+            _ => return Err(format!("no control '{id}'")),
+        };
+        let (Ok(v), Ok(k)) = (v, k) else { return Err(format!("no control '{id}'")) };
+        let (effect, enabled) = &mut self.post[v][k];
+        let value = match kind {
+            ControlKind::Slider { min, max, .. } => value.clamp(*min, *max),
+            _ => value,
+        };
+        match (name, effect) {
+            ("on", _) => *enabled = on,
+            ("threshold", PostEffect::Bloom { threshold, .. } | PostEffect::Edges { threshold, .. }) => {
+                *threshold = value
+            }
+            ("intensity", PostEffect::Bloom { intensity, .. }) => *intensity = value,
+            ("exposure", PostEffect::Tonemap { exposure, .. }) => *exposure = value,
+            ("operator", PostEffect::Tonemap { operator, .. }) => {
+                *operator = TONEMAPS[(value.max(0.0) as usize).min(TONEMAPS.len() - 1)].0
+            }
+            ("strength", PostEffect::Vignette { strength }) => *strength = value,
+            _ => return Err(format!("no control '{id}'")),
+        }
+        Ok(())
+    }
+
+    /// Whether the free camera is chosen (the front end then flies it).
+    pub fn free_camera(&self) -> bool {
+        self.camera == self.cameras
+    }
+
+    /// Switch between the free camera and the first of the scene's (Enter).
+    pub fn toggle_free_camera(&mut self) {
+        self.camera = if self.free_camera() { 0 } else { self.cameras };
+    }
+
+    /// The scene camera to show alone, or `None` for the free camera (which
+    /// starts where the scene's views put it).
+    pub fn scene_camera(&self) -> Option<usize> {
+        (!self.free_camera()).then_some(self.camera)
+    }
+
+    /// Pause or play (Space).
+    pub fn toggle_pause(&mut self) {
+        self.paused = !self.paused;
+    }
+
+    /// The share of every tile drawn.
+    pub fn density(&self) -> f32 {
+        self.density
+    }
+
+    /// Draw `density` (0..=1) of every tile (`[` and `]`, whether or not the
+    /// scene has tiles).
+    pub fn set_density(&mut self, density: f32) {
+        self.density = density.clamp(0.0, 1.0);
+    }
+
+    /// The hour of the sun, where the scene has one.
+    pub fn time_of_day(&self) -> Option<f32> {
+        self.time_of_day
+    }
+
+    /// Move the sun and sky to `hours` (`,` and `.`; the scene then has a time of day).
+    pub fn set_time_of_day(&mut self, hours: f32) {
+        self.time_of_day = Some(hours.rem_euclid(24.0));
+    }
+
+    /// Put the density, time of day and shadows into `world` and `renderer`
+    /// (each frame: each is cheap where it did not change).
+    pub fn apply(&self, world: &mut World, renderer: &mut Renderer) {
+        renderer.set_density(self.density);
+        if let Some(hours) = self.time_of_day.filter(|&h| world.desc().time_of_day != Some(h)) {
+            world.set_time_of_day(hours);
+        }
+        world.set_shadows(self.shadows);
+    }
+
+    /// `views` (the world's, for [`scene_camera`](Self::scene_camera)) as
+    /// chosen: culling, and the post chain of each view of a scene camera
+    /// with the effects turned off left out and the exposure added to its
+    /// tonemapping.
+    pub fn views(&self, views: Vec<View>) -> Vec<View> {
+        (views.into_iter())
+            .map(|mut view| {
+                if self.culling > 0 {
+                    view.culling = CULLINGS[self.culling - 1].0;
+                }
+                let camera = self.scene_cameras.iter().position(|c| *c == view.camera);
+                if let Some(effects) = camera.and_then(|c| self.post.get(c)) {
+                    view.post = effects.iter().filter(|(_, on)| *on).map(|(e, _)| self.exposed(*e)).collect();
+                }
+                view
+            })
+            .collect()
+    }
+
+    /// `effect` with the chosen exposure added, where it tonemaps.
+    fn exposed(&self, effect: PostEffect) -> PostEffect {
+        match effect {
+            PostEffect::Tonemap { operator, exposure } => {
+                PostEffect::Tonemap { operator, exposure: exposure + self.exposure }
+            }
+            other => other,
+        }
+    }
+
+    /// How far a frame that took `real` seconds moves the scene clock
+    /// (nothing while paused, else times the speed), and whether it starts
+    /// again from 0 (restart was pressed since the last frame).
+    pub fn advance(&mut self, real: f32) -> (f32, bool) {
+        let restart = std::mem::take(&mut self.restart);
+        (if self.paused { 0.0 } else { real * self.speed }, restart)
+    }
+}
+
+/// An effect's numeric parameters: name, value and range.
+fn parameters(effect: &PostEffect) -> Vec<(&'static str, f32, f32, f32)> {
+    match *effect {
+        PostEffect::Bloom { threshold, intensity } => {
+            vec![("threshold", threshold, 0.0, 4.0), ("intensity", intensity, 0.0, 2.0)]
+        }
+        PostEffect::Tonemap { exposure, .. } => vec![("exposure", exposure, -4.0, 4.0)],
+        PostEffect::Fxaa => Vec::new(),
+        PostEffect::Edges { threshold, .. } => vec![("threshold", threshold, 0.0, 1.0)],
+        PostEffect::Vignette { strength } => vec![("strength", strength, 0.0, 1.0)],
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::asset::parse_scene;
+
+    fn controls(scene: &str) -> Controls {
+        Controls::new(&parse_scene("t.scn".as_ref(), scene).expect("scene"), 1.0)
+    }
+
+    const SCENE: &str = r#"
+{ "classname" "world"
+"time_of_day" "9" }
+{ "classname" "camera"
+"origin" "0 1 5"
+"post" "bloom tonemap" }
+{ "classname" "camera"
+"origin" "5 1 0" }
+{ "classname" "light_directional"
+"direction" "0 -1 0"
+"shadows" "1" }
+{ "classname" "entity"
+"mesh" "cube" }
+"#;
+
+    #[test]
+    fn the_list_follows_the_scene() {
+        let c = controls(SCENE);
+        let ids: Vec<String> = c.list().into_iter().map(|c| c.id).collect();
+        for id in ["camera", "culling", "shadows", "exposure", "time_of_day", "paused", "speed", "restart"] {
+            assert!(ids.contains(&id.to_owned()), "{id} in {ids:?}");
+        }
+        assert!(!ids.contains(&"density".to_owned()), "no tiles, no density");
+        assert!(ids.contains(&"post.0.0.intensity".to_owned()) && ids.contains(&"post.0.1.operator".to_owned()));
+        let plain = controls("{ \"classname\" \"camera\" }\n{ \"classname\" \"light_point\"\n\"origin\" \"0 1 0\" }\n");
+        let ids: Vec<String> = plain.list().into_iter().map(|c| c.id).collect();
+        assert!(!ids.iter().any(|i| i == "shadows" || i == "exposure" || i == "time_of_day"), "{ids:?}");
+    }
+
+    #[test]
+    fn setting_a_control_changes_what_it_claims() {
+        let mut c = controls(SCENE);
+        let base = vec![View::new(c.scene_cameras[0]).with_post(vec![PostEffect::BLOOM, PostEffect::TONEMAP])];
+        c.set("post.0.0.on", 0.0).unwrap();
+        c.set("exposure", 1.5).unwrap();
+        c.set("culling", 2.0).unwrap();
+        let views = c.views(base.clone());
+        assert_eq!(views[0].post, vec![PostEffect::Tonemap { operator: Tonemap::Aces, exposure: 1.5 }]);
+        assert_eq!(views[0].culling, Culling::Cpu);
+        c.set("post.0.1.operator", 3.0).unwrap();
+        assert!(matches!(c.views(base)[0].post[0], PostEffect::Tonemap { operator: Tonemap::Agx, .. }));
+        c.set("speed", 9.0).unwrap();
+        assert_eq!(c.advance(0.5), (2.0, false), "speed clamps to 4");
+        c.set("paused", 1.0).unwrap();
+        c.set("restart", 0.0).unwrap();
+        assert_eq!(c.advance(0.5), (0.0, true), "paused: the clock stays; restart once");
+        assert_eq!(c.advance(0.5), (0.0, false));
+        c.set("camera", 99.0).unwrap();
+        assert!(c.free_camera(), "the last choice is the free camera");
+        c.toggle_free_camera();
+        assert_eq!(c.scene_camera(), Some(0));
+        for (id, value) in [("nothing", 1.0), ("post.7.0.on", 1.0), ("post.0.0.exposure", 1.0), ("speed", f32::NAN)] {
+            assert!(c.set(id, value).is_err(), "{id}");
+        }
+    }
+}
