@@ -166,6 +166,53 @@ for (const backend of backends) {
   }
 }
 
+// The controls beside the canvas change what they claim, as the canvas's
+// numbers show: shadows off leaves no shadow views, a lower density draws
+// fewer instances, and pausing stops the scene clock.
+for (const backend of backends) {
+  const { page, state, logs } = await open("scenes/meadow.scn", backend, undefined, "&density=0.1");
+  try {
+    if (state.error) {
+      report(false, `the controls on ${backend}`, `${state.error}\n  ${logs.join("\n  ")}`);
+      continue;
+    }
+    const result = await page.evaluate(async () => {
+      const canvas = document.getElementById("glint");
+      const frames = async (n) => {
+        const from = +canvas.dataset.frames;
+        while (+canvas.dataset.frames < from + n) await new Promise((r) => requestAnimationFrame(r));
+      };
+      const control = (id) => document.querySelector(`[data-control="${id}"]`);
+      if (!control("shadows") || !control("density") || !control("paused")) return { missing: document.getElementById("controls").textContent };
+      await frames(4);  // counts culled on the GPU come back a frame or two late
+      const before = { shadows: +canvas.dataset.shadowViews, instances: +canvas.dataset.instances };
+      control("shadows").click();
+      const density = control("density");
+      density.value = "0.05";
+      density.dispatchEvent(new Event("input"));
+      // Counts culled on the GPU come back when the browser maps them: a few frames.
+      for (let k = 0; k < 12 && (k < 3 || +canvas.dataset.instances === before.instances); k++) await frames(1);
+      const after = { shadows: +canvas.dataset.shadowViews, instances: +canvas.dataset.instances };
+      control("paused").click();
+      await frames(1);
+      const t1 = canvas.dataset.time;
+      await frames(2);
+      return { before, after, t1, t2: canvas.dataset.time };
+    });
+    if (result.missing !== undefined) {
+      report(false, `the controls on ${backend}`, `no shadows, density or paused control: ${result.missing}`);
+      continue;
+    }
+    const { before, after, t1, t2 } = result;
+    const ok = before.shadows > 0 && after.shadows === 0 && after.instances * 1.5 < before.instances && t1 === t2;
+    report(ok, `the controls on ${backend}`,
+      `shadow views ${before.shadows} then ${after.shadows}; instances ${before.instances} then ${after.instances}; ` +
+      `paused at ${t1} s, still ${t2} s two frames later`);
+  } finally {
+    await page.close();
+  }
+}
+
 // A broken scene shows its error, with the file and line, on the page.
 for (const backend of backends) {
   const { page, state } = await open("scenes/broken.scn", backend);

@@ -20,6 +20,9 @@ pub struct Input {
     /// Touch drag to orbit, in CSS pixels, and where the finger last was.
     orbit: Vec2,
     touch: Option<Vec2>,
+    /// Keys pressed since the last frame (not repeats), for the page's own
+    /// keys: `H`, Enter and Space.
+    pressed: Vec<String>,
 }
 
 impl Input {
@@ -30,6 +33,18 @@ impl Input {
         } else {
             self.held.remove(&code);
         }
+    }
+
+    /// A key was pressed (`repeat`: held down and repeating).
+    pub fn key_pressed(&mut self, code: String, repeat: bool) {
+        if !repeat {
+            self.pressed.push(code);
+        }
+    }
+
+    /// The keys pressed since the last call.
+    pub fn take_pressed(&mut self) -> Vec<String> {
+        std::mem::take(&mut self.pressed)
     }
 
     /// A mouse button went down or up (button 2 is the right one).

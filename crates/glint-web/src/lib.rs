@@ -7,15 +7,20 @@
 //! `backend=webgpu|webgl2` (default: WebGPU when there is an adapter), and
 //! `size=WxH` (a fixed canvas size in pixels, for tests; default: the window
 //! at its device pixel ratio). The page shows the backend, frame time and draw
-//! counts, and a broken scene's `file:line` message; the canvas carries
-//! `data-frames` (frames drawn) and `data-error` for scripts.
+//! counts, the scene's controls beside the canvas (`panel.rs`: the list the
+//! viewer's overlay shows), and a broken scene's `file:line` message; the
+//! canvas carries `data-frames` (frames drawn), `data-error`, and the last
+//! frame's `data-shadow-views`, `data-instances` (drawn) and `data-time`
+//! (the scene clock) for scripts.
 #![cfg(target_arch = "wasm32")]
 
 mod fetch;
 mod input;
+mod panel;
 
 use glam::Vec2;
 use glint::scene::FlyCamera;
+use glint::world::Controls;
 use glint::{Gpu, OffscreenTarget, Renderer, View, WindowSurface, World};
 use input::Input;
 use std::cell::RefCell;
@@ -112,12 +117,17 @@ impl Query {
 struct Shown {
     world: World,
     renderer: Renderer,
+    /// The views of the camera shown (all of the scene's for the free camera).
     views: Vec<View>,
     fly: FlyCamera,
     /// What a touch drag orbits: the first view's target.
     centre: glam::Vec3,
-    /// Page time (ms) at its first frame.
-    start: Option<f64>,
+    /// What the user chose in the panel.
+    controls: Controls,
+    /// The scene camera shown (`None`: the free camera).
+    camera: Option<usize>,
+    /// The scene clock, seconds.
+    time: f32,
 }
 
 /// Everything the frame loop needs.
@@ -241,7 +251,13 @@ async fn show(viewer: &Rc<RefCell<Viewer>>, scene: &str) {
     };
     let camera = flown.camera;
     let fly = FlyCamera::from_camera(&camera, 0.5 * (camera.target - camera.eye).length().max(1.0));
-    v.shown = Some(Shown { world, renderer, views, fly, centre: camera.target, start: None });
+    let mut controls = Controls::new(world.desc(), v.density);
+    controls.toggle_free_camera();
+    v.shown = Some(Shown { world, renderer, views, fly, centre: camera.target, controls, camera: None, time: 0.0 });
+    drop(v);
+    if let Err(e) = panel::build(viewer) {
+        show_error(&e);
+    }
 }
 
 /// The frame callback, which schedules itself again (so it holds a handle on itself).
@@ -274,19 +290,32 @@ impl Viewer {
         self.last = Some(now);
         self.follow_size()?;
         let (fly_input, wheel, orbit) = self.input.take();
+        let pressed = self.input.take_pressed();
         let Some(shown) = &mut self.shown else { return Ok(()) };
-        if wheel != 0.0 {
-            shown.fly.change_speed(wheel);
+        for key in pressed {
+            match key.as_str() {
+                "KeyH" => panel::toggle(),
+                "Enter" => shown.controls.toggle_free_camera(),
+                "Space" => shown.controls.toggle_pause(),
+                _ => {}
+            }
         }
-        shown.fly.update(dt.min(0.25) as f32, &fly_input);
-        if orbit != Vec2::ZERO {
-            shown.fly.orbit(shown.centre, orbit);
+        shown.show_chosen_camera();
+        if shown.controls.free_camera() {
+            if wheel != 0.0 {
+                shown.fly.change_speed(wheel);
+            }
+            shown.fly.update(dt.min(0.25) as f32, &fly_input);
+            if orbit != Vec2::ZERO {
+                shown.fly.orbit(shown.centre, orbit);
+            }
         }
-        let start = *shown.start.get_or_insert(now);
-        let time = ((now - start) / 1e3) as f32;
-        shown.world.pose(time, &mut shown.renderer).map_err(|e| e.to_string())?;
-        let mut views = shown.views.clone();
-        if let Some(flown) = views.iter_mut().find(|v| v.output.is_none()) {
+        let (advance, restart) = shown.controls.advance(dt.min(0.25) as f32);
+        shown.time = if restart { 0.0 } else { shown.time + advance };
+        shown.controls.apply(&mut shown.world, &mut shown.renderer);
+        shown.world.pose(shown.time, &mut shown.renderer).map_err(|e| e.to_string())?;
+        let mut views = shown.controls.views(shown.views.clone());
+        if let Some(flown) = views.iter_mut().find(|v| v.output.is_none()).filter(|_| shown.controls.free_camera()) {
             flown.camera = shown.fly.apply(&flown.camera);
         }
         let stats = shown.world.draw(&mut shown.renderer, &views, &mut self.target).map_err(|e| e.to_string())?;
@@ -313,6 +342,10 @@ impl Viewer {
         let _ = self.canvas.set_attribute("data-frames", &self.frames.to_string());
         let _ = self.canvas.set_attribute("data-backend", self.backend);
         let _ = self.canvas.set_attribute("data-culling", culling);
+        let shadow_views: u32 = stats.iter().map(|s| s.shadow_views).sum();
+        let _ = self.canvas.set_attribute("data-shadow-views", &shadow_views.to_string());
+        let _ = self.canvas.set_attribute("data-instances", &drawn.to_string());
+        let _ = self.canvas.set_attribute("data-time", &shown.time.to_string());
         Ok(())
     }
 
@@ -327,6 +360,24 @@ impl Viewer {
         self.surface.resize(&self.gpu, width, height);
         self.target = OffscreenTarget::new(&self.gpu, width, height, self.msaa).map_err(|e| e.to_string())?;
         Ok(())
+    }
+}
+
+impl Shown {
+    /// Show the scene camera the controls chose (its views alone), or the
+    /// scene's views for the free camera, when the choice changed; the free
+    /// camera starts again from the camera shown.
+    fn show_chosen_camera(&mut self) {
+        let chosen = self.controls.scene_camera();
+        if chosen == self.camera {
+            return;
+        }
+        self.camera = chosen;
+        self.views = self.world.views(chosen);
+        if let Some(view) = self.views.iter().find(|v| v.output.is_none()) {
+            let camera = view.camera;
+            self.fly = FlyCamera::from_camera(&camera, 0.5 * (camera.target - camera.eye).length().max(1.0));
+        }
     }
 }
 
@@ -382,7 +433,14 @@ fn listen(canvas: &web_sys::HtmlCanvasElement, viewer: &Rc<RefCell<Viewer>>) -> 
         closure.forget();
         added.map_err(|e| format!("{e:?}"))
     }
-    on(&window, "keydown", viewer, |input, e: &web_sys::KeyboardEvent| input.key(e.code(), true))?;
+    on(&window, "keydown", viewer, |input, e: &web_sys::KeyboardEvent| {
+        // Keys typed into the panel's inputs (Space on a checkbox) are theirs.
+        let tag = e.target().and_then(|t| js_sys::Reflect::get(&t, &"tagName".into()).ok()).and_then(|t| t.as_string());
+        if !matches!(tag.as_deref(), Some("INPUT" | "SELECT" | "BUTTON")) {
+            input.key_pressed(e.code(), e.repeat());
+            input.key(e.code(), true);
+        }
+    })?;
     on(&window, "keyup", viewer, |input, e: &web_sys::KeyboardEvent| input.key(e.code(), false))?;
     on(canvas, "mousedown", viewer, |input, e: &web_sys::MouseEvent| input.button(e.button(), true))?;
     on(&window, "mouseup", viewer, |input, e: &web_sys::MouseEvent| input.button(e.button(), false))?;
