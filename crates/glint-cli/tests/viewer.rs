@@ -207,6 +207,20 @@ fn the_controls_change_what_they_claim() {
     let (full, sparse) = (view(&full, "instances_drawn"), view(&sparse, "instances_drawn"));
     assert!(sparse * 2 < full && sparse > 0, "a quarter of every tile: {full} then {sparse}");
 
+    // The cloth's debug view off: its edge ribbons and pin markers go.
+    let args: Vec<String> = ["--size", "96x64", "--msaa", "1", "--frames", "6"]
+        .map(str::to_owned)
+        .into_iter()
+        .chain(at(2, &format!("stats={}", stats("debug").display())))
+        .chain(at(3, "set=cloth_debug=0"))
+        .chain(at(5, &format!("stats={}", stats("plain").display())))
+        .collect();
+    let Some(out) = view_under_xvfb(&repo("tests/scenes/cloth_debug.scn"), &args) else { return };
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let [debug, plain] = ["debug", "plain"].map(|n| read_stats(&stats(n)));
+    let entities = |s: &serde_json::Value| view(s, "entities_submitted");
+    assert_eq!((entities(&debug), entities(&plain)), (4, 2), "floor, cloth, edges, pins; then floor and cloth");
+
     // A control the scene lacks is bad input, named.
     let bad: Vec<String> = ["--frames", "3"].map(str::to_owned).into_iter().chain(at(2, "set=warp=1")).collect();
     let Some(out) = view_under_xvfb(&repo("tests/scenes/tiles.scn"), &bad) else { return };

@@ -242,18 +242,14 @@ async fn show(viewer: &Rc<RefCell<Viewer>>, scene: &str) {
     }
     clear_error();
     let mut v = viewer.borrow_mut();
-    let mut renderer = Renderer::new(&v.gpu);
-    renderer.set_density(v.density);
-    let world = World::place(desc, &mut renderer);
-    let views = world.views(None);
-    let Some(flown) = views.iter().find(|view| view.output.is_none()) else {
-        return show_error(&format!("{scene}: no camera draws into the page"));
-    };
-    let camera = flown.camera;
-    let fly = FlyCamera::from_camera(&camera, 0.5 * (camera.target - camera.eye).length().max(1.0));
-    let mut controls = Controls::new(world.desc(), v.density);
-    controls.toggle_free_camera();
-    v.shown = Some(Shown { world, renderer, views, fly, centre: camera.target, controls, camera: None, time: 0.0 });
+    let placed = Shown::place(desc, &v.gpu, v.density);
+    match placed {
+        Ok(mut shown) => {
+            shown.controls.toggle_free_camera();
+            v.shown = Some(shown);
+        }
+        Err(e) => return show_error(&format!("{scene}: {e}")),
+    }
     drop(v);
     if let Err(e) = panel::build(viewer) {
         show_error(&e);
@@ -300,6 +296,7 @@ impl Viewer {
                 _ => {}
             }
         }
+        shown.show_cloth_debug_if_chosen(&self.gpu)?;
         shown.show_chosen_camera();
         if shown.controls.free_camera() {
             if wheel != 0.0 {
@@ -364,6 +361,35 @@ impl Viewer {
 }
 
 impl Shown {
+    /// `desc` placed in a new renderer on `gpu`, drawing `density` of every
+    /// tile, its first camera chosen; an error when no camera draws into the page.
+    fn place(desc: glint::asset::SceneDesc, gpu: &Gpu, density: f32) -> Result<Self, String> {
+        let mut renderer = Renderer::new(gpu);
+        renderer.set_density(density);
+        let controls = Controls::new(&desc, density);
+        let world = World::place(desc, &mut renderer);
+        let views = world.views(None);
+        let camera = views.iter().find(|view| view.output.is_none()).ok_or("no camera draws into the page")?.camera;
+        let fly = FlyCamera::from_camera(&camera, 0.5 * (camera.target - camera.eye).length().max(1.0));
+        Ok(Self { world, renderer, views, fly, centre: camera.target, controls, camera: None, time: 0.0 })
+    }
+
+    /// Place the scene again when the controls turned the cloths' debug
+    /// view on or off (the cloths start again from rest), keeping the
+    /// controls, the camera and the free camera's place.
+    fn show_cloth_debug_if_chosen(&mut self, gpu: &Gpu) -> Result<(), String> {
+        let Some(debug) = self.controls.cloth_debug() else { return Ok(()) };
+        if self.world.desc().cloths.iter().all(|c| c.debug == debug) {
+            return Ok(());
+        }
+        let mut desc = self.world.desc().clone();
+        desc.set_cloth_debug(debug).map_err(|e| e.to_string())?;
+        let placed = Self::place(desc, gpu, self.controls.density())?;
+        (self.world, self.renderer, self.time) = (placed.world, placed.renderer, 0.0);
+        self.views = self.world.views(self.camera);
+        Ok(())
+    }
+
     /// Show the scene camera the controls chose (its views alone), or the
     /// scene's views for the free camera, when the choice changed; the free
     /// camera starts again from the camera shown.

@@ -283,6 +283,25 @@ impl View {
         }
     }
 
+    /// Place the scene again when the controls turned the cloths' debug view
+    /// on or off; the cloths start again from rest.
+    fn show_cloth_debug_if_chosen(
+        &mut self,
+        camera: Option<usize>,
+        cull: (Option<crate::CullArg>, f32),
+    ) -> Result<(), Error> {
+        let Some(debug) = self.controls.cloth_debug() else { return Ok(()) };
+        if self.scene.world.desc().cloths.iter().all(|c| c.debug == debug) {
+            return Ok(());
+        }
+        let mut desc = self.scene.world.desc().clone();
+        desc.set_cloth_debug(debug)?;
+        self.scene = Scene::new(&self.gpu, desc, camera, cull);
+        self.shown_camera = None;
+        self.clock.restart();
+        Ok(())
+    }
+
     /// Move the camera, draw the scene and show it.
     fn draw(&mut self) -> Result<(), Error> {
         let now = Instant::now();
@@ -615,6 +634,7 @@ impl App {
         }
         let density = view.controls.density();
         view.reload_if_changed(&self.args.scene, self.args.camera, (self.args.cull, density));
+        view.show_cloth_debug_if_chosen(self.args.camera, (self.args.cull, density))?;
         if draw {
             view.draw()?;
         }

@@ -239,6 +239,17 @@ impl SceneDesc {
         View::new(self.cameras[index]).with_post(c.post.clone()).with_culling(c.culling)
     }
 
+    /// Draw every cloth's debug view or not ([`ClothDesc::set_debug`]);
+    /// whether any cloth changed (place the scene again to show it).
+    pub fn set_cloth_debug(&mut self, debug: bool) -> Result<bool, Diagnostic> {
+        let mut changed = false;
+        for cloth in self.cloths.iter_mut().filter(|c| c.debug != debug) {
+            cloth.set_debug(debug, &self.path)?;
+            changed = true;
+        }
+        Ok(changed)
+    }
+
     /// Total instances over all render tasks.
     pub fn instance_count(&self) -> usize {
         self.entities.iter().map(|e| e.transforms.len()).sum()

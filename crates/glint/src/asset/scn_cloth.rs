@@ -106,6 +106,17 @@ impl ClothSetup {
 }
 
 impl ClothDesc {
+    /// Draw seed 003's debug view (edge ribbons, pin markers) or not: the
+    /// view is made again from the cloth at rest (place the scene again to
+    /// show it). Errors name the cloth's block in `scene`.
+    pub fn set_debug(&mut self, debug: bool, scene: &Path) -> Result<(), Diagnostic> {
+        let at = |m: String| Diagnostic::at(scene, self.line, format!("cloth: {m}"));
+        let cloth = self.setup.start().map_err(at)?;
+        self.view = ClothView::new(&cloth, debug).map_err(|e| at(e.to_string()))?;
+        self.debug = debug;
+        Ok(())
+    }
+
     /// Steps a pose at `time` takes from rest (1 for a static cloth).
     pub fn steps_to(&self, time: f32) -> u64 {
         match self.integrator {

@@ -87,6 +87,8 @@ pub struct Controls {
     /// EV added to every tonemap's exposure (where any view tonemaps).
     has_tonemap: bool,
     exposure: f32,
+    /// Whether the cloths draw their debug view (`None`: the scene has no cloth).
+    cloth_debug: Option<bool>,
     /// Whether the scene has tiled instances, and the share drawn.
     has_tiles: bool,
     density: f32,
@@ -114,6 +116,7 @@ impl Controls {
             shadows: true,
             has_tonemap,
             exposure: 0.0,
+            cloth_debug: (!desc.cloths.is_empty()).then(|| desc.cloths.iter().any(|c| c.debug)),
             has_tiles: desc.entities.iter().any(|e| e.tiles.is_some()),
             density,
             time_of_day: desc.time_of_day,
@@ -142,6 +145,9 @@ impl Controls {
         if self.has_tonemap {
             let kind = ControlKind::Slider { value: self.exposure, min: -4.0, max: 4.0, step: 0.1 };
             add("exposure".into(), "Scene", "exposure (EV)", kind);
+        }
+        if let Some(on) = self.cloth_debug {
+            add("cloth_debug".into(), "Scene", "cloth debug view", ControlKind::Toggle { on });
         }
         if self.has_tiles {
             let kind = ControlKind::Slider { value: self.density, min: 0.0, max: 1.0, step: 0.05 };
@@ -191,6 +197,7 @@ impl Controls {
             ("camera", ControlKind::Choice { options, .. }) => self.camera = index(options.len()),
             ("culling", ControlKind::Choice { options, .. }) => self.culling = index(options.len()),
             ("shadows", _) => self.shadows = on,
+            ("cloth_debug", _) => self.cloth_debug = Some(on),
             ("exposure", _) => self.exposure = clamp(value),
             ("density", _) => self.density = clamp(value),
             ("time_of_day", _) => self.time_of_day = Some(clamp(value)),
@@ -250,6 +257,13 @@ impl Controls {
     /// Pause or play (Space).
     pub fn toggle_pause(&mut self) {
         self.paused = !self.paused;
+    }
+
+    /// Whether the cloths should draw their debug view (`None`: no cloth).
+    /// The front end places the scene again when it differs from the
+    /// scene's ([`SceneDesc::set_cloth_debug`]).
+    pub fn cloth_debug(&self) -> Option<bool> {
+        self.cloth_debug
     }
 
     /// The share of every tile drawn.
