@@ -123,6 +123,8 @@ fn explain_mode(
     let mut renderer = Renderer::new(gpu);
     renderer.set_mode(mode);
     renderer.set_explaining(true);
+    // Each pass's GPU time too, where the device has timestamp queries.
+    renderer.enable_gpu_timing();
     let mut world = World::place(desc.clone(), &mut renderer);
     let views = culled(world.views(args.camera), args.cull);
     if args.view >= views.len() {
@@ -232,5 +234,16 @@ fn describe(e: &Explained) -> String {
         "CPU ms (this frame): prepare {:.3}, cull {:.3}, queue {:.3}, sort {:.3}, batch {:.3}, upload {:.3}, encode {:.3}, submit {:.3}; whole flush {:.3} (median of {COSTED_FRAMES} frames {:.3})",
         c.prepare, c.cull, c.queue, c.sort, c.batch, c.upload, c.encode, c.submit, c.total, e.cpu_ms_median
     );
+    if let Some(g) = &s.gpu {
+        let post: Vec<String> = g.post_ms.iter().map(|ms| format!("{ms:.3}")).collect();
+        let shadow = g.shadow_ms.map_or(String::new(), |ms| format!("shadow pass {ms:.3}, "));
+        let _ = writeln!(
+            t,
+            "GPU ms (frame {}): {shadow}forward pass {:.3}, post [{}]",
+            g.frame,
+            g.forward_ms,
+            post.join(", ")
+        );
+    }
     t
 }

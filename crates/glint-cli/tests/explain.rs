@@ -23,9 +23,13 @@ fn glint_vulkan(args: &[&str]) -> Option<std::process::Output> {
 }
 
 /// The text without what changes from run to run and machine to machine: the
-/// first line (it names the adapter) and the CPU times.
+/// first line (it names the adapter) and the CPU and GPU times.
 fn stable(text: &str) -> String {
-    text.lines().skip(1).filter(|l| !l.starts_with("CPU ")).map(|l| format!("{l}\n")).collect()
+    text.lines()
+        .skip(1)
+        .filter(|l| !l.starts_with("CPU ") && !l.starts_with("GPU "))
+        .map(|l| format!("{l}\n"))
+        .collect()
 }
 
 #[test]

@@ -378,10 +378,7 @@ impl Shown {
     /// view on or off (the cloths start again from rest), keeping the
     /// controls, the camera and the free camera's place.
     fn show_cloth_debug_if_chosen(&mut self, gpu: &Gpu) -> Result<(), String> {
-        let Some(debug) = self.controls.cloth_debug() else { return Ok(()) };
-        if self.world.desc().cloths.iter().all(|c| c.debug == debug) {
-            return Ok(());
-        }
+        let Some(debug) = self.controls.cloth_debug_to_show(self.world.desc()) else { return Ok(()) };
         let mut desc = self.world.desc().clone();
         desc.set_cloth_debug(debug).map_err(|e| e.to_string())?;
         let placed = Self::place(desc, gpu, self.controls.density())?;

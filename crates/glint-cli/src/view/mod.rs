@@ -290,10 +290,7 @@ impl View {
         camera: Option<usize>,
         cull: (Option<crate::CullArg>, f32),
     ) -> Result<(), Error> {
-        let Some(debug) = self.controls.cloth_debug() else { return Ok(()) };
-        if self.scene.world.desc().cloths.iter().all(|c| c.debug == debug) {
-            return Ok(());
-        }
+        let Some(debug) = self.controls.cloth_debug_to_show(self.scene.world.desc()) else { return Ok(()) };
         let mut desc = self.scene.world.desc().clone();
         desc.set_cloth_debug(debug)?;
         self.scene = Scene::new(&self.gpu, desc, camera, cull);

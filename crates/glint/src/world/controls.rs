@@ -259,11 +259,11 @@ impl Controls {
         self.paused = !self.paused;
     }
 
-    /// Whether the cloths should draw their debug view (`None`: no cloth).
-    /// The front end places the scene again when it differs from the
-    /// scene's ([`SceneDesc::set_cloth_debug`]).
-    pub fn cloth_debug(&self) -> Option<bool> {
-        self.cloth_debug
+    /// Whether the cloths of `desc` should draw their debug view, where they
+    /// do not yet: the front end then places the scene again after
+    /// [`SceneDesc::set_cloth_debug`].
+    pub fn cloth_debug_to_show(&self, desc: &SceneDesc) -> Option<bool> {
+        self.cloth_debug.filter(|&on| desc.cloths.iter().any(|c| c.debug != on))
     }
 
     /// The share of every tile drawn.
