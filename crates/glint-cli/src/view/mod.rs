@@ -335,12 +335,9 @@ impl View {
         scene.renderer.set_explaining(self.overlay.visible && self.overlay.calls_open);
         let stats = scene.world.draw(&mut scene.renderer, &views, &mut self.target)?;
         self.overlay.record(dt.as_secs_f32() * 1e3);
-        let start = Instant::now();
         let calls = scene.renderer.explained();
-        self.overlay.draw((&self.window, &self.gpu), &self.target, controls, (&stats, calls));
-        if self.overlay.visible {
-            self.overlay_ms.push(start.elapsed().as_secs_f64() * 1e3);
-        }
+        let overlay = self.overlay.draw((&self.window, &self.gpu), &self.target, controls, (&stats, calls));
+        self.overlay_ms.extend(overlay);
         self.surface.present(&self.gpu, &self.target);
         if self.last_title.elapsed() >= TITLE_INTERVAL {
             let recent = self.clock.take_recent();

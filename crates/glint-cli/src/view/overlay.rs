@@ -51,17 +51,21 @@ impl Overlay {
     }
 
     /// Lay out the panels (applying what the user changes to `controls`) and
-    /// draw them over `target`'s frame.
+    /// draw them over `target`'s frame; returns the CPU time it took, ms
+    /// (`None` while hidden): laying out, tessellating, uploading and
+    /// recording, not the submission, which on a CPU rasterizer waits for
+    /// the frame submitted before it (as presenting would without the overlay).
     pub fn draw(
         &mut self,
         (window, gpu): (&Window, &Gpu),
         target: &OffscreenTarget,
         controls: &mut Controls,
         (stats, calls): (&[FrameStats], Option<&FrameCalls>),
-    ) {
+    ) -> Option<f64> {
         if !self.visible {
-            return;
+            return None;
         }
+        let start = std::time::Instant::now();
         let input = self.state.take_egui_input(window);
         let history = &self.history;
         let mut calls_open = self.calls_open;
@@ -106,10 +110,13 @@ impl Overlay {
             });
             self.renderer.render(&mut pass.forget_lifetime(), &primitives, &screen);
         }
-        gpu.queue.submit(extra.into_iter().chain([encoder.finish()]));
+        let commands = extra.into_iter().chain([encoder.finish()]).collect::<Vec<_>>();
+        let cpu_ms = start.elapsed().as_secs_f64() * 1e3;
+        gpu.queue.submit(commands);
         for id in output.textures_delta.free.drain() {
             self.renderer.free_texture(&id);
         }
+        Some(cpu_ms)
     }
 }
 
