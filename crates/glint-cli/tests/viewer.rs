@@ -147,7 +147,7 @@ fn read_stats(path: &Path) -> serde_json::Value {
 fn the_overlay_draws_and_h_hides_it() {
     let dir = tempfile::tempdir().expect("tempdir");
     let shot = |name: &str| dir.path().join(format!("{name}.png"));
-    let args: Vec<String> = ["--size", "320x240", "--msaa", "1", "--frames", "8"]
+    let args: Vec<String> = ["--size", "640x360", "--msaa", "1", "--frames", "8"]
         .map(str::to_owned)
         .into_iter()
         .chain(at(1, "set=paused=1"))
@@ -162,7 +162,7 @@ fn the_overlay_draws_and_h_hides_it() {
     let differing =
         with.pixels().zip(without.pixels()).filter(|(p, q)| p.0.iter().zip(q.0).any(|(x, y)| x.abs_diff(y) > 24));
     let changed = differing.count();
-    assert!(changed > 320 * 240 / 10, "the panels cover part of the frame: {changed} pixels differ");
+    assert!(changed > 640 * 360 / 10, "the panels cover part of the frame: {changed} pixels differ");
     // The overlay's CPU time is reported beside the frame's.
     let summary = stderr(&out);
     assert!(summary.contains("the overlay took"), "{summary}");

@@ -13,6 +13,9 @@ use winit::window::Window;
 /// Frames of history in the frame-time plot.
 const HISTORY: usize = 120;
 
+/// Narrowest window, in pixels, whose panels start open.
+const MIN_OPEN_WIDTH: u32 = 560;
+
 /// The overlay and its egui state.
 pub struct Overlay {
     ctx: egui::Context,
@@ -69,9 +72,11 @@ impl Overlay {
         let input = self.state.take_egui_input(window);
         let history = &self.history;
         let mut calls_open = self.calls_open;
+        // In a small window the panels start folded, so the scene shows.
+        let open = target.width() >= MIN_OPEN_WIDTH;
         let mut output = self.ctx.run_pass(input, |ctx| {
             let panel = |name: &'static str, corner: egui::Align2, x: f32| {
-                egui::Window::new(name).anchor(corner, [x, 8.0]).vscroll(true).max_width(280.0)
+                egui::Window::new(name).anchor(corner, [x, 8.0]).vscroll(true).max_width(280.0).default_open(open)
             };
             panel("controls", egui::Align2::LEFT_TOP, 8.0).show(ctx, |ui| controls_panel(ui, controls));
             panel("stats", egui::Align2::RIGHT_TOP, -8.0).show(ctx, |ui| {
