@@ -12,6 +12,11 @@ use std::process::Command;
 /// (with a message) where there is no xvfb-run or no GPU adapter and
 /// `GLINT_REQUIRE_ADAPTER=1` does not ask for them.
 fn view_under_xvfb(scene: &Path, args: &[String]) -> Option<std::process::Output> {
+    view_under_xvfb_on(scene, args, None)
+}
+
+/// [`view_under_xvfb`] on wgpu's `backend` (`WGPU_BACKEND`) where given.
+fn view_under_xvfb_on(scene: &Path, args: &[String], backend: Option<&str>) -> Option<std::process::Output> {
     let required = std::env::var("GLINT_REQUIRE_ADAPTER").as_deref() == Ok("1");
     if Command::new("xvfb-run").arg("--help").output().is_err() {
         assert!(!required, "GLINT_REQUIRE_ADAPTER=1 but xvfb-run is missing (apt-get install xvfb xauth)");
@@ -24,6 +29,7 @@ fn view_under_xvfb(scene: &Path, args: &[String]) -> Option<std::process::Output
         .args(args)
         .current_dir(repo(""))
         .env("NODEVICE_SELECT", "1")
+        .envs(backend.map(|b| ("WGPU_BACKEND", b)))
         .output()
         .expect("run xvfb-run");
     if out.status.code() == Some(2) && !required {
@@ -35,7 +41,6 @@ fn view_under_xvfb(scene: &Path, args: &[String]) -> Option<std::process::Output
 
 /// The viewer under a virtual X display: a few frames, a resize, minimise and
 /// restore, a screenshot on the way and one on quitting.
-
 #[test]
 fn view_runs_under_xvfb_resizes_and_takes_screenshots() {
     let dir = tempfile::tempdir().expect("tempdir");
@@ -140,11 +145,16 @@ fn read_stats(path: &Path) -> serde_json::Value {
     serde_json::from_str(&text).expect("one JSON object")
 }
 
-/// The overlay draws over the frame: a screenshot with it differs from the
-/// same frame of a paused scene without it, and hiding it gives back the
-/// scene as `glint render` draws it.
+/// The overlay draws over the frame, on Vulkan and on GL: a screenshot with
+/// it differs from the same frame of the paused scene without it.
 #[test]
 fn the_overlay_draws_and_h_hides_it() {
+    for backend in [None, Some("gl")] {
+        overlay_draws_and_hides(backend);
+    }
+}
+
+fn overlay_draws_and_hides(backend: Option<&str>) {
     let dir = tempfile::tempdir().expect("tempdir");
     let shot = |name: &str| dir.path().join(format!("{name}.png"));
     let args: Vec<String> = ["--size", "640x360", "--msaa", "1", "--frames", "8"]
@@ -155,14 +165,17 @@ fn the_overlay_draws_and_h_hides_it() {
         .chain(at(5, "overlay=off"))
         .chain(at(7, &format!("screenshot={}", shot("without").display())))
         .collect();
-    let Some(out) = view_under_xvfb(&repo("tests/scenes/lights.scn"), &args) else { return };
+    let Some(out) = view_under_xvfb_on(&repo("tests/scenes/lights.scn"), &args, backend) else { return };
     assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    if backend == Some("gl") {
+        assert!(stderr(&out).contains("(Gl)"), "drawn on GL: {}", stderr(&out));
+    }
     let (with, without) =
         (image::open(shot("with")).expect("png").into_rgb8(), image::open(shot("without")).expect("png").into_rgb8());
     let differing =
         with.pixels().zip(without.pixels()).filter(|(p, q)| p.0.iter().zip(q.0).any(|(x, y)| x.abs_diff(y) > 24));
     let changed = differing.count();
-    assert!(changed > 640 * 360 / 10, "the panels cover part of the frame: {changed} pixels differ");
+    assert!(changed > 640 * 360 / 10, "{backend:?}: the panels cover part of the frame: {changed} pixels differ");
     // The overlay's CPU time is reported beside the frame's.
     let summary = stderr(&out);
     assert!(summary.contains("the overlay took"), "{summary}");
