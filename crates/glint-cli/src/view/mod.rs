@@ -125,6 +125,8 @@ struct View {
     shown_camera: Option<usize>,
     /// The camera the free camera's views start from (`--camera`).
     free_start: Option<usize>,
+    /// How every view culls, where `--cull` says.
+    cull: Option<crate::CullArg>,
     overlay: Overlay,
     /// CPU time of each frame's overlay, ms.
     overlay_ms: Vec<f64>,
@@ -236,6 +238,7 @@ impl App {
             controls,
             shown_camera: None,
             free_start: self.args.camera,
+            cull: self.args.cull,
             overlay,
             overlay_ms: Vec::new(),
             stats: Vec::new(),
@@ -362,7 +365,7 @@ impl View {
         }
         self.shown_camera = chosen;
         let scene = &mut self.scene;
-        scene.views = scene.world.views(chosen.or(self.free_start));
+        scene.views = crate::culled(scene.world.views(chosen.or(self.free_start)), self.cull);
         // The free camera starts again from the scene camera shown.
         let camera = scene.camera();
         self.fly = FlyCamera::from_camera(&camera, 0.5 * (camera.target - camera.eye).length().max(1.0));
