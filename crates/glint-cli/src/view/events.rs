@@ -133,10 +133,11 @@ impl ApplicationHandler for App {
                 played.scene,
                 played.speed()
             );
-            if let Some(ms) = crate::bench::median(&mut view.overlay_ms.clone()) {
+            let shown = view.overlay_ms.len();
+            if let Some(median) = crate::bench::median(&mut view.overlay_ms.clone()) {
+                let mean = view.overlay_ms.iter().sum::<f64>() / shown as f64;
                 eprintln!(
-                    "glint view: the overlay took {ms:.3} ms of CPU a frame (median of {} frames shown with it)",
-                    view.overlay_ms.len()
+                    "glint view: the overlay took {median:.3} ms of CPU a frame (median; mean {mean:.3}) over the {shown} frames shown with it"
                 );
             }
         }

@@ -3,6 +3,13 @@
 //! [`Controls`] list, and a stats panel with the frame time and its history,
 //! each view's counts, stage CPU times and pass GPU times, and, when opened,
 //! the frame's draw calls as `glint explain` lists them. `H` hides it.
+//!
+//! egui lays the panels out again when the user touches them, when the window
+//! changes size, and otherwise [`REFRESH`] apart (the statistics then are
+//! readable, not a blur); between layouts each frame paints the last one's
+//! triangles again, which costs almost nothing. (egui asks to lay out again
+//! after every pass whose text changed size, that is every frame here: it is
+//! heard only for the first [`SIZING_PASSES`], while new panels size themselves.)
 
 use glint::render::FrameCalls;
 use glint::world::{ControlKind, Controls};
@@ -16,6 +23,12 @@ const HISTORY: usize = 120;
 /// Narrowest window, in pixels, whose panels start open.
 const MIN_OPEN_WIDTH: u32 = 560;
 
+/// Longest time between two layouts of the panels (the statistics' refresh).
+const REFRESH: std::time::Duration = std::time::Duration::from_millis(250);
+
+/// Layouts after which egui's own requests to lay out again are not heard.
+const SIZING_PASSES: u32 = 3;
+
 /// The overlay and its egui state.
 pub struct Overlay {
     ctx: egui::Context,
@@ -27,6 +40,21 @@ pub struct Overlay {
     history: VecDeque<f32>,
     /// Whether the draw-call list is open (the renderer then explains frames).
     pub calls_open: bool,
+    /// The last layout's triangles, its scale and the target size it was
+    /// made for, and when.
+    laid_out: Option<Layout>,
+    /// Whether egui had input (or asked to lay out again while sizing) since the last layout.
+    due: bool,
+    /// Layouts so far.
+    layouts: u32,
+}
+
+/// One layout of the panels, painted until the next.
+struct Layout {
+    primitives: Vec<egui::ClippedPrimitive>,
+    pixels_per_point: f32,
+    size: (u32, u32),
+    at: std::time::Instant,
 }
 
 impl Overlay {
@@ -36,13 +64,43 @@ impl Overlay {
         let side = gpu.device.limits().max_texture_dimension_2d as usize;
         let state = egui_winit::State::new(ctx.clone(), egui::ViewportId::ROOT, window, None, None, Some(side));
         let renderer = egui_wgpu::Renderer::new(&gpu.device, format, egui_wgpu::RendererOptions::default());
-        Self { ctx, state, renderer, visible: true, history: VecDeque::new(), calls_open: false }
+        Self {
+            ctx,
+            state,
+            renderer,
+            visible: true,
+            history: VecDeque::new(),
+            calls_open: false,
+            laid_out: None,
+            due: true,
+            layouts: 0,
+        }
     }
 
     /// Pass a window event to egui; whether egui used it (a click on a panel,
     /// typing into a field), so the viewer leaves it alone.
     pub fn on_event(&mut self, window: &Window, event: &winit::event::WindowEvent) -> bool {
-        self.visible && self.state.on_window_event(window, event).consumed
+        if !self.visible {
+            return false;
+        }
+        let response = self.state.on_window_event(window, event);
+        // Input lays the panels out again; a redraw request (every frame) does not.
+        use winit::event::WindowEvent as E;
+        let input = matches!(
+            event,
+            E::KeyboardInput { .. }
+                | E::ModifiersChanged(_)
+                | E::Ime(_)
+                | E::CursorMoved { .. }
+                | E::CursorLeft { .. }
+                | E::MouseWheel { .. }
+                | E::MouseInput { .. }
+                | E::Touch(_)
+                | E::Focused(_)
+                | E::ScaleFactorChanged { .. }
+        );
+        self.due |= response.repaint && input;
+        response.consumed
     }
 
     /// Note a frame's time for the plot.
@@ -69,11 +127,50 @@ impl Overlay {
             return None;
         }
         let start = std::time::Instant::now();
+        let size = (target.width(), target.height());
+        let stale = self.laid_out.as_ref().is_none_or(|l| l.size != size || l.at.elapsed() >= REFRESH);
+        if self.due || stale {
+            self.lay_out((window, gpu), size, controls, (stats, calls));
+        }
+        let layout = self.laid_out.as_ref().expect("laid out above");
+        let screen =
+            egui_wgpu::ScreenDescriptor { size_in_pixels: [size.0, size.1], pixels_per_point: layout.pixels_per_point };
+        let label = Some("overlay");
+        let mut encoder = gpu.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label });
+        let extra = self.renderer.update_buffers(&gpu.device, &gpu.queue, &mut encoder, &layout.primitives, &screen);
+        {
+            let pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label,
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view: target.color_view(),
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations { load: wgpu::LoadOp::Load, store: wgpu::StoreOp::Store },
+                })],
+                ..Default::default()
+            });
+            self.renderer.render(&mut pass.forget_lifetime(), &layout.primitives, &screen);
+        }
+        let commands = extra.into_iter().chain([encoder.finish()]).collect::<Vec<_>>();
+        let cpu_ms = start.elapsed().as_secs_f64() * 1e3;
+        gpu.queue.submit(commands);
+        Some(cpu_ms)
+    }
+
+    /// Run egui over the panels (applying what the user changes to
+    /// `controls`), keeping the triangles to paint and updating its textures.
+    fn lay_out(
+        &mut self,
+        (window, gpu): (&Window, &Gpu),
+        size: (u32, u32),
+        controls: &mut Controls,
+        (stats, calls): (&[FrameStats], Option<&FrameCalls>),
+    ) {
         let input = self.state.take_egui_input(window);
         let history = &self.history;
         let mut calls_open = self.calls_open;
         // In a small window the panels start folded, so the scene shows.
-        let open = target.width() >= MIN_OPEN_WIDTH;
+        let open = size.0 >= MIN_OPEN_WIDTH;
         let mut output = self.ctx.run_pass(input, |ctx| {
             let panel = |name: &'static str, corner: egui::Align2, x: f32| {
                 egui::Window::new(name).anchor(corner, [x, 8.0]).vscroll(true).max_width(280.0).default_open(open)
@@ -87,41 +184,22 @@ impl Overlay {
             });
         });
         self.calls_open = calls_open;
-        self.state.handle_platform_output(window, output.platform_output);
-        let primitives = self.ctx.tessellate(output.shapes, output.pixels_per_point);
-        let screen = egui_wgpu::ScreenDescriptor {
-            size_in_pixels: [target.width(), target.height()],
-            pixels_per_point: output.pixels_per_point,
-        };
+        let again = output.viewport_output.get(&egui::ViewportId::ROOT).is_some_and(|v| v.repaint_delay.is_zero());
+        self.layouts += 1;
+        self.due = again && self.layouts < SIZING_PASSES;
+        self.state.handle_platform_output(window, std::mem::take(&mut output.platform_output));
+        let primitives = self.ctx.tessellate(std::mem::take(&mut output.shapes), output.pixels_per_point);
         // Every texture change is applied (egui checks none is left).
         for (id, deltas) in output.textures_delta.set.drain() {
             for delta in &deltas {
                 self.renderer.update_texture(&gpu.device, &gpu.queue, id, delta);
             }
         }
-        let label = Some("overlay");
-        let mut encoder = gpu.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label });
-        let extra = self.renderer.update_buffers(&gpu.device, &gpu.queue, &mut encoder, &primitives, &screen);
-        {
-            let pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label,
-                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: target.color_view(),
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations { load: wgpu::LoadOp::Load, store: wgpu::StoreOp::Store },
-                })],
-                ..Default::default()
-            });
-            self.renderer.render(&mut pass.forget_lifetime(), &primitives, &screen);
-        }
-        let commands = extra.into_iter().chain([encoder.finish()]).collect::<Vec<_>>();
-        let cpu_ms = start.elapsed().as_secs_f64() * 1e3;
-        gpu.queue.submit(commands);
         for id in output.textures_delta.free.drain() {
             self.renderer.free_texture(&id);
         }
-        Some(cpu_ms)
+        let at = std::time::Instant::now();
+        self.laid_out = Some(Layout { primitives, pixels_per_point: output.pixels_per_point, size, at });
     }
 }
 
