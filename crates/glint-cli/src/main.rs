@@ -508,7 +508,7 @@ fn parse_msaa(s: &str) -> Result<u32, String> {
 /// any number) is an error naming the file, for `check` as for `render`.
 pub(crate) fn load(scene: &Path, options: LoadOptions) -> Result<SceneDesc, Error> {
     let desc = if Model::is_model_path(scene) {
-        Model::load_with(scene, options)?.into_scene()
+        Model::load_with(scene, options)?.into_shown_scene()
     } else {
         load_scene_with(scene, options)?
     };

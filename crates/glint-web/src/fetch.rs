@@ -29,7 +29,7 @@ pub async fn load(path: &str) -> Result<SceneDesc, String> {
     let mut asked = HashSet::new();
     for _ in 0..MAX_ROUNDS {
         let result = match Model::is_model_path(path) {
-            true => Model::load_with(path, options.clone()).map(Model::into_scene),
+            true => Model::load_with(path, options.clone()).map(Model::into_shown_scene),
             false => load_scene_with(path, options.clone()),
         };
         let missing: Vec<PathBuf> = set.take_missing().into_iter().filter(|p| asked.insert(p.clone())).collect();

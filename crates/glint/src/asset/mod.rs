@@ -3,6 +3,7 @@
 //! [`Diagnostic`] naming the file, the line where there is one, and what was expected.
 
 pub mod animation;
+mod environment;
 mod files;
 mod gltf;
 mod gltf_check;
@@ -26,6 +27,8 @@ mod scn_syntax;
 mod scn_targets;
 mod texture;
 
+pub(crate) use environment::{decoded_bytes, read_environment};
+pub use environment::{equirect_direction, equirect_uv, EnvironmentImage, MAX_RADIANCE};
 pub(crate) use files::AssetFolder;
 pub use files::{FileSet, Files};
 pub use files::{

@@ -226,6 +226,23 @@ impl Model {
     /// the file's lights, or a sun and a fill light when it has none; ambient light
     /// and a sky.
     pub fn into_scene(self) -> SceneDesc {
+        self.scene()
+    }
+
+    /// [`into_scene`](Self::into_scene) as `glint view`, `glint render` and the
+    /// web page show a model file: a glTF model also lit by a studio
+    /// environment ([`SceneDesc::with_studio_environment`]), as the glTF sample
+    /// viewer lights one, so metals have something to reflect.
+    pub fn into_shown_scene(self) -> SceneDesc {
+        let gltf = (self.path.extension().and_then(|e| e.to_str()))
+            .is_some_and(|e| e.eq_ignore_ascii_case("gltf") || e.eq_ignore_ascii_case("glb"));
+        match gltf {
+            true => self.scene().with_studio_environment(),
+            false => self.scene(),
+        }
+    }
+
+    fn scene(self) -> SceneDesc {
         let bounds = self.bounds().unwrap_or(Aabb { min: Vec3::splat(-1.0), max: Vec3::splat(1.0) });
         let (center, radius) = (bounds.center(), (bounds.half_extent().length()).max(1e-3));
         let fov = 45.0_f32;
@@ -264,6 +281,7 @@ impl Model {
             light_sways: Vec::new(),
             emitters: Vec::new(),
             time_of_day: None,
+            environment_image: None,
             models: vec![self],
         }
     }

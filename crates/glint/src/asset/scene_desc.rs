@@ -169,6 +169,9 @@ pub struct SceneDesc {
     pub warnings: Vec<Diagnostic>,
     /// The hour its sun and sky were last set to ([`SceneDesc::set_time_of_day`]).
     pub time_of_day: Option<f32>,
+    /// The image its environment lights it with, when that is a file's
+    /// ([`EnvironmentSource::Image`](crate::scene::EnvironmentSource::Image) of its id).
+    pub environment_image: Option<super::EnvironmentImage>,
 }
 
 /// A directional light whose direction sways with time (`sway` in `.scn`).
@@ -199,6 +202,18 @@ pub struct CameraView {
 }
 
 impl SceneDesc {
+    /// This scene lit by a neutral studio environment
+    /// ([`EnvironmentImage::studio`](super::EnvironmentImage::studio)), its sky
+    /// drawn blurred: how glTF viewers show a model without a scene of its own.
+    pub fn with_studio_environment(mut self) -> Self {
+        let studio = super::EnvironmentImage::studio();
+        let source = crate::scene::EnvironmentSource::Image(studio.id());
+        self.environment.light =
+            Some(crate::scene::EnvironmentLight { sky_blur: 0.6, ..crate::scene::EnvironmentLight::new(source) });
+        self.environment_image = Some(studio);
+        self
+    }
+
     /// The views `glint render` draws: the cameras that draw into render
     /// targets ([`SceneDesc::target_views`]), then every other camera that has a
     /// viewport, in file order, or else the first other camera alone over the image.

@@ -14,9 +14,11 @@ use super::scn_syntax::{decode_scene_text, parse_blocks, Block, Pair};
 use super::scn_targets;
 use super::texture::read_texture;
 use super::texture::TextureCache;
+use super::{decoded_bytes, read_environment};
 use super::{AssetFolder, Diagnostic, LoadOptions, Model, ShapeKind, Texture, MAX_SCENE_BYTES, MAX_SCENE_TOTAL_BYTES};
 use crate::scene::{
-    Background, Camera, Culling, Environment, Fog, Light, Material, ShadowLayout, MAX_LIGHTS, MAX_SHADOW_MAP_BYTES,
+    Background, Camera, Culling, Environment, EnvironmentLight, EnvironmentSource, Fog, Light, Material, ShadowLayout,
+    MAX_LIGHTS, MAX_SHADOW_MAP_BYTES,
 };
 use crate::text::{list, quote};
 use glam::{EulerRot, Mat4, Quat, Vec3};
@@ -76,6 +78,7 @@ pub fn parse_scene_with(path: &Path, text: &str, options: LoadOptions) -> Result
             emitters: Vec::new(),
             warnings: Vec::new(),
             time_of_day: None,
+            environment_image: None,
         },
         textures: TextureCache::new(options.texture_memory),
         model_index: HashMap::new(),
@@ -254,6 +257,46 @@ impl Loader<'_> {
             }
             env.wind.direction = direction.normalize();
         }
+        self.environment(f)
+    }
+
+    /// The world's image-based lighting: `environment` (`sky`, or a `.hdr` or
+    /// OpenEXR file), `environment_intensity`, `environment_rotation` (degrees
+    /// about +Y) and `sky_blur` (0..1).
+    fn environment(&mut self, f: &mut Fields) -> Result<(), Diagnostic> {
+        let intensity = f.number("environment_intensity", 0.0..=1000.0)?;
+        let rotation = f.number("environment_rotation", -3600.0..=3600.0)?;
+        let blur = f.number("sky_blur", 0.0..=1.0)?;
+        let Some(pair) = f.get("environment") else {
+            if let Some(key) =
+                [(intensity, "environment_intensity"), (rotation, "environment_rotation"), (blur, "sky_blur")]
+                    .iter()
+                    .find_map(|(v, key)| v.map(|_| key))
+            {
+                return Err(Diagnostic::at(self.path, f.block.line, format!("\"{key}\" needs \"environment\"")));
+            }
+            return Ok(());
+        };
+        let source = match pair.value.trim() {
+            "sky" => EnvironmentSource::Sky,
+            file => {
+                let at = |m: String| Diagnostic::at(self.path, pair.line, format!("\"environment\": {m}"));
+                let path = self.assets.resolve(file, self.path).map_err(|e| at(e.message))?;
+                let image =
+                    read_environment(&path, self.textures.free(), &self.assets.files).map_err(|e| at(e.message))?;
+                self.textures.charge(decoded_bytes(&image));
+                let id = image.id();
+                self.scene.environment_image = Some(image);
+                EnvironmentSource::Image(id)
+            }
+        };
+        let light = EnvironmentLight {
+            intensity: intensity.unwrap_or(1.0),
+            rotation: rotation.unwrap_or(0.0).to_radians(),
+            sky_blur: blur.unwrap_or(0.0),
+            ..EnvironmentLight::new(source)
+        };
+        self.scene.environment.light = Some(light);
         Ok(())
     }
 

@@ -147,6 +147,36 @@ fn tiled(extra: &str) -> String {
 }
 
 #[test]
+fn the_world_environment_is_the_sky_or_an_image_counted_in_texture_memory() {
+    let sky = parse("{ \"classname\" \"world\"\n\"environment\" \"sky\"\n\"environment_rotation\" \"90\" }").unwrap();
+    let light = sky.environment.light.expect("lit by the sky");
+    assert_eq!(light.source, crate::scene::EnvironmentSource::Sky);
+    assert!((light.rotation - std::f32::consts::FRAC_PI_2).abs() < 1e-6 && light.intensity == 1.0);
+    assert!(parse("{ \"classname\" \"world\" }").unwrap().environment.light.is_none());
+    // An image, from a file set: its id is the scene's, its pixels count against the memory.
+    let env = crate::asset::EnvironmentImage::uniform(glam::Vec3::ONE);
+    let mut hdr = Vec::new();
+    let rgb: Vec<image::Rgb<f32>> = env.pixels().pixels().copied().collect();
+    image::codecs::hdr::HdrEncoder::new(&mut hdr).encode(&rgb, 8, 4).unwrap();
+    let set = std::sync::Arc::new(crate::asset::FileSet::default());
+    set.insert(Path::new("dir/sky.hdr"), hdr);
+    let text = "{ \"classname\" \"world\"\n\"environment\" \"sky.hdr\"\n\"environment_intensity\" \"2\" }";
+    let options = |memory| LoadOptions {
+        files: crate::asset::Files::Memory(set.clone()),
+        texture_memory: memory,
+        ..Default::default()
+    };
+    let desc = parse_scene_with(Path::new("dir/t.scn"), text, options(1 << 20)).unwrap();
+    let image = desc.environment_image.as_ref().expect("the image");
+    assert_eq!(image.pixels().dimensions(), (8, 4));
+    let light = desc.environment.light.expect("lit by it");
+    assert_eq!((light.source, light.intensity), (crate::scene::EnvironmentSource::Image(image.id()), 2.0));
+    let err = parse_scene_with(Path::new("dir/t.scn"), text, options(100)).unwrap_err();
+    assert_eq!(err.line, Some(2), "{err}");
+    assert!(err.message.contains("texture memory"), "{err}");
+}
+
+#[test]
 fn tiled_instances_are_an_entity_of_their_own_with_their_tiles_and_density() {
     let both = format!(
         "{}\n{}",
@@ -243,6 +273,9 @@ fn semantic_errors_name_file_line_and_expectation() {
         ("{\n\"classname\" \"world\"\n\"glare\" \"5\"\n}", 3, "\"glare\" is 5, expected a value in 0..=4"),
         ("{\n\"classname\" \"world\"\n\"time_of_day\" \"25\"\n}", 3, "expected a value in 0..=24"),
         (&motion("\"edge_fade\" \"5 2\""), 4, "0 <= inner < outer <= 1000000"),
+        ("{\n\"classname\" \"world\"\n\"sky_blur\" \"0.5\"\n}", 1, "\"sky_blur\" needs \"environment\""),
+        ("{\n\"classname\" \"world\"\n\"environment\" \"sky\"\n\"sky_blur\" \"2\"\n}", 4, "expected a value in 0..=1"),
+        ("{\n\"classname\" \"world\"\n\"environment\" \"none.hdr\"\n}", 3, "\"environment\": "),
     ];
     for (text, line, want) in cases {
         let err = parse(text).unwrap_err();

@@ -51,7 +51,7 @@ impl Light {
     }
 }
 
-/// The Scene block, `@group(0) @binding(0)` (4,176 bytes).
+/// The Scene block, `@group(0) @binding(0)` (4,208 bytes).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub(crate) struct SceneGpu {
@@ -60,9 +60,11 @@ pub(crate) struct SceneGpu {
     sky_bottom: [f32; 4],           // 16
     fog: [f32; 4],                  // 16: rgb colour, w density
     counts: [u32; 4],               // 16: lights, directional lights, 2 reserved
+    environment: [f32; 4],          // 16: intensity (0: none), cos and sin of its turn, last specular level
+    environment_sky: [f32; 4],      // 16: the specular level the sky is drawn from, 3 reserved
     lights: [LightGpu; MAX_LIGHTS], // 64 × 64
 }
-const _: () = assert!(std::mem::size_of::<SceneGpu>() == 80 + 64 * MAX_LIGHTS);
+const _: () = assert!(std::mem::size_of::<SceneGpu>() == 112 + 64 * MAX_LIGHTS);
 
 impl SceneGpu {
     /// Pack the environment and up to [`MAX_LIGHTS`] lights (the caller checks the
@@ -80,8 +82,16 @@ impl SceneGpu {
             sky_bottom: bottom.extend(1.0).to_array(),
             fog: env.fog.map_or([0.0; 4], |f| f.color.extend(f.density).to_array()),
             counts: [lights.len().min(MAX_LIGHTS) as u32, 0, 0, 0],
+            environment: [0.0; 4],
+            environment_sky: [0.0; 4],
             lights: [LightGpu::default(); MAX_LIGHTS],
         };
+        if let Some(light) = env.light {
+            let finite = |v: f32, fallback: f32| if v.is_finite() { v } else { fallback };
+            let turn = finite(light.rotation, 0.0);
+            block.environment = [finite(light.intensity, 1.0).max(0.0), turn.cos(), turn.sin(), 0.0];
+            block.environment_sky = [finite(light.sky_blur, 0.0).clamp(0.0, 1.0), 0.0, 0.0, 0.0];
+        }
         let directional = |l: &Light| matches!(l.kind, LightKind::Directional { .. });
         let ordered = (lights.iter().enumerate().filter(|(_, l)| directional(l)))
             .chain(lights.iter().enumerate().filter(|(_, l)| !directional(l)));
@@ -90,6 +100,16 @@ impl SceneGpu {
         }
         block.counts[1] = lights.iter().filter(|l| directional(l)).count() as u32;
         block
+    }
+}
+
+impl SceneGpu {
+    /// The block with the environment's specular map ending at level `last`
+    /// (its roughness-1 level), the sky's blur scaled to it.
+    pub(crate) fn with_specular_levels(mut self, last: f32) -> Self {
+        self.environment[3] = last;
+        self.environment_sky[0] *= last;
+        self
     }
 }
 

@@ -100,7 +100,7 @@ impl Renderer {
             } else {
                 self.draw_stages(&self.view.forward, &mut pass, (0..sky_at, &[false]), &mut bound, stats);
             }
-            if self.draw_sky(&mut pass, target, background, stats) {
+            if self.draw_sky(&mut pass, target, environment, stats) {
                 bound = Bound { stencil_reference: bound.stencil_reference, ..Bound::default() };
             }
             self.draw_stages(&self.view.forward, &mut pass, (sky_at..end, after_sky), &mut bound, stats);
@@ -181,19 +181,18 @@ impl Renderer {
         }
     }
 
-    /// Draw the gradient sky of `background` (none for a plain colour); returns
+    /// Draw the sky of `environment` (its image, or its gradient; none for a
+    /// plain colour: [`sky_pass`](super::prepare::sky_pass)); returns
     /// whether it drew, after which only groups 0, 1 and 3 are bound.
     pub(super) fn draw_sky(
         &self,
         pass: &mut wgpu::RenderPass<'_>,
         target: &OffscreenTarget,
-        background: Background,
+        environment: &Environment,
         stats: &mut FrameStats,
     ) -> bool {
-        let sky = match background {
-            Background::Gradient { .. } => self.registry.pipelines.sky_built(target.format(), SkyPass::Gradient),
-            Background::Color(_) => None,
-        };
+        let sky =
+            super::prepare::sky_pass(environment).and_then(|p| self.registry.pipelines.sky_built(target.format(), p));
         let Some(sky) = sky else { return false };
         full_screen(pass, sky, "sky", stats);
         self.outline.call(|| DrawCall::single("sky", "draw", (1, 1), &["pipeline"]));

@@ -13,6 +13,9 @@ pub enum RenderError {
     /// An entity names a shape this renderer never created.
     #[error("unknown shape id {0:?}: shapes come from this renderer's add_shape")]
     UnknownShape(ShapeId),
+    /// The environment names an image this renderer was never given.
+    #[error("unknown environment {0:?}: environment images come from this renderer's add_environment")]
+    UnknownEnvironment(crate::scene::EnvironmentId),
     /// An entity names a material this renderer never created.
     #[error("unknown material id {0:?}: materials come from this renderer's add_material")]
     UnknownMaterial(MaterialId),

@@ -97,7 +97,8 @@ impl Renderer {
         shadowed: &[Option<u32>],
         bytes: &mut UploadStats,
     ) -> Result<(), RenderError> {
-        let scene = SceneGpu::new(&lighting.environment, lighting.lights, shadowed);
+        let scene = SceneGpu::new(&lighting.environment, lighting.lights, shadowed)
+            .with_specular_levels(self.environment.last_level());
         bytes.scene += self.view.scene_block.update(&self.queue, scene);
         let camera = frame.camera.to_gpu(frame.aspect).with_motion(&lighting.environment);
         bytes.camera += self.view.blocks.update(&self.queue, 0, camera);

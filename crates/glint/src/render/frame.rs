@@ -479,6 +479,7 @@ impl Renderer {
         // Each stage's CPU time is the lap that ends on its line.
         let mut lap = Laps::start();
         self.frame_variant = FrameVariant::after(drawn, lighting.lights);
+        stats.environment_prefiltered = self.prepare_environment(lighting)?;
         let prepared = self.prepare(target.format(), &lighting.environment, &mut stats)?;
         self.prepare_particles(target.format(), &mut stats)?;
         stats.cpu_ms.prepare = lap.next();

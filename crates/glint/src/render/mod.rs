@@ -28,6 +28,7 @@ pub mod cull;
 mod cull_pipelines;
 mod draw_list;
 mod encode;
+mod environment;
 mod error;
 mod explain;
 mod forward;
@@ -150,6 +151,8 @@ pub struct Renderer {
     /// How many times the shadow maps were replaced (each view's Scene bind
     /// group points at one generation).
     shadow_maps_generation: u64,
+    /// The environment's prefiltered maps (image-based lighting).
+    environment: environment::EnvironmentMaps,
     /// Whether this frame's forward pipelines look up shadow maps (the `SHADOWS`
     /// variant): set by `shadow_pass` when a light casts shadows, and by `flush`
     /// when that pass drew maps for its lights.
@@ -214,12 +217,14 @@ impl Renderer {
         let pipelines = &registry.pipelines;
         let shadow_maps = ShadowMaps::new(&device, shadows, 1, 1, 1, 1);
         let instances = InstanceBuffer::new(&device, gpu.vertex_storage(), gpu.culls_on_gpu());
+        let environment = environment::EnvironmentMaps::new(&device);
         let shared = views::Shared {
             device: &device,
             pipelines,
             instances: &instances,
             shadow_maps: &shadow_maps,
             shadow_maps_generation: 0,
+            environment: &environment,
         };
         let paths =
             ListPaths { indirect: gpu.draws_indirect(), storage: gpu.vertex_storage(), gpu_cull: gpu.culls_on_gpu() };
@@ -241,6 +246,7 @@ impl Renderer {
             outline: outline::Outline::new(gpu.debug_groups()),
             shadow_maps,
             shadow_maps_generation: 0,
+            environment,
             frame_variant: FrameVariant::default(),
             store: InstanceStore::default(),
             mode: FrameMode::Optimized,
@@ -269,9 +275,9 @@ impl Renderer {
     /// Point the view being drawn at the shared instance buffer and shadow maps,
     /// where either was replaced since its bind groups were made.
     fn refresh_view(&mut self) {
-        let Self { view, device, registry, instances, shadow_maps, shadow_maps_generation, .. } = self;
+        let Self { view, device, registry, instances, shadow_maps, shadow_maps_generation, environment, .. } = self;
         let (pipelines, shadow_maps_generation) = (&registry.pipelines, *shadow_maps_generation);
-        view.refresh(&views::Shared { device, pipelines, instances, shadow_maps, shadow_maps_generation });
+        view.refresh(&views::Shared { device, pipelines, instances, shadow_maps, shadow_maps_generation, environment });
     }
 
     /// What every view's GPU state points at.
@@ -282,12 +288,18 @@ impl Renderer {
             instances: &self.instances,
             shadow_maps: &self.shadow_maps,
             shadow_maps_generation: self.shadow_maps_generation,
+            environment: &self.environment,
         }
     }
 
     /// The shapes, materials, textures and render targets added so far.
     pub fn registry(&self) -> &Registry {
         &self.registry
+    }
+
+    /// Add an environment image ([`Registry::add_environment`]).
+    pub fn add_environment(&mut self, image: &crate::asset::EnvironmentImage) -> crate::scene::EnvironmentId {
+        self.registry.add_environment(image)
     }
 
     /// Add a shape ([`Registry::add_shape`]).

@@ -106,7 +106,7 @@ impl Renderer {
         {
             let background = lighting.environment.background;
             let mut pass = self.begin_forward_pass(encoder, target, (background, Part::Whole), stats);
-            self.draw_sky(&mut pass, target, background, stats);
+            self.draw_sky(&mut pass, target, &lighting.environment, stats);
             let list = &self.view.forward;
             pass.push_debug_group("naive: one draw per instance");
             for (b, draw) in list.batches.iter().zip(&list.draws) {

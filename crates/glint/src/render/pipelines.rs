@@ -107,11 +107,13 @@ impl VertexLayout {
 /// where the map is read).
 const SHADOW_SLOPE_BIAS: f32 = 1.5;
 
-/// The full-screen passes of the sky shader: the gradient sky, drawn behind
-/// what the opaque stages drew, and the sun glare, added over everything.
+/// The full-screen passes of the sky shader: the gradient sky or the
+/// environment, drawn behind what the opaque stages drew, and the sun glare,
+/// added over everything.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub(crate) enum SkyPass {
     Gradient,
+    Environment,
     Glare,
 }
 
@@ -265,6 +267,11 @@ impl Pipelines {
                     ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Comparison),
                     count: None,
                 },
+                // The environment's maps (render/environment.rs).
+                texture_entry(5),
+                texture_entry(6),
+                texture_entry(7),
+                sampler_entry(8),
             ],
         );
         // One record per view, picked by a dynamic offset (render/views.rs).
@@ -452,6 +459,7 @@ impl Pipelines {
         // The sky behind what was drawn; the glare added over everything.
         let (compare, entry, blend) = match pass {
             SkyPass::Gradient => (Compare::LessEqual, "fs_sky", None),
+            SkyPass::Environment => (Compare::LessEqual, "fs_sky_environment", None),
             SkyPass::Glare => {
                 let add = wgpu::BlendComponent {
                     src_factor: wgpu::BlendFactor::One,
@@ -465,6 +473,7 @@ impl Pipelines {
         let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
             label: Some(match pass {
                 SkyPass::Gradient => "renderer: sky pipeline",
+                SkyPass::Environment => "renderer: environment sky pipeline",
                 SkyPass::Glare => "renderer: glare pipeline",
             }),
             layout: Some(&self.sky_layout),

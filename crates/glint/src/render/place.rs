@@ -43,6 +43,9 @@ impl Renderer {
     /// each frame.
     pub fn place_scene(&mut self, desc: &SceneDesc) -> PlacedScene {
         let registry = &mut self.registry;
+        if let Some(image) = &desc.environment_image {
+            registry.add_environment(image);
+        }
         let mut textures: Vec<TextureId> = desc.textures.iter().map(|t| registry.add_texture(t.clone())).collect();
         // Render target k's texture follows the file textures (see `SceneDesc::render_targets`).
         let mut render_targets = Vec::new();

@@ -17,7 +17,7 @@ pub(super) struct PrepareKey {
     target: TargetFormat,
     variant: FrameVariant,
     fog: bool,
-    sky: bool,
+    sky: Option<SkyPass>,
     glare: bool,
 }
 
@@ -47,12 +47,34 @@ impl Renderer {
             return Err(RenderError::TooManyLights(lighting.lights.len()));
         }
         self.frame_variant = FrameVariant::expected(lighting.lights);
+        self.prepare_environment(&lighting)?;
         let mut stats = FrameStats::default();
         let uses: Vec<_> =
             entities.iter().map(|e| (e.shape, e.material, super::instances::stored_compactly(e))).collect();
         let target = TargetFormat { color: crate::gpu::COLOR_FORMAT, samples };
         self.registry.prepare_uses(&uses, target, (&lighting.environment, self.frame_variant), &mut stats)?;
         Ok(stats.pipelines_compiled)
+    }
+
+    /// Prefilter `lighting`'s environment (image-based lighting) now, in a
+    /// submission of its own, unless that was done already (a frame does it
+    /// otherwise: at load time, so the first frame does not). Returns whether it
+    /// prefiltered.
+    pub fn prefilter_environment(&mut self, lighting: &Lighting) -> Result<bool, RenderError> {
+        let done = self.prepare_environment(lighting)?;
+        self.queue.submit(std::mem::take(&mut self.registry.mip_blits));
+        Ok(done)
+    }
+
+    /// Prefilter `lighting`'s environment (image-based lighting) unless that
+    /// was done already, its passes to run first in the next submission; bind
+    /// the new maps. Returns whether it prefiltered.
+    pub(super) fn prepare_environment(&mut self, lighting: &Lighting) -> Result<bool, RenderError> {
+        let commands = self.environment.update(&mut self.registry, &lighting.environment, lighting.lights)?;
+        let done = commands.is_some();
+        self.registry.mip_blits.extend(commands);
+        self.refresh_view();
+        Ok(done)
     }
 
     /// Stage 1: make sure everything the submitted entities use exists on the GPU
@@ -73,7 +95,7 @@ impl Renderer {
             target,
             variant: self.frame_variant,
             fog: environment.fog.is_some(),
-            sky: matches!(environment.background, Background::Gradient { .. }),
+            sky: sky_pass(environment),
             glare: environment.glare > 0.0,
         };
         if let Some((_, table)) = self.last_prepared.as_ref().filter(|(k, _)| *k == key) {
@@ -154,12 +176,22 @@ impl Registry {
                 self.prepare_material(material, layout, target, (environment, frame), stats)?;
             prepared.push(Prepared { pipeline, layout, draw: BatchDraw { mesh, texture_set } });
         }
-        if matches!(environment.background, Background::Gradient { .. }) {
-            stats.pipelines_compiled += u32::from(self.pipelines.build_sky(&self.device, target, SkyPass::Gradient)?);
+        if let Some(sky) = sky_pass(environment) {
+            stats.pipelines_compiled += u32::from(self.pipelines.build_sky(&self.device, target, sky)?);
         }
         if environment.glare > 0.0 {
             stats.pipelines_compiled += u32::from(self.pipelines.build_sky(&self.device, target, SkyPass::Glare)?);
         }
         Ok(prepared)
+    }
+}
+
+/// The sky a frame under `environment` draws: the environment's where it
+/// lights the scene, else the gradient's, else none (a plain clear colour).
+pub(super) fn sky_pass(environment: &Environment) -> Option<SkyPass> {
+    match (environment.light, environment.background) {
+        (Some(_), _) => Some(SkyPass::Environment),
+        (None, Background::Gradient { .. }) => Some(SkyPass::Gradient),
+        (None, Background::Color(_)) => None,
     }
 }

@@ -97,6 +97,8 @@ pub struct Registry {
     pub(super) render_targets: Vec<(OffscreenTarget, TextureId)>,
     /// Whether the device occlusion-culls (render targets' depth is then readable).
     pub(super) occlusion: bool,
+    /// Environment images ([`add_environment`](Self::add_environment)), uploaded.
+    environments: std::collections::HashMap<crate::scene::EnvironmentId, super::environment::SourceImage>,
 }
 
 impl Registry {
@@ -138,6 +140,7 @@ impl Registry {
             mip_blits: Vec::new(),
             textures: Vec::new(),
             render_targets: Vec::new(),
+            environments: Default::default(),
             device,
             queue,
         }
@@ -188,6 +191,23 @@ impl Registry {
         }
         self.textures.push(TextureSlot { pending: Some(texture), view: None });
         TextureId(self.textures.len() as u32 - 1)
+    }
+
+    /// Add an environment image for image-based lighting
+    /// ([`EnvironmentSource::Image`](crate::scene::EnvironmentSource::Image) of
+    /// its id): uploaded now (halved until it fits the adapter), prefiltered
+    /// when a frame first uses it. Adding the same image again does nothing.
+    pub fn add_environment(&mut self, image: &crate::asset::EnvironmentImage) -> crate::scene::EnvironmentId {
+        let side = self.device.limits().max_texture_dimension_2d;
+        let (device, queue) = (&self.device, &self.queue);
+        (self.environments.entry(image.id()))
+            .or_insert_with(|| super::environment::SourceImage::upload(device, queue, image, side));
+        image.id()
+    }
+
+    /// The uploaded environment image `id`.
+    pub(super) fn environment(&self, id: crate::scene::EnvironmentId) -> Option<&super::environment::SourceImage> {
+        self.environments.get(&id)
     }
 
     /// Add a `width` × `height` render target (half floats when `hdr`, else

@@ -190,24 +190,26 @@ impl ShadowMaps {
         self.size_2d == size_2d && self.size_cube == size_cube && self.layers >= layers && self.cubes >= cubes
     }
 
-    /// The Scene block's bind group over `scene` and `shadow` blocks and these maps.
+    /// The Scene block's bind group over `scene` and `shadow` blocks, these
+    /// maps and `environment`'s.
     pub(crate) fn scene_group(
         &self,
         device: &wgpu::Device,
         layout: &wgpu::BindGroupLayout,
-        scene: &wgpu::Buffer,
-        shadow: &wgpu::Buffer,
+        (scene, shadow): (&wgpu::Buffer, &wgpu::Buffer),
+        environment: &super::environment::EnvironmentMaps,
     ) -> wgpu::BindGroup {
+        let entries = [
+            wgpu::BindGroupEntry { binding: 0, resource: scene.as_entire_binding() },
+            wgpu::BindGroupEntry { binding: 1, resource: shadow.as_entire_binding() },
+            wgpu::BindGroupEntry { binding: 2, resource: wgpu::BindingResource::TextureView(&self.maps) },
+            wgpu::BindGroupEntry { binding: 3, resource: wgpu::BindingResource::TextureView(&self.cube_maps) },
+            wgpu::BindGroupEntry { binding: 4, resource: wgpu::BindingResource::Sampler(&self.sampler) },
+        ];
         device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("renderer: scene block (group 0)"),
             layout,
-            entries: &[
-                wgpu::BindGroupEntry { binding: 0, resource: scene.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 1, resource: shadow.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 2, resource: wgpu::BindingResource::TextureView(&self.maps) },
-                wgpu::BindGroupEntry { binding: 3, resource: wgpu::BindingResource::TextureView(&self.cube_maps) },
-                wgpu::BindGroupEntry { binding: 4, resource: wgpu::BindingResource::Sampler(&self.sampler) },
-            ],
+            entries: &entries.into_iter().chain(environment.entries()).collect::<Vec<_>>(),
         })
     }
 }

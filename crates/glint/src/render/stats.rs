@@ -184,6 +184,9 @@ pub struct FrameStats {
     pub cpu_ms: StageTimes,
     /// Shadow views drawn by this frame's shadow pass.
     pub shadow_views: u32,
+    /// Whether this frame prefiltered its environment (image-based lighting):
+    /// the first frame with it, and after the environment or the sky it bakes changed.
+    pub environment_prefiltered: bool,
     /// Draws and time per pass (the totals above are the forward passes').
     pub passes: Passes,
     /// GPU time per pass of the newest earlier frame the GPU has finished

@@ -73,6 +73,7 @@ pub(crate) struct Shared<'a> {
     pub instances: &'a InstanceBuffer,
     pub shadow_maps: &'a ShadowMaps,
     pub shadow_maps_generation: u64,
+    pub environment: &'a super::environment::EnvironmentMaps,
 }
 
 /// What one view keeps on the GPU between frames: a split screen's views, or a
@@ -95,8 +96,8 @@ pub(crate) struct ViewGpu {
     pub scene_group: wgpu::BindGroup,
     /// Its post chain's pass parameters.
     pub post_params: PostParams,
-    /// The instance buffer and shadow maps generations the bind groups point at.
-    generations: (u64, u64),
+    /// The instance buffer, shadow maps and environment maps generations the bind groups point at.
+    generations: (u64, u64, u64),
     /// How the lists draw.
     paths: ListPaths,
 }
@@ -116,7 +117,7 @@ impl ViewGpu {
             post_params: PostParams::new(device),
             scene_block,
             shadow_block,
-            generations: (instances.generation(), shared.shadow_maps_generation),
+            generations: (instances.generation(), shared.shadow_maps_generation, shared.environment.generation()),
             paths,
         }
     }
@@ -126,23 +127,24 @@ impl ViewGpu {
         Self::new(shared, self.paths)
     }
 
-    /// Point the bind groups at the instance buffer and shadow maps of
-    /// `shared` where either was replaced since they were made.
+    /// Point the bind groups at the instance buffer, shadow maps and
+    /// environment maps of `shared` where any was replaced since they were made.
     pub(crate) fn refresh(&mut self, shared: &Shared) {
         let (instances, maps) = (shared.instances.generation(), shared.shadow_maps_generation);
+        let environment = shared.environment.generation();
         if self.generations.0 != instances {
             let layout = &shared.pipelines.instance_layout;
             self.forward.rebind(shared.device, layout, shared.instances.array());
             self.shadows.rebind(shared.device, layout, shared.instances.array());
         }
-        if self.generations.1 != maps {
+        if (self.generations.1, self.generations.2) != (maps, environment) {
             self.scene_group = scene_group(shared, &self.scene_block, &self.shadow_block);
         }
-        self.generations = (instances, maps);
+        self.generations = (instances, maps, environment);
     }
 }
 
 fn scene_group(shared: &Shared, scene: &UniformBlock<SceneGpu>, shadow: &UniformBlock<ShadowGpu>) -> wgpu::BindGroup {
     let layout = &shared.pipelines.scene_layout;
-    shared.shadow_maps.scene_group(shared.device, layout, &scene.buffer, &shadow.buffer)
+    shared.shadow_maps.scene_group(shared.device, layout, (&scene.buffer, &shadow.buffer), shared.environment)
 }

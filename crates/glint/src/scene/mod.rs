@@ -25,7 +25,7 @@ mod view_order;
 pub use camera::{Camera, Projection};
 pub use daylight::Daylight;
 pub use entity::Entity;
-pub use environment::{Background, Environment, Fog};
+pub use environment::{Background, Environment, EnvironmentLight, EnvironmentSource, Fog};
 pub use fly::{FlyCamera, FlyInput};
 pub use light::{Light, LightKind, ShadowSettings, CASCADES, MAX_LIGHTS};
 pub use lighting::Lighting;
@@ -55,6 +55,13 @@ pub struct MaterialId(pub u32);
 /// Handle to a texture, returned by [`Renderer::add_texture`](crate::Renderer::add_texture).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub struct TextureId(pub(crate) u32);
+
+/// Handle to an environment image ([`EnvironmentImage`](crate::asset::EnvironmentImage)):
+/// unique in the process from the image's creation, so a scene's
+/// [`Environment`] can name it before a renderer has it
+/// ([`Registry::add_environment`](crate::Registry::add_environment)).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct EnvironmentId(pub(crate) u32);
 
 /// Handle to a render target, returned by [`Renderer::add_render_target`](crate::Renderer::add_render_target):
 /// a view can draw into it ([`View::output`]) and a material map can show it.

@@ -2,6 +2,8 @@
 // src/render/mod.rs). Field layouts match the #[repr(C)] twins in render/blocks.rs.
 #define_import_path glint::blocks
 
+#import glint::equirect::equirect_uv
+
 struct Light {
     // xyz: direction the light travels (w = 0) or world position (w = 1).
     position: vec4<f32>,
@@ -24,6 +26,12 @@ struct SceneBlock {
     fog: vec4<f32>,
     // x: number of lights; y: directional lights (first in `lights`); z, w: reserved.
     counts: vec4<u32>,
+    // Image-based lighting (render/environment.rs): x: intensity (0: none);
+    // y, z: cos and sin of the environment's turn about +Y; w: the specular
+    // map's last level (roughness 1).
+    environment: vec4<f32>,
+    // x: the specular level the sky is drawn from (its blur); y, z, w: reserved.
+    environment_sky: vec4<f32>,
     lights: array<Light, 64>,
 }
 
@@ -58,4 +66,23 @@ struct ShadowBlock {
 // lavapipe's process grew every frame a shader holding a cube-map lookup drew.
 @group(0) @binding(3) var shadow_cubes: texture_depth_2d_array;
 @group(0) @binding(4) var shadow_sampler: sampler_comparison;
+// The environment (render/environment.rs; 1 × 1 stand-ins without one): the
+// specular map (equirectangular, a level per roughness step), the diffuse
+// light's nine spherical-harmonic coefficients (texels 0..9 of row 0), the
+// split-sum BRDF table (x: n·v, y: roughness) and their sampler.
+@group(0) @binding(5) var environment_specular: texture_2d<f32>;
+@group(0) @binding(6) var environment_irradiance: texture_2d<f32>;
+@group(0) @binding(7) var environment_brdf: texture_2d<f32>;
+@group(0) @binding(8) var environment_sampler: sampler;
 @group(1) @binding(0) var<uniform> camera: CameraBlock;
+
+// The environment's radiance toward world direction `d`, from specular level
+// `level` (fractional levels blend), times its intensity. The environment is
+// turned as glam's Mat3::from_rotation_y(rotation) turns it: looked up turned back.
+fn environment_sample(d: vec3<f32>, level: f32) -> vec3<f32> {
+    let c = scene.environment.y;
+    let s = scene.environment.z;
+    let own = vec3<f32>(c * d.x - s * d.z, d.y, s * d.x + c * d.z);
+    let uv = equirect_uv(own);
+    return textureSampleLevel(environment_specular, environment_sampler, uv, level).rgb * scene.environment.x;
+}

@@ -1,7 +1,8 @@
 // Forward pass: lit, textured, instanced meshes. Composed per feature set: each
 // `#ifdef` below is one bit of ShaderFeatures (src/shader/mod.rs).
 
-#import glint::blocks::{scene, camera, shadows, shadow_maps, shadow_cubes, shadow_sampler, Light, CASCADES}
+#import glint::blocks::{scene, camera, shadows, shadow_maps, shadow_cubes, shadow_sampler, Light, CASCADES, environment_irradiance, environment_brdf, environment_sampler, environment_sample}
+#import glint::equirect::sh_basis
 
 struct MaterialBlock {
     base_color: vec4<f32>,
@@ -612,7 +613,11 @@ fn shade(
     let v = normalize(camera.position.xyz - p);
     let ng = surface.normal;
     let receive = surface.receive_shadows;
+#ifdef ENVIRONMENT
+    var color = environment_irradiance_at(n) * material.coeffs.x * occlusion * base;
+#else
     var color = scene.ambient.rgb * material.coeffs.x * occlusion * base;
+#endif
     for (var i = 0u; i < DIRECTIONAL_LIGHTS; i++) {
         color += blinn_phong(directional(i, p, ng, receive), material, n, v, base, specular);
     }
@@ -659,7 +664,11 @@ fn shade_metallic_roughness(
     let b = Brdf(n, v, max(dot(n, v), 1e-4), alpha * alpha, f0, base * (1.0 - metallic));
     let ng = surface.normal;
     let receive = surface.receive_shadows;
+#ifdef ENVIRONMENT
+    var color = environment_light(b, roughness, occlusion);
+#else
     var color = scene.ambient.rgb * occlusion * (b.c_diff + f0);
+#endif
     for (var i = 0u; i < DIRECTIONAL_LIGHTS; i++) {
         color += ggx(directional(i, p, ng, receive), b);
     }
@@ -668,6 +677,43 @@ fn shade_metallic_roughness(
     }
     return color;
 }
+
+#ifdef ENVIRONMENT
+// The radiance a white Lambert surface facing `n` returns under the
+// environment: its nine spherical-harmonic coefficients against the basis.
+fn environment_irradiance_at(n: vec3<f32>) -> vec3<f32> {
+    let c = scene.environment.y;
+    let s = scene.environment.z;
+    var basis = sh_basis(vec3<f32>(c * n.x - s * n.z, n.y, s * n.x + c * n.z));
+    var sum = vec3<f32>(0.0);
+    for (var k = 0u; k < 9u; k++) {
+        sum += textureLoad(environment_irradiance, vec2<u32>(k, 0u), 0).rgb * basis[k];
+    }
+    return max(sum, vec3<f32>(0.0)) * scene.environment.x;
+}
+
+// The environment's light on a metallic-roughness surface: the split-sum
+// specular (prefiltered radiance times F0 scaled and biased by the BRDF table)
+// with multiple-scattering energy compensation (Fdez-Agüera 2019: rough
+// metals keep the energy single scattering loses), Lambert diffuse from the
+// harmonics, specular occlusion from `occlusion` (Lagarde 2014), and the
+// diffuse darkened by `occlusion`.
+fn environment_light(b: Brdf, roughness: f32, occlusion: f32) -> vec3<f32> {
+    let half_texel = 0.5 / vec2<f32>(textureDimensions(environment_brdf));
+    let at = clamp(vec2<f32>(b.n_v, roughness), half_texel, 1.0 - half_texel);
+    let fab = textureSampleLevel(environment_brdf, environment_sampler, at, 0.0).rg;
+    let fr = max(vec3<f32>(1.0 - roughness), b.f0) - b.f0;
+    let k_s = b.f0 + fr * pow(1.0 - b.n_v, 5.0);
+    let fss_ess = k_s * fab.x + fab.y;
+    let ems = 1.0 - (fab.x + fab.y);
+    let f_avg = b.f0 + (1.0 - b.f0) / 21.0;
+    let fms_ems = ems * fss_ess * f_avg / (1.0 - f_avg * ems);
+    let k_d = b.c_diff * (1.0 - fss_ess - fms_ems);
+    let specular_occlusion = saturate(pow(b.n_v + occlusion, exp2(-16.0 * roughness - 1.0)) - 1.0 + occlusion);
+    let radiance = environment_sample(reflect(-b.v, b.n), roughness * scene.environment.w);
+    return fss_ess * radiance * specular_occlusion + (fms_ems + k_d) * environment_irradiance_at(b.n) * occlusion;
+}
+#endif
 
 // One light through glTF's BRDF.
 fn ggx(light: Incoming, b: Brdf) -> vec3<f32> {

@@ -36,8 +36,9 @@ bitflags::bitflags! {
     /// | 19 | `EDGE_FADE` | fade alpha with the distance from the instance's placed position ([`Material::edge_fade`]) |
     /// | 20 | `COMPACT` | read each instance from a 16-byte compact record, numbered by the draw (set by the entity: [`Entity::with_compact_instances`](crate::Entity::with_compact_instances)) |
     /// | 21 | `SWIM` | swing a fish's tail with its instance's phase ([`Motion::Swim`](crate::scene::Motion::Swim)) |
+    /// | 22 | `ENVIRONMENT` | light from the environment (image-based lighting) instead of the ambient colour ([`Environment::light`]) |
     ///
-    /// Bits 21–31 are free for more (shadow receiving comes with shadow maps).
+    /// Bits 23–31 are free for more (shadow receiving comes with shadow maps).
     /// The motion bits stay in shadow passes' variants, so shadows move too.
     ///
     /// One def follows from the bits rather than being one: `TEXCOORDS`, set with
@@ -89,6 +90,8 @@ bitflags::bitflags! {
         const COMPACT = 1 << 20;
         /// `SWIM`.
         const SWIM = 1 << 21;
+        /// `ENVIRONMENT`.
+        const ENVIRONMENT = 1 << 22;
     }
 }
 
@@ -117,6 +120,7 @@ impl ShaderFeatures {
         f.set(Self::EMISSIVE_MAP, material.emissive_map.is_some());
         f.set(Self::FOG, material.fog && environment.fog.is_some());
         f.set(Self::EDGE_FADE, material.edge_fade.is_some());
+        f.set(Self::ENVIRONMENT, environment.light.is_some() && material.shading != ShadingModel::Unlit);
         f |= match material.motion {
             None => Self::empty(),
             Some(crate::scene::Motion::Wind { .. }) => Self::WIND,
@@ -197,6 +201,7 @@ pub(crate) const DATA_TEXTURE_WIDTH: u32 = 2048;
 /// Composes glint's shaders with naga_oil.
 pub(crate) struct ShaderLibrary {
     composer: Composer,
+    /// Whether the shared modules (`glint::equirect`, `glint::blocks`) were added.
     blocks_added: bool,
     /// Whether the forward shader reads its arrays from storage buffers (else
     /// from data textures: the `DATA_TEXTURES` variant).
@@ -220,13 +225,15 @@ impl ShaderLibrary {
             message: e.emit_to_string(composer),
         };
         if !self.blocks_added {
-            let blocks = ComposableModuleDescriptor {
-                source: include_str!("blocks.wgsl"),
-                file_path: "glint/shader/blocks.wgsl",
-                ..Default::default()
-            };
-            if let Err(e) = self.composer.add_composable_module(blocks) {
-                return Err(fail("blocks.wgsl", e, &self.composer));
+            let shared = [
+                ("glint/shader/equirect.wgsl", include_str!("equirect.wgsl")),
+                ("glint/shader/blocks.wgsl", include_str!("blocks.wgsl")),
+            ];
+            for (file_path, source) in shared {
+                let module = ComposableModuleDescriptor { source, file_path, ..Default::default() };
+                if let Err(e) = self.composer.add_composable_module(module) {
+                    return Err(fail(file_path, e, &self.composer));
+                }
             }
             self.blocks_added = true;
         }
@@ -253,6 +260,12 @@ impl ShaderLibrary {
     /// The gradient sky: `vs_sky` / `fs_sky`, groups 0–1.
     pub(crate) fn sky(&mut self) -> Result<wgpu::naga::Module, ShaderError> {
         self.compose("glint/shader/sky.wgsl", include_str!("sky.wgsl"), HashMap::new())
+    }
+
+    /// The environment's prefiltering passes: `vs_full` with `fs_specular`,
+    /// `fs_irradiance` and `fs_brdf`, its own group 0.
+    pub(crate) fn prefilter(&mut self) -> Result<wgpu::naga::Module, ShaderError> {
+        self.compose("glint/shader/prefilter.wgsl", include_str!("prefilter.wgsl"), HashMap::new())
     }
 
     /// The particle billboards' module: `vs_particle` / `fs_particle`; with
@@ -314,6 +327,7 @@ mod tests {
                 assert_eq!(stored == 0, !storage, "{features:?}: {stored} storage buffers");
             }
             library.sky().expect("sky composes");
+            library.prefilter().expect("prefilter composes");
         }
     }
 

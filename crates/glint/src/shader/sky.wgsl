@@ -1,9 +1,9 @@
-// Two-colour gradient sky: one full-screen triangle on the far plane, drawn after
+// Two-colour gradient sky (or the environment's): one full-screen triangle on the far plane, drawn after
 // the opaque queues so the depth test skips every covered pixel. The sun glare:
 // the same triangle drawn last, added without a depth test (a sphere around
 // the view, bright in the sun's direction).
 
-#import glint::blocks::{scene, camera}
+#import glint::blocks::{scene, camera, environment_sample}
 
 struct SkyOut {
     @builtin(position) clip: vec4<f32>,
@@ -33,6 +33,13 @@ fn fs_sky(in: SkyOut) -> @location(0) vec4<f32> {
     // Flat at the horizon (no kink where the ground colour meets the sky).
     let t = smoothstep(0.0, 0.6, dir.y);
     return vec4<f32>(mix(scene.sky_bottom.rgb, scene.sky_top.rgb, t), 1.0);
+}
+
+// The sky drawn from the environment (image-based lighting), at the Scene
+// block's blur level.
+@fragment
+fn fs_sky_environment(in: SkyOut) -> @location(0) vec4<f32> {
+    return vec4<f32>(environment_sample(view_ray(in.ndc), scene.environment_sky.x), 1.0);
 }
 
 // Sun glare, added over everything: the first directional light's colour times
