@@ -158,3 +158,22 @@ fn the_environment_is_prefiltered_only_when_it_changes() {
     assert!(frame(&mut renderer, &desc), "another time of day bakes and prefilters the sky again");
     assert!(!frame(&mut renderer, &desc));
 }
+
+#[test]
+fn a_gltf_model_shown_alone_gets_a_studio_environment_and_an_obj_does_not() {
+    let models = common::repo_root().join("tests/models");
+    let gltf = glint::asset::Model::load(&models.join("animated.gltf")).expect("loads").into_shown_scene();
+    let light = gltf.environment.light.expect("a studio environment");
+    let image = gltf.environment_image.as_ref().expect("its image");
+    assert_eq!(light.source, EnvironmentSource::Image(image.id()));
+    let obj = glint::asset::Model::load(&models.join("smoothing.obj")).expect("loads").into_shown_scene();
+    assert!(obj.environment.light.is_none() && obj.environment_image.is_none());
+    // Drawn, the studio lights it: its sky is the studio's blurred dome, not the gradient.
+    let Some(gpu) = common::gpu() else { return };
+    let (lit, stats) = common::render_desc(gpu, &gltf, 64, glint::Culling::Cpu);
+    assert!(stats.environment_prefiltered && stats.passes.sky.draws == 1);
+    let plain = glint::asset::Model::load(&models.join("animated.gltf")).expect("loads").into_scene();
+    let (unlit, _) = common::render_desc(gpu, &plain, 64, glint::Culling::Cpu);
+    let corner = |image: &image::RgbaImage| image.get_pixel(1, 1).0;
+    assert_ne!(corner(&lit), corner(&unlit), "the sky comes from the studio");
+}

@@ -39,27 +39,8 @@ impl Blitter {
 
     /// A pipeline drawing into targets of `format`.
     pub(crate) fn pipeline(&self, device: &wgpu::Device, format: wgpu::TextureFormat) -> wgpu::RenderPipeline {
-        device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some(&format!("blit: pipeline ({format:?})")),
-            layout: Some(&self.pipeline_layout),
-            vertex: wgpu::VertexState {
-                module: &self.module,
-                entry_point: Some("vs_blit"),
-                compilation_options: Default::default(),
-                buffers: &[],
-            },
-            primitive: Default::default(),
-            depth_stencil: None,
-            multisample: Default::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &self.module,
-                entry_point: Some("fs_blit"),
-                compilation_options: Default::default(),
-                targets: &[Some(format.into())],
-            }),
-            multiview_mask: None,
-            cache: None,
-        })
+        let label = format!("blit: pipeline ({format:?})");
+        full_screen_pipeline(device, &label, (&self.pipeline_layout, &self.module), ("vs_blit", "fs_blit"), format)
     }
 
     /// Record a pass drawing `source` over all of `target` with `pipeline` (made
@@ -118,4 +99,38 @@ pub(crate) fn sampler_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
         ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
         count: None,
     }
+}
+
+/// A pipeline of one full-screen triangle (its `vertex` entry makes it from the
+/// vertex index: no vertex buffers) shaded by `fragment` into one target of
+/// `format`, without depth or blending: the blits', the post chain's and the
+/// environment prefilter's passes.
+pub(crate) fn full_screen_pipeline(
+    device: &wgpu::Device,
+    label: &str,
+    (layout, module): (&wgpu::PipelineLayout, &wgpu::ShaderModule),
+    (vertex, fragment): (&str, &str),
+    format: wgpu::TextureFormat,
+) -> wgpu::RenderPipeline {
+    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some(label),
+        layout: Some(layout),
+        vertex: wgpu::VertexState {
+            module,
+            entry_point: Some(vertex),
+            compilation_options: Default::default(),
+            buffers: &[],
+        },
+        primitive: Default::default(),
+        depth_stencil: None,
+        multisample: Default::default(),
+        fragment: Some(wgpu::FragmentState {
+            module,
+            entry_point: Some(fragment),
+            compilation_options: Default::default(),
+            targets: &[Some(format.into())],
+        }),
+        multiview_mask: None,
+        cache: None,
+    })
 }

@@ -19,7 +19,7 @@ pub use heap::keep_freed_heap_memory;
 pub use target::{OffscreenTarget, Readback, TargetFormat};
 pub use window::WindowSurface;
 
-pub(crate) use blit::{sampler_entry, texture_entry, Blitter};
+pub(crate) use blit::{full_screen_pipeline, sampler_entry, texture_entry, Blitter};
 pub(crate) use errors::{DriverErrors, UncapturedErrors};
 pub(crate) use submit::SubmitQueue;
 

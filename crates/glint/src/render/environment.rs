@@ -16,7 +16,7 @@
 
 use super::{Registry, RenderError};
 use crate::asset::EnvironmentImage;
-use crate::gpu::{sampler_entry, texture_entry, HDR_FORMAT};
+use crate::gpu::{full_screen_pipeline, sampler_entry, texture_entry, HDR_FORMAT};
 use crate::scene::{Background, Environment, EnvironmentId, EnvironmentSource, Light, LightKind};
 
 /// The most levels of the specular map: roughness steps of 0.2.
@@ -348,27 +348,7 @@ impl PrefilterPipelines {
             immediate_size: 0,
         });
         let pipeline = |entry: &str| {
-            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some(entry),
-                layout: Some(&pipeline_layout),
-                vertex: wgpu::VertexState {
-                    module,
-                    entry_point: Some("vs_full"),
-                    compilation_options: Default::default(),
-                    buffers: &[],
-                },
-                primitive: Default::default(),
-                depth_stencil: None,
-                multisample: Default::default(),
-                fragment: Some(wgpu::FragmentState {
-                    module,
-                    entry_point: Some(entry),
-                    compilation_options: Default::default(),
-                    targets: &[Some(HDR_FORMAT.into())],
-                }),
-                multiview_mask: None,
-                cache: None,
-            })
+            full_screen_pipeline(device, entry, (&pipeline_layout, module), ("vs_full", entry), HDR_FORMAT)
         };
         Self {
             specular: pipeline("fs_specular"),

@@ -314,27 +314,9 @@ impl PostChain {
         for (_, step) in steps {
             let format = if step.target == Image::Output { images.output_format } else { HDR_FORMAT };
             self.pipelines.entry((step.pass, format)).or_insert_with(|| {
-                device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                    label: Some(&format!("post: {} ({format:?})", step.pass.entry_point())),
-                    layout: Some(&self.pipeline_layout),
-                    vertex: wgpu::VertexState {
-                        module,
-                        entry_point: Some("vs_post"),
-                        compilation_options: Default::default(),
-                        buffers: &[],
-                    },
-                    primitive: Default::default(),
-                    depth_stencil: None,
-                    multisample: Default::default(),
-                    fragment: Some(wgpu::FragmentState {
-                        module,
-                        entry_point: Some(step.pass.entry_point()),
-                        compilation_options: Default::default(),
-                        targets: &[Some(format.into())],
-                    }),
-                    multiview_mask: None,
-                    cache: None,
-                })
+                let label = format!("post: {} ({format:?})", step.pass.entry_point());
+                let shader = (&self.pipeline_layout, &*module);
+                crate::gpu::full_screen_pipeline(device, &label, shader, ("vs_post", step.pass.entry_point()), format)
             });
         }
         let (width, height) = images.size;
