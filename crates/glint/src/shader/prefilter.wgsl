@@ -47,9 +47,13 @@ fn hammersley(i: u32, n: u32) -> vec2<f32> {
     return vec2<f32>(f32(i) / f32(n), f32(b) * 2.3283064365386963e-10);
 }
 
-// The cosine of a GGX half vector's angle from the normal for the uniform number `x`.
-fn ggx_cos(x: f32, a2: f32) -> f32 {
-    return sqrt((1.0 - x) / (1.0 + (a2 - 1.0) * x));
+// The GGX half vector (z along the normal) for Hammersley point `xi`, its
+// density D(h)(n·h) for α² = `a2`.
+fn ggx_half_vector(xi: vec2<f32>, a2: f32) -> vec3<f32> {
+    let cos_h = sqrt((1.0 - xi.y) / (1.0 + (a2 - 1.0) * xi.y));
+    let sin_h = sqrt(max(1.0 - cos_h * cos_h, 0.0));
+    let phi = 2.0 * EQUIRECT_PI * xi.x;
+    return vec3<f32>(sin_h * cos(phi), sin_h * sin(phi), cos_h);
 }
 
 @fragment
@@ -71,11 +75,9 @@ fn fs_specular(@builtin(position) at: vec4<f32>) -> @location(0) vec4<f32> {
     var sum = vec3<f32>(0.0);
     var weight = 0.0;
     for (var i = 0u; i < count; i++) {
-        let xi = hammersley(i, count);
-        let cos_h = ggx_cos(xi.y, a2);
-        let sin_h = sqrt(max(1.0 - cos_h * cos_h, 0.0));
-        let phi = 2.0 * EQUIRECT_PI * xi.x;
-        let h = t * (sin_h * cos(phi)) + b * (sin_h * sin(phi)) + n * cos_h;
+        let local = ggx_half_vector(hammersley(i, count), a2);
+        let cos_h = local.z;
+        let h = t * local.x + b * local.y + n * cos_h;
         let l = 2.0 * cos_h * h - n;
         let n_l = dot(n, l);
         if n_l > 0.0 {
@@ -135,11 +137,8 @@ fn fs_brdf(@builtin(position) at: vec4<f32>) -> @location(0) vec4<f32> {
     var scale = 0.0;
     var bias = 0.0;
     for (var i = 0u; i < count; i++) {
-        let xi = hammersley(i, count);
-        let cos_h = ggx_cos(xi.y, a2);
-        let sin_h = sqrt(max(1.0 - cos_h * cos_h, 0.0));
-        let phi = 2.0 * EQUIRECT_PI * xi.x;
-        let h = vec3<f32>(sin_h * cos(phi), sin_h * sin(phi), cos_h);
+        let h = ggx_half_vector(hammersley(i, count), a2);
+        let cos_h = h.z;
         let v_h = dot(v, h);
         let l = 2.0 * v_h * h - v;
         let n_l = l.z;
