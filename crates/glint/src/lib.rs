@@ -48,8 +48,8 @@ pub use asset::{Diagnostic, Texture};
 pub use gpu::{Gpu, GpuError, OffscreenTarget, WindowSurface};
 pub use render::{FrameMode, FrameStats, RenderError, Renderer, Shadows};
 pub use scene::{
-    AlphaMode, Background, Camera, Culling, Entity, Environment, Light, Lighting, Material, MaterialId, Mesh,
-    RenderTargetId, ShadowSettings, ShapeId, TextureId, Tiles, View, Viewport,
+    AlphaMode, AmbientOcclusion, Background, Camera, Culling, Entity, Environment, Light, Lighting, Material,
+    MaterialId, Mesh, RenderTargetId, ShadowSettings, ShapeId, TextureId, Tiles, View, Viewport,
 };
 pub use world::World;
 

@@ -199,6 +199,8 @@ pub struct CameraView {
     pub output: Option<usize>,
     /// `cull`: how it culls (`off`, `cpu` or `gpu`, the default).
     pub culling: Culling,
+    /// `ssao`, `ssao_radius`, `ssao_intensity`: its screen-space ambient occlusion.
+    pub ambient_occlusion: Option<crate::scene::AmbientOcclusion>,
 }
 
 impl SceneDesc {
@@ -251,7 +253,8 @@ impl SceneDesc {
     /// Camera `index` over the whole image, with its post chain.
     pub fn camera_view(&self, index: usize) -> View {
         let c = &self.camera_views[index];
-        View::new(self.cameras[index]).with_post(c.post.clone()).with_culling(c.culling)
+        (View::new(self.cameras[index]).with_post(c.post.clone()).with_culling(c.culling))
+            .with_ambient_occlusion(c.ambient_occlusion)
     }
 
     /// Draw every cloth's debug view or not ([`ClothDesc::set_debug`]);

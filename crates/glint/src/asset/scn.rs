@@ -17,8 +17,8 @@ use super::texture::TextureCache;
 use super::{decoded_bytes, read_environment};
 use super::{AssetFolder, Diagnostic, LoadOptions, Model, ShapeKind, Texture, MAX_SCENE_BYTES, MAX_SCENE_TOTAL_BYTES};
 use crate::scene::{
-    Background, Camera, Culling, Environment, EnvironmentLight, EnvironmentSource, Fog, Light, Material, ShadowLayout,
-    MAX_LIGHTS, MAX_SHADOW_MAP_BYTES,
+    AmbientOcclusion, Background, Camera, Culling, Environment, EnvironmentLight, EnvironmentSource, Fog, Light,
+    Material, ShadowLayout, MAX_LIGHTS, MAX_SHADOW_MAP_BYTES,
 };
 use crate::text::{list, quote};
 use glam::{EulerRot, Mat4, Quat, Vec3};
@@ -148,6 +148,19 @@ pub(super) struct Loader<'a> {
     targets: scn_targets::Targets,
     /// The world's `time_of_day`, applied once every light is read.
     time_of_day: Option<f32>,
+}
+
+/// A camera's `ssao`, `ssao_radius` and `ssao_intensity` (the last two read
+/// either way, so they are never reported unknown).
+fn ambient_occlusion(f: &mut Fields) -> Result<Option<AmbientOcclusion>, Diagnostic> {
+    let on = f.flag("ssao")?;
+    let radius = f.number("ssao_radius", 0.001..=AmbientOcclusion::MAX_RADIUS)?;
+    let intensity = f.number("ssao_intensity", 0.0..=AmbientOcclusion::MAX_INTENSITY)?;
+    let defaults = AmbientOcclusion::default();
+    Ok((on == Some(true)).then(|| AmbientOcclusion {
+        radius: radius.unwrap_or(defaults.radius),
+        intensity: intensity.unwrap_or(defaults.intensity),
+    }))
 }
 
 /// Rotation from Quake-style angles in degrees: pitch about X, yaw about Y, roll about Z.
@@ -340,7 +353,8 @@ impl Loader<'_> {
         let post = super::scn_post::chain(f)?;
         let output = self.targets.named(f, "output")?;
         let culling = f.choice("cull", &Culling::NAMES)?.map_or(Culling::default(), |(k, _)| Culling::ALL[k]);
-        self.scene.camera_views.push(CameraView { viewport, post, output, culling });
+        let ambient_occlusion = ambient_occlusion(f)?;
+        self.scene.camera_views.push(CameraView { viewport, post, output, culling, ambient_occlusion });
         self.camera_lines.push(f.block.line);
         self.scene.cameras.push(camera);
         Ok(())

@@ -177,6 +177,30 @@ fn the_world_environment_is_the_sky_or_an_image_counted_in_texture_memory() {
 }
 
 #[test]
+fn a_camera_takes_ambient_occlusion_with_its_radius_and_intensity() {
+    let camera = |keys: &str| format!("{{\n\"classname\" \"camera\"\n{keys}\n}}");
+    let on = parse(&camera("\"ssao\" \"1\"\n\"ssao_radius\" \"2\"\n\"ssao_intensity\" \"1.5\"")).unwrap();
+    let settings = on.camera_views[0].ambient_occlusion.expect("on");
+    assert_eq!((settings.radius, settings.intensity), (2.0, 1.5));
+    assert_eq!(on.camera_view(0).ambient_occlusion, Some(settings), "the view has it");
+    let defaults = parse(&camera("\"ssao\" \"1\"")).unwrap().camera_views[0].ambient_occlusion;
+    assert_eq!(defaults, Some(crate::scene::AmbientOcclusion::default()));
+    for keys in ["\"ssao\" \"0\"\n\"ssao_radius\" \"2\"", ""] {
+        let off = parse(&camera(keys)).unwrap();
+        assert!(off.camera_views[0].ambient_occlusion.is_none() && off.warnings.is_empty(), "{keys}");
+    }
+    for (keys, expected) in [
+        ("\"ssao\" \"yes\"", "expected 0 or 1"),
+        ("\"ssao\" \"1\"\n\"ssao_radius\" \"0\"", "ssao_radius"),
+        ("\"ssao\" \"1\"\n\"ssao_intensity\" \"-1\"", "ssao_intensity"),
+        ("\"ssao\" \"1\"\n\"ssao_radius\" \"nan\"", "ssao_radius"),
+    ] {
+        let err = parse(&camera(keys)).unwrap_err();
+        assert!(err.line.is_some_and(|l| l >= 3) && err.message.contains(expected), "{keys}: {err}");
+    }
+}
+
+#[test]
 fn tiled_instances_are_an_entity_of_their_own_with_their_tiles_and_density() {
     let both = format!(
         "{}\n{}",

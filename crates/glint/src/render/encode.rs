@@ -42,6 +42,16 @@ pub(super) struct Bound {
     texture_set: Option<u16>,
     page: Option<u16>,
     stencil_reference: u32,
+    /// Draw each run with its pipeline's pre-pass twin (runs without one are
+    /// skipped): ambient occlusion's depth pre-pass.
+    prepass: bool,
+}
+
+impl Bound {
+    /// Nothing bound yet, in a depth pre-pass.
+    pub(super) fn prepass() -> Self {
+        Self { prepass: true, ..Self::default() }
+    }
 }
 
 impl Renderer {
@@ -64,6 +74,7 @@ impl Renderer {
             }
             self.view.forward.record_cull(encoder, pipelines, self.queue.submits());
         }
+        self.encode_ambient_occlusion(encoder, stats);
         let depth = target.depth_only_view().filter(|_| self.view.forward.gpu.as_ref().is_some_and(|g| g.occluding));
         let end = self.view.forward.runs.len();
         let mut bound = Bound::default();
@@ -252,16 +263,24 @@ impl Renderer {
         stats: &mut FrameStats,
     ) {
         let (first, draw) = (&list.batches[run.first as usize], &list.draws[run.first as usize]);
+        let pipelines = &self.registry.pipelines;
+        let pipeline = match bound.prepass {
+            true => match pipelines.prepass_of(first.pipeline) {
+                Some(twin) => twin,
+                None => return,
+            },
+            false => first.pipeline,
+        };
         let mut changed = 0;
-        let reference = self.registry.pipelines.stencil_reference(first.pipeline);
+        let reference = pipelines.stencil_reference(pipeline);
         if bound.stencil_reference != reference {
             pass.set_stencil_reference(reference);
             bound.stencil_reference = reference;
             changed |= state::STENCIL;
         }
-        if bound.pipeline != Some(first.pipeline) {
-            pass.set_pipeline(self.registry.pipelines.forward(first.pipeline));
-            bound.pipeline = Some(first.pipeline);
+        if bound.pipeline != Some(pipeline) {
+            pass.set_pipeline(pipelines.forward(pipeline));
+            bound.pipeline = Some(pipeline);
             stats.pipelines_bound += 1;
             changed |= state::PIPELINE;
         }

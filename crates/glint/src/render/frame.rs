@@ -478,7 +478,8 @@ impl Renderer {
         };
         // Each stage's CPU time is the lap that ends on its line.
         let mut lap = Laps::start();
-        self.frame_variant = FrameVariant::after(drawn, lighting.lights);
+        let occluded = frame.ambient_occlusion.is_some() && self.mode == FrameMode::Optimized;
+        self.frame_variant = FrameVariant::after(drawn, lighting.lights, occluded);
         stats.environment_prefiltered = self.prepare_environment(lighting)?;
         let prepared = self.prepare(target.format(), &lighting.environment, &mut stats)?;
         self.prepare_particles(target.format(), &mut stats)?;
@@ -514,6 +515,7 @@ impl Renderer {
                 self.view.forward.build(0, &visible.instances, frame.frustum, draw_of, placed);
                 stats.cpu_ms.batch = lap.next();
                 self.visible = visible;
+                self.prepare_ambient_occlusion(frame, (target.width(), target.height()), &mut stats)?;
                 self.upload(frame, (lighting, shadowed), target, &mut stats)?;
                 stats.cpu_ms.upload = lap.next();
                 self.encode(&mut encoder, target, &lighting.environment, &mut stats);

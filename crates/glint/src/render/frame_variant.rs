@@ -1,5 +1,5 @@
 //! Core layer: what a frame adds to its forward shader variants (shadow lookups,
-//! light counts), chosen before its pipelines are prepared.
+//! light counts, ambient occlusion), chosen before its pipelines are prepared.
 
 use super::shadow_pass::ShadowsDrawn;
 use crate::scene::{Light, LightKind};
@@ -16,23 +16,27 @@ pub(super) struct FrameVariant {
     pub shadow_cubes: bool,
     /// The lights by kind.
     pub lights: LightCounts,
+    /// The view has screen-space ambient occlusion (`AMBIENT_OCCLUSION`).
+    pub ambient_occlusion: bool,
 }
 
 impl FrameVariant {
     /// The variant of a frame lit by `lights` whose shadow pass draws every map
     /// they ask for (what the shadow pass prepares before planning its views).
-    pub(super) fn expected(lights: &[Light]) -> Self {
+    /// `ambient_occlusion`: the view's.
+    pub(super) fn expected(lights: &[Light], ambient_occlusion: bool) -> Self {
         let point = |l: &Light| matches!(l.kind, LightKind::Point { .. });
         Self {
             shadows: lights.iter().any(|l| l.shadows.is_some()),
             shadow_cubes: lights.iter().any(|l| l.shadows.is_some() && point(l)),
             lights: LightCounts::of(lights),
+            ambient_occlusion,
         }
     }
 
     /// The variant of a frame lit by `lights` after `drawn`, the shadow pass
     /// that drew its maps for these lights (none: no shadows).
-    pub(super) fn after(drawn: Option<&ShadowsDrawn>, lights: &[Light]) -> Self {
+    pub(super) fn after(drawn: Option<&ShadowsDrawn>, lights: &[Light], ambient_occlusion: bool) -> Self {
         let point_cubes = |f: &ShadowsDrawn| {
             lights.iter().zip(&f.first_view).any(|(l, v)| v.is_some() && matches!(l.kind, LightKind::Point { .. }))
         };
@@ -40,6 +44,7 @@ impl FrameVariant {
             shadows: drawn.is_some_and(|f| f.views > 0),
             shadow_cubes: drawn.is_some_and(point_cubes),
             lights: LightCounts::of(lights),
+            ambient_occlusion,
         }
     }
 }
@@ -55,12 +60,12 @@ mod tests {
         let sun = Light::directional(Vec3::NEG_Y, Vec3::ONE, 1.0).with_shadows(ShadowSettings::default());
         let lamp = Light::point(Vec3::Y, Vec3::ONE, 5.0, 10.0).with_shadows(ShadowSettings::default());
         let both = [sun, lamp];
-        let expected = FrameVariant::expected(&both);
+        let expected = FrameVariant::expected(&both, false);
         assert!(expected.shadows && expected.shadow_cubes);
         assert_eq!(expected.lights, LightCounts { directional: 1, positional: 1 });
-        assert!(!FrameVariant::expected(&[sun]).shadow_cubes, "cascades only: no cube lookup");
+        assert!(!FrameVariant::expected(&[sun], false).shadow_cubes, "cascades only: no cube lookup");
         let unshadowed = Light { shadows: None, ..lamp };
-        assert!(!FrameVariant::expected(&[sun, unshadowed]).shadow_cubes);
+        assert!(!FrameVariant::expected(&[sun, unshadowed], false).shadow_cubes);
         // The pass found no room for the lamp's cube: the frame looks up 2D maps only.
         let camera = crate::scene::Camera::perspective(60.0, 0.1, 10.0);
         let drawn = ShadowsDrawn {
@@ -72,11 +77,14 @@ mod tests {
             cost: Default::default(),
             prepared: Default::default(),
         };
-        let after = FrameVariant::after(Some(&drawn), &both);
+        let after = FrameVariant::after(Some(&drawn), &both, false);
         assert!(after.shadows && !after.shadow_cubes);
         let cubed = ShadowsDrawn { first_view: vec![Some(0), Some(0)], views: 10, ..drawn };
-        assert!(FrameVariant::after(Some(&cubed), &both).shadow_cubes);
+        assert!(FrameVariant::after(Some(&cubed), &both, false).shadow_cubes);
         // No maps: no lookups.
-        assert_eq!(FrameVariant::after(None, &both), FrameVariant { lights: expected.lights, ..Default::default() });
+        assert_eq!(
+            FrameVariant::after(None, &both, false),
+            FrameVariant { lights: expected.lights, ..Default::default() }
+        );
     }
 }

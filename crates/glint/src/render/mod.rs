@@ -22,6 +22,7 @@
 //! so a run of batches with one pipeline, texture set and pool page is a single
 //! `multi_draw_indexed_indirect` call: one indirect command per batch.
 
+mod ambient_occlusion;
 pub mod batch;
 mod blocks;
 pub mod cull;
@@ -187,6 +188,8 @@ pub struct Renderer {
     /// Particle layers ([`Renderer::add_particles`]), drawn in every view.
     particle_layers: Vec<particles::ParticleLayer>,
     particle_pipelines: particles::ParticlePipelines,
+    /// Ambient occlusion's passes, made with the first view that has it.
+    occlusion_pipelines: Option<ambient_occlusion::OcclusionPipelines>,
 }
 
 fn ms_since(t: Instant) -> f64 {
@@ -225,6 +228,7 @@ impl Renderer {
             shadow_maps: &shadow_maps,
             shadow_maps_generation: 0,
             environment: &environment,
+            white: &registry.defaults.white_linear,
         };
         let paths =
             ListPaths { indirect: gpu.draws_indirect(), storage: gpu.vertex_storage(), gpu_cull: gpu.culls_on_gpu() };
@@ -234,6 +238,7 @@ impl Renderer {
         Self {
             particle_layers: Vec::new(),
             particle_pipelines,
+            occlusion_pipelines: None,
             submits_counted: queue.submits(),
             uncaptured: gpu.uncaptured(),
             device,
@@ -275,9 +280,17 @@ impl Renderer {
     /// Point the view being drawn at the shared instance buffer and shadow maps,
     /// where either was replaced since its bind groups were made.
     fn refresh_view(&mut self) {
+        self.update_view(|view, shared| view.refresh(shared));
+    }
+
+    /// Run `update` on the view being drawn with what every view points at.
+    fn update_view(&mut self, update: impl FnOnce(&mut ViewGpu, &views::Shared)) {
         let Self { view, device, registry, instances, shadow_maps, shadow_maps_generation, environment, .. } = self;
-        let (pipelines, shadow_maps_generation) = (&registry.pipelines, *shadow_maps_generation);
-        view.refresh(&views::Shared { device, pipelines, instances, shadow_maps, shadow_maps_generation, environment });
+        let (pipelines, white) = (&registry.pipelines, &registry.defaults.white_linear);
+        let shadow_maps_generation = *shadow_maps_generation;
+        let shared =
+            views::Shared { device, pipelines, instances, shadow_maps, shadow_maps_generation, environment, white };
+        update(view, &shared);
     }
 
     /// What every view's GPU state points at.
@@ -289,6 +302,7 @@ impl Renderer {
             shadow_maps: &self.shadow_maps,
             shadow_maps_generation: self.shadow_maps_generation,
             environment: &self.environment,
+            white: &self.registry.defaults.white_linear,
         }
     }
 

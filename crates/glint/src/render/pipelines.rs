@@ -126,6 +126,9 @@ pub(crate) enum PassKind {
     ShadowDepth,
     /// A cube-map face: the distance to the light over its range as depth.
     ShadowDistance,
+    /// A view's depth pre-pass for ambient occlusion: normal and distance
+    /// (`fs_prepass`) into its own target, one sample.
+    Prepass,
 }
 
 /// Everything that makes one pipeline differ from another.
@@ -156,6 +159,8 @@ pub(crate) struct Pipelines {
     /// Forward and shadow pipelines; a key's index is its id in sort keys.
     forward_cache: Vec<(PipelineKey, wgpu::RenderPipeline)>,
     forward_index: HashMap<PipelineKey, u16>,
+    /// Each forward pipeline's pre-pass twin, once asked for.
+    prepass_of: HashMap<u16, Option<u16>>,
     /// The sky shader's pipelines by target and pass.
     sky_cache: HashMap<(TargetFormat, SkyPass), wgpu::RenderPipeline>,
 }
@@ -272,6 +277,8 @@ impl Pipelines {
                 texture_entry(6),
                 texture_entry(7),
                 sampler_entry(8),
+                // The view's ambient occlusion (render/ambient_occlusion.rs).
+                texture_entry(9),
             ],
         );
         // One record per view, picked by a dynamic offset (render/views.rs).
@@ -329,6 +336,7 @@ impl Pipelines {
             sky_module: None,
             forward_cache: Vec::new(),
             forward_index: HashMap::new(),
+            prepass_of: HashMap::new(),
             sky_cache: HashMap::new(),
         }
     }
@@ -363,6 +371,7 @@ impl Pipelines {
     /// map of `pass`: only the features that move vertices or discard fragments
     /// stay; depth writes, no colour, one sample.
     pub(crate) fn shadow_key(forward: PipelineKey, pass: PassKind) -> PipelineKey {
+        debug_assert!(pass != PassKind::Forward);
         let kept = ShaderFeatures::ALPHA_MASK
             | ShaderFeatures::DIFFUSE_MAP
             | ShaderFeatures::VERTEX_COLOR
@@ -376,7 +385,8 @@ impl Pipelines {
         let states = RenderStates {
             depth: crate::scene::DepthState { compare: Compare::Less, write: true },
             raster: crate::scene::RasterState {
-                cull: Cull::None,
+                // The pre-pass sees what the camera sees; shadow views both sides.
+                cull: if pass == PassKind::Prepass { forward.states.raster.cull } else { Cull::None },
                 depth_bias: 0,
                 // Depth views lean on slope-scaled bias; distance views write their own depth.
                 slope_bias_bits: if pass == PassKind::ShadowDepth { SHADOW_SLOPE_BIAS.to_bits() } else { 0 },
@@ -390,10 +400,41 @@ impl Pipelines {
             lights: LightCounts::default(),
             vertex_layout: forward.vertex_layout,
             states,
-            color_format: COLOR_FORMAT,
+            color_format: if pass == PassKind::Prepass {
+                super::ambient_occlusion::PREPASS_FORMAT
+            } else {
+                COLOR_FORMAT
+            },
             depth_format: super::shadow_maps::SHADOW_FORMAT,
             samples: 1,
         }
+    }
+
+    /// The pre-pass pipeline drawing what forward pipeline `forward` draws, or
+    /// `None` where that draws nothing into the pre-pass (blended, or not
+    /// writing depth); built on first use. Returns whether it was built now.
+    pub(crate) fn prepass_id(
+        &mut self,
+        device: &wgpu::Device,
+        forward: u16,
+    ) -> Result<(Option<u16>, bool), ShaderError> {
+        if let Some(&id) = self.prepass_of.get(&forward) {
+            return Ok((id, false));
+        }
+        let key = self.key_of(forward);
+        let drawn = key.states.depth.write && !key.features.contains(ShaderFeatures::ALPHA_BLEND);
+        let (id, built) = match drawn {
+            true => self.forward_id(device, Self::shadow_key(key, PassKind::Prepass)).map(|(id, b)| (Some(id), b))?,
+            false => (None, false),
+        };
+        self.prepass_of.insert(forward, id);
+        Ok((id, built))
+    }
+
+    /// The pre-pass pipeline of forward pipeline `forward`, once
+    /// [`prepass_id`](Self::prepass_id) made it (`None`: it draws nothing there).
+    pub(crate) fn prepass_of(&self, forward: u16) -> Option<u16> {
+        self.prepass_of.get(&forward).copied().flatten()
     }
 
     /// The id of the forward pipeline for `key`, building it (and its shader variant)
@@ -532,6 +573,7 @@ impl Pipelines {
             PassKind::Forward => (&self.layout, Some("fs_main"), &targets),
             PassKind::ShadowDepth => (&self.shadow_layout, alpha_tested.then_some("fs_shadow_mask"), &[]),
             PassKind::ShadowDistance => (&self.shadow_layout, Some("fs_shadow_distance"), &[]),
+            PassKind::Prepass => (&self.shadow_layout, Some("fs_prepass"), &targets),
         };
         device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
             label: Some(&label),

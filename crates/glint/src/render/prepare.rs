@@ -46,7 +46,7 @@ impl Renderer {
         if lighting.lights.len() > MAX_LIGHTS {
             return Err(RenderError::TooManyLights(lighting.lights.len()));
         }
-        self.frame_variant = FrameVariant::expected(lighting.lights);
+        self.frame_variant = FrameVariant::expected(lighting.lights, false);
         self.prepare_environment(&lighting)?;
         let mut stats = FrameStats::default();
         let uses: Vec<_> =

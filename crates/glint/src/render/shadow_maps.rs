@@ -191,13 +191,13 @@ impl ShadowMaps {
     }
 
     /// The Scene block's bind group over `scene` and `shadow` blocks, these
-    /// maps and `environment`'s.
+    /// maps, `environment`'s and the view's ambient `occlusion`.
     pub(crate) fn scene_group(
         &self,
         device: &wgpu::Device,
         layout: &wgpu::BindGroupLayout,
         (scene, shadow): (&wgpu::Buffer, &wgpu::Buffer),
-        environment: &super::environment::EnvironmentMaps,
+        (environment, occlusion): (&super::environment::EnvironmentMaps, &wgpu::TextureView),
     ) -> wgpu::BindGroup {
         let entries = [
             wgpu::BindGroupEntry { binding: 0, resource: scene.as_entire_binding() },
@@ -205,6 +205,7 @@ impl ShadowMaps {
             wgpu::BindGroupEntry { binding: 2, resource: wgpu::BindingResource::TextureView(&self.maps) },
             wgpu::BindGroupEntry { binding: 3, resource: wgpu::BindingResource::TextureView(&self.cube_maps) },
             wgpu::BindGroupEntry { binding: 4, resource: wgpu::BindingResource::Sampler(&self.sampler) },
+            wgpu::BindGroupEntry { binding: 9, resource: wgpu::BindingResource::TextureView(occlusion) },
         ];
         device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("renderer: scene block (group 0)"),

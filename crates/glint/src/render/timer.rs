@@ -18,19 +18,22 @@ pub(crate) enum Timed {
     Shadow,
     /// The forward pass.
     Forward,
+    /// Ambient occlusion: from its depth pre-pass to its blur's end.
+    AmbientOcclusion,
     /// Post effect k of the view's chain (all its passes).
     Post(u8),
 }
 
-/// Timestamp pairs: shadow, forward, then one per post effect.
-const PAIRS: usize = 2 + MAX_POST_EFFECTS;
+/// Timestamp pairs: shadow, forward, ambient occlusion, then one per post effect.
+const PAIRS: usize = 3 + MAX_POST_EFFECTS;
 
 impl Timed {
     fn pair(self) -> usize {
         match self {
             Timed::Shadow => 0,
             Timed::Forward => 1,
-            Timed::Post(k) => 2 + usize::from(k),
+            Timed::AmbientOcclusion => 2,
+            Timed::Post(k) => 3 + usize::from(k),
         }
     }
 }
@@ -44,6 +47,9 @@ pub struct GpuTimes {
     pub shadow_ms: Option<f64>,
     /// The forward pass: opaque, alpha-test, sky and transparent.
     pub forward_ms: f64,
+    /// Ambient occlusion's passes (depth pre-pass, occlusion, blur); `None`
+    /// for a view without it.
+    pub ambient_occlusion_ms: Option<f64>,
     /// Each post effect of the view's chain, in order (empty without one).
     pub post_ms: Vec<f64>,
 }
@@ -106,7 +112,7 @@ impl GpuTimer {
         };
         Some(Self {
             queries: device.create_query_set(&wgpu::QuerySetDescriptor {
-                label: Some("gpu timer: shadow, forward and post pass timestamps"),
+                label: Some("gpu timer: shadow, forward, ambient occlusion and post pass timestamps"),
                 ty: wgpu::QueryType::Timestamp,
                 count: 2 * PAIRS as u32,
             }),
@@ -227,6 +233,8 @@ impl GpuTimer {
             frame: slot.frame,
             shadow_ms: slot.written[Timed::Shadow.pair()].then(|| ms(Timed::Shadow.pair())),
             forward_ms: ms(Timed::Forward.pair()),
+            ambient_occlusion_ms: slot.written[Timed::AmbientOcclusion.pair()]
+                .then(|| ms(Timed::AmbientOcclusion.pair())),
             post_ms: post.map(|t| ms(t.pair())).collect(),
         })
     }

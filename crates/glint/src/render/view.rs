@@ -2,7 +2,7 @@
 //! [`View`](crate::scene::View).
 
 use super::cull::Frustum;
-use crate::scene::{Camera, Culling, View};
+use crate::scene::{AmbientOcclusion, Camera, Culling, View};
 use glam::Mat4;
 
 /// A view's camera matrices for one frame at its aspect ratio: what culling,
@@ -19,6 +19,8 @@ pub(super) struct ViewFrame {
     pub frustum: Frustum,
     /// How it culls: [`Culling::Gpu`] only where the device can.
     pub culling: Culling,
+    /// Its screen-space ambient occlusion, its values clamped into range.
+    pub ambient_occlusion: Option<AmbientOcclusion>,
 }
 
 impl ViewFrame {
@@ -33,6 +35,7 @@ impl ViewFrame {
             Culling::Gpu if !gpu_cull => Culling::Cpu,
             culling => culling,
         };
-        Self { camera, aspect, view: matrix, frustum, culling }
+        let ambient_occlusion = view.ambient_occlusion.map(AmbientOcclusion::clamped);
+        Self { camera, aspect, view: matrix, frustum, culling, ambient_occlusion }
     }
 }

@@ -4,6 +4,7 @@
 //! draw lists. Records and lists are written only where their bytes change, so
 //! a view that did not change uploads nothing, however many views a frame has.
 
+use super::ambient_occlusion::OcclusionTargets;
 use super::blocks::CameraGpu;
 use super::blocks::{SceneGpu, UniformBlock};
 use super::draw_list::{DrawList, ListPaths};
@@ -74,6 +75,8 @@ pub(crate) struct Shared<'a> {
     pub shadow_maps: &'a ShadowMaps,
     pub shadow_maps_generation: u64,
     pub environment: &'a super::environment::EnvironmentMaps,
+    /// A 1 × 1 white texture: the ambient occlusion of a view without it.
+    pub white: &'a wgpu::TextureView,
 }
 
 /// What one view keeps on the GPU between frames: a split screen's views, or a
@@ -96,6 +99,8 @@ pub(crate) struct ViewGpu {
     pub scene_group: wgpu::BindGroup,
     /// Its post chain's pass parameters.
     pub post_params: PostParams,
+    /// Its ambient occlusion's textures, from its first frame with it.
+    pub occlusion: Option<OcclusionTargets>,
     /// The instance buffer, shadow maps and environment maps generations the bind groups point at.
     generations: (u64, u64, u64),
     /// How the lists draw.
@@ -113,8 +118,9 @@ impl ViewGpu {
             blocks: ViewBlocks::new(device, &pipelines.camera_layout),
             forward: list("renderer block: forward draw indices"),
             shadows: list("renderer block: shadow draw indices"),
-            scene_group: scene_group(shared, &scene_block, &shadow_block),
+            scene_group: scene_group(shared, &scene_block, &shadow_block, None),
             post_params: PostParams::new(device),
+            occlusion: None,
             scene_block,
             shadow_block,
             generations: (instances.generation(), shared.shadow_maps_generation, shared.environment.generation()),
@@ -138,13 +144,34 @@ impl ViewGpu {
             self.shadows.rebind(shared.device, layout, shared.instances.array());
         }
         if (self.generations.1, self.generations.2) != (maps, environment) {
-            self.scene_group = scene_group(shared, &self.scene_block, &self.shadow_block);
+            self.rebind_scene(shared);
         }
         self.generations = (instances, maps, environment);
     }
+
+    /// Give the view ambient-occlusion textures `occlusion` (new ones: its
+    /// size changed), its Scene bind group pointed at them.
+    pub(crate) fn set_occlusion(&mut self, shared: &Shared, occlusion: OcclusionTargets) {
+        self.occlusion = Some(occlusion);
+        self.rebind_scene(shared);
+    }
+
+    fn rebind_scene(&mut self, shared: &Shared) {
+        let occlusion = self.occlusion.as_ref().map(|o| &o.blurred);
+        self.scene_group = scene_group(shared, &self.scene_block, &self.shadow_block, occlusion);
+    }
 }
 
-fn scene_group(shared: &Shared, scene: &UniformBlock<SceneGpu>, shadow: &UniformBlock<ShadowGpu>) -> wgpu::BindGroup {
+/// The Scene bind group over a view's blocks, the shared maps, and its ambient
+/// occlusion (white without).
+fn scene_group(
+    shared: &Shared,
+    scene: &UniformBlock<SceneGpu>,
+    shadow: &UniformBlock<ShadowGpu>,
+    occlusion: Option<&wgpu::TextureView>,
+) -> wgpu::BindGroup {
     let layout = &shared.pipelines.scene_layout;
-    shared.shadow_maps.scene_group(shared.device, layout, (&scene.buffer, &shadow.buffer), shared.environment)
+    let blocks = (&scene.buffer, &shadow.buffer);
+    let occlusion = occlusion.unwrap_or(shared.white);
+    shared.shadow_maps.scene_group(shared.device, layout, blocks, (shared.environment, occlusion))
 }

@@ -38,7 +38,7 @@ pub use states::{
     BlendState, Compare, Cull, DepthState, ParticleBlend, RasterState, RenderStates, StencilOp, StencilState,
 };
 pub use tiles::Tiles;
-pub use view::{Culling, View, Viewport};
+pub use view::{AmbientOcclusion, Culling, View, Viewport};
 pub use view_order::draw_order;
 
 /// Handle to a shape (a mesh uploaded by the renderer), returned by

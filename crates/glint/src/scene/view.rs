@@ -88,6 +88,39 @@ impl Culling {
     }
 }
 
+/// Screen-space ambient occlusion of a view (camera key `ssao`): the contact
+/// shadows an environment cannot give, darkening only ambient and environment
+/// light (`render/ambient_occlusion.rs`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AmbientOcclusion {
+    /// How far around a point (world units) geometry occludes it.
+    pub radius: f32,
+    /// How strongly: the visibility found is raised to this power (0: none).
+    pub intensity: f32,
+}
+
+impl AmbientOcclusion {
+    /// The largest radius accepted (world units).
+    pub const MAX_RADIUS: f32 = 1000.0;
+    /// The largest intensity accepted.
+    pub const MAX_INTENSITY: f32 = 16.0;
+
+    /// These settings with non-finite or out-of-range values clamped into range.
+    pub fn clamped(self) -> Self {
+        let clamp = |v: f32, max: f32, default: f32| if v.is_finite() { v.clamp(0.0, max) } else { default };
+        Self {
+            radius: clamp(self.radius, Self::MAX_RADIUS, 0.5),
+            intensity: clamp(self.intensity, Self::MAX_INTENSITY, 1.0),
+        }
+    }
+}
+
+impl Default for AmbientOcclusion {
+    fn default() -> Self {
+        Self { radius: 0.5, intensity: 1.0 }
+    }
+}
+
 /// One camera's part of a frame.
 #[derive(Clone, Debug, PartialEq)]
 pub struct View {
@@ -104,12 +137,22 @@ pub struct View {
     /// The render target it draws into instead of the frame's target (`None`,
     /// the default: the frame's). Its viewport is then a rectangle of that target.
     pub output: Option<RenderTargetId>,
+    /// Its screen-space ambient occlusion (`None`, the default: none, and no
+    /// depth pre-pass).
+    pub ambient_occlusion: Option<AmbientOcclusion>,
 }
 
 impl View {
     /// The whole target seen by `camera`, culled.
     pub fn new(camera: Camera) -> Self {
-        Self { camera, viewport: Viewport::FULL, culling: Culling::Gpu, post: Vec::new(), output: None }
+        Self {
+            camera,
+            viewport: Viewport::FULL,
+            culling: Culling::Gpu,
+            post: Vec::new(),
+            output: None,
+            ambient_occlusion: None,
+        }
     }
 
     /// This view drawing into `viewport`.
@@ -130,6 +173,11 @@ impl View {
     /// This view culled as `culling` says.
     pub fn with_culling(self, culling: Culling) -> Self {
         Self { culling, ..self }
+    }
+
+    /// This view with screen-space ambient occlusion (`None`: without).
+    pub fn with_ambient_occlusion(self, ambient_occlusion: Option<AmbientOcclusion>) -> Self {
+        Self { ambient_occlusion, ..self }
     }
 }
 

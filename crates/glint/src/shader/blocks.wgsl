@@ -74,6 +74,9 @@ struct ShadowBlock {
 @group(0) @binding(6) var environment_irradiance: texture_2d<f32>;
 @group(0) @binding(7) var environment_brdf: texture_2d<f32>;
 @group(0) @binding(8) var environment_sampler: sampler;
+// The view's screen-space ambient occlusion at half its resolution
+// (render/ambient_occlusion.rs; a 1 × 1 white stand-in without it).
+@group(0) @binding(9) var ambient_occlusion: texture_2d<f32>;
 @group(1) @binding(0) var<uniform> camera: CameraBlock;
 
 // The environment's radiance toward world direction `d`, from specular level

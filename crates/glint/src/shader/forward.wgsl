@@ -1,7 +1,7 @@
 // Forward pass: lit, textured, instanced meshes. Composed per feature set: each
 // `#ifdef` below is one bit of ShaderFeatures (src/shader/mod.rs).
 
-#import glint::blocks::{scene, camera, shadows, shadow_maps, shadow_cubes, shadow_sampler, Light, CASCADES, environment_irradiance, environment_brdf, environment_sampler, environment_sample}
+#import glint::blocks::{scene, camera, shadows, shadow_maps, shadow_cubes, shadow_sampler, Light, CASCADES, environment_irradiance, environment_brdf, environment_sampler, environment_sample, ambient_occlusion}
 #import glint::equirect::sh_basis
 
 struct MaterialBlock {
@@ -781,6 +781,9 @@ fn fs_main(in: VertexOut, @builtin(front_facing) front: bool) -> @location(0) ve
 #ifdef OCCLUSION_MAP
     occlusion = textureSample(occlusion_map, material_sampler, map_uv(in, SLOT_OCCLUSION)).r;
 #endif
+#ifdef AMBIENT_OCCLUSION
+    occlusion *= screen_occlusion(in.clip.xy);
+#endif
 #ifdef UNLIT
     var color = base.rgb;
 #else
@@ -811,6 +814,36 @@ fn fs_main(in: VertexOut, @builtin(front_facing) front: bool) -> @location(0) ve
 #else
     return vec4<f32>(color, 1.0);
 #endif
+}
+
+// The view's ambient occlusion at framebuffer position `pixel`, bilinear
+// between the half-resolution texels around it.
+fn screen_occlusion(pixel: vec2<f32>) -> f32 {
+    let size = vec2<i32>(textureDimensions(ambient_occlusion));
+    let at = pixel * 0.5 - 0.5;
+    let base = vec2<i32>(floor(at));
+    let f = at - floor(at);
+    var v = vec4<f32>();
+    for (var k = 0; k < 4; k++) {
+        let q = clamp(base + vec2<i32>(k & 1, k >> 1u), vec2<i32>(0), size - 1);
+        v[k] = textureLoad(ambient_occlusion, q, 0).r;
+    }
+    return mix(mix(v.x, v.y, f.x), mix(v.z, v.w, f.x), f.y);
+}
+
+// Depth pre-pass of a view with ambient occlusion (render/ambient_occlusion.rs):
+// the view-space normal (octahedral) and the distance in front of the camera
+// as a half float plus what it rounded away, for ssao.wgsl.
+@fragment
+fn fs_prepass(in: VertexOut, @builtin(front_facing) front: bool) -> @location(0) vec4<f32> {
+    shadow_alpha_test(in);
+    let n = normalize((camera.view * vec4<f32>(normalize(in.normal) * select(-1.0, 1.0, front), 0.0)).xyz);
+    let e = n.xy / (abs(n.x) + abs(n.y) + abs(n.z));
+    let folded = (1.0 - abs(e.yx)) * select(vec2<f32>(-1.0), vec2<f32>(1.0), e >= vec2<f32>(0.0));
+    let distance = min(-(camera.view * vec4<f32>(in.world_position, 1.0)).z, 65504.0);
+    // Cut to a half float's 10 mantissa bits: exact in the target.
+    let high = bitcast<f32>(bitcast<u32>(distance) & 0xffffe000u);
+    return vec4<f32>(select(e, folded, n.z < 0.0), high, distance - high);
 }
 
 // Shadow maps: alpha-tested casters drop their cut-away fragments.

@@ -37,8 +37,9 @@ bitflags::bitflags! {
     /// | 20 | `COMPACT` | read each instance from a 16-byte compact record, numbered by the draw (set by the entity: [`Entity::with_compact_instances`](crate::Entity::with_compact_instances)) |
     /// | 21 | `SWIM` | swing a fish's tail with its instance's phase ([`Motion::Swim`](crate::scene::Motion::Swim)) |
     /// | 22 | `ENVIRONMENT` | light from the environment (image-based lighting) instead of the ambient colour ([`Environment::light`]) |
+    /// | 23 | `AMBIENT_OCCLUSION` | darken ambient and environment light by the view's screen-space ambient occlusion (set by the frame, for a view with [`View::ambient_occlusion`](crate::View::ambient_occlusion); not for blended or unlit materials) |
     ///
-    /// Bits 23–31 are free for more (shadow receiving comes with shadow maps).
+    /// Bits 24–31 are free for more (shadow receiving comes with shadow maps).
     /// The motion bits stay in shadow passes' variants, so shadows move too.
     ///
     /// One def follows from the bits rather than being one: `TEXCOORDS`, set with
@@ -92,6 +93,8 @@ bitflags::bitflags! {
         const SWIM = 1 << 21;
         /// `ENVIRONMENT`.
         const ENVIRONMENT = 1 << 22;
+        /// `AMBIENT_OCCLUSION`.
+        const AMBIENT_OCCLUSION = 1 << 23;
     }
 }
 
@@ -290,6 +293,8 @@ pub(crate) const POST: &str = include_str!("post.wgsl");
 pub(crate) const CULL: &str = include_str!("cull.wgsl");
 /// The depth pyramid of occlusion culling (`render/occlusion.rs`).
 pub(crate) const PYRAMID: &str = include_str!("pyramid.wgsl");
+/// Screen-space ambient occlusion (`render/ambient_occlusion.rs`).
+pub(crate) const SSAO: &str = include_str!("ssao.wgsl");
 
 #[cfg(test)]
 mod tests {

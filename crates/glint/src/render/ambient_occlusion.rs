@@ -1,0 +1,290 @@
+//! Core layer: screen-space ambient occlusion of a view with
+//! [`View::ambient_occlusion`](crate::View::ambient_occlusion) (camera key `ssao`).
+//!
+//! Three render passes before the view's forward pass, the same on Vulkan, GL,
+//! WebGL2 and WebGPU:
+//! 1. **depth pre-pass** — the forward list's opaque and alpha-tested runs, each
+//!    with its pipeline's pre-pass twin (`fs_prepass`: [`PassKind::Prepass`](super::pipelines::PassKind)),
+//!    write the view-space normal and distance into a full-resolution target
+//!    of their own ([`PREPASS_FORMAT`], with its own depth buffer);
+//! 2. **occlusion** — `shader/ssao.wgsl`'s ground-truth-style pass at half resolution;
+//! 3. **blur** — depth-aware, at half resolution, into the texture the forward
+//!    shader's `AMBIENT_OCCLUSION` variant reads (group 0, binding 9), which
+//!    darkens ambient and environment light only, never the lights'.
+//!
+//! With occlusion culling, the pre-pass draws the early phase (what the view
+//! saw last frame): what comes into view gets its occlusion a frame later.
+//! The passes' GPU time is [`GpuTimes::ambient_occlusion_ms`](super::GpuTimes::ambient_occlusion_ms),
+//! their draws [`Passes::ambient_occlusion`](super::Passes::ambient_occlusion).
+
+use super::blocks::UniformBlock;
+use super::encode::Bound;
+use super::explain::PassType;
+use super::queue::SKY_STAGE;
+use super::timer::Timed;
+use super::view::ViewFrame;
+use super::views::ViewBlocks;
+use super::{draw_list::run_stage, FrameStats, PassStats, RenderError, Renderer};
+use crate::scene::{AmbientOcclusion, Projection};
+
+/// The pre-pass target: octahedral view-space normal (xy), distance as a half
+/// float (z) plus what it rounded away (w); 0 where nothing was drawn.
+pub(crate) const PREPASS_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
+/// The occlusion textures (half resolution): 1 open, 0 wholly occluded.
+const OCCLUSION_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R8Unorm;
+/// The largest radius searched, in full-resolution pixels (nearer surfaces
+/// search no further, so a close-up costs what a distant view does).
+const MAX_RADIUS_PIXELS: f32 = 64.0;
+
+/// The occlusion passes' parameters (`Occlusion` in `shader/ssao.wgsl`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+struct OcclusionGpu {
+    projection: [f32; 4],
+    params: [f32; 4],
+}
+
+impl OcclusionGpu {
+    fn new(frame: &ViewFrame, settings: AmbientOcclusion) -> Self {
+        let p = frame.camera.projection(frame.aspect);
+        let orthographic = matches!(frame.camera.projection, Projection::Orthographic { .. });
+        Self {
+            projection: [p.x_axis.x, p.y_axis.y, f32::from(u8::from(orthographic)), settings.radius],
+            params: [settings.intensity, MAX_RADIUS_PIXELS, 0.0, 0.0],
+        }
+    }
+}
+
+/// The occlusion and blur pipelines, made with the first view that has ambient occlusion.
+pub(crate) struct OcclusionPipelines {
+    layouts: [wgpu::BindGroupLayout; 2],
+    occlusion: wgpu::RenderPipeline,
+    blur: wgpu::RenderPipeline,
+}
+
+impl OcclusionPipelines {
+    pub(crate) fn new(device: &wgpu::Device) -> Self {
+        let entry = |binding, ty| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: wgpu::ShaderStages::FRAGMENT,
+            ty,
+            count: None,
+        };
+        let texture = |binding| {
+            entry(
+                binding,
+                wgpu::BindingType::Texture {
+                    sample_type: wgpu::TextureSampleType::Float { filterable: false },
+                    view_dimension: wgpu::TextureViewDimension::D2,
+                    multisampled: false,
+                },
+            )
+        };
+        let uniform = entry(
+            0,
+            wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Uniform,
+                has_dynamic_offset: false,
+                min_binding_size: None,
+            },
+        );
+        let layout = |label, entries: &[wgpu::BindGroupLayoutEntry]| {
+            device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some(label), entries })
+        };
+        let layouts = [
+            layout("ambient occlusion: occlusion", &[uniform, texture(1)]),
+            layout("ambient occlusion: blur", &[uniform, texture(1), texture(2)]),
+        ];
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("ssao.wgsl"),
+            source: wgpu::ShaderSource::Wgsl(crate::shader::SSAO.into()),
+        });
+        let pipeline = |label, layout: &wgpu::BindGroupLayout, fragment| {
+            let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some(label),
+                bind_group_layouts: &[Some(layout)],
+                immediate_size: 0,
+            });
+            crate::gpu::full_screen_pipeline(device, label, (&layout, &module), ("vs_full", fragment), OCCLUSION_FORMAT)
+        };
+        Self {
+            occlusion: pipeline("ambient occlusion: occlusion pass", &layouts[0], "fs_occlusion"),
+            blur: pipeline("ambient occlusion: blur pass", &layouts[1], "fs_blur"),
+            layouts,
+        }
+    }
+}
+
+/// One view's ambient-occlusion textures at its size, and its parameters.
+pub(crate) struct OcclusionTargets {
+    size: (u32, u32),
+    prepass: wgpu::TextureView,
+    depth: wgpu::TextureView,
+    raw: wgpu::TextureView,
+    /// What the forward pass reads.
+    pub(crate) blurred: wgpu::TextureView,
+    block: UniformBlock<OcclusionGpu>,
+    groups: [wgpu::BindGroup; 2],
+}
+
+impl OcclusionTargets {
+    fn new(device: &wgpu::Device, pipelines: &OcclusionPipelines, (width, height): (u32, u32)) -> Self {
+        let texture = |label, (width, height), format, usage| {
+            device
+                .create_texture(&wgpu::TextureDescriptor {
+                    label: Some(label),
+                    size: wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
+                    mip_level_count: 1,
+                    sample_count: 1,
+                    dimension: wgpu::TextureDimension::D2,
+                    format,
+                    usage,
+                    view_formats: &[],
+                })
+                .create_view(&Default::default())
+        };
+        let read = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING;
+        let full = (width, height);
+        let half = (width.div_ceil(2), height.div_ceil(2));
+        let prepass = texture("ambient occlusion: pre-pass", full, PREPASS_FORMAT, read);
+        let depth = texture(
+            "ambient occlusion: pre-pass depth",
+            full,
+            super::shadow_maps::SHADOW_FORMAT,
+            wgpu::TextureUsages::RENDER_ATTACHMENT,
+        );
+        let raw = texture("ambient occlusion: raw", half, OCCLUSION_FORMAT, read);
+        let blurred = texture("ambient occlusion: blurred", half, OCCLUSION_FORMAT, read);
+        let block = UniformBlock::new(device, "ambient occlusion: parameters");
+        let group = |k: usize, views: &[&wgpu::TextureView]| {
+            let textures = views.iter().enumerate().map(|(j, v)| wgpu::BindGroupEntry {
+                binding: 1 + j as u32,
+                resource: wgpu::BindingResource::TextureView(v),
+            });
+            let entries: Vec<_> =
+                std::iter::once(wgpu::BindGroupEntry { binding: 0, resource: block.buffer.as_entire_binding() })
+                    .chain(textures)
+                    .collect();
+            device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("ambient occlusion: inputs"),
+                layout: &pipelines.layouts[k],
+                entries: &entries,
+            })
+        };
+        let groups = [group(0, &[&prepass]), group(1, &[&prepass, &raw])];
+        Self { size: full, prepass, depth, raw, blurred, block, groups }
+    }
+}
+
+impl Renderer {
+    /// Stage 1 of a view with ambient occlusion (after batching, which says
+    /// what the pre-pass draws): the occlusion pipelines, each forward
+    /// pipeline's pre-pass twin, the view's textures at its size `size` (the
+    /// Scene bind group pointed at them) and its parameters.
+    pub(super) fn prepare_ambient_occlusion(
+        &mut self,
+        frame: &ViewFrame,
+        size: (u32, u32),
+        stats: &mut FrameStats,
+    ) -> Result<(), RenderError> {
+        let Some(settings) = frame.ambient_occlusion.filter(|_| self.frame_variant.ambient_occlusion) else {
+            return Ok(());
+        };
+        let pipelines = self.occlusion_pipelines.get_or_insert_with(|| OcclusionPipelines::new(&self.device));
+        let list = &self.view.forward;
+        for batch in &list.batches {
+            let (_, built) = self.registry.pipelines.prepass_id(&self.device, batch.pipeline)?;
+            stats.pipelines_compiled += u32::from(built);
+        }
+        if self.view.occlusion.as_ref().is_none_or(|t| t.size != size) {
+            let targets = OcclusionTargets::new(&self.device, pipelines, size);
+            self.update_view(|view, shared| view.set_occlusion(shared, targets));
+        }
+        let targets = self.view.occlusion.as_mut().expect("made above");
+        stats.bytes_uploaded.camera += targets.block.update(&self.queue, OcclusionGpu::new(frame, settings));
+        Ok(())
+    }
+
+    /// Stage 7's first passes for a view with ambient occlusion (prepared by
+    /// [`prepare_ambient_occlusion`](Self::prepare_ambient_occlusion)): the
+    /// depth pre-pass of the forward list's runs before the sky, then the
+    /// occlusion and blur passes.
+    pub(super) fn encode_ambient_occlusion(&mut self, encoder: &mut wgpu::CommandEncoder, stats: &mut FrameStats) {
+        let (Some(targets), Some(pipelines)) = (&self.view.occlusion, &self.occlusion_pipelines) else { return };
+        if !self.frame_variant.ambient_occlusion {
+            return;
+        }
+        let start = web_time::Instant::now();
+        let list = &self.view.forward;
+        let sky_at = list.runs.partition_point(|r| run_stage(list, r) < SKY_STAGE);
+        let timer = self.gpu_timer.as_ref();
+        let mut drawn = FrameStats::default();
+        {
+            let label = "depth pre-pass";
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some(label),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view: &targets.prepass,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                        store: wgpu::StoreOp::Store,
+                    },
+                })],
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: &targets.depth,
+                    depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(1.0), store: wgpu::StoreOp::Discard }),
+                    stencil_ops: None,
+                }),
+                timestamp_writes: timer.and_then(|t| t.pass_writes(Timed::AmbientOcclusion, true, false)),
+                ..Default::default()
+            });
+            pass.set_bind_group(1, &self.view.blocks.bind_group, &[ViewBlocks::offset(0)]);
+            pass.set_bind_group(3, &list.bind_group, &[]);
+            drawn.bind_groups_set += 2;
+            let bound = ["bind group 1 (camera)", "bind group 3 (instances, draw indices)"];
+            self.outline.pass(label, PassType::Render, &bound);
+            let mut bound = Bound::prepass();
+            self.draw_stages(list, &mut pass, (0..sky_at, &[false]), &mut bound, &mut drawn);
+        }
+        for (k, (label, pipeline, output)) in [
+            ("ambient occlusion", &pipelines.occlusion, &targets.raw),
+            ("ambient occlusion: blur", &pipelines.blur, &targets.blurred),
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some(label),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view: output,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(wgpu::Color::WHITE),
+                        store: wgpu::StoreOp::Store,
+                    },
+                })],
+                timestamp_writes: timer.and_then(|t| t.pass_writes(Timed::AmbientOcclusion, false, k == 1)),
+                ..Default::default()
+            });
+            self.outline.pass(label, PassType::Render, &["bind group 0 (pre-pass, occlusion)"]);
+            pass.set_pipeline(pipeline);
+            pass.set_bind_group(0, &targets.groups[k], &[]);
+            pass.draw(0..3, 0..1);
+            self.outline
+                .call(|| super::explain::DrawCall::single(label, "draw", (1, 1), &["pipeline", "bind group 0"]));
+            (drawn.draw_calls, drawn.draws) = (drawn.draw_calls + 1, drawn.draws + 1);
+        }
+        if let Some(timer) = &mut self.gpu_timer {
+            timer.resolve(encoder, Timed::AmbientOcclusion, self.frame_index);
+        }
+        stats.passes.ambient_occlusion = PassStats {
+            draw_calls: drawn.draw_calls,
+            draws: drawn.draws,
+            instances: drawn.passes.opaque.instances + drawn.passes.alpha_test.instances,
+            cpu_ms: super::ms_since(start),
+        };
+    }
+}

@@ -1,0 +1,176 @@
+// Screen-space ambient occlusion (render/ambient_occlusion.rs), two full-screen
+// passes at half the view's resolution over the depth pre-pass:
+// - fs_occlusion: ground-truth ambient occlusion (Jimenez et al. 2016, "Practical
+//   Realtime Strategies for Accurate Indirect Occlusion"): per pixel, SLICES
+//   screen directions turned by a per-pixel noise; in each, the highest horizon
+//   on either side within the radius, and the cosine-weighted visible arc
+//   between them about the projected normal. Each slice's visible arc is divided
+//   by its unoccluded arc, so open ground is exactly 1.
+// - fs_blur: a 5 × 5 blur whose taps count less the further their depth is
+//   from the centre's, so occlusion does not bleed across silhouettes.
+// Half-resolution pixel p stands for full-resolution pixel 2p of the pre-pass.
+
+struct Occlusion {
+    // x, y: the projection's scale (its [0][0] and [1][1]); z: 1 for an
+    // orthographic camera; w: the radius in view units.
+    projection: vec4<f32>,
+    // x: intensity (the visibility's exponent); y: the largest radius in
+    // full-resolution pixels; z, w: reserved.
+    params: vec4<f32>,
+}
+
+@group(0) @binding(0) var<uniform> ao: Occlusion;
+// The depth pre-pass (forward.wgsl fs_prepass): xy the view-space normal
+// (octahedral), z + w the distance in front of the camera (a half float and
+// what it rounded away); 0 where nothing was drawn.
+@group(0) @binding(1) var prepass: texture_2d<f32>;
+// fs_blur: fs_occlusion's output.
+@group(0) @binding(2) var raw: texture_2d<f32>;
+
+const PI: f32 = 3.14159265;
+const SLICES: u32 = 3u;
+const STEPS: u32 = 6u;
+// The sine of the angle above a surface's tangent plane below which nothing
+// occludes it (about a degree): flat ground stays exactly open.
+const BIAS: f32 = 0.02;
+
+@vertex
+fn vs_full(@builtin(vertex_index) i: u32) -> @builtin(position) vec4<f32> {
+    let uv = vec2<f32>(f32((i << 1u) & 2u), f32(i & 2u));
+    return vec4<f32>(uv * 2.0 - 1.0, 0.0, 1.0);
+}
+
+fn decode_normal(e: vec2<f32>) -> vec3<f32> {
+    var n = vec3<f32>(e, 1.0 - abs(e.x) - abs(e.y));
+    let t = max(-n.z, 0.0);
+    n.x += select(t, -t, n.x >= 0.0);
+    n.y += select(t, -t, n.y >= 0.0);
+    return normalize(n);
+}
+
+fn distance_at(q: vec2<i32>) -> f32 {
+    let t = textureLoad(prepass, q, 0);
+    return t.z + t.w;
+}
+
+// The view-space position of full-resolution pixel q at `distance`.
+fn view_position(q: vec2<i32>, distance: f32) -> vec3<f32> {
+    let size = vec2<f32>(textureDimensions(prepass));
+    let uv = (vec2<f32>(q) + 0.5) / size;
+    let ndc = vec2<f32>(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0);
+    let scale = select(distance, 1.0, ao.projection.z > 0.5);
+    return vec3<f32>(ndc * scale / ao.projection.xy, -distance);
+}
+
+// Interleaved gradient noise (Jimenez 2014): a different slice turn per pixel.
+fn noise(p: vec2<f32>) -> f32 {
+    return fract(52.9829189 * fract(dot(p, vec2<f32>(0.06711056, 0.00583715))));
+}
+
+// The cosine-weighted visible arc from the view vector to horizon angle h,
+// about normal angle n in the slice.
+fn arc(h: f32, n: f32) -> f32 {
+    return 0.25 * (-cos(2.0 * h - n) + cos(n) + 2.0 * h * sin(n));
+}
+
+@fragment
+fn fs_occlusion(@builtin(position) position: vec4<f32>) -> @location(0) vec4<f32> {
+    let half_pixel = floor(position.xy);
+    let q = vec2<i32>(half_pixel) * 2;
+    let full = vec2<i32>(textureDimensions(prepass));
+    let centre = textureLoad(prepass, q, 0);
+    let distance = centre.z + centre.w;
+    if distance <= 0.0 {
+        return vec4<f32>(1.0);
+    }
+    let p = view_position(q, distance);
+    let n = decode_normal(centre.xy);
+    let orthographic = ao.projection.z > 0.5;
+    let v = select(normalize(-p), vec3<f32>(0.0, 0.0, 1.0), orthographic);
+    let radius = ao.projection.w;
+    // The radius in full-resolution pixels.
+    let per_unit = 0.5 * f32(full.y) * ao.projection.y / select(distance, 1.0, orthographic);
+    let radius_pixels = min(radius * per_unit, ao.params.y);
+    if radius_pixels < 2.0 {
+        return vec4<f32>(1.0);
+    }
+    let turn = noise(half_pixel);
+    let jitter = fract(turn * 7.0 + 0.5);
+    var visible = 0.0;
+    var open = 0.0;
+    for (var s = 0u; s < SLICES; s++) {
+        let phi = (f32(s) + turn) * PI / f32(SLICES);
+        let direction = vec2<f32>(cos(phi), sin(phi));
+        // Screen y grows down, view y up.
+        let d = vec3<f32>(direction.x, -direction.y, 0.0);
+        let axis = normalize(cross(d, v));
+        let along = cross(v, axis);
+        let projected = n - axis * dot(n, axis);
+        let length_n = length(projected);
+        if length_n < 1e-4 {
+            continue;
+        }
+        let cos_n = clamp(dot(projected, v) / length_n, -1.0, 1.0);
+        let normal_angle = sign(dot(projected, along)) * acos(cos_n);
+        // The highest horizon's cosine on each side: +direction, then −direction.
+        var horizon = vec2<f32>(-1.0);
+        for (var side = 0u; side < 2u; side++) {
+            let step = select(-direction, direction, side == 0u);
+            for (var k = 0u; k < STEPS; k++) {
+                let t = (f32(k) + jitter) / f32(STEPS);
+                let offset = step * max(t * t * radius_pixels, 1.5);
+                let sq = q + vec2<i32>(round(offset));
+                // Off screen, and where nothing was drawn: nothing occludes.
+                if any(sq < vec2<i32>(0)) || any(sq >= full) {
+                    continue;
+                }
+                let sample_distance = distance_at(sq);
+                if sample_distance <= 0.0 {
+                    continue;
+                }
+                let delta = view_position(sq, sample_distance) - p;
+                let length_d = max(length(delta), 1e-6);
+                // Only what rises above the surface's own plane occludes it: a
+                // sample rounded off the slice, on flat ground, would not lie
+                // on the slice's tangent.
+                if dot(delta, n) < BIAS * length_d {
+                    continue;
+                }
+                let falloff = saturate(1.0 - length_d * length_d / (radius * radius));
+                let cos_h = mix(-1.0, clamp(dot(delta, v) / length_d, -1.0, 1.0), falloff);
+                horizon[side] = max(horizon[side], cos_h);
+            }
+        }
+        // Horizon angles, at most a quarter turn from the normal.
+        let h_plus = normal_angle + min(acos(horizon.x) - normal_angle, 0.5 * PI);
+        let h_minus = normal_angle + max(-acos(horizon.y) - normal_angle, -0.5 * PI);
+        let unoccluded = arc(normal_angle + 0.5 * PI, normal_angle) + arc(normal_angle - 0.5 * PI, normal_angle);
+        visible += length_n * (arc(h_plus, normal_angle) + arc(h_minus, normal_angle));
+        open += length_n * unoccluded;
+    }
+    let visibility = select(1.0, saturate(visible / open), open > 1e-4);
+    return vec4<f32>(exp2(ao.params.x * log2(max(visibility, 1e-4))));
+}
+
+@fragment
+fn fs_blur(@builtin(position) position: vec4<f32>) -> @location(0) vec4<f32> {
+    let p = vec2<i32>(floor(position.xy));
+    let size = vec2<i32>(textureDimensions(raw));
+    let full = vec2<i32>(textureDimensions(prepass));
+    let centre = distance_at(p * 2);
+    if centre <= 0.0 {
+        return vec4<f32>(1.0);
+    }
+    var sum = 0.0;
+    var weight = 0.0;
+    for (var y = -2; y <= 2; y++) {
+        for (var x = -2; x <= 2; x++) {
+            let s = clamp(p + vec2<i32>(x, y), vec2<i32>(0), size - 1);
+            let d = distance_at(min(s * 2, full - 1));
+            let w = select(0.0, exp(-abs(d - centre) / (0.02 * centre)), d > 0.0);
+            sum += w * textureLoad(raw, s, 0).r;
+            weight += w;
+        }
+    }
+    return vec4<f32>(select(1.0, sum / weight, weight > 0.0));
+}

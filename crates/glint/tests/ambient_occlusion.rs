@@ -1,0 +1,147 @@
+//! Screen-space ambient occlusion (`tests/scenes/ssao.scn`: a box on a floor
+//! lit only by a white sky): the crease where the box meets the floor darkens,
+//! open floor stays exactly as it was, on Vulkan, GL and the WebGL2 path; the
+//! passes' draws and GPU time are in the frame's statistics.
+
+mod common;
+
+use glam::Vec3;
+use glint::asset::SceneDesc;
+use glint::{FrameStats, Gpu, OffscreenTarget, Renderer, View};
+
+const SIZE: u32 = 256;
+
+fn scene() -> SceneDesc {
+    common::load_scene(&common::repo_root().join("tests/scenes/ssao.scn"))
+}
+
+/// One frame of `desc`'s first camera, with its ambient occlusion or without.
+fn frame(gpu: &Gpu, desc: &SceneDesc, occluded: bool) -> (image::RgbaImage, FrameStats, Renderer) {
+    let mut renderer = Renderer::new(gpu);
+    let entities = renderer.place_scene(desc).entities;
+    let mut target = OffscreenTarget::new(gpu, SIZE, SIZE, 4).expect("target");
+    let mut view = desc.camera_view(0);
+    if !occluded {
+        view = view.with_ambient_occlusion(None);
+    }
+    let stats = renderer.render(&entities, view, desc.lighting(), &mut target).expect("frame");
+    (target.read_rgba8(gpu).expect("readback"), stats, renderer)
+}
+
+/// The pixel where world point `p` lands in the camera's picture.
+fn pixel(desc: &SceneDesc, p: Vec3) -> (u32, u32) {
+    let camera = desc.cameras[0];
+    let ndc = (camera.projection(1.0) * camera.view()).project_point3(p);
+    let to = |v: f32| ((v * 0.5 + 0.5) * SIZE as f32) as u32;
+    (to(ndc.x), to(-ndc.y))
+}
+
+/// The green channel of `image` at `(x, y)`, as a fraction of `reference`'s.
+fn ratio(image: &image::RgbaImage, reference: &image::RgbaImage, (x, y): (u32, u32)) -> f32 {
+    f32::from(image.get_pixel(x, y)[1]) / f32::from(reference.get_pixel(x, y)[1]).max(1.0)
+}
+
+/// The crease in front of the box is darker with ambient occlusion; floor
+/// further than the radius from the box, and the sky, are the same bytes.
+fn assert_crease_darkens(gpu: &Gpu) {
+    let desc = scene();
+    let radius = desc.camera_views[0].ambient_occlusion.expect("the camera's ssao").radius;
+    let (occluded, stats, _) = frame(gpu, &desc, true);
+    let (open, plain, _) = frame(gpu, &desc, false);
+    // The floor just in front of each visible face of the box (a unit cube at 0 0.5 0).
+    for crease in [Vec3::new(0.0, 0.0, 0.55), Vec3::new(0.55, 0.0, 0.0)] {
+        let at = pixel(&desc, crease);
+        let r = ratio(&occluded, &open, at);
+        assert!(r < 0.9, "the crease at {crease} ({at:?}) darkens by at least 10 %: ratio {r}");
+    }
+    // The bottom of the box's front face darkens too, its top does not.
+    let low = ratio(&occluded, &open, pixel(&desc, Vec3::new(0.0, 0.05, 0.5)));
+    let high = ratio(&occluded, &open, pixel(&desc, Vec3::new(0.0, 0.95, 0.5)));
+    assert!(low < 0.95 && high > 0.99, "the box's face: {low} near the floor, {high} at its top");
+    // Every pixel of floor further than the radius (and a pixel) from the box is unchanged.
+    let camera = desc.cameras[0];
+    let inverse = (camera.projection(1.0) * camera.view()).inverse();
+    let mut checked = 0;
+    for (x, y, p) in occluded.enumerate_pixels() {
+        let ndc = |v: u32| (v as f32 + 0.5) / SIZE as f32 * 2.0 - 1.0;
+        let (near, far) = (
+            inverse.project_point3(Vec3::new(ndc(x), -ndc(y), 0.0)),
+            inverse.project_point3(Vec3::new(ndc(x), -ndc(y), 1.0)),
+        );
+        if far.y >= near.y {
+            continue; // the sky
+        }
+        let floor = near + (far - near) * (near.y / (near.y - far.y));
+        let outside = (floor.abs() - Vec3::new(0.5, 0.0, 0.5)).max(Vec3::ZERO).length();
+        if floor.x.abs().max(floor.z.abs()) < 3.5 && outside > radius + 0.1 && pixel_is_floor(&desc, floor) {
+            assert_eq!(p, open.get_pixel(x, y), "open floor at {floor} ({x}, {y}) is unchanged");
+            checked += 1;
+        }
+    }
+    assert!(checked > 10_000, "{checked} open floor pixels checked");
+    assert_eq!(plain.passes.ambient_occlusion, Default::default(), "no passes without it");
+    let ao = stats.passes.ambient_occlusion;
+    assert_eq!((ao.draws, ao.instances), (2 + 2, 2), "the pre-pass's floor and box, then occlusion and blur: {ao:?}");
+    assert_eq!(stats.draws, plain.draws, "the forward pass draws the same");
+}
+
+/// Whether floor point `p` is not hidden by the box from the camera.
+fn pixel_is_floor(desc: &SceneDesc, p: Vec3) -> bool {
+    let eye = desc.cameras[0].eye;
+    // The segment from the eye to p misses the box (slab test).
+    let (lo, hi) = (Vec3::new(-0.5, 0.0, -0.5), Vec3::new(0.5, 1.0, 0.5));
+    let d = p - eye;
+    let (mut enter, mut exit) = (0.0f32, 1.0f32);
+    for k in 0..3 {
+        if d[k].abs() < 1e-9 {
+            if eye[k] < lo[k] || eye[k] > hi[k] {
+                return true;
+            }
+            continue;
+        }
+        let (a, b) = ((lo[k] - eye[k]) / d[k], (hi[k] - eye[k]) / d[k]);
+        enter = enter.max(a.min(b));
+        exit = exit.min(a.max(b));
+    }
+    enter > exit
+}
+
+#[test]
+fn ambient_occlusion_darkens_the_crease_and_leaves_open_floor() {
+    let Some(gpu) = common::gpu() else { return };
+    assert_crease_darkens(gpu);
+}
+
+#[test]
+fn ambient_occlusion_on_gl() {
+    let Some(gpu) = common::gl_gpu() else { return };
+    assert_crease_darkens(gpu);
+}
+
+#[test]
+fn ambient_occlusion_on_the_webgl2_path() {
+    let Some(gpu) = common::gl_webgl2_gpu() else { return };
+    assert_crease_darkens(gpu);
+}
+
+#[test]
+fn ambient_occlusion_has_its_gpu_time() {
+    let Some(gpu) = common::gpu() else { return };
+    let desc = scene();
+    let mut renderer = Renderer::new(gpu);
+    if !renderer.enable_gpu_timing() {
+        eprintln!("skipping: {} has no timestamp queries", gpu.info().name);
+        return;
+    }
+    let entities = renderer.place_scene(&desc).entities;
+    let mut target = OffscreenTarget::new(gpu, 64, 64, 1).expect("target");
+    let mut draw = |view: View| {
+        renderer.render(&entities, view, desc.lighting(), &mut target).expect("frame");
+        renderer.read_gpu_times().expect("timed frame")
+    };
+    let times = draw(desc.camera_view(0));
+    let ms = times.ambient_occlusion_ms.expect("the occlusion passes are timed");
+    assert!(ms > 0.0 && ms < 60_000.0, "{times:?}");
+    let without = draw(desc.camera_view(0).with_ambient_occlusion(None));
+    assert_eq!(without.ambient_occlusion_ms, None, "{without:?}");
+}
