@@ -11,7 +11,7 @@ import { mkdirSync, writeFileSync } from "node:fs";
 
 const [base, glint, out] = process.argv.slice(2);
 const size = [256, 160];
-const scenes = ["scenes/showcase.scn", "scenes/split.scn", "scenes/monitor.scn"];
+const scenes = ["scenes/showcase.scn", "scenes/split.scn", "scenes/monitor.scn", "scenes/materials.scn"];
 const backends = ["webgl2", "webgpu"];
 mkdirSync(out, { recursive: true });
 

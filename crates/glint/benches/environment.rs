@@ -1,8 +1,11 @@
 //! Image-based lighting's costs, as wall time of work waited for on the GPU
 //! (on lavapipe that is the GPU time; on a real GPU it includes a submission's
 //! round trip): prefiltering a 1024 × 512 environment, and the showcase at
-//! 1280 × 720 with its environment and without (its gradient sky and ambient
-//! light instead), in alternating rounds so both see the same machine.
+//! 1280 × 720 with its environment, without (its gradient sky and ambient
+//! light instead), and with its environment and screen-space ambient occlusion,
+//! in alternating rounds so all see the same machine; with ambient occlusion,
+//! its passes' share of the frame's GPU time (timestamp queries, where the
+//! adapter has them).
 //! Run: `cargo bench -p glint --bench environment` (median, min and max of each).
 
 use glint::asset::EnvironmentImage;
@@ -57,7 +60,12 @@ fn main() {
     let mut plain = lit.clone();
     plain.environment.light = None;
     let mut target = OffscreenTarget::new(&gpu, 1280, 720, 1).expect("target");
-    let mut scenes = [(lit, Vec::new()), (plain, Vec::new())];
+    let views = [
+        glint::View::new(lit.cameras[0]),
+        glint::View::new(plain.cameras[0]),
+        glint::View::new(lit.cameras[0]).with_ambient_occlusion(Some(Default::default())),
+    ];
+    let mut scenes = [(lit.clone(), Vec::new()), (plain, Vec::new()), (lit, Vec::new())];
     let mut renderers: Vec<(Renderer, Vec<glint::Entity>)> = (scenes.iter())
         .map(|(desc, _)| {
             let mut renderer = Renderer::new(&gpu);
@@ -65,21 +73,38 @@ fn main() {
             (renderer, entities)
         })
         .collect();
+    let timed = renderers[2].0.enable_gpu_timing();
+    // Per timed frame: ambient occlusion's GPU time and the frame's.
+    let mut shares = Vec::new();
     for round in 0..=ROUNDS {
-        for ((desc, times), (renderer, entities)) in scenes.iter_mut().zip(&mut renderers) {
+        for (k, ((desc, times), (renderer, entities))) in scenes.iter_mut().zip(&mut renderers).enumerate() {
             for _ in 0..FRAMES {
                 let t = Instant::now();
-                let view = glint::View::new(desc.cameras[0]);
-                renderer.render(entities.iter(), view, desc.lighting(), &mut target).expect("frame");
+                renderer.render(entities.iter(), views[k].clone(), desc.lighting(), &mut target).expect("frame");
                 wait(&gpu);
                 if round > 0 {
                     times.push(t.elapsed().as_secs_f64() * 1e3);
                 }
+                let gpu_times = renderer.read_gpu_times().filter(|_| round > 0 && timed && k == 2);
+                if let Some(g) = gpu_times {
+                    let total = g.shadow_ms.unwrap_or(0.0) + g.forward_ms + g.post_ms.iter().sum::<f64>();
+                    let ao = g.ambient_occlusion_ms.unwrap_or(0.0);
+                    shares.push((ao, total + ao));
+                }
             }
         }
     }
-    let [(_, with), (_, without)] = scenes;
+    let [(_, with), (_, without), (_, occluded)] = scenes;
     let with = summary("showcase 1280x720 with its environment, frame", with);
     let without = summary("showcase 1280x720 without it, frame", without);
     println!("the environment adds {:+.1} % to the frame", (with / without - 1.0) * 100.0);
+    let occluded = summary("showcase 1280x720 with its environment and ambient occlusion, frame", occluded);
+    println!("ambient occlusion adds {:+.1} % to the frame (wall time)", (occluded / with - 1.0) * 100.0);
+    if shares.is_empty() {
+        println!("no GPU timestamps on this adapter: no GPU share");
+        return;
+    }
+    let ao = summary("ambient occlusion passes, GPU", shares.iter().map(|s| s.0).collect());
+    let frame = summary("the frame's passes with it, GPU", shares.iter().map(|s| s.1).collect());
+    println!("ambient occlusion's share of the frame's GPU time: {:.1} %", ao / frame * 100.0);
 }

@@ -12,10 +12,15 @@
 //!    shader's `AMBIENT_OCCLUSION` variant reads (group 0, binding 9), which
 //!    darkens ambient and environment light only, never the lights'.
 //!
+//! Passes 2 and 3 are compute passes where the frame's path has compute (views
+//! cull on the GPU: [`Gpu::culls_on_gpu`](crate::Gpu::culls_on_gpu)), full-screen
+//! fragment passes otherwise (GL, WebGL2); both run the same functions.
+//!
 //! With occlusion culling, the pre-pass draws the early phase (what the view
 //! saw last frame): what comes into view gets its occlusion a frame later.
 //! The passes' GPU time is [`GpuTimes::ambient_occlusion_ms`](super::GpuTimes::ambient_occlusion_ms),
-//! their draws [`Passes::ambient_occlusion`](super::Passes::ambient_occlusion).
+//! their draws [`Passes::ambient_occlusion`](super::Passes::ambient_occlusion)
+//! (the pre-pass's, and one each for occlusion and blur as fragment passes).
 
 use super::blocks::UniformBlock;
 use super::encode::Bound;
@@ -30,8 +35,10 @@ use crate::scene::{AmbientOcclusion, Projection};
 /// The pre-pass target: octahedral view-space normal (xy), distance as a half
 /// float (z) plus what it rounded away (w); 0 where nothing was drawn.
 pub(crate) const PREPASS_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
-/// The occlusion textures (half resolution): 1 open, 0 wholly occluded.
-const OCCLUSION_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R8Unorm;
+/// The occlusion textures (half resolution), in red: 1 open, 0 wholly
+/// occluded. Four channels, as compute passes store it and one is not a
+/// storage format.
+const OCCLUSION_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
 /// The largest radius searched, in full-resolution pixels (nearer surfaces
 /// search no further, so a close-up costs what a distant view does).
 const MAX_RADIUS_PIXELS: f32 = 64.0;
@@ -55,21 +62,23 @@ impl OcclusionGpu {
     }
 }
 
+/// How the occlusion and blur passes run.
+enum Passes {
+    Fragment([wgpu::RenderPipeline; 2]),
+    Compute([wgpu::ComputePipeline; 2]),
+}
+
 /// The occlusion and blur pipelines, made with the first view that has ambient occlusion.
 pub(crate) struct OcclusionPipelines {
     layouts: [wgpu::BindGroupLayout; 2],
-    occlusion: wgpu::RenderPipeline,
-    blur: wgpu::RenderPipeline,
+    passes: Passes,
 }
 
 impl OcclusionPipelines {
-    pub(crate) fn new(device: &wgpu::Device) -> Self {
-        let entry = |binding, ty| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: wgpu::ShaderStages::FRAGMENT,
-            ty,
-            count: None,
-        };
+    /// As compute passes when `compute`, else as fragment passes.
+    pub(crate) fn new(device: &wgpu::Device, compute: bool) -> Self {
+        let visibility = if compute { wgpu::ShaderStages::COMPUTE } else { wgpu::ShaderStages::FRAGMENT };
+        let entry = |binding, ty| wgpu::BindGroupLayoutEntry { binding, visibility, ty, count: None };
         let texture = |binding| {
             entry(
                 binding,
@@ -88,30 +97,53 @@ impl OcclusionPipelines {
                 min_binding_size: None,
             },
         );
+        let output = entry(
+            3,
+            wgpu::BindingType::StorageTexture {
+                access: wgpu::StorageTextureAccess::WriteOnly,
+                format: OCCLUSION_FORMAT,
+                view_dimension: wgpu::TextureViewDimension::D2,
+            },
+        );
         let layout = |label, entries: &[wgpu::BindGroupLayoutEntry]| {
-            device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some(label), entries })
+            let entries: Vec<_> = entries.iter().copied().chain(compute.then_some(output)).collect();
+            device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some(label), entries: &entries })
         };
         let layouts = [
             layout("ambient occlusion: occlusion", &[uniform, texture(1)]),
             layout("ambient occlusion: blur", &[uniform, texture(1), texture(2)]),
         ];
+        let source = match compute {
+            true => format!("{}{}", crate::shader::SSAO, crate::shader::SSAO_COMPUTE),
+            false => crate::shader::SSAO.to_string(),
+        };
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("ssao.wgsl"),
-            source: wgpu::ShaderSource::Wgsl(crate::shader::SSAO.into()),
+            source: wgpu::ShaderSource::Wgsl(source.into()),
         });
-        let pipeline = |label, layout: &wgpu::BindGroupLayout, fragment| {
-            let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: Some(label),
-                bind_group_layouts: &[Some(layout)],
-                immediate_size: 0,
-            });
-            crate::gpu::full_screen_pipeline(device, label, (&layout, &module), ("vs_full", fragment), OCCLUSION_FORMAT)
+        let passes = match compute {
+            true => Passes::Compute([0, 1].map(|k| {
+                let entry = ["cs_occlusion", "cs_blur"][k];
+                super::compute_pipeline(device, &module, entry, &[Some(&layouts[k])])
+            })),
+            false => Passes::Fragment([0, 1].map(|k| {
+                let (label, entry) =
+                    [("ambient occlusion: occlusion", "fs_occlusion"), ("ambient occlusion: blur", "fs_blur")][k];
+                let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                    label: Some(label),
+                    bind_group_layouts: &[Some(&layouts[k])],
+                    immediate_size: 0,
+                });
+                crate::gpu::full_screen_pipeline(
+                    device,
+                    label,
+                    (&layout, &module),
+                    ("vs_full", entry),
+                    OCCLUSION_FORMAT,
+                )
+            })),
         };
-        Self {
-            occlusion: pipeline("ambient occlusion: occlusion pass", &layouts[0], "fs_occlusion"),
-            blur: pipeline("ambient occlusion: blur pass", &layouts[1], "fs_blur"),
-            layouts,
-        }
+        Self { layouts, passes }
     }
 }
 
@@ -129,6 +161,7 @@ pub(crate) struct OcclusionTargets {
 
 impl OcclusionTargets {
     fn new(device: &wgpu::Device, pipelines: &OcclusionPipelines, (width, height): (u32, u32)) -> Self {
+        let compute = matches!(pipelines.passes, Passes::Compute(_));
         let texture = |label, (width, height), format, usage| {
             device
                 .create_texture(&wgpu::TextureDescriptor {
@@ -144,6 +177,10 @@ impl OcclusionTargets {
                 .create_view(&Default::default())
         };
         let read = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING;
+        let written = match compute {
+            true => read | wgpu::TextureUsages::STORAGE_BINDING,
+            false => read,
+        };
         let full = (width, height);
         let half = (width.div_ceil(2), height.div_ceil(2));
         let prepass = texture("ambient occlusion: pre-pass", full, PREPASS_FORMAT, read);
@@ -153,17 +190,18 @@ impl OcclusionTargets {
             super::shadow_maps::SHADOW_FORMAT,
             wgpu::TextureUsages::RENDER_ATTACHMENT,
         );
-        let raw = texture("ambient occlusion: raw", half, OCCLUSION_FORMAT, read);
-        let blurred = texture("ambient occlusion: blurred", half, OCCLUSION_FORMAT, read);
+        let raw = texture("ambient occlusion: raw", half, OCCLUSION_FORMAT, written);
+        let blurred = texture("ambient occlusion: blurred", half, OCCLUSION_FORMAT, written);
         let block = UniformBlock::new(device, "ambient occlusion: parameters");
-        let group = |k: usize, views: &[&wgpu::TextureView]| {
-            let textures = views.iter().enumerate().map(|(j, v)| wgpu::BindGroupEntry {
-                binding: 1 + j as u32,
-                resource: wgpu::BindingResource::TextureView(v),
-            });
+        // Binding 0 the parameters, 1 the pre-pass, 2 the raw occlusion (the
+        // blur's), 3 the output (compute passes').
+        let group = |k: usize, inputs: &[&wgpu::TextureView], output: &wgpu::TextureView| {
+            let view =
+                |binding, view| wgpu::BindGroupEntry { binding, resource: wgpu::BindingResource::TextureView(view) };
             let entries: Vec<_> =
                 std::iter::once(wgpu::BindGroupEntry { binding: 0, resource: block.buffer.as_entire_binding() })
-                    .chain(textures)
+                    .chain(inputs.iter().enumerate().map(|(j, v)| view(1 + j as u32, v)))
+                    .chain(compute.then(|| view(3, output)))
                     .collect();
             device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("ambient occlusion: inputs"),
@@ -171,7 +209,7 @@ impl OcclusionTargets {
                 entries: &entries,
             })
         };
-        let groups = [group(0, &[&prepass]), group(1, &[&prepass, &raw])];
+        let groups = [group(0, &[&prepass], &raw), group(1, &[&prepass, &raw], &blurred)];
         Self { size: full, prepass, depth, raw, blurred, block, groups }
     }
 }
@@ -190,7 +228,8 @@ impl Renderer {
         let Some(settings) = frame.ambient_occlusion.filter(|_| self.frame_variant.ambient_occlusion) else {
             return Ok(());
         };
-        let pipelines = self.occlusion_pipelines.get_or_insert_with(|| OcclusionPipelines::new(&self.device));
+        let compute = self.cull_pipelines.is_some();
+        let pipelines = self.occlusion_pipelines.get_or_insert_with(|| OcclusionPipelines::new(&self.device, compute));
         let list = &self.view.forward;
         for batch in &list.batches {
             let (_, built) = self.registry.pipelines.prepass_id(&self.device, batch.pipeline)?;
@@ -248,34 +287,45 @@ impl Renderer {
             let mut bound = Bound::prepass();
             self.draw_stages(list, &mut pass, (0..sky_at, &[false]), &mut bound, &mut drawn);
         }
-        for (k, (label, pipeline, output)) in [
-            ("ambient occlusion", &pipelines.occlusion, &targets.raw),
-            ("ambient occlusion: blur", &pipelines.blur, &targets.blurred),
-        ]
-        .into_iter()
-        .enumerate()
-        {
-            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some(label),
-                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: output,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(wgpu::Color::WHITE),
-                        store: wgpu::StoreOp::Store,
-                    },
-                })],
-                timestamp_writes: timer.and_then(|t| t.pass_writes(Timed::AmbientOcclusion, false, k == 1)),
-                ..Default::default()
-            });
-            self.outline.pass(label, PassType::Render, &["bind group 0 (pre-pass, occlusion)"]);
-            pass.set_pipeline(pipeline);
-            pass.set_bind_group(0, &targets.groups[k], &[]);
-            pass.draw(0..3, 0..1);
-            self.outline
-                .call(|| super::explain::DrawCall::single(label, "draw", (1, 1), &["pipeline", "bind group 0"]));
-            (drawn.draw_calls, drawn.draws) = (drawn.draw_calls + 1, drawn.draws + 1);
+        let outputs = [&targets.raw, &targets.blurred];
+        for (k, label) in ["ambient occlusion", "ambient occlusion: blur"].into_iter().enumerate() {
+            match &pipelines.passes {
+                Passes::Fragment(pipelines) => {
+                    let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                        label: Some(label),
+                        color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                            view: outputs[k],
+                            depth_slice: None,
+                            resolve_target: None,
+                            ops: wgpu::Operations {
+                                load: wgpu::LoadOp::Clear(wgpu::Color::WHITE),
+                                store: wgpu::StoreOp::Store,
+                            },
+                        })],
+                        timestamp_writes: timer.and_then(|t| t.pass_writes(Timed::AmbientOcclusion, false, k == 1)),
+                        ..Default::default()
+                    });
+                    self.outline.pass(label, PassType::Render, &["bind group 0 (pre-pass, occlusion)"]);
+                    pass.set_pipeline(&pipelines[k]);
+                    pass.set_bind_group(0, &targets.groups[k], &[]);
+                    pass.draw(0..3, 0..1);
+                    let changed = ["pipeline", "bind group 0"];
+                    self.outline.call(|| super::explain::DrawCall::single(label, "draw", (1, 1), &changed));
+                    (drawn.draw_calls, drawn.draws) = (drawn.draw_calls + 1, drawn.draws + 1);
+                }
+                Passes::Compute(pipelines) => {
+                    let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                        label: Some(label),
+                        timestamp_writes: timer
+                            .and_then(|t| t.compute_pass_writes(Timed::AmbientOcclusion, false, k == 1)),
+                    });
+                    self.outline.pass(label, PassType::Compute, &[]);
+                    pass.set_pipeline(&pipelines[k]);
+                    pass.set_bind_group(0, &targets.groups[k], &[]);
+                    let (width, height) = (targets.size.0.div_ceil(2), targets.size.1.div_ceil(2));
+                    pass.dispatch_workgroups(width.div_ceil(8), height.div_ceil(8), 1);
+                }
+            }
         }
         if let Some(timer) = &mut self.gpu_timer {
             timer.resolve(encoder, Timed::AmbientOcclusion, self.frame_index);

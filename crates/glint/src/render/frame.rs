@@ -5,7 +5,8 @@
 //! shadow maps. A frame is one command encoder and one submission. Debug groups
 //! nest like the outline (`outline.rs`: frame › view k › shadows, forward,
 //! post), around passes labelled "light n cascade c", "cull instances",
-//! "forward pass: early", "depth pyramid", "post: …".
+//! "depth pre-pass", "ambient occlusion", "forward pass: early", "depth
+//! pyramid", "post: …".
 
 use super::post::ChainImages;
 use super::shadow_pass::{Shadows, ShadowsDrawn};
@@ -310,8 +311,11 @@ impl Renderer {
     /// 3. queue — one draw item with a 64-bit sort key per visible run (per instance when blended)
     /// 4. sort — radix sort by key
     /// 5. batch — equal (stage, pipeline, material, shape) runs merged into instanced draws, one indirect command each
-    /// 6. upload — Scene and Camera blocks if changed, changed instances, draw indices and indirect commands if changed
-    /// 7. encode — culled on the GPU, the cull pass first; one pass: opaque → alpha-test → sky →
+    /// 6. upload — with ambient occlusion, its pre-pass pipelines, textures and parameters
+    ///    (`render/ambient_occlusion.rs`); Scene and Camera blocks if changed, changed instances,
+    ///    draw indices and indirect commands if changed
+    /// 7. encode — culled on the GPU, the cull pass first; with ambient occlusion, its depth
+    ///    pre-pass, occlusion and blur passes; one pass: opaque → alpha-test → sky →
     ///    transparent (or as `render_order` says) → particle layers → glare; batches sharing pipeline, texture set and
     ///    mesh page go in one multi-draw-indirect call. Occlusion culling splits the pass
     ///    around its depth pyramid and late cull (`render/occlusion.rs`)

@@ -144,6 +144,20 @@ impl GpuTimer {
         })
     }
 
+    /// [`pass_writes`](Self::pass_writes) for a compute pass.
+    pub(crate) fn compute_pass_writes(
+        &self,
+        which: Timed,
+        begin: bool,
+        end: bool,
+    ) -> Option<wgpu::ComputePassTimestampWrites<'_>> {
+        self.pass_writes(which, begin, end).map(|w| wgpu::ComputePassTimestampWrites {
+            query_set: w.query_set,
+            beginning_of_pass_write_index: w.beginning_of_pass_write_index,
+            end_of_pass_write_index: w.end_of_pass_write_index,
+        })
+    }
+
     /// After the last pass of `which` in frame `frame`: resolve its timestamps
     /// and copy them into the frame's readback slot (none free: not timed).
     pub(crate) fn resolve(&mut self, encoder: &mut wgpu::CommandEncoder, which: Timed, frame: u64) {

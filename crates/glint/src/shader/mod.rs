@@ -293,8 +293,10 @@ pub(crate) const POST: &str = include_str!("post.wgsl");
 pub(crate) const CULL: &str = include_str!("cull.wgsl");
 /// The depth pyramid of occlusion culling (`render/occlusion.rs`).
 pub(crate) const PYRAMID: &str = include_str!("pyramid.wgsl");
-/// Screen-space ambient occlusion (`render/ambient_occlusion.rs`).
+/// Screen-space ambient occlusion (`render/ambient_occlusion.rs`): its fragment passes.
 pub(crate) const SSAO: &str = include_str!("ssao.wgsl");
+/// Its compute passes, appended to [`SSAO`].
+pub(crate) const SSAO_COMPUTE: &str = include_str!("ssao_compute.wgsl");
 
 #[cfg(test)]
 mod tests {

@@ -1,5 +1,6 @@
-// Screen-space ambient occlusion (render/ambient_occlusion.rs), two full-screen
-// passes at half the view's resolution over the depth pre-pass:
+// Screen-space ambient occlusion (render/ambient_occlusion.rs), two passes at
+// half the view's resolution over the depth pre-pass, full-screen fragment
+// passes here, compute passes with ssao_compute.wgsl appended:
 // - fs_occlusion: ground-truth ambient occlusion (Jimenez et al. 2016, "Practical
 //   Realtime Strategies for Accurate Indirect Occlusion"): per pixel, SLICES
 //   screen directions turned by a per-pixel noise; in each, the highest horizon
@@ -75,13 +76,22 @@ fn arc(h: f32, n: f32) -> f32 {
 
 @fragment
 fn fs_occlusion(@builtin(position) position: vec4<f32>) -> @location(0) vec4<f32> {
-    let half_pixel = floor(position.xy);
-    let q = vec2<i32>(half_pixel) * 2;
+    return vec4<f32>(occlusion_at(vec2<i32>(floor(position.xy))));
+}
+
+@fragment
+fn fs_blur(@builtin(position) position: vec4<f32>) -> @location(0) vec4<f32> {
+    return vec4<f32>(blur_at(vec2<i32>(floor(position.xy))));
+}
+
+// The occlusion of half-resolution pixel `half_pixel`: 1 open, 0 wholly occluded.
+fn occlusion_at(half_pixel: vec2<i32>) -> f32 {
+    let q = half_pixel * 2;
     let full = vec2<i32>(textureDimensions(prepass));
     let centre = textureLoad(prepass, q, 0);
     let distance = centre.z + centre.w;
     if distance <= 0.0 {
-        return vec4<f32>(1.0);
+        return 1.0;
     }
     let p = view_position(q, distance);
     let n = decode_normal(centre.xy);
@@ -92,9 +102,9 @@ fn fs_occlusion(@builtin(position) position: vec4<f32>) -> @location(0) vec4<f32
     let per_unit = 0.5 * f32(full.y) * ao.projection.y / select(distance, 1.0, orthographic);
     let radius_pixels = min(radius * per_unit, ao.params.y);
     if radius_pixels < 2.0 {
-        return vec4<f32>(1.0);
+        return 1.0;
     }
-    let turn = noise(half_pixel);
+    let turn = noise(vec2<f32>(half_pixel));
     let jitter = fract(turn * 7.0 + 0.5);
     var visible = 0.0;
     var open = 0.0;
@@ -149,17 +159,16 @@ fn fs_occlusion(@builtin(position) position: vec4<f32>) -> @location(0) vec4<f32
         open += length_n * unoccluded;
     }
     let visibility = select(1.0, saturate(visible / open), open > 1e-4);
-    return vec4<f32>(exp2(ao.params.x * log2(max(visibility, 1e-4))));
+    return exp2(ao.params.x * log2(max(visibility, 1e-4)));
 }
 
-@fragment
-fn fs_blur(@builtin(position) position: vec4<f32>) -> @location(0) vec4<f32> {
-    let p = vec2<i32>(floor(position.xy));
+// Half-resolution pixel `p` of the occlusion, blurred.
+fn blur_at(p: vec2<i32>) -> f32 {
     let size = vec2<i32>(textureDimensions(raw));
     let full = vec2<i32>(textureDimensions(prepass));
     let centre = distance_at(p * 2);
     if centre <= 0.0 {
-        return vec4<f32>(1.0);
+        return 1.0;
     }
     var sum = 0.0;
     var weight = 0.0;
@@ -172,5 +181,5 @@ fn fs_blur(@builtin(position) position: vec4<f32>) -> @location(0) vec4<f32> {
             weight += w;
         }
     }
-    return vec4<f32>(select(1.0, sum / weight, weight > 0.0));
+    return select(1.0, sum / weight, weight > 0.0);
 }

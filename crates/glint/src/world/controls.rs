@@ -6,13 +6,13 @@
 //!
 //! The choices take effect through three calls a frame loop makes:
 //! [`Controls::apply`] (density, time of day and shadows, into the world and
-//! renderer), [`Controls::views`] (the chosen camera, culling, post effects
-//! and exposure) and [`Controls::advance`] (pause, speed and restart of the
+//! renderer), [`Controls::views`] (the chosen camera, culling, ambient
+//! occlusion, post effects and exposure) and [`Controls::advance`] (pause, speed and restart of the
 //! scene clock).
 
 use super::World;
 use crate::asset::SceneDesc;
-use crate::scene::{Camera, Culling, PostEffect, Tonemap, View};
+use crate::scene::{AmbientOcclusion, Camera, Culling, PostEffect, Tonemap, View};
 use crate::Renderer;
 use serde::Serialize;
 
@@ -99,6 +99,9 @@ pub struct Controls {
     restart: bool,
     /// Each camera's post effects (as the scene gave them), and which are on.
     post: Vec<Vec<(PostEffect, bool)>>,
+    /// Each camera's ambient occlusion settings (the scene's, else the
+    /// defaults), and whether it is on.
+    occlusion: Vec<(AmbientOcclusion, bool)>,
 }
 
 impl Controls {
@@ -124,6 +127,9 @@ impl Controls {
             speed: 1.0,
             restart: false,
             post: chains.map(|chain| chain.iter().map(|&e| (e, true)).collect()).collect(),
+            occlusion: (desc.camera_views.iter())
+                .map(|c| (c.ambient_occlusion.unwrap_or_default(), c.ambient_occlusion.is_some()))
+                .collect(),
         }
     }
 
@@ -161,6 +167,24 @@ impl Controls {
         let (min, max) = SPEED_RANGE;
         add("speed".into(), "Time", "speed", ControlKind::Slider { value: self.speed, min, max, step: 0.05 });
         add("restart".into(), "Time", "restart", ControlKind::Button);
+        for (v, (settings, on)) in self.occlusion.iter().enumerate() {
+            let section = format!("Ambient occlusion: camera {v}");
+            let id = |name: &str| format!("ssao.{v}.{name}");
+            add(id("on"), &section, "ambient occlusion", ControlKind::Toggle { on: *on });
+            let (radius, intensity) = (settings.radius, settings.intensity);
+            add(
+                id("radius"),
+                &section,
+                "radius",
+                ControlKind::Slider { value: radius, min: 0.05, max: 4.0, step: 0.05 },
+            );
+            add(
+                id("intensity"),
+                &section,
+                "intensity",
+                ControlKind::Slider { value: intensity, min: 0.0, max: 4.0, step: 0.1 },
+            );
+        }
         for (v, effects) in self.post.iter().enumerate() {
             let section = format!("Post: camera {v}");
             for (k, (effect, on)) in effects.iter().enumerate() {
@@ -204,7 +228,24 @@ impl Controls {
             ("paused", _) => self.paused = on,
             ("speed", _) => self.speed = clamp(value),
             ("restart", _) => self.restart = true,
+            (ssao, _) if ssao.starts_with("ssao.") => self.set_occlusion(ssao, clamp(value), on)?,
             (post, kind) => self.set_post(post, kind, value, on)?,
+        }
+        Ok(())
+    }
+
+    /// Set a "ssao.V.NAME" control (`value` clamped to its range).
+    fn set_occlusion(&mut self, id: &str, value: f32, on: bool) -> Result<(), String> {
+        let mut parts = id.split('.').skip(1);
+        let (v, name) = (parts.next().and_then(|v| v.parse::<usize>().ok()), parts.next());
+        let Some((settings, enabled)) = v.and_then(|v| self.occlusion.get_mut(v)) else {
+            return Err(format!("no control '{id}'"));
+        };
+        match name {
+            Some("on") => *enabled = on,
+            Some("radius") => settings.radius = value,
+            Some("intensity") => settings.intensity = value,
+            _ => return Err(format!("no control '{id}'")),
         }
         Ok(())
     }
@@ -298,9 +339,9 @@ impl Controls {
     }
 
     /// `views` (the world's, for [`scene_camera`](Self::scene_camera)) as
-    /// chosen: culling, and the post chain of each view of a scene camera
-    /// with the effects turned off left out and the exposure added to its
-    /// tonemapping.
+    /// chosen: culling, the ambient occlusion of each view of a scene camera,
+    /// and its post chain with the effects turned off left out and the
+    /// exposure added to its tonemapping.
     pub fn views(&self, views: Vec<View>) -> Vec<View> {
         (views.into_iter())
             .map(|mut view| {
@@ -310,6 +351,9 @@ impl Controls {
                 let camera = self.scene_cameras.iter().position(|c| *c == view.camera);
                 if let Some(effects) = camera.and_then(|c| self.post.get(c)) {
                     view.post = effects.iter().filter(|(_, on)| *on).map(|(e, _)| self.exposed(*e)).collect();
+                }
+                if let Some(&(settings, on)) = camera.and_then(|c| self.occlusion.get(c)) {
+                    view.ambient_occlusion = on.then_some(settings);
                 }
                 view
             })
@@ -396,6 +440,12 @@ mod tests {
         let views = c.views(base.clone());
         assert_eq!(views[0].post, vec![PostEffect::Tonemap { operator: Tonemap::Aces, exposure: 1.5 }]);
         assert_eq!(views[0].culling, Culling::Cpu);
+        assert_eq!(views[0].ambient_occlusion, None, "the scene's camera has none");
+        c.set("ssao.0.on", 1.0).unwrap();
+        c.set("ssao.0.radius", 99.0).unwrap();
+        c.set("ssao.0.intensity", 2.0).unwrap();
+        let occlusion = c.views(base.clone())[0].ambient_occlusion.expect("turned on");
+        assert_eq!((occlusion.radius, occlusion.intensity), (4.0, 2.0), "the radius clamps to 4");
         c.set("post.0.1.operator", 3.0).unwrap();
         assert!(matches!(c.views(base)[0].post[0], PostEffect::Tonemap { operator: Tonemap::Agx, .. }));
         c.set("speed", 9.0).unwrap();
@@ -408,7 +458,14 @@ mod tests {
         assert!(c.free_camera(), "the last choice is the free camera");
         c.toggle_free_camera();
         assert_eq!(c.scene_camera(), Some(0));
-        for (id, value) in [("nothing", 1.0), ("post.7.0.on", 1.0), ("post.0.0.exposure", 1.0), ("speed", f32::NAN)] {
+        let bad = [
+            ("nothing", 1.0),
+            ("post.7.0.on", 1.0),
+            ("post.0.0.exposure", 1.0),
+            ("speed", f32::NAN),
+            ("ssao.5.on", 1.0),
+        ];
+        for (id, value) in bad {
             assert!(c.set(id, value).is_err(), "{id}");
         }
     }
