@@ -215,8 +215,8 @@ impl OcclusionTargets {
 }
 
 impl Renderer {
-    /// Stage 1 of a view with ambient occlusion (after batching, which says
-    /// what the pre-pass draws): the occlusion pipelines, each forward
+    /// The start of stage 6 for a view with ambient occlusion (after batching,
+    /// which says what the pre-pass draws): the occlusion pipelines, each forward
     /// pipeline's pre-pass twin, the view's textures at its size `size` (the
     /// Scene bind group pointed at them) and its parameters.
     pub(super) fn prepare_ambient_occlusion(
