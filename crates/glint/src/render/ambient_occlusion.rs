@@ -63,7 +63,7 @@ impl OcclusionGpu {
 }
 
 /// How the occlusion and blur passes run.
-enum Passes {
+enum Kind {
     Fragment([wgpu::RenderPipeline; 2]),
     Compute([wgpu::ComputePipeline; 2]),
 }
@@ -71,7 +71,7 @@ enum Passes {
 /// The occlusion and blur pipelines, made with the first view that has ambient occlusion.
 pub(crate) struct OcclusionPipelines {
     layouts: [wgpu::BindGroupLayout; 2],
-    passes: Passes,
+    kind: Kind,
 }
 
 impl OcclusionPipelines {
@@ -121,12 +121,12 @@ impl OcclusionPipelines {
             label: Some("ssao.wgsl"),
             source: wgpu::ShaderSource::Wgsl(source.into()),
         });
-        let passes = match compute {
-            true => Passes::Compute([0, 1].map(|k| {
+        let kind = match compute {
+            true => Kind::Compute([0, 1].map(|k| {
                 let entry = ["cs_occlusion", "cs_blur"][k];
                 super::compute_pipeline(device, &module, entry, &[Some(&layouts[k])])
             })),
-            false => Passes::Fragment([0, 1].map(|k| {
+            false => Kind::Fragment([0, 1].map(|k| {
                 let (label, entry) =
                     [("ambient occlusion: occlusion", "fs_occlusion"), ("ambient occlusion: blur", "fs_blur")][k];
                 let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -143,7 +143,7 @@ impl OcclusionPipelines {
                 )
             })),
         };
-        Self { layouts, passes }
+        Self { layouts, kind }
     }
 }
 
@@ -161,7 +161,7 @@ pub(crate) struct OcclusionTargets {
 
 impl OcclusionTargets {
     fn new(device: &wgpu::Device, pipelines: &OcclusionPipelines, (width, height): (u32, u32)) -> Self {
-        let compute = matches!(pipelines.passes, Passes::Compute(_));
+        let compute = matches!(pipelines.kind, Kind::Compute(_));
         let texture = |label, (width, height), format, usage| {
             device
                 .create_texture(&wgpu::TextureDescriptor {
@@ -289,8 +289,8 @@ impl Renderer {
         }
         let outputs = [&targets.raw, &targets.blurred];
         for (k, label) in ["ambient occlusion", "ambient occlusion: blur"].into_iter().enumerate() {
-            match &pipelines.passes {
-                Passes::Fragment(pipelines) => {
+            match &pipelines.kind {
+                Kind::Fragment(pipelines) => {
                     let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                         label: Some(label),
                         color_attachments: &[Some(wgpu::RenderPassColorAttachment {
@@ -313,7 +313,7 @@ impl Renderer {
                     self.outline.call(|| super::explain::DrawCall::single(label, "draw", (1, 1), &changed));
                     (drawn.draw_calls, drawn.draws) = (drawn.draw_calls + 1, drawn.draws + 1);
                 }
-                Passes::Compute(pipelines) => {
+                Kind::Compute(pipelines) => {
                     let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                         label: Some(label),
                         timestamp_writes: timer
