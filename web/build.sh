@@ -27,4 +27,7 @@ mkdir -p web/dist/scenes
 cp scenes/*.scn web/dist/scenes/
 cp -r assets web/dist/assets
 rm -rf web/dist/assets/fonts
+for file in glint_web_bg.wasm glint_web.js index.html; do
+  echo "web/dist/$file: $(wc -c < "web/dist/$file") bytes, gzipped $(gzip -9 < "web/dist/$file" | wc -c) bytes"
+done
 echo "web/dist: $(du -sh web/dist | cut -f1); page (wasm + js + html): $(cat web/dist/glint_web_bg.wasm web/dist/glint_web.js web/dist/index.html | wc -c) bytes, gzipped $(cat web/dist/glint_web_bg.wasm web/dist/glint_web.js web/dist/index.html | gzip -9 | wc -c) bytes"

@@ -103,6 +103,32 @@ for (const backend of backends) {
   }
 }
 
+// The showcase's startup, stage by stage as the page reports it (data-startup,
+// startup.rs), median of five loads on each backend; every stage must be there.
+const STAGES = ["download", "instantiate", "gpu", "fetch", "load", "place", "waiting", "prepare", "first frame", "total"];
+for (const backend of backends) {
+  const loads = [];
+  let why = "";
+  for (let k = 0; k < 5 && !why; k++) {
+    const { page, state, logs } = await open("scenes/showcase.scn", backend);
+    try {
+      const reported = state.error ? null : await page.evaluate(() => document.getElementById("glint").dataset.startup);
+      const stages = reported ? JSON.parse(reported) : {};
+      const missing = STAGES.filter((s) => !Number.isFinite(stages[s]));
+      if (state.error || missing.length) why = `${state.error ?? `missing ${missing.join(", ")}`}\n  ${logs.join("\n  ")}`;
+      else loads.push(stages);
+    } finally {
+      await page.close();
+    }
+  }
+  const median = (name) => {
+    const v = loads.map((l) => l[name]).sort((a, b) => a - b);
+    return Math.round(v[v.length >> 1]);
+  };
+  report(!why, `the showcase's startup on ${backend}`,
+    why || `median of ${loads.length} loads: ${STAGES.map((s) => `${s} ${median(s)} ms`).join(", ")}`);
+}
+
 // The meadow (animated, so not compared with glint render): a tenth of every tile
 // of its 1.08 million grass instances drawn (SwiftShader draws a frame of all of
 // them in seconds); its first frame and frame time, and grass in the lower half.

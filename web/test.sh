@@ -23,6 +23,15 @@ stale=$(find crates/glint/src crates/glint-web web/index.html web/build.sh scene
 if [ ! -f web/dist/glint_web_bg.wasm ] || [ -n "$stale" ]; then
   bash web/build.sh
 fi
+# The page's size budget (gzipped bytes of wasm + js + html): a change that
+# grows the page past it fails here. Lowered as the page shrinks.
+budget=2050000
+page=$(cat web/dist/glint_web_bg.wasm web/dist/glint_web.js web/dist/index.html | gzip -9 | wc -c)
+echo "the page: $page bytes gzipped (budget $budget)"
+if [ "$page" -gt "$budget" ]; then
+  echo "FAIL the page is $page bytes gzipped, over its budget of $budget" >&2
+  exit 1
+fi
 # A broken scene the page must report (line 3: a camera origin of two numbers).
 printf '{\n"classname" "camera"\n"origin" "0 1"\n}\n' > web/dist/scenes/broken.scn
 

@@ -21,8 +21,9 @@ const MAX_ROUNDS: usize = 64;
 /// Largest file fetched at all (the loader's largest limit, a model or buffer).
 const MAX_FETCH_BYTES: f64 = (1u64 << 30) as f64;
 
-/// Load the scene (or model, shown alone) at `path`, relative to the page.
-pub async fn load(path: &str) -> Result<SceneDesc, String> {
+/// Load the scene (or model, shown alone) at `path`, relative to the page,
+/// adding the milliseconds spent fetching to `fetching`.
+pub async fn load(path: &str, fetching: &mut f64) -> Result<SceneDesc, String> {
     let set = Arc::new(FileSet::default());
     let options = LoadOptions { files: Files::Memory(set.clone()), ..Default::default() };
     let path = Path::new(path);
@@ -36,11 +37,13 @@ pub async fn load(path: &str) -> Result<SceneDesc, String> {
         if missing.is_empty() {
             return result.map_err(|e| e.to_string());
         }
+        let started = super::startup::now();
         for file in missing {
             if let Some(bytes) = fetch(&file).await? {
                 set.insert(&file, bytes);
             }
         }
+        *fetching += super::startup::now() - started;
         if set.bytes() > MAX_SCENE_TOTAL_BYTES {
             let limit = MAX_SCENE_TOTAL_BYTES;
             return Err(format!("{}: its files are over the {limit}-byte limit for one scene", path.display()));

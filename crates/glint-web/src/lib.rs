@@ -11,12 +11,14 @@
 //! viewer's overlay shows), and a broken scene's `file:line` message; the
 //! canvas carries `data-frames` (frames drawn), `data-error`, and the last
 //! frame's `data-shadow-views`, `data-instances` (drawn) and `data-time`
-//! (the scene clock) for scripts.
+//! (the scene clock) for scripts, and `data-startup`, the first frame's
+//! startup stages (`startup.rs`).
 #![cfg(target_arch = "wasm32")]
 
 mod fetch;
 mod input;
 mod panel;
+mod startup;
 
 use glam::Vec2;
 use glint::scene::FlyCamera;
@@ -145,9 +147,12 @@ struct Viewer {
     frames: u64,
     last: Option<f64>,
     frame_ms: f64,
+    /// The startup's stages until the first frame is shown (then `None`).
+    startup: Option<startup::Startup>,
 }
 
 async fn run() -> Result<(), String> {
+    let mut startup = startup::Startup::begin();
     let query = Query::read();
     let document = web_sys::window().and_then(|w| w.document()).ok_or("no document")?;
     let canvas: web_sys::HtmlCanvasElement = (document.get_element_by_id("glint"))
@@ -158,6 +163,7 @@ async fn run() -> Result<(), String> {
     canvas.set_width(width);
     canvas.set_height(height);
     let (gpu, surface, backend) = open_gpu(&canvas, query.backend.as_deref()).await?;
+    startup.lap("gpu");
     // A lost device draws nothing more: say so instead of leaving the last frame up.
     gpu.device.set_device_lost_callback(move |reason, message| {
         show_error(&format!("the {backend} device was lost ({reason:?}): {message}; reload the page"))
@@ -179,6 +185,7 @@ async fn run() -> Result<(), String> {
         frames: 0,
         last: None,
         frame_ms: 0.0,
+        startup: Some(startup),
     }));
     VIEWER.with(|v| *v.borrow_mut() = Some(viewer.clone()));
     listen(&canvas, &viewer)?;
@@ -233,16 +240,23 @@ async fn open_gpu(
 /// Fetch and show `scene`, or put its error on the page (keeping the last scene).
 async fn show(viewer: &Rc<RefCell<Viewer>>, scene: &str) {
     set_text("status", &format!("loading {scene} ..."));
-    let desc = match fetch::load(scene).await {
+    let mut fetching = 0.0;
+    let desc = match fetch::load(scene, &mut fetching).await {
         Ok(desc) => desc,
         Err(e) => return show_error(&e),
     };
+    if let Some(startup) = &mut viewer.borrow_mut().startup {
+        startup.split(("fetch", fetching), "load");
+    }
     for warning in &desc.warnings {
         web_sys::console::warn_1(&warning.to_string().into());
     }
     clear_error();
     let mut v = viewer.borrow_mut();
     let placed = Shown::place(desc, &v.gpu, v.density);
+    if let Some(startup) = &mut v.startup {
+        startup.lap("place");
+    }
     match placed {
         Ok(mut shown) => {
             shown.controls.toggle_free_camera();
@@ -254,6 +268,8 @@ async fn show(viewer: &Rc<RefCell<Viewer>>, scene: &str) {
     if let Err(e) = panel::build(viewer) {
         show_error(&e);
     }
+    // Shown while the next animation frame, the scene's first, makes its pipelines.
+    set_text("status", &format!("{scene}: preparing shaders and pipelines ..."));
 }
 
 /// The frame callback, which schedules itself again (so it holds a handle on itself).
@@ -315,8 +331,18 @@ impl Viewer {
         if let Some(flown) = views.iter_mut().find(|v| v.output.is_none()).filter(|_| shown.controls.free_camera()) {
             flown.camera = shown.fly.apply(&flown.camera);
         }
+        if let Some(startup) = &mut self.startup {
+            // The controls panel, and the wait for the first animation frame.
+            startup.lap("waiting");
+        }
         let stats = shown.world.draw(&mut shown.renderer, &views, &mut self.target).map_err(|e| e.to_string())?;
         self.surface.present(&self.gpu, &self.target);
+        if let Some(mut startup) = self.startup.take() {
+            // Each view's shadow pass prepares its pipelines before its flush does.
+            let prepare: f64 = stats.iter().map(|s| s.cpu_ms.prepare + s.passes.shadow.cpu_ms).sum();
+            startup.split(("prepare", prepare), "first frame");
+            startup.report(&self.canvas);
+        }
         self.frames += 1;
         self.frame_ms = if self.frames == 1 { dt * 1e3 } else { 0.9 * self.frame_ms + 0.1 * dt * 1e3 };
         let draws: u32 = stats.iter().map(|s| s.draws).sum();
