@@ -215,6 +215,12 @@ impl OcclusionTargets {
 }
 
 impl Renderer {
+    /// Whether a view with these settings gets ambient occlusion: only the
+    /// optimized frame draws it (the naive baseline has no pre-pass).
+    pub(super) fn occludes(&self, settings: Option<AmbientOcclusion>) -> bool {
+        settings.is_some() && self.mode == super::FrameMode::Optimized
+    }
+
     /// The start of stage 6 for a view with ambient occlusion (after batching,
     /// which says what the pre-pass draws): the occlusion pipelines, each forward
     /// pipeline's pre-pass twin, the view's textures at its size `size` (the
@@ -230,9 +236,11 @@ impl Renderer {
         };
         let compute = self.cull_pipelines.is_some();
         let pipelines = self.occlusion_pipelines.get_or_insert_with(|| OcclusionPipelines::new(&self.device, compute));
+        // A run's batches share one pipeline (what `draw_run` binds).
         let list = &self.view.forward;
-        for batch in &list.batches {
-            let (_, built) = self.registry.pipelines.prepass_id(&self.device, batch.pipeline)?;
+        for run in &list.runs {
+            let forward = list.batches[run.first as usize].pipeline;
+            let (_, built) = self.registry.pipelines.prepass_id(&self.device, forward)?;
             stats.pipelines_compiled += u32::from(built);
         }
         if self.view.occlusion.as_ref().is_none_or(|t| t.size != size) {

@@ -482,7 +482,7 @@ impl Renderer {
         };
         // Each stage's CPU time is the lap that ends on its line.
         let mut lap = Laps::start();
-        let occluded = frame.ambient_occlusion.is_some() && self.mode == FrameMode::Optimized;
+        let occluded = self.occludes(frame.ambient_occlusion);
         self.frame_variant = FrameVariant::after(drawn, lighting.lights, occluded);
         stats.environment_prefiltered = self.prepare_environment(lighting)?;
         let prepared = self.prepare(target.format(), &lighting.environment, &mut stats)?;

@@ -368,8 +368,9 @@ impl Pipelines {
     }
 
     /// The key of the shadow pipeline drawing what `forward` draws into a shadow
-    /// map of `pass`: only the features that move vertices or discard fragments
-    /// stay; depth writes, no colour, one sample.
+    /// map of `pass` (or ambient occlusion's pre-pass): only the features that
+    /// move vertices or discard fragments stay; depth writes, one sample, no
+    /// colour (the pre-pass: its normal-and-distance target).
     pub(crate) fn shadow_key(forward: PipelineKey, pass: PassKind) -> PipelineKey {
         debug_assert!(pass != PassKind::Forward);
         let kept = ShaderFeatures::ALPHA_MASK

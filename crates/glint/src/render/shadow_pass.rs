@@ -113,8 +113,7 @@ impl Renderer {
         }
         let mut prepared = FrameStats::default();
         // The flush after this pass samples the maps it draws: choose its pipelines now.
-        let occluded = view.ambient_occlusion.is_some() && self.mode == super::FrameMode::Optimized;
-        self.frame_variant = super::FrameVariant::expected(lights, occluded);
+        self.frame_variant = super::FrameVariant::expected(lights, self.occludes(view.ambient_occlusion));
         let draws_with = self.prepare(self.scene_format(&view, target), &lighting.environment, &mut prepared)?;
         let [_, _, width, height] = view.viewport.pixels(target.width(), target.height());
         let frame = ViewFrame::new(&view, width, height, self.cull_pipelines.is_some());

@@ -108,9 +108,10 @@ impl AmbientOcclusion {
     /// These settings with non-finite or out-of-range values clamped into range.
     pub fn clamped(self) -> Self {
         let clamp = |v: f32, max: f32, default: f32| if v.is_finite() { v.clamp(0.0, max) } else { default };
+        let defaults = Self::default();
         Self {
-            radius: clamp(self.radius, Self::MAX_RADIUS, 0.5),
-            intensity: clamp(self.intensity, Self::MAX_INTENSITY, 1.0),
+            radius: clamp(self.radius, Self::MAX_RADIUS, defaults.radius),
+            intensity: clamp(self.intensity, Self::MAX_INTENSITY, defaults.intensity),
         }
     }
 }
