@@ -205,8 +205,8 @@ impl EnvironmentMaps {
         }
         let scope = crate::gpu::DriverErrors::watch(&registry.device);
         if self.pipelines.is_none() {
-            let module = registry.pipelines.library.prefilter()?;
-            let module = super::pipelines::shader_module(&registry.device, "environment: prefilter shader", module);
+            let wgsl = crate::shader::prefilter();
+            let module = super::pipelines::shader_module(&registry.device, "environment: prefilter shader", wgsl);
             self.pipelines = Some(PrefilterPipelines::new(&registry.device, &module));
         }
         let device = &registry.device;

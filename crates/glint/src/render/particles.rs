@@ -136,12 +136,7 @@ impl ParticlePipelines {
 
     /// Build the pipeline of `key` unless it exists; returns whether it was
     /// built now.
-    fn build(
-        &mut self,
-        device: &wgpu::Device,
-        library: &mut crate::shader::ShaderLibrary,
-        (target, blend, soft): PipelineKey,
-    ) -> Result<bool, RenderError> {
+    fn build(&mut self, device: &wgpu::Device, (target, blend, soft): PipelineKey) -> Result<bool, RenderError> {
         if self.cache.contains_key(&(target, blend, soft)) {
             return Ok(false);
         }
@@ -149,8 +144,8 @@ impl ParticlePipelines {
         let module = match self.modules.entry(variant) {
             std::collections::hash_map::Entry::Occupied(built) => built.into_mut(),
             std::collections::hash_map::Entry::Vacant(slot) => {
-                let module = library.particles(variant).map_err(RenderError::Shader)?;
-                slot.insert(super::pipelines::shader_module(device, "renderer: particle shader", module))
+                let wgsl = crate::shader::particles(variant);
+                slot.insert(super::pipelines::shader_module(device, "renderer: particle shader", wgsl))
             }
         };
         let layout = &self.layouts[match variant {
@@ -283,7 +278,7 @@ impl Renderer {
         for layer in self.particle_layers.iter().filter(|l| l.count > 0) {
             for soft in [false, layer.soft > 0.0 && self.particle_pipelines.soft] {
                 let key = (target, layer.blend, soft);
-                let built = self.particle_pipelines.build(&registry.device, &mut registry.pipelines.library, key)?;
+                let built = self.particle_pipelines.build(&registry.device, key)?;
                 stats.pipelines_compiled += u32::from(built);
             }
         }

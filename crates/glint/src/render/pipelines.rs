@@ -9,8 +9,7 @@
 use super::gpu_array;
 use crate::gpu::{sampler_entry, texture_entry, DriverErrors, TargetFormat, COLOR_FORMAT, DEPTH_FORMAT};
 use crate::scene::{BlendState, Compare, Cull, Mesh, RenderStates, SkinVertex, StencilOp, Vertex};
-use crate::shader::{LightCounts, ShaderError, ShaderFeatures, ShaderLibrary};
-use std::borrow::Cow;
+use crate::shader::{LightCounts, ShaderError, ShaderFeatures};
 use std::collections::HashMap;
 
 /// One vertex buffer of a mesh: the interleaved [`Vertex`] stream, or one of
@@ -153,7 +152,9 @@ pub(crate) struct Pipelines {
     layout: wgpu::PipelineLayout,
     shadow_layout: wgpu::PipelineLayout,
     sky_layout: wgpu::PipelineLayout,
-    pub(crate) library: ShaderLibrary,
+    /// Whether the forward shader reads its arrays from storage buffers (else
+    /// from data textures).
+    vertex_storage: bool,
     modules: HashMap<(ShaderFeatures, LightCounts), wgpu::ShaderModule>,
     sky_module: Option<wgpu::ShaderModule>,
     /// Forward and shadow pipelines; a key's index is its id in sort keys.
@@ -331,7 +332,7 @@ impl Pipelines {
             layout: pipeline_layout,
             shadow_layout,
             sky_layout,
-            library: ShaderLibrary::new(vertex_storage),
+            vertex_storage,
             modules: HashMap::new(),
             sky_module: None,
             forward_cache: Vec::new(),
@@ -448,8 +449,8 @@ impl Pipelines {
         let scope = DriverErrors::watch(device);
         let variant = (key.features, key.lights);
         if !self.modules.contains_key(&variant) {
-            let module = self.library.forward(key.features, key.lights)?;
-            self.modules.insert(variant, shader_module(device, &label, module));
+            let wgsl = crate::shader::forward(key.features, key.lights, self.vertex_storage);
+            self.modules.insert(variant, shader_module(device, &label, wgsl));
         }
         let pipeline = self.build_forward(device, key);
         if let Some(error) = scope.finish() {
@@ -494,8 +495,7 @@ impl Pipelines {
         }
         let scope = DriverErrors::watch(device);
         if self.sky_module.is_none() {
-            let module = self.library.sky()?;
-            self.sky_module = Some(shader_module(device, "renderer: sky shader", module));
+            self.sky_module = Some(shader_module(device, "renderer: sky shader", crate::shader::sky()));
         }
         let module = self.sky_module.as_ref().expect("built above");
         // The sky behind what was drawn; the glare added over everything.
@@ -608,9 +608,10 @@ impl Pipelines {
     }
 }
 
-pub(crate) fn shader_module(device: &wgpu::Device, label: &str, module: wgpu::naga::Module) -> wgpu::ShaderModule {
+/// The module of one of the composed shaders' WGSL (`crate::shader`).
+pub(crate) fn shader_module(device: &wgpu::Device, label: &str, wgsl: String) -> wgpu::ShaderModule {
     device.create_shader_module(wgpu::ShaderModuleDescriptor {
         label: Some(label),
-        source: wgpu::ShaderSource::Naga(Cow::Owned(module)),
+        source: wgpu::ShaderSource::Wgsl(wgsl.into()),
     })
 }

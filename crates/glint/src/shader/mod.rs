@@ -1,13 +1,18 @@
 //! Core layer: WGSL sources and shader variants.
 //!
-//! Every shader imports the shared blocks (`glint::blocks`: groups 0 and 1) through
-//! naga_oil. The forward shader is composed per [`ShaderFeatures`] set: each bit is a
-//! naga_oil shader def that `forward.wgsl` tests with `#ifdef`, so a material pays
-//! only for what it uses, and each set is compiled once.
+//! Every shader imports the shared blocks (`glint::blocks`: groups 0 and 1) with
+//! naga_oil's `#import`. The forward shader has a variant per [`ShaderFeatures`]
+//! set: each bit is a shader def that `forward.wgsl` tests with `#ifdef`, so a
+//! material pays only for what it uses, and each set is compiled once. The
+//! composition happens when glint is built (`build.rs`, [`assemble`]); a test
+//! checks it against naga_oil's.
+
+mod assemble;
+#[cfg(test)]
+mod composed_tests;
 
 use crate::scene::{AlphaMode, Environment, Light, LightKind, Material, ShadingModel};
-use naga_oil::compose::{ComposableModuleDescriptor, Composer, NagaModuleDescriptor, ShaderDefValue};
-use std::collections::HashMap;
+use assemble::{assemble, Defs};
 
 bitflags::bitflags! {
     /// The macro set of a forward-shader variant. The bits, and the shader def each sets:
@@ -137,15 +142,11 @@ impl ShaderFeatures {
     /// The vertex-animation bits: kept in shadow passes.
     pub const MOTION: Self = Self::WIND.union(Self::FLAP).union(Self::CIRCLE).union(Self::SWIM);
 
-    /// The naga_oil shader defs of this set: one boolean def per bit that is set,
-    /// and `TEXCOORDS` with any map.
-    fn shader_defs(self) -> HashMap<String, ShaderDefValue> {
+    /// The shader defs of this set: one per bit that is set, and `TEXCOORDS`
+    /// with any map.
+    fn shader_defs(self) -> impl Iterator<Item = &'static str> {
         let texcoords = self.intersects(Self::MAPS).then_some("TEXCOORDS");
-        self.iter_names()
-            .map(|(name, _)| name)
-            .chain(texcoords)
-            .map(|name| (name.to_string(), ShaderDefValue::Bool(true)))
-            .collect()
+        self.iter_names().map(|(name, _)| name).chain(texcoords)
     }
 }
 
@@ -170,18 +171,13 @@ impl LightCounts {
         Self { directional: directional as u8, positional: (lights.len() - directional) as u8 }
     }
 
-    fn shader_defs(self) -> impl Iterator<Item = (String, ShaderDefValue)> {
-        [
-            ("DIRECTIONAL_LIGHTS".to_string(), ShaderDefValue::UInt(self.directional.into())),
-            ("POSITIONAL_LIGHTS".to_string(), ShaderDefValue::UInt(self.positional.into())),
-        ]
-        .into_iter()
+    fn shader_defs(self) -> [(&'static str, u32); 2] {
+        [("DIRECTIONAL_LIGHTS", self.directional.into()), ("POSITIONAL_LIGHTS", self.positional.into())]
     }
 }
 
-/// A shader that failed to compose (a bug in glint's own WGSL), or a pipeline
-/// the adapter's driver refused (for example a GLES driver that cannot
-/// translate it).
+/// A pipeline the adapter's driver refused (for example a GLES driver that
+/// cannot translate it).
 #[derive(Debug, thiserror::Error)]
 #[error("shader '{name}' did not build: {message}")]
 pub struct ShaderError {
@@ -201,159 +197,61 @@ impl ShaderError {
 /// `render/gpu_array.rs`): WebGL2's guaranteed smallest texture limit.
 pub(crate) const DATA_TEXTURE_WIDTH: u32 = 2048;
 
-/// Composes glint's shaders with naga_oil.
-pub(crate) struct ShaderLibrary {
-    composer: Composer,
-    /// Whether the shared modules (`glint::equirect`, `glint::blocks`) were added.
-    blocks_added: bool,
-    /// Whether the forward shader reads its arrays from storage buffers (else
-    /// from data textures: the `DATA_TEXTURES` variant).
-    vertex_storage: bool,
+/// The defs of the forward shader for one feature set and mix of lights,
+/// reading its arrays from storage buffers when `vertex_storage` (else from
+/// data textures: the `DATA_TEXTURES` def).
+fn forward_defs(features: ShaderFeatures, lights: LightCounts, vertex_storage: bool) -> Defs {
+    let mut values = vec![("DATA_WIDTH", DATA_TEXTURE_WIDTH)];
+    values.extend(lights.shader_defs());
+    Defs { set: features.shader_defs().chain((!vertex_storage).then_some("DATA_TEXTURES")).collect(), values }
 }
 
-impl ShaderLibrary {
-    /// A library with nothing composed yet, reading storage buffers when `vertex_storage`.
-    pub(crate) fn new(vertex_storage: bool) -> Self {
-        Self { composer: Composer::default(), blocks_added: false, vertex_storage }
-    }
+/// The forward shader for one feature set and mix of lights: `vs_main` /
+/// `fs_main`, groups 0–3; reading storage buffers when `vertex_storage`.
+pub(crate) fn forward(features: ShaderFeatures, lights: LightCounts, vertex_storage: bool) -> String {
+    assemble(assemble::FORWARD, &forward_defs(features, lights, vertex_storage))
+}
 
-    fn compose(
-        &mut self,
-        name: &str,
-        source: &str,
-        defs: HashMap<String, ShaderDefValue>,
-    ) -> Result<wgpu::naga::Module, ShaderError> {
-        let fail = |name: &str, e: naga_oil::compose::ComposerError, composer: &Composer| ShaderError {
-            name: name.into(),
-            message: e.emit_to_string(composer),
-        };
-        if !self.blocks_added {
-            let shared = [
-                ("glint/shader/equirect.wgsl", include_str!("equirect.wgsl")),
-                ("glint/shader/blocks.wgsl", include_str!("blocks.wgsl")),
-            ];
-            for (file_path, source) in shared {
-                let module = ComposableModuleDescriptor { source, file_path, ..Default::default() };
-                if let Err(e) = self.composer.add_composable_module(module) {
-                    return Err(fail(file_path, e, &self.composer));
-                }
-            }
-            self.blocks_added = true;
-        }
-        let desc = NagaModuleDescriptor { source, file_path: name, shader_defs: defs, ..Default::default() };
-        self.composer.make_naga_module(desc).map_err(|e| fail(name, e, &self.composer))
-    }
+/// The gradient sky: `vs_sky` / `fs_sky`, groups 0–1.
+pub(crate) fn sky() -> String {
+    assemble(assemble::SKY, &Defs::default())
+}
 
-    /// The forward shader for one feature set and mix of lights: `vs_main` /
-    /// `fs_main`, groups 0–3.
-    pub(crate) fn forward(
-        &mut self,
-        features: ShaderFeatures,
-        lights: LightCounts,
-    ) -> Result<wgpu::naga::Module, ShaderError> {
-        let mut defs = features.shader_defs();
-        defs.extend(lights.shader_defs());
-        if !self.vertex_storage {
-            defs.insert("DATA_TEXTURES".into(), ShaderDefValue::Bool(true));
-        }
-        defs.insert("DATA_WIDTH".into(), ShaderDefValue::UInt(DATA_TEXTURE_WIDTH));
-        self.compose("glint/shader/forward.wgsl", include_str!("forward.wgsl"), defs)
-    }
+/// The environment's prefiltering passes: `vs_full` with `fs_specular`,
+/// `fs_irradiance` and `fs_brdf`, its own group 0.
+pub(crate) fn prefilter() -> String {
+    assemble(assemble::PREFILTER, &Defs::default())
+}
 
-    /// The gradient sky: `vs_sky` / `fs_sky`, groups 0–1.
-    pub(crate) fn sky(&mut self) -> Result<wgpu::naga::Module, ShaderError> {
-        self.compose("glint/shader/sky.wgsl", include_str!("sky.wgsl"), HashMap::new())
-    }
+/// The defs of the particle billboards' module: with `soft`, `SOFT` (and
+/// `SOFT_MSAA` when `soft` says the depth is multisampled).
+fn particle_defs(soft: Option<bool>) -> Defs {
+    let set = soft.map(|msaa| std::iter::once("SOFT").chain(msaa.then_some("SOFT_MSAA")).collect());
+    Defs { set: set.unwrap_or_default(), values: Vec::new() }
+}
 
-    /// The environment's prefiltering passes: `vs_full` with `fs_specular`,
-    /// `fs_irradiance` and `fs_brdf`, its own group 0.
-    pub(crate) fn prefilter(&mut self) -> Result<wgpu::naga::Module, ShaderError> {
-        self.compose("glint/shader/prefilter.wgsl", include_str!("prefilter.wgsl"), HashMap::new())
-    }
-
-    /// The particle billboards' module: `vs_particle` / `fs_particle`; with
-    /// `soft`, reading the scene's depth (multisampled when `soft` says so).
-    pub(crate) fn particles(&mut self, soft: Option<bool>) -> Result<wgpu::naga::Module, ShaderError> {
-        let defs = match soft {
-            None => HashMap::new(),
-            Some(msaa) => std::iter::once("SOFT")
-                .chain(msaa.then_some("SOFT_MSAA"))
-                .map(|d| (d.to_string(), ShaderDefValue::Bool(true)))
-                .collect(),
-        };
-        self.compose("glint/shader/particles.wgsl", include_str!("particles.wgsl"), defs)
-    }
+/// The particle billboards' module: `vs_particle` / `fs_particle`; with
+/// `soft`, reading the scene's depth (multisampled when `soft` says so).
+pub(crate) fn particles(soft: Option<bool>) -> String {
+    assemble(assemble::PARTICLES, &particle_defs(soft))
 }
 
 /// Mip blit shader: `vs_blit` / `fs_blit`, its own group 0.
-pub(crate) const BLIT: &str = include_str!("blit.wgsl");
+pub(crate) const BLIT: &str = assemble::BLIT;
 /// The post-processing passes (render/post.rs).
-pub(crate) const POST: &str = include_str!("post.wgsl");
+pub(crate) const POST: &str = assemble::POST;
 /// GPU frustum culling of a draw list (`render/gpu_cull.rs`).
-pub(crate) const CULL: &str = include_str!("cull.wgsl");
+pub(crate) const CULL: &str = assemble::CULL;
 /// The depth pyramid of occlusion culling (`render/occlusion.rs`).
-pub(crate) const PYRAMID: &str = include_str!("pyramid.wgsl");
+pub(crate) const PYRAMID: &str = assemble::PYRAMID;
 /// Screen-space ambient occlusion (`render/ambient_occlusion.rs`): its fragment passes.
-pub(crate) const SSAO: &str = include_str!("ssao.wgsl");
+pub(crate) const SSAO: &str = assemble::SSAO;
 /// Its compute passes, appended to [`SSAO`].
-pub(crate) const SSAO_COMPUTE: &str = include_str!("ssao_compute.wgsl");
+pub(crate) const SSAO_COMPUTE: &str = assemble::SSAO_COMPUTE;
 
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn every_combination_of_up_to_three_features_composes_and_validates() {
-        // Every #ifdef region and every interaction of up to three of them (the
-        // nesting is at most three deep), plus everything at once: exhaustive
-        // would be 2^bits, which grows too fast to keep.
-        let bits: Vec<u32> = ShaderFeatures::all().iter().map(|f| f.bits()).collect();
-        let mut sets = vec![0, ShaderFeatures::all().bits()];
-        for (i, a) in bits.iter().enumerate() {
-            for (j, b) in bits.iter().enumerate().skip(i) {
-                sets.extend(bits.iter().skip(j).map(|c| a | b | c));
-            }
-        }
-        // Each set with one of these light mixes in turn: no lights, each kind alone, both.
-        let mixes =
-            [(0, 0), (1, 0), (0, 1), (2, 3)].map(|(directional, positional)| LightCounts { directional, positional });
-        // Both ways of reading the arrays: storage buffers and data textures.
-        for storage in [true, false] {
-            let mut library = ShaderLibrary::new(storage);
-            for (k, &set) in sets.iter().enumerate() {
-                let features = ShaderFeatures::from_bits_truncate(set);
-                let lights = mixes[k % mixes.len()];
-                let module =
-                    library.forward(features, lights).unwrap_or_else(|e| panic!("{features:?} {lights:?}: {e}"));
-                let mut validator =
-                    wgpu::naga::valid::Validator::new(Default::default(), wgpu::naga::valid::Capabilities::all());
-                validator.validate(&module).unwrap_or_else(|e| panic!("{features:?} storage {storage}: {e:?}"));
-                let stored = (module.global_variables.iter())
-                    .filter(|(_, v)| matches!(v.space, wgpu::naga::AddressSpace::Storage { .. }))
-                    .count();
-                assert_eq!(stored == 0, !storage, "{features:?}: {stored} storage buffers");
-            }
-            library.sky().expect("sky composes");
-            library.prefilter().expect("prefilter composes");
-        }
-    }
-
-    #[test]
-    fn the_shaders_need_no_cube_map_capability() {
-        // Point lights' cubes are sampled as 2D layers, so adapters without cube-map
-        // arrays (NVIDIA's GL driver, WebGL2) take the same shader.
-        let without = wgpu::naga::valid::Capabilities::all() - wgpu::naga::valid::Capabilities::CUBE_ARRAY_TEXTURES;
-        let lights = LightCounts { directional: 1, positional: 1 };
-        let module = ShaderLibrary::new(true).forward(ShaderFeatures::all(), lights).expect("composes");
-        wgpu::naga::valid::Validator::new(Default::default(), without).validate(&module).expect("valid");
-        let cubes = module.global_variables.iter().filter(|(_, v)| {
-            matches!(
-                module.types[v.ty].inner,
-                wgpu::naga::TypeInner::Image { dim: wgpu::naga::ImageDimension::Cube, .. }
-            )
-        });
-        assert_eq!(cubes.count(), 0, "no cube-map bindings");
-    }
 
     #[test]
     fn light_counts_split_directional_from_point_and_spot_lights() {
@@ -388,6 +286,6 @@ mod tests {
         );
         m.fog = false;
         assert!(!ShaderFeatures::for_material(&m, &foggy).contains(ShaderFeatures::FOG));
-        assert_eq!(ShaderFeatures::FOG.shader_defs().keys().collect::<Vec<_>>(), vec!["FOG"]);
+        assert_eq!(ShaderFeatures::FOG.shader_defs().collect::<Vec<_>>(), vec!["FOG"]);
     }
 }
