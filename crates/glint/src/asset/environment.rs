@@ -147,7 +147,13 @@ pub(crate) fn decode_environment(bytes: &[u8], name: String, free: u64) -> Resul
     let reader = || image::ImageReader::new(Cursor::new(bytes)).with_guessed_format();
     let decoder = reader().map_err(|e| format!("cannot read environment: {e}"))?;
     match decoder.format() {
-        Some(image::ImageFormat::Hdr | image::ImageFormat::OpenExr) => {}
+        Some(image::ImageFormat::Hdr) => {}
+        Some(image::ImageFormat::OpenExr) if cfg!(feature = "exr") => {}
+        Some(image::ImageFormat::OpenExr) => {
+            return Err("OpenEXR environments are read where glint is built with its feature `exr` (the web page \
+                        is not): convert it to a Radiance .hdr"
+                .into())
+        }
         Some(other) => return Err(format!("expected a Radiance .hdr or OpenEXR image, found {other:?}")),
         None => return Err("expected a Radiance .hdr or OpenEXR image".into()),
     }
