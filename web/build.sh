@@ -15,19 +15,33 @@ fi
 # is too old for the reference types rustc now emits, and breaks the module.
 (cd web && npm ci --no-audit --no-fund --silent)
 
-cargo build --profile web --locked --target wasm32-unknown-unknown -p glint-web
 rm -rf web/dist
 mkdir -p web/dist
-wasm-bindgen --target web --no-typescript --out-dir web/dist target/wasm32-unknown-unknown/web/glint_web.wasm
-web/node_modules/.bin/wasm-opt -Oz --enable-reference-types --enable-bulk-memory --enable-nontrapping-float-to-int \
-  --enable-sign-ext --enable-mutable-globals --enable-multivalue --strip-debug --strip-producers \
-  web/dist/glint_web_bg.wasm -o web/dist/glint_web_bg.wasm
+# Two modules: glint_web_webgl2 (glint-web's feature `webgl`) and
+# glint_web_webgpu (`webgpu`: no wgpu-core and no naga, since glint's shaders
+# are WGSL made when glint is built). index.html loads the one the browser can use.
+for module in webgl2 webgpu; do
+  feature=webgpu
+  [ "$module" = webgl2 ] && feature=webgl
+  cargo build --profile web --locked --target wasm32-unknown-unknown -p glint-web --no-default-features --features "$feature"
+  wasm-bindgen --target web --no-typescript --out-dir web/dist --out-name "glint_web_$module" \
+    target/wasm32-unknown-unknown/web/glint_web.wasm
+  web/node_modules/.bin/wasm-opt -Oz --enable-reference-types --enable-bulk-memory --enable-nontrapping-float-to-int \
+    --enable-sign-ext --enable-mutable-globals --enable-multivalue --strip-debug --strip-producers \
+    "web/dist/glint_web_${module}_bg.wasm" -o "web/dist/glint_web_${module}_bg.wasm"
+done
 cp web/index.html web/dist/
 mkdir -p web/dist/scenes
 cp scenes/*.scn web/dist/scenes/
 cp -r assets web/dist/assets
 rm -rf web/dist/assets/fonts
-for file in glint_web_bg.wasm glint_web.js index.html; do
-  echo "web/dist/$file: $(wc -c < "web/dist/$file") bytes, gzipped $(gzip -9 < "web/dist/$file" | wc -c) bytes"
+# Gzipped bytes of files served one by one.
+gz() { local sum=0 f; for f in "$@"; do sum=$((sum + $(gzip -9 < "$f" | wc -c))); done; echo "$sum"; }
+for file in glint_web_webgl2_bg.wasm glint_web_webgl2.js glint_web_webgpu_bg.wasm glint_web_webgpu.js index.html; do
+  echo "web/dist/$file: $(wc -c < "web/dist/$file") bytes, gzipped $(gz "web/dist/$file") bytes"
 done
-echo "web/dist: $(du -sh web/dist | cut -f1); page (wasm + js + html): $(cat web/dist/glint_web_bg.wasm web/dist/glint_web.js web/dist/index.html | wc -c) bytes, gzipped $(cat web/dist/glint_web_bg.wasm web/dist/glint_web.js web/dist/index.html | gzip -9 | wc -c) bytes"
+# What a browser downloads: one module, its glue and the page.
+for module in webgl2 webgpu; do
+  files=("web/dist/glint_web_${module}_bg.wasm" "web/dist/glint_web_$module.js" web/dist/index.html)
+  echo "the $module page (wasm + js + html): $(cat "${files[@]}" | wc -c) bytes, gzipped $(gz "${files[@]}") bytes"
+done

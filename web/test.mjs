@@ -27,6 +27,40 @@ const browser = await chromium.launch({
     "--disable-background-networking", "--disable-component-update", "--disable-sync", "--no-first-run",
   ],
 });
+/** An init script timing the page's WebGL2 calls: milliseconds inside shader
+ * compiling and linking (with the status queries that wait for them), texture
+ * uploads, draws (where SwiftShader builds each program's pipeline on first
+ * use), and all WebGL calls; `window.glintWebGL.first` holds the sums at the
+ * first frame (data-frames turning 1). */
+function timeWebGL() {
+  const sums = { shaders: 0, textures: 0, draws: 0, gl: 0 };
+  const kinds = {
+    shaders: ["compileShader", "linkProgram", "getShaderParameter", "getProgramParameter"],
+    textures: ["texImage2D", "texSubImage2D", "texImage3D", "texSubImage3D", "texStorage2D", "texStorage3D", "generateMipmap"],
+    draws: ["drawArrays", "drawElements", "drawArraysInstanced", "drawElementsInstanced", "drawRangeElements"],
+  };
+  const proto = WebGL2RenderingContext.prototype;
+  for (const name of Object.getOwnPropertyNames(proto)) {
+    const d = Object.getOwnPropertyDescriptor(proto, name);
+    if (typeof d.value !== "function" || name === "constructor") continue;
+    const kind = Object.keys(kinds).find((k) => kinds[k].includes(name));
+    const call = d.value;
+    proto[name] = function (...args) {
+      const t = performance.now();
+      try { return call.apply(this, args); } finally {
+        const spent = performance.now() - t;
+        sums.gl += spent;
+        if (kind) sums[kind] += spent;
+      }
+    };
+  }
+  window.glintWebGL = { sums };
+  new MutationObserver((_, observer) => {
+    const canvas = document.getElementById("glint");
+    if (+canvas?.dataset.frames >= 1) { window.glintWebGL.first = { ...sums }; observer.disconnect(); }
+  }).observe(document, { attributes: true, subtree: true, attributeFilter: ["data-frames"] });
+}
+
 let passed = 0, failed = 0;
 const report = (ok, name, detail) => {
   ok ? passed++ : failed++;
@@ -66,6 +100,8 @@ for (const backend of backends) {
         continue;
       }
       const shown = await page.evaluate(() => document.getElementById("glint").dataset.backend);
+      // The module the page loaded (index.html): the WebGPU-only one for WebGPU.
+      const module = await page.evaluate(() => document.documentElement.dataset.module);
       // WebGPU culls on the GPU, WebGL2 (no compute) on the CPU.
       const culling = await page.evaluate(() => document.getElementById("glint").dataset.culling);
       // The frame as the renderer drew it, encoded as PNG by the browser.
@@ -95,28 +131,45 @@ for (const backend of backends) {
         verdict = `${e.stdout}${e.stderr}`.trim();
       }
       const expectedCulling = backend === "webgpu" ? "gpu" : "cpu";
-      if (shown !== expected || culling !== expectedCulling) ok = false;
-      report(ok, name, `${shown}, culled on the ${culling}, first frame ${Math.round(state.first)} ms after navigation; ${verdict}`);
+      if (shown !== expected || culling !== expectedCulling || module !== backend) ok = false;
+      report(ok, name, `${shown} (module ${module}), culled on the ${culling}, first frame ${Math.round(state.first)} ms after navigation; ${verdict}`);
     } finally {
       await page.close();
     }
   }
 }
 
+// Without ?backend= the page picks the WebGPU module where the browser offers
+// an adapter (this Chromium does), and runs on WebGPU.
+{
+  const { page, state, logs } = await open("scenes/showcase.scn", "");
+  try {
+    const module = await page.evaluate(() => document.documentElement.dataset.module);
+    const shown = state.error ? null : await page.evaluate(() => document.getElementById("glint").dataset.backend);
+    report(module === "webgpu" && shown === "WebGPU", "the page's own choice of module",
+      `module ${module}, backend ${shown}${state.error ? `: ${state.error}\n  ${logs.join("\n  ")}` : ""}`);
+  } finally {
+    await page.close();
+  }
+}
+
 // The showcase's startup, stage by stage as the page reports it (data-startup,
 // startup.rs), median of five loads on each backend; every stage must be there.
+// On WebGL2 the loads also time what the browser itself spends in its WebGL
+// calls (below): the floor under glint's "prepare" and "first frame" there.
 const STAGES = ["download", "instantiate", "gpu", "fetch", "load", "place", "waiting", "prepare", "first frame", "total"];
+const CALLS = ["shaders", "textures", "draws", "gl"];
 for (const backend of backends) {
   const loads = [];
   let why = "";
   for (let k = 0; k < 5 && !why; k++) {
-    const { page, state, logs } = await open("scenes/showcase.scn", backend);
+    const { page, state, logs } = await open("scenes/showcase.scn", backend, backend === "webgl2" ? timeWebGL : undefined);
     try {
       const reported = state.error ? null : await page.evaluate(() => document.getElementById("glint").dataset.startup);
       const stages = reported ? JSON.parse(reported) : {};
       const missing = STAGES.filter((s) => !Number.isFinite(stages[s]));
       if (state.error || missing.length) why = `${state.error ?? `missing ${missing.join(", ")}`}\n  ${logs.join("\n  ")}`;
-      else loads.push(stages);
+      else loads.push({ ...stages, ...(await page.evaluate(() => window.glintWebGL?.first ?? {})) });
     } finally {
       await page.close();
     }
@@ -125,8 +178,10 @@ for (const backend of backends) {
     const v = loads.map((l) => l[name]).sort((a, b) => a - b);
     return Math.round(v[v.length >> 1]);
   };
+  const calls = backend === "webgl2"
+    ? `; inside WebGL until the first frame: ${CALLS.map((c) => `${c} ${median(c)} ms`).join(", ")}` : "";
   report(!why, `the showcase's startup on ${backend}`,
-    why || `median of ${loads.length} loads: ${STAGES.map((s) => `${s} ${median(s)} ms`).join(", ")}`);
+    why || `median of ${loads.length} loads: ${STAGES.map((s) => `${s} ${median(s)} ms`).join(", ")}${calls}`);
 }
 
 // The meadow (animated, so not compared with glint render): a tenth of every tile

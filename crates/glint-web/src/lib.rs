@@ -1,7 +1,9 @@
 //! glint in the browser: the page `web/index.html` loads this wasm module,
 //! which draws `.scn` scenes fetched over HTTP into its canvas, on WebGPU where
 //! the browser has it and WebGL2 otherwise (the renderer's WebGL2 path, chosen
-//! from the adapter's capabilities), with the viewer's fly camera.
+//! from the adapter's capabilities), with the viewer's fly camera. It is built
+//! twice, with the feature `webgpu` or `webgl` (`web/build.sh`), and the page
+//! loads the module its browser can use.
 //!
 //! The page's query string may name `scene=PATH` (a demo scene by default),
 //! `backend=webgpu|webgl2` (default: WebGPU when there is an adapter), and

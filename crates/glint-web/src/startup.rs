@@ -60,13 +60,13 @@ impl Startup {
     }
 }
 
-/// When the module's last byte arrived (resource timing of `glint_web_bg.wasm`).
+/// When the module's last byte arrived (resource timing of `glint_web_*_bg.wasm`).
 fn module_downloaded() -> Option<f64> {
     let performance = web_sys::window()?.performance()?;
     let entries = performance.get_entries_by_type("resource");
     entries.iter().find_map(|entry| {
         let name = js_sys::Reflect::get(&entry, &"name".into()).ok()?.as_string()?;
         let end = js_sys::Reflect::get(&entry, &"responseEnd".into()).ok()?.as_f64()?;
-        name.ends_with("glint_web_bg.wasm").then_some(end)
+        name.ends_with("_bg.wasm").then_some(end)
     })
 }
