@@ -28,24 +28,30 @@ const browser = await chromium.launch({
   ],
 });
 /** An init script timing the page's WebGL2 calls: milliseconds inside shader
- * compiling and linking (with the status queries that wait for them), texture
- * uploads, draws (where SwiftShader builds each program's pipeline on first
- * use), and all WebGL calls; `window.glintWebGL.first` holds the sums at the
- * first frame (data-frames turning 1). */
+ * compiling and linking (with the status queries and each program's first
+ * useProgram, where Chromium waits for its link), texture uploads, draws, and
+ * all WebGL calls, and the programs linked; `window.glintWebGL.first` holds
+ * the sums at the first frame (data-frames turning 1). */
 function timeWebGL() {
-  const sums = { shaders: 0, textures: 0, draws: 0, gl: 0 };
+  const sums = { shaders: 0, textures: 0, draws: 0, gl: 0, programs: 0 };
   const kinds = {
     shaders: ["compileShader", "linkProgram", "getShaderParameter", "getProgramParameter"],
     textures: ["texImage2D", "texSubImage2D", "texImage3D", "texSubImage3D", "texStorage2D", "texStorage3D", "generateMipmap"],
     draws: ["drawArrays", "drawElements", "drawArraysInstanced", "drawElementsInstanced", "drawRangeElements"],
   };
+  const used = new WeakSet();
   const proto = WebGL2RenderingContext.prototype;
   for (const name of Object.getOwnPropertyNames(proto)) {
     const d = Object.getOwnPropertyDescriptor(proto, name);
     if (typeof d.value !== "function" || name === "constructor") continue;
-    const kind = Object.keys(kinds).find((k) => kinds[k].includes(name));
     const call = d.value;
     proto[name] = function (...args) {
+      let kind = Object.keys(kinds).find((k) => kinds[k].includes(name));
+      if (name === "useProgram" && args[0] && !used.has(args[0])) {
+        used.add(args[0]);
+        kind = "shaders";
+      }
+      if (name === "linkProgram") sums.programs++;
       const t = performance.now();
       try { return call.apply(this, args); } finally {
         const spent = performance.now() - t;
@@ -158,7 +164,7 @@ for (const backend of backends) {
 // On WebGL2 the loads also time what the browser itself spends in its WebGL
 // calls (below): the floor under glint's "prepare" and "first frame" there.
 const STAGES = ["download", "instantiate", "gpu", "fetch", "load", "place", "waiting", "prepare", "first frame", "total"];
-const CALLS = ["shaders", "textures", "draws", "gl"];
+const CALLS = ["shaders", "textures", "draws", "gl"];  // and "programs", a count
 for (const backend of backends) {
   const loads = [];
   let why = "";
@@ -179,7 +185,8 @@ for (const backend of backends) {
     return Math.round(v[v.length >> 1]);
   };
   const calls = backend === "webgl2"
-    ? `; inside WebGL until the first frame: ${CALLS.map((c) => `${c} ${median(c)} ms`).join(", ")}` : "";
+    ? `; inside WebGL until the first frame: ${CALLS.map((c) => `${c} ${median(c)} ms`).join(", ")}` +
+      ` (${median("programs")} programs linked)` : "";
   report(!why, `the showcase's startup on ${backend}`,
     why || `median of ${loads.length} loads: ${STAGES.map((s) => `${s} ${median(s)} ms`).join(", ")}${calls}`);
 }
