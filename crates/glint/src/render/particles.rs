@@ -10,7 +10,7 @@
 //! call a layer, whatever its count.
 
 use super::explain::DrawCall;
-use super::{RenderError, Renderer};
+use super::Renderer;
 use crate::asset::Texture;
 use crate::gpu::TargetFormat;
 pub use crate::scene::ParticleBlend;
@@ -136,9 +136,9 @@ impl ParticlePipelines {
 
     /// Build the pipeline of `key` unless it exists; returns whether it was
     /// built now.
-    fn build(&mut self, device: &wgpu::Device, (target, blend, soft): PipelineKey) -> Result<bool, RenderError> {
+    fn build(&mut self, device: &wgpu::Device, (target, blend, soft): PipelineKey) -> bool {
         if self.cache.contains_key(&(target, blend, soft)) {
-            return Ok(false);
+            return false;
         }
         let variant = soft.then_some(target.samples > 1);
         let module = match self.modules.entry(variant) {
@@ -202,7 +202,7 @@ impl ParticlePipelines {
             cache: None,
         });
         self.cache.insert((target, blend, soft), pipeline);
-        Ok(true)
+        true
     }
 }
 
@@ -269,20 +269,14 @@ impl Renderer {
 
     /// Stage 1 for particles: the pipelines of every layer for `target` (a
     /// soft layer's both ways where depth is readable: a view's target may not be).
-    pub(super) fn prepare_particles(
-        &mut self,
-        target: TargetFormat,
-        stats: &mut FrameStats,
-    ) -> Result<(), RenderError> {
+    pub(super) fn prepare_particles(&mut self, target: TargetFormat, stats: &mut FrameStats) {
         let registry = &mut self.registry;
         for layer in self.particle_layers.iter().filter(|l| l.count > 0) {
             for soft in [false, layer.soft > 0.0 && self.particle_pipelines.soft] {
-                let key = (target, layer.blend, soft);
-                let built = self.particle_pipelines.build(&registry.device, key)?;
+                let built = self.particle_pipelines.build(&registry.device, (target, layer.blend, soft));
                 stats.pipelines_compiled += u32::from(built);
             }
         }
-        Ok(())
     }
 
     /// The scene depth a frame's soft layers read from `target`, when some

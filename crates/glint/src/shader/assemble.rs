@@ -39,7 +39,7 @@ impl Defs {
 /// When a `#{DEF}` the selected segments need has no value in `defs`: a bug in
 /// glint, which names each valued def it uses.
 pub(crate) fn assemble(shader: &[Segment], defs: &Defs) -> String {
-    let mut wgsl = String::with_capacity(shader.iter().map(|s| s.len()).sum());
+    let mut wgsl = String::new();
     for segment in shader.iter().filter(|s| s.when.iter().all(|&(def, wanted)| defs.is_set(def) == wanted)) {
         match segment.piece {
             Piece::Text(text) => wgsl.push_str(text),
@@ -51,13 +51,4 @@ pub(crate) fn assemble(shader: &[Segment], defs: &Defs) -> String {
         }
     }
     wgsl
-}
-
-impl Segment {
-    fn len(&self) -> usize {
-        match self.piece {
-            Piece::Text(text) => text.len(),
-            Piece::Value(_) => 10,
-        }
-    }
 }
