@@ -1,6 +1,6 @@
 //! Loading a scene over HTTP: the scene is loaded from a [`FileSet`] in memory,
-//! and whatever the load asked for and the set lacked is fetched (relative to
-//! the page) before loading again, round by round, as the loader's own checks
+//! and whatever the load asked for and the set lacked is fetched (all of it at
+//! once, relative to the page) before loading again, round by round, as the loader's own checks
 //! allow: paths stay under the page's folder, each file within its kind's size
 //! limit, the whole within one scene's total. A file the server does not have
 //! stays missing and is reported by the loader with its `file:line`.
@@ -12,10 +12,11 @@ use std::sync::Arc;
 use wasm_bindgen::JsCast;
 use wasm_bindgen_futures::JsFuture;
 
-/// Rounds of fetching. A load stops at the first file the set lacks, so each
-/// round may find one more: the meadow's five models and their material
-/// libraries take eleven. Every round fetches a file not asked for before, so
-/// the rounds end; this bounds how many files one scene may name.
+/// Rounds of fetching. A load goes past a file the set lacks to the next
+/// texture or block, so a round finds every file the files of the last round
+/// name: the showcase takes three rounds (the scene, then its environment and
+/// textures together). Every round fetches a file not asked for before, so the
+/// rounds end; this bounds how deep one scene's files may name others.
 const MAX_ROUNDS: usize = 64;
 
 /// Largest file fetched at all (the loader's largest limit, a model or buffer).
@@ -38,8 +39,11 @@ pub async fn load(path: &str, fetching: &mut f64) -> Result<SceneDesc, String> {
             return result.map_err(|e| e.to_string());
         }
         let started = super::startup::now();
-        for file in missing {
-            if let Some(bytes) = fetch(&file).await? {
+        // Every request is sent before the first answer is read.
+        let requests =
+            missing.into_iter().map(|file| request(&file).map(|r| (file, r))).collect::<Result<Vec<_>, _>>()?;
+        for (file, request) in requests {
+            if let Some(bytes) = request.receive().await? {
                 set.insert(&file, bytes);
             }
         }
@@ -52,21 +56,35 @@ pub async fn load(path: &str, fetching: &mut f64) -> Result<SceneDesc, String> {
     Err(format!("{}: still naming new files after {MAX_ROUNDS} rounds of fetching", path.display()))
 }
 
-/// The file at `path` under the page, or `None` when the server has none.
-async fn fetch(path: &Path) -> Result<Option<Vec<u8>>, String> {
+/// A request sent for one file under the page.
+struct Request {
+    url: String,
+    response: JsFuture,
+}
+
+/// Send the request for the file at `path` under the page.
+fn request(path: &Path) -> Result<Request, String> {
     let url: Vec<String> = path.components().map(|c| c.as_os_str().to_string_lossy().into_owned()).collect();
     let url = url.join("/");
     let window = web_sys::window().ok_or("no window")?;
-    let failed = |e: wasm_bindgen::JsValue| format!("{url}: cannot fetch: {e:?}");
-    let response: web_sys::Response =
-        JsFuture::from(window.fetch_with_str(&url)).await.map_err(failed)?.dyn_into().map_err(failed)?;
-    if !response.ok() {
-        return Ok(None);
+    let response = JsFuture::from(window.fetch_with_str(&url));
+    Ok(Request { url, response })
+}
+
+impl Request {
+    /// The file's bytes, or `None` when the server has none.
+    async fn receive(self) -> Result<Option<Vec<u8>>, String> {
+        let url = self.url;
+        let failed = |e: wasm_bindgen::JsValue| format!("{url}: cannot fetch: {e:?}");
+        let response: web_sys::Response = self.response.await.map_err(failed)?.dyn_into().map_err(failed)?;
+        if !response.ok() {
+            return Ok(None);
+        }
+        let length = response.headers().get("content-length").ok().flatten().and_then(|l| l.parse::<f64>().ok());
+        if length.is_some_and(|l| l > MAX_FETCH_BYTES) {
+            return Err(format!("{url}: larger than the {MAX_FETCH_BYTES}-byte limit for any file"));
+        }
+        let body = JsFuture::from(response.array_buffer().map_err(failed)?).await.map_err(failed)?;
+        Ok(Some(js_sys::Uint8Array::new(&body).to_vec()))
     }
-    let length = response.headers().get("content-length").ok().flatten().and_then(|l| l.parse::<f64>().ok());
-    if length.is_some_and(|l| l > MAX_FETCH_BYTES) {
-        return Err(format!("{url}: larger than the {MAX_FETCH_BYTES}-byte limit for any file"));
-    }
-    let body = JsFuture::from(response.array_buffer().map_err(failed)?).await.map_err(failed)?;
-    Ok(Some(js_sys::Uint8Array::new(&body).to_vec()))
 }

@@ -5,23 +5,25 @@
 mod common;
 
 use glint::asset::{load_scene_with, FileSet, Files, LoadOptions, SceneDesc};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 /// Load `scene` (a path under the repository root) from a set filled from
 /// disk round by round, as a page fetching over HTTP would; returns the scene
-/// and the rounds it took.
-fn load_from_memory(set: &Arc<FileSet>, scene: &str) -> (Result<SceneDesc, glint::Diagnostic>, usize) {
+/// and the files each round fetched.
+fn load_from_memory(set: &Arc<FileSet>, scene: &str) -> (Result<SceneDesc, glint::Diagnostic>, Vec<Vec<PathBuf>>) {
     let options = LoadOptions { files: Files::Memory(set.clone()), ..Default::default() };
     let root = common::repo_root();
-    for round in 1..=8 {
+    let mut rounds = Vec::new();
+    for _ in 1..=8 {
         let result = load_scene_with(Path::new(scene), options.clone());
         let missing = set.take_missing();
         let fetched: Vec<_> = missing.iter().filter_map(|p| Some((p, std::fs::read(root.join(p)).ok()?))).collect();
         // A missing file may be only a warning (an MTL, a texture): go on while any was found.
         if fetched.is_empty() {
-            return (result, round);
+            return (result, rounds);
         }
+        rounds.push(fetched.iter().map(|(p, _)| p.to_path_buf()).collect());
         for (path, bytes) in fetched {
             set.insert(path, bytes);
         }
@@ -55,7 +57,13 @@ fn a_scene_with_textures_and_models_loads_from_memory_as_from_disk() {
     set.insert(Path::new("demo/mixed.scn"), text.into_bytes());
     let (scene, rounds) = load_from_memory(&set, "demo/mixed.scn");
     let scene = scene.unwrap_or_else(|e| panic!("{e}"));
-    assert!(rounds >= 3, "the scene, then its models and textures, then the models' files: {rounds} rounds");
+    // A load goes past a file the set lacks: the first pass asks for both of
+    // the material's textures and both models at once, the next for the
+    // models' own files (the glTF's buffer, the OBJ's MTL), the last for the MTL's mask.
+    let first = ["assets/textures/tiles.png", "assets/textures/tiles_normal.png", "tests/models/animated.gltf"];
+    let first: Vec<PathBuf> = first.iter().chain(&["tests/models/cutout.obj"]).map(PathBuf::from).collect();
+    assert_eq!(rounds.first(), Some(&first), "{rounds:?}");
+    assert_eq!(rounds.len(), 3, "{rounds:?}");
     assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
     // What came from memory is what the same files give from disk.
     let root = common::repo_root();
@@ -74,6 +82,25 @@ fn a_scene_with_textures_and_models_loads_from_memory_as_from_disk() {
         assert_eq!(model.animations.len(), disk.animations.len(), "{file}");
     }
     assert!(!scene.models[1].textures.is_empty(), "the textures its MTL names");
+}
+
+#[test]
+fn the_showcase_asks_for_its_four_files_in_one_pass_and_loads_as_from_disk() {
+    let set = Arc::new(FileSet::default());
+    let scene = "scenes/showcase.scn";
+    set.insert(Path::new(scene), std::fs::read(common::repo_root().join(scene)).expect("the showcase"));
+    let (loaded, rounds) = load_from_memory(&set, scene);
+    let loaded = loaded.unwrap_or_else(|e| panic!("{e}"));
+    // Its environment and its three textures, in two blocks, asked for in one pass.
+    assert_eq!(rounds.len(), 1, "{rounds:?}");
+    assert_eq!(rounds[0].len(), 4, "{rounds:?}");
+    let disk = common::load_scene(&common::repo_root().join(scene));
+    assert_eq!(loaded.textures.len(), disk.textures.len());
+    assert!(loaded.textures.iter().zip(&disk.textures).all(|(a, b)| a.image == b.image && a.srgb == b.srgb));
+    let (a, b) = (loaded.environment_image.expect("environment"), disk.environment_image.expect("environment"));
+    assert!(a.pixels() == b.pixels());
+    assert_eq!(loaded.entities.len(), disk.entities.len());
+    assert_eq!(loaded.materials.len(), disk.materials.len());
 }
 
 #[test]

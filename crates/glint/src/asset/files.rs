@@ -60,6 +60,17 @@ impl Files {
         }
     }
 
+    /// How many reads have found the memory set lacking their file (always 0
+    /// from disk). A load that sees this grow across a step knows the step
+    /// failed for want of a file the page has yet to fetch, and may go on to
+    /// find the others in the same pass (`.scn` blocks and textures do).
+    pub(crate) fn misses(&self) -> usize {
+        match self {
+            Files::Disk => 0,
+            Files::Memory(set) => set.misses.load(std::sync::atomic::Ordering::Relaxed),
+        }
+    }
+
     /// The size of the file at `path`, 0 when it cannot be had.
     pub(crate) fn size(&self, path: &Path) -> u64 {
         match self {
@@ -76,6 +87,7 @@ impl Files {
 pub struct FileSet {
     files: Mutex<HashMap<PathBuf, Arc<[u8]>>>,
     missing: Mutex<BTreeSet<PathBuf>>,
+    misses: std::sync::atomic::AtomicUsize,
 }
 
 impl FileSet {
@@ -102,6 +114,7 @@ impl FileSet {
         let key = normal(path);
         let Some(bytes) = self.lock().get(&key).cloned() else {
             self.missing.lock().unwrap_or_else(|e| e.into_inner()).insert(key);
+            self.misses.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
             return Err(Diagnostic::file(path, "cannot read: not found"));
         };
         if bytes.len() as u64 > limit {

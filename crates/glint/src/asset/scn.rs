@@ -95,13 +95,17 @@ pub fn parse_scene_with(path: &Path, text: &str, options: LoadOptions) -> Result
         camera_lines: Vec::new(),
         targets: scn_targets::Targets::default(),
         time_of_day: None,
+        deferred: None,
     };
     loader.time_of_day = loader.options.time_of_day;
     // Render targets first, so cameras and materials may name one defined
     // anywhere in the file (as materials are named by entities).
     let is_target = |b: &&Block| b.pairs.iter().any(|p| p.key == "classname" && p.value.trim() == "render_target");
     for block in blocks.iter().filter(is_target).chain(blocks.iter().filter(|b| !is_target(b))) {
-        loader.block(block)?;
+        let misses = loader.assets.files.misses();
+        if let Err(error) = loader.block(block) {
+            loader.defer(error, misses)?;
+        }
     }
     loader.finish()
 }
@@ -148,6 +152,8 @@ pub(super) struct Loader<'a> {
     targets: scn_targets::Targets,
     /// The world's `time_of_day`, applied once every light is read.
     time_of_day: Option<f32>,
+    /// The first error that came of a file the memory set lacks ([`Loader::defer`]).
+    deferred: Option<Diagnostic>,
 }
 
 /// A camera's `ssao`, `ssao_radius` and `ssao_intensity` (the last two read
@@ -395,9 +401,26 @@ impl Loader<'_> {
             .assets
             .resolve(pair.value.trim(), self.path)
             .map_err(|e| Diagnostic::at(self.path, pair.line, format!("\"{key}\": {}", e.message)))?;
-        self.textures
-            .get_or_decode(file.clone(), srgb, |free| read_texture(&file, srgb, free, &self.assets.files).map_err(fail))
-            .map(Some)
+        let misses = self.assets.files.misses();
+        let decoded =
+            self.textures.get_or_decode(file.clone(), srgb, |free| read_texture(&file, srgb, free, &self.assets.files));
+        match decoded {
+            Ok(texture) => Ok(Some(texture)),
+            Err(error) => self.defer(fail(error), misses).map(|()| None),
+        }
+    }
+
+    /// Keep `error` for the end of the load when a read since the set's count
+    /// was `misses` found the memory set lacking its file, and go on; otherwise
+    /// it is the load's error. A page fetches what the set lacked and loads
+    /// again, so going on finds every file a pass can name (a block's textures,
+    /// every block's models) instead of one a pass.
+    fn defer(&mut self, error: Diagnostic, misses: usize) -> Result<(), Diagnostic> {
+        if self.assets.files.misses() == misses {
+            return Err(error);
+        }
+        self.deferred.get_or_insert(error);
+        Ok(())
     }
 
     fn material(&mut self, f: &mut Fields) -> Result<(), Diagnostic> {
@@ -611,6 +634,9 @@ impl Loader<'_> {
 
     /// Resolve material names and gather placements into one task per (mesh, material, render order).
     fn finish(mut self) -> Result<SceneDesc, Diagnostic> {
+        if let Some(error) = self.deferred {
+            return Err(error);
+        }
         if let Some(hours) = self.time_of_day {
             self.scene.set_time_of_day(hours);
         }
