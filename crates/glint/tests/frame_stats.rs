@@ -387,6 +387,30 @@ fn shadow_lookups_are_compiled_in_only_for_frames_that_draw_shadow_maps() {
 }
 
 #[test]
+fn a_textured_and_a_plain_material_share_their_shadow_pipelines_unless_alpha_tested() {
+    // A shadow map needs positions only, and an alpha test's inputs where there
+    // is one: every program fewer is one fewer to compile before a WebGL2 page's first frame.
+    let Some(gpu) = common::gpu() else { return };
+    let (mut r, cube, plain) = renderer_with_cube(gpu);
+    let map =
+        r.add_texture(Texture::new("t", image::RgbaImage::from_pixel(2, 2, image::Rgba([200, 90, 40, 255])), true));
+    let textured = r.add_material(Material { diffuse_map: Some(map), ..Material::default() });
+    let cut = r.add_material(Material {
+        diffuse_map: Some(map),
+        alpha_mode: AlphaMode::Mask { cutoff: 0.5 },
+        ..Material::default()
+    });
+    let shadowed: Vec<Light> = sun().into_iter().map(|l| l.with_shadows(glint::ShadowSettings::default())).collect();
+    let at = |x: f32| Mat4::from_translation(Vec3::new(x, 0.0, 0.0));
+    let (a, b, c) =
+        (Entity::new(cube, plain, at(-1.5)), Entity::new(cube, textured, at(0.0)), Entity::new(cube, cut, at(1.5)));
+    let first = frame(&mut r, gpu, &[&a, &b], &shadowed);
+    assert_eq!(first.pipelines_compiled, 3, "two forward variants and one depth pipeline for both");
+    let masked = frame(&mut r, gpu, &[&a, &b, &c], &shadowed);
+    assert_eq!(masked.pipelines_compiled, 2, "the alpha-tested material's forward and depth pipelines");
+}
+
+#[test]
 fn a_frame_with_shadows_and_a_post_chain_is_one_submission_its_debug_groups_nested_like_its_outline() {
     let Some(gpu) = common::gpu() else { return };
     one_submission_nested_like_the_outline(gpu);

@@ -370,20 +370,19 @@ impl Pipelines {
 
     /// The key of the shadow pipeline drawing what `forward` draws into a shadow
     /// map of `pass` (or ambient occlusion's pre-pass): only the features that
-    /// move vertices or discard fragments stay; depth writes, one sample, no
-    /// colour (the pre-pass: its normal-and-distance target).
+    /// move vertices, and for an alpha-tested material those its test reads,
+    /// stay (so a textured and a plain material share one shadow pipeline:
+    /// fewer programs to compile before a WebGL2 page's first frame); depth
+    /// writes, one sample, no colour (the pre-pass: its normal-and-distance target).
     pub(crate) fn shadow_key(forward: PipelineKey, pass: PassKind) -> PipelineKey {
         debug_assert!(pass != PassKind::Forward);
-        let kept = ShaderFeatures::ALPHA_MASK
+        let moving = ShaderFeatures::SKINNED | ShaderFeatures::COMPACT | ShaderFeatures::MOTION;
+        let tested = ShaderFeatures::ALPHA_MASK
             | ShaderFeatures::DIFFUSE_MAP
             | ShaderFeatures::VERTEX_COLOR
-            | ShaderFeatures::UV1
-            | ShaderFeatures::SKINNED
-            | ShaderFeatures::COMPACT
-            | ShaderFeatures::MOTION;
+            | ShaderFeatures::UV1;
         let mask = forward.features.contains(ShaderFeatures::ALPHA_MASK);
-        let features =
-            if mask { forward.features & kept } else { forward.features & !ShaderFeatures::ALPHA_MASK & kept };
+        let features = forward.features & if mask { moving | tested } else { moving };
         let states = RenderStates {
             depth: crate::scene::DepthState { compare: Compare::Less, write: true },
             raster: crate::scene::RasterState {
