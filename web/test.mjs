@@ -28,14 +28,16 @@ const browser = await chromium.launch({
   ],
 });
 /** An init script timing the page's WebGL2 calls: milliseconds inside shader
- * compiling and linking (with the status queries and each program's first
- * useProgram, where Chromium waits for its link), texture uploads, draws, and
- * all WebGL calls, and the programs linked; `window.glintWebGL.first` holds
- * the sums at the first frame (data-frames turning 1). */
+ * compiling and linking with their status queries ("compile"), inside each
+ * program's first useProgram ("first use": Chromium waits there for the link,
+ * and for everything queued before it, so the first frame's present waits there
+ * for the GPU process to draw the frame), texture uploads, draws, and all WebGL
+ * calls, and the programs linked; `window.glintWebGL.first` holds the sums at
+ * the first frame (data-frames turning 1). */
 function timeWebGL() {
-  const sums = { shaders: 0, textures: 0, draws: 0, gl: 0, programs: 0 };
+  const sums = { compile: 0, "first use": 0, textures: 0, draws: 0, gl: 0, programs: 0 };
   const kinds = {
-    shaders: ["compileShader", "linkProgram", "getShaderParameter", "getProgramParameter"],
+    compile: ["compileShader", "linkProgram", "getShaderParameter", "getProgramParameter"],
     textures: ["texImage2D", "texSubImage2D", "texImage3D", "texSubImage3D", "texStorage2D", "texStorage3D", "generateMipmap"],
     draws: ["drawArrays", "drawElements", "drawArraysInstanced", "drawElementsInstanced", "drawRangeElements"],
   };
@@ -49,7 +51,7 @@ function timeWebGL() {
       let kind = Object.keys(kinds).find((k) => kinds[k].includes(name));
       if (name === "useProgram" && args[0] && !used.has(args[0])) {
         used.add(args[0]);
-        kind = "shaders";
+        kind = "first use";
       }
       if (name === "linkProgram") sums.programs++;
       const t = performance.now();
@@ -67,17 +69,56 @@ function timeWebGL() {
   }).observe(document, { attributes: true, subtree: true, attributeFilter: ["data-frames"] });
 }
 
+/** An init script noting when each of the first three frames is presented
+ * (data-frames turning 1, 2, 3: `window.glintFrames`, ms) and when the GPU
+ * has finished drawing the first (`window.glintDrawn`): its present returns
+ * once its work is queued, and a software GPU draws it afterwards. WebGPU:
+ * every queue submitted to is asked onSubmittedWorkDone; WebGL2: a fence,
+ * polled. Neither blocks the page. */
+function timeFrames() {
+  window.glintFrames = [];
+  const queues = new Set();
+  let gl = null;
+  if (window.GPUQueue) {
+    const submit = GPUQueue.prototype.submit;
+    GPUQueue.prototype.submit = function (...args) { queues.add(this); return submit.apply(this, args); };
+  }
+  const getContext = HTMLCanvasElement.prototype.getContext;
+  HTMLCanvasElement.prototype.getContext = function (kind, ...rest) {
+    const context = getContext.call(this, kind, ...rest);
+    if (kind === "webgl2" && context) gl = context;
+    return context;
+  };
+  new MutationObserver((_, observer) => {
+    const frames = +document.getElementById("glint")?.dataset.frames;
+    if (frames > window.glintFrames.length && frames <= 3) window.glintFrames.push(performance.now());
+    if (frames === 1 && window.glintDrawn === undefined) {
+      window.glintDrawn = null;
+      if (gl) {
+        const fence = gl.fenceSync(gl.SYNC_GPU_COMMANDS_COMPLETE, 0);
+        gl.flush();
+        const poll = () => gl.getSyncParameter(fence, gl.SYNC_STATUS) === gl.SIGNALED
+          ? (window.glintDrawn = performance.now()) : setTimeout(poll, 5);
+        poll();
+      } else {
+        Promise.all([...queues].map((q) => q.onSubmittedWorkDone())).then(() => { window.glintDrawn = performance.now(); });
+      }
+    }
+    if (window.glintFrames.length >= 3) observer.disconnect();
+  }).observe(document, { attributes: true, subtree: true, attributeFilter: ["data-frames"] });
+}
+
 let passed = 0, failed = 0;
 const report = (ok, name, detail) => {
   ok ? passed++ : failed++;
   console.log(`${ok ? "ok  " : "FAIL"} ${name}: ${detail}`);
 };
 
-/** Open the page on `scene` and `backend` (running `init` before the page's own scripts,
+/** Open the page on `scene` and `backend` (running the `init` scripts before the page's own,
  * adding `query` to the address); wait for 3 frames or an error. */
-async function open(scene, backend, init, query = "") {
+async function open(scene, backend, init = [], query = "") {
   const page = await browser.newPage({ viewport: { width: size[0] + 40, height: size[1] + 120 } });
-  if (init) await page.addInitScript(init);
+  for (const script of init) await page.addInitScript(script);
   const logs = [];
   page.on("console", (m) => logs.push(`${m.type()}: ${m.text()}`));
   page.on("pageerror", (e) => logs.push(`pageerror: ${e.message}`));
@@ -162,20 +203,30 @@ for (const backend of backends) {
 // The showcase's startup, stage by stage as the page reports it (data-startup,
 // startup.rs), median of five loads on each backend; every stage must be there.
 // On WebGL2 the loads also time what the browser itself spends in its WebGL
-// calls (below): the floor under glint's "prepare" and "first frame" there.
+// calls (timeWebGL): the floor under glint's "prepare" and "first frame" there.
+// "total" ends when the first frame is presented, its work queued; the GPU
+// (SwiftShader, on the CPU) draws it afterwards: when it has (timeFrames) is
+// printed beside, and the second and third frames' mean time.
 const STAGES = ["download", "instantiate", "gpu", "fetch", "load", "place", "waiting", "prepare", "first frame", "total"];
-const CALLS = ["shaders", "textures", "draws", "gl"];  // and "programs", a count
+const CALLS = ["compile", "first use", "textures", "draws", "gl"];  // and "programs", a count
 for (const backend of backends) {
   const loads = [];
   let why = "";
   for (let k = 0; k < 5 && !why; k++) {
-    const { page, state, logs } = await open("scenes/showcase.scn", backend, backend === "webgl2" ? timeWebGL : undefined);
+    const init = backend === "webgl2" ? [timeFrames, timeWebGL] : [timeFrames];
+    const { page, state, logs } = await open("scenes/showcase.scn", backend, init);
     try {
       const reported = state.error ? null : await page.evaluate(() => document.getElementById("glint").dataset.startup);
       const stages = reported ? JSON.parse(reported) : {};
       const missing = STAGES.filter((s) => !Number.isFinite(stages[s]));
       if (state.error || missing.length) why = `${state.error ?? `missing ${missing.join(", ")}`}\n  ${logs.join("\n  ")}`;
-      else loads.push({ ...stages, ...(await page.evaluate(() => window.glintWebGL?.first ?? {})) });
+      else {
+        const [one, , three] = await page.evaluate(() => window.glintFrames);
+        const later = (three - one) / 2;
+        await page.waitForFunction(() => Number.isFinite(window.glintDrawn), null, { timeout: 90_000 });
+        const drawn = await page.evaluate(() => window.glintDrawn);
+        loads.push({ ...stages, later, drawn, ...(await page.evaluate(() => window.glintWebGL?.first ?? {})) });
+      }
     } finally {
       await page.close();
     }
@@ -188,7 +239,8 @@ for (const backend of backends) {
     ? `; inside WebGL until the first frame: ${CALLS.map((c) => `${c} ${median(c)} ms`).join(", ")}` +
       ` (${median("programs")} programs linked)` : "";
   report(!why, `the showcase's startup on ${backend}`,
-    why || `median of ${loads.length} loads: ${STAGES.map((s) => `${s} ${median(s)} ms`).join(", ")}${calls}`);
+    why || `median of ${loads.length} loads: ${STAGES.map((s) => `${s} ${median(s)} ms`).join(", ")}${calls}; ` +
+      `the first frame drawn by the GPU ${median("drawn")} ms after navigation; later frames ${median("later")} ms each`);
 }
 
 // The meadow (animated, so not compared with glint render): a tenth of every tile
@@ -324,7 +376,7 @@ for (const backend of backends) {
       return (window.glintTestDevice = await request.apply(this, args));
     };
   };
-  const { page, state } = await open("scenes/split.scn", "webgpu", keepDevice);
+  const { page, state } = await open("scenes/split.scn", "webgpu", [keepDevice]);
   await page.evaluate(() => window.glintTestDevice.destroy());
   const text = await page
     .waitForFunction(() => document.getElementById("glint").dataset.error, null, { timeout: 30_000 })
