@@ -1,7 +1,7 @@
 //! Loading a scene over HTTP: the scene is loaded from a [`FileSet`] in memory,
 //! and whatever the load asked for and the set lacked is fetched (all of it at
-//! once, relative to the page) before loading again, round by round, as the loader's own checks
-//! allow: paths stay under the page's folder, each file within its kind's size
+//! once, relative to the page) before loading again, round by round, as the
+//! loader's own checks allow: paths stay under the page's folder, each file within its kind's size
 //! limit, the whole within one scene's total. A file the server does not have
 //! stays missing and is reported by the loader with its `file:line`.
 
@@ -13,9 +13,9 @@ use wasm_bindgen::JsCast;
 use wasm_bindgen_futures::JsFuture;
 
 /// Rounds of fetching. A load goes past a file the set lacks to the next
-/// texture or block, so a round finds every file the files of the last round
-/// name: the showcase takes three rounds (the scene, then its environment and
-/// textures together). Every round fetches a file not asked for before, so the
+/// texture or block, so a round fetches every file the files of the last round
+/// name: the showcase takes two (the scene, then its environment and textures
+/// together). Every round fetches a file not asked for before, so the
 /// rounds end; this bounds how deep one scene's files may name others.
 const MAX_ROUNDS: usize = 64;
 
