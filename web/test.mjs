@@ -207,7 +207,7 @@ for (const backend of backends) {
 // "total" ends when the first frame is presented, its work queued; the GPU
 // (SwiftShader, on the CPU) draws it afterwards: when it has (timeFrames) is
 // printed beside, and the second and third frames' mean time.
-const STAGES = ["download", "instantiate", "gpu", "fetch", "load", "place", "waiting", "prepare", "first frame", "total"];
+const STAGES = ["download", "instantiate", "gpu", "fetch", "decode", "load", "place", "waiting", "prepare", "first frame", "total"];
 const CALLS = ["compile", "first use", "textures", "draws", "gl"];  // and "programs", a count
 for (const backend of backends) {
   const loads = [];

@@ -3,7 +3,9 @@
 //! once, relative to the page) before loading again, round by round, as the
 //! loader's own checks allow: paths stay under the page's folder, each file within its kind's size
 //! limit, the whole within one scene's total. A file the server does not have
-//! stays missing and is reported by the loader with its `file:line`.
+//! stays missing and is reported by the loader with its `file:line`. The
+//! browser decodes the PNG and JPEG images a load asks for in the same rounds
+//! ([`super::decode`]).
 
 use glint::asset::{load_scene_with, FileSet, Files, LoadOptions, Model, SceneDesc, MAX_SCENE_TOTAL_BYTES};
 use std::collections::HashSet;
@@ -12,20 +14,30 @@ use std::sync::Arc;
 use wasm_bindgen::JsCast;
 use wasm_bindgen_futures::JsFuture;
 
-/// Rounds of fetching. A load goes past a file the set lacks to the next
-/// texture or block, so a round fetches every file the files of the last round
-/// name: the showcase takes two (the scene, then its environment and textures
-/// together). Every round fetches a file not asked for before, so the
-/// rounds end; this bounds how deep one scene's files may name others.
+/// Rounds of fetching. A load goes past a file the set lacks (or an image not
+/// yet decoded) to the next texture or block, so a round fetches every file the
+/// files of the last round name: the showcase takes three (the scene; its
+/// environment and textures together; then the textures' decoding). Every
+/// round fetches a file not asked for before or decodes an image not decoded
+/// before, so the rounds end; this bounds how deep one scene's files may name others.
 const MAX_ROUNDS: usize = 64;
 
 /// Largest file fetched at all (the loader's largest limit, a model or buffer).
 const MAX_FETCH_BYTES: f64 = (1u64 << 30) as f64;
 
+/// Milliseconds a load spent waiting for the network and for the browser's decoders.
+#[derive(Default)]
+pub struct Waits {
+    /// Fetching files (requests sent before images are decoded, answers read after).
+    pub fetch: f64,
+    /// Decoding images.
+    pub decode: f64,
+}
+
 /// Load the scene (or model, shown alone) at `path`, relative to the page,
-/// adding the milliseconds spent fetching to `fetching`.
-pub async fn load(path: &str, fetching: &mut f64) -> Result<SceneDesc, String> {
-    let set = Arc::new(FileSet::default());
+/// adding the time spent waiting to `waits`.
+pub async fn load(path: &str, waits: &mut Waits) -> Result<SceneDesc, String> {
+    let set = Arc::new(FileSet::host_decoding());
     let options = LoadOptions { files: Files::Memory(set.clone()), ..Default::default() };
     let path = Path::new(path);
     let mut asked = HashSet::new();
@@ -35,19 +47,26 @@ pub async fn load(path: &str, fetching: &mut f64) -> Result<SceneDesc, String> {
             false => load_scene_with(path, options.clone()),
         };
         let missing: Vec<PathBuf> = set.take_missing().into_iter().filter(|p| asked.insert(p.clone())).collect();
-        if missing.is_empty() {
+        let undecoded = set.take_undecoded();
+        if missing.is_empty() && undecoded.is_empty() {
             return result.map_err(|e| e.to_string());
         }
         let started = super::startup::now();
         // Every request is sent before the first answer is read.
         let requests =
             missing.into_iter().map(|file| request(&file).map(|r| (file, r))).collect::<Result<Vec<_>, _>>()?;
+        let decoding = super::startup::now();
+        for (encoded, decoded) in super::decode::decode_all(undecoded).await? {
+            set.insert_decoded(encoded, decoded);
+        }
+        let decoded = super::startup::now();
+        waits.decode += decoded - decoding;
         for (file, request) in requests {
             if let Some(bytes) = request.receive().await? {
                 set.insert(&file, bytes);
             }
         }
-        *fetching += super::startup::now() - started;
+        waits.fetch += super::startup::now() - started - (decoded - decoding);
         if set.bytes() > MAX_SCENE_TOTAL_BYTES {
             let limit = MAX_SCENE_TOTAL_BYTES;
             return Err(format!("{}: its files are over the {limit}-byte limit for one scene", path.display()));

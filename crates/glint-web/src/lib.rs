@@ -17,6 +17,7 @@
 //! startup stages (`startup.rs`).
 #![cfg(target_arch = "wasm32")]
 
+mod decode;
 mod fetch;
 mod input;
 mod panel;
@@ -242,13 +243,13 @@ async fn open_gpu(
 /// Fetch and show `scene`, or put its error on the page (keeping the last scene).
 async fn show(viewer: &Rc<RefCell<Viewer>>, scene: &str) {
     set_text("status", &format!("loading {scene} ..."));
-    let mut fetching = 0.0;
-    let desc = match fetch::load(scene, &mut fetching).await {
+    let mut waits = fetch::Waits::default();
+    let desc = match fetch::load(scene, &mut waits).await {
         Ok(desc) => desc,
         Err(e) => return show_error(&e),
     };
     if let Some(startup) = &mut viewer.borrow_mut().startup {
-        startup.split(("fetch", fetching), "load");
+        startup.split(&[("fetch", waits.fetch), ("decode", waits.decode)], "load");
     }
     for warning in &desc.warnings {
         web_sys::console::warn_1(&warning.to_string().into());
@@ -342,7 +343,7 @@ impl Viewer {
         if let Some(mut startup) = self.startup.take() {
             // Each view's shadow pass prepares its pipelines before its flush does.
             let prepare: f64 = stats.iter().map(|s| s.cpu_ms.prepare + s.passes.shadow.cpu_ms).sum();
-            startup.split(("prepare", prepare), "first frame");
+            startup.split(&[("prepare", prepare)], "first frame");
             startup.report(&self.canvas);
         }
         self.frames += 1;

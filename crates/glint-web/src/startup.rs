@@ -1,6 +1,7 @@
 //! The page's startup, stage by stage: download (navigation to the module's
 //! last byte), instantiate (to the module running), gpu (adapter and device),
-//! fetch (the scene and its files over HTTP), load (parsing and decoding them),
+//! fetch (the scene and its files over HTTP), decode (the browser decoding its
+//! PNG and JPEG images), load (parsing them and decoding the rest),
 //! place (the scene on the GPU), waiting (the controls panel, and the wait
 //! for the first animation frame), prepare (the first frame's preparation,
 //! its shadow passes' included: shader variants composed, pipelines made,
@@ -34,12 +35,16 @@ impl Startup {
         self.last = t;
     }
 
-    /// End stages `inner` (`inner_ms` of it, measured inside) and `name` (the rest) now.
-    pub fn split(&mut self, (inner, inner_ms): (&'static str, f64), name: &'static str) {
+    /// End stages `inner` (each with its milliseconds, measured inside) and
+    /// `name` (the rest) now.
+    pub fn split(&mut self, inner: &[(&'static str, f64)], name: &'static str) {
         let t = now();
-        let whole = t - self.last;
-        self.stages.push((inner, inner_ms.min(whole)));
-        self.stages.push((name, (whole - inner_ms).max(0.0)));
+        let mut rest = t - self.last;
+        for &(stage, ms) in inner {
+            self.stages.push((stage, ms.min(rest)));
+            rest = (rest - ms).max(0.0);
+        }
+        self.stages.push((name, rest));
         self.last = t;
     }
 

@@ -1,6 +1,8 @@
 //! Loading from files held in memory ([`Files::Memory`]), as the web viewer
 //! does: load, fetch what the load found missing, load again. The scene comes
-//! out as from disk, and paths are held to the set's root just as strictly.
+//! out as from disk, and paths are held to the set's root just as strictly. A
+//! set may leave PNG and JPEG decoding to its host (the page's browser; here
+//! the `image` crate stands in for it).
 
 mod common;
 
@@ -8,24 +10,52 @@ use glint::asset::{load_scene_with, FileSet, Files, LoadOptions, SceneDesc};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
+/// What a host makes of an encoded image: width, height and RGBA8 pixels.
+type Decoded = Result<(u32, u32, Vec<u8>), String>;
+
+/// A host decoding as a browser does: PNG and JPEG to straight RGBA8.
+fn decode(encoded: &[u8]) -> Decoded {
+    let image = image::load_from_memory(encoded).map_err(|e| e.to_string())?.into_rgba8();
+    Ok((image.width(), image.height(), image.into_raw()))
+}
+
 /// Load `scene` (a path under the repository root) from a set filled from
-/// disk round by round, as a page fetching over HTTP would; returns the scene
-/// and the files each round fetched.
+/// disk round by round, as a page fetching over HTTP would; returns the scene,
+/// the files each round fetched and the images it had `host` decode.
 fn load_from_memory(set: &Arc<FileSet>, scene: &str) -> (Result<SceneDesc, glint::Diagnostic>, Vec<Vec<PathBuf>>) {
+    let (result, rounds, _) = load_with_host(set, scene, decode);
+    (result, rounds)
+}
+
+/// [`load_from_memory`], with `host` decoding the images the set leaves to it;
+/// also returns how many images it decoded.
+fn load_with_host(
+    set: &Arc<FileSet>,
+    scene: &str,
+    host: impl Fn(&[u8]) -> Decoded,
+) -> (Result<SceneDesc, glint::Diagnostic>, Vec<Vec<PathBuf>>, usize) {
     let options = LoadOptions { files: Files::Memory(set.clone()), ..Default::default() };
     let root = common::repo_root();
-    let mut rounds = Vec::new();
+    let (mut rounds, mut decoded) = (Vec::new(), 0);
     for _ in 1..=8 {
         let result = load_scene_with(Path::new(scene), options.clone());
         let missing = set.take_missing();
         let fetched: Vec<_> = missing.iter().filter_map(|p| Some((p, std::fs::read(root.join(p)).ok()?))).collect();
+        let undecoded = set.take_undecoded();
         // A missing file may be only a warning (an MTL, a texture): go on while any was found.
-        if fetched.is_empty() {
-            return (result, rounds);
+        if fetched.is_empty() && undecoded.is_empty() {
+            return (result, rounds, decoded);
         }
-        rounds.push(fetched.iter().map(|(p, _)| p.to_path_buf()).collect());
+        if !fetched.is_empty() {
+            rounds.push(fetched.iter().map(|(p, _)| p.to_path_buf()).collect());
+        }
         for (path, bytes) in fetched {
             set.insert(path, bytes);
+        }
+        decoded += undecoded.len();
+        for encoded in undecoded {
+            let pixels = host(&encoded);
+            set.insert_decoded(encoded, pixels);
         }
     }
     panic!("{scene}: still missing files after 8 rounds");
@@ -37,11 +67,10 @@ fn block(pairs: &[(&str, &str)]) -> String {
     format!("{{\n{lines}}}\n")
 }
 
-#[test]
-fn a_scene_with_textures_and_models_loads_from_memory_as_from_disk() {
-    let set = Arc::new(FileSet::default());
-    // Textures beside the scene's folder, a glTF with an external buffer, an OBJ with its MTL and mask.
-    let text = [
+/// A scene using textures beside the scene's folder, a glTF with an external
+/// buffer, an OBJ with its MTL and mask, under `demo/mixed.scn`.
+fn mixed_scene() -> String {
+    [
         block(&[
             ("classname", "material"),
             ("name", "tiles"),
@@ -53,10 +82,25 @@ fn a_scene_with_textures_and_models_loads_from_memory_as_from_disk() {
         block(&[("classname", "entity"), ("mesh", "../tests/models/cutout.obj"), ("origin", "2 0 0")]),
         block(&[("classname", "camera"), ("origin", "0 2 5")]),
     ]
-    .concat();
-    set.insert(Path::new("demo/mixed.scn"), text.into_bytes());
-    let (scene, rounds) = load_from_memory(&set, "demo/mixed.scn");
-    let scene = scene.unwrap_or_else(|e| panic!("{e}"));
+    .concat()
+}
+
+#[test]
+fn a_scene_with_textures_and_models_loads_from_memory_as_from_disk() {
+    // Decoded by glint, then by the host: every image (two for the material,
+    // the OBJ's mask) goes to it, in the rounds that fetch them.
+    for (set, images) in [(FileSet::default(), 0), (FileSet::host_decoding(), 3)] {
+        let set = Arc::new(set);
+        set.insert(Path::new("demo/mixed.scn"), mixed_scene().into_bytes());
+        let (scene, rounds, decoded) = load_with_host(&set, "demo/mixed.scn", decode);
+        let scene = scene.unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(decoded, images);
+        assert_same_as_disk(&scene, &rounds);
+    }
+}
+
+/// `scene`, loaded from memory in `rounds`, is the mixed scene as loaded from disk.
+fn assert_same_as_disk(scene: &SceneDesc, rounds: &[Vec<PathBuf>]) {
     // A load goes past a file the set lacks: the first pass asks for both of
     // the material's textures and both models at once, the next for the
     // models' own files (the glTF's buffer, the OBJ's MTL), the last for the MTL's mask.
@@ -86,7 +130,7 @@ fn a_scene_with_textures_and_models_loads_from_memory_as_from_disk() {
 
 #[test]
 fn the_showcase_asks_for_its_four_files_in_one_pass_and_loads_as_from_disk() {
-    let set = Arc::new(FileSet::default());
+    let set = Arc::new(FileSet::host_decoding());
     let scene = "scenes/showcase.scn";
     set.insert(Path::new(scene), std::fs::read(common::repo_root().join(scene)).expect("the showcase"));
     let (loaded, rounds) = load_from_memory(&set, scene);
@@ -125,4 +169,59 @@ fn in_memory_paths_stay_under_the_root_and_missing_files_are_named() {
     set.insert(Path::new("scenes/huge.scn"), vec![b' '; (glint::asset::MAX_SCENE_BYTES + 1) as usize]);
     let error = load_scene_with(Path::new("scenes/huge.scn"), options).expect_err("too big");
     assert!(error.message.contains("larger than the"), "{error}");
+}
+
+#[test]
+fn a_gltf_models_images_go_to_the_host_too() {
+    let set = Arc::new(FileSet::host_decoding());
+    let text = block(&[("classname", "entity"), ("mesh", "../tests/models/uv1.gltf")]);
+    set.insert(Path::new("demo/uv1.scn"), text.into_bytes());
+    let (scene, _, decoded) = load_with_host(&set, "demo/uv1.scn", decode);
+    let scene = scene.unwrap_or_else(|e| panic!("{e}"));
+    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+    let disk = glint::asset::Model::load(&common::repo_root().join("tests/models/uv1.gltf")).expect("uv1.gltf");
+    let textures = &scene.models[0].textures;
+    assert!(!textures.is_empty() && decoded == textures.len(), "{decoded} decoded for {} textures", textures.len());
+    assert!(textures.iter().zip(&disk.textures).all(|(a, b)| a.image == b.image && a.srgb == b.srgb));
+}
+
+#[test]
+fn a_host_decodes_only_images_that_pass_the_header_checks_and_its_failures_are_reported() {
+    let set = Arc::new(FileSet::host_decoding());
+    let options = LoadOptions { files: Files::Memory(set.clone()), ..Default::default() };
+    let material = |map: &str| block(&[("classname", "material"), ("name", "m"), ("diffuse_map", map)]);
+    let load = |map: &str| {
+        set.insert(Path::new("scenes/a.scn"), material(map).into_bytes());
+        load_scene_with(Path::new("scenes/a.scn"), options.clone())
+    };
+    // Too wide, from its header: refused before the host sees it.
+    let mut wide = std::io::Cursor::new(Vec::new());
+    image::RgbaImage::new(glint::asset::MAX_TEXTURE_SIDE + 1, 1).write_to(&mut wide, image::ImageFormat::Png).unwrap();
+    set.insert(Path::new("textures/wide.png"), wide.into_inner());
+    let error = load("../textures/wide.png").expect_err("too wide");
+    assert!(error.message.contains("at most 8192 pixels a side"), "{error}");
+    assert!(set.take_undecoded().is_empty());
+    // Not yet decoded: the host is asked for it, and the load fails for now.
+    let tiles = std::fs::read(common::repo_root().join("assets/textures/tiles.png")).expect("tiles.png");
+    set.insert(Path::new("textures/tiles.png"), tiles.clone());
+    assert!(load("../textures/tiles.png").is_err());
+    assert_eq!(set.take_undecoded(), [Arc::from(&tiles[..])]);
+    // What the host could not decode is reported, with the file's line, and never asked for again.
+    set.insert_decoded(tiles.as_slice().into(), Err("the browser says no".into()));
+    let error = load("../textures/tiles.png").expect_err("host failed");
+    assert_eq!(error.line, Some(4), "{error}");
+    assert!(error.message.contains("cannot decode texture: the browser says no"), "{error}");
+    assert!(set.take_undecoded().is_empty());
+    // Pixels that do not match the header's size are refused, as are too few bytes for the size given.
+    set.insert_decoded(tiles.as_slice().into(), Ok((2, 2, vec![0; 16])));
+    let error = load("../textures/tiles.png").expect_err("wrong size");
+    assert!(error.message.contains("its header says 256 x 256 pixels, its data 2 x 2"), "{error}");
+    set.insert_decoded(tiles.as_slice().into(), Ok((256, 256, vec![0; 16])));
+    let error = load("../textures/tiles.png").expect_err("short");
+    assert!(error.message.contains("256 x 256 pixels in 16 bytes"), "{error}");
+    // The host's pixels are the texture's.
+    let pixels: Vec<u8> = (0..256 * 256 * 4).map(|i| (i % 251) as u8).collect();
+    set.insert_decoded(tiles.as_slice().into(), Ok((256, 256, pixels.clone())));
+    let scene = load("../textures/tiles.png").unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(scene.textures[0].image.as_raw(), &pixels);
 }

@@ -6,7 +6,7 @@
 //! in `docs/limits.md`.
 
 use super::{Diagnostic, LoadOptions};
-use std::collections::{BTreeSet, HashMap};
+use std::collections::{BTreeSet, HashMap, HashSet};
 use std::io::Read;
 use std::path::{Component, Path, PathBuf};
 use std::sync::{Arc, Mutex};
@@ -71,6 +71,18 @@ impl Files {
         }
     }
 
+    /// The pixels of the PNG or JPEG `bytes` as the host decoded them, or why it
+    /// could not; `None` when glint decodes them itself (from disk, or a set
+    /// without [`FileSet::host_decoding`]). An image the host has yet to decode
+    /// is noted ([`FileSet::take_undecoded`]) and counted as a miss, like a file
+    /// the set lacks, so a load goes past it to find the others.
+    pub(crate) fn host_decoded(&self, bytes: &[u8]) -> Option<Result<image::RgbaImage, String>> {
+        match self {
+            Files::Memory(set) if set.host_decodes => Some(set.decoded(bytes)),
+            _ => None,
+        }
+    }
+
     /// The size of the file at `path`, 0 when it cannot be had.
     pub(crate) fn size(&self, path: &Path) -> u64 {
         match self {
@@ -83,14 +95,68 @@ impl Files {
 /// Files held in memory by path (relative, `/`-separated, `.` and `..` applied),
 /// for loading without a file system: the web viewer fetches a scene, loads it
 /// from the set, fetches what the load found missing, and loads again.
+///
+/// A set made by [`FileSet::host_decoding`] also leaves PNG and JPEG decoding
+/// to its host (a browser decodes them natively, so the page need not ship a
+/// decoder): a load names the images it needs decoded as it names missing
+/// files, and the host hands back their pixels between loads.
 #[derive(Debug, Default)]
 pub struct FileSet {
     files: Mutex<HashMap<PathBuf, Arc<[u8]>>>,
     missing: Mutex<BTreeSet<PathBuf>>,
     misses: std::sync::atomic::AtomicUsize,
+    host_decodes: bool,
+    images: Mutex<HostImages>,
+}
+
+/// The images of a [`FileSet`] that its host decodes, by their encoded bytes.
+#[derive(Debug, Default)]
+struct HostImages {
+    /// Pixels the host decoded, or why it could not.
+    decoded: HashMap<Arc<[u8]>, Result<image::RgbaImage, String>>,
+    /// Images a load asked for since the last [`FileSet::take_undecoded`].
+    undecoded: HashSet<Arc<[u8]>>,
 }
 
 impl FileSet {
+    /// An empty set whose host decodes its PNG and JPEG images: loads ask for
+    /// them through [`FileSet::take_undecoded`] and get them from
+    /// [`FileSet::insert_decoded`]. glint still checks each image's format and
+    /// size from its header, against the same limits, before asking.
+    pub fn host_decoding() -> Self {
+        Self { host_decodes: true, ..Self::default() }
+    }
+
+    /// The encoded images loads asked the host to decode since the last call.
+    pub fn take_undecoded(&self) -> Vec<Arc<[u8]>> {
+        self.lock_images().undecoded.drain().collect()
+    }
+
+    /// Hand back what the host made of `encoded` (one of [`FileSet::take_undecoded`]'s):
+    /// its width, height and RGBA8 pixels, top row first, not premultiplied and
+    /// with no colour conversion; or why it could not decode them.
+    pub fn insert_decoded(&self, encoded: Arc<[u8]>, decoded: Result<(u32, u32, Vec<u8>), String>) {
+        let image = decoded.and_then(|(w, h, pixels)| {
+            let len = pixels.len();
+            image::RgbaImage::from_raw(w, h, pixels).ok_or_else(|| format!("{w} x {h} pixels in {len} bytes"))
+        });
+        self.lock_images().decoded.insert(encoded, image);
+    }
+
+    fn decoded(&self, bytes: &[u8]) -> Result<image::RgbaImage, String> {
+        let mut images = self.lock_images();
+        if let Some(decoded) = images.decoded.get(bytes) {
+            return decoded.clone();
+        }
+        images.undecoded.insert(bytes.into());
+        self.misses.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        Err("not decoded yet".into())
+    }
+
+    fn lock_images(&self) -> std::sync::MutexGuard<'_, HostImages> {
+        self.images.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
     /// Add (or replace) the file at `path`.
     pub fn insert(&self, path: &Path, bytes: Vec<u8>) {
         self.lock().insert(normal(path), bytes.into());

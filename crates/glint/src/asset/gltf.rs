@@ -80,7 +80,7 @@ pub(crate) fn parse_gltf(path: &Path, bytes: &[u8], options: LoadOptions) -> Res
         // Only images a material uses are read and decoded.
         let decoded = textures.get_or_decode(image, srgb, |free| {
             let bytes = read_image(json, image, &buffers, &uris)?;
-            decode_texture(&bytes, name, srgb, free)
+            decode_texture(&bytes, name, srgb, free, &assets.files)
         });
         decoded.map_err(|e| warnings.push(fail(format!("image {image}: {e}; drawn without it")))).ok()
     };

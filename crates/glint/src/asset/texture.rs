@@ -1,7 +1,6 @@
 use super::{Diagnostic, TextureRef, MAX_IMAGE_FILE_BYTES};
 use std::collections::HashMap;
 use std::hash::Hash;
-use std::io::Cursor;
 use std::path::Path;
 
 /// Largest accepted side of a texture, in pixels.
@@ -137,27 +136,32 @@ pub fn load_image(path: &Path, free: u64) -> Result<image::RgbaImage, Diagnostic
 pub(crate) fn read_texture(path: &Path, srgb: bool, free: u64, files: &super::Files) -> Result<Texture, Diagnostic> {
     let bytes = files.read(path, MAX_IMAGE_FILE_BYTES)?;
     let name = path.file_name().map_or_else(|| "texture".into(), |n| n.to_string_lossy().into_owned());
-    decode_texture(&bytes, name, srgb, free).map_err(|m| Diagnostic::file(path, m))
+    decode_texture(&bytes, name, srgb, free, files).map_err(|m| Diagnostic::file(path, m))
 }
 
-/// Decode PNG or JPEG bytes into a [`Texture`] called `name`, refusing (before
-/// decoding the pixels) an image larger than [`MAX_TEXTURE_SIDE`] or needing more
-/// than `free` bytes. The error says what was wrong, never quoting the bytes.
-pub(crate) fn decode_texture(bytes: &[u8], name: String, srgb: bool, free: u64) -> Result<Texture, String> {
-    let reader = |bytes| image::ImageReader::new(Cursor::new(bytes)).with_guessed_format();
-    let mut decoder = reader(bytes).map_err(|e| format!("cannot read texture: {e}"))?;
-    match decoder.format() {
-        Some(image::ImageFormat::Png | image::ImageFormat::Jpeg) => {}
-        Some(other) => return Err(format!("expected a PNG or JPEG image, found {other:?}")),
-        None => return Err("expected a PNG or JPEG image".into()),
+/// Decode PNG or JPEG bytes into a [`Texture`] called `name`, refusing (from the
+/// header, before anyone decodes the pixels) an image larger than
+/// [`MAX_TEXTURE_SIDE`] or needing more than `free` bytes. `files` decides who
+/// decodes: glint, or the host of a [`super::FileSet::host_decoding`] set. The
+/// error says what was wrong, never quoting the bytes.
+pub(crate) fn decode_texture(
+    bytes: &[u8],
+    name: String,
+    srgb: bool,
+    free: u64,
+    files: &super::Files,
+) -> Result<Texture, String> {
+    match imagesize::image_type(bytes) {
+        Ok(imagesize::ImageType::Png | imagesize::ImageType::Jpeg) => {}
+        Ok(other) => return Err(format!("expected a PNG or JPEG image, found {other:?}")),
+        Err(_) => return Err("expected a PNG or JPEG image".into()),
     }
-    let (w, h) = reader(bytes)
-        .map_err(|e| format!("cannot read texture: {e}"))?
-        .into_dimensions()
-        .map_err(|e| format!("cannot read texture: {e}"))?;
-    if w.max(h) > MAX_TEXTURE_SIDE {
+    let size = imagesize::blob_size(bytes).map_err(|e| format!("cannot read texture: {e}"))?;
+    let side = |side: usize| u32::try_from(side).ok().filter(|&s| s <= MAX_TEXTURE_SIDE);
+    let (Some(w), Some(h)) = (side(size.width), side(size.height)) else {
+        let (w, h) = (size.width, size.height);
         return Err(format!("{w} x {h} pixels: textures may be at most {MAX_TEXTURE_SIDE} pixels a side"));
-    }
+    };
     let needs = 4 * u64::from(w) * u64::from(h);
     if needs > free {
         let mib = |bytes: u64| bytes as f64 / f64::from(1 << 20);
@@ -168,11 +172,34 @@ pub(crate) fn decode_texture(bytes: &[u8], name: String, srgb: bool, free: u64) 
             MAX_TEXTURE_MEMORY >> 20
         ));
     }
+    let image = match files.host_decoded(bytes) {
+        Some(decoded) => decoded,
+        None => decode_here(bytes, needs),
+    }
+    .map_err(|e| format!("cannot decode texture: {e}"))?;
+    if image.dimensions() != (w, h) {
+        let (dw, dh) = image.dimensions();
+        return Err(format!("cannot decode texture: its header says {w} x {h} pixels, its data {dw} x {dh}"));
+    }
+    Ok(Texture::new(name, image, srgb))
+}
+
+/// Decode PNG or JPEG bytes with the `image` crate, allocating at most about
+/// twice the `needs` bytes of the RGBA result.
+#[cfg(feature = "png-jpeg")]
+fn decode_here(bytes: &[u8], needs: u64) -> Result<image::RgbaImage, String> {
+    let mut decoder =
+        image::ImageReader::new(std::io::Cursor::new(bytes)).with_guessed_format().map_err(|e| e.to_string())?;
     let mut limits = image::Limits::default();
     limits.max_image_width = Some(MAX_TEXTURE_SIDE);
     limits.max_image_height = Some(MAX_TEXTURE_SIDE);
     limits.max_alloc = Some(needs.max(1 << 20) * 2);
     decoder.limits(limits);
-    let image = decoder.decode().map_err(|e| format!("cannot decode texture: {e}"))?.into_rgba8();
-    Ok(Texture::new(name, image, srgb))
+    Ok(decoder.decode().map_err(|e| e.to_string())?.into_rgba8())
+}
+
+/// Without the `png-jpeg` feature only a host decodes PNG and JPEG.
+#[cfg(not(feature = "png-jpeg"))]
+fn decode_here(_: &[u8], _: u64) -> Result<image::RgbaImage, String> {
+    Err("glint was built without PNG and JPEG decoding (its feature `png-jpeg`)".into())
 }
