@@ -151,10 +151,9 @@ pub(crate) fn decode_texture(
     free: u64,
     files: &super::Files,
 ) -> Result<Texture, String> {
-    match imagesize::image_type(bytes) {
-        Ok(imagesize::ImageType::Png | imagesize::ImageType::Jpeg) => {}
-        Ok(other) => return Err(format!("expected a PNG or JPEG image, found {other:?}")),
-        Err(_) => return Err("expected a PNG or JPEG image".into()),
+    // imagesize knows only these two formats here (its features).
+    if !matches!(imagesize::image_type(bytes), Ok(imagesize::ImageType::Png | imagesize::ImageType::Jpeg)) {
+        return Err("expected a PNG or JPEG image".into());
     }
     let size = imagesize::blob_size(bytes).map_err(|e| format!("cannot read texture: {e}"))?;
     let side = |side: usize| u32::try_from(side).ok().filter(|&s| s <= MAX_TEXTURE_SIDE);
