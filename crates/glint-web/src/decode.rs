@@ -16,6 +16,9 @@ pub type Decoded = Result<(u32, u32, Vec<u8>), String>;
 /// Decode every image in `encoded`, all started before the first is awaited,
 /// pairing each with its result.
 pub async fn decode_all(encoded: Vec<Arc<[u8]>>) -> Result<Vec<(Arc<[u8]>, Decoded)>, String> {
+    if encoded.is_empty() {
+        return Ok(Vec::new()); // no WebGL2 context made for nothing
+    }
     let window = web_sys::window().ok_or("no window")?;
     let options = web_sys::ImageBitmapOptions::new();
     options.set_premultiply_alpha(web_sys::PremultiplyAlpha::None);
