@@ -13,9 +13,11 @@ use web_sys::WebGl2RenderingContext as Gl;
 /// Decoded images: width, height and RGBA8 pixels top row first, or why not.
 pub type Decoded = Result<(u32, u32, Vec<u8>), String>;
 
-/// Decode every image in `encoded`, all started before the first is awaited,
-/// pairing each with its result.
-pub async fn decode_all(encoded: Vec<Arc<[u8]>>) -> Result<Vec<(Arc<[u8]>, Decoded)>, String> {
+/// Decode every image in `encoded` (each at most once), all started before the
+/// first is awaited, pairing each with its result.
+pub async fn decode_all(mut encoded: Vec<Arc<[u8]>>) -> Result<Vec<(Arc<[u8]>, Decoded)>, String> {
+    encoded.sort_unstable();
+    encoded.dedup();
     if encoded.is_empty() {
         return Ok(Vec::new()); // no WebGL2 context made for nothing
     }

@@ -16,10 +16,10 @@ use wasm_bindgen_futures::JsFuture;
 
 /// Rounds of fetching. A load goes past a file the set lacks (or an image not
 /// yet decoded) to the next texture or block, so a round fetches every file the
-/// files of the last round name: the showcase takes three (the scene; its
-/// environment and textures together; then the textures' decoding). Every
-/// round fetches a file not asked for before or decodes an image not decoded
-/// before, so the rounds end; this bounds how deep one scene's files may name others.
+/// files of the last round name, and decodes the images among them: the
+/// showcase takes two (the scene, then its environment and textures together).
+/// Every round fetches a file not asked for before or decodes an image not
+/// decoded before, so the rounds end; this bounds how deep one scene's files may name others.
 const MAX_ROUNDS: usize = 64;
 
 /// Largest file fetched at all (the loader's largest limit, a model or buffer).
@@ -55,18 +55,19 @@ pub async fn load(path: &str, waits: &mut Waits) -> Result<SceneDesc, String> {
         // Every request is sent before the first answer is read.
         let requests =
             missing.into_iter().map(|file| request(&file).map(|r| (file, r))).collect::<Result<Vec<_>, _>>()?;
-        let decoding = super::startup::now();
-        for (encoded, decoded) in super::decode::decode_all(undecoded).await? {
-            set.insert_decoded(encoded, decoded);
-        }
-        let decoded = super::startup::now();
-        waits.decode += decoded - decoding;
         for (file, request) in requests {
             if let Some(bytes) = request.receive().await? {
                 set.insert(&file, bytes);
             }
         }
-        waits.fetch += super::startup::now() - started - (decoded - decoding);
+        let decoding = super::startup::now();
+        waits.fetch += decoding - started;
+        // The images the load asked for, and those just fetched (the next load would ask for them).
+        let undecoded = undecoded.into_iter().chain(set.take_undecoded()).collect();
+        for (encoded, decoded) in super::decode::decode_all(undecoded).await? {
+            set.insert_decoded(encoded, decoded);
+        }
+        waits.decode += super::startup::now() - decoding;
         if set.bytes() > MAX_SCENE_TOTAL_BYTES {
             let limit = MAX_SCENE_TOTAL_BYTES;
             return Err(format!("{}: its files are over the {limit}-byte limit for one scene", path.display()));

@@ -27,8 +27,10 @@ fn load_from_memory(set: &Arc<FileSet>, scene: &str) -> (Result<SceneDesc, glint
     (result, rounds)
 }
 
-/// [`load_from_memory`], with `host` decoding the images the set leaves to it;
-/// also returns how many images it decoded.
+/// [`load_from_memory`], with `host` decoding the images the set leaves to it
+/// (after each round's files are in, as the page does); also returns how many
+/// images it decoded. A round that only decodes (images inside a glTF) fetches
+/// no files.
 fn load_with_host(
     set: &Arc<FileSet>,
     scene: &str,
@@ -46,12 +48,11 @@ fn load_with_host(
         if fetched.is_empty() && undecoded.is_empty() {
             return (result, rounds, decoded);
         }
-        if !fetched.is_empty() {
-            rounds.push(fetched.iter().map(|(p, _)| p.to_path_buf()).collect());
-        }
+        rounds.push(fetched.iter().map(|(p, _)| p.to_path_buf()).collect());
         for (path, bytes) in fetched {
             set.insert(path, bytes);
         }
+        let undecoded: Vec<_> = undecoded.into_iter().chain(set.take_undecoded()).collect();
         decoded += undecoded.len();
         for encoded in undecoded {
             let pixels = host(&encoded);
@@ -88,7 +89,8 @@ fn mixed_scene() -> String {
 #[test]
 fn a_scene_with_textures_and_models_loads_from_memory_as_from_disk() {
     // Decoded by glint, then by the host: every image (two for the material,
-    // the OBJ's mask) goes to it, in the rounds that fetch them.
+    // the OBJ's mask) goes to it, in the rounds that fetch them, so the load
+    // takes no more passes.
     for (set, images) in [(FileSet::default(), 0), (FileSet::host_decoding(), 3)] {
         let set = Arc::new(set);
         set.insert(Path::new("demo/mixed.scn"), mixed_scene().into_bytes());
@@ -176,7 +178,9 @@ fn a_gltf_models_images_go_to_the_host_too() {
     let set = Arc::new(FileSet::host_decoding());
     let text = block(&[("classname", "entity"), ("mesh", "../tests/models/uv1.gltf")]);
     set.insert(Path::new("demo/uv1.scn"), text.into_bytes());
-    let (scene, _, decoded) = load_with_host(&set, "demo/uv1.scn", decode);
+    // Its image is a data: URI, named when the glTF is read: the scene and the glTF, then the decoding.
+    let (scene, rounds, decoded) = load_with_host(&set, "demo/uv1.scn", decode);
+    assert_eq!(rounds, [vec![PathBuf::from("tests/models/uv1.gltf")], vec![]]);
     let scene = scene.unwrap_or_else(|e| panic!("{e}"));
     assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
     let disk = glint::asset::Model::load(&common::repo_root().join("tests/models/uv1.gltf")).expect("uv1.gltf");
@@ -201,9 +205,10 @@ fn a_host_decodes_only_images_that_pass_the_header_checks_and_its_failures_are_r
     let error = load("../textures/wide.png").expect_err("too wide");
     assert!(error.message.contains("at most 8192 pixels a side"), "{error}");
     assert!(set.take_undecoded().is_empty());
-    // Not yet decoded: the host is asked for it, and the load fails for now.
+    // Named for decoding as it comes in; until decoded, the load fails for now and asks again.
     let tiles = std::fs::read(common::repo_root().join("assets/textures/tiles.png")).expect("tiles.png");
     set.insert(Path::new("textures/tiles.png"), tiles.clone());
+    assert_eq!(set.take_undecoded(), [Arc::from(&tiles[..])]);
     assert!(load("../textures/tiles.png").is_err());
     assert_eq!(set.take_undecoded(), [Arc::from(&tiles[..])]);
     // What the host could not decode is reported, with the file's line, and never asked for again.
@@ -224,4 +229,35 @@ fn a_host_decodes_only_images_that_pass_the_header_checks_and_its_failures_are_r
     set.insert_decoded(tiles.as_slice().into(), Ok((256, 256, pixels.clone())));
     let scene = load("../textures/tiles.png").unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(scene.textures[0].image.as_raw(), &pixels);
+}
+
+/// The first bytes of a PNG of `w` x `h` RGBA pixels: its signature and header,
+/// all that is read before decoding.
+fn png_header(w: u32, h: u32) -> Vec<u8> {
+    let mut png = b"\x89PNG\r\n\x1a\n\0\0\0\x0dIHDR".to_vec();
+    png.extend(w.to_be_bytes());
+    png.extend(h.to_be_bytes());
+    png.extend([8, 6, 0, 0, 0, 0, 0, 0, 0]); // 8-bit RGBA, then a CRC nobody checks here
+    png
+}
+
+#[test]
+fn inserted_images_are_named_for_decoding_up_to_one_scenes_texture_memory() {
+    let set = FileSet::host_decoding();
+    // Four 8192-wide images fit in the 1 GiB of one scene's textures; a fifth
+    // would not, and nor would one over 8192 a side or a file that is no image.
+    let side = glint::asset::MAX_TEXTURE_SIDE;
+    for h in 0..5 {
+        set.insert(Path::new(&format!("big{h}.png")), png_header(side, side - h));
+    }
+    set.insert(Path::new("wide.png"), png_header(side + 1, 1));
+    set.insert(Path::new("scene.scn"), b"{\n}\n".to_vec());
+    let mut named: Vec<_> =
+        set.take_undecoded().iter().map(|b| u32::from_be_bytes(b[20..24].try_into().unwrap())).collect();
+    named.sort_unstable();
+    assert_eq!(named, [side - 3, side - 2, side - 1, side]);
+    // Without host decoding nothing is named.
+    let plain = FileSet::default();
+    plain.insert(Path::new("a.png"), png_header(4, 4));
+    assert!(plain.take_undecoded().is_empty());
 }

@@ -99,7 +99,9 @@ impl Files {
 /// A set made by [`FileSet::host_decoding`] also leaves PNG and JPEG decoding
 /// to its host (a browser decodes them natively, so the page need not ship a
 /// decoder): a load names the images it needs decoded as it names missing
-/// files, and the host hands back their pixels between loads.
+/// files, and the host hands back their pixels between loads. So that a load
+/// need not pass over its files once more only to name their images, a PNG or
+/// JPEG file is named for decoding as soon as it is inserted.
 #[derive(Debug, Default)]
 pub struct FileSet {
     files: Mutex<HashMap<PathBuf, Arc<[u8]>>>,
@@ -114,8 +116,12 @@ pub struct FileSet {
 struct HostImages {
     /// Pixels the host decoded, or why it could not.
     decoded: HashMap<Arc<[u8]>, Result<image::RgbaImage, String>>,
-    /// Images a load asked for since the last [`FileSet::take_undecoded`].
+    /// Images a load asked for, or files inserted, since the last [`FileSet::take_undecoded`].
     undecoded: HashSet<Arc<[u8]>>,
+    /// RGBA bytes, by their headers, of the files named for decoding as they
+    /// were inserted: at most [`super::MAX_TEXTURE_MEMORY`], the most one load
+    /// could decode (past it, only what a load asks for is decoded).
+    inserted_bytes: u64,
 }
 
 impl FileSet {
@@ -157,9 +163,28 @@ impl FileSet {
         self.images.lock().unwrap_or_else(|e| e.into_inner())
     }
 
-    /// Add (or replace) the file at `path`.
+    /// Add (or replace) the file at `path`. In a [`FileSet::host_decoding`]
+    /// set, a PNG or JPEG whose header passes the texture checks is named for
+    /// decoding at once ([`FileSet::take_undecoded`]), while the pixels of all
+    /// so named stay within [`super::MAX_TEXTURE_MEMORY`].
     pub fn insert(&self, path: &Path, bytes: Vec<u8>) {
-        self.lock().insert(normal(path), bytes.into());
+        let bytes: Arc<[u8]> = bytes.into();
+        if self.host_decodes {
+            self.name_for_decoding(&bytes);
+        }
+        self.lock().insert(normal(path), bytes);
+    }
+
+    fn name_for_decoding(&self, bytes: &Arc<[u8]>) {
+        let Ok((w, h)) = super::texture::texture_size(bytes) else { return };
+        let mut images = self.lock_images();
+        let needs = images.inserted_bytes + 4 * u64::from(w) * u64::from(h);
+        if needs <= super::MAX_TEXTURE_MEMORY
+            && !images.decoded.contains_key(bytes)
+            && images.undecoded.insert(bytes.clone())
+        {
+            images.inserted_bytes = needs;
+        }
     }
 
     /// The paths reads asked for that the set lacked, since the last call.

@@ -139,6 +139,24 @@ pub(crate) fn read_texture(path: &Path, srgb: bool, free: u64, files: &super::Fi
     decode_texture(&bytes, name, srgb, free, files).map_err(|m| Diagnostic::file(path, m))
 }
 
+/// The width and height of a PNG or JPEG image, from its header: an error for
+/// any other format, and for a side over [`MAX_TEXTURE_SIDE`].
+pub(crate) fn texture_size(bytes: &[u8]) -> Result<(u32, u32), String> {
+    // imagesize knows only these two formats here (its features).
+    if !matches!(imagesize::image_type(bytes), Ok(imagesize::ImageType::Png | imagesize::ImageType::Jpeg)) {
+        return Err("expected a PNG or JPEG image".into());
+    }
+    let size = imagesize::blob_size(bytes).map_err(|e| format!("cannot read texture: {e}"))?;
+    let side = |side: usize| u32::try_from(side).ok().filter(|&s| s <= MAX_TEXTURE_SIDE);
+    match (side(size.width), side(size.height)) {
+        (Some(w), Some(h)) => Ok((w, h)),
+        _ => {
+            let (w, h) = (size.width, size.height);
+            Err(format!("{w} x {h} pixels: textures may be at most {MAX_TEXTURE_SIDE} pixels a side"))
+        }
+    }
+}
+
 /// Decode PNG or JPEG bytes into a [`Texture`] called `name`, refusing (from the
 /// header, before anyone decodes the pixels) an image larger than
 /// [`MAX_TEXTURE_SIDE`] or needing more than `free` bytes. `files` decides who
@@ -151,16 +169,7 @@ pub(crate) fn decode_texture(
     free: u64,
     files: &super::Files,
 ) -> Result<Texture, String> {
-    // imagesize knows only these two formats here (its features).
-    if !matches!(imagesize::image_type(bytes), Ok(imagesize::ImageType::Png | imagesize::ImageType::Jpeg)) {
-        return Err("expected a PNG or JPEG image".into());
-    }
-    let size = imagesize::blob_size(bytes).map_err(|e| format!("cannot read texture: {e}"))?;
-    let side = |side: usize| u32::try_from(side).ok().filter(|&s| s <= MAX_TEXTURE_SIDE);
-    let (Some(w), Some(h)) = (side(size.width), side(size.height)) else {
-        let (w, h) = (size.width, size.height);
-        return Err(format!("{w} x {h} pixels: textures may be at most {MAX_TEXTURE_SIDE} pixels a side"));
-    };
+    let (w, h) = texture_size(bytes)?;
     let needs = 4 * u64::from(w) * u64::from(h);
     if needs > free {
         let mib = |bytes: u64| bytes as f64 / f64::from(1 << 20);
