@@ -4,8 +4,8 @@
 //! loader's own checks allow: paths stay under the page's folder, each file within its kind's size
 //! limit, the whole within one scene's total. A file the server does not have
 //! stays missing and is reported by the loader with its `file:line`. The
-//! browser decodes the PNG and JPEG images a load asks for in the same rounds
-//! ([`super::decode`]).
+//! browser decodes the PNG and JPEG images of each round's files, and those
+//! a load asks for, before the next load ([`super::decode`]).
 
 use glint::asset::{load_scene_with, FileSet, Files, LoadOptions, Model, SceneDesc, MAX_SCENE_TOTAL_BYTES};
 use std::collections::HashSet;
@@ -28,7 +28,7 @@ const MAX_FETCH_BYTES: f64 = (1u64 << 30) as f64;
 /// Milliseconds a load spent waiting for the network and for the browser's decoders.
 #[derive(Default)]
 pub struct Waits {
-    /// Fetching files (requests sent before images are decoded, answers read after).
+    /// Fetching files (every request of a round sent before the first answer is read).
     pub fetch: f64,
     /// Decoding images.
     pub decode: f64,

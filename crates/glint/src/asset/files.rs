@@ -133,7 +133,8 @@ impl FileSet {
         Self { host_decodes: true, ..Self::default() }
     }
 
-    /// The encoded images loads asked the host to decode since the last call.
+    /// The encoded images named for the host to decode since the last call: by
+    /// loads, and by [`FileSet::insert`] as their files came in.
     pub fn take_undecoded(&self) -> Vec<Arc<[u8]>> {
         self.lock_images().undecoded.drain().collect()
     }

@@ -180,11 +180,10 @@ pub(crate) fn decode_texture(
             MAX_TEXTURE_MEMORY >> 20
         ));
     }
-    let image = match files.host_decoded(bytes) {
-        Some(decoded) => decoded,
-        None => decode_here(bytes, needs),
-    }
-    .map_err(|e| format!("cannot decode texture: {e}"))?;
+    let image = files
+        .host_decoded(bytes)
+        .unwrap_or_else(|| decode_here(bytes, needs))
+        .map_err(|e| format!("cannot decode texture: {e}"))?;
     if image.dimensions() != (w, h) {
         let (dw, dh) = image.dimensions();
         return Err(format!("cannot decode texture: its header says {w} x {h} pixels, its data {dw} x {dh}"));
