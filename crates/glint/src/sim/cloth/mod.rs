@@ -11,6 +11,7 @@ pub use mesh::{ClothMesh, ClothMeshError, Topology};
 pub use pins::{PinMotion, PinSelector};
 pub use view::ClothView;
 mod dynamics;
+mod factor;
 mod system;
 
 pub use dynamics::{

@@ -1,22 +1,13 @@
 //! The sparse linear system of a Newton step: a fixed pattern over the free
 //! degrees of freedom (the lower triangle of the 3×3 blocks between the nodes
 //! of each edge and hinge, and of each node with itself), filled anew when the
-//! Jacobian is refreshed, and factorised with faer. Each entry's slot in the
-//! matrix, the fill-reducing ordering and the symbolic Cholesky factorisation are
-//! computed once; the numeric factor lives in a buffer reused every time, so
-//! one factorisation can serve several solves.
+//! Jacobian is refreshed, and factorised ([`super::factor`]). Each entry's slot
+//! in the matrix, the fill-reducing ordering and the symbolic Cholesky
+//! factorisation are computed once; the numeric factor lives in a buffer reused
+//! every time, so one factorisation can serve several solves.
 
-use faer::dyn_stack::{MemBuffer, MemStack};
-use faer::linalg::solvers::Solve;
-use faer::sparse::linalg::cholesky::{factorize_symbolic_cholesky, LltRef, SymbolicCholesky, SymmetricOrdering};
-use faer::sparse::linalg::solvers::{Lu, SymbolicLu};
+use super::factor::{Cholesky, Lu};
 use faer::sparse::{Pair, SparseColMat, SparseColMatRef, SymbolicSparseColMat};
-use faer::{Conj, Side, Spec};
-
-/// Factorisations run on one thread: on the 2-core reference machine faer's
-/// parallel supernodal Cholesky was slower (9.4 s against 8.2 s for 20 steps
-/// of a 65 × 65 sheet), its threads contending with rayon's element assembly.
-const FACTOR_PAR: faer::Par = faer::Par::Seq;
 
 /// Why a linear solve failed.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -49,11 +40,11 @@ pub enum SystemError {
     Failed,
 }
 
-/// The factor the last [`SparseSystem::factorize`] produced.
+/// The factor the last factorisation produced.
 enum Factor {
     None,
     Cholesky,
-    Lu(Box<Lu<usize, f64>>),
+    Lu,
 }
 
 /// A sparse symmetric system over `n` unknowns with a fixed pattern (lower triangle).
@@ -66,10 +57,8 @@ pub struct SparseSystem {
     matrix_values: Vec<f64>,
     /// One value per pattern entry, in pattern order.
     pub values: Vec<f64>,
-    cholesky: SymbolicCholesky<usize>,
-    cholesky_values: Vec<f64>,
-    scratch: MemBuffer,
-    lu: Option<SymbolicLu<usize>>,
+    cholesky: Cholesky,
+    lu: Lu,
     factor: Factor,
     #[cfg(test)]
     pattern: Vec<(usize, usize)>,
@@ -94,30 +83,15 @@ impl SparseSystem {
                 rows.binary_search(&row).map(|i| symbolic.col_ptr()[col] + i).map_err(|_| SystemError::Failed)
             })
             .collect::<Result<Vec<_>, _>>()?;
-        let cholesky =
-            factorize_symbolic_cholesky(symbolic.as_ref(), Side::Lower, SymmetricOrdering::Amd, Default::default())
-                .map_err(|_| SystemError::Failed)?;
-        let par = FACTOR_PAR;
-        let scratch_layout = cholesky
-            .factorize_numeric_llt_scratch::<f64>(par, Spec::default())
-            .or(cholesky.solve_in_place_scratch::<f64>(1, par));
-        let bytes = (pattern.len() as u64 * BYTES_PER_PATTERN_ENTRY)
-            .saturating_add(8 * cholesky.len_val() as u64)
-            .saturating_add(scratch_layout.size_bytes() as u64);
-        if bytes > MAX_SYSTEM_BYTES {
-            return Err(SystemError::TooLarge(bytes));
-        }
-        let scratch = MemBuffer::new(scratch_layout);
+        let cholesky = Cholesky::new(symbolic.as_ref(), pattern.len() as u64 * BYTES_PER_PATTERN_ENTRY)?;
         Ok(Self {
             n,
-            cholesky_values: vec![0.0; cholesky.len_val()],
             matrix_values: vec![0.0; symbolic.row_idx().len()],
             symbolic,
             slots,
             values: vec![0.0; pattern.len()],
             cholesky,
-            scratch,
-            lu: None,
+            lu: Lu::default(),
             factor: Factor::None,
             #[cfg(test)]
             pattern: pattern.to_vec(),
@@ -151,20 +125,7 @@ impl SparseSystem {
         self.factor = Factor::None;
         self.fill_matrix();
         let matrix = SparseColMatRef::new(self.symbolic.as_ref(), &self.matrix_values);
-        let par = FACTOR_PAR;
-        let stack = MemStack::new(&mut self.scratch);
-        let ok = self
-            .cholesky
-            .factorize_numeric_llt(
-                &mut self.cholesky_values,
-                matrix,
-                Side::Lower,
-                Default::default(),
-                par,
-                stack,
-                Spec::default(),
-            )
-            .is_ok();
+        let ok = self.cholesky.factorize(matrix);
         if ok {
             self.factor = Factor::Cholesky;
         }
@@ -192,26 +153,17 @@ impl SparseSystem {
             }
         }
         let full = SparseColMat::try_new_from_triplets(self.n, self.n, &triplets).map_err(|_| SolveFailed)?;
-        let symbolic = match &self.lu {
-            Some(s) => s.clone(),
-            None => self.lu.insert(SymbolicLu::try_new(full.symbolic()).map_err(|_| SolveFailed)?).clone(),
-        };
-        let lu = Lu::try_new_with_symbolic(symbolic, full.as_ref()).map_err(|_| SolveFailed)?;
-        self.factor = Factor::Lu(Box::new(lu));
+        self.lu.factorize(full.as_ref())?;
+        self.factor = Factor::Lu;
         Ok(())
     }
 
     /// Solve `A x = rhs` in place with the last factorisation.
     pub fn solve(&mut self, rhs: &mut [f64]) -> Result<(), SolveFailed> {
-        let view = faer::MatMut::from_column_major_slice_mut(rhs, self.n, 1);
-        match &self.factor {
+        match self.factor {
             Factor::None => return Err(SolveFailed),
-            Factor::Cholesky => {
-                let par = FACTOR_PAR;
-                let stack = MemStack::new(&mut self.scratch);
-                LltRef::new(&self.cholesky, &self.cholesky_values).solve_in_place_with_conj(Conj::No, view, par, stack);
-            }
-            Factor::Lu(lu) => lu.solve_in_place(view),
+            Factor::Cholesky => self.cholesky.solve(rhs),
+            Factor::Lu => self.lu.solve(rhs),
         }
         if rhs.iter().all(|v| v.is_finite()) {
             Ok(())
