@@ -2,7 +2,7 @@
 //! structure-of-arrays bounds: one array of box centres, one of half extents.
 
 use glam::{Mat4, Vec3A, Vec4};
-use rayon::prelude::*;
+use p3_maybe_rayon::prelude::*;
 use std::ops::Range;
 
 /// Half extent that marks a box as never visible (instances with invalid

@@ -8,7 +8,7 @@ use super::instances::{InstanceStore, Slot};
 use super::view::ViewFrame;
 use super::{FrameStats, Renderer, Submitted};
 use crate::scene::Culling;
-use rayon::prelude::*;
+use p3_maybe_rayon::prelude::*;
 
 /// Submitted instances above which entities are culled on all cores. Tiles make
 /// culling cheap enough that threads rarely pay: on many.scn (100,000 instances in

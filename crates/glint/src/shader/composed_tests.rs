@@ -152,14 +152,14 @@ fn covering_sets() -> Vec<ShaderFeatures> {
 
 #[test]
 fn every_forward_variant_is_what_naga_oil_composes_and_validates() {
-    use rayon::prelude::*;
+    use p3_maybe_rayon::prelude::*;
     // Each set with one of these light mixes in turn: no lights, each kind
     // alone, both; and both ways of reading the arrays.
     let mixes =
         [(0, 0), (1, 0), (0, 1), (2, 3)].map(|(directional, positional)| LightCounts { directional, positional });
     let sets = covering_sets();
     let cases: Vec<(usize, bool)> = (0..sets.len()).flat_map(|k| [(k, true), (k, false)]).collect();
-    cases.par_chunks(cases.len().div_ceil(rayon::current_num_threads())).for_each(|chunk| {
+    cases.par_chunks(cases.len().div_ceil(current_num_threads())).for_each(|chunk| {
         let mut composer = composer();
         for &(k, storage) in chunk {
             let (features, lights) = (sets[k], mixes[k % mixes.len()]);

@@ -31,7 +31,7 @@ use super::pins::PinMotion;
 use super::system::{SparseSystem, SystemError, BYTES_PER_PATTERN_ENTRY, MAX_SYSTEM_BYTES};
 use super::{ClothMesh, ClothMeshError, Topology};
 use glam::DVec3;
-use rayon::prelude::*;
+use p3_maybe_rayon::prelude::*;
 
 pub mod realtime;
 

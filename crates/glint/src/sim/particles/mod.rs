@@ -22,7 +22,7 @@ pub use schedule::Schedule;
 
 use crate::render::ParticleGpu;
 use glam::{Vec3, Vec4};
-use rayon::prelude::*;
+use p3_maybe_rayon::prelude::*;
 
 /// Most particles one emitter may have alive at once.
 pub const MAX_PARTICLES: u32 = crate::render::MAX_LAYER_PARTICLES;

@@ -7,7 +7,7 @@
 
 use crate::scene::Aabb;
 use glam::{IVec3, UVec3, Vec3};
-use rayon::prelude::*;
+use p3_maybe_rayon::prelude::*;
 
 /// Most cells a grid has: wider cells beyond that (the counting sort's
 /// running sum is over cells, and the GPU's scan covers 2²⁰ entries, one
@@ -86,8 +86,7 @@ impl Grid {
     pub fn rebuild(&mut self, positions: &[Vec3]) {
         let shape = self.shape;
         let cells = shape.cells() as usize;
-        self.cell_of.clear();
-        self.cell_of.par_extend(positions.par_iter().map(|&p| shape.index(shape.coords(p))));
+        self.cell_of = positions.par_iter().map(|&p| shape.index(shape.coords(p))).collect();
         self.start.clear();
         self.start.resize(cells + 1, 0);
         for &c in &self.cell_of {

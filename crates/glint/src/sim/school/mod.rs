@@ -20,8 +20,8 @@ use crate::scene::Aabb;
 use glam::{Mat3, Mat4, Vec3};
 use grid::Grid;
 pub use grid::GridShape;
+use p3_maybe_rayon::prelude::*;
 use rand::{Rng, SeedableRng};
-use rayon::prelude::*;
 use rules::{confine, limit_speed, Seen};
 
 /// Most fish a school holds.
@@ -245,7 +245,6 @@ pub struct School {
     grid: Grid,
     /// Positions and velocities in the grid's order, rebuilt each step.
     sorted: Vec<(Vec3, Vec3)>,
-    next: Vec<Swimmer>,
     steps: u64,
 }
 
@@ -316,7 +315,7 @@ impl School {
     /// A school in the given state (tests build small cases by hand).
     pub fn from_state(params: SchoolParams, fish: Vec<Swimmer>, predator: Option<Swimmer>) -> Self {
         let shape = GridShape::new(params.bounds, params.radius, grid::MAX_CELLS.min(2 * fish.len() as u32 + 4096));
-        Self { params, fish, predator, grid: Grid::new(shape), sorted: Vec::new(), next: Vec::new(), steps: 0 }
+        Self { params, fish, predator, grid: Grid::new(shape), sorted: Vec::new(), steps: 0 }
     }
 
     /// Its parameters.
@@ -348,11 +347,15 @@ impl School {
         let positions: Vec<Vec3> = self.fish.par_iter().map(|f| f.position).collect();
         self.grid.rebuild(&positions);
         let fish = &self.fish;
-        self.sorted.clear();
-        self.sorted.par_extend(self.grid.order.par_iter().map(|&i| {
-            let f = &fish[i as usize];
-            (f.position, f.velocity)
-        }));
+        self.sorted = self
+            .grid
+            .order
+            .par_iter()
+            .map(|&i| {
+                let f = &fish[i as usize];
+                (f.position, f.velocity)
+            })
+            .collect();
     }
 
     /// What fish `i` feels now: each rule's pull, from the neighbours the
@@ -379,23 +382,25 @@ impl School {
     /// state at the step's start.
     pub fn step(&mut self, dt: f32) {
         self.rebuild_grid();
-        let mut next = std::mem::take(&mut self.next);
-        next.clear();
         let this = &*self;
         let p = &this.params;
-        next.par_extend(this.fish.par_iter().map(|f| {
-            let a = this.forces_of(f).acceleration(p);
-            let v = limit_speed(f.velocity + a * dt, f.velocity, p);
-            let (position, velocity) = confine(f.position + v * dt, v, p);
-            let velocity = limit_speed(velocity, v, p);
-            let mut moved = Swimmer { position, velocity, phase: f.phase };
-            moved.beat(dt, p.beat_rate, p.max_speed);
-            moved
-        }));
+        let next: Vec<Swimmer> = this
+            .fish
+            .par_iter()
+            .map(|f| {
+                let a = this.forces_of(f).acceleration(p);
+                let v = limit_speed(f.velocity + a * dt, f.velocity, p);
+                let (position, velocity) = confine(f.position + v * dt, v, p);
+                let velocity = limit_speed(velocity, v, p);
+                let mut moved = Swimmer { position, velocity, phase: f.phase };
+                moved.beat(dt, p.beat_rate, p.max_speed);
+                moved
+            })
+            .collect();
         if let (Some(h), Some(hunter)) = (self.predator, self.params.predator) {
             self.predator = Some(hunt(h, hunter, &self.fish, &self.params, dt));
         }
-        self.next = std::mem::replace(&mut self.fish, next);
+        self.fish = next;
         self.steps += 1;
     }
 
