@@ -2,7 +2,8 @@
 // on SwiftShader, loads the page for each demo scene on WebGL2 and on WebGPU,
 // waits for frames, reads the renderer's frame back, and compares it with
 // `glint render` of the same scene and camera (glint compare: the
-// reference-image tolerance). A broken scene must show its file:line error, and
+// reference-image tolerance), and the tablecloth's once it has draped with
+// `glint render --time` at that moment. A broken scene must show its file:line error, and
 // a lost device its message.
 // Prints one line per case and "N passed, M failed"; exits non-zero on a failure.
 import { chromium } from "playwright-core";
@@ -137,6 +138,32 @@ async function open(scene, backend, init = [], query = "") {
   return { page, state, logs, wall: Date.now() - start };
 }
 
+/** Read the page's frame back (as PNG, encoded by the browser), render `scene`
+ * with `glint render` at the page's size and `args`, and compare the two with
+ * `glint compare` (the reference-image tolerance); the images and the
+ * difference map are left in `out`. */
+async function compareWithGlint(page, logs, scene, backend, args) {
+  const png = await page.evaluate(async () => {
+    const f = await window.glintReadFrame();
+    const canvas = new OffscreenCanvas(f.width, f.height);
+    canvas.getContext("2d").putImageData(new ImageData(new Uint8ClampedArray(f.data), f.width, f.height), 0, 0);
+    const bytes = new Uint8Array(await (await canvas.convertToBlob({ type: "image/png" })).arrayBuffer());
+    let text = "";
+    for (const b of bytes) text += String.fromCharCode(b);
+    return btoa(text);
+  }).catch((e) => ({ unread: String(e).split("\n")[0] }));
+  if (png.unread) return { ok: false, verdict: `the frame could not be read back: ${png.unread}\n  ${logs.join("\n  ")}` };
+  const stem = `${out}/${scene.replace(/[\/.]/g, "_")}_${backend}`;
+  writeFileSync(`${stem}.page.png`, Buffer.from(png, "base64"));
+  execFileSync(glint, ["render", scene, "--size", `${size[0]}x${size[1]}`, "--msaa", "4", ...args, "-o", `${stem}.glint.png`]);
+  try {
+    const verdict = execFileSync(glint, ["compare", `${stem}.glint.png`, `${stem}.page.png`, "--diff", `${stem}.diff.png`]);
+    return { ok: true, verdict: verdict.toString().trim() };
+  } catch (e) {
+    return { ok: false, verdict: `${e.stdout}${e.stderr}`.trim() };
+  }
+}
+
 for (const backend of backends) {
   for (const scene of scenes) {
     const name = `${scene} on ${backend}`;
@@ -151,34 +178,10 @@ for (const backend of backends) {
       const module = await page.evaluate(() => document.documentElement.dataset.module);
       // WebGPU culls on the GPU, WebGL2 (no compute) on the CPU.
       const culling = await page.evaluate(() => document.getElementById("glint").dataset.culling);
-      // The frame as the renderer drew it, encoded as PNG by the browser.
-      const png = await page.evaluate(async () => {
-        const f = await window.glintReadFrame();
-        const canvas = new OffscreenCanvas(f.width, f.height);
-        canvas.getContext("2d").putImageData(new ImageData(new Uint8ClampedArray(f.data), f.width, f.height), 0, 0);
-        const bytes = new Uint8Array(await (await canvas.convertToBlob({ type: "image/png" })).arrayBuffer());
-        let text = "";
-        for (const b of bytes) text += String.fromCharCode(b);
-        return btoa(text);
-      }).catch((e) => ({ unread: String(e).split("\n")[0] }));
       const expected = backend === "webgpu" ? "WebGPU" : "WebGL2";
-      if (png.unread) {
-        report(false, name, `${shown}: the frame could not be read back: ${png.unread}\n  ${logs.join("\n  ")}`);
-        continue;
-      }
-      const stem = `${out}/${scene.replace(/[\/.]/g, "_")}_${backend}`;
-      writeFileSync(`${stem}.page.png`, Buffer.from(png, "base64"));
-      execFileSync(glint, ["render", scene, "--size", `${size[0]}x${size[1]}`, "--msaa", "4", "-o", `${stem}.glint.png`]);
-      let verdict, ok = true;
-      try {
-        verdict = execFileSync(glint, ["compare", `${stem}.glint.png`, `${stem}.page.png`, "--diff", `${stem}.diff.png`])
-          .toString().trim();
-      } catch (e) {
-        ok = false;
-        verdict = `${e.stdout}${e.stderr}`.trim();
-      }
       const expectedCulling = backend === "webgpu" ? "gpu" : "cpu";
-      if (shown !== expected || culling !== expectedCulling || module !== backend) ok = false;
+      const { ok: same, verdict } = await compareWithGlint(page, logs, scene, backend, []);
+      const ok = same && shown === expected && culling === expectedCulling && module === backend;
       report(ok, name, `${shown} (module ${module}), culled on the ${culling}, first frame ${Math.round(state.first)} ms after navigation; ${verdict}`);
     } finally {
       await page.close();
@@ -301,6 +304,36 @@ for (const backend of backends) {
     });
     report(moved > 0.002, `the aquarium on ${backend}`,
       `first frame ${Math.round(state.first)} ms after navigation; ${(100 * moved).toFixed(1)} % of pixels moved over 3 frames`);
+  } finally {
+    await page.close();
+  }
+}
+
+// The tablecloth falls onto its table as it does natively: the page's cloth
+// (faer's simplicial factorisations and plain loops in the wasm module, where
+// glint natively may use supernodal ones and rayon) is paused once it has
+// struck the table, and compared with `glint render --time` at the same time.
+for (const backend of backends) {
+  const scene = "scenes/tablecloth.scn";
+  const { page, state, logs } = await open(scene, backend);
+  try {
+    if (state.error) {
+      report(false, `the tablecloth on ${backend}`, `${state.error}\n  ${logs.join("\n  ")}`);
+      continue;
+    }
+    const time = await page.evaluate(async () => {
+      const canvas = document.getElementById("glint");
+      const frames = async (n) => {
+        const from = +canvas.dataset.frames;
+        while (+canvas.dataset.frames < from + n) await new Promise((r) => requestAnimationFrame(r));
+      };
+      while (+canvas.dataset.time < 0.3) await frames(1);
+      document.querySelector('[data-control="paused"]').click();
+      await frames(1);
+      return canvas.dataset.time;
+    });
+    const { ok, verdict } = await compareWithGlint(page, logs, scene, backend, ["--time", time]);
+    report(ok, `the tablecloth on ${backend}`, `paused at ${time} s; ${verdict}`);
   } finally {
     await page.close();
   }
