@@ -115,11 +115,21 @@ const report = (ok, name, detail) => {
   console.log(`${ok ? "ok  " : "FAIL"} ${name}: ${detail}`);
 };
 
+/** An init script: `window.glintAwaitFrames(n)` resolves once the page has
+ * drawn `n` more frames (data-frames). */
+function awaitFrames() {
+  window.glintAwaitFrames = async (n) => {
+    const canvas = document.getElementById("glint");
+    const from = +canvas.dataset.frames;
+    while (+canvas.dataset.frames < from + n) await new Promise((r) => requestAnimationFrame(r));
+  };
+}
+
 /** Open the page on `scene` and `backend` (running the `init` scripts before the page's own,
  * adding `query` to the address); wait for 3 frames or an error. */
 async function open(scene, backend, init = [], query = "") {
   const page = await browser.newPage({ viewport: { width: size[0] + 40, height: size[1] + 120 } });
-  for (const script of init) await page.addInitScript(script);
+  for (const script of [awaitFrames, ...init]) await page.addInitScript(script);
   const logs = [];
   page.on("console", (m) => logs.push(`${m.type()}: ${m.text()}`));
   page.on("pageerror", (e) => logs.push(`pageerror: ${e.message}`));
@@ -291,10 +301,8 @@ for (const backend of backends) {
       continue;
     }
     const moved = await page.evaluate(async () => {
-      const canvas = document.getElementById("glint");
       const a = await window.glintReadFrame();
-      const from = +canvas.dataset.frames;
-      while (+canvas.dataset.frames < from + 3) await new Promise((r) => requestAnimationFrame(r));
+      await window.glintAwaitFrames(3);
       const b = await window.glintReadFrame();
       let changed = 0;
       for (let i = 0; i < a.data.length; i += 4) {
@@ -323,10 +331,7 @@ for (const backend of backends) {
     }
     const time = await page.evaluate(async () => {
       const canvas = document.getElementById("glint");
-      const frames = async (n) => {
-        const from = +canvas.dataset.frames;
-        while (+canvas.dataset.frames < from + n) await new Promise((r) => requestAnimationFrame(r));
-      };
+      const frames = window.glintAwaitFrames;
       while (+canvas.dataset.time < 0.3) await frames(1);
       document.querySelector('[data-control="paused"]').click();
       await frames(1);
@@ -351,10 +356,7 @@ for (const backend of backends) {
     }
     const result = await page.evaluate(async () => {
       const canvas = document.getElementById("glint");
-      const frames = async (n) => {
-        const from = +canvas.dataset.frames;
-        while (+canvas.dataset.frames < from + n) await new Promise((r) => requestAnimationFrame(r));
-      };
+      const frames = window.glintAwaitFrames;
       const control = (id) => document.querySelector(`[data-control="${id}"]`);
       if (!control("shadows") || !control("density") || !control("paused")) return { missing: document.getElementById("controls").textContent };
       await frames(4);  // counts culled on the GPU come back a frame or two late
