@@ -4,6 +4,9 @@
 //! - `tiles.png` (sRGB colour): 4×4 glazed tiles with grout.
 //! - `tiles_normal.png` (linear, +Y up): the tiles' bevels as a normal map.
 //! - `leaf.png` (sRGB colour + alpha): a leaf on transparent ground, for alpha masking.
+//! - `turned.jpg` (sRGB colour): a 64×32 sign (red left, blue right, a yellow top
+//!   band) stored sideways, 32×64, with the EXIF orientation 6 ("turn a quarter
+//!   clockwise") that shows it upright, as cameras store photos taken on end.
 
 use image::{Rgba, RgbaImage};
 
@@ -103,8 +106,23 @@ fn main() -> Result<(), image::ImageError> {
         Rgba([(225.0 * l) as u8, (200.0 * l) as u8, (150.0 * l) as u8, 255])
     });
     sand.save(dir.join("sand.png"))?;
+
+    // The sign as it should look, stored turned a quarter back.
+    let sign = image::RgbImage::from_fn(64, 32, |x, y| match (x, y) {
+        (_, 0..8) => image::Rgb([240, 200, 40]),
+        (0..32, _) => image::Rgb([200, 40, 40]),
+        _ => image::Rgb([40, 60, 200]),
+    });
+    let mut jpeg = Vec::new();
+    let mut encoder = image::codecs::jpeg::JpegEncoder::new_with_quality(&mut jpeg, 95);
+    // TIFF, big-endian: one IFD entry, Orientation (0x0112), SHORT, 1 value: 6.
+    let exif =
+        [b"MM\0*".as_slice(), &[0, 0, 0, 8, 0, 1, 0x01, 0x12, 0, 3, 0, 0, 0, 1, 0, 6, 0, 0, 0, 0, 0, 0]].concat();
+    image::ImageEncoder::set_exif_metadata(&mut encoder, exif).map_err(image::ImageError::Unsupported)?;
+    encoder.encode_image(&image::imageops::rotate270(&sign))?;
+    std::fs::write(dir.join("turned.jpg"), jpeg).map_err(image::ImageError::IoError)?;
     println!(
-        "wrote tiles.png, tiles_normal.png, leaf.png, sand.png to {} and fish.png, bubble.png beside the underwater models",
+        "wrote tiles.png, tiles_normal.png, leaf.png, sand.png, turned.jpg to {} and fish.png, bubble.png beside the underwater models",
         dir.display()
     );
     Ok(())

@@ -41,6 +41,22 @@ for budget in webgl2:1300000 webgpu:660000; do
 done
 # A broken scene the page must report (line 3: a camera origin of two numbers).
 printf '{\n"classname" "camera"\n"origin" "0 1"\n}\n' > web/dist/scenes/broken.scn
+# A sign stored sideways in a JPEG whose EXIF orientation turns it upright: the
+# page's browser turns it as it decodes it, and glint's own decoder must too.
+cat > web/dist/scenes/turned.scn <<'EOF'
+{ "classname" "world"
+"ambient" "1 1 1" }
+{ "classname" "camera"
+"origin" "0 0 2.2"
+"target" "0 0 0" }
+{ "classname" "material"
+"name" "sign"
+"diffuse_map" "../assets/textures/turned.jpg" }
+{ "classname" "entity"
+"mesh" "cube"
+"material" "sign"
+"scale" "2 1 0.05" }
+EOF
 
 cargo build -q -p glint-cli
 port=$(python3 -c 'import socket; s = socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])')

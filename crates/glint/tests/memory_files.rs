@@ -13,9 +13,17 @@ use std::sync::Arc;
 /// What a host makes of an encoded image: width, height and RGBA8 pixels.
 type Decoded = Result<(u32, u32, Vec<u8>), String>;
 
-/// A host decoding as a browser does: PNG and JPEG to straight RGBA8.
+/// A host decoding as a browser does: PNG and JPEG to straight RGBA8, turned
+/// as the image's EXIF orientation says.
 fn decode(encoded: &[u8]) -> Decoded {
-    let image = image::load_from_memory(encoded).map_err(|e| e.to_string())?.into_rgba8();
+    use image::ImageDecoder;
+    let reader =
+        image::ImageReader::new(std::io::Cursor::new(encoded)).with_guessed_format().map_err(|e| e.to_string())?;
+    let mut decoder = reader.into_decoder().map_err(|e| e.to_string())?;
+    let orientation = decoder.orientation().map_err(|e| e.to_string())?;
+    let mut image = image::DynamicImage::from_decoder(decoder).map_err(|e| e.to_string())?;
+    image.apply_orientation(orientation);
+    let image = image.into_rgba8();
     Ok((image.width(), image.height(), image.into_raw()))
 }
 
@@ -128,6 +136,32 @@ fn assert_same_as_disk(scene: &SceneDesc, rounds: &[Vec<PathBuf>]) {
         assert_eq!(model.animations.len(), disk.animations.len(), "{file}");
     }
     assert!(!scene.models[1].textures.is_empty(), "the textures its MTL names");
+}
+
+#[test]
+fn a_jpeg_turned_by_its_exif_orientation_looks_the_same_decoded_by_glint_or_by_the_host() {
+    // Stored 32 x 64 with orientation 6 (turn a quarter clockwise): a 64 x 32
+    // sign, yellow along its top, red on its left, blue on its right.
+    let path = common::repo_root().join("assets/textures/turned.jpg");
+    let disk = glint::asset::load_texture(&path, true).expect("turned.jpg").image;
+    assert_eq!(disk.dimensions(), (64, 32));
+    let near = |(x, y): (u32, u32), rgb: [u8; 3]| {
+        let p = disk.get_pixel(x, y).0;
+        assert!((0..3).all(|i| p[i].abs_diff(rgb[i]) < 24), "({x}, {y}): {p:?}, expected about {rgb:?}");
+    };
+    near((32, 2), [240, 200, 40]);
+    near((8, 24), [200, 40, 40]);
+    near((56, 24), [40, 60, 200]);
+    // The same pixels as the stored ones turned, and as a host's (a browser's) turned ones.
+    let stored = image::load_from_memory(&std::fs::read(&path).unwrap()).unwrap().into_rgba8();
+    assert_eq!(stored.dimensions(), (32, 64));
+    assert!(image::imageops::rotate90(&stored) == disk);
+    let set = Arc::new(FileSet::host_decoding());
+    let scene = block(&[("classname", "material"), ("name", "sign"), ("diffuse_map", "assets/textures/turned.jpg")]);
+    set.insert(Path::new("sign.scn"), scene.into_bytes());
+    let (loaded, _, decoded) = load_with_host(&set, "sign.scn", decode);
+    assert_eq!(decoded, 1);
+    assert!(loaded.unwrap_or_else(|e| panic!("{e}")).textures[0].image == disk);
 }
 
 #[test]

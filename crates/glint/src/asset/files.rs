@@ -141,7 +141,8 @@ impl FileSet {
 
     /// Hand back what the host made of `encoded` (one of [`FileSet::take_undecoded`]'s):
     /// its width, height and RGBA8 pixels, top row first, not premultiplied and
-    /// with no colour conversion; or why it could not decode them.
+    /// with no colour conversion, turned as its EXIF orientation says (as
+    /// browsers do, and glint's own decoder); or why it could not decode them.
     pub fn insert_decoded(&self, encoded: Arc<[u8]>, decoded: Result<(u32, u32, Vec<u8>), String>) {
         let image = decoded.and_then(|(w, h, pixels)| {
             let len = pixels.len();

@@ -184,7 +184,8 @@ pub(crate) fn decode_texture(
         .host_decoded(bytes)
         .unwrap_or_else(|| decode_here(bytes, needs))
         .map_err(|e| format!("cannot decode texture: {e}"))?;
-    if image.dimensions() != (w, h) {
+    // An EXIF orientation that turns the image a quarter swaps its sides.
+    if image.dimensions() != (w, h) && image.dimensions() != (h, w) {
         let (dw, dh) = image.dimensions();
         return Err(format!("cannot decode texture: its header says {w} x {h} pixels, its data {dw} x {dh}"));
     }
@@ -192,17 +193,24 @@ pub(crate) fn decode_texture(
 }
 
 /// Decode PNG or JPEG bytes with the `image` crate, allocating at most about
-/// twice the `needs` bytes of the RGBA result.
+/// twice the `needs` bytes of the RGBA result, and turn the pixels as the
+/// image's EXIF orientation says, as browsers do (the page's images, which its
+/// browser decodes, look the same).
 #[cfg(feature = "png-jpeg")]
 fn decode_here(bytes: &[u8], needs: u64) -> Result<image::RgbaImage, String> {
-    let mut decoder =
+    use image::ImageDecoder;
+    let mut reader =
         image::ImageReader::new(std::io::Cursor::new(bytes)).with_guessed_format().map_err(|e| e.to_string())?;
     let mut limits = image::Limits::default();
     limits.max_image_width = Some(MAX_TEXTURE_SIDE);
     limits.max_image_height = Some(MAX_TEXTURE_SIDE);
     limits.max_alloc = Some(needs.max(1 << 20) * 2);
-    decoder.limits(limits);
-    Ok(decoder.decode().map_err(|e| e.to_string())?.into_rgba8())
+    reader.limits(limits);
+    let mut decoder = reader.into_decoder().map_err(|e| e.to_string())?;
+    let orientation = decoder.orientation().map_err(|e| e.to_string())?;
+    let mut image = image::DynamicImage::from_decoder(decoder).map_err(|e| e.to_string())?;
+    image.apply_orientation(orientation);
+    Ok(image.into_rgba8())
 }
 
 /// Without the `png-jpeg` feature only a host decodes PNG and JPEG.
