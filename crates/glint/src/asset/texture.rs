@@ -207,7 +207,8 @@ fn decode_here(bytes: &[u8], needs: u64) -> Result<image::RgbaImage, String> {
     limits.max_alloc = Some(needs.max(1 << 20) * 2);
     reader.limits(limits);
     let mut decoder = reader.into_decoder().map_err(|e| e.to_string())?;
-    let orientation = decoder.orientation().map_err(|e| e.to_string())?;
+    // An unreadable orientation leaves the image as stored, as browsers do.
+    let orientation = decoder.orientation().unwrap_or(image::metadata::Orientation::NoTransforms);
     let mut image = image::DynamicImage::from_decoder(decoder).map_err(|e| e.to_string())?;
     image.apply_orientation(orientation);
     Ok(image.into_rgba8())
