@@ -113,6 +113,24 @@ pub struct BenchConfig {
     pub density: f32,
 }
 
+/// Whether the naive frame may draw `desc`: at most
+/// [`MAX_NAIVE_DRAWS`](glint::render::MAX_NAIVE_DRAWS) instances (each one
+/// draw, about 5 KB of memory while the frame is built), else an error naming
+/// `scene`, before any GPU work.
+pub fn check_naive(desc: &SceneDesc, scene: &std::path::Path) -> Result<(), glint::Diagnostic> {
+    let (n, most) = (desc.instance_count(), glint::render::MAX_NAIVE_DRAWS);
+    if n > most {
+        return Err(glint::Diagnostic::file(
+            scene,
+            format!(
+                "the naive frame draws each instance alone, and this scene has {n}, more than the {most} it draws \
+                 (about 5 KB of memory each); measure the optimized frame alone (--mode optimized)"
+            ),
+        ));
+    }
+    Ok(())
+}
+
 /// The view a bench draws: the scene's first camera with its post chain, or
 /// with `post` instead when given.
 pub fn bench_view(desc: &SceneDesc, post: Option<Vec<glint::scene::PostEffect>>) -> glint::View {

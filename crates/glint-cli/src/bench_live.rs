@@ -48,7 +48,7 @@ pub fn run(gpu: &Gpu, desc: SceneDesc, config: &BenchConfig, (start, step): (f32
     let mut renderer = Renderer::new(gpu);
     renderer.set_density(config.density);
     let timed = renderer.enable_gpu_timing();
-    let mut world = World::place(desc, &mut renderer);
+    let mut world = World::place(desc, &mut renderer)?;
     let views = world.views(None);
     let (mut frame_ms, mut pose_ms, mut draw_ms, mut gpu_ms) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
     let mut last = None;

@@ -52,6 +52,9 @@ pub fn explain(args: ExplainArgs) -> Result<(), Error> {
     let desc = load(args.scene, args.options.clone())?;
     check_camera(&desc, args.scene, args.camera)?;
     desc.check_pose(args.time)?;
+    if args.naive {
+        crate::bench::check_naive(&desc, args.scene)?;
+    }
     let gpu = Gpu::headless()?;
     let mut modes = vec![explain_mode(&gpu, &desc, &args, FrameMode::Optimized)?];
     if args.naive {
@@ -125,7 +128,7 @@ fn explain_mode(
     renderer.set_explaining(true);
     // Each pass's GPU time too, where the device has timestamp queries.
     renderer.enable_gpu_timing();
-    let mut world = World::place(desc.clone(), &mut renderer);
+    let mut world = World::place(desc.clone(), &mut renderer)?;
     let views = culled(world.views(args.camera), args.cull);
     if args.view >= views.len() {
         let message = format!("--view {} requested, but the frame has {} views", args.view, views.len());

@@ -1,5 +1,9 @@
 //! The `glint` command-line tool.
 
+// Everything printed goes through `output` (checked writes): `println!`
+// panics when standard output cannot be written.
+#![deny(clippy::print_stdout)]
+
 mod bench;
 mod bench_live;
 mod compare;
@@ -269,7 +273,7 @@ fn parse_hours(s: &str) -> Result<f32, String> {
 fn number_in(s: &str, range: std::ops::RangeInclusive<f32>, what: &str) -> Result<f32, String> {
     match s.parse::<f32>() {
         Ok(v) if range.contains(&v) => Ok(v),
-        _ => Err(format!("expected {what} from {} to {}, found {s:?}", range.start(), range.end())),
+        _ => Err(format!("expected {what} from {} to {}", range.start(), range.end())),
     }
 }
 
@@ -387,15 +391,26 @@ fn run_bench(
         return Err(glint::Diagnostic::file(scene, "--frames must be at least 1").into());
     }
     let desc = load(scene, options)?;
+    // The naive baseline of a scene past its limit: refused when asked for
+    // alone, left out (and said so) beside the others.
+    let naive = bench::check_naive(&desc, scene);
+    let with_naive = match (mode, naive) {
+        (BenchMode::All, Err(e)) => {
+            eprintln!("note: no naive baseline: {}", e.message);
+            false
+        }
+        (BenchMode::Naive | BenchMode::Both, Err(e)) => return Err(e.into()),
+        (BenchMode::Optimized, _) => false,
+        (_, Ok(())) => true,
+    };
     let gpu = Gpu::headless()?;
     let view = bench::bench_view(&desc, post);
     let optimized = bench::BenchRun::Optimized(cull.map_or(view.culling, CullArg::culling));
     let runs = match mode {
-        BenchMode::All => vec![
-            bench::BenchRun::Naive,
-            bench::BenchRun::Culled(glint::Culling::Cpu),
-            bench::BenchRun::Culled(glint::Culling::Gpu),
-        ],
+        BenchMode::All => {
+            let culled = [glint::Culling::Cpu, glint::Culling::Gpu].map(bench::BenchRun::Culled);
+            with_naive.then_some(bench::BenchRun::Naive).into_iter().chain(culled).collect()
+        }
         BenchMode::Optimized => vec![optimized],
         BenchMode::Naive => vec![bench::BenchRun::Naive],
         BenchMode::Both => vec![optimized, bench::BenchRun::Naive],
@@ -404,7 +419,7 @@ fn run_bench(
         runs.into_iter().map(|r| bench::run_mode(&gpu, &desc, &view, r, config)).collect::<Result<Vec<_>, _>>()?;
     let speedup = match mode {
         BenchMode::Both => Some(reports[1].cpu_ms_median / reports[0].cpu_ms_median),
-        BenchMode::All => Some(reports[0].cpu_ms_median / reports[2].cpu_ms_median),
+        BenchMode::All if with_naive => Some(reports[0].cpu_ms_median / reports[2].cpu_ms_median),
         _ => None,
     };
     let ratios = bench::ratios(&reports);
@@ -452,11 +467,11 @@ fn run_bench(
 }
 
 fn parse_size(s: &str) -> Result<(u32, u32), String> {
-    let (w, h) = s.split_once(['x', 'X']).ok_or_else(|| format!("'{s}' is not WIDTHxHEIGHT"))?;
+    let (w, h) = s.split_once(['x', 'X']).ok_or_else(|| "expected WIDTHxHEIGHT".to_string())?;
     let side = |v: &str| v.trim().parse::<u32>().ok().filter(|&n| (1..=16384).contains(&n));
     match (side(w), side(h)) {
         (Some(w), Some(h)) => Ok((w, h)),
-        _ => Err(format!("'{s}': each side must be a whole number in 1..=16384")),
+        _ => Err("each side must be a whole number in 1..=16384".into()),
     }
 }
 
@@ -473,16 +488,14 @@ fn parse_orbit(s: &str) -> Result<f32, String> {
 fn parse_time(s: &str) -> Result<f32, String> {
     match s.trim().parse::<f32>() {
         Ok(t) if t.is_finite() && t >= 0.0 => Ok(t),
-        _ => Err(format!("'{s}' is not a time: expected seconds, 0 or more")),
+        _ => Err("not a time: expected seconds, 0 or more".into()),
     }
 }
 
 fn parse_fps(s: &str) -> Result<f32, String> {
     match s.trim().parse::<f32>() {
         Ok(f) if FPS_RANGE.contains(&f) => Ok(f),
-        _ => {
-            Err(format!("'{s}' is not a frame rate: expected a number in {}..={}", FPS_RANGE.start(), FPS_RANGE.end()))
-        }
+        _ => Err(format!("not a frame rate: expected a number in {}..={}", FPS_RANGE.start(), FPS_RANGE.end())),
     }
 }
 
@@ -499,7 +512,7 @@ fn parse_msaa(s: &str) -> Result<u32, String> {
     match s {
         "1" => Ok(1),
         "4" => Ok(4),
-        _ => Err(format!("'{s}': MSAA must be 1 or 4")),
+        _ => Err("MSAA must be 1 or 4".into()),
     }
 }
 
@@ -561,6 +574,44 @@ fn check(scene: &Path, options: LoadOptions) -> Result<(), Error> {
     Ok(())
 }
 
+/// `e` with every value it quotes from the command line (an invalid value,
+/// an unknown argument) cut to the message policy's
+/// [`MAX_QUOTED_CHARS`](glint::text::MAX_QUOTED_CHARS) characters, then its
+/// length, as `glint::text::quote` cuts values from files.
+fn quoted_within_policy(mut e: clap::Error) -> clap::Error {
+    use clap::error::ContextValue;
+    let most = glint::text::MAX_QUOTED_CHARS;
+    let cut = |s: &String| match s.chars().count() {
+        n if n > most => Some(format!("{}…({n} characters)", s.chars().take(most).collect::<String>())),
+        _ => None,
+    };
+    // A tip built from the value (how to pass it after `--`) is cut whole.
+    let styled = |s: &clap::builder::StyledStr| {
+        let text = s.to_string();
+        (text.chars().count() > 3 * most).then(|| glint::text::shorten(&text, 3 * most).into())
+    };
+    let long: Vec<_> = e
+        .context()
+        .filter_map(|(kind, value)| match value {
+            ContextValue::String(s) => cut(s).map(|s| (kind, ContextValue::String(s))),
+            ContextValue::Strings(list) if list.iter().any(|s| cut(s).is_some()) => {
+                let list = list.iter().map(|s| cut(s).unwrap_or_else(|| s.clone())).collect();
+                Some((kind, ContextValue::Strings(list)))
+            }
+            ContextValue::StyledStr(s) => styled(s).map(|s| (kind, ContextValue::StyledStr(s))),
+            ContextValue::StyledStrs(list) if list.iter().any(|s| styled(s).is_some()) => {
+                let list = list.iter().map(|s| styled(s).unwrap_or_else(|| s.clone())).collect();
+                Some((kind, ContextValue::StyledStrs(list)))
+            }
+            _ => None,
+        })
+        .collect();
+    for (kind, value) in long {
+        e.insert(kind, value);
+    }
+    e
+}
+
 fn main() -> ExitCode {
     // Mesa's device-select Vulkan layer complains about XDG_RUNTIME_DIR on headless
     // machines; it has nothing to select here. Set before any thread starts.
@@ -573,6 +624,7 @@ fn main() -> ExitCode {
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
         Err(e) => {
+            let e = quoted_within_policy(e);
             // Help and version go to stdout: a failed write there is a failure too.
             let printed = e.print().and_then(|()| std::io::Write::flush(&mut std::io::stdout()));
             return ExitCode::from(if e.use_stderr() || printed.is_err() { 1 } else { 0 });

@@ -81,7 +81,9 @@ pub fn particles(args: &ParticleArgs) -> Result<(), Error> {
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::VERTEX,
             mapped_at_creation: false,
         });
-        let mut on_gpu = GpuParticles::new((&gpu.device, &gpu.queue), params.clone(), dt, (&records, slots), blend)
+        let kernels = std::sync::Arc::new(glint::sim::particles::ParticleKernels::new(&gpu.device));
+        let device_queue = (&gpu.device, &gpu.queue);
+        let mut on_gpu = GpuParticles::new(device_queue, &kernels, params.clone(), dt, (&records, slots), blend)
             .map_err(|m| crate::sim::usage(&m))?;
         let mut run = |steps: u32| -> Result<f64, Error> {
             let start = Instant::now();
@@ -126,10 +128,10 @@ pub fn particles(args: &ParticleArgs) -> Result<(), Error> {
         threads: rayon::current_num_threads(),
     };
     if args.json {
-        println!("{}", serde_json::to_string(&report).expect("plain numbers serialise"));
+        crate::output::print(&format!("{}\n", serde_json::to_string(&report).expect("plain numbers serialise")))?;
     } else {
-        println!(
-            "{} alive particles ({} slots, {}) on the {}: {:.3} ms a step (median of {}; min {:.3}, max {:.3})",
+        crate::output::print(&format!(
+            "{} alive particles ({} slots, {}) on the {}: {:.3} ms a step (median of {}; min {:.3}, max {:.3})\n",
             report.alive,
             report.slots,
             report.blend,
@@ -138,7 +140,7 @@ pub fn particles(args: &ParticleArgs) -> Result<(), Error> {
             report.steps,
             report.ms_per_step_min,
             report.ms_per_step_max
-        );
+        ))?;
     }
     Ok(())
 }

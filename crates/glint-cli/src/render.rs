@@ -62,7 +62,7 @@ pub fn render(args: RenderArgs) -> Result<(), Error> {
     let mut target = OffscreenTarget::new(&gpu, width, height, msaa)?;
     let mut renderer = Renderer::new(&gpu);
     renderer.set_density(density);
-    let mut world = World::place(desc, &mut renderer);
+    let mut world = World::place(desc, &mut renderer)?;
     let views = culled(world.views(camera), cull);
     let progress = (range.len() > 1).then(|| {
         let bar = indicatif::ProgressBar::new(range.len() as u64);
@@ -253,7 +253,7 @@ fn frame_delay(fps: f32) -> (u16, u16) {
 
 /// `A..B`: frames A up to (not including) B.
 pub fn parse_range(s: &str) -> Result<Range<u32>, String> {
-    let expected = format!("'{s}': expected FIRST..END, frames FIRST up to (not including) END, such as 0..100");
+    let expected = "expected FIRST..END, frames FIRST up to (not including) END, such as 0..100".to_string();
     let (a, b) = s.split_once("..").ok_or_else(|| expected.clone())?;
     match (a.trim().parse::<u32>(), b.trim().parse::<u32>()) {
         (Ok(a), Ok(b)) if a < b => Ok(a..b),

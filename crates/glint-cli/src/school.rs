@@ -73,10 +73,10 @@ pub fn school(args: &SchoolArgs) -> Result<(), Error> {
     let school = School::new(params).map_err(|why| crate::sim::usage(&why))?;
     let (times, stats) = if args.gpu { gpu_steps(args, school)? } else { cpu_steps(args, school) };
     if !args.bench {
-        println!(
-            "{} fish after {} steps: mean speed {:.3}, polarisation {:.3}, nearest neighbour {:.3}",
+        crate::output::print(&format!(
+            "{} fish after {} steps: mean speed {:.3}, polarisation {:.3}, nearest neighbour {:.3}\n",
             args.fish, args.steps, stats.mean_speed, stats.polarisation, stats.nearest
-        );
+        ))?;
         return Ok(());
     }
     let mut sorted = times;
@@ -95,10 +95,10 @@ pub fn school(args: &SchoolArgs) -> Result<(), Error> {
         nearest: stats.nearest,
     };
     if args.json {
-        println!("{}", serde_json::to_string(&report).expect("plain numbers serialise"));
+        crate::output::print(&format!("{}\n", serde_json::to_string(&report).expect("plain numbers serialise")))?;
     } else {
-        println!(
-            "{} fish on the {}: {:.3} ms a step (median of {}; min {:.3}, max {:.3}), {:.1} steps/s",
+        crate::output::print(&format!(
+            "{} fish on the {}: {:.3} ms a step (median of {}; min {:.3}, max {:.3}), {:.1} steps/s\n",
             report.fish,
             report.path,
             report.ms_per_step,
@@ -106,7 +106,7 @@ pub fn school(args: &SchoolArgs) -> Result<(), Error> {
             report.ms_per_step_min,
             report.ms_per_step_max,
             report.steps_per_second
-        );
+        ))?;
     }
     Ok(())
 }

@@ -262,24 +262,25 @@ pub(crate) fn usage(message: &str) -> Error {
 }
 
 fn parse_pair<T: std::str::FromStr>(s: &str) -> Result<(T, T), String> {
-    let (a, b) = s.split_once(',').ok_or_else(|| format!("'{s}' is not A,B"))?;
+    let (a, b) = s.split_once(',').ok_or_else(|| "expected two numbers, A,B".to_string())?;
     match (a.trim().parse(), b.trim().parse()) {
         (Ok(a), Ok(b)) => Ok((a, b)),
-        _ => Err(format!("'{s}': expected two numbers, A,B")),
+        _ => Err("expected two numbers, A,B".into()),
     }
 }
 
 fn positive(s: &str) -> Result<f64, String> {
-    s.trim()
-        .parse::<f64>()
-        .ok()
-        .filter(|v| v.is_finite() && *v > 0.0)
-        .ok_or(format!("'{s}': expected a number above 0"))
+    s.trim().parse::<f64>().ok().filter(|v| v.is_finite() && *v > 0.0).ok_or_else(|| "expected a number above 0".into())
 }
 
-/// A number above 0, for `f32` options.
+/// A number above 0, for `f32` options: one that stays finite and above 0
+/// as an `f32` (1e300 would be infinite, 1e-300 zero).
 pub(crate) fn positive_f32(s: &str) -> Result<f32, String> {
-    positive(s).map(|v| v as f32)
+    let v = positive(s)? as f32;
+    match v.is_finite() && v >= f32::MIN_POSITIVE {
+        true => Ok(v),
+        false => Err(format!("expected a number from {:e} to {:e} (a 32-bit float)", f32::MIN_POSITIVE, f32::MAX)),
+    }
 }
 
 fn non_negative(s: &str) -> Result<f64, String> {
@@ -287,17 +288,17 @@ fn non_negative(s: &str) -> Result<f64, String> {
         .parse::<f64>()
         .ok()
         .filter(|v| v.is_finite() && *v >= 0.0)
-        .ok_or(format!("'{s}': expected a number 0 or above"))
+        .ok_or_else(|| "expected a number 0 or above".into())
 }
 
 fn poisson(s: &str) -> Result<f64, String> {
-    s.trim().parse::<f64>().ok().filter(|v| (0.0..=0.5).contains(v)).ok_or(format!("'{s}': expected 0 <= ν <= 0.5"))
+    s.trim().parse::<f64>().ok().filter(|v| (0.0..=0.5).contains(v)).ok_or_else(|| "expected 0 <= ν <= 0.5".into())
 }
 
 fn parse_vector(s: &str) -> Result<DVec3, String> {
     let v: Vec<f64> = s.split_whitespace().filter_map(|w| w.parse().ok().filter(|v: &f64| v.is_finite())).collect();
     match v[..] {
         [x, y, z] if s.split_whitespace().count() == 3 => Ok(DVec3::new(x, y, z)),
-        _ => Err(format!("'{s}': expected three numbers, \"X Y Z\"")),
+        _ => Err("expected three numbers, \"X Y Z\"".into()),
     }
 }

@@ -149,11 +149,7 @@ fn unknown_keys_warn_with_file_and_line_but_succeed() {
     std::fs::write(&path, "{\n\"classname\" \"entity\"\n\"mesh\" \"cube\"\n\"colour\" \"red\"\n}\n").expect("write");
     let out = glint(&["check", path.to_str().expect("path")]);
     assert_eq!(out.status.code(), Some(0));
-    assert!(
-        stderr(&out).contains(&format!("warning: {}:4: unknown key \"colour\"", path.display())),
-        "{}",
-        stderr(&out)
-    );
+    assert!(stderr(&out).contains(&format!("warning: {}:4: unknown key 'colour'", path.display())), "{}", stderr(&out));
 }
 
 #[test]

@@ -1,6 +1,6 @@
-//! Hostile input, round two, as a user meets it on the command line: every
-//! case is one error line and its exit code, never a panic, a hang or an
-//! allocation past the limits of `docs/limits.md`.
+//! Hostile input, rounds two and three, as a user meets it on the command
+//! line: every case is one error line and its exit code, never a panic, a
+//! hang or an allocation past the limits of `docs/limits.md`.
 
 mod common;
 
@@ -204,5 +204,108 @@ fn a_target_the_device_cannot_hold_is_exit_3_never_a_panic() {
         ),
         other => panic!("exit {other:?}: {text}"),
     }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn sim_reports_are_checked_writes() {
+    // `glint sim school` and `sim particles` panicked on a full stdout.
+    let cases: [&[&str]; 4] = [
+        &["sim", "school", "--fish", "20", "--steps", "1"],
+        &["sim", "school", "--fish", "20", "--steps", "1", "--bench", "--json"],
+        &["sim", "particles", "--alive", "1000", "--steps", "1"],
+        &["sim", "particles", "--alive", "1000", "--steps", "1", "--json"],
+    ];
+    for args in cases {
+        if let Some(out) = glint_to_full_stdout(args) {
+            assert_write_failed(&out, "standard output");
+        }
+    }
+}
+
+#[test]
+fn a_time_step_must_stay_a_32_bit_number() {
+    // 1e300 is finite as f64 and infinite as f32 (NaN statistics, exit 0); 1e-300 is 0.
+    for dt in ["1e300", "1e-300"] {
+        let out = glint(&["sim", "school", "--fish", "20", "--steps", "1", "--dt", dt]);
+        assert_bad_input(&out, "(a 32-bit float)");
+    }
+}
+
+#[test]
+fn long_command_line_values_are_quoted_to_the_policy() {
+    let long = "9".repeat(100_000);
+    let cases: [&[&str]; 8] = [
+        &["render", "tests/scenes/shapes.scn", "--fps", &long],
+        &["render", "tests/scenes/shapes.scn", "--size", &long],
+        &["render", "tests/scenes/shapes.scn", "--time", &long],
+        &["render", "tests/scenes/shapes.scn", "--frame-range", &long],
+        &["render", "tests/scenes/shapes.scn", "--time-of-day", &long],
+        &["bench", "tests/scenes/shapes.scn", "--density", &long],
+        &["view", "tests/scenes/shapes.scn", "--at", &long],
+        &["render", "tests/scenes/shapes.scn", &format!("--{long}")],
+    ];
+    for args in cases {
+        let out = glint(args);
+        let text = stderr(&out);
+        assert_eq!(out.status.code(), Some(1), "{}", glint::text::shorten(&text, 400));
+        assert!(text.len() < 1000 && text.contains(" characters)"), "{}", glint::text::shorten(&text, 400));
+    }
+}
+
+#[test]
+fn the_naive_frame_refuses_scenes_past_its_limit_before_the_gpu() {
+    let dir = scratch("naive");
+    let scene = dir.join("many.scn");
+    let count = glint::render::MAX_NAIVE_DRAWS + 1;
+    std::fs::write(&scene, format!("{{\n\"classname\" \"instances\"\n\"mesh\" \"cube\"\n\"count\" \"{count}\"\n}}\n"))
+        .unwrap();
+    let expected = "this scene has 250001, more than the 250000 it draws";
+    assert_bad_input(&glint(&["bench", path(&scene), "--mode", "naive", "--frames", "1"]), expected);
+    assert_bad_input(&glint(&["bench", path(&scene), "--mode", "both", "--frames", "1"]), expected);
+    assert_bad_input(&glint(&["explain", path(&scene), "--naive"]), expected);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn the_instance_limit_counts_each_part_of_a_placed_model() {
+    // An OBJ of two objects placed 2,000,000 times passed check and failed in render.
+    let dir = scratch("parts");
+    std::fs::write(
+        dir.join("two.obj"),
+        "o a\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\no b\nv 0 0 1\nv 1 0 1\nv 0 1 1\nf 4 5 6\n",
+    )
+    .unwrap();
+    let scene = dir.join("parts.scn");
+    let block =
+        |count: u64| format!("{{\n\"classname\" \"instances\"\n\"mesh\" \"two.obj\"\n\"count\" \"{count}\"\n}}\n");
+    std::fs::write(&scene, block(1_000_001)).unwrap();
+    assert_bad_input(
+        &glint(&["check", path(&scene)]),
+        "parts.scn:4: the scene places 2000002 instances (1000001 placements of a model that makes 2 instances each)",
+    );
+    std::fs::write(&scene, block(1_000_000)).unwrap();
+    let out = glint(&["check", path(&scene)]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    assert!(String::from_utf8_lossy(&out.stdout).contains("instances:  2000000"));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn a_swaying_sun_far_in_the_future_still_draws() {
+    // At --time 6e37 the sway's phase overflowed to NaN: exit 3 with an internal message.
+    let dir = scratch("sway");
+    let scene = dir.join("sway.scn");
+    std::fs::write(
+        &scene,
+        "{\n\"classname\" \"light_directional\"\n\"direction\" \"0.3 -1 0.2\"\n\"sway\" \"10 4\"\n\"shadows\" \"1\"\n}\n\
+         {\n\"classname\" \"entity\"\n\"mesh\" \"cube\"\n}\n{\n\"classname\" \"camera\"\n\"origin\" \"2 2 4\"\n}\n",
+    )
+    .unwrap();
+    let out = glint(&["render", path(&scene), "--time", "6e37", "--size", "16x16", "-o", path(&dir.join("o.png"))]);
+    if no_adapter(&out) {
+        return;
+    }
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
     std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -396,7 +396,7 @@ impl Shown {
         let mut renderer = Renderer::new(gpu);
         renderer.set_density(density);
         let controls = Controls::new(&desc, density);
-        let world = World::place(desc, &mut renderer);
+        let world = World::place(desc, &mut renderer).map_err(|e| e.to_string())?;
         let views = world.views(None);
         let camera = views.iter().find(|view| view.output.is_none()).ok_or("no camera draws into the page")?.camera;
         let fly = FlyCamera::from_camera(&camera, 0.5 * (camera.target - camera.eye).length().max(1.0));

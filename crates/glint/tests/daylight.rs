@@ -12,7 +12,7 @@ fn picture(gpu: &glint::Gpu, edit: impl FnOnce(&mut glint::asset::SceneDesc)) ->
     assert!(desc.warnings.is_empty(), "{:?}", desc.warnings);
     edit(&mut desc);
     let mut renderer = Renderer::new(gpu);
-    let mut world = World::place(desc, &mut renderer);
+    let mut world = World::place(desc, &mut renderer).expect("placed");
     world.pose(0.5, &mut renderer).expect("posed");
     let mut target = OffscreenTarget::new(gpu, 256, 256, 4).expect("target");
     let mut stats = world.draw(&mut renderer, &world.views(None), &mut target).expect("frame");
@@ -47,8 +47,8 @@ fn the_glare_brightens_the_view_toward_the_sun_over_everything() {
 #[test]
 fn the_hour_moves_sun_and_sky_together() {
     let Some(gpu) = common::gpu() else { return };
-    let (noon, _) = picture(gpu, |d| d.set_time_of_day(12.0));
-    let (night, _) = picture(gpu, |d| d.set_time_of_day(23.0));
+    let (noon, _) = picture(gpu, |d| d.set_time_of_day(12.0).unwrap());
+    let (night, _) = picture(gpu, |d| d.set_time_of_day(23.0).unwrap());
     let everywhere = |_, _| true;
     assert!(brightness(&noon, everywhere) > 2.0 * brightness(&night, everywhere), "night is dark");
     common::assert_matches_reference("glare_noon", &noon);

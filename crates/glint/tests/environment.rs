@@ -154,7 +154,7 @@ fn the_environment_is_prefiltered_only_when_it_changes() {
     };
     assert!(frame(&mut renderer, &desc), "the first frame prefilters");
     assert!(!frame(&mut renderer, &desc), "the same sky: nothing to do");
-    desc.set_time_of_day(17.0);
+    desc.set_time_of_day(17.0).unwrap();
     assert!(frame(&mut renderer, &desc), "another time of day bakes and prefilters the sky again");
     assert!(!frame(&mut renderer, &desc));
 }

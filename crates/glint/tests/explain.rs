@@ -15,7 +15,7 @@ fn explained(gpu: &Gpu, scene: &str, time: f32, mode: FrameMode) -> (Vec<FrameSt
     let mut renderer = Renderer::new(gpu);
     renderer.set_mode(mode);
     renderer.set_explaining(true);
-    let mut world = World::place(desc, &mut renderer);
+    let mut world = World::place(desc, &mut renderer).expect("placed");
     let views = world.views(None);
     let mut target = OffscreenTarget::new(gpu, 96, 64, 1).expect("target");
     world.pose(time, &mut renderer).expect("posed");

@@ -132,7 +132,7 @@ fn skinned_and_morphed_models_render_at_two_times() {
     for (file, name, eye, target) in cases {
         // One renderer across both times: the second frame re-uploads only what moved.
         let mut renderer = Renderer::new(gpu);
-        let mut world = glint::World::place(scene(file, eye, target), &mut renderer);
+        let mut world = glint::World::place(scene(file, eye, target), &mut renderer).expect("placed");
         let mut target_image = OffscreenTarget::new(gpu, 96, 96, 4).expect("target");
         for (time, suffix) in [(0.0, "t0"), (1.0, "t1")] {
             world.pose(time, &mut renderer).expect("no cloth to fail");

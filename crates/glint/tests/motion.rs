@@ -12,7 +12,7 @@ fn at(gpu: &glint::Gpu, time: f32, culling: Culling) -> (image::RgbaImage, glint
     let desc = common::load_scene(&common::repo_root().join("tests/scenes/motion.scn"));
     assert!(desc.warnings.is_empty(), "{:?}", desc.warnings);
     let mut renderer = Renderer::new(gpu);
-    let mut world = World::place(desc, &mut renderer);
+    let mut world = World::place(desc, &mut renderer).expect("placed");
     world.pose(time, &mut renderer).expect("posed");
     let views: Vec<_> = world.views(None).into_iter().map(|v| v.with_culling(culling)).collect();
     let mut target = OffscreenTarget::new(gpu, 256, 256, 4).expect("target");
@@ -66,7 +66,7 @@ fn a_model_whose_material_moves_is_drawn_at_the_scene_time_mid_flap() {
     let desc = common::load_scene(&common::repo_root().join("tests/scenes/butterflies.scn"));
     assert!(desc.warnings.is_empty(), "{:?}", desc.warnings);
     let mut renderer = Renderer::new(gpu);
-    let mut world = World::place(desc, &mut renderer);
+    let mut world = World::place(desc, &mut renderer).expect("placed");
     let mut pictures = Vec::new();
     // A quarter beat (wings up) and three quarters (down), at one beat a second.
     for time in [0.25, 0.75] {

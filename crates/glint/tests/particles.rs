@@ -14,7 +14,7 @@ fn emitter_at(gpu: &glint::Gpu, times: &[f32]) -> (Vec<image::RgbaImage>, Vec<gl
     let desc = common::load_scene(&common::repo_root().join("tests/scenes/emitter.scn"));
     assert!(desc.warnings.is_empty(), "{:?}", desc.warnings);
     let mut renderer = Renderer::new(gpu);
-    let mut world = World::place(desc, &mut renderer);
+    let mut world = World::place(desc, &mut renderer).expect("placed");
     let mut target = OffscreenTarget::new(gpu, 256, 256, 4).expect("target");
     let (mut pictures, mut stats) = (Vec::new(), Vec::new());
     for &time in times {
@@ -89,12 +89,13 @@ fn gpu_particles_match_the_cpu_slot_for_slot() {
     let dt = 1.0 / 60.0;
     let mut cpu = ParticleSystem::new(params.clone(), dt).unwrap();
     let slots = cpu.schedule().slots() as u32;
-    let layer =
-        renderer.add_particles(slots, ParticleLook { blend: ParticleBlend::Additive, texture: None, soft: 0.0 });
+    let look = ParticleLook { blend: ParticleBlend::Additive, texture: None, soft: 0.0 };
+    let layer = renderer.add_particles(slots, look).unwrap();
     let (buffer, capacity) = renderer.particle_buffer(layer).map(|(b, c)| (b.clone(), c)).unwrap();
+    let kernels = std::sync::Arc::new(glint::sim::particles::ParticleKernels::new(renderer.device_and_queue().0));
+    let blend = ParticleBlend::Additive;
     let mut on_gpu =
-        GpuParticles::new(renderer.device_and_queue(), params, dt, (&buffer, capacity), ParticleBlend::Additive)
-            .unwrap();
+        GpuParticles::new(renderer.device_and_queue(), &kernels, params, dt, (&buffer, capacity), blend).unwrap();
     for _ in 0..100 {
         cpu.step();
     }
@@ -122,7 +123,7 @@ fn soft_at(gpu: &glint::Gpu, soft: f32) -> image::RgbaImage {
     assert!(desc.warnings.is_empty(), "{:?}", desc.warnings);
     desc.emitters[0].soft = soft;
     let mut renderer = Renderer::new(gpu);
-    let mut world = World::place(desc, &mut renderer);
+    let mut world = World::place(desc, &mut renderer).expect("placed");
     world.pose(3.0, &mut renderer).expect("posed");
     let mut target = OffscreenTarget::new(gpu, 256, 256, 4).expect("target");
     let views = world.views(None);

@@ -92,7 +92,7 @@ fn school_at(gpu: &glint::Gpu, time: f32) -> (image::RgbaImage, glint::World) {
     let desc = common::load_scene(&common::repo_root().join("tests/scenes/school.scn"));
     assert!(desc.warnings.is_empty(), "{:?}", desc.warnings);
     let mut renderer = glint::Renderer::new(gpu);
-    let mut world = glint::World::place(desc, &mut renderer);
+    let mut world = glint::World::place(desc, &mut renderer).expect("placed");
     world.pose(time, &mut renderer).expect("posed");
     let mut target = glint::OffscreenTarget::new(gpu, 256, 256, 4).expect("target");
     world.draw(&mut renderer, &world.views(None), &mut target).expect("frame");
@@ -137,13 +137,13 @@ fn a_school_or_emitter_broken_after_loading_is_an_error_when_posed_not_a_panic()
     let mut desc = common::load_scene(&common::repo_root().join("tests/scenes/school.scn"));
     desc.schools[0].params.count = 0;
     let mut renderer = glint::Renderer::new(gpu);
-    let mut world = glint::World::place(desc, &mut renderer);
+    let mut world = glint::World::place(desc, &mut renderer).expect("placed");
     let err = world.pose(1.0, &mut renderer).unwrap_err();
     assert_eq!(err.exit_code(), 1);
     assert!(err.to_string().contains("school.scn:38: school: count must be 1"), "{err}");
     let mut desc = common::load_scene(&common::repo_root().join("tests/scenes/emitter.scn"));
     desc.emitters[1].params.lifetime = (2.0, 1.0);
-    let mut world = glint::World::place(desc, &mut renderer);
+    let mut world = glint::World::place(desc, &mut renderer).expect("placed");
     let err = world.pose(1.0, &mut renderer).unwrap_err().to_string();
     assert!(err.contains("emitter.scn:35: emitter: lifetime must be min max"), "{err}");
 }

@@ -145,14 +145,19 @@ struct Scene {
 impl Scene {
     /// `desc` placed in a new renderer, showing camera `camera` (see
     /// [`World::views`]), culled as `cull` says where given.
-    fn new(gpu: &Gpu, desc: SceneDesc, camera: Option<usize>, (cull, density): (Option<crate::CullArg>, f32)) -> Self {
+    fn new(
+        gpu: &Gpu,
+        desc: SceneDesc,
+        camera: Option<usize>,
+        (cull, density): (Option<crate::CullArg>, f32),
+    ) -> Result<Self, Error> {
         let mut renderer = Renderer::new(gpu);
         renderer.set_density(density);
         // The overlay shows each pass's GPU time, where the device can tell.
         renderer.enable_gpu_timing();
-        let world = World::place(desc, &mut renderer);
+        let world = World::place(desc, &mut renderer)?;
         let views = crate::culled(world.views(camera), cull);
-        Self { world, renderer, views }
+        Ok(Self { world, renderer, views })
     }
 
     /// The view the fly camera moves: the first into the window.
@@ -216,7 +221,7 @@ impl App {
         let msaa = if gpu.supports_msaa(self.args.msaa) { self.args.msaa } else { 1 };
         let target = OffscreenTarget::new(&gpu, size.width.max(1), size.height.max(1), msaa)?;
         let controls = free_controls(&desc, self.args.density);
-        let scene = Scene::new(&gpu, desc, self.args.camera, (self.args.cull, self.args.density));
+        let scene = Scene::new(&gpu, desc, self.args.camera, (self.args.cull, self.args.density))?;
         let camera = scene.camera();
         let overlay = Overlay::new(&window, &gpu, target.format().color);
         eprintln!("glint view: {} on {} ({:?})", self.args.scene.display(), gpu.info().name, gpu.info().backend);
@@ -274,9 +279,14 @@ impl View {
                 // The views come from the new file (the chosen camera, or all
                 // views when it has no longer one); the fly camera's place
                 // stays, and so do the density and the free camera.
-                self.controls = free_controls(&desc, self.controls.density());
-                self.shown_camera = None;
-                self.scene = Scene::new(&self.gpu, desc, camera_index, cull);
+                let controls = free_controls(&desc, self.controls.density());
+                match Scene::new(&self.gpu, desc, camera_index, cull) {
+                    Ok(scene) => (self.scene, self.controls, self.shown_camera) = (scene, controls, None),
+                    Err(e) => {
+                        eprintln!("error: {e}\n  (keeping the last good scene)");
+                        return;
+                    }
+                }
                 // Animations and cloths start again from the beginning, rather
                 // than a new cloth stepping all the way to the old time at once.
                 self.clock.restart();
@@ -295,7 +305,7 @@ impl View {
         let Some(debug) = self.controls.cloth_debug_to_show(self.scene.world.desc()) else { return Ok(()) };
         let mut desc = self.scene.world.desc().clone();
         desc.set_cloth_debug(debug)?;
-        self.scene = Scene::new(&self.gpu, desc, camera, cull);
+        self.scene = Scene::new(&self.gpu, desc, camera, cull)?;
         self.shown_camera = None;
         self.clock.restart();
         Ok(())

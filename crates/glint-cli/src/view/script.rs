@@ -43,13 +43,13 @@ pub fn parse_at(s: &str) -> Result<Scripted, String> {
     let expected = "expected FRAME:resize=WxH, FRAME:minimize, FRAME:restore, FRAME:screenshot=PATH, \
                     FRAME:density=D, FRAME:time_of_day=H, FRAME:overlay=on|off, FRAME:set=CONTROL=VALUE \
                     or FRAME:stats=PATH";
-    let (frame, action) = s.split_once(':').ok_or_else(|| format!("'{s}': {expected}"))?;
+    let (frame, action) = s.split_once(':').ok_or_else(|| expected.to_string())?;
     let frame = frame
         .trim()
         .parse::<u32>()
         .ok()
         .filter(|&f| f >= 1)
-        .ok_or_else(|| format!("'{s}': the frame must be a whole number from 1"))?;
+        .ok_or_else(|| "the frame must be a whole number from 1".to_string())?;
     let action = match action.split_once('=') {
         None if action == "minimize" => Action::Minimize,
         None if action == "restore" => Action::Restore,
@@ -66,11 +66,11 @@ pub fn parse_at(s: &str) -> Result<Scripted, String> {
         Some(("set", setting)) => match setting.split_once('=') {
             Some((id, value)) if !id.is_empty() => match value.parse::<f32>() {
                 Ok(v) if v.is_finite() => Action::Set(id.to_owned(), v),
-                _ => return Err(format!("'{s}': the value of a control must be a number")),
+                _ => return Err("the value of a control must be a number".into()),
             },
-            _ => return Err(format!("'{s}': {expected}")),
+            _ => return Err(expected.into()),
         },
-        _ => return Err(format!("'{s}': {expected}")),
+        _ => return Err(expected.into()),
     };
     Ok(Scripted { frame, action })
 }

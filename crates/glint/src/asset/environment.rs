@@ -141,14 +141,28 @@ pub(crate) fn read_environment(path: &Path, free: u64, files: &super::Files) -> 
     decode_environment(&bytes, name, free).map_err(|m| Diagnostic::file(path, m))
 }
 
+/// Most pixels of an environment: an equirectangular image 8192 × 4096
+/// (decoding one from OpenEXR peaks near 1.3 GB).
+pub const MAX_ENVIRONMENT_PIXELS: u64 = 8192 * 4096;
+
+/// Most bytes of a Radiance header, its lines up to the empty one (glint's
+/// own encoder writes 50): the decoder keeps every line, at about 40 bytes of
+/// memory per byte.
+pub const MAX_HDR_HEADER_BYTES: usize = 64 * 1024;
+
 /// Decode `.hdr` or OpenEXR bytes (as [`read_environment`] does).
 pub(crate) fn decode_environment(bytes: &[u8], name: String, free: u64) -> Result<EnvironmentImage, String> {
     use super::MAX_TEXTURE_SIDE;
     let reader = || image::ImageReader::new(Cursor::new(bytes)).with_guessed_format();
-    let decoder = reader().map_err(|e| format!("cannot read environment: {e}"))?;
-    match decoder.format() {
-        Some(image::ImageFormat::Hdr) => {}
-        Some(image::ImageFormat::OpenExr) if cfg!(feature = "exr") => {}
+    let decoder = reader().map_err(|e| format!("cannot read environment: {}", super::image_error(&e.into())))?;
+    let format = decoder.format();
+    // Bytes the decoder needs beside the result (an OpenEXR's data window).
+    let mut decoding = 0;
+    match format {
+        Some(image::ImageFormat::Hdr) => check_hdr_header(bytes)?,
+        #[cfg(feature = "exr")]
+        Some(image::ImageFormat::OpenExr) => decoding = check_exr_header(bytes)?,
+        #[cfg(not(feature = "exr"))]
         Some(image::ImageFormat::OpenExr) => {
             return Err("OpenEXR environments are read where glint is built with its feature `exr` (the web page \
                         is not): convert it to a Radiance .hdr"
@@ -157,21 +171,26 @@ pub(crate) fn decode_environment(bytes: &[u8], name: String, free: u64) -> Resul
         Some(other) => return Err(format!("expected a Radiance .hdr or OpenEXR image, found {other:?}")),
         None => return Err("expected a Radiance .hdr or OpenEXR image".into()),
     }
-    let (w, h) = (reader().map_err(|e| format!("cannot read environment: {e}"))?)
-        .into_dimensions()
-        .map_err(|e| format!("cannot read environment: {e}"))?;
+    let fail = |what: &str, e: image::ImageError| format!("cannot {what} environment: {}", super::image_error(&e));
+    let decoder_now = reader().map_err(|e| fail("read", e.into()))?;
+    let (w, h) = decoder_now.into_dimensions().map_err(|e| fail("read", e))?;
     if w.max(h) > MAX_TEXTURE_SIDE {
         return Err(format!("{w} x {h} pixels: environments may be at most {MAX_TEXTURE_SIDE} pixels a side"));
+    }
+    if u64::from(w) * u64::from(h) > MAX_ENVIRONMENT_PIXELS {
+        return Err(format!(
+            "{w} x {h} pixels: environments may have at most {MAX_ENVIRONMENT_PIXELS} pixels (8192 x 4096)"
+        ));
     }
     if w < 2 || h < 1 {
         return Err(format!("{w} x {h} pixels: an environment needs at least 2 x 1"));
     }
     let needs = TEXEL_BYTES * u64::from(w) * u64::from(h);
-    if needs > free {
+    if needs.max(decoding) > free {
         let mib = |bytes: u64| bytes as f64 / f64::from(1 << 20);
         return Err(format!(
             "{w} x {h} pixels need {:.1} MiB decoded, but only {:.1} MiB of texture memory are left",
-            mib(needs),
+            mib(needs.max(decoding)),
             mib(free)
         ));
     }
@@ -179,12 +198,74 @@ pub(crate) fn decode_environment(bytes: &[u8], name: String, free: u64) -> Resul
     limits.max_image_width = Some(MAX_TEXTURE_SIDE);
     limits.max_image_height = Some(MAX_TEXTURE_SIDE);
     // The decoders hold a row buffer or an RGBA f32 copy beside the result.
-    limits.max_alloc = Some(needs.max(1 << 20) * 3);
+    limits.max_alloc = Some(needs.max(decoding).max(1 << 20) * 3);
     let mut decoder = decoder;
     decoder.limits(limits);
-    let image = decoder.decode().map_err(|e| format!("cannot decode environment: {e}"))?;
+    let image = decoder.decode().map_err(|e| fail("decode", e))?;
     Ok(EnvironmentImage::new(name, image.into_rgb32f()))
 }
+
+/// Check a Radiance header before the decoder reads it: it ends (an empty
+/// line) within [`MAX_HDR_HEADER_BYTES`], and its `FORMAT`, when given, is
+/// the one the decoder reads. Says what was expected, never quoting the file.
+fn check_hdr_header(bytes: &[u8]) -> Result<(), String> {
+    let head = &bytes[..bytes.len().min(MAX_HDR_HEADER_BYTES)];
+    let Some(end) = head.windows(2).position(|w| w == b"\n\n") else {
+        return Err(format!(
+            "the Radiance header does not end (an empty line) within its first {MAX_HDR_HEADER_BYTES} bytes"
+        ));
+    };
+    let format = head[..end].split(|&b| b == b'\n').find_map(|line| line.strip_prefix(b"FORMAT="));
+    match format.map(<[u8]>::trim_ascii) {
+        None | Some(b"32-bit_rle_rgbe") => Ok(()),
+        Some(_) => Err("the Radiance header's FORMAT is not 32-bit_rle_rgbe, the only one glint reads".into()),
+    }
+}
+
+/// Check an OpenEXR header before the decoder reads it, as its decoder does
+/// not: every layer's data window, display window and tiles at most
+/// [`MAX_TEXTURE_SIDE`](super::MAX_TEXTURE_SIDE) a side, and offset tables the
+/// file can hold (8 bytes a chunk). Returns the bytes decoding the data
+/// windows takes (RGBA f32), which must fit the texture memory too.
+#[cfg(feature = "exr")]
+fn check_exr_header(bytes: &[u8]) -> Result<u64, String> {
+    use exr::meta::BlockDescription;
+    let side = super::MAX_TEXTURE_SIDE as usize;
+    let meta = exr::meta::MetaData::read_from_buffered(Cursor::new(bytes), false)
+        .map_err(|_| "cannot read the OpenEXR header: expected an OpenEXR 2 image".to_string())?;
+    if meta.headers.len() > MAX_EXR_LAYERS {
+        return Err(format!("{} layers: an environment may have at most {MAX_EXR_LAYERS}", meta.headers.len()));
+    }
+    let mut decoding = 0u64;
+    let mut chunks = 0u64;
+    for (k, header) in meta.headers.iter().enumerate() {
+        let display = header.shared_attributes.display_window.size;
+        let tiles = match &header.blocks {
+            BlockDescription::Tiles(t) => Some(t.tile_size),
+            BlockDescription::ScanLines => None,
+        };
+        let sizes = [("data window", Some(header.layer_size)), ("display window", Some(display)), ("tiles", tiles)];
+        for (what, size) in sizes.iter().filter_map(|(w, s)| s.map(|s| (w, s))) {
+            if size.width() > side || size.height() > side {
+                return Err(format!(
+                    "layer {k}: its {what} is {} x {} pixels; environments may be at most {side} a side",
+                    size.width(),
+                    size.height()
+                ));
+            }
+        }
+        decoding += 16 * header.layer_size.area() as u64;
+        chunks += header.chunk_count as u64;
+    }
+    if chunks.saturating_mul(8) > bytes.len() as u64 {
+        return Err(format!("its layers have {chunks} chunks, more than the file's offset tables can hold"));
+    }
+    Ok(decoding)
+}
+
+/// Most layers of an OpenEXR environment (each is checked and decoded).
+#[cfg(feature = "exr")]
+const MAX_EXR_LAYERS: usize = 16;
 
 /// The bytes of decoded pixels `environment` holds (counted in a scene's texture memory).
 pub(crate) fn decoded_bytes(environment: &EnvironmentImage) -> u64 {

@@ -28,7 +28,9 @@ mod scn_targets;
 mod texture;
 
 pub(crate) use environment::{decoded_bytes, read_environment};
-pub use environment::{equirect_direction, equirect_uv, EnvironmentImage, MAX_RADIANCE};
+pub use environment::{
+    equirect_direction, equirect_uv, EnvironmentImage, MAX_ENVIRONMENT_PIXELS, MAX_HDR_HEADER_BYTES, MAX_RADIANCE,
+};
 pub(crate) use files::AssetFolder;
 pub use files::{FileSet, Files};
 pub use files::{
@@ -40,9 +42,10 @@ pub use procedural::ShapeKind;
 pub use scene_desc::{CameraView, DrawOptions, EntityDesc, LightSway, MaterialDesc, MeshRef, SceneDesc, TextureRef};
 pub use scn::{load_scene, load_scene_with, parse_scene, parse_scene_with, MAX_CAMERAS, MAX_INSTANCES};
 pub use scn_cloth::{ClothDesc, ClothSetup, MAX_POSE_STEPS};
-pub use scn_emitter::{EmitterDesc, MAX_POSE_PARTICLE_STEPS};
-pub use scn_school::{SchoolDesc, MAX_POSE_FISH_STEPS};
+pub use scn_emitter::{EmitterDesc, MAX_EMITTERS, MAX_POSE_PARTICLE_STEPS, MAX_SCENE_PARTICLES, STEP_OVERHEAD};
+pub use scn_school::{SchoolDesc, MAX_POSE_SCHOOL_TESTS};
 pub use scn_targets::{RenderTargetDesc, MAX_RENDER_TARGETS, MAX_RENDER_TARGET_BYTES, MAX_RENDER_TARGET_SIDE};
+pub(crate) use texture::image_error;
 pub use texture::{load_image, load_texture, Texture, MAX_TEXTURE_MEMORY, MAX_TEXTURE_SIDE};
 
 use std::fmt;

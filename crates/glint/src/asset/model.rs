@@ -112,6 +112,12 @@ pub struct Model {
 }
 
 impl Model {
+    /// Instances one placement of the model makes: one per transform of each
+    /// part (a glTF mesh used by several nodes is one part placed at each).
+    pub fn instances_per_placement(&self) -> usize {
+        self.parts.iter().map(|p| p.transforms.len()).sum()
+    }
+
     /// Load a model file: Wavefront `.obj` (with its `.mtl` libraries), or glTF
     /// 2.0 `.gltf` / `.glb`.
     pub fn load(path: &Path) -> Result<Self, Diagnostic> {

@@ -3,6 +3,7 @@
 use super::scn::{Loader, Placement, MAX_INSTANCES, MAX_TILES};
 use super::scn_fields::Fields;
 use super::Diagnostic;
+use crate::scene::MAX_COMPACT_HALF;
 use crate::text::quote;
 use glam::{Mat4, Quat, Vec3};
 use rand::seq::SliceRandom;
@@ -78,6 +79,21 @@ pub(crate) fn sort_into_tiles(transforms: &mut Vec<Mat4>, n: u32, origin: Vec3, 
     sizes
 }
 
+/// Whether every instance's y and scale fit a compact instance's half floats
+/// (at most [`MAX_COMPACT_HALF`] in size), else what is out of range.
+fn check_compact(transforms: &[Mat4]) -> Result<(), String> {
+    let (y, scale) = transforms
+        .iter()
+        .fold((0.0f32, 0.0f32), |(y, s), m| (y.max(m.w_axis.y.abs()), s.max(m.y_axis.truncate().length())));
+    if y > MAX_COMPACT_HALF || scale > MAX_COMPACT_HALF {
+        return Err(format!(
+            "\"compact\" stores each instance's y and scale as half floats, at most {MAX_COMPACT_HALF}: \
+             these instances reach y {y} and scale {scale}; move \"origin\" nearer, or leave out \"compact\""
+        ));
+    }
+    Ok(())
+}
+
 impl Loader<'_> {
     /// An `instances` block: `count` copies of a mesh placed on a grid or at
     /// random in a box, optionally sorted into tiles.
@@ -107,7 +123,7 @@ impl Loader<'_> {
                 format!("\"count\" is {count}, more than glint allows in one file ({MAX_INSTANCES})"),
             ));
         }
-        self.count_instances(count, count_pair.line)?;
+        self.count_instances(count, &mesh, count_pair.line)?;
         let random = matches!(f.choice("layout", &["grid", "random"])?, Some((1, _)));
         let origin = f.vec3("origin")?.unwrap_or(Vec3::ZERO);
         let extent = f.vec3("extent")?.unwrap_or(Vec3::new(10.0, 0.0, 10.0));
@@ -136,6 +152,9 @@ impl Loader<'_> {
         let compact = f.flag("compact")?;
         let tiles = match tiles {
             Some(n) => {
+                if compact == Some(true) {
+                    check_compact(&transforms).map_err(|m| Diagnostic::at(self.path, f.block.line, m))?;
+                }
                 let sizes = sort_into_tiles(&mut transforms, n as u32, origin, extent, seed.wrapping_add(1));
                 let tiles = crate::scene::Tiles::from_sizes(sizes, padding.unwrap_or(0.0));
                 Some((tiles, density.unwrap_or(1.0), compact.unwrap_or(false)))

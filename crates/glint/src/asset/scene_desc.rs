@@ -268,15 +268,25 @@ impl SceneDesc {
         Ok(changed)
     }
 
-    /// Total instances over all render tasks.
+    /// Total instances over all render tasks: a model's placements count once
+    /// per instance of each of its parts ([`Model::instances_per_placement`]).
     pub fn instance_count(&self) -> usize {
-        self.entities.iter().map(|e| e.transforms.len()).sum()
+        self.entities.iter().map(|e| e.transforms.len() * self.instances_per_placement(&e.mesh)).sum()
+    }
+
+    /// Instances one placement of `mesh` makes: one for a shape, a model's
+    /// [`Model::instances_per_placement`].
+    pub fn instances_per_placement(&self, mesh: &MeshRef) -> usize {
+        match *mesh {
+            MeshRef::Shape(_) => 1,
+            MeshRef::Model(i) => self.models.get(i).map_or(1, Model::instances_per_placement),
+        }
     }
 
     /// Check, without stepping, that posing at `time` stays within the cloth
     /// limits ([`MAX_POSE_STEPS`](super::MAX_POSE_STEPS) per cloth, 10⁹
     /// node²-steps over all of them; see `docs/limits.md`) and the schools'
-    /// ([`MAX_POSE_FISH_STEPS`](super::MAX_POSE_FISH_STEPS)) and emitters'
+    /// ([`MAX_POSE_SCHOOL_TESTS`](super::MAX_POSE_SCHOOL_TESTS)) and emitters'
     /// ([`MAX_POSE_PARTICLE_STEPS`](super::MAX_POSE_PARTICLE_STEPS)), each at most
     /// [`MAX_POSE_STEPS`](super::MAX_POSE_STEPS) steps too: the error names
     /// the block that goes over. Posing at an earlier time takes no more work.
@@ -300,7 +310,7 @@ impl SceneDesc {
             e.params.check().and(dt).map_err(|m| Diagnostic::at(&self.path, e.line, format!("emitter: {m}")))?;
         }
         let fish = super::scn_school::pose_work(&self.schools, time);
-        within(&self.path, (super::MAX_POSE_FISH_STEPS, "fish-steps"), fish)?;
+        within(&self.path, (super::MAX_POSE_SCHOOL_TESTS, "neighbour tests"), fish)?;
         let particles = super::scn_emitter::pose_work(&self.emitters, time);
         within(&self.path, (super::MAX_POSE_PARTICLE_STEPS, "particle-steps"), particles)
     }

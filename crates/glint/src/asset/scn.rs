@@ -95,6 +95,7 @@ pub fn parse_scene_with(path: &Path, text: &str, options: LoadOptions) -> Result
         camera_lines: Vec::new(),
         targets: scn_targets::Targets::default(),
         time_of_day: None,
+        time_of_day_line: None,
         deferred: None,
     };
     loader.time_of_day = loader.options.time_of_day;
@@ -150,8 +151,10 @@ pub(super) struct Loader<'a> {
     camera_lines: Vec<usize>,
     /// The `render_target` blocks so far, by name.
     targets: scn_targets::Targets,
-    /// The world's `time_of_day`, applied once every light is read.
+    /// The world's `time_of_day` (or the caller's), applied once every light is read.
     time_of_day: Option<f32>,
+    /// The line of the world's `time_of_day`, when it came from the file.
+    time_of_day_line: Option<usize>,
     /// The first error that came of a file the memory set lacks ([`Loader::defer`]).
     deferred: Option<Diagnostic>,
 }
@@ -204,6 +207,7 @@ impl Loader<'_> {
             "school" => self.school(&mut f)?,
             "emitter" => {
                 let (params, looks, dt) = scn_emitter::parse(&mut f, block.line)?;
+                scn_emitter::check_scene_room(&self.scene.emitters, &params).map_err(|m| Diagnostic::at(self.path, block.line, m))?;
                 if f.get("texture").is_some_and(|p| self.targets.map(self.path, p.line, &p.value).is_some()) {
                     return Err(Diagnostic::at(self.path, block.line, "\"texture\": particles show an image file, not a render target"));
                 }
@@ -264,7 +268,10 @@ impl Loader<'_> {
             env.glare = glare;
         }
         let hours = f.number("time_of_day", 0.0..=24.0)?;
-        self.time_of_day = self.time_of_day.or(hours);
+        if self.time_of_day.is_none() && hours.is_some() {
+            self.time_of_day = hours;
+            self.time_of_day_line = f.get("time_of_day").map(|p| p.line);
+        }
         if let Some(strength) = f.number("wind", 0.0..=crate::scene::MAX_WIND)? {
             env.wind.strength = strength;
         }
@@ -503,7 +510,7 @@ impl Loader<'_> {
             let Some(rest) = pair.key.strip_prefix(prefix) else { continue };
             f.used[i] = true;
             let (name, key) = rest.rsplit_once('.').ok_or_else(|| {
-                Diagnostic::at(self.path, pair.line, format!("\"{}\": expected {prefix}MATERIAL.key", pair.key))
+                Diagnostic::at(self.path, pair.line, format!("{}: expected {prefix}MATERIAL.key", quote(&pair.key)))
             })?;
             let stripped = Pair { key: key.to_string(), value: pair.value.clone(), line: pair.line };
             match slot.get(name) {
@@ -574,14 +581,21 @@ impl Loader<'_> {
         Ok(())
     }
 
-    pub(super) fn count_instances(&mut self, n: u64, line: usize) -> Result<(), Diagnostic> {
-        self.instances += n;
+    /// Count `n` placements of `mesh` against [`MAX_INSTANCES`], each as
+    /// many instances as the mesh makes (a model's parts and their nodes).
+    pub(super) fn count_instances(&mut self, n: u64, mesh: &MeshRef, line: usize) -> Result<(), Diagnostic> {
+        let each = self.scene.instances_per_placement(mesh) as u64;
+        self.instances = self.instances.saturating_add(n.saturating_mul(each));
         if self.instances > MAX_INSTANCES {
+            let parts = match each {
+                1 => String::new(),
+                _ => format!(" ({n} placements of a model that makes {each} instances each)"),
+            };
             return Err(Diagnostic::at(
                 self.path,
                 line,
                 format!(
-                    "the scene places {} instances, more than glint allows in one file ({MAX_INSTANCES})",
+                    "the scene places {} instances{parts}, more than glint allows in one file ({MAX_INSTANCES})",
                     self.instances
                 ),
             ));
@@ -610,7 +624,7 @@ impl Loader<'_> {
         let origin = f.vec3("origin")?.unwrap_or(Vec3::ZERO);
         let angles = f.vec3("angles")?.unwrap_or(Vec3::ZERO);
         let scale = Self::scale(f)?;
-        self.count_instances(1, f.block.line)?;
+        self.count_instances(1, &mesh, f.block.line)?;
         let transform = Mat4::from_scale_rotation_translation(scale, rotation(angles), origin);
         let draw = Self::draw_options(f)?;
         self.placements.push(Placement {
@@ -638,7 +652,10 @@ impl Loader<'_> {
             return Err(error);
         }
         if let Some(hours) = self.time_of_day {
-            self.scene.set_time_of_day(hours);
+            self.scene.set_time_of_day(hours).map_err(|e| match self.time_of_day_line {
+                Some(line) => Diagnostic::at(self.path, line, e.message),
+                None => e,
+            })?;
         }
         self.scene.textures = std::mem::replace(&mut self.textures, TextureCache::new(0)).into_textures();
         // Tiled blocks are entities of their own (keyed by their place).

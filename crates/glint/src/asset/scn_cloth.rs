@@ -422,7 +422,7 @@ mod tests {
             assert!(err.message.contains(message), "{body}: {err}");
         }
         let warned = parse("\"sise\" \"1 1\"\n").unwrap();
-        assert!(warned.warnings[0].message.contains("unknown key \"sise\" in cloth block"));
+        assert!(warned.warnings[0].message.contains("unknown key 'sise' in cloth block"));
     }
 
     #[test]

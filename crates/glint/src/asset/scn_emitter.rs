@@ -11,9 +11,43 @@ use crate::sim::particles::{Burst, EmitterParams, Schedule, SpawnShape, MAX_PART
 use crate::text::quote;
 use glam::{Vec3, Vec4};
 
-/// Most particle-steps one pose may take over a scene's emitters (slots ×
-/// steps to the time): a far `--time` is an error rather than minutes.
-pub const MAX_POSE_PARTICLE_STEPS: u64 = 4_000_000_000;
+/// Most particle-steps one pose may take over a scene's emitters (steps to
+/// the time × (slots + [`STEP_OVERHEAD`])): a far `--time` is an error
+/// rather than minutes. 4·10⁸ take about 25 s on this project's 2-core
+/// machine (10⁶ slots step in about 60 ms on the CPU).
+pub const MAX_POSE_PARTICLE_STEPS: u64 = 400_000_000;
+
+/// What one step of an emitter costs beside its slots, in particle-steps:
+/// the step's own work (its compute pass and its dispatches recorded, or the
+/// CPU's loop over the schedule) is about what stepping this many particles
+/// costs, so a tiny emitter stepped a million times counts as the work it is.
+pub const STEP_OVERHEAD: u64 = 16_384;
+
+/// Most `emitter` blocks in a scene: each is a particle layer drawn in every
+/// view and, on the GPU, a compute pass every frame.
+pub const MAX_EMITTERS: usize = 256;
+
+/// Most particle slots over a scene's emitters: what one emitter may hold
+/// ([`MAX_PARTICLES`]), about 300 MB of GPU buffers; twenty emitters at
+/// their largest ran the machine out of memory.
+pub const MAX_SCENE_PARTICLES: u64 = MAX_PARTICLES as u64;
+
+/// Whether a scene with `emitters` has room for one more of `params`: at most
+/// [`MAX_EMITTERS`] emitters and [`MAX_SCENE_PARTICLES`] slots in all.
+pub(crate) fn check_scene_room(emitters: &[EmitterDesc], params: &EmitterParams) -> Result<(), String> {
+    if emitters.len() >= MAX_EMITTERS {
+        return Err(format!("a scene may have at most {MAX_EMITTERS} emitters; this is one more"));
+    }
+    let slots = |p: &EmitterParams| Schedule::new(p).slots();
+    let total = emitters.iter().map(|e| slots(&e.params)).sum::<u64>() + slots(params);
+    if total > MAX_SCENE_PARTICLES {
+        return Err(format!(
+            "the scene's emitters hold {total} particle slots with this one, more than the \
+             {MAX_SCENE_PARTICLES} a scene may have: lower \"rate\", \"lifetime\" or \"burst\""
+        ));
+    }
+    Ok(())
+}
 
 /// An `emitter` block.
 #[derive(Clone, Debug)]
@@ -38,9 +72,11 @@ impl EmitterDesc {
         (f64::from(time.max(0.0)) / f64::from(self.dt)).round() as u64
     }
 
-    /// Particle-steps posing at `time` takes (every slot, every step).
+    /// Particle-steps posing at `time` takes: every slot, every step, and
+    /// each step's own [`STEP_OVERHEAD`].
     pub fn pose_work(&self, time: f32) -> u64 {
-        self.steps_to(time).saturating_mul(Schedule::new(&self.params).slots())
+        let slots = Schedule::new(&self.params).slots();
+        self.steps_to(time).saturating_mul(slots.saturating_add(STEP_OVERHEAD))
     }
 }
 
@@ -201,7 +237,10 @@ pub(crate) fn parse(f: &mut Fields, line: usize) -> Result<(EmitterParams, Looks
 pub(crate) fn pose_work(emitters: &[EmitterDesc], time: f32) -> impl Iterator<Item = (usize, u64, u64, String)> + '_ {
     emitters.iter().map(move |e| {
         let slots = Schedule::new(&e.params).slots();
-        let what = format!("emitter: time {time} s is {} steps of {slots} particle slots", e.steps_to(time));
+        let what = format!(
+            "emitter: time {time} s is {} steps of {slots} particle slots (each step counting {STEP_OVERHEAD} more for itself)",
+            e.steps_to(time)
+        );
         (e.line, e.steps_to(time), e.pose_work(time), what)
     })
 }

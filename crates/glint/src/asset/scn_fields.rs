@@ -183,13 +183,13 @@ impl<'b> Fields<'b> {
                 out.push(Diagnostic::at(
                     self.path,
                     pair.line,
-                    format!("\"{}\" is given again later in this block; the last one is used", pair.key),
+                    format!("{} is given again later in this block; the last one is used", quote(&pair.key)),
                 ));
             } else if !self.used[i] && pair.key != "classname" {
                 out.push(Diagnostic::at(
                     self.path,
                     pair.line,
-                    format!("unknown key \"{}\" in {} block (ignored)", pair.key, self.class),
+                    format!("unknown key {} in {} block (ignored)", quote(&pair.key), self.class),
                 ));
             }
         }

@@ -1,7 +1,9 @@
-//! Hostile `.scn` input, round two: render targets, cameras, cloth work and
-//! message lengths, each refused at its line before the work or memory it
-//! would take (`docs/limits.md`).
+//! Hostile `.scn` input, rounds two and three: render targets, cameras,
+//! cloth work and message lengths; emitters, schools, compact instances,
+//! model placements and the sun, each refused at its line before the work
+//! or memory it would take (`docs/limits.md`).
 
+use super::scn_emitter::MAX_EMITTERS;
 use super::scn_targets::MAX_RENDER_TARGETS;
 use super::*;
 use std::fmt::Write;
@@ -168,4 +170,105 @@ fn a_render_target_may_be_named_above_its_block() {
     let scene = parse(&text).unwrap();
     assert_eq!(scene.camera_views[0].output, Some(0));
     assert_eq!(scene.materials[0].diffuse_map, Some(scene.textures.len()), "the target's texture follows the files");
+}
+
+fn emitter(body: &str) -> String {
+    format!("{{\n\"classname\" \"emitter\"\n{body}}}\n")
+}
+
+#[test]
+fn emitters_past_their_count_or_the_scene_s_particles_are_refused_at_their_block() {
+    // A thousand tiny emitters segfaulted after 24 s: each a layer, buffers and pipelines.
+    let tiny = emitter("\"rate\" \"1\"\n\"lifetime\" \"1\"\n");
+    let err = parse(&tiny.repeat(MAX_EMITTERS + 1)).unwrap_err();
+    assert_eq!(err.line, Some(MAX_EMITTERS * 5 + 1), "{err}");
+    assert!(err.message.contains("at most 256 emitters"), "{err}");
+    assert_eq!(parse(&tiny.repeat(MAX_EMITTERS)).unwrap().emitters.len(), MAX_EMITTERS);
+    // Twenty emitters at the largest rate took 6.1 GB: three million slots
+    // fit once, not twice.
+    let big = emitter("\"rate\" \"1000000\"\n\"lifetime\" \"3\"\n");
+    assert!(parse(&big).is_ok());
+    let err = parse(&big.repeat(2)).unwrap_err();
+    assert_eq!(err.line, Some(6), "{err}");
+    assert!(err.message.contains("more than the 4194304 a scene may have"), "{err}");
+}
+
+#[test]
+fn an_emitter_s_steps_count_for_themselves_in_the_pose_budget() {
+    // 50 emitters of 2 slots at dt 0.0001 to 10 s: 5·10⁶ recorded dispatches
+    // (3 GB) at 0.25 % of the old budget.
+    let small = emitter("\"rate\" \"1\"\n\"lifetime\" \"1\"\n\"dt\" \"0.0001\"\n");
+    let scene = parse(&small.repeat(50)).unwrap();
+    let err = scene.check_pose(10.0).unwrap_err();
+    assert!(err.message.contains("each step counting 16384 more for itself"), "{err}");
+    assert!(scene.check_pose(0.01).is_ok());
+    // The budget's own edge is about 25 s of stepping, not minutes: 10⁶ slots
+    // for 500 steps is past it.
+    let million = parse(&emitter("\"rate\" \"1000000\"\n\"lifetime\" \"1\"\n\"dt\" \"0.01\"\n")).unwrap();
+    assert!(million.check_pose(3.0).is_ok());
+    assert!(million.check_pose(5.0).unwrap_err().message.contains("particle-steps a pose may take"));
+}
+
+fn school(body: &str) -> String {
+    format!("{{\n\"classname\" \"school\"\n\"mesh\" \"cone\"\n{body}}}\n")
+}
+
+#[test]
+fn a_school_s_budget_counts_its_density_and_its_grid() {
+    // 40,000 fish in a 2-unit box took 13 s a step: each fish tested every
+    // other. Now each tests at most MAX_NEIGHBOUR_TESTS, and the budget counts them.
+    let dense = parse(&school("\"count\" \"40000\"\n\"bounds\" \"-1 -1 -1 1 1 1\"\n")).unwrap();
+    let sparse = parse(&school("\"count\" \"40000\"\n\"bounds\" \"-30 -30 -30 30 30 30\"\n")).unwrap();
+    let cost = |scene: &SceneDesc| scene.schools[0].params.step_cost();
+    let tests = u64::from(crate::sim::school::MAX_NEIGHBOUR_TESTS) + crate::sim::school::FISH_STEP_TESTS;
+    assert!(cost(&dense) >= 40_000 * tests, "{}", cost(&dense));
+    assert!(cost(&sparse) < cost(&dense) / 4, "{} against {}", cost(&sparse), cost(&dense));
+    let err = dense.check_pose(60.0).unwrap_err();
+    assert!(err.message.contains("neighbour tests"), "{err}");
+    // 200 one-fish schools at 1000 s ran past 30 s at 1 % of the fish-step
+    // budget: each step sorts into a grid of thousands of cells.
+    let one = school("\"count\" \"1\"\n\"bounds\" \"-15 -15 -15 15 15 15\"\n");
+    let many = parse(&one.repeat(200)).unwrap();
+    assert!(cost(&many) > 3000, "a grid of thousands of cells: {}", cost(&many));
+    assert!(many.check_pose(1000.0).unwrap_err().message.contains("neighbour tests a pose may take"));
+    assert!(many.check_pose(10.0).is_ok());
+}
+
+#[test]
+fn compact_instances_past_a_half_float_are_refused_at_their_block() {
+    let block = |origin: &str, scale: &str| {
+        format!(
+            "{{\n\"classname\" \"instances\"\n\"mesh\" \"cone\"\n\"count\" \"16\"\n\"tiles\" \"2\"\n\
+             \"compact\" \"1\"\n\"origin\" \"{origin}\"\n\"scale\" \"{scale}\"\n}}\n"
+        )
+    };
+    assert!(parse(&block("0 0 0", "1 1")).is_ok());
+    for (origin, scale) in [("0 70000 0", "1 1"), ("0 -70000 0", "1 1"), ("0 0 0", "66000 70000")] {
+        let err = parse(&block(origin, scale)).unwrap_err();
+        assert_eq!(err.line, Some(1), "{err}");
+        assert!(err.message.contains("as half floats, at most 65504"), "{err}");
+    }
+    // x and z are stored exactly.
+    assert!(parse(&block("1e6 0 -1e6", "1 1")).is_ok());
+}
+
+#[test]
+fn time_of_day_without_room_for_a_sun_is_an_error_at_its_line() {
+    let point = "{\n\"classname\" \"light_point\"\n\"origin\" \"0 1 0\"\n}\n";
+    let world = "{\n\"classname\" \"world\"\n\"time_of_day\" \"12\"\n}\n";
+    let err = parse(&format!("{world}{}", point.repeat(crate::scene::MAX_LIGHTS))).unwrap_err();
+    assert_eq!(err.line, Some(3), "{err}");
+    assert!(err.message.contains("time_of_day needs a sun: the scene has 64 lights, none directional"), "{err}");
+    let fits = parse(&format!("{world}{}", point.repeat(crate::scene::MAX_LIGHTS - 1))).unwrap();
+    assert_eq!(fits.lights.len(), crate::scene::MAX_LIGHTS, "the sun is added");
+}
+
+#[test]
+fn unknown_keys_and_obstacles_say_what_they_must_in_few_words() {
+    let long = "k".repeat(100_000);
+    let scene = parse(&format!("{{\n\"classname\" \"camera\"\n\"{long}\" \"1\"\n}}\n")).unwrap();
+    let warning = scene.warnings[0].to_string();
+    assert!(warning.len() < 160 && warning.contains("(100000 characters)"), "{warning}");
+    let err = parse(&school("\"bounds\" \"-5 -5 -5 5 5 5\"\n\"obstacles\" \"0 0 0 1e6\"\n")).unwrap_err();
+    assert!(err.message.contains("radius 1000000 must be above 0 and at most 100000"), "{err}");
 }

@@ -87,7 +87,11 @@ impl super::SceneDesc {
     /// none), the sky gradient and the ambient light to `hours` of the day
     /// ([`Daylight::at`](crate::scene::Daylight::at)): the world's
     /// `time_of_day`. The glare follows the sun, whose direction and colour it takes.
-    pub fn set_time_of_day(&mut self, hours: f32) {
+    ///
+    /// A scene with no directional light and already [`MAX_LIGHTS`](crate::scene::MAX_LIGHTS)
+    /// lights has no room for a sun: its sky and ambient light still move, its
+    /// lights stay as they are, and the error says so.
+    pub fn set_time_of_day(&mut self, hours: f32) -> Result<(), Diagnostic> {
         let day = crate::scene::Daylight::at(hours);
         self.time_of_day = Some(hours);
         let directional = |l: &Light| matches!(l.kind, crate::scene::LightKind::Directional { .. });
@@ -105,6 +109,18 @@ impl super::SceneDesc {
         let env = &mut self.environment;
         env.background = crate::scene::Background::Gradient { top: day.sky_top, bottom: day.sky_bottom };
         env.ambient = day.ambient;
+        match self.lights.iter().any(directional) {
+            true => Ok(()),
+            false => Err(Diagnostic::file(
+                &self.path,
+                format!(
+                    "time_of_day needs a sun: the scene has {} lights, none directional, and a frame \
+                     can use at most {}; make one of them light_directional or leave out a light",
+                    self.lights.len(),
+                    crate::scene::MAX_LIGHTS
+                ),
+            )),
+        }
     }
 }
 
@@ -117,9 +133,14 @@ impl super::LightSway {
         let base = self.base.normalize_or(Vec3::NEG_Y);
         let across = base.cross(Vec3::Y).try_normalize().unwrap_or(Vec3::X);
         let other = base.cross(across);
-        let tau = std::f32::consts::TAU;
-        let a = self.degrees.to_radians() * (tau * time / self.period).sin();
-        let b = 0.5 * self.degrees.to_radians() * (tau * time / (0.7 * self.period) + 1.0).sin();
+        // The phase is taken modulo one swing in f64 first: 2π·t overflows f32
+        // at t ≈ 5·10³⁷ s, and sin(∞) is NaN.
+        let phase = |period: f32| {
+            let turns = (f64::from(time) / f64::from(period)).rem_euclid(1.0);
+            (turns * std::f64::consts::TAU) as f32
+        };
+        let a = self.degrees.to_radians() * phase(self.period).sin();
+        let b = 0.5 * self.degrees.to_radians() * (phase(0.7 * self.period) + 1.0).sin();
         glam::Quat::from_axis_angle(other, b) * (glam::Quat::from_axis_angle(across, a) * base)
     }
 }
@@ -144,6 +165,11 @@ mod tests {
         let scene = light("10 4").unwrap();
         let sway = &scene.light_sways[0];
         assert_eq!((sway.light, sway.degrees, sway.period), (0, 10.0, 4.0));
+        // Far in the future the phase is still a phase: no NaN direction.
+        for t in [6e37, f32::MAX, 1e9 + 0.25] {
+            let d = sway.direction_at(t);
+            assert!(d.is_finite() && (d.length() - 1.0).abs() < 1e-4, "{t}: {d}");
+        }
         let base = sway.base.normalize();
         let mut most: f32 = 0.0;
         for k in 0..200 {
@@ -188,7 +214,7 @@ mod tests {
             "{ \"classname\" \"light_point\"\n\"origin\" \"0 2 0\"\n\"shadows\" \"1\"\n\"shadow_distance\" \"9\" }\n",
         )
         .unwrap();
-        assert!(scene.warnings[0].to_string().contains("t.scn:4: unknown key \"shadow_distance\""));
+        assert!(scene.warnings[0].to_string().contains("t.scn:4: unknown key 'shadow_distance'"));
         for (text, expected) in [
             ("\"shadows\" \"yes\"", "t.scn:3: \"shadows\" is 'yes', expected 0 or 1"),
             ("\"shadow_map_size\" \"8\"", "t.scn:3: \"shadow_map_size\" is '8', expected a whole number in 16..=8192"),

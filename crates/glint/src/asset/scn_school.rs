@@ -10,11 +10,12 @@ use crate::scene::Aabb;
 use crate::sim::school::{Hunter, Obstacle, SchoolParams, Weights, MAX_FISH};
 use glam::Vec3;
 
-/// Most fish-steps one pose may take over a scene's schools (fish × steps to
-/// the time): about ten minutes of stepping on the 2-core reference machine
-/// (50,000 fish step in about 12 ms there), so a far `--time` is an error
-/// rather than hours.
-pub const MAX_POSE_FISH_STEPS: u64 = 2_000_000_000;
+/// Most work one pose may take over a scene's schools, in neighbour tests
+/// (steps to the time × [`SchoolParams::step_cost`]: each fish's tests at
+/// its starting density, its own rules, and the grid's cells), so a far
+/// `--time` is an error rather than minutes: about 25 s of stepping on this
+/// project's 2-core machine (`docs/limits.md`).
+pub const MAX_POSE_SCHOOL_TESTS: u64 = 10_000_000_000;
 
 /// Most obstacles one school may have (the GPU school's block holds as many).
 pub const MAX_OBSTACLES: usize = crate::sim::school::MAX_GPU_OBSTACLES;
@@ -45,9 +46,9 @@ impl SchoolDesc {
         (f64::from(time.max(0.0)) / f64::from(self.dt)).round() as u64
     }
 
-    /// Fish-steps posing at `time` takes.
+    /// Neighbour tests posing at `time` counts as ([`SchoolParams::step_cost`] a step).
     pub fn pose_work(&self, time: f32) -> u64 {
-        self.steps_to(time).saturating_mul(self.params.count as u64)
+        self.steps_to(time).saturating_mul(self.params.step_cost())
     }
 
     /// Each fish's scale: `size` varied ±15 % by its number.
@@ -102,7 +103,10 @@ pub(crate) fn parse(f: &mut Fields, line: usize) -> Result<(SchoolParams, f32, f
                     let one = super::scn_syntax::Pair { key: pair.key.clone(), value: s.to_string(), line: pair.line };
                     let [x, y, z, r] = numbers::<4>(f.path, &one, "spheres \"x y z radius\" separated by ;")?;
                     if !(r > 0.0 && r <= 1e5) {
-                        return Err(at(pair.line, format!("\"obstacles\": radius {r} must be above 0")));
+                        return Err(at(
+                            pair.line,
+                            format!("\"obstacles\": radius {r} must be above 0 and at most 100000"),
+                        ));
                     }
                     Ok(Obstacle { center: Vec3::new(x, y, z), radius: r })
                 })
@@ -170,7 +174,10 @@ impl Loader<'_> {
         };
         let predator_material = f.get("predator_material").map(|p| (p.value.trim().to_string(), p.line));
         let (params, dt, size, predator_size) = parse(f, line)?;
-        self.count_instances(params.count as u64 + u64::from(predator_mesh.is_some()), line)?;
+        self.count_instances(params.count as u64, &mesh, line)?;
+        if let Some(predator) = &predator_mesh {
+            self.count_instances(1, predator, line)?;
+        }
         let draw = Self::draw_options(f)?;
         let mut school = SchoolDesc {
             line,
@@ -203,10 +210,15 @@ impl Loader<'_> {
 }
 
 /// What posing every school at `time` takes, for [`SceneDesc::check_pose`](super::SceneDesc::check_pose):
-/// each block's line, steps, fish-steps, and what they are.
+/// each block's line, steps, neighbour tests, and what they are.
 pub(crate) fn pose_work(schools: &[SchoolDesc], time: f32) -> impl Iterator<Item = (usize, u64, u64, String)> + '_ {
     schools.iter().map(move |s| {
-        let what = format!("school: time {time} s is {} steps of {} fish", s.steps_to(time), s.params.count);
+        let what = format!(
+            "school: time {time} s is {} steps of {} fish, counted as {} neighbour tests a step",
+            s.steps_to(time),
+            s.params.count,
+            s.params.step_cost()
+        );
         (s.line, s.steps_to(time), s.pose_work(time), what)
     })
 }

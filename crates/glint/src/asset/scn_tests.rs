@@ -92,7 +92,7 @@ fn unknown_keys_warn_with_their_line() {
     let scene = parse("{\n\"classname\" \"entity\"\n\"mesh\" \"cube\"\n\"colour\" \"1 0 0\"\n}\n").unwrap();
     assert_eq!(scene.warnings.len(), 1);
     assert_eq!(scene.warnings[0].line, Some(4));
-    assert!(scene.warnings[0].message.contains("unknown key \"colour\""));
+    assert!(scene.warnings[0].message.contains("unknown key 'colour'"));
 }
 
 /// A `material` block named m with `extra` from its fourth line.

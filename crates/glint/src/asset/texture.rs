@@ -192,6 +192,31 @@ pub(crate) fn decode_texture(
     Ok(Texture::new(name, image, srgb))
 }
 
+/// What went wrong in one of `image`'s decoders, by kind alone: their own
+/// messages may quote the file (a Radiance header's `FORMAT` value), and
+/// nothing read from a file is quoted (`docs/limits.md`).
+pub(crate) fn image_error(e: &image::ImageError) -> String {
+    use image::ImageError as E;
+    match e {
+        E::Decoding(d) => format!("its {} data is malformed", format_name(d.format_hint())),
+        E::Limits(_) => "decoding it needs more memory than its size allows".into(),
+        E::Unsupported(u) => {
+            format!("it uses a {} feature glint's decoder does not support", format_name(u.format_hint()))
+        }
+        E::IoError(io) if io.kind() == std::io::ErrorKind::UnexpectedEof => "it ends early (cut short)".into(),
+        E::IoError(_) => "it cannot be read".into(),
+        E::Encoding(_) | E::Parameter(_) => "it cannot be decoded".into(),
+    }
+}
+
+/// The name of the format `hint` names, or "image" when it names none.
+fn format_name(hint: image::error::ImageFormatHint) -> String {
+    match hint {
+        image::error::ImageFormatHint::Exact(format) => format!("{format:?}"),
+        _ => "image".into(),
+    }
+}
+
 /// Decode PNG or JPEG bytes with the `image` crate, allocating at most about
 /// twice the `needs` bytes of the RGBA result, and turn the pixels as the
 /// image's EXIF orientation says, as browsers do (the page's images, which its
@@ -199,17 +224,18 @@ pub(crate) fn decode_texture(
 #[cfg(feature = "png-jpeg")]
 fn decode_here(bytes: &[u8], needs: u64) -> Result<image::RgbaImage, String> {
     use image::ImageDecoder;
-    let mut reader =
-        image::ImageReader::new(std::io::Cursor::new(bytes)).with_guessed_format().map_err(|e| e.to_string())?;
+    let mut reader = image::ImageReader::new(std::io::Cursor::new(bytes))
+        .with_guessed_format()
+        .map_err(|e| image_error(&e.into()))?;
     let mut limits = image::Limits::default();
     limits.max_image_width = Some(MAX_TEXTURE_SIDE);
     limits.max_image_height = Some(MAX_TEXTURE_SIDE);
     limits.max_alloc = Some(needs.max(1 << 20) * 2);
     reader.limits(limits);
-    let mut decoder = reader.into_decoder().map_err(|e| e.to_string())?;
+    let mut decoder = reader.into_decoder().map_err(|e| image_error(&e))?;
     // An unreadable orientation leaves the image as stored, as browsers do.
     let orientation = decoder.orientation().unwrap_or(image::metadata::Orientation::NoTransforms);
-    let mut image = image::DynamicImage::from_decoder(decoder).map_err(|e| e.to_string())?;
+    let mut image = image::DynamicImage::from_decoder(decoder).map_err(|e| image_error(&e))?;
     image.apply_orientation(orientation);
     Ok(image.into_rgba8())
 }

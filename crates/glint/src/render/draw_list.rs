@@ -234,14 +234,20 @@ impl DrawList {
         first_run..self.runs.len()
     }
 
-    /// Append one batch of one instance, `instance`, drawn alone (the naive
-    /// baseline's).
-    pub(crate) fn push_alone(&mut self, batch: Batch, draw: BatchDraw, instance: u32) {
+    /// Append one batch of one instance drawn alone (the naive baseline's):
+    /// store instance `listed`, named through the draw-index list, or with
+    /// `None` a compact instance the batch names by its number.
+    pub(crate) fn push_alone(&mut self, batch: Batch, draw: BatchDraw, listed: Option<u32>) {
         self.runs.push(Run::new(self.batches.len(), 1, 0));
         self.batches.push(batch);
         self.draws.push(draw);
-        self.placed.push(Placed::Listed);
-        self.draw_indices.push(instance);
+        match listed {
+            Some(instance) => {
+                self.placed.push(Placed::Listed);
+                self.draw_indices.push(instance);
+            }
+            None => self.placed.push(Placed::Compact),
+        }
     }
 
     /// Write every draw index alone (the naive baseline's way, every frame);

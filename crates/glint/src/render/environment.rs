@@ -19,6 +19,11 @@ use crate::asset::EnvironmentImage;
 use crate::gpu::{full_screen_pipeline, sampler_entry, texture_entry, HDR_FORMAT};
 use crate::scene::{Background, Environment, EnvironmentId, EnvironmentSource, Light, LightKind};
 
+/// The widest environment source uploaded, and so the widest specular map:
+/// a larger image is halved on the CPU first (about a 512² cube face's
+/// detail). Prefiltering costs [`SPECULAR_SAMPLES`] GGX samples a texel, so
+/// an 8192-texel-wide map took 37–76 s and 3 GB on lavapipe (`docs/limits.md`).
+pub(crate) const MAX_SOURCE_SIDE: u32 = 2048;
 /// The most levels of the specular map: roughness steps of 0.2.
 pub(crate) const SPECULAR_LEVELS: u32 = 6;
 /// GGX samples per specular texel (filtered importance sampling keeps this low).
@@ -474,6 +479,27 @@ mod tests {
             })
             .collect();
         (w, h, texels)
+    }
+
+    #[test]
+    fn a_wide_environment_is_prefiltered_from_a_reduced_copy() {
+        // An 8192-texel-wide specular map took 37–76 s and 3 GB to prefilter
+        // on lavapipe: the source is halved to 2048 wide first.
+        let gpu = match Gpu::headless() {
+            Ok(gpu) => gpu,
+            Err(e) if std::env::var("GLINT_REQUIRE_ADAPTER").as_deref() == Ok("1") => panic!("{e}"),
+            Err(e) => return eprintln!("skipping GPU test: {e}"),
+        };
+        let wide = EnvironmentImage::from_fn("wide", 4 * MAX_SOURCE_SIDE, 8, |d| Vec3::splat(0.5 + 0.5 * d.y));
+        let mut renderer = super::super::Renderer::new(&gpu);
+        let id = renderer.add_environment(&wide);
+        let source = renderer.registry.environment(id).expect("uploaded");
+        assert_eq!((source.texture.width(), source.texture.height()), (MAX_SOURCE_SIDE, 2));
+        let light = Some(EnvironmentLight::new(EnvironmentSource::Image(id)));
+        let environment = Environment { light, ..Environment::default() };
+        assert!(renderer.prepare_environment(&Lighting::new(&[], environment)).expect("prefiltered"));
+        let (specular, _) = renderer.environment.textures.clone().expect("made");
+        assert_eq!(specular.width(), MAX_SOURCE_SIDE);
     }
 
     #[test]

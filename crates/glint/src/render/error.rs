@@ -42,6 +42,16 @@ pub enum RenderError {
         /// Which limit that is.
         limit_name: &'static str,
     },
+    /// A frame would make more of something than glint allows.
+    #[error("{what} would make {count}, more than the {limit} glint allows (docs/limits.md)")]
+    TooMany {
+        /// What is counted.
+        what: &'static str,
+        /// How many the frame would make.
+        count: u64,
+        /// The most allowed.
+        limit: u64,
+    },
     /// A texture wider or taller than the adapter allows.
     #[error("texture '{name}' is {width} x {height}, larger than this adapter's {side} texels a side (max_texture_dimension_2d)")]
     TextureTooLarge {

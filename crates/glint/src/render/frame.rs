@@ -486,7 +486,7 @@ impl Renderer {
         self.frame_variant = FrameVariant::after(drawn, lighting.lights, occluded);
         stats.environment_prefiltered = self.prepare_environment(lighting)?;
         let prepared = self.prepare(target.format(), &lighting.environment, &mut stats)?;
-        self.prepare_particles(target.format(), &mut stats);
+        self.prepare_particles(target.format(), &mut stats)?;
         stats.cpu_ms.prepare = lap.next();
         let shadowed = drawn.map_or(&[][..], |d| d.first_view.as_slice());
         // The frame's encoder, given back once this view's commands are in it

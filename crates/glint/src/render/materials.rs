@@ -6,7 +6,7 @@ use super::pipelines::{Pipelines, VertexLayout};
 use super::registry::{Maps, MaterialGpuTwin, Registry, TextureSet};
 use super::{FrameStats, FrameVariant, RenderError};
 use crate::gpu::TargetFormat;
-use crate::scene::{Environment, MaterialId};
+use crate::scene::{Environment, MaterialId, TextureId};
 use crate::shader::ShaderFeatures;
 
 impl Registry {
@@ -33,30 +33,7 @@ impl Registry {
         if current.is_none() {
             let maps: Maps = material.maps();
             for texture in maps.into_iter().flatten() {
-                let tex = self
-                    .textures
-                    .get_mut(texture.0 as usize)
-                    .ok_or_else(|| RenderError::UnknownTexture { material: material.name.clone(), texture })?;
-                if let Some(pending) = tex.pending.take() {
-                    let side = self.device.limits().max_texture_dimension_2d;
-                    let (w, h) = pending.image.dimensions();
-                    if w.max(h) > side {
-                        return Err(RenderError::TextureTooLarge {
-                            name: pending.name.clone(),
-                            width: w,
-                            height: h,
-                            side,
-                        });
-                    }
-                    let scope = crate::gpu::DriverErrors::watch(&self.device);
-                    let (view, bytes, blits) = self.uploader.upload(&self.device, &self.queue, &pending);
-                    self.mip_blits.extend(blits);
-                    if let Some(error) = scope.finish() {
-                        return Err(RenderError::Device { what: "a texture", message: error.to_string() });
-                    }
-                    tex.view = Some(view);
-                    stats.bytes_uploaded.textures += bytes;
-                }
+                stats.bytes_uploaded.textures += self.upload_texture(texture, &material.name)?;
             }
             let texture_set = match self.texture_sets.iter().position(|s| s.maps == maps) {
                 Some(k) => k as u16,
@@ -91,6 +68,28 @@ impl Registry {
         let twin = self.materials[id.0 as usize].gpu.as_mut().expect("made above");
         twin.pipelines[layout.index()] = Some(pipeline);
         Ok((pipeline, twin.texture_set))
+    }
+
+    /// Upload texture `id`'s pixels unless that was done already (a texture
+    /// is uploaded on its first use, once, whoever uses it); returns the bytes
+    /// uploaded. `owner` names the user in the error for an unknown id.
+    pub(super) fn upload_texture(&mut self, id: TextureId, owner: &str) -> Result<u64, RenderError> {
+        let side = self.device.limits().max_texture_dimension_2d;
+        let unknown = || RenderError::UnknownTexture { material: owner.to_string(), texture: id };
+        let tex = self.textures.get_mut(id.0 as usize).ok_or_else(unknown)?;
+        let Some(pending) = tex.pending.take() else { return Ok(0) };
+        let (w, h) = pending.image.dimensions();
+        if w.max(h) > side {
+            return Err(RenderError::TextureTooLarge { name: pending.name.clone(), width: w, height: h, side });
+        }
+        let scope = crate::gpu::DriverErrors::watch(&self.device);
+        let (view, bytes, blits) = self.uploader.upload(&self.device, &self.queue, &pending);
+        self.mip_blits.extend(blits);
+        if let Some(error) = scope.finish() {
+            return Err(RenderError::Device { what: "a texture", message: error.to_string() });
+        }
+        tex.view = Some(view);
+        Ok(bytes)
     }
 
     /// The Material block's bind group for a texture set: the table and the maps

@@ -70,6 +70,7 @@ pub use error::RenderError;
 pub use explain::{BatchCall, DrawCall, FrameCalls, PassCalls, PassType};
 pub use gpu_cull::SKIP_UNPAID_OCCLUSION;
 pub use mesh_pool::MeshTooLarge;
+pub use naive::MAX_NAIVE_DRAWS;
 pub use particles::{ParticleBlend, ParticleGpu, ParticleLook, ParticlesId, MAX_LAYER_PARTICLES};
 pub use place::PlacedScene;
 pub use registry::Registry;
@@ -187,6 +188,8 @@ pub struct Renderer {
     density: f32,
     /// Particle layers ([`Renderer::add_particles`]), drawn in every view.
     particle_layers: Vec<particles::ParticleLayer>,
+    /// The soft round spot the layers without a sprite show, added once.
+    particle_spot: Option<crate::scene::TextureId>,
     particle_pipelines: particles::ParticlePipelines,
     /// Ambient occlusion's passes, made with the first view that has it.
     occlusion_pipelines: Option<ambient_occlusion::OcclusionPipelines>,
@@ -237,6 +240,7 @@ impl Renderer {
         let particle_pipelines = particles::ParticlePipelines::new(&device, layouts, gpu.occlusion_culls());
         Self {
             particle_layers: Vec::new(),
+            particle_spot: None,
             particle_pipelines,
             occlusion_pipelines: None,
             submits_counted: queue.submits(),

@@ -15,9 +15,15 @@ use super::prepare::Prepared;
 use super::queue::{sort_key, Queue};
 use super::timer::Timed;
 use super::view::ViewFrame;
+use super::visible::visible_instances;
 use super::{FrameStats, Laps, RenderError, Renderer};
 use crate::gpu::OffscreenTarget;
 use crate::scene::Lighting;
+
+/// The most draws a naive frame makes: each costs about 5 KB of memory
+/// while the frame is built and encoded (7 KB with `glint explain`'s call
+/// list), so 250,000 stay near 1.75 GB (`docs/limits.md`).
+pub const MAX_NAIVE_DRAWS: usize = 250_000;
 
 impl Renderer {
     /// The naive frame's stages between prepare and compose: batch, upload,
@@ -31,7 +37,7 @@ impl Renderer {
         (encoder, stats): (&mut wgpu::CommandEncoder, &mut FrameStats),
         lap: &mut Laps,
     ) -> Result<(), RenderError> {
-        self.naive_batches(stats, prepared);
+        self.naive_batches(frame, stats, prepared)?;
         stats.cpu_ms.batch = lap.next();
         self.naive_upload(frame, (lighting, shadowed), stats)?;
         stats.cpu_ms.upload = lap.next();
@@ -40,35 +46,53 @@ impl Renderer {
         Ok(())
     }
 
-    /// One batch per valid instance of every submitted entity, in submission
-    /// order, each drawing as `prepared` says.
-    fn naive_batches(&mut self, stats: &mut FrameStats, prepared: &[Prepared]) {
+    /// One batch per instance the optimized frame draws with culling off
+    /// (every valid one; of a tiled entity, each tile's share at its
+    /// density), in submission order, each drawing as `prepared` says.
+    /// Refuses a frame of more than [`MAX_NAIVE_DRAWS`] draws before building it.
+    fn naive_batches(
+        &mut self,
+        frame: &ViewFrame,
+        stats: &mut FrameStats,
+        prepared: &[Prepared],
+    ) -> Result<(), RenderError> {
         self.view.forward.clear();
+        let mut instances = Vec::new();
         for (s, &Prepared { pipeline, draw, .. }) in self.submitted.iter().zip(prepared) {
             let slot = self.store.slot(s.slot);
             stats.instances_invalid += u64::from(slot.invalid);
-            for i in slot.first..slot.first + slot.count {
-                if self.store.bounds.is_valid(i as usize) {
-                    let stage = Queue::Opaque.stage();
-                    // Keyed as the optimized frame keys it (blended materials far
-                    // to near), though the naive frame draws in submission order.
-                    let features = self.registry.pipelines.key_of(pipeline).features;
-                    let blended = features.contains(crate::shader::ShaderFeatures::ALPHA_BLEND);
-                    let key = sort_key(stage, blended, pipeline, draw.texture_set, s.material, s.shape, 0.0);
-                    let batch = Batch {
-                        key,
-                        stage,
-                        pipeline,
-                        material: s.material,
-                        shape: s.shape,
-                        first_instance: self.view.forward.draw_indices.len() as u32,
-                        instance_count: 1,
-                    };
-                    self.view.forward.push_alone(batch, draw, i);
-                }
+            instances.clear();
+            visible_instances(&frame.frustum, false, slot, s.density, (&self.store, &mut instances));
+            let drawn = self.view.forward.batches.len() + instances.len();
+            if drawn > MAX_NAIVE_DRAWS {
+                let what = "the naive frame (one draw per instance)";
+                return Err(RenderError::TooMany { what, count: drawn as u64, limit: MAX_NAIVE_DRAWS as u64 });
+            }
+            // Keyed as the optimized frame keys it (blended materials far to
+            // near), though the naive frame draws in submission order.
+            let stage = Queue::Opaque.stage();
+            let features = self.registry.pipelines.key_of(pipeline).features;
+            let blended = features.contains(crate::shader::ShaderFeatures::ALPHA_BLEND);
+            let key = sort_key(stage, blended, pipeline, draw.texture_set, s.material, s.shape, 0.0);
+            for &i in &instances {
+                let list = &mut self.view.forward;
+                // The COMPACT variant draws an instance by its number; the
+                // others read it from the draw-index list.
+                let first_instance = if slot.compact { i } else { list.draw_indices.len() as u32 };
+                let batch = Batch {
+                    key,
+                    stage,
+                    pipeline,
+                    material: s.material,
+                    shape: s.shape,
+                    first_instance,
+                    instance_count: 1,
+                };
+                list.push_alone(batch, draw, (!slot.compact).then_some(i));
             }
         }
-        stats.instances_drawn = self.view.forward.draw_indices.len() as u64;
+        stats.instances_drawn = self.view.forward.batches.len() as u64;
+        Ok(())
     }
 
     /// The view's blocks and changed instances as the optimized frame writes

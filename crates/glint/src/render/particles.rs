@@ -10,10 +10,12 @@
 //! call a layer, whatever its count.
 
 use super::explain::DrawCall;
+use super::RenderError;
 use super::Renderer;
 use crate::asset::Texture;
 use crate::gpu::TargetFormat;
 pub use crate::scene::ParticleBlend;
+use crate::scene::TextureId;
 use crate::FrameStats;
 use std::collections::HashMap;
 
@@ -37,8 +39,9 @@ pub struct ParticleLook {
     /// How they blend.
     pub blend: ParticleBlend,
     /// The sprite each billboard shows, times its colour (a soft round spot
-    /// without one).
-    pub texture: Option<Texture>,
+    /// without one): a texture of this renderer's registry, uploaded once
+    /// however many layers and materials show it.
+    pub texture: Option<TextureId>,
     /// World units over which a particle fades out in front of geometry
     /// (0: none). Soft where the target's depth is readable (the devices that
     /// occlusion-cull: [`Gpu::occlusion_culls`](crate::Gpu::occlusion_culls));
@@ -57,7 +60,11 @@ pub(crate) struct ParticleLayer {
     count: u32,
     blend: ParticleBlend,
     soft: f32,
-    group: wgpu::BindGroup,
+    /// The registry texture it shows, uploaded on its first frame.
+    sprite: TextureId,
+    look_block: wgpu::Buffer,
+    /// Its sprite group (group 2), made on its first frame.
+    group: Option<wgpu::BindGroup>,
 }
 
 /// A particle pipeline: for a target, a blend, and whether it reads depth.
@@ -209,10 +216,15 @@ impl ParticlePipelines {
 impl Renderer {
     /// A particle layer of `capacity` billboards (at most [`MAX_LAYER_PARTICLES`]), drawn in
     /// every view from the next frame on; none to draw until written.
-    pub fn add_particles(&mut self, capacity: u32, look: ParticleLook) -> ParticlesId {
+    pub fn add_particles(&mut self, capacity: u32, look: ParticleLook) -> Result<ParticlesId, RenderError> {
         let capacity = capacity.clamp(1, MAX_LAYER_PARTICLES);
-        let registry = &mut self.registry;
-        let buffer = registry.device.create_buffer(&wgpu::BufferDescriptor {
+        let sprite = match look.texture {
+            Some(id) => id,
+            None => *self.particle_spot.get_or_insert_with(|| self.registry.add_texture(spot())),
+        };
+        let device = &self.registry.device;
+        let scope = crate::gpu::DriverErrors::watch(device);
+        let buffer = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("renderer: particles"),
             size: capacity as u64 * std::mem::size_of::<ParticleGpu>() as u64,
             usage: match self.cull_pipelines.is_some() {
@@ -222,28 +234,28 @@ impl Renderer {
             mapped_at_creation: false,
         });
         let soft = if look.soft.is_finite() { look.soft.max(0.0) } else { 0.0 };
-        let look_block = wgpu::util::DeviceExt::create_buffer_init(
-            &registry.device,
-            &wgpu::util::BufferInitDescriptor {
-                label: Some("renderer: particle look"),
-                contents: bytemuck::cast_slice(&[soft, 0.0, 0.0, 0.0]),
-                usage: wgpu::BufferUsages::UNIFORM,
-            },
-        );
-        let sprite = look.texture.unwrap_or_else(spot);
-        let (view, _, blits) = registry.uploader.upload(&registry.device, &registry.queue, &sprite);
-        registry.mip_blits.extend(blits);
-        let group = registry.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("renderer: particle sprite"),
-            layout: &self.particle_pipelines.texture_layout,
-            entries: &[
-                wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(&view) },
-                wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::Sampler(&registry.sampler) },
-                wgpu::BindGroupEntry { binding: 2, resource: look_block.as_entire_binding() },
-            ],
+        let look_block = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("renderer: particle look"),
+            size: 16,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
         });
-        self.particle_layers.push(ParticleLayer { buffer, capacity, count: 0, blend: look.blend, soft, group });
-        ParticlesId(self.particle_layers.len() as u32 - 1)
+        self.registry.queue.write_buffer(&look_block, 0, bytemuck::cast_slice(&[soft, 0.0, 0.0, 0.0]));
+        if let Some(error) = scope.finish() {
+            return Err(RenderError::Device { what: "a particle layer", message: error.to_string() });
+        }
+        let blend = look.blend;
+        self.particle_layers.push(ParticleLayer {
+            buffer,
+            capacity,
+            count: 0,
+            blend,
+            soft,
+            sprite,
+            look_block,
+            group: None,
+        });
+        Ok(ParticlesId(self.particle_layers.len() as u32 - 1))
     }
 
     /// Draw `records` in layer `id` from the next frame on (as many as fit).
@@ -267,16 +279,39 @@ impl Renderer {
         }
     }
 
-    /// Stage 1 for particles: the pipelines of every layer for `target` (a
-    /// soft layer's both ways where depth is readable: a view's target may not be).
-    pub(super) fn prepare_particles(&mut self, target: TargetFormat, stats: &mut FrameStats) {
+    /// Stage 1 for particles: every layer to draw gets its sprite (uploaded
+    /// once however many layers and materials show it, counted in `stats`)
+    /// and its pipelines for `target` (a soft layer's both ways where depth is
+    /// readable: a view's target may not be).
+    pub(super) fn prepare_particles(
+        &mut self,
+        target: TargetFormat,
+        stats: &mut FrameStats,
+    ) -> Result<(), RenderError> {
         let registry = &mut self.registry;
-        for layer in self.particle_layers.iter().filter(|l| l.count > 0) {
+        for layer in self.particle_layers.iter_mut().filter(|l| l.count > 0) {
+            if layer.group.is_none() {
+                stats.bytes_uploaded.textures += registry.upload_texture(layer.sprite, "particle layer")?;
+                let view = registry.textures[layer.sprite.0 as usize].view.as_ref().expect("uploaded above");
+                layer.group = Some(registry.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: Some("renderer: particle sprite"),
+                    layout: &self.particle_pipelines.texture_layout,
+                    entries: &[
+                        wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(view) },
+                        wgpu::BindGroupEntry {
+                            binding: 1,
+                            resource: wgpu::BindingResource::Sampler(&registry.sampler),
+                        },
+                        wgpu::BindGroupEntry { binding: 2, resource: layer.look_block.as_entire_binding() },
+                    ],
+                }));
+            }
             for soft in [false, layer.soft > 0.0 && self.particle_pipelines.soft] {
                 let built = self.particle_pipelines.build(&registry.device, (target, layer.blend, soft));
                 stats.pipelines_compiled += u32::from(built);
             }
         }
+        Ok(())
     }
 
     /// The scene depth a frame's soft layers read from `target`, when some
@@ -305,11 +340,10 @@ impl Renderer {
     ) {
         for layer in self.particle_layers.iter().filter(|l| l.count > 0) {
             let soft = depth.filter(|_| layer.soft > 0.0);
-            let Some(pipeline) = self.particle_pipelines.cache.get(&(target, layer.blend, soft.is_some())) else {
-                continue;
-            };
+            let pipeline = self.particle_pipelines.cache.get(&(target, layer.blend, soft.is_some()));
+            let (Some(pipeline), Some(group)) = (pipeline, &layer.group) else { continue };
             pass.set_pipeline(pipeline);
-            pass.set_bind_group(2, &layer.group, &[]);
+            pass.set_bind_group(2, group, &[]);
             if let Some(depth) = soft {
                 pass.set_bind_group(3, depth, &[]);
             }

@@ -22,6 +22,10 @@ pub struct PlacedScene {
     /// The renderer's id of each of the scene's render targets, in file order
     /// (for [`SceneDesc::views`]).
     pub render_targets: Vec<RenderTargetId>,
+    /// The renderer's id of each of the scene's textures
+    /// ([`SceneDesc::textures`], then each render target's), for what
+    /// shows them besides its materials (an emitter's sprite).
+    pub textures: Vec<TextureId>,
 }
 
 /// A model's ids in one registry: shape and material per part.
@@ -128,7 +132,7 @@ impl Renderer {
                 cloth.draw.apply(entity);
             }
         }
-        PlacedScene { entities, render_targets }
+        PlacedScene { entities, render_targets, textures }
     }
 }
 

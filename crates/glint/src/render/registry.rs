@@ -195,10 +195,11 @@ impl Registry {
 
     /// Add an environment image for image-based lighting
     /// ([`EnvironmentSource::Image`](crate::scene::EnvironmentSource::Image) of
-    /// its id): uploaded now (halved until it fits the adapter), prefiltered
-    /// when a frame first uses it. Adding the same image again does nothing.
+    /// its id): uploaded now (halved until it fits the adapter and
+    /// 2048 texels a side), prefiltered when a frame first uses it. Adding the
+    /// same image again does nothing.
     pub fn add_environment(&mut self, image: &crate::asset::EnvironmentImage) -> crate::scene::EnvironmentId {
-        let side = self.device.limits().max_texture_dimension_2d;
+        let side = self.device.limits().max_texture_dimension_2d.min(super::environment::MAX_SOURCE_SIDE);
         let (device, queue) = (&self.device, &self.queue);
         (self.environments.entry(image.id()))
             .or_insert_with(|| super::environment::SourceImage::upload(device, queue, image, side));

@@ -193,7 +193,7 @@ impl Renderer {
 /// only the instances of clusters crossing a plane one by one. A tiled entity's
 /// tiles are culled whole, `density` of each drawn ([`visible_tiles`]).
 /// Invalid instances are never appended.
-fn visible_instances(
+pub(super) fn visible_instances(
     frustum: &Frustum,
     culling: bool,
     slot: &Slot,

@@ -2,6 +2,10 @@ use super::{MaterialId, ShapeId, Tiles};
 use glam::Mat4;
 use std::sync::atomic::{AtomicU64, Ordering};
 
+/// The largest y or scale a compact instance holds (half float's largest
+/// finite value; [`Entity::with_compact_instances`]).
+pub const MAX_COMPACT_HALF: f32 = 65504.0;
+
 /// A thing to draw: a shape, a material and one transform per instance.
 ///
 /// All instances of an entity go in one instanced draw, and entities that share
@@ -123,7 +127,9 @@ impl Entity {
     /// what else a transform holds (tilt, uneven scale) is lost. Takes effect
     /// for a tiled entity (see [`with_tiles`](Self::with_tiles)) without
     /// joints and with a material index below 32768; its tiles are then always
-    /// culled on the CPU and drawn whole, blended or not.
+    /// culled on the CPU and drawn whole, blended or not. A half float holds
+    /// at most [`MAX_COMPACT_HALF`] (y and scale): past it an instance draws
+    /// wrongly (a `.scn` file is refused at its `instances` block).
     pub fn with_compact_instances(mut self) -> Self {
         self.set_compact_instances(true);
         self

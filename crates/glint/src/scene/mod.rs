@@ -24,7 +24,7 @@ mod view_order;
 
 pub use camera::{Camera, Projection};
 pub use daylight::Daylight;
-pub use entity::Entity;
+pub use entity::{Entity, MAX_COMPACT_HALF};
 pub use environment::{Background, Environment, EnvironmentLight, EnvironmentSource, Fog};
 pub use fly::{FlyCamera, FlyInput};
 pub use light::{Light, LightKind, ShadowSettings, CASCADES, MAX_LIGHTS};

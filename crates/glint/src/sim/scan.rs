@@ -34,18 +34,21 @@ impl GpuScan {
     /// `counts` into `starts`; makes its own uniform and block totals.
     pub(crate) fn group(
         &self,
-        device: &wgpu::Device,
+        (device, queue): (&wgpu::Device, &wgpu::Queue),
         counts: &wgpu::Buffer,
         starts: &wgpu::Buffer,
         n: u32,
     ) -> ScanGroup {
-        use wgpu::util::DeviceExt;
         assert!(n <= MAX_SCAN, "a scan covers at most {MAX_SCAN} entries");
-        let size = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        // Written, not mapped at creation: a device out of memory makes an
+        // invalid buffer, which an error scope reports, where mapping one panics.
+        let size = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("scan: size"),
-            contents: bytemuck::cast_slice(&[n, 0, 0, 0]),
-            usage: wgpu::BufferUsages::UNIFORM,
+            size: 16,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
         });
+        queue.write_buffer(&size, 0, bytemuck::cast_slice(&[n, 0, 0, 0]));
         let sums = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("scan: block totals"),
             size: 4 * u64::from(n.div_ceil(WORKGROUP).max(4)),

@@ -333,7 +333,9 @@ impl Controls {
     pub fn apply(&self, world: &mut World, renderer: &mut Renderer) {
         renderer.set_density(self.density);
         if let Some(hours) = self.time_of_day.filter(|&h| world.desc().time_of_day != Some(h)) {
-            world.set_time_of_day(hours);
+            if let Err(e) = world.set_time_of_day(hours) {
+                log::warn!("{e}");
+            }
         }
         world.set_shadows(self.shadows);
     }

@@ -10,7 +10,7 @@
 //!
 //! let gpu = Gpu::headless()?;
 //! let mut renderer = Renderer::new(&gpu);
-//! let mut world = World::place(load_scene("scenes/showcase.scn".as_ref())?, &mut renderer);
+//! let mut world = World::place(load_scene("scenes/showcase.scn".as_ref())?, &mut renderer)?;
 //! let views = world.views(None);
 //! let mut target = OffscreenTarget::new(&gpu, 640, 360, 4)?;
 //! for frame in 0..3 {
@@ -29,6 +29,7 @@ use crate::asset::{MeshRef, SceneDesc};
 use crate::render::{place, PlacedScene};
 use crate::scene::{Entity, Lighting, View};
 use crate::sim::cloth::ClothView;
+use crate::sim::particles::ParticleKernels;
 use crate::{FrameStats, OffscreenTarget, RenderError, Renderer};
 use cloth::ClothSim;
 use particles::EmitterSim;
@@ -60,20 +61,37 @@ impl World {
     /// Add `desc`'s textures, render targets, materials, shapes and models to
     /// `renderer` ([`Renderer::place_scene`]), a particle layer for each
     /// emitter, and start its clock at 0: every cloth at rest, every school
-    /// at its seeded start, no particle spawned.
-    pub fn place(desc: SceneDesc, renderer: &mut Renderer) -> Self {
+    /// at its seeded start, no particle spawned. Errors when the device
+    /// cannot hold the emitters' layers (out of memory).
+    pub fn place(desc: SceneDesc, renderer: &mut Renderer) -> Result<Self, crate::RenderError> {
         let mut placed = renderer.place_scene(&desc);
         let cloths = desc.cloths.iter().map(ClothSim::new).collect();
         let schools: Vec<SchoolSim> = desc.schools.iter().map(SchoolSim::new).collect();
         let ranges = school::entity_ranges(&desc);
-        let emitters = desc.emitters.iter().map(|e| EmitterSim::new(e, &desc, renderer)).collect();
+        // The emitters stepped by compute shaders share one set of kernels.
+        let kernels = (renderer.computes() && !desc.emitters.is_empty())
+            .then(|| std::sync::Arc::new(ParticleKernels::new(renderer.device_and_queue().0)));
+        let emitters = (desc.emitters.iter())
+            .map(|e| EmitterSim::new(e, (&placed.textures, kernels.as_ref()), renderer))
+            .collect::<Result<_, _>>()?;
         for (sim, school) in schools.iter().zip(&desc.schools) {
             // Each fish's own tail beat from the first frame.
             sim.show(school, &desc, &ranges, &mut placed.entities);
         }
         let models = desc.models.iter().flat_map(|m| &m.materials);
         let moves = desc.materials.iter().chain(models).any(|m| m.material.motion.is_some());
-        Self { desc, placed, cloths, schools, emitters, drawn_at: -1.0, ranges, time: 0.0, moves, shadows_off: None }
+        Ok(Self {
+            desc,
+            placed,
+            cloths,
+            schools,
+            emitters,
+            drawn_at: -1.0,
+            ranges,
+            time: 0.0,
+            moves,
+            shadows_off: None,
+        })
     }
 
     /// The scene as its file described it.
@@ -190,9 +208,10 @@ impl World {
 
     /// Move its sun, sky and glare to `hours` of the day
     /// ([`SceneDesc::set_time_of_day`]), from the next frame's
-    /// [`lighting`](Self::lighting) on.
-    pub fn set_time_of_day(&mut self, hours: f32) {
-        self.desc.set_time_of_day(hours);
+    /// [`lighting`](Self::lighting) on. A scene with no room for a sun
+    /// keeps its lights, and the error says so (its sky still moves).
+    pub fn set_time_of_day(&mut self, hours: f32) -> Result<(), crate::Diagnostic> {
+        self.desc.set_time_of_day(hours)
     }
 
     /// Turn every light's shadows off (keeping their settings) or back on,

@@ -3,11 +3,13 @@
 //! where the renderer computes ([`Renderer::computes`]), else on the CPU (GL,
 //! WebGL2), from the same description and seed.
 
-use crate::asset::{EmitterDesc, SceneDesc};
+use crate::asset::EmitterDesc;
 use crate::render::{ParticleBlend, ParticleLook, ParticlesId};
-use crate::sim::particles::{GpuParticles, ParticleSystem};
-use crate::{FrameStats, Renderer};
+use crate::scene::TextureId;
+use crate::sim::particles::{GpuParticles, ParticleKernels, ParticleSystem};
+use crate::{FrameStats, RenderError, Renderer};
 use glam::Vec3;
+use std::sync::Arc;
 
 /// Where an emitter steps.
 enum Run {
@@ -17,35 +19,47 @@ enum Run {
 
 /// One emitter's run and the layer it draws in; no run for parameters that
 /// cannot make an emitter (a description changed after loading:
-/// [`SceneDesc::check_pose`] refuses to pose it).
+/// [`SceneDesc::check_pose`](crate::asset::SceneDesc::check_pose) refuses to pose it).
 pub(crate) struct EmitterSim {
     run: Option<Run>,
     layer: ParticlesId,
 }
 
 impl EmitterSim {
-    /// `desc`'s emitter at time 0, with a layer in `renderer` (its sprite
-    /// one of `scene`'s textures).
-    pub(crate) fn new(desc: &EmitterDesc, scene: &SceneDesc, renderer: &mut Renderer) -> Self {
+    /// `desc`'s emitter at time 0, with a layer in `renderer` (its sprite one
+    /// of the scene's textures, as `textures` placed them), stepped by
+    /// `kernels` where the renderer computes. Errors when the device cannot
+    /// hold the layer (out of memory: exit 3).
+    pub(crate) fn new(
+        desc: &EmitterDesc,
+        (textures, kernels): (&[TextureId], Option<&Arc<ParticleKernels>>),
+        renderer: &mut Renderer,
+    ) -> Result<Self, RenderError> {
         let slots = crate::sim::particles::Schedule::new(&desc.params).slots() as u32;
-        let texture = desc.texture.and_then(|i| scene.textures.get(i)).cloned();
-        let layer = renderer.add_particles(slots, ParticleLook { blend: desc.blend, texture, soft: desc.soft });
+        let texture = desc.texture.and_then(|i| textures.get(i)).copied();
+        let layer = renderer.add_particles(slots, ParticleLook { blend: desc.blend, texture, soft: desc.soft })?;
         let cpu = || ParticleSystem::new(desc.params.clone(), desc.dt).ok().map(|s| Run::Cpu(Box::new(s)));
-        let run = match (renderer.computes(), renderer.particle_buffer(layer)) {
-            (true, Some((buffer, capacity))) => {
+        let run = match (kernels, renderer.particle_buffer(layer)) {
+            (Some(kernels), Some((buffer, capacity))) => {
                 let buffer = buffer.clone();
+                let device = renderer.device_and_queue().0;
+                let scope = crate::gpu::DriverErrors::watch(device);
                 let on_gpu = GpuParticles::new(
                     renderer.device_and_queue(),
+                    kernels,
                     desc.params.clone(),
                     desc.dt,
                     (&buffer, capacity),
                     desc.blend,
                 );
+                if let Some(error) = scope.finish() {
+                    return Err(RenderError::Device { what: "an emitter's buffers", message: error.to_string() });
+                }
                 on_gpu.map_or_else(|_| cpu(), |g| Some(Run::Gpu(Box::new(g))))
             }
             _ => cpu(),
         };
-        Self { run, layer }
+        Ok(Self { run, layer })
     }
 
     /// On the CPU, step (or restart and step) to `time`; on the GPU the steps

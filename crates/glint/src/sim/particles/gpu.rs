@@ -7,6 +7,7 @@ use super::{EmitterParams, Schedule, SpawnShape};
 use crate::render::{GpuSimulation, ParticleBlend};
 use crate::sim::scan::{GpuScan, ScanGroup};
 use glam::Vec3;
+use std::sync::Arc;
 
 const WORKGROUP: u32 = 256;
 /// Distance buckets of the depth sort.
@@ -50,6 +51,38 @@ struct StepGpu {
     eye: [f32; 4],
 }
 
+/// The compute pipelines every GPU emitter on one device shares: made once
+/// ([`ParticleKernels::new`]), not once an emitter (a thousand emitters each
+/// compiling its own ran a machine out of memory).
+pub struct ParticleKernels {
+    layout: wgpu::BindGroupLayout,
+    update: wgpu::ComputePipeline,
+    write: wgpu::ComputePipeline,
+    sort: [wgpu::ComputePipeline; 3],
+    scan: GpuScan,
+}
+
+impl ParticleKernels {
+    /// Compile `particles.wgsl`'s kernels and the scan's for `device`.
+    pub fn new(device: &wgpu::Device) -> Self {
+        // The emitter and step blocks, the slots, the layer's records, the
+        // sort's keys, counts and starts.
+        let layout = crate::sim::compute::layout(device, "particles", 7, 2, Some(1));
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("particles.wgsl"),
+            source: wgpu::ShaderSource::Wgsl(include_str!("particles.wgsl").into()),
+        });
+        let pipeline = |entry| crate::render::compute_pipeline(device, &module, entry, &[Some(&layout)]);
+        Self {
+            update: pipeline("update"),
+            write: pipeline("write"),
+            sort: [pipeline("clear"), pipeline("count"), pipeline("scatter")],
+            scan: GpuScan::new(device),
+            layout,
+        }
+    }
+}
+
 /// An emitter stepped on the GPU into a particle layer's buffer.
 pub struct GpuParticles {
     params: EmitterParams,
@@ -64,23 +97,21 @@ pub struct GpuParticles {
     state: wgpu::Buffer,
     /// The buffers bound besides the step blocks, in binding order.
     bound: [wgpu::Buffer; 6],
-    layout: wgpu::BindGroupLayout,
     step_buffer: wgpu::Buffer,
     group: wgpu::BindGroup,
-    update: wgpu::ComputePipeline,
-    write: wgpu::ComputePipeline,
-    sort: [wgpu::ComputePipeline; 3],
-    scan: GpuScan,
+    kernels: Arc<ParticleKernels>,
     scan_group: ScanGroup,
 }
 
 impl GpuParticles {
     /// `params`' emitter stepping `dt` seconds at a time into `records` (a
     /// particle layer's buffer, [`Renderer::particle_buffer`](crate::Renderer::particle_buffer),
-    /// of at least [`Schedule::slots`] records), blended as `blend`.
+    /// of at least [`Schedule::slots`] records), blended as `blend`, by
+    /// `kernels` (shared with the device's other emitters).
     /// Errors with [`EmitterParams::check`]'s reason, or when the layer is too small.
     pub fn new(
         (device, queue): (&wgpu::Device, &wgpu::Queue),
+        kernels: &Arc<ParticleKernels>,
         params: EmitterParams,
         dt: f32,
         (records, capacity): (&wgpu::Buffer, u32),
@@ -114,23 +145,12 @@ impl GpuParticles {
         };
         let emitter = uniform("particles: emitter", std::mem::size_of::<EmitterGpu>() as u64);
         queue.write_buffer(&emitter, 0, bytemuck::bytes_of(&emitter_block(&params, &schedule)));
-        // The emitter and step blocks, the slots, the layer's records, the
-        // sort's keys, counts and starts.
-        let layout = crate::sim::compute::layout(device, "particles", 7, 2, Some(1));
         let bound = [emitter, state.clone(), records.clone(), keys, counts.clone(), starts.clone()];
         let step_buffer = step_buffer(device, FIRST_STEP_BLOCKS);
-        let group = bind_group(device, &layout, &bound, &step_buffer);
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("particles.wgsl"),
-            source: wgpu::ShaderSource::Wgsl(include_str!("particles.wgsl").into()),
-        });
-        let pipeline = |entry| crate::render::compute_pipeline(device, &module, entry, &[Some(&layout)]);
-        let scan = GpuScan::new(device);
-        let scan_group = scan.group(device, &counts, &starts, BUCKETS + 1);
+        let group = bind_group(device, &kernels.layout, &bound, &step_buffer);
+        let scan_group = kernels.scan.group((device, queue), &counts, &starts, BUCKETS + 1);
         Ok(Self {
-            update: pipeline("update"),
-            write: pipeline("write"),
-            sort: [pipeline("clear"), pipeline("count"), pipeline("scatter")],
+            kernels: kernels.clone(),
             params,
             schedule,
             blend,
@@ -141,10 +161,8 @@ impl GpuParticles {
             eye: Vec3::ZERO,
             state,
             bound,
-            layout,
             step_buffer,
             group,
-            scan,
             scan_group,
         })
     }
@@ -216,7 +234,7 @@ impl GpuSimulation for GpuParticles {
         // Every step's block, and the last one again for the sort.
         if self.step_buffer.size() < STEP_STRIDE * u64::from(steps + 1) {
             self.step_buffer = step_buffer(device, u64::from(steps + 1).next_power_of_two());
-            self.group = bind_group(device, &self.layout, &self.bound, &self.step_buffer);
+            self.group = bind_group(device, &self.kernels.layout, &self.bound, &self.step_buffer);
         }
         let blocks: Vec<u8> = (0..=steps)
             .flat_map(|k| {
@@ -230,7 +248,8 @@ impl GpuSimulation for GpuParticles {
         let groups = self.slots.div_ceil(WORKGROUP);
         let mut pass = encoder
             .begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("particles"), timestamp_writes: None });
-        pass.set_pipeline(&self.update);
+        let kernels = &self.kernels;
+        pass.set_pipeline(&kernels.update);
         for k in 0..steps {
             pass.set_bind_group(0, &self.group, &[(u64::from(k) * STEP_STRIDE) as u32]);
             pass.dispatch_workgroups(groups, 1, 1);
@@ -239,16 +258,16 @@ impl GpuSimulation for GpuParticles {
         pass.set_bind_group(0, &self.group, &last);
         match self.blend {
             ParticleBlend::Additive => {
-                pass.set_pipeline(&self.write);
+                pass.set_pipeline(&kernels.write);
                 pass.dispatch_workgroups(groups, 1, 1);
             }
             ParticleBlend::Alpha => {
-                let [clear, count, scatter] = &self.sort;
+                let [clear, count, scatter] = &kernels.sort;
                 pass.set_pipeline(clear);
                 pass.dispatch_workgroups(groups.max((BUCKETS + 1).div_ceil(WORKGROUP)), 1, 1);
                 pass.set_pipeline(count);
                 pass.dispatch_workgroups(groups, 1, 1);
-                self.scan.encode(&mut pass, &self.scan_group);
+                kernels.scan.encode(&mut pass, &self.scan_group);
                 pass.set_bind_group(0, &self.group, &last);
                 pass.set_pipeline(scatter);
                 pass.dispatch_workgroups(groups, 1, 1);

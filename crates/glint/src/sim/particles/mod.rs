@@ -17,7 +17,7 @@ mod schedule;
 #[cfg(test)]
 mod tests;
 
-pub use gpu::GpuParticles;
+pub use gpu::{GpuParticles, ParticleKernels};
 pub use schedule::Schedule;
 
 use crate::render::ParticleGpu;

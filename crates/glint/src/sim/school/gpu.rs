@@ -151,7 +151,7 @@ impl GpuSchool {
             .map(|entry| crate::render::compute_pipeline(device, &module, entry, &[Some(&layout)]))
             .collect();
         let scan = GpuScan::new(device);
-        let scan_group = scan.group(device, &counts, &starts, cells + 1);
+        let scan_group = scan.group((device, &gpu.queue), &counts, &starts, cells + 1);
         Ok(Self {
             params,
             block,
@@ -251,7 +251,12 @@ fn params_block(params: &SchoolParams, shape: super::GridShape, count: u32, dt: 
         more: [w.avoid, w.flee, params.max_accel, dt],
         speed: [params.min_speed, params.max_speed, params.beat_rate, params.floor.unwrap_or(0.0)],
         hunter,
-        flags: [u32::from(params.floor.is_some()), params.obstacles.len() as u32, shape.cells(), 0],
+        flags: [
+            u32::from(params.floor.is_some()),
+            params.obstacles.len() as u32,
+            shape.cells(),
+            super::MAX_NEIGHBOUR_TESTS,
+        ],
         obstacles,
     }
 }

@@ -67,6 +67,15 @@ impl Seen {
         self.count += 1;
     }
 
+    /// Scale the separation by `stride`: the neighbours seen were every
+    /// `stride`-th of those there, and separation is a sum over them all
+    /// (alignment and cohesion are means).
+    pub(crate) fn scale_separation(&mut self, stride: f32) {
+        if stride != 1.0 {
+            self.separation *= stride;
+        }
+    }
+
     /// The rules for a fish at `p` moving at `v`, given what it saw and the
     /// predator's position.
     pub(crate) fn forces(self, params: &SchoolParams, p: Vec3, v: Vec3, predator: Option<Vec3>) -> Forces {

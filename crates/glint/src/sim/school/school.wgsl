@@ -25,7 +25,7 @@ struct Params {
     speed: vec4<f32>,
     // hunter speed, accel, fear, 1 with a predator
     hunter: vec4<f32>,
-    // 1 with a floor, obstacles, cells, 0
+    // 1 with a floor, obstacles, cells, most neighbour tests a fish
     flags: vec4<u32>,
     obstacles: array<vec4<f32>, 64>,
 }
@@ -185,6 +185,21 @@ fn steer(@builtin(global_invocation_id) id: vec3<u32>) {
     let hi = vec3<i32>(params.dims) - 1;
     let x0 = max(c.x - 1, 0);
     let x1 = min(c.x + 1, hi.x);
+    // More candidates in the 27 cells than a fish tests: every stride-th
+    // (rules.rs and School::forces_of do the same).
+    var candidates = 0u;
+    for (var dz = -1; dz <= 1; dz = dz + 1) {
+        for (var dy = -1; dy <= 1; dy = dy + 1) {
+            let y = c.y + dy;
+            let z = c.z + dz;
+            if y < 0 || z < 0 || y > hi.y || z > hi.z {
+                continue;
+            }
+            candidates = candidates + starts[cell_index(vec3<i32>(x1, y, z)) + 1u] - starts[cell_index(vec3<i32>(x0, y, z))];
+        }
+    }
+    let stride = max((candidates + params.flags.w - 1u) / params.flags.w, 1u);
+    var before = 0u;
     for (var dz = -1; dz <= 1; dz = dz + 1) {
         for (var dy = -1; dy <= 1; dy = dy + 1) {
             let y = c.y + dy;
@@ -194,7 +209,9 @@ fn steer(@builtin(global_invocation_id) id: vec3<u32>) {
             }
             let first = starts[cell_index(vec3<i32>(x0, y, z))];
             let last = starts[cell_index(vec3<i32>(x1, y, z)) + 1u];
-            for (var s = first; s < last; s = s + 1u) {
+            let skip = (stride - before % stride) % stride;
+            before = before + last - first;
+            for (var s = first + skip; s < last; s = s + stride) {
                 let q = sorted[s].position;
                 let d = q - p;
                 let d2 = dot(d, d);
@@ -211,6 +228,7 @@ fn steer(@builtin(global_invocation_id) id: vec3<u32>) {
             }
         }
     }
+    separation = separation * f32(stride);
     var alignment = vec3<f32>(0.0);
     var cohesion = vec3<f32>(0.0);
     if seen > 0u {
