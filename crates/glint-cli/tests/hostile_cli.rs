@@ -260,7 +260,7 @@ fn the_naive_frame_refuses_scenes_past_its_limit_before_the_gpu() {
     let count = glint::render::MAX_NAIVE_DRAWS + 1;
     std::fs::write(&scene, format!("{{\n\"classname\" \"instances\"\n\"mesh\" \"cube\"\n\"count\" \"{count}\"\n}}\n"))
         .unwrap();
-    let expected = "this scene has 250001, more than the 250000 it draws";
+    let expected = "this scene has 150001, more than the 150000 it draws";
     assert_bad_input(&glint(&["bench", path(&scene), "--mode", "naive", "--frames", "1"]), expected);
     assert_bad_input(&glint(&["bench", path(&scene), "--mode", "both", "--frames", "1"]), expected);
     assert_bad_input(&glint(&["explain", path(&scene), "--naive"]), expected);

@@ -200,7 +200,7 @@ fn an_emitter_s_steps_count_for_themselves_in_the_pose_budget() {
     let small = emitter("\"rate\" \"1\"\n\"lifetime\" \"1\"\n\"dt\" \"0.0001\"\n");
     let scene = parse(&small.repeat(50)).unwrap();
     let err = scene.check_pose(10.0).unwrap_err();
-    assert!(err.message.contains("each step counting 16384 more for itself"), "{err}");
+    assert!(err.message.contains("each step counting 4096 more for itself"), "{err}");
     assert!(scene.check_pose(0.01).is_ok());
     // The budget's own edge is about 25 s of stepping, not minutes: 10⁶ slots
     // for 500 steps is past it.

@@ -13,9 +13,9 @@ use glam::Vec3;
 /// Most work one pose may take over a scene's schools, in neighbour tests
 /// (steps to the time × [`SchoolParams::step_cost`]: each fish's tests at
 /// its starting density, its own rules, and the grid's cells), so a far
-/// `--time` is an error rather than minutes: about 25 s of stepping on this
-/// project's 2-core machine (`docs/limits.md`).
-pub const MAX_POSE_SCHOOL_TESTS: u64 = 10_000_000_000;
+/// `--time` is an error rather than minutes: at about 3 ns a test, 21–23 s of
+/// stepping on this project's 2-core machine (`docs/limits.md`).
+pub const MAX_POSE_SCHOOL_TESTS: u64 = 7_000_000_000;
 
 /// Most obstacles one school may have (the GPU school's block holds as many).
 pub const MAX_OBSTACLES: usize = crate::sim::school::MAX_GPU_OBSTACLES;

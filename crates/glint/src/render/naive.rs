@@ -22,8 +22,9 @@ use crate::scene::Lighting;
 
 /// The most draws a naive frame makes: each costs about 5 KB of memory
 /// while the frame is built and encoded (7 KB with `glint explain`'s call
-/// list), so 250,000 stay near 1.75 GB (`docs/limits.md`).
-pub const MAX_NAIVE_DRAWS: usize = 250_000;
+/// list), and `glint explain --naive` draws eight such frames: at 250,000 it
+/// took 34 s and 1.8 GB on this project's 2-core machine (`docs/limits.md`).
+pub const MAX_NAIVE_DRAWS: usize = 150_000;
 
 impl Renderer {
     /// The naive frame's stages between prepare and compose: batch, upload,
