@@ -87,6 +87,45 @@ fn one_gpu_step_matches_the_cpu_step_closely() {
     assert!((a.position - b.position).length() < 1e-4, "the predator hunts the same fish: {a:?} vs {b:?}");
 }
 
+#[test]
+fn in_a_crowd_the_gpu_samples_neighbours_as_the_cpu_does() {
+    // 3,000 fish in a ball of radius 0.3: each has far more than
+    // MAX_NEIGHBOUR_TESTS others in its 27 cells and tests an even sample of
+    // them, on the GPU as on the CPU. The samples differ (the GPU orders a
+    // cell's fish by atomic rank), but one step must turn the fish alike.
+    let Some(gpu) = common::gpu() else { return };
+    if !gpu.culls_on_gpu() {
+        return;
+    }
+    let params = SchoolParams {
+        count: 3000,
+        bounds: Aabb { min: Vec3::splat(-20.0), max: Vec3::splat(20.0) },
+        clusters: Some((1, 0.3)),
+        seed: 3,
+        ..SchoolParams::default()
+    };
+    let mut cpu = School::new(params).unwrap();
+    let before: Vec<Vec3> = cpu.fish().iter().map(|f| f.velocity).collect();
+    let mut on_gpu = GpuSchool::new(gpu, &cpu).unwrap();
+    cpu.step(1.0 / 30.0);
+    let mut renderer = glint::Renderer::new(gpu);
+    on_gpu.advance(&gpu.queue, 1, 1.0 / 30.0);
+    renderer.simulate(&mut on_gpu);
+    let mut target = glint::OffscreenTarget::new(gpu, 32, 32, 1).unwrap();
+    let views = [glint::View::new(glint::Camera::perspective(60.0, 0.1, 10.0))];
+    let nothing: &[glint::Entity] = &[];
+    renderer.render_views(nothing, &views, glint::Lighting::new(&[], Default::default()), &mut target).unwrap();
+    let stepped = on_gpu.read(gpu).unwrap();
+    let (mut apart, mut turned) = (0.0, 0.0);
+    for ((v0, a), b) in before.iter().zip(cpu.fish()).zip(stepped.fish()) {
+        assert!(b.velocity.is_finite() && b.position.is_finite());
+        apart += (a.velocity - b.velocity).length();
+        turned += (a.velocity - *v0).length();
+    }
+    assert!(turned > 100.0, "the crowd pushes the fish apart: {turned}");
+    assert!(apart < 0.25 * turned, "CPU and GPU turn the fish alike: {apart} against {turned}");
+}
+
 /// `tests/scenes/school.scn` posed at `time` on `gpu`, 256 × 256 with 4× MSAA.
 fn school_at(gpu: &glint::Gpu, time: f32) -> (image::RgbaImage, glint::World) {
     let desc = common::load_scene(&common::repo_root().join("tests/scenes/school.scn"));

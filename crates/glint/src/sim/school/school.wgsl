@@ -65,6 +65,21 @@ fn cell_index(c: vec3<i32>) -> u32 {
     return u32(c.x) + params.dims.x * (u32(c.y) + params.dims.y * u32(c.z));
 }
 
+// The sorted fish in row `row` (0..9: dy fastest, then dz, each -1..1) of
+// the 27 cells around cell `c`: the cells x-1..x+1 of that row are
+// consecutive in cell order. Empty where the row is outside the grid.
+fn row_slots(c: vec3<i32>, row: i32) -> vec2<u32> {
+    let hi = vec3<i32>(params.dims) - 1;
+    let y = c.y + row % 3 - 1;
+    let z = c.z + row / 3 - 1;
+    if y < 0 || z < 0 || y > hi.y || z > hi.z {
+        return vec2<u32>(0u, 0u);
+    }
+    let x0 = max(c.x - 1, 0);
+    let x1 = min(c.x + 1, hi.x);
+    return vec2<u32>(starts[cell_index(vec3<i32>(x0, y, z))], starts[cell_index(vec3<i32>(x1, y, z)) + 1u]);
+}
+
 @compute @workgroup_size(256)
 fn clear(@builtin(global_invocation_id) id: vec3<u32>) {
     let cells = params.flags.z;
@@ -182,50 +197,35 @@ fn steer(@builtin(global_invocation_id) id: vec3<u32>) {
     var position_sum = vec3<f32>(0.0);
     var seen = 0u;
     let c = coords(p);
-    let hi = vec3<i32>(params.dims) - 1;
-    let x0 = max(c.x - 1, 0);
-    let x1 = min(c.x + 1, hi.x);
     // More candidates in the 27 cells than a fish tests: every stride-th
     // (rules.rs and School::forces_of do the same).
     var candidates = 0u;
-    for (var dz = -1; dz <= 1; dz = dz + 1) {
-        for (var dy = -1; dy <= 1; dy = dy + 1) {
-            let y = c.y + dy;
-            let z = c.z + dz;
-            if y < 0 || z < 0 || y > hi.y || z > hi.z {
-                continue;
-            }
-            candidates = candidates + starts[cell_index(vec3<i32>(x1, y, z)) + 1u] - starts[cell_index(vec3<i32>(x0, y, z))];
-        }
+    for (var row = 0; row < 9; row = row + 1) {
+        let slots = row_slots(c, row);
+        candidates = candidates + slots.y - slots.x;
     }
     let stride = max((candidates + params.flags.w - 1u) / params.flags.w, 1u);
     var before = 0u;
-    for (var dz = -1; dz <= 1; dz = dz + 1) {
-        for (var dy = -1; dy <= 1; dy = dy + 1) {
-            let y = c.y + dy;
-            let z = c.z + dz;
-            if y < 0 || z < 0 || y > hi.y || z > hi.z {
+    for (var row = 0; row < 9; row = row + 1) {
+        let slots = row_slots(c, row);
+        let first = slots.x;
+        let last = slots.y;
+        let skip = (stride - before % stride) % stride;
+        before = before + last - first;
+        for (var s = first + skip; s < last; s = s + stride) {
+            let q = sorted[s].position;
+            let d = q - p;
+            let d2 = dot(d, d);
+            if d2 >= r2 || d2 == 0.0 {
                 continue;
             }
-            let first = starts[cell_index(vec3<i32>(x0, y, z))];
-            let last = starts[cell_index(vec3<i32>(x1, y, z)) + 1u];
-            let skip = (stride - before % stride) % stride;
-            before = before + last - first;
-            for (var s = first + skip; s < last; s = s + stride) {
-                let q = sorted[s].position;
-                let d = q - p;
-                let d2 = dot(d, d);
-                if d2 >= r2 || d2 == 0.0 {
-                    continue;
-                }
-                if cos_half > -1.0 && dot(d, ahead) < cos_half * sqrt(d2) {
-                    continue;
-                }
-                separation = separation - d / max(d2, 1e-4);
-                velocity_sum = velocity_sum + sorted[s].velocity;
-                position_sum = position_sum + q;
-                seen = seen + 1u;
+            if cos_half > -1.0 && dot(d, ahead) < cos_half * sqrt(d2) {
+                continue;
             }
+            separation = separation - d / max(d2, 1e-4);
+            velocity_sum = velocity_sum + sorted[s].velocity;
+            position_sum = position_sum + q;
+            seen = seen + 1u;
         }
     }
     separation = separation * f32(stride);

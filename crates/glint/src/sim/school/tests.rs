@@ -234,3 +234,34 @@ fn bad_parameters_are_refused_with_a_reason() {
         assert!(School::new(p).is_err());
     }
 }
+
+#[test]
+fn a_crowded_fish_tests_an_even_sample_that_keeps_its_rules() {
+    // 4,000 fish in a unit box all lie in each other's 27 cells: every fish
+    // tested every other (13 s a step at 40,000). Now each tests an even
+    // sample of at most MAX_NEIGHBOUR_TESTS; the means it steers by stay
+    // those of the whole crowd, and the separation sum keeps its size.
+    let mut rng = rand_pcg::Pcg64::seed_from_u64(5);
+    let fish: Vec<(Vec3, Vec3)> = (0..4000)
+        .map(|_| {
+            let p = Vec3::new(rng.random_range(-0.5..0.5), rng.random_range(-0.5..0.5), rng.random_range(-0.5..0.5));
+            let v = Vec3::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0), 1.0);
+            (p, v)
+        })
+        .collect();
+    let mut school = case(&fish, |p| p.bounds = Aabb { min: Vec3::splat(-0.5), max: Vec3::splat(0.5) });
+    for i in [0, 1234, 3999] {
+        let sampled = school.forces(i);
+        assert!(sampled.neighbours <= MAX_NEIGHBOUR_TESTS && sampled.neighbours > 400, "{}", sampled.neighbours);
+        let (p, v) = fish[i];
+        let others = || fish.iter().enumerate().filter(|&(j, _)| j != i).map(|(_, f)| f);
+        let n = (fish.len() - 1) as f32;
+        let cohesion = others().map(|f| f.0).sum::<Vec3>() / n - p;
+        let alignment = others().map(|f| f.1).sum::<Vec3>() / n - v;
+        let separation: Vec3 = others().map(|f| -(f.0 - p) / (f.0 - p).length_squared().max(1e-4)).sum();
+        assert!((sampled.cohesion - cohesion).length() < 0.05, "{} against {cohesion}", sampled.cohesion);
+        assert!((sampled.alignment - alignment).length() < 0.1, "{} against {alignment}", sampled.alignment);
+        let ratio = sampled.separation.length() / separation.length();
+        assert!((0.5..2.0).contains(&ratio), "separation {} against {separation}", sampled.separation);
+    }
+}
