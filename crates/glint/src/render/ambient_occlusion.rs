@@ -346,3 +346,13 @@ impl Renderer {
         };
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_occlusion_parameters_mirror_their_wgsl_struct() {
+        crate::shader::layout::assert_mirrors!(OcclusionGpu, crate::shader::SSAO, "Occlusion", [projection, params]);
+    }
+}

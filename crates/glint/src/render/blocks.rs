@@ -352,6 +352,38 @@ mod tests {
     }
 
     #[test]
+    fn the_blocks_mirror_their_wgsl_structs() {
+        use crate::shader::layout::{assert_layout, assert_mirrors};
+        let wgsl = crate::shader::forward_for_layouts();
+        assert_mirrors!(LightGpu, &wgsl, "Light", [position, color, spot, params]);
+        assert_mirrors!(
+            SceneGpu,
+            &wgsl,
+            "SceneBlock",
+            [ambient, sky_top, sky_bottom, fog, counts, environment, environment_sky, lights]
+        );
+        assert_mirrors!(CameraGpu, &wgsl, "CameraBlock", [view_proj, view, inv_view_proj, position, motion]);
+        assert_mirrors!(
+            MaterialGpu,
+            &wgsl,
+            "MaterialBlock",
+            [base_color, coeffs, pbr, emissive, uv_x, alpha_cutoff, uv_y, uv1_maps, motion, fade]
+        );
+        let at = |field: usize, row: usize| field + 16 * row;
+        let rows = std::mem::offset_of!(InstanceGpu, rows);
+        let fields = [
+            ("row_x", at(rows, 0)),
+            ("row_y", at(rows, 1)),
+            ("row_z", at(rows, 2)),
+            ("material", std::mem::offset_of!(InstanceGpu, material)),
+            ("joints", std::mem::offset_of!(InstanceGpu, joints)),
+            ("joint_count", std::mem::offset_of!(InstanceGpu, joint_count)),
+            ("flags", std::mem::offset_of!(InstanceGpu, flags)),
+        ];
+        assert_layout(&wgsl, "Instance", std::mem::size_of::<InstanceGpu>(), &fields);
+    }
+
+    #[test]
     fn a_compact_instance_keeps_position_scale_turn_material_and_shadow_flag() {
         let turn = 2.5_f32;
         let (scale, rotation) = (Vec3::splat(0.7), glam::Quat::from_rotation_y(turn));

@@ -482,6 +482,13 @@ mod tests {
     }
 
     #[test]
+    fn a_prefilter_record_mirrors_its_wgsl_struct() {
+        // Each pass's record is twelve floats, the WGSL's three vec4s.
+        let fields = [("level", 0), ("source", 16), ("irradiance", 32)];
+        crate::shader::layout::assert_layout(&crate::shader::prefilter(), "Params", size_of::<[f32; 12]>(), &fields);
+    }
+
+    #[test]
     fn a_wide_environment_is_prefiltered_from_a_reduced_copy() {
         // An 8192-texel-wide specular map took 37–76 s and 3 GB to prefilter
         // on lavapipe: the source is halved to 2048 wide first.

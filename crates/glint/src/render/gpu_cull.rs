@@ -513,3 +513,29 @@ fn grid(n: u32) -> (u32, u32) {
     let x = groups.min(65_535);
     (x, groups.div_ceil(x))
 }
+
+#[cfg(test)]
+mod layout_tests {
+    use super::*;
+    use crate::shader::layout::{assert_layout, assert_mirrors};
+
+    #[test]
+    fn the_culling_records_mirror_their_wgsl_structs() {
+        let wgsl = crate::shader::CULL;
+        assert_mirrors!(BoundsGpu, wgsl, "Bounds", [center, extent]);
+        assert_mirrors!(CullRange, wgsl, "CullRange", [first, count, start, batch, frustum, out]);
+        assert_mirrors!(Run, wgsl, "Run", [first, len, frustum, pad]);
+        let pad = std::mem::offset_of!(Params, pad);
+        let fields = [
+            ("ranges", std::mem::offset_of!(Params, ranges)),
+            ("candidates", std::mem::offset_of!(Params, candidates)),
+            ("runs", std::mem::offset_of!(Params, runs)),
+            ("totals", std::mem::offset_of!(Params, totals)),
+            ("counts_first", std::mem::offset_of!(Params, counts_first)),
+            ("place_offset", std::mem::offset_of!(Params, place_offset)),
+            ("pad0", pad),
+            ("pad1", pad + 4),
+        ];
+        assert_layout(wgsl, "Params", std::mem::size_of::<Params>(), &fields);
+    }
+}

@@ -333,3 +333,14 @@ pub(crate) fn draw_late_run(
         false => pass.multi_draw_indexed_indirect(&late.args.buffer, at, run.len),
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_pyramid_parameters_mirror_their_wgsl_struct() {
+        let wgsl = crate::shader::CULL;
+        crate::shader::layout::assert_mirrors!(OcclusionGpu, wgsl, "Occlusion", [view_proj, size, levels, pad]);
+    }
+}

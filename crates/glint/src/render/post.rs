@@ -365,6 +365,11 @@ mod tests {
     use super::*;
 
     #[test]
+    fn the_post_parameters_mirror_their_wgsl_struct() {
+        crate::shader::layout::assert_mirrors!(Params, crate::shader::POST, "Params", [a, texel]);
+    }
+
+    #[test]
     fn a_chain_ping_pongs_between_two_targets_and_ends_in_the_output() {
         let chain = [PostEffect::BLOOM, PostEffect::TONEMAP, PostEffect::Fxaa];
         let steps = steps(&chain);

@@ -214,3 +214,14 @@ impl ShadowMaps {
         })
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_shadow_block_mirrors_its_wgsl_struct() {
+        use crate::shader::layout::assert_mirrors;
+        assert_mirrors!(ShadowGpu, &crate::shader::forward_for_layouts(), "ShadowBlock", [view_proj, info, params]);
+    }
+}

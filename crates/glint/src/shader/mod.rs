@@ -10,6 +10,8 @@
 mod assemble;
 #[cfg(test)]
 mod composed_tests;
+#[cfg(test)]
+pub(crate) mod layout;
 
 use crate::scene::{AlphaMode, Environment, Light, LightKind, Material, ShadingModel};
 use assemble::{assemble, Defs};
@@ -210,6 +212,14 @@ fn forward_defs(features: ShaderFeatures, lights: LightCounts, vertex_storage: b
 /// `fs_main`, groups 0–3; reading storage buffers when `vertex_storage`.
 pub(crate) fn forward(features: ShaderFeatures, lights: LightCounts, vertex_storage: bool) -> String {
     assemble(assemble::FORWARD, &forward_defs(features, lights, vertex_storage))
+}
+
+/// A forward shader holding every block the frame's Rust structs mirror
+/// (for the layout checks, [`layout`]).
+#[cfg(test)]
+pub(crate) fn forward_for_layouts() -> String {
+    let features = ShaderFeatures::SHADOWS | ShaderFeatures::SHADOW_CUBES;
+    forward(features, LightCounts { directional: 1, positional: 1 }, true)
 }
 
 /// The gradient sky: `vs_sky` / `fs_sky`, groups 0–1.

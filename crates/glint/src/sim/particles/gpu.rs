@@ -338,3 +338,41 @@ fn emitter_block(params: &EmitterParams, schedule: &Schedule) -> EmitterGpu {
         ground: [ground, bounce, bursts_alive as f32, schedule.slots() as f32],
     }
 }
+
+#[cfg(test)]
+mod layout_tests {
+    use super::*;
+    use crate::shader::layout::assert_mirrors;
+
+    #[test]
+    fn the_emitter_blocks_and_records_mirror_their_wgsl_structs() {
+        let wgsl = include_str!("particles.wgsl");
+        assert_mirrors!(
+            EmitterGpu,
+            wgsl,
+            "Emitter",
+            [
+                origin,
+                shape,
+                axis,
+                seed,
+                across,
+                stream_slots,
+                other,
+                burst,
+                shape_size,
+                gravity,
+                drag,
+                color,
+                color_end,
+                motion,
+                timing,
+                look,
+                ground
+            ]
+        );
+        assert_mirrors!(StepGpu, wgsl, "Step", [times, counts, eye]);
+        assert_mirrors!(super::super::Particle, wgsl, "Particle", [position, age, velocity, id]);
+        assert_mirrors!(crate::render::ParticleGpu, wgsl, "Record", [center_size, color]);
+    }
+}

@@ -53,14 +53,25 @@ impl From<&FishGpu> for Swimmer {
     }
 }
 
-/// The predator's `Hunt` state (48 bytes with the nearest fish's search).
+/// The predator's `Hunt` state (48 bytes with the nearest fish's search:
+/// its squared distance's bits at 28, where a fish keeps its padding, and
+/// its number).
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
 struct HuntGpu {
-    fish: FishGpu,
+    position: [f32; 3],
+    phase: f32,
+    velocity: [f32; 3],
     nearest_bits: u32,
     nearest: u32,
-    pad: [u32; 2],
+    pad: [u32; 3],
+}
+
+impl From<&Swimmer> for HuntGpu {
+    fn from(f: &Swimmer) -> Self {
+        let FishGpu { position, phase, velocity, .. } = FishGpu::from(f);
+        Self { position, phase, velocity, nearest_bits: 0, nearest: 0, pad: [0; 3] }
+    }
 }
 
 /// The passes of one step before the scan, and after it.
@@ -127,7 +138,7 @@ impl GpuSchool {
         let starts = buffer("school: first slot per cell", 4 * (cells as u64 + 1));
         let hunt = buffer("school: predator", std::mem::size_of::<HuntGpu>() as u64);
         let predator = school.predator().copied().unwrap_or_default();
-        let hunt_data = HuntGpu { fish: FishGpu::from(&predator), nearest_bits: 0, nearest: 0, pad: [0; 2] };
+        let hunt_data = HuntGpu::from(&predator);
         gpu.queue.write_buffer(&hunt, 0, bytemuck::bytes_of(&hunt_data));
         let uniform = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("school: parameters"),
@@ -217,7 +228,8 @@ impl GpuSchool {
             bytemuck::pod_collect_to_vec::<u8, FishGpu>(&bytes).iter().map(Swimmer::from).collect();
         let hunt: HuntGpu =
             bytemuck::pod_read_unaligned(&gpu.read_buffer(&self.hunt)?[..std::mem::size_of::<HuntGpu>()]);
-        let predator = self.params.predator.map(|_| Swimmer::from(&hunt.fish));
+        let hunter = FishGpu { position: hunt.position, phase: hunt.phase, velocity: hunt.velocity, pad: 0.0 };
+        let predator = self.params.predator.map(|_| Swimmer::from(&hunter));
         Ok(School::from_state(self.params.clone(), fish, predator))
     }
 }
@@ -258,5 +270,35 @@ fn params_block(params: &SchoolParams, shape: super::GridShape, count: u32, dt: 
             super::MAX_NEIGHBOUR_TESTS,
         ],
         obstacles,
+    }
+}
+
+#[cfg(test)]
+mod layout_tests {
+    use super::*;
+    use crate::shader::layout::{assert_layout, assert_mirrors};
+
+    #[test]
+    fn the_school_blocks_mirror_their_wgsl_structs() {
+        let wgsl = include_str!("school.wgsl");
+        assert_mirrors!(
+            ParamsGpu,
+            wgsl,
+            "Params",
+            [
+                origin, cell, dims, count, bounds_min, radius, bounds_max, cos_half, weights, more, speed, hunter,
+                flags, obstacles
+            ]
+        );
+        assert_mirrors!(FishGpu, wgsl, "Fish", [position, phase, velocity, pad]);
+        // The WGSL's tail padding is implicit.
+        let fields = [
+            ("position", std::mem::offset_of!(HuntGpu, position)),
+            ("phase", std::mem::offset_of!(HuntGpu, phase)),
+            ("velocity", std::mem::offset_of!(HuntGpu, velocity)),
+            ("nearest_bits", std::mem::offset_of!(HuntGpu, nearest_bits)),
+            ("nearest", std::mem::offset_of!(HuntGpu, nearest)),
+        ];
+        assert_layout(wgsl, "Hunt", std::mem::size_of::<HuntGpu>(), &fields);
     }
 }
