@@ -9,7 +9,9 @@
 //! selects; its tests check the result against naga_oil's composition.
 //!
 //! The other shaders (`blit`, `post`, `cull`, `pyramid`, `ssao`,
-//! `ssao_compute`) become plain strings there, their comments dropped too.
+//! `ssao_compute`, and the simulations' `particles_step`, `school` and
+//! `scan`) have no defs: each becomes one string there, its imports ahead of
+//! its own text, comments dropped too.
 //!
 //! The sources keep to the subset of naga_oil's preprocessor that this reads:
 //! `#define_import_path`, `#import` (outside conditionals), `#ifdef`,
@@ -22,18 +24,23 @@ use std::path::Path;
 const COMPOSED: [(&str, &str); 4] =
     [("FORWARD", "forward"), ("SKY", "sky"), ("PREFILTER", "prefilter"), ("PARTICLES", "particles")];
 
-/// The shaders used as they are, and the constant each becomes.
-const PLAIN: [(&str, &str); 6] = [
+/// The shaders without defs (their imports ahead of their own text), and the
+/// constant each becomes.
+const PLAIN: [(&str, &str); 9] = [
     ("BLIT", "blit"),
     ("POST", "post"),
     ("CULL", "cull"),
     ("PYRAMID", "pyramid"),
     ("SSAO", "ssao"),
     ("SSAO_COMPUTE", "ssao_compute"),
+    ("PARTICLES_STEP", "particles_step"),
+    ("SCHOOL", "school"),
+    ("SCAN", "scan"),
 ];
 
 /// The modules others import: their import path and file.
-const MODULES: [(&str, &str); 2] = [("glint::blocks", "blocks"), ("glint::equirect", "equirect")];
+const MODULES: [(&str, &str); 3] =
+    [("glint::blocks", "blocks"), ("glint::equirect", "equirect"), ("glint::full_screen", "full_screen")];
 
 /// One piece of a shader: text or a def's value, and the tests it is under.
 struct Piece {
@@ -63,7 +70,7 @@ fn main() {
         let mut pieces = Vec::new();
         append(dir, name, &mut vec![name.to_string()], &mut pieces);
         let [Piece { when, value: false, text }] = &merged(pieces)[..] else {
-            panic!("{name}.wgsl: directives in a shader used as it is");
+            panic!("{name}.wgsl: defs or conditionals in a shader without defs");
         };
         assert!(when.is_empty());
         writeln!(out, "/// `{name}.wgsl` without its comments.\npub(crate) const {constant}: &str = {text:?};")

@@ -3,6 +3,8 @@
 // a frame at the same size (texel centres land on pixel centres: an exact copy).
 // sRGB views decode and re-encode, so filtering is in linear space.
 
+#import glint::full_screen::{full_screen_clip, full_screen_uv}
+
 @group(0) @binding(0) var source: texture_2d<f32>;
 @group(0) @binding(1) var source_sampler: sampler;
 
@@ -13,11 +15,7 @@ struct BlitOut {
 
 @vertex
 fn vs_blit(@builtin(vertex_index) index: u32) -> BlitOut {
-    let uv = vec2<f32>(f32((index << 1u) & 2u), f32(index & 2u));
-    var out: BlitOut;
-    out.clip = vec4<f32>(uv * 2.0 - 1.0, 0.0, 1.0);
-    out.uv = vec2<f32>(uv.x, 1.0 - uv.y);
-    return out;
+    return BlitOut(full_screen_clip(index, 0.0), full_screen_uv(index));
 }
 
 @fragment

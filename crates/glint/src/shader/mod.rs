@@ -258,6 +258,12 @@ pub(crate) const PYRAMID: &str = assemble::PYRAMID;
 pub(crate) const SSAO: &str = assemble::SSAO;
 /// Its compute passes, appended to [`SSAO`].
 pub(crate) const SSAO_COMPUTE: &str = assemble::SSAO_COMPUTE;
+/// Particles stepped on the GPU (`sim/particles/gpu.rs`).
+pub(crate) const PARTICLES_STEP: &str = assemble::PARTICLES_STEP;
+/// Fish schooling on the GPU (`sim/school/gpu.rs`).
+pub(crate) const SCHOOL: &str = assemble::SCHOOL;
+/// The running sum of the GPU's counting sorts (`sim/scan.rs`).
+pub(crate) const SCAN: &str = assemble::SCAN;
 
 #[cfg(test)]
 mod tests {

@@ -5,6 +5,8 @@
 // Bindings: the pass's input, a second input (bloom's blurred light), a linear
 // clamping sampler and the pass's parameters.
 
+#import glint::full_screen::{full_screen_clip, full_screen_uv}
+
 struct Params {
     // Per pass: bright: x threshold. blur: xy direction in texels. bloom_add: x
     // intensity. tonemap: x exposure (EV), y operator (0 none, 1 Reinhard, 2 ACES,
@@ -26,11 +28,7 @@ struct Varyings {
 
 @vertex
 fn vs_post(@builtin(vertex_index) index: u32) -> Varyings {
-    let uv = vec2<f32>(f32((index << 1u) & 2u), f32(index & 2u));
-    var out: Varyings;
-    out.position = vec4<f32>(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0, 0.0, 1.0);
-    out.uv = uv;
-    return out;
+    return Varyings(full_screen_clip(index, 0.0), full_screen_uv(index));
 }
 
 fn luminance(c: vec3<f32>) -> f32 {

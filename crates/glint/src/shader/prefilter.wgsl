@@ -14,6 +14,7 @@
 //   lights use.
 
 #import glint::equirect::{equirect_uv, equirect_direction, sh_basis, EQUIRECT_PI}
+#import glint::full_screen::full_screen_clip
 
 struct Params {
     // x: the level's roughness (0: a copy of the source); y: the source level a
@@ -31,8 +32,7 @@ struct Params {
 
 @vertex
 fn vs_full(@builtin(vertex_index) index: u32) -> @builtin(position) vec4<f32> {
-    let uv = vec2<f32>(f32((index << 1u) & 2u), f32(index & 2u));
-    return vec4<f32>(uv * 2.0 - 1.0, 0.0, 1.0);
+    return full_screen_clip(index, 0.0);
 }
 
 // The i-th of n points of the Hammersley set (bits reversed by hand: GLSL ES

@@ -4,6 +4,7 @@
 // the view, bright in the sun's direction).
 
 #import glint::blocks::{scene, camera, environment_sample}
+#import glint::full_screen::full_screen_clip
 
 struct SkyOut {
     @builtin(position) clip: vec4<f32>,
@@ -12,12 +13,8 @@ struct SkyOut {
 
 @vertex
 fn vs_sky(@builtin(vertex_index) index: u32) -> SkyOut {
-    let uv = vec2<f32>(f32((index << 1u) & 2u), f32(index & 2u));
-    let ndc = uv * 2.0 - 1.0;
-    var out: SkyOut;
-    out.clip = vec4<f32>(ndc, 1.0, 1.0);
-    out.ndc = ndc;
-    return out;
+    let clip = full_screen_clip(index, 1.0);
+    return SkyOut(clip, clip.xy);
 }
 
 // The unit direction the camera looks along through this pixel.

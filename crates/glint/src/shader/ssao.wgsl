@@ -28,6 +28,8 @@ struct Occlusion {
 // fs_blur: fs_occlusion's output.
 @group(0) @binding(2) var raw: texture_2d<f32>;
 
+#import glint::full_screen::full_screen_clip
+
 const PI: f32 = 3.14159265;
 const SLICES: u32 = 3u;
 const STEPS: u32 = 6u;
@@ -37,8 +39,7 @@ const BIAS: f32 = 0.02;
 
 @vertex
 fn vs_full(@builtin(vertex_index) i: u32) -> @builtin(position) vec4<f32> {
-    let uv = vec2<f32>(f32((i << 1u) & 2u), f32(i & 2u));
-    return vec4<f32>(uv * 2.0 - 1.0, 0.0, 1.0);
+    return full_screen_clip(i, 0.0);
 }
 
 fn decode_normal(e: vec2<f32>) -> vec3<f32> {

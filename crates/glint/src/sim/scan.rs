@@ -1,4 +1,4 @@
-//! [`GpuScan`]: an exclusive running sum on the GPU (`scan.wgsl`), the middle
+//! [`GpuScan`]: an exclusive running sum on the GPU (`shader/scan.wgsl`), the middle
 //! of the counting sorts that rebuild the school's grid and order particles
 //! by depth: count into buckets, sum, scatter.
 
@@ -23,7 +23,7 @@ impl GpuScan {
         let layout = super::compute::layout(device, "scan", 4, 1, None);
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("scan.wgsl"),
-            source: wgpu::ShaderSource::Wgsl(include_str!("scan.wgsl").into()),
+            source: wgpu::ShaderSource::Wgsl(crate::shader::SCAN.into()),
         });
         let pipeline = |entry| crate::render::compute_pipeline(device, &module, entry, &[Some(&layout)]);
         let pipelines = [pipeline("scan_blocks"), pipeline("scan_sums"), pipeline("scan_add")];

@@ -1,7 +1,7 @@
 //! [`GpuParticles`]: an emitter's slots on the GPU, stepped by compute
 //! passes in the frame's encoder ([`Renderer::simulate`](crate::Renderer::simulate))
 //! and written into a particle layer as billboards, back to front for
-//! alpha blending (a counting sort by distance, `particles.wgsl`).
+//! alpha blending (a counting sort by distance, `shader/particles_step.wgsl`).
 
 use super::{EmitterParams, Schedule, SpawnShape};
 use crate::render::{GpuSimulation, ParticleBlend};
@@ -19,7 +19,7 @@ const MAX_STEPS_PER_FRAME: u64 = crate::asset::MAX_POSE_STEPS;
 /// Step blocks the step buffer holds to begin with (it grows to a frame's steps).
 const FIRST_STEP_BLOCKS: u64 = 64;
 
-/// `particles.wgsl`'s `Emitter` block.
+/// `shader/particles_step.wgsl`'s `Emitter` block.
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
 struct EmitterGpu {
@@ -42,7 +42,7 @@ struct EmitterGpu {
     ground: [f32; 4],
 }
 
-/// `particles.wgsl`'s `Step` block.
+/// `shader/particles_step.wgsl`'s `Step` block.
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
 struct StepGpu {
@@ -63,14 +63,14 @@ pub struct ParticleKernels {
 }
 
 impl ParticleKernels {
-    /// Compile `particles.wgsl`'s kernels and the scan's for `device`.
+    /// Compile `shader/particles_step.wgsl`'s kernels and the scan's for `device`.
     pub fn new(device: &wgpu::Device) -> Self {
         // The emitter and step blocks, the slots, the layer's records, the
         // sort's keys, counts and starts.
         let layout = crate::sim::compute::layout(device, "particles", 7, 2, Some(1));
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("particles.wgsl"),
-            source: wgpu::ShaderSource::Wgsl(include_str!("particles.wgsl").into()),
+            label: Some("particles_step.wgsl"),
+            source: wgpu::ShaderSource::Wgsl(crate::shader::PARTICLES_STEP.into()),
         });
         let pipeline = |entry| crate::render::compute_pipeline(device, &module, entry, &[Some(&layout)]);
         Self {
@@ -346,7 +346,7 @@ mod layout_tests {
 
     #[test]
     fn the_emitter_blocks_and_records_mirror_their_wgsl_structs() {
-        let wgsl = include_str!("particles.wgsl");
+        let wgsl = crate::shader::PARTICLES_STEP;
         assert_mirrors!(
             EmitterGpu,
             wgsl,

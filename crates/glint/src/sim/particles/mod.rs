@@ -132,7 +132,7 @@ pub struct Particle {
 }
 
 /// The hash every random draw comes from: PCG's output permutation over a
-/// counter (the same integer steps in `particles.wgsl`).
+/// counter (the same integer steps in `shader/particles_step.wgsl`).
 pub fn hash(v: u32) -> u32 {
     let state = v.wrapping_mul(747_796_405).wrapping_add(2_891_336_453);
     let word = ((state >> ((state >> 28) + 4)) ^ state).wrapping_mul(277_803_737);
@@ -261,7 +261,7 @@ impl EmitterParams {
 }
 
 /// A swirling force, a sum of sines of position and time (the same in
-/// `particles.wgsl`): divergence-free enough to curl smoke and bubbles.
+/// `shader/particles_step.wgsl`): divergence-free enough to curl smoke and bubbles.
 pub fn noise(p: Vec3, t: f32) -> Vec3 {
     Vec3::new(
         (p.y * 1.7 + t * 1.3).sin() + (p.z * 2.3 - t * 0.7).sin(),

@@ -116,7 +116,7 @@ impl Schedule {
 
 /// The particle in `slot` after `stream` steady particles and `bursts`
 /// bursts, with `(stream slots, burst size, bursts alive)` (the same integer
-/// steps in `particles.wgsl`).
+/// steps in `shader/particles_step.wgsl`).
 pub fn occupant(
     slot: u32,
     (stream, bursts): (u64, u64),

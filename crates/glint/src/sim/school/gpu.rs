@@ -1,4 +1,4 @@
-//! [`GpuSchool`]: a [`School`] stepped by compute shaders (`school.wgsl`),
+//! [`GpuSchool`]: a [`School`] stepped by compute shaders (`shader/school.wgsl`),
 //! its state kept on the GPU between steps and read back on request.
 
 use super::{School, SchoolParams, Swimmer};
@@ -11,7 +11,7 @@ use crate::Gpu;
 pub const MAX_GPU_OBSTACLES: usize = 64;
 const WORKGROUP: u32 = 256;
 
-/// The uniform block `Params` of `school.wgsl`.
+/// The uniform block `Params` of `shader/school.wgsl`.
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
 struct ParamsGpu {
@@ -31,7 +31,7 @@ struct ParamsGpu {
     obstacles: [[f32; 4]; MAX_GPU_OBSTACLES],
 }
 
-/// One fish as `school.wgsl` stores it (32 bytes).
+/// One fish as `shader/school.wgsl` stores it (32 bytes).
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
 struct FishGpu {
@@ -154,7 +154,7 @@ impl GpuSchool {
         let groups = [group(0), group(1)];
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("school.wgsl"),
-            source: wgpu::ShaderSource::Wgsl(include_str!("school.wgsl").into()),
+            source: wgpu::ShaderSource::Wgsl(crate::shader::SCHOOL.into()),
         });
         let pipelines = BEFORE_SCAN
             .iter()
@@ -280,7 +280,7 @@ mod layout_tests {
 
     #[test]
     fn the_school_blocks_mirror_their_wgsl_structs() {
-        let wgsl = include_str!("school.wgsl");
+        let wgsl = crate::shader::SCHOOL;
         assert_mirrors!(
             ParamsGpu,
             wgsl,

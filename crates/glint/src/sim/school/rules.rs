@@ -1,5 +1,5 @@
 //! Reynolds' steering rules for one fish, as accelerations before their
-//! weights; the GPU's `school.wgsl` computes the same sums. Each rule is a
+//! weights; the GPU's `shader/school.wgsl` computes the same sums. Each rule is a
 //! field of [`Forces`] so tests can check it alone.
 
 use super::{Obstacle, SchoolParams};
