@@ -1,12 +1,17 @@
 //! # glint
 //!
-//! A real-time 3D renderer on wgpu, built to be read. Two layers:
+//! A real-time 3D renderer on wgpu, built to be read. A beginner layer over a
+//! core layer:
 //!
 //! - **Beginner layer** ([`scene`]): [`Mesh`], [`Material`], [`Entity`], [`Light`],
 //!   [`Camera`] — plain data, no wgpu.
-//! - **Core layer** ([`gpu`], [`render`], [`asset`], shaders): the [`Gpu`] context,
-//!   the [`Renderer`] with its sort keys, batching and shader data blocks, and
-//!   loaders that never trust a file.
+//! - **Core layer**: the [`Gpu`] context and targets ([`gpu`]) and the WGSL
+//!   composed when glint is built (`shader`); above them, loaders that never
+//!   trust a file ([`asset`]), the simulations ([`sim`]: cloth, schools,
+//!   particles) and the [`Renderer`] with its sort keys, batching and shader
+//!   data blocks ([`render`]); on top, a [`World`]: a loaded scene placed in a
+//!   renderer and run ([`world`]). `DESIGN.md` in the repository keeps the
+//!   table of what may import what.
 //!
 //! A frame follows Tiny Graphics' program structure:
 //!

@@ -1,3 +1,7 @@
+//! Core layer: [`Texture`], decoded pixels of a PNG or JPEG image, read
+//! within [`MAX_TEXTURE_SIDE`] and [`MAX_TEXTURE_MEMORY`] (the header checked
+//! before any pixel is decoded).
+
 use super::{Diagnostic, TextureRef, MAX_IMAGE_FILE_BYTES};
 use std::collections::HashMap;
 use std::hash::Hash;

@@ -1,3 +1,7 @@
+//! Core layer: [`Gpu`], the device, queue and what the adapter can do
+//! (compute, vertex storage, MSAA, timestamps), headless or for a window; and
+//! [`GpuError`].
+
 use std::fmt;
 use std::sync::Arc;
 

@@ -1,3 +1,7 @@
+//! Core layer: [`OffscreenTarget`], the colour and depth textures a frame is
+//! drawn into (with MSAA, resolved), and [`Readback`], a frame copied back to
+//! the CPU in bands.
+
 use super::{Gpu, GpuError, COLOR_FORMAT, DEPTH_FORMAT};
 
 /// What pipelines drawing into a target depend on: its colour format and samples.

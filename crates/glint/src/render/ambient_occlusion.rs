@@ -46,12 +46,12 @@ const MAX_RADIUS_PIXELS: f32 = 64.0;
 /// The occlusion passes' parameters (`Occlusion` in `shader/ssao.wgsl`).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
-struct OcclusionGpu {
+struct AmbientOcclusionGpu {
     projection: [f32; 4],
     params: [f32; 4],
 }
 
-impl OcclusionGpu {
+impl AmbientOcclusionGpu {
     fn new(frame: &ViewFrame, settings: AmbientOcclusion) -> Self {
         let p = frame.camera.projection(frame.aspect);
         let orthographic = matches!(frame.camera.projection, Projection::Orthographic { .. });
@@ -69,12 +69,12 @@ enum Kind {
 }
 
 /// The occlusion and blur pipelines, made with the first view that has ambient occlusion.
-pub(crate) struct OcclusionPipelines {
+pub(crate) struct AmbientOcclusionPipelines {
     layouts: [wgpu::BindGroupLayout; 2],
     kind: Kind,
 }
 
-impl OcclusionPipelines {
+impl AmbientOcclusionPipelines {
     /// As compute passes when `compute`, else as fragment passes.
     pub(crate) fn new(device: &wgpu::Device, compute: bool) -> Self {
         let visibility = if compute { wgpu::ShaderStages::COMPUTE } else { wgpu::ShaderStages::FRAGMENT };
@@ -155,12 +155,12 @@ pub(crate) struct OcclusionTargets {
     raw: wgpu::TextureView,
     /// What the forward pass reads.
     pub(crate) blurred: wgpu::TextureView,
-    block: UniformBlock<OcclusionGpu>,
+    block: UniformBlock<AmbientOcclusionGpu>,
     groups: [wgpu::BindGroup; 2],
 }
 
 impl OcclusionTargets {
-    fn new(device: &wgpu::Device, pipelines: &OcclusionPipelines, (width, height): (u32, u32)) -> Self {
+    fn new(device: &wgpu::Device, pipelines: &AmbientOcclusionPipelines, (width, height): (u32, u32)) -> Self {
         let compute = matches!(pipelines.kind, Kind::Compute(_));
         let texture = |label, (width, height), format, usage| {
             device
@@ -235,7 +235,9 @@ impl Renderer {
             return Ok(());
         };
         let compute = self.cull_pipelines.is_some();
-        let pipelines = self.occlusion_pipelines.get_or_insert_with(|| OcclusionPipelines::new(&self.device, compute));
+        let pipelines = self
+            .ambient_occlusion_pipelines
+            .get_or_insert_with(|| AmbientOcclusionPipelines::new(&self.device, compute));
         // A run's batches share one pipeline (what `draw_run` binds).
         let list = &self.view.forward;
         for run in &list.runs {
@@ -248,7 +250,7 @@ impl Renderer {
             self.update_view(|view, shared| view.set_occlusion(shared, targets));
         }
         let targets = self.view.occlusion.as_mut().expect("made above");
-        stats.bytes_uploaded.camera += targets.block.update(&self.queue, OcclusionGpu::new(frame, settings));
+        stats.bytes_uploaded.camera += targets.block.update(&self.queue, AmbientOcclusionGpu::new(frame, settings));
         Ok(())
     }
 
@@ -257,7 +259,9 @@ impl Renderer {
     /// depth pre-pass of the forward list's runs before the sky, then the
     /// occlusion and blur passes.
     pub(super) fn encode_ambient_occlusion(&mut self, encoder: &mut wgpu::CommandEncoder, stats: &mut FrameStats) {
-        let (Some(targets), Some(pipelines)) = (&self.view.occlusion, &self.occlusion_pipelines) else { return };
+        let (Some(targets), Some(pipelines)) = (&self.view.occlusion, &self.ambient_occlusion_pipelines) else {
+            return;
+        };
         if !self.frame_variant.ambient_occlusion {
             return;
         }
@@ -353,6 +357,11 @@ mod tests {
 
     #[test]
     fn the_occlusion_parameters_mirror_their_wgsl_struct() {
-        crate::shader::layout::assert_mirrors!(OcclusionGpu, crate::shader::SSAO, "Occlusion", [projection, params]);
+        crate::shader::layout::assert_mirrors!(
+            AmbientOcclusionGpu,
+            crate::shader::SSAO,
+            "AmbientOcclusion",
+            [projection, params]
+        );
     }
 }

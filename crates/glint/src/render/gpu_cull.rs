@@ -22,7 +22,7 @@
 use super::cull_pipelines::OcclusionPipelines;
 pub(crate) use super::cull_pipelines::{compute_pipeline, CullPipelines};
 use super::occlusion::{LateInput, LatePhase};
-use super::readback::Readback;
+use super::readback::CountReadback;
 use super::resources::GrowBuffer;
 use super::RenderError;
 use crate::render::cull::{Boxes, Frustum};
@@ -120,7 +120,7 @@ pub(crate) struct GpuCull {
     groups: Option<[wgpu::BindGroup; 2]>,
     uploaded: (Vec<CullRange>, Vec<Run>, Vec<[f32; 4]>, Params),
     params_now: Params,
-    readback: Readback,
+    readback: CountReadback,
     /// The late phase, once the list has been occlusion-culled.
     late: Option<LatePhase>,
     /// Its bind groups: group 0 and 1 of the late dispatches, group 2 of both phases.
@@ -171,7 +171,7 @@ impl GpuCull {
             groups: None,
             uploaded: Default::default(),
             params_now: Params::default(),
-            readback: Readback::new(device),
+            readback: CountReadback::new(device),
             late: None,
             late_groups: None,
             occluding: false,

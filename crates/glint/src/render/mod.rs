@@ -192,7 +192,7 @@ pub struct Renderer {
     particle_spot: Option<crate::scene::TextureId>,
     particle_pipelines: particles::ParticlePipelines,
     /// Ambient occlusion's passes, made with the first view that has it.
-    occlusion_pipelines: Option<ambient_occlusion::OcclusionPipelines>,
+    ambient_occlusion_pipelines: Option<ambient_occlusion::AmbientOcclusionPipelines>,
 }
 
 fn ms_since(t: Instant) -> f64 {
@@ -242,7 +242,7 @@ impl Renderer {
             particle_layers: Vec::new(),
             particle_spot: None,
             particle_pipelines,
-            occlusion_pipelines: None,
+            ambient_occlusion_pipelines: None,
             submits_counted: queue.submits(),
             uncaptured: gpu.uncaptured(),
             device,

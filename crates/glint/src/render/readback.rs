@@ -1,4 +1,4 @@
-//! Core layer: [`Readback`], small counts from the GPU (GPU culling's
+//! Core layer: [`CountReadback`], small counts from the GPU (GPU culling's
 //! instances drawn per frustum) read back a frame or two late without a stall:
 //! a few buffers copied into, mapped once their submission has gone, and read
 //! when the map is done.
@@ -11,20 +11,20 @@ const MAPPING: u8 = 1;
 const MAPPED: u8 = 2;
 const FAILED: u8 = 3;
 const COPIED: u8 = 4;
-/// Readback slots: a frame's counts are read two or three frames later.
+/// Its slots: a frame's counts are read two or three frames later.
 const SLOTS: usize = 3;
 /// Frustums a list has at most: the camera, or every shadow view.
 const MAX_FRUSTUMS: u64 = super::views::MAX_SHADOW_VIEWS as u64;
 
 /// A few small buffers the per-frustum totals are copied into and mapped from.
-pub(crate) struct Readback {
+pub(crate) struct CountReadback {
     slots: Vec<(wgpu::Buffer, Arc<AtomicU8>, u64, u32)>,
     latest: Option<Vec<u32>>,
-    /// Whether `latest` came back since [`take_fresh`](Readback::take_fresh).
+    /// Whether `latest` came back since [`take_fresh`](CountReadback::take_fresh).
     fresh: bool,
 }
 
-impl Readback {
+impl CountReadback {
     pub(crate) fn new(device: &wgpu::Device) -> Self {
         let slot = |_| {
             let buffer = device.create_buffer(&wgpu::BufferDescriptor {

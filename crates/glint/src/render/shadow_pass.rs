@@ -5,8 +5,8 @@
 //! camera's view still casts — and its draws are sorted and batched like the
 //! forward view's, into one [`DrawList`](super::draw_list::DrawList) for all
 //! views. Each view is one depth-only render pass into its layer of the shadow
-//! maps; the whole pass is one command buffer, submitted by the flush with its
-//! own, before the forward pass.
+//! maps, recorded into the frame's one encoder before the forward pass, and
+//! sent in the frame's one submission.
 
 use super::blocks::CameraGpu;
 use super::cull::Frustum;

@@ -1,3 +1,6 @@
+//! Beginner layer: [`Camera`], where a view looks from and its
+//! [`Projection`] (perspective or orthographic).
+
 use glam::{Mat4, Vec3};
 
 /// How the camera projects.

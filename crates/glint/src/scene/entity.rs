@@ -1,3 +1,7 @@
+//! Beginner layer: [`Entity`], a shape and a material drawn at one or many
+//! instance transforms (with tiles, density and compact records for
+//! vegetation, joints for skinned meshes).
+
 use super::{MaterialId, ShapeId, Tiles};
 use glam::Mat4;
 use std::sync::atomic::{AtomicU64, Ordering};

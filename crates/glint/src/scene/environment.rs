@@ -1,3 +1,6 @@
+//! Beginner layer: a scene's [`Environment`]: the background (a colour or a
+//! sky gradient), fog, ambient light and image-based lighting.
+
 use glam::Vec3;
 
 /// What is drawn where no geometry is.
@@ -30,7 +33,7 @@ pub enum EnvironmentSource {
     /// describe, baked by glint ([`EnvironmentImage::sky`](crate::asset::EnvironmentImage::sky))
     /// and baked again when either changes (time of day).
     Sky,
-    /// An image added with [`Registry::add_environment`](crate::Registry::add_environment).
+    /// An image added with [`Registry::add_environment`](crate::render::Registry::add_environment).
     Image(super::EnvironmentId),
 }
 

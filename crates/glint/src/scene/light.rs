@@ -1,3 +1,6 @@
+//! Beginner layer: [`Light`], a directional, point or spot light, and its
+//! [`ShadowSettings`] (at most [`MAX_LIGHTS`] a frame).
+
 use glam::Vec3;
 
 /// Most lights one frame can use. All lights live in one uniform block

@@ -1,3 +1,7 @@
+//! Beginner layer: [`Material`], how a surface looks (Blinn-Phong or
+//! metallic-roughness shading, maps, alpha, motion) and how it is drawn (its
+//! render states).
+
 use super::states::{BlendState, Compare, Cull, DepthState, RenderStates};
 use super::TextureId;
 use glam::{Vec2, Vec4};

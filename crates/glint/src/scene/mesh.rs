@@ -1,3 +1,7 @@
+//! Beginner layer: [`Mesh`], a shape's vertices ([`Vertex`], 48 bytes, and
+//! [`SkinVertex`] for skinned shapes) and triangle indices, with its bounds
+//! ([`Aabb`], [`BoundingSphere`]), normals and tangents.
+
 use glam::{Vec2, Vec3};
 use std::collections::HashMap;
 

@@ -59,7 +59,7 @@ pub struct TextureId(pub(crate) u32);
 /// Handle to an environment image ([`EnvironmentImage`](crate::asset::EnvironmentImage)):
 /// unique in the process from the image's creation, so a scene's
 /// [`Environment`] can name it before a renderer has it
-/// ([`Registry::add_environment`](crate::Registry::add_environment)).
+/// ([`Registry::add_environment`](crate::render::Registry::add_environment)).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub struct EnvironmentId(pub(crate) u32);
 

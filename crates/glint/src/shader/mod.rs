@@ -1,11 +1,14 @@
 //! Core layer: WGSL sources and shader variants.
 //!
-//! Every shader imports the shared blocks (`glint::blocks`: groups 0 and 1) with
-//! naga_oil's `#import`. The forward shader has a variant per [`ShaderFeatures`]
-//! set: each bit is a shader def that `forward.wgsl` tests with `#ifdef`, so a
-//! material pays only for what it uses, and each set is compiled once. The
-//! composition happens when glint is built (`build.rs`, [`assemble`]); a test
-//! checks it against naga_oil's.
+//! Shaders import shared modules (`glint::blocks`: groups 0 and 1;
+//! `glint::equirect`; `glint::full_screen`, the full-screen triangle) with
+//! `#import`, in the subset of naga_oil's syntax that `build.rs` reads. The
+//! forward shader has a variant per [`ShaderFeatures`] set: each bit is a
+//! shader def that `forward.wgsl` tests with `#ifdef`, so a material pays only
+//! for what it uses, and each set is compiled once. The composition happens
+//! when glint is built (`build.rs`, [`assemble`]), with no composer at run
+//! time; tests check it against naga_oil's composition, and every Rust struct
+//! that mirrors a WGSL struct against naga's layout of it (`layout.rs`).
 
 mod assemble;
 #[cfg(test)]

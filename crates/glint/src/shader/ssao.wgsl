@@ -11,7 +11,7 @@
 //   from the centre's, so occlusion does not bleed across silhouettes.
 // Half-resolution pixel p stands for full-resolution pixel 2p of the pre-pass.
 
-struct Occlusion {
+struct AmbientOcclusion {
     // x, y: the projection's scale (its [0][0] and [1][1]); z: 1 for an
     // orthographic camera; w: the radius in view units.
     projection: vec4<f32>,
@@ -20,7 +20,7 @@ struct Occlusion {
     params: vec4<f32>,
 }
 
-@group(0) @binding(0) var<uniform> ao: Occlusion;
+@group(0) @binding(0) var<uniform> ao: AmbientOcclusion;
 // The depth pre-pass (forward.wgsl fs_prepass): xy the view-space normal
 // (octahedral), z + w the distance in front of the camera (a half float and
 // what it rounded away); 0 where nothing was drawn.
