@@ -46,7 +46,7 @@ const ROOT: [(&str, &str); 9] = [
 
 /// Crossings from before the table was kept (file, module it names), to be
 /// taken off as the layers are fixed (issue 46).
-const KNOWN: [(&str, &str); 19] = [
+const KNOWN: [(&str, &str); 15] = [
     ("asset/mod.rs", "sim"),
     ("asset/scn_cloth.rs", "sim"),
     ("asset/scn_emitter.rs", "sim"),
@@ -62,10 +62,6 @@ const KNOWN: [(&str, &str); 19] = [
     ("render/resources.rs", "asset"),
     ("sim/cloth/mesh.rs", "asset"),
     ("sim/particles/gpu.rs", "asset"),
-    ("sim/particles/gpu.rs", "render"),
-    ("sim/particles/mod.rs", "render"),
-    ("sim/scan.rs", "render"),
-    ("sim/school/gpu.rs", "render"),
 ];
 
 fn row(module: &str) -> Option<(u8, bool)> {

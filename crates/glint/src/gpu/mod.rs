@@ -3,12 +3,14 @@
 //! `gpu::` owns every wgpu handle that is not tied to one renderer: the
 //! [`Gpu`] context (instance, adapter, device, queue) and the
 //! [`OffscreenTarget`] a frame is drawn into and read back from, and the
-//! [`WindowSurface`] that shows it in a window.
+//! [`WindowSurface`] that shows it in a window; and what GPU simulations and
+//! the renderer share ([`GpuSimulation`], [`ParticleGpu`], compute helpers).
 
 mod blit;
 mod context;
 mod errors;
 mod heap;
+mod simulation;
 mod submit;
 mod target;
 mod window;
@@ -16,6 +18,8 @@ mod window;
 pub(crate) use context::read_buffer;
 pub use context::{Gpu, GpuError, WindowHandles};
 pub use heap::keep_freed_heap_memory;
+pub(crate) use simulation::{bind_buffers, buffers_layout, compute_pipeline};
+pub use simulation::{GpuSimulation, ParticleGpu, MAX_LAYER_PARTICLES};
 pub use target::{OffscreenTarget, Readback, TargetFormat};
 pub use window::WindowSurface;
 

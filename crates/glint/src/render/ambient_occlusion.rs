@@ -124,7 +124,7 @@ impl AmbientOcclusionPipelines {
         let kind = match compute {
             true => Kind::Compute([0, 1].map(|k| {
                 let entry = ["cs_occlusion", "cs_blur"][k];
-                super::compute_pipeline(device, &module, entry, &[Some(&layouts[k])])
+                crate::gpu::compute_pipeline(device, &module, entry, &[Some(&layouts[k])])
             })),
             false => Kind::Fragment([0, 1].map(|k| {
                 let (label, entry) =

@@ -4,6 +4,7 @@
 //! its depth pyramid's.
 
 use super::occlusion::PyramidPipelines;
+use crate::gpu::compute_pipeline;
 
 /// The occlusion-culling pipelines: both phases' cull passes and the pyramid.
 pub(crate) struct OcclusionPipelines {
@@ -104,26 +105,4 @@ impl CullPipelines {
     pub(crate) fn occlusion(&self) -> bool {
         self.occlusion.is_some() && self.occlusion_on
     }
-}
-
-/// The compute pipeline of `module`'s entry point `entry` over bind groups of `layouts`.
-pub(crate) fn compute_pipeline(
-    device: &wgpu::Device,
-    module: &wgpu::ShaderModule,
-    entry: &str,
-    layouts: &[Option<&wgpu::BindGroupLayout>],
-) -> wgpu::ComputePipeline {
-    let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-        label: Some(entry),
-        bind_group_layouts: layouts,
-        immediate_size: 0,
-    });
-    device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-        label: Some(entry),
-        layout: Some(&layout),
-        module,
-        entry_point: Some(entry),
-        compilation_options: Default::default(),
-        cache: None,
-    })
 }

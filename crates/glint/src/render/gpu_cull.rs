@@ -19,8 +19,8 @@
 //! [`GpuCull::args`], empty commands included). Each frustum's instances drawn
 //! come back to the CPU a frame or two late, without a stall.
 
+pub(crate) use super::cull_pipelines::CullPipelines;
 use super::cull_pipelines::OcclusionPipelines;
-pub(crate) use super::cull_pipelines::{compute_pipeline, CullPipelines};
 use super::occlusion::{LateInput, LatePhase};
 use super::readback::CountReadback;
 use super::resources::GrowBuffer;

@@ -64,18 +64,17 @@ mod view;
 mod views;
 mod visible;
 
+pub use crate::gpu::{GpuSimulation, ParticleGpu, MAX_LAYER_PARTICLES};
 pub use crate::scene::{ShadowLayout, MAX_CUBES, MAX_SHADOW_MAP_BYTES};
-pub(crate) use cull_pipelines::compute_pipeline;
 pub use error::RenderError;
 pub use explain::{BatchCall, DrawCall, FrameCalls, PassCalls, PassType};
 pub use gpu_cull::SKIP_UNPAID_OCCLUSION;
 pub use mesh_pool::MeshTooLarge;
 pub use naive::MAX_NAIVE_DRAWS;
-pub use particles::{ParticleBlend, ParticleGpu, ParticleLook, ParticlesId, MAX_LAYER_PARTICLES};
+pub use particles::{ParticleBlend, ParticleLook, ParticlesId};
 pub use place::PlacedScene;
 pub use registry::Registry;
 pub use shadow_pass::Shadows;
-pub use simulate::GpuSimulation;
 pub use stats::{FrameStats, PassStats, Passes, StageTimes, UploadStats};
 pub use timer::GpuTimes;
 

@@ -72,7 +72,7 @@ impl PyramidPipelines {
             label: Some("pyramid.wgsl"),
             source: wgpu::ShaderSource::Wgsl(crate::shader::PYRAMID.into()),
         });
-        let pipeline = |entry, layout| super::gpu_cull::compute_pipeline(device, &module, entry, &[Some(layout)]);
+        let pipeline = |entry, layout| crate::gpu::compute_pipeline(device, &module, entry, &[Some(layout)]);
         Self {
             first: pipeline("first", &layouts[0]),
             first_multisampled: pipeline("first_multisampled", &layouts[1]),

@@ -14,24 +14,11 @@ use super::RenderError;
 use super::Renderer;
 use crate::asset::Texture;
 use crate::gpu::TargetFormat;
+use crate::gpu::{ParticleGpu, MAX_LAYER_PARTICLES};
 pub use crate::scene::ParticleBlend;
 use crate::scene::TextureId;
 use crate::FrameStats;
 use std::collections::HashMap;
-
-/// Most records one layer holds: 128 MiB, the storage binding every adapter has.
-pub const MAX_LAYER_PARTICLES: u32 = 1 << 22;
-
-/// One billboard (32 bytes): the per-instance vertex data of the particle
-/// pipeline (locations 0 and 1) and what `particles.wgsl` writes.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct ParticleGpu {
-    /// xyz: the centre; w: the side, world units (0: not drawn).
-    pub center_size: [f32; 4],
-    /// Linear RGB and alpha.
-    pub color: [f32; 4],
-}
 
 /// What a layer's particles look like.
 #[derive(Clone, Debug)]

@@ -5,13 +5,7 @@
 //! submission, never read back. The outline shows it as `frame N › simulate`.
 
 use super::Renderer;
-
-/// A simulation whose steps are compute passes in the frame.
-pub trait GpuSimulation {
-    /// Record its pending steps into `encoder` (writing their parameters
-    /// through `queue`, and making buffers on `device` if it needs more).
-    fn encode(&mut self, device: &wgpu::Device, queue: &wgpu::Queue, encoder: &mut wgpu::CommandEncoder);
-}
+use crate::gpu::GpuSimulation;
 
 impl Renderer {
     /// Stage 0 of the next frame: record `sim`'s compute passes into the

@@ -4,7 +4,6 @@
 //! with compute shaders.
 
 pub mod cloth;
-mod compute;
 pub mod particles;
 mod scan;
 pub mod school;

@@ -20,12 +20,12 @@ pub(crate) struct ScanGroup {
 
 impl GpuScan {
     pub(crate) fn new(device: &wgpu::Device) -> Self {
-        let layout = super::compute::layout(device, "scan", 4, 1, None);
+        let layout = crate::gpu::buffers_layout(device, "scan", 4, 1, None);
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("scan.wgsl"),
             source: wgpu::ShaderSource::Wgsl(crate::shader::SCAN.into()),
         });
-        let pipeline = |entry| crate::render::compute_pipeline(device, &module, entry, &[Some(&layout)]);
+        let pipeline = |entry| crate::gpu::compute_pipeline(device, &module, entry, &[Some(&layout)]);
         let pipelines = [pipeline("scan_blocks"), pipeline("scan_sums"), pipeline("scan_add")];
         Self { layout, pipelines }
     }
@@ -56,7 +56,8 @@ impl GpuScan {
             mapped_at_creation: false,
         });
         let buffers = [&size, counts, starts, &sums];
-        let group = super::compute::bind(device, "scan", &self.layout, buffers.iter().map(|b| b.as_entire_binding()));
+        let group =
+            crate::gpu::bind_buffers(device, "scan", &self.layout, buffers.iter().map(|b| b.as_entire_binding()));
         ScanGroup { group, n }
     }
 

@@ -4,7 +4,8 @@
 //! alpha blending (a counting sort by distance, `shader/particles_step.wgsl`).
 
 use super::{EmitterParams, Schedule, SpawnShape};
-use crate::render::{GpuSimulation, ParticleBlend};
+use crate::gpu::GpuSimulation;
+use crate::scene::ParticleBlend;
 use crate::sim::scan::{GpuScan, ScanGroup};
 use glam::Vec3;
 use std::sync::Arc;
@@ -67,12 +68,12 @@ impl ParticleKernels {
     pub fn new(device: &wgpu::Device) -> Self {
         // The emitter and step blocks, the slots, the layer's records, the
         // sort's keys, counts and starts.
-        let layout = crate::sim::compute::layout(device, "particles", 7, 2, Some(1));
+        let layout = crate::gpu::buffers_layout(device, "particles", 7, 2, Some(1));
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("particles_step.wgsl"),
             source: wgpu::ShaderSource::Wgsl(crate::shader::PARTICLES_STEP.into()),
         });
-        let pipeline = |entry| crate::render::compute_pipeline(device, &module, entry, &[Some(&layout)]);
+        let pipeline = |entry| crate::gpu::compute_pipeline(device, &module, entry, &[Some(&layout)]);
         Self {
             update: pipeline("update"),
             write: pipeline("write"),
@@ -303,7 +304,7 @@ fn bind_group(
     let resources = std::iter::once(bound[0].as_entire_binding())
         .chain([wgpu::BindingResource::Buffer(step)])
         .chain(bound[1..].iter().map(|b| b.as_entire_binding()));
-    crate::sim::compute::bind(device, "particles", layout, resources)
+    crate::gpu::bind_buffers(device, "particles", layout, resources)
 }
 
 /// The `Emitter` block of `params`.
@@ -373,6 +374,6 @@ mod layout_tests {
         );
         assert_mirrors!(StepGpu, wgsl, "Step", [times, counts, eye]);
         assert_mirrors!(super::super::Particle, wgsl, "Particle", [position, age, velocity, id]);
-        assert_mirrors!(crate::render::ParticleGpu, wgsl, "Record", [center_size, color]);
+        assert_mirrors!(crate::gpu::ParticleGpu, wgsl, "Record", [center_size, color]);
     }
 }

@@ -20,12 +20,12 @@ mod tests;
 pub use gpu::{GpuParticles, ParticleKernels};
 pub use schedule::Schedule;
 
-use crate::render::ParticleGpu;
+use crate::gpu::ParticleGpu;
 use glam::{Vec3, Vec4};
 use p3_maybe_rayon::prelude::*;
 
 /// Most particles one emitter may have alive at once.
-pub const MAX_PARTICLES: u32 = crate::render::MAX_LAYER_PARTICLES;
+pub const MAX_PARTICLES: u32 = crate::gpu::MAX_LAYER_PARTICLES;
 
 /// Where particles start.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -3,7 +3,7 @@
 
 use super::{School, SchoolParams, Swimmer};
 use crate::gpu::GpuError;
-use crate::render::GpuSimulation;
+use crate::gpu::GpuSimulation;
 use crate::sim::scan::{GpuScan, ScanGroup};
 use crate::Gpu;
 
@@ -146,10 +146,10 @@ impl GpuSchool {
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let layout = crate::sim::compute::layout(device, "school", 8, 1, None);
+        let layout = crate::gpu::buffers_layout(device, "school", 8, 1, None);
         let group = |from: usize| {
             let buffers = [&uniform, &fish[from], &fish[1 - from], &sorted, &keys, &counts, &starts, &hunt];
-            crate::sim::compute::bind(device, "school", &layout, buffers.iter().map(|b| b.as_entire_binding()))
+            crate::gpu::bind_buffers(device, "school", &layout, buffers.iter().map(|b| b.as_entire_binding()))
         };
         let groups = [group(0), group(1)];
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
@@ -159,7 +159,7 @@ impl GpuSchool {
         let pipelines = BEFORE_SCAN
             .iter()
             .chain(&AFTER_SCAN)
-            .map(|entry| crate::render::compute_pipeline(device, &module, entry, &[Some(&layout)]))
+            .map(|entry| crate::gpu::compute_pipeline(device, &module, entry, &[Some(&layout)]))
             .collect();
         let scan = GpuScan::new(device);
         let scan_group = scan.group((device, &gpu.queue), &counts, &starts, cells + 1);

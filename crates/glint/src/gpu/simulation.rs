@@ -1,0 +1,91 @@
+//! Core layer: what GPU simulations share with the renderer: the
+//! [`GpuSimulation`] trait (a simulation whose steps are compute passes in the
+//! frame's encoder), the billboard record a simulation writes into a particle
+//! layer ([`ParticleGpu`]), and the compute helpers every simulation's and
+//! culling's shaders use (bind group layouts of whole buffers, pipelines).
+//! The simulations (`sim`) and the renderer (`render`) both build on it, so
+//! neither needs the other.
+
+/// A simulation whose steps are compute passes in the frame.
+pub trait GpuSimulation {
+    /// Record its pending steps into `encoder` (writing their parameters
+    /// through `queue`, and making buffers on `device` if it needs more).
+    fn encode(&mut self, device: &wgpu::Device, queue: &wgpu::Queue, encoder: &mut wgpu::CommandEncoder);
+}
+
+/// Most records one layer holds: 128 MiB, the storage binding every adapter has.
+pub const MAX_LAYER_PARTICLES: u32 = 1 << 22;
+
+/// One billboard (32 bytes): the per-instance vertex data of the particle
+/// pipeline (locations 0 and 1) and what `shader/particles_step.wgsl` writes.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct ParticleGpu {
+    /// xyz: the centre; w: the side, world units (0: not drawn).
+    pub center_size: [f32; 4],
+    /// Linear RGB and alpha.
+    pub color: [f32; 4],
+}
+
+/// A compute layout of `count` buffers: bindings below `uniforms` are uniform
+/// blocks (binding `dynamic` with a dynamic offset), the rest storage.
+pub(crate) fn buffers_layout(
+    device: &wgpu::Device,
+    label: &str,
+    count: u32,
+    uniforms: u32,
+    dynamic: Option<u32>,
+) -> wgpu::BindGroupLayout {
+    let entry = |binding: u32| wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Buffer {
+            ty: match binding < uniforms {
+                true => wgpu::BufferBindingType::Uniform,
+                false => wgpu::BufferBindingType::Storage { read_only: false },
+            },
+            has_dynamic_offset: dynamic == Some(binding),
+            min_binding_size: None,
+        },
+        count: None,
+    };
+    let entries: Vec<_> = (0..count).map(entry).collect();
+    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some(label), entries: &entries })
+}
+
+/// A bind group of `resources` in binding order.
+pub(crate) fn bind_buffers<'a>(
+    device: &wgpu::Device,
+    label: &str,
+    layout: &wgpu::BindGroupLayout,
+    resources: impl IntoIterator<Item = wgpu::BindingResource<'a>>,
+) -> wgpu::BindGroup {
+    let entries: Vec<_> = resources
+        .into_iter()
+        .enumerate()
+        .map(|(k, resource)| wgpu::BindGroupEntry { binding: k as u32, resource })
+        .collect();
+    device.create_bind_group(&wgpu::BindGroupDescriptor { label: Some(label), layout, entries: &entries })
+}
+
+/// The compute pipeline of `module`'s entry point `entry` over bind groups of `layouts`.
+pub(crate) fn compute_pipeline(
+    device: &wgpu::Device,
+    module: &wgpu::ShaderModule,
+    entry: &str,
+    layouts: &[Option<&wgpu::BindGroupLayout>],
+) -> wgpu::ComputePipeline {
+    let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: Some(entry),
+        bind_group_layouts: layouts,
+        immediate_size: 0,
+    });
+    device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+        label: Some(entry),
+        layout: Some(&layout),
+        module,
+        entry_point: Some(entry),
+        compilation_options: Default::default(),
+        cache: None,
+    })
+}
