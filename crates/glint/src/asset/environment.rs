@@ -157,11 +157,10 @@ pub(crate) fn decode_environment(bytes: &[u8], name: String, free: u64) -> Resul
     let decoder = reader().map_err(|e| format!("cannot read environment: {}", super::image_error(&e.into())))?;
     let format = decoder.format();
     // Bytes the decoder needs beside the result (an OpenEXR's data window).
-    let mut decoding = 0;
-    match format {
-        Some(image::ImageFormat::Hdr) => check_hdr_header(bytes)?,
+    let decoding = match format {
+        Some(image::ImageFormat::Hdr) => check_hdr_header(bytes).map(|()| 0)?,
         #[cfg(feature = "exr")]
-        Some(image::ImageFormat::OpenExr) => decoding = check_exr_header(bytes)?,
+        Some(image::ImageFormat::OpenExr) => check_exr_header(bytes)?,
         #[cfg(not(feature = "exr"))]
         Some(image::ImageFormat::OpenExr) => {
             return Err("OpenEXR environments are read where glint is built with its feature `exr` (the web page \
@@ -170,7 +169,7 @@ pub(crate) fn decode_environment(bytes: &[u8], name: String, free: u64) -> Resul
         }
         Some(other) => return Err(format!("expected a Radiance .hdr or OpenEXR image, found {other:?}")),
         None => return Err("expected a Radiance .hdr or OpenEXR image".into()),
-    }
+    };
     let fail = |what: &str, e: image::ImageError| format!("cannot {what} environment: {}", super::image_error(&e));
     let decoder_now = reader().map_err(|e| fail("read", e.into()))?;
     let (w, h) = decoder_now.into_dimensions().map_err(|e| fail("read", e))?;
