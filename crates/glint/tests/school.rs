@@ -55,6 +55,21 @@ fn gpu_and_cpu_schooling_agree_statistically() {
     }
 }
 
+/// `school` stepped once (1/30 s) on the GPU, through a frame's simulate
+/// stage before an empty view, and read back.
+fn gpu_step(gpu: &glint::Gpu, school: &School) -> School {
+    let mut on_gpu = GpuSchool::new(gpu, school).unwrap();
+    let mut renderer = glint::Renderer::new(gpu);
+    on_gpu.advance(&gpu.queue, 1, 1.0 / 30.0);
+    renderer.simulate(&mut on_gpu);
+    let mut target = glint::OffscreenTarget::new(gpu, 32, 32, 1).unwrap();
+    let views = [glint::View::new(glint::Camera::perspective(60.0, 0.1, 10.0))];
+    let nothing: &[glint::Entity] = &[];
+    renderer.render_views(nothing, &views, glint::Lighting::new(&[], Default::default()), &mut target).unwrap();
+    assert!(renderer.frame_outline().iter().any(|g| g.ends_with("› simulate")), "{:?}", renderer.frame_outline());
+    on_gpu.read(gpu).unwrap()
+}
+
 #[test]
 fn one_gpu_step_matches_the_cpu_step_closely() {
     // One step from the same state, in a frame's simulate stage: the GPU's
@@ -68,18 +83,8 @@ fn one_gpu_step_matches_the_cpu_step_closely() {
     for _ in 0..30 {
         cpu.step(1.0 / 30.0);
     }
-    let mut on_gpu = GpuSchool::new(gpu, &cpu).unwrap();
+    let stepped = gpu_step(gpu, &cpu);
     cpu.step(1.0 / 30.0);
-    // The step goes through a frame's simulate stage, before an empty view.
-    let mut renderer = glint::Renderer::new(gpu);
-    on_gpu.advance(&gpu.queue, 1, 1.0 / 30.0);
-    renderer.simulate(&mut on_gpu);
-    let mut target = glint::OffscreenTarget::new(gpu, 32, 32, 1).unwrap();
-    let views = [glint::View::new(glint::Camera::perspective(60.0, 0.1, 10.0))];
-    let nothing: &[glint::Entity] = &[];
-    renderer.render_views(nothing, &views, glint::Lighting::new(&[], Default::default()), &mut target).unwrap();
-    assert!(renderer.frame_outline().iter().any(|g| g.ends_with("› simulate")), "{:?}", renderer.frame_outline());
-    let stepped = on_gpu.read(gpu).unwrap();
     let worst =
         cpu.fish().iter().zip(stepped.fish()).map(|(a, b)| (a.velocity - b.velocity).length()).fold(0.0, f32::max);
     assert!(worst < 1e-3, "largest velocity difference {worst}");
@@ -106,16 +111,8 @@ fn in_a_crowd_the_gpu_samples_neighbours_as_the_cpu_does() {
     };
     let mut cpu = School::new(params).unwrap();
     let before: Vec<Vec3> = cpu.fish().iter().map(|f| f.velocity).collect();
-    let mut on_gpu = GpuSchool::new(gpu, &cpu).unwrap();
+    let stepped = gpu_step(gpu, &cpu);
     cpu.step(1.0 / 30.0);
-    let mut renderer = glint::Renderer::new(gpu);
-    on_gpu.advance(&gpu.queue, 1, 1.0 / 30.0);
-    renderer.simulate(&mut on_gpu);
-    let mut target = glint::OffscreenTarget::new(gpu, 32, 32, 1).unwrap();
-    let views = [glint::View::new(glint::Camera::perspective(60.0, 0.1, 10.0))];
-    let nothing: &[glint::Entity] = &[];
-    renderer.render_views(nothing, &views, glint::Lighting::new(&[], Default::default()), &mut target).unwrap();
-    let stepped = on_gpu.read(gpu).unwrap();
     let (mut apart, mut turned) = (0.0, 0.0);
     for ((v0, a), b) in before.iter().zip(cpu.fish()).zip(stepped.fish()) {
         assert!(b.velocity.is_finite() && b.position.is_finite());
