@@ -46,20 +46,14 @@ const ROOT: [(&str, &str); 9] = [
 
 /// Crossings from before the table was kept (file, module it names), to be
 /// taken off as the layers are fixed (issue 46).
-const KNOWN: [(&str, &str); 15] = [
+const KNOWN: [(&str, &str); 9] = [
     ("asset/mod.rs", "sim"),
     ("asset/scn_cloth.rs", "sim"),
     ("asset/scn_emitter.rs", "sim"),
     ("asset/scn_hostile_tests.rs", "sim"),
     ("asset/scn_school.rs", "sim"),
-    ("render/environment.rs", "asset"),
-    ("render/forward.rs", "asset"),
-    ("render/mod.rs", "asset"),
-    ("render/particles.rs", "asset"),
     ("render/place.rs", "asset"),
     ("render/place.rs", "sim"),
-    ("render/registry.rs", "asset"),
-    ("render/resources.rs", "asset"),
     ("sim/cloth/mesh.rs", "asset"),
     ("sim/particles/gpu.rs", "asset"),
 ];

@@ -13,7 +13,8 @@ mod gltf_tests;
 mod model;
 mod obj;
 mod placement;
-pub mod procedural;
+/// Procedural shapes (now plain data in [`scene`](crate::scene)), under their old path.
+pub use crate::scene::procedural;
 mod scene_desc;
 mod scn;
 mod scn_cloth;
@@ -27,6 +28,7 @@ mod scn_syntax;
 mod scn_targets;
 mod texture;
 
+pub use crate::scene::ShapeKind;
 pub(crate) use environment::{decoded_bytes, read_environment};
 pub use environment::{
     equirect_direction, equirect_uv, EnvironmentImage, MAX_ENVIRONMENT_PIXELS, MAX_HDR_HEADER_BYTES, MAX_RADIANCE,
@@ -38,7 +40,6 @@ pub use files::{
     MAX_SCENE_TOTAL_BYTES,
 };
 pub use model::{Model, ModelPart, Morph, Skin};
-pub use procedural::ShapeKind;
 pub use scene_desc::{CameraView, DrawOptions, EntityDesc, LightSway, MaterialDesc, MeshRef, SceneDesc, TextureRef};
 pub use scn::{load_scene, load_scene_with, parse_scene, parse_scene_with, MAX_CAMERAS, MAX_INSTANCES};
 pub use scn_cloth::{ClothDesc, ClothSetup, MAX_POSE_STEPS};

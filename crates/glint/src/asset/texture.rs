@@ -3,6 +3,7 @@
 //! before any pixel is decoded).
 
 use super::{Diagnostic, TextureRef, MAX_IMAGE_FILE_BYTES};
+pub use crate::scene::Texture;
 use std::collections::HashMap;
 use std::hash::Hash;
 use std::path::Path;
@@ -14,37 +15,6 @@ pub const MAX_TEXTURE_SIDE: u32 = 8192;
 /// with every model it places, or one model loaded alone may hold: four
 /// 8192 × 8192 textures, or sixty-four of 2048 × 2048.
 pub const MAX_TEXTURE_MEMORY: u64 = 1 << 30;
-
-/// A decoded texture waiting to be uploaded: RGBA8 pixels and how to read them.
-///
-/// Colour maps are sRGB (decoded to linear by the sampler); normal and specular
-/// maps are linear. Mipmaps are generated on the GPU when it is uploaded.
-#[derive(Clone, Debug)]
-pub struct Texture {
-    /// Name for labels and diagnostics (usually the file name).
-    pub name: String,
-    /// The pixels, top row first.
-    pub image: image::RgbaImage,
-    /// Whether the pixel values are sRGB-encoded colour.
-    pub srgb: bool,
-}
-
-impl Texture {
-    /// Wrap decoded pixels.
-    pub fn new(name: impl Into<String>, image: image::RgbaImage, srgb: bool) -> Self {
-        Self { name: name.into(), image, srgb }
-    }
-
-    /// Bytes of decoded pixels.
-    pub fn bytes(&self) -> u64 {
-        4 * u64::from(self.image.width()) * u64::from(self.image.height())
-    }
-
-    /// Number of mip levels down to 1×1.
-    pub fn mip_levels(&self) -> u32 {
-        32 - self.image.width().max(self.image.height()).max(1).leading_zeros()
-    }
-}
 
 /// Textures decoded while loading one file, each source once per colour space;
 /// a texture's index is its [`TextureRef`].

@@ -15,8 +15,8 @@
 //! applied where it is looked up, so changing them prefilters nothing.
 
 use super::{Registry, RenderError};
-use crate::asset::EnvironmentImage;
 use crate::gpu::{full_screen_pipeline, sampler_entry, texture_entry, HDR_FORMAT};
+use crate::scene::EnvironmentImage;
 use crate::scene::{Background, Environment, EnvironmentId, EnvironmentSource, Light, LightKind};
 
 /// The widest environment source uploaded, and so the widest specular map:
@@ -414,7 +414,7 @@ mod tests {
         (0..h)
             .flat_map(|y| (0..w).map(move |x| (x, y)))
             .map(|(x, y)| {
-                let d = crate::asset::equirect_direction([(x as f32 + 0.5) / w as f32, (y as f32 + 0.5) / h as f32]);
+                let d = crate::scene::equirect_direction([(x as f32 + 0.5) / w as f32, (y as f32 + 0.5) / h as f32]);
                 let radiance = Vec3::from_array(env.pixels().get_pixel(x, y).0);
                 (d, radiance, texel * (1.0 - d.y * d.y).max(0.0).sqrt())
             })
@@ -537,7 +537,7 @@ mod tests {
             for uv in [[0.63, 0.3], [0.4, 0.5], [0.1, 0.7], [0.85, 0.45]] {
                 let (x, y) = ((uv[0] * w as f32) as u32, (uv[1] * h as f32) as u32);
                 let center = [(x as f32 + 0.5) / w as f32, (y as f32 + 0.5) / h as f32];
-                let want = prefiltered(&texels, crate::asset::equirect_direction(center), roughness);
+                let want = prefiltered(&texels, crate::scene::equirect_direction(center), roughness);
                 let got = Vec3::from_slice(&map[(y * w + x) as usize][..3]);
                 let error = (got - want).abs().max_element() / want.max_element();
                 eprintln!("roughness {roughness} at {uv:?}: {got} vs {want} ({:.1} %)", error * 100.0);

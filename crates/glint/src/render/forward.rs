@@ -124,9 +124,9 @@ impl Renderer {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::asset::ShapeKind;
     use crate::gpu::{Gpu, OffscreenTarget};
     use crate::render::Shadows;
+    use crate::scene::ShapeKind;
     use crate::scene::{Background, Camera, Entity, Environment, Lighting, Material};
     use glam::{Mat4, Vec3};
 

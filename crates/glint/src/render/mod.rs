@@ -78,8 +78,8 @@ pub use shadow_pass::Shadows;
 pub use stats::{FrameStats, PassStats, Passes, StageTimes, UploadStats};
 pub use timer::GpuTimes;
 
-use crate::asset::Texture;
 use crate::gpu::{Gpu, SubmitQueue};
+use crate::scene::Texture;
 use crate::scene::{Entity, Material, MaterialId, Mesh, RenderTargetId, ShapeId, TextureId};
 use draw_list::ListPaths;
 use frame_variant::FrameVariant;
@@ -315,7 +315,7 @@ impl Renderer {
     }
 
     /// Add an environment image ([`Registry::add_environment`]).
-    pub fn add_environment(&mut self, image: &crate::asset::EnvironmentImage) -> crate::scene::EnvironmentId {
+    pub fn add_environment(&mut self, image: &crate::scene::EnvironmentImage) -> crate::scene::EnvironmentId {
         self.registry.add_environment(image)
     }
 

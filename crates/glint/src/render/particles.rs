@@ -12,10 +12,10 @@
 use super::explain::DrawCall;
 use super::RenderError;
 use super::Renderer;
-use crate::asset::Texture;
 use crate::gpu::TargetFormat;
 use crate::gpu::{ParticleGpu, MAX_LAYER_PARTICLES};
 pub use crate::scene::ParticleBlend;
+use crate::scene::Texture;
 use crate::scene::TextureId;
 use crate::FrameStats;
 use std::collections::HashMap;

@@ -9,8 +9,8 @@ use super::mesh_pool::{MeshPool, MeshRange};
 use super::pipelines::{Pipelines, VertexLayout};
 use super::resources::{MaterialTable, TextureUploader};
 use super::RenderError;
-use crate::asset::Texture;
 use crate::gpu::{Gpu, OffscreenTarget, TargetFormat};
+use crate::scene::Texture;
 use crate::scene::{Material, MaterialId, Mesh, RenderTargetId, ShapeId, TextureId};
 
 pub(super) struct ShapeSlot {
@@ -198,7 +198,7 @@ impl Registry {
     /// its id): uploaded now (halved until it fits the adapter and
     /// 2048 texels a side), prefiltered when a frame first uses it. Adding the
     /// same image again does nothing.
-    pub fn add_environment(&mut self, image: &crate::asset::EnvironmentImage) -> crate::scene::EnvironmentId {
+    pub fn add_environment(&mut self, image: &crate::scene::EnvironmentImage) -> crate::scene::EnvironmentId {
         let side = self.device.limits().max_texture_dimension_2d.min(super::environment::MAX_SOURCE_SIDE);
         let (device, queue) = (&self.device, &self.queue);
         (self.environments.entry(image.id()))

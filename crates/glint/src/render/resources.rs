@@ -6,8 +6,8 @@ use super::cull::Boxes;
 use super::gpu_array::GpuArray;
 use super::gpu_cull::BoundsGpu;
 use super::RenderError;
-use crate::asset::Texture;
 use crate::gpu::{Blitter, DriverErrors};
+use crate::scene::Texture;
 
 /// Builds textures and fills their mip chains by repeated half-size blits.
 pub(crate) struct TextureUploader {

@@ -30,7 +30,7 @@ pub struct Fog {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum EnvironmentSource {
     /// The sky this environment's gradient and the first directional light
-    /// describe, baked by glint ([`EnvironmentImage::sky`](crate::asset::EnvironmentImage::sky))
+    /// describe, baked by glint ([`EnvironmentImage::sky`](crate::scene::EnvironmentImage::sky))
     /// and baked again when either changes (time of day).
     Sky,
     /// An image added with [`Registry::add_environment`](crate::render::Registry::add_environment).

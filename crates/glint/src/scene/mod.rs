@@ -9,6 +9,7 @@ mod camera;
 mod daylight;
 mod entity;
 mod environment;
+mod environment_image;
 mod fly;
 mod light;
 mod lighting;
@@ -16,8 +17,10 @@ mod material;
 mod mesh;
 mod motion;
 mod post;
+pub mod procedural;
 pub(crate) mod shadow_layout;
 mod states;
+mod texture;
 mod tiles;
 mod view;
 mod view_order;
@@ -26,6 +29,7 @@ pub use camera::{Camera, Projection};
 pub use daylight::Daylight;
 pub use entity::{Entity, MAX_COMPACT_HALF};
 pub use environment::{Background, Environment, EnvironmentLight, EnvironmentSource, Fog};
+pub use environment_image::{equirect_direction, equirect_uv, EnvironmentImage, MAX_RADIANCE};
 pub use fly::{FlyCamera, FlyInput};
 pub use light::{Light, LightKind, ShadowSettings, CASCADES, MAX_LIGHTS};
 pub use lighting::Lighting;
@@ -33,10 +37,12 @@ pub use material::{AlphaMode, MapSlots, Material, ShadingModel};
 pub use mesh::{smooth_normals, smooth_normals_in_groups, Aabb, BoundingSphere, Mesh, MeshError, SkinVertex, Vertex};
 pub use motion::{Motion, Wind, MAX_WIND};
 pub use post::{PostEffect, Tonemap, MAX_POST_EFFECTS};
+pub use procedural::ShapeKind;
 pub use shadow_layout::{ShadowLayout, MAX_CUBES, MAX_SHADOW_MAP_BYTES};
 pub use states::{
     BlendState, Compare, Cull, DepthState, ParticleBlend, RasterState, RenderStates, StencilOp, StencilState,
 };
+pub use texture::Texture;
 pub use tiles::Tiles;
 pub use view::{AmbientOcclusion, Culling, View, Viewport};
 pub use view_order::draw_order;
@@ -56,7 +62,7 @@ pub struct MaterialId(pub u32);
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub struct TextureId(pub(crate) u32);
 
-/// Handle to an environment image ([`EnvironmentImage`](crate::asset::EnvironmentImage)):
+/// Handle to an environment image ([`EnvironmentImage`]):
 /// unique in the process from the image's creation, so a scene's
 /// [`Environment`] can name it before a renderer has it
 /// ([`Registry::add_environment`](crate::render::Registry::add_environment)).

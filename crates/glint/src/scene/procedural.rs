@@ -1,4 +1,4 @@
-//! Core layer: procedural shapes. Every shape fits the unit box [−0.5, 0.5]³
+//! Beginner layer: procedural shapes ([`ShapeKind`]), built as plain [`Mesh`]es. Every shape fits the unit box [−0.5, 0.5]³
 //! (scale it with the entity's transform), has unit normals, UVs in 0..1,
 //! MikkTSpace tangents and counter-clockwise front faces seen from outside.
 
