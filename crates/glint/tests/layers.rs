@@ -46,7 +46,7 @@ const ROOT: [(&str, &str); 9] = [
 
 /// Crossings from before the table was kept (file, module it names), to be
 /// taken off as the layers are fixed (issue 46).
-const KNOWN: [(&str, &str); 9] = [
+const KNOWN: [(&str, &str); 8] = [
     ("asset/mod.rs", "sim"),
     ("asset/scn_cloth.rs", "sim"),
     ("asset/scn_emitter.rs", "sim"),
@@ -55,7 +55,6 @@ const KNOWN: [(&str, &str); 9] = [
     ("render/place.rs", "asset"),
     ("render/place.rs", "sim"),
     ("sim/cloth/mesh.rs", "asset"),
-    ("sim/particles/gpu.rs", "asset"),
 ];
 
 fn row(module: &str) -> Option<(u8, bool)> {

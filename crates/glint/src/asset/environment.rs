@@ -118,13 +118,12 @@ fn check_exr_header(bytes: &[u8]) -> Result<u64, String> {
     let mut decoding = 0u64;
     let mut chunks = 0u64;
     for (k, header) in meta.headers.iter().enumerate() {
-        let display = header.shared_attributes.display_window.size;
-        let tiles = match &header.blocks {
-            BlockDescription::Tiles(t) => Some(t.tile_size),
-            BlockDescription::ScanLines => None,
-        };
-        let sizes = [("data window", Some(header.layer_size)), ("display window", Some(display)), ("tiles", tiles)];
-        for (what, size) in sizes.iter().filter_map(|(w, s)| s.map(|s| (w, s))) {
+        let mut sizes =
+            vec![("data window", header.layer_size), ("display window", header.shared_attributes.display_window.size)];
+        if let BlockDescription::Tiles(t) = &header.blocks {
+            sizes.push(("tiles", t.tile_size));
+        }
+        for (what, size) in sizes {
             if size.width() > side || size.height() > side {
                 return Err(format!(
                     "layer {k}: its {what} is {} x {} pixels; environments may be at most {side} a side",

@@ -12,9 +12,7 @@ use crate::text::quote;
 use glam::{DVec3, Vec3};
 use std::path::Path;
 
-/// Most steps one pose may take for one cloth (`--time` over `dt`): a later time
-/// is an error rather than hours of stepping.
-pub const MAX_POSE_STEPS: u64 = 100_000;
+pub use crate::scene::MAX_POSE_STEPS;
 
 /// Most work posing a scene may take, in node²-steps: steps × nodes² summed
 /// over its cloths. A step's Newton solve costs about 2–3·10⁻⁸ s × nodes² on the

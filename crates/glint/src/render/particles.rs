@@ -15,8 +15,7 @@ use super::Renderer;
 use crate::gpu::TargetFormat;
 use crate::gpu::{ParticleGpu, MAX_LAYER_PARTICLES};
 pub use crate::scene::ParticleBlend;
-use crate::scene::Texture;
-use crate::scene::TextureId;
+use crate::scene::{Texture, TextureId};
 use crate::FrameStats;
 use std::collections::HashMap;
 
@@ -279,7 +278,9 @@ impl Renderer {
         for layer in self.particle_layers.iter_mut().filter(|l| l.count > 0) {
             if layer.group.is_none() {
                 stats.bytes_uploaded.textures += registry.upload_texture(layer.sprite, "particle layer")?;
-                let view = registry.textures[layer.sprite.0 as usize].view.as_ref().expect("uploaded above");
+                // A sprite that could not be uploaded shows white, as a material's map does.
+                let uploaded = registry.textures[layer.sprite.0 as usize].view.as_ref();
+                let view = uploaded.unwrap_or(&registry.defaults.white_srgb);
                 layer.group = Some(registry.device.create_bind_group(&wgpu::BindGroupDescriptor {
                     label: Some("renderer: particle sprite"),
                     layout: &self.particle_pipelines.texture_layout,

@@ -44,6 +44,11 @@ pub use states::{
 };
 pub use texture::Texture;
 pub use tiles::Tiles;
+
+/// Most steps one pose may take for one simulation (a cloth, a school, an
+/// emitter: `--time` over its `dt`): a later time is an error rather than
+/// hours of stepping.
+pub const MAX_POSE_STEPS: u64 = 100_000;
 pub use view::{AmbientOcclusion, Culling, View, Viewport};
 pub use view_order::draw_order;
 

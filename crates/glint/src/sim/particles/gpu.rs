@@ -16,7 +16,7 @@ const BUCKETS: u32 = 4096;
 /// Bytes between steps' blocks in the step buffer (the dynamic-offset alignment).
 const STEP_STRIDE: u64 = 256;
 /// Steps one frame records at most (a 25.6 MB step buffer).
-const MAX_STEPS_PER_FRAME: u64 = crate::asset::MAX_POSE_STEPS;
+const MAX_STEPS_PER_FRAME: u64 = crate::scene::MAX_POSE_STEPS;
 /// Step blocks the step buffer holds to begin with (it grows to a frame's steps).
 const FIRST_STEP_BLOCKS: u64 = 64;
 
