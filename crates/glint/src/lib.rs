@@ -51,7 +51,7 @@ pub mod world;
 
 pub use asset::{Diagnostic, Texture};
 pub use gpu::{Gpu, GpuError, OffscreenTarget, WindowSurface};
-pub use render::{FrameMode, FrameStats, RenderError, Renderer, Shadows};
+pub use render::{FrameInput, FrameMode, FrameOutput, FrameStats, RenderError, Renderer, Shadows, ViewKey};
 pub use scene::{
     AlphaMode, AmbientOcclusion, Background, Camera, Culling, Entity, Environment, Light, Lighting, Material,
     MaterialId, Mesh, RenderTargetId, ShadowSettings, ShapeId, TextureId, Tiles, View, Viewport,

@@ -28,9 +28,8 @@ fn shadow_maps_past_the_memory_limit_are_an_error_not_a_panic() {
     let cube = renderer.add_shape(ShapeKind::Cube.mesh());
     let material = renderer.add_material(Material::default());
     let entity = Entity::new(cube, material, Mat4::IDENTITY);
-    let target = OffscreenTarget::new(gpu, 32, 32, 1).expect("target");
-    renderer.submit(&entity);
-    let error = renderer.shadow_pass(camera(), &suns(3, 8192), &target).expect_err("3 GiB of shadow maps");
+    let mut target = OffscreenTarget::new(gpu, 32, 32, 1).expect("target");
+    let error = renderer.render([&entity], camera(), &suns(3, 8192), &mut target).expect_err("3 GiB of shadow maps");
     match &error {
         RenderError::TooLarge { what, bytes, limit, .. } => {
             assert_eq!(*what, "the shadow maps");
@@ -40,8 +39,8 @@ fn shadow_maps_past_the_memory_limit_are_an_error_not_a_panic() {
         other => panic!("expected TooLarge, got {other}"),
     }
     // The renderer is still usable: the same lights at a size that fits cast shadows.
-    renderer.submit(&entity);
-    renderer.shadow_pass(camera(), &suns(3, 1024), &target).expect("12 cascades of 4 MiB fit");
+    let stats = renderer.render([&entity], camera(), &suns(3, 1024), &mut target).expect("12 cascades of 4 MiB fit");
+    assert_eq!(stats.shadow_views, 12);
 }
 
 #[test]

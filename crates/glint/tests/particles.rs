@@ -100,11 +100,11 @@ fn gpu_particles_match_the_cpu_slot_for_slot() {
         cpu.step();
     }
     on_gpu.advance_to(&gpu.queue, cpu.time(), Vec3::ZERO);
-    renderer.simulate(&mut on_gpu);
     let mut target = OffscreenTarget::new(gpu, 64, 64, 1).unwrap();
-    let views = [glint::View::new(glint::Camera::perspective(60.0, 0.1, 10.0))];
-    let nothing: &[glint::Entity] = &[];
-    renderer.render_views(nothing, &views, glint::Lighting::new(&[], Default::default()), &mut target).unwrap();
+    let view = glint::View::new(glint::Camera::perspective(60.0, 0.1, 10.0));
+    let lighting = glint::Lighting::new(&[], Default::default());
+    let input = glint::FrameInput::new(&[], lighting).view(glint::ViewKey(0), &view).simulate(&mut on_gpu);
+    renderer.render_frame(input, &mut target).unwrap();
     let from_gpu = on_gpu.read_slots(gpu).unwrap();
     let mut alive = 0;
     for (k, (a, b)) in cpu.slots().iter().zip(&from_gpu).enumerate() {

@@ -61,11 +61,11 @@ fn gpu_step(gpu: &glint::Gpu, school: &School) -> School {
     let mut on_gpu = GpuSchool::new(gpu, school).unwrap();
     let mut renderer = glint::Renderer::new(gpu);
     on_gpu.advance(&gpu.queue, 1, 1.0 / 30.0);
-    renderer.simulate(&mut on_gpu);
     let mut target = glint::OffscreenTarget::new(gpu, 32, 32, 1).unwrap();
-    let views = [glint::View::new(glint::Camera::perspective(60.0, 0.1, 10.0))];
-    let nothing: &[glint::Entity] = &[];
-    renderer.render_views(nothing, &views, glint::Lighting::new(&[], Default::default()), &mut target).unwrap();
+    let view = glint::View::new(glint::Camera::perspective(60.0, 0.1, 10.0));
+    let lighting = glint::Lighting::new(&[], Default::default());
+    let input = glint::FrameInput::new(&[], lighting).view(glint::ViewKey(0), &view).simulate(&mut on_gpu);
+    renderer.render_frame(input, &mut target).unwrap();
     assert!(renderer.frame_outline().iter().any(|g| g.ends_with("› simulate")), "{:?}", renderer.frame_outline());
     on_gpu.read(gpu).unwrap()
 }

@@ -7,7 +7,9 @@ mod common;
 use glam::{Mat4, Vec3};
 use glint::asset::ShapeKind;
 use glint::scene::PostEffect;
-use glint::{Camera, Entity, Gpu, Light, Material, OffscreenTarget, RenderError, Renderer, Shadows, View, Viewport};
+use glint::{
+    Camera, Entity, FrameInput, Gpu, Light, Material, OffscreenTarget, RenderError, Renderer, Shadows, View, Viewport,
+};
 
 /// Draw `views` of `scenes/split.scn` into one `width` × `height` image.
 fn split_scene(gpu: &Gpu, views: &[View], (width, height): (u32, u32)) -> (image::RgbaImage, Vec<glint::FrameStats>) {
@@ -209,12 +211,12 @@ fn each_view_keeps_its_gpu_state_so_an_unchanged_split_screen_uploads_nothing() 
     // records and draw lists, each view rewrote the other's every frame.
     let Some(gpu) = common::gpu() else { return };
     let (mut renderer, cube, lights) = cube_scene(gpu);
-    let far = Entity::new(cube.shape, cube.material, Mat4::from_translation(Vec3::new(0.0, 0.0, 8.0)));
     let toward = Camera::perspective(60.0, 0.1, 100.0).looking_at(Vec3::new(0.0, 1.0, 4.0), Vec3::ZERO);
     let away = Camera::perspective(60.0, 0.1, 100.0).looking_at(Vec3::new(0.0, 1.0, 4.0), Vec3::new(0.0, 1.0, 8.0));
     let halves = [Viewport { width: 0.5, ..Viewport::FULL }, Viewport { x: 0.5, width: 0.5, ..Viewport::FULL }];
     let views = [View::new(toward).with_viewport(halves[0]), View::new(away).with_viewport(halves[1])];
     let mut target = OffscreenTarget::new(gpu, 64, 32, 1).expect("target");
+    let far = Entity::new(cube.shape, cube.material, Mat4::from_translation(Vec3::new(0.0, 0.0, 8.0)));
     let first = renderer.render_views([&cube, &far], &views, &lights, &mut target).expect("frame");
     let image = target.read_rgba8(gpu).expect("readback");
     assert!(first.iter().all(|s| s.bytes_uploaded.camera > 0), "each view writes its camera once");
@@ -224,9 +226,73 @@ fn each_view_keeps_its_gpu_state_so_an_unchanged_split_screen_uploads_nothing() 
         assert_eq!(s.draws, first[k].draws, "view {k} draws the same");
     }
     assert_eq!(target.read_rgba8(gpu).expect("readback"), image, "the same picture");
-    // The single-view calls keep their own state beside the views'.
-    let alone = renderer.render([&cube, &far], views[0].clone(), &lights, &mut target).expect("frame");
-    assert!(alone.bytes_uploaded.camera > 0, "its own camera record, written once");
-    let again = renderer.render_views([&cube, &far], &views, &lights, &mut target).expect("frame");
-    assert!(again.iter().all(|s| s.bytes_uploaded.camera == 0 && s.bytes_uploaded.draw_indices == 0));
+    // A view's state follows the caller's key, not its place in the list:
+    // the same views under new keys write their records once, and listed the
+    // other way round under the same keys, nothing.
+    let entities = [Entity::new(cube.shape, cube.material, Mat4::IDENTITY), far];
+    let (left, right) = (glint::ViewKey(7), glint::ViewKey(3));
+    let mut keyed = |order: [(glint::ViewKey, &View); 2]| {
+        let mut input = FrameInput::new(&entities, &lights);
+        for (key, view) in order {
+            input = input.view(key, view);
+        }
+        renderer.render_frame(input, &mut target).expect("frame")
+    };
+    let new_keys = keyed([(left, &views[0]), (right, &views[1])]);
+    assert!(new_keys.views.iter().all(|s| s.bytes_uploaded.camera > 0), "new keys, new records");
+    let swapped = keyed([(right, &views[1]), (left, &views[0])]);
+    for (k, s) in swapped.views.iter().enumerate() {
+        assert_eq!(s.bytes_uploaded.total, 0, "view {k} under its key uploads nothing: {:?}", s.bytes_uploaded);
+    }
+    assert_eq!(target.read_rgba8(gpu).expect("readback"), image, "the same picture");
+}
+
+/// Two halves of a 64 × 32 target looking at a cube from either side, lit by
+/// a point light that casts shadows onto a floor.
+fn point_lit_split(gpu: &Gpu) -> (Renderer, [Entity; 2], [Light; 1], [View; 2]) {
+    let mut renderer = Renderer::new(gpu);
+    let cube = renderer.add_shape(ShapeKind::Cube.mesh());
+    let material = renderer.add_material(Material::default());
+    let floor = Mat4::from_translation(Vec3::Y * -1.0) * Mat4::from_scale(Vec3::new(8.0, 0.1, 8.0));
+    let entities = [Entity::new(cube, material, Mat4::IDENTITY), Entity::new(cube, material, floor)];
+    let lamp =
+        Light::point(Vec3::new(0.5, 2.5, 0.5), Vec3::ONE, 8.0, 12.0).with_shadows(glint::ShadowSettings::default());
+    let camera = |eye: Vec3| Camera::perspective(60.0, 0.1, 100.0).looking_at(eye, Vec3::ZERO);
+    let halves = [Viewport { width: 0.5, ..Viewport::FULL }, Viewport { x: 0.5, width: 0.5, ..Viewport::FULL }];
+    let views = [
+        View::new(camera(Vec3::new(3.0, 2.0, 3.0))).with_viewport(halves[0]),
+        View::new(camera(Vec3::new(-3.0, 2.0, -3.0))).with_viewport(halves[1]),
+    ];
+    (renderer, entities, [lamp], views)
+}
+
+#[test]
+fn a_split_screen_draws_a_point_lights_six_faces_once_in_one_frame_that_prepares_once() {
+    let Some(gpu) = common::gpu() else { return };
+    let (mut renderer, entities, lights, views) = point_lit_split(gpu);
+    let mut target = OffscreenTarget::new(gpu, 64, 32, 1).expect("target");
+    let input = FrameInput::new(&entities, &lights).views(&views);
+    let frame = renderer.render_frame(input, &mut target).expect("frame");
+    let faces: Vec<u32> = frame.views.iter().map(|s| s.shadow_views).collect();
+    assert_eq!(faces, [6, 0], "the first view draws the six cube faces, the second samples them");
+    assert_eq!(frame.views.iter().map(|s| s.frame).collect::<Vec<_>>(), [frame.frame; 2], "one frame number");
+    assert_eq!((frame.prepares, frame.submits), (1, 1), "both views draw with one prepared table, one submission");
+    let instances: Vec<u64> = frame.views.iter().map(|s| s.bytes_uploaded.instances).collect();
+    assert!(instances[0] > 0 && instances[1] == 0, "the instances go up once: {instances:?}");
+    let split = target.read_rgba8(gpu).expect("readback");
+    // Each half is its camera drawn alone (whose frame draws the faces itself).
+    for (k, view) in views.iter().enumerate() {
+        let (mut alone, _, _, _) = point_lit_split(gpu);
+        let whole = view.clone().with_viewport(Viewport::FULL);
+        let mut half = OffscreenTarget::new(gpu, 32, 32, 1).expect("target");
+        let stats = alone.render(&entities, whole, &lights, &mut half).expect("frame");
+        assert_eq!(stats.shadow_views, 6);
+        let image = half.read_rgba8(gpu).expect("readback");
+        let difference = common::max_difference(&crop(&split, 32 * k as u32, 0, 32, 32), &image);
+        assert!(difference <= 2, "half {k} differs from its camera alone by {difference}");
+    }
+    // The next frame is the next number, for both views.
+    let next = renderer.render_frame(FrameInput::new(&entities, &lights).views(&views), &mut target).expect("frame");
+    assert_eq!(next.frame, frame.frame + 1);
+    assert!(next.views.iter().all(|s| s.frame == next.frame));
 }

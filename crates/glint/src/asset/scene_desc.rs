@@ -144,7 +144,7 @@ pub struct SceneDesc {
     pub camera_views: Vec<CameraView>,
     /// `render_target` blocks in file order: render target k's texture comes
     /// after the file textures in material maps, and placing the scene gives
-    /// its id ([`PlacedScene::render_targets`](crate::render::PlacedScene::render_targets)).
+    /// its id ([`PlacedScene::render_targets`](crate::world::PlacedScene::render_targets)).
     pub render_targets: Vec<RenderTargetDesc>,
     /// Lights in file order.
     pub lights: Vec<Light>,

@@ -28,7 +28,7 @@ use super::explain::PassType;
 use super::queue::SKY_STAGE;
 use super::timer::Timed;
 use super::view::ViewFrame;
-use super::views::ViewBlocks;
+use super::views::{ViewBlocks, ViewGpu};
 use super::{draw_list::run_stage, FrameStats, PassStats, RenderError, Renderer};
 use crate::scene::{AmbientOcclusion, Projection};
 
@@ -227,11 +227,12 @@ impl Renderer {
     /// Scene bind group pointed at them) and its parameters.
     pub(super) fn prepare_ambient_occlusion(
         &mut self,
+        gpu: &mut ViewGpu,
         frame: &ViewFrame,
         size: (u32, u32),
         stats: &mut FrameStats,
     ) -> Result<(), RenderError> {
-        let Some(settings) = frame.ambient_occlusion.filter(|_| self.frame_variant.ambient_occlusion) else {
+        let Some(settings) = frame.ambient_occlusion.filter(|_| frame.variant.ambient_occlusion) else {
             return Ok(());
         };
         let compute = self.cull_pipelines.is_some();
@@ -239,17 +240,17 @@ impl Renderer {
             .ambient_occlusion_pipelines
             .get_or_insert_with(|| AmbientOcclusionPipelines::new(&self.device, compute));
         // A run's batches share one pipeline (what `draw_run` binds).
-        let list = &self.view.forward;
+        let list = &gpu.forward;
         for run in &list.runs {
             let forward = list.batches[run.first as usize].pipeline;
             let (_, built) = self.registry.pipelines.prepass_id(&self.device, forward)?;
             stats.pipelines_compiled += u32::from(built);
         }
-        if self.view.occlusion.as_ref().is_none_or(|t| t.size != size) {
+        if gpu.occlusion.as_ref().is_none_or(|t| t.size != size) {
             let targets = OcclusionTargets::new(&self.device, pipelines, size);
-            self.update_view(|view, shared| view.set_occlusion(shared, targets));
+            gpu.set_occlusion(&self.shared(), targets);
         }
-        let targets = self.view.occlusion.as_mut().expect("made above");
+        let targets = gpu.occlusion.as_mut().expect("made above");
         stats.bytes_uploaded.camera += targets.block.update(&self.queue, AmbientOcclusionGpu::new(frame, settings));
         Ok(())
     }
@@ -258,15 +259,21 @@ impl Renderer {
     /// [`prepare_ambient_occlusion`](Self::prepare_ambient_occlusion)): the
     /// depth pre-pass of the forward list's runs before the sky, then the
     /// occlusion and blur passes.
-    pub(super) fn encode_ambient_occlusion(&mut self, encoder: &mut wgpu::CommandEncoder, stats: &mut FrameStats) {
-        let (Some(targets), Some(pipelines)) = (&self.view.occlusion, &self.ambient_occlusion_pipelines) else {
+    pub(super) fn encode_ambient_occlusion(
+        &mut self,
+        gpu: &ViewGpu,
+        view: &ViewFrame,
+        encoder: &mut wgpu::CommandEncoder,
+        stats: &mut FrameStats,
+    ) {
+        let (Some(targets), Some(pipelines)) = (&gpu.occlusion, &self.ambient_occlusion_pipelines) else {
             return;
         };
-        if !self.frame_variant.ambient_occlusion {
+        if !view.variant.ambient_occlusion {
             return;
         }
         let start = web_time::Instant::now();
-        let list = &self.view.forward;
+        let list = &gpu.forward;
         let sky_at = list.runs.partition_point(|r| run_stage(list, r) < SKY_STAGE);
         let timer = self.gpu_timer.as_ref();
         let mut drawn = FrameStats::default();
@@ -291,7 +298,7 @@ impl Renderer {
                 timestamp_writes: timer.and_then(|t| t.pass_writes(Timed::AmbientOcclusion, true, false)),
                 ..Default::default()
             });
-            pass.set_bind_group(1, &self.view.blocks.bind_group, &[ViewBlocks::offset(0)]);
+            pass.set_bind_group(1, &gpu.blocks.bind_group, &[ViewBlocks::offset(0)]);
             pass.set_bind_group(3, &list.bind_group, &[]);
             drawn.bind_groups_set += 2;
             let bound = ["bind group 1 (camera)", "bind group 3 (instances, draw indices)"];

@@ -15,7 +15,8 @@ use super::gpu_cull::{Run, COMMAND_BYTES};
 use super::pipelines::SkyPass;
 use super::queue::{Queue, SKY_STAGE};
 use super::timer::Timed;
-use super::views::ViewBlocks;
+use super::view::ViewFrame;
+use super::views::{ViewBlocks, ViewGpu};
 use super::{FrameStats, Renderer};
 use crate::gpu::OffscreenTarget;
 use crate::scene::{Background, Environment};
@@ -60,23 +61,24 @@ impl Renderer {
     /// particles → glare.
     pub(super) fn encode(
         &mut self,
-        encoder: &mut wgpu::CommandEncoder,
-        target: &OffscreenTarget,
+        gpu: &mut ViewGpu,
+        view: &ViewFrame,
+        (encoder, target): (&mut wgpu::CommandEncoder, &OffscreenTarget),
         environment: &Environment,
         stats: &mut FrameStats,
     ) {
         let background = environment.background;
-        let list = &self.view.forward;
+        let list = &gpu.forward;
         let sky_at = list.runs.partition_point(|r| run_stage(list, r) < SKY_STAGE);
         if let Some(pipelines) = &self.cull_pipelines {
-            if self.view.forward.culled_on_gpu() {
+            if gpu.forward.culled_on_gpu() {
                 self.outline.pass("cull instances", PassType::Compute, &[]);
             }
-            self.view.forward.record_cull(encoder, pipelines, self.queue.submits());
+            gpu.forward.record_cull(encoder, pipelines, self.queue.submits());
         }
-        self.encode_ambient_occlusion(encoder, stats);
-        let depth = target.depth_only_view().filter(|_| self.view.forward.gpu.as_ref().is_some_and(|g| g.occluding));
-        let end = self.view.forward.runs.len();
+        self.encode_ambient_occlusion(gpu, view, encoder, stats);
+        let depth = target.depth_only_view().filter(|_| gpu.forward.gpu.as_ref().is_some_and(|g| g.occluding));
+        let end = gpu.forward.runs.len();
         let mut bound = Bound::default();
         // Occlusion culling: the opaque stages of what was seen last frame, then
         // the late phase (depth pyramid, late cull), then what it found in a
@@ -84,13 +86,13 @@ impl Renderer {
         let (late, after_sky) = match (depth, &self.cull_pipelines) {
             (Some(depth), Some(pipelines)) => {
                 {
-                    let mut pass = self.begin_forward_pass(encoder, target, (background, Part::First), stats);
-                    self.draw_stages(&self.view.forward, &mut pass, (0..sky_at, &[false]), &mut bound, stats);
+                    let mut pass = self.begin_forward_pass(gpu, encoder, target, (background, Part::First), stats);
+                    self.draw_stages(&gpu.forward, &mut pass, (0..sky_at, &[false]), &mut bound, stats);
                 }
-                if let Some(gpu) = &mut self.view.forward.gpu {
+                if let Some(culled) = &mut gpu.forward.gpu {
                     self.outline.pass("depth pyramid", PassType::Compute, &[]);
                     self.outline.pass("cull instances: late", PassType::Compute, &[]);
-                    gpu.record_late((&self.device, encoder), pipelines, depth, self.queue.submits());
+                    culled.record_late((&self.device, encoder), pipelines, depth, self.queue.submits());
                 }
                 (Part::Second, &[false, true][..])
             }
@@ -104,24 +106,24 @@ impl Renderer {
             (part, _) => part,
         };
         {
-            let mut pass = self.begin_forward_pass(encoder, target, (background, part), stats);
+            let mut pass = self.begin_forward_pass(gpu, encoder, target, (background, part), stats);
             if late == Part::Second {
                 bound = Bound::default();
-                self.draw_stages(&self.view.forward, &mut pass, (0..sky_at, &[true]), &mut bound, stats);
+                self.draw_stages(&gpu.forward, &mut pass, (0..sky_at, &[true]), &mut bound, stats);
             } else {
-                self.draw_stages(&self.view.forward, &mut pass, (0..sky_at, &[false]), &mut bound, stats);
+                self.draw_stages(&gpu.forward, &mut pass, (0..sky_at, &[false]), &mut bound, stats);
             }
-            if self.draw_sky(&mut pass, target, environment, stats) {
+            if self.draw_sky(gpu, &mut pass, target, environment, stats) {
                 bound = Bound { stencil_reference: bound.stencil_reference, ..Bound::default() };
             }
-            self.draw_stages(&self.view.forward, &mut pass, (sky_at..end, after_sky), &mut bound, stats);
+            self.draw_stages(&gpu.forward, &mut pass, (sky_at..end, after_sky), &mut bound, stats);
             if particle_depth.is_none() {
                 self.draw_particles(&mut pass, target.format(), None, stats);
                 self.draw_glare(&mut pass, target, environment, stats);
             }
         }
         if let Some(depth) = &particle_depth {
-            let mut pass = self.begin_forward_pass(encoder, target, (background, Part::Particles), stats);
+            let mut pass = self.begin_forward_pass(gpu, encoder, target, (background, Part::Particles), stats);
             self.draw_particles(&mut pass, target.format(), Some(depth), stats);
             self.draw_glare(&mut pass, target, environment, stats);
         }
@@ -134,6 +136,7 @@ impl Renderer {
     /// to `background`, with the Scene, Camera and Renderer blocks bound.
     pub(super) fn begin_forward_pass<'e>(
         &self,
+        gpu: &ViewGpu,
         encoder: &'e mut wgpu::CommandEncoder,
         target: &OffscreenTarget,
         (background, part): (Background, Part),
@@ -167,9 +170,9 @@ impl Renderer {
             timestamp_writes: self.gpu_timer.as_ref().and_then(|t| t.pass_writes(Timed::Forward, begins, ends)),
             ..Default::default()
         });
-        pass.set_bind_group(0, &self.view.scene_group, &[]);
-        pass.set_bind_group(1, &self.view.blocks.bind_group, &[ViewBlocks::offset(0)]);
-        pass.set_bind_group(3, &self.view.forward.bind_group, &[]);
+        pass.set_bind_group(0, &gpu.scene_group, &[]);
+        pass.set_bind_group(1, &gpu.blocks.bind_group, &[ViewBlocks::offset(0)]);
+        pass.set_bind_group(3, &gpu.forward.bind_group, &[]);
         stats.bind_groups_set += 3;
         let bound = ["bind group 0 (scene)", "bind group 1 (camera)", "bind group 3 (instances, draw indices)"];
         self.outline.pass(label, PassType::Render, &bound);
@@ -197,6 +200,7 @@ impl Renderer {
     /// whether it drew, after which only groups 0, 1 and 3 are bound.
     pub(super) fn draw_sky(
         &self,
+        gpu: &ViewGpu,
         pass: &mut wgpu::RenderPass<'_>,
         target: &OffscreenTarget,
         environment: &Environment,
@@ -209,7 +213,7 @@ impl Renderer {
         self.outline.call(|| DrawCall::single("sky", "draw", (1, 1), &["pipeline"]));
         stats.passes.sky = super::PassStats { draw_calls: 1, draws: 1, instances: 1, cpu_ms: 0.0 };
         // The sky's layout has groups 0–1 only: bind the forward groups again.
-        pass.set_bind_group(3, &self.view.forward.bind_group, &[]);
+        pass.set_bind_group(3, &gpu.forward.bind_group, &[]);
         stats.bind_groups_set += 1;
         true
     }

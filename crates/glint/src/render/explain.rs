@@ -24,8 +24,8 @@ pub struct FrameCalls {
 }
 
 impl FrameCalls {
-    /// The passes of view `view` of [`Renderer::render_views`] (every pass
-    /// when the frame drew one view with [`Renderer::render`]).
+    /// The passes of view `view` (its place in the frame's list) and the
+    /// frame's own passes.
     pub fn of_view(&self, view: usize) -> Vec<&PassCalls> {
         self.passes.iter().filter(|p| p.view().is_none_or(|v| v == view)).collect()
     }

@@ -4,6 +4,7 @@ use super::blocks::SceneGpu;
 use super::prepare::Prepared;
 use super::queue::{self, DrawItem, Queue};
 use super::view::ViewFrame;
+use super::views::ViewGpu;
 use super::visible::Visible;
 use super::{FrameStats, RenderError, Renderer, UploadStats};
 use crate::gpu::OffscreenTarget;
@@ -15,7 +16,7 @@ impl Renderer {
     /// materials so that they can be sorted far to near one by one; one per run
     /// of store instances (an entity's candidates culled on the GPU, a whole tile). Depth is the view distance of the
     /// run's (or instance's, or entity's) box centre over the far plane.
-    pub(super) fn build_queue(&mut self, frame: &ViewFrame, visible: &Visible, prepared: &[Prepared]) {
+    pub(super) fn build_queue(&self, gpu: &mut ViewGpu, frame: &ViewFrame, visible: &Visible, prepared: &[Prepared]) {
         let far = frame.camera.far();
         let depth = |center: Vec3A| -frame.view.transform_point3a(center).z / far;
         let runs = visible.runs.iter().map(|r| (r, false)).chain(visible.ranges.iter().map(|r| (r, true)));
@@ -43,11 +44,11 @@ impl Renderer {
             if blended && !of_store {
                 for k in run.start..run.start + run.len {
                     let instance = visible.instances[k as usize] as usize;
-                    self.view.forward.items.push(item(k, 1, depth(self.store.bounds.center(instance))));
+                    gpu.forward.items.push(item(k, 1, depth(self.store.bounds.center(instance))));
                 }
             } else {
                 let center = self.store.slot(s.slot).bounds.map_or(Vec3A::ZERO, |(c, _)| c);
-                self.view.forward.items.push(item(run.start, run.len, depth(center)));
+                gpu.forward.items.push(item(run.start, run.len, depth(center)));
             }
         }
     }
@@ -58,28 +59,29 @@ impl Renderer {
     /// Culled on the GPU, the view is occlusion-culled against its depth in `target`.
     pub(super) fn upload(
         &mut self,
+        gpu: &mut ViewGpu,
         frame: &ViewFrame,
         (lighting, shadowed): (&Lighting, &[Option<u32>]),
         target: &OffscreenTarget,
         stats: &mut FrameStats,
     ) -> Result<(), RenderError> {
-        self.upload_view_blocks(frame, lighting, shadowed, &mut stats.bytes_uploaded)?;
+        self.upload_view_blocks(gpu, frame, lighting, shadowed, &mut stats.bytes_uploaded)?;
         let bytes = &mut stats.bytes_uploaded;
         let layout = &self.registry.pipelines.instance_layout;
-        let gpu = self.cull_pipelines.as_ref().zip(self.instances.bounds());
+        let culls = self.cull_pipelines.as_ref().zip(self.instances.bounds());
         let view_proj = frame.camera.projection(frame.aspect) * frame.view;
         let depth = (target.width(), target.height(), target.samples());
         let occlusion = (frame.culling == Culling::Gpu).then_some((view_proj, depth));
-        let list = &mut self.view.forward;
-        let written = list.upload(&self.device, &self.queue, (layout, self.instances.array()), gpu, occlusion)?;
+        let list = &mut gpu.forward;
+        let written = list.upload(&self.device, &self.queue, (layout, self.instances.array()), culls, occlusion)?;
         stats.occlusion = list.gpu.as_ref().is_some_and(|g| g.occluding);
         bytes.draw_indices += written.draw_indices;
         bytes.indirect += written.indirect;
-        stats.instances_drawn = self.view.forward.cpu_instances();
-        if self.view.forward.culled_on_gpu() {
+        stats.instances_drawn = gpu.forward.cpu_instances();
+        if gpu.forward.culled_on_gpu() {
             // Counted on the GPU (blended instances included), a frame or two late.
             let submits = self.queue.submits();
-            let drawn = self.view.forward.gpu.as_mut().and_then(|g| g.drawn(&self.device, submits));
+            let drawn = gpu.forward.gpu.as_mut().and_then(|g| g.drawn(&self.device, submits));
             let drawn = drawn.map(|d| d.iter().map(|&n| u64::from(n)).sum::<u64>());
             let valid = stats.instances_submitted - stats.instances_invalid;
             stats.instances_drawn = drawn.unwrap_or(0);
@@ -92,6 +94,7 @@ impl Renderer {
     /// that changed.
     pub(super) fn upload_view_blocks(
         &mut self,
+        gpu: &mut ViewGpu,
         frame: &ViewFrame,
         lighting: &Lighting,
         shadowed: &[Option<u32>],
@@ -99,18 +102,19 @@ impl Renderer {
     ) -> Result<(), RenderError> {
         let scene = SceneGpu::new(&lighting.environment, lighting.lights, shadowed)
             .with_specular_levels(self.environment.last_level());
-        bytes.scene += self.view.scene_block.update(&self.queue, scene);
+        bytes.scene += gpu.scene_block.update(&self.queue, scene);
         let camera = frame.camera.to_gpu(frame.aspect).with_motion(&lighting.environment);
-        bytes.camera += self.view.blocks.update(&self.queue, 0, camera);
-        self.upload_instances(bytes)
+        bytes.camera += gpu.blocks.update(&self.queue, 0, camera);
+        self.upload_instances(gpu, bytes)
     }
 
     /// Write the instances that changed (all of them when the buffer grew, and
-    /// then every draw list is bound to the new buffer).
-    pub(super) fn upload_instances(&mut self, bytes: &mut UploadStats) -> Result<(), RenderError> {
+    /// then `gpu`'s draw lists are bound to the new buffer; other views' are
+    /// when they are drawn next).
+    pub(super) fn upload_instances(&mut self, gpu: &mut ViewGpu, bytes: &mut UploadStats) -> Result<(), RenderError> {
         if self.instances.reserve(&self.device, self.store.len())? {
             self.store.mark_all_dirty();
-            self.refresh_view();
+            gpu.refresh(&self.shared());
         }
         for range in self.store.take_dirty() {
             let data = &self.store.instances[range.start as usize..range.end as usize];
@@ -179,11 +183,12 @@ mod tests {
         };
         let stats = r.flush(camera, Lighting::new(&[], sky), &Shadows::none(), &mut target).expect("frame");
         // Drawn order: `front` (opaque), sky, the five glass instances far to near, then the ground (200).
-        let stages: Vec<u8> = r.view.forward.batches.iter().map(|b| b.stage).collect();
+        let forward = &r.views[&crate::render::ViewKey(0)].0.forward;
+        let stages: Vec<u8> = forward.batches.iter().map(|b| b.stage).collect();
         assert_eq!(stages, vec![64, 192, 200]);
-        let glass_batch = r.view.forward.batches[1];
+        let glass_batch = forward.batches[1];
         assert_eq!(glass_batch.instance_count, 5, "one entity's instances merge into one draw once sorted");
-        let order: Vec<f32> = r.view.forward.draw_indices[glass_batch.first_instance as usize..][..5]
+        let order: Vec<f32> = forward.draw_indices[glass_batch.first_instance as usize..][..5]
             .iter()
             .map(|&i| r.store.instances[i as usize].transform().w_axis.z)
             .collect();

@@ -6,17 +6,20 @@ use super::draw_list::DrawList;
 use super::{RenderError, Renderer};
 
 impl Renderer {
-    /// The instances the last frame of the single view (`render` or `flush`)
-    /// drew, as instance-store indices, sorted: the camera's, then each shadow
-    /// view's. Culled on the GPU, read back from what the cull pass wrote
+    /// The instances the last frame's first view (that of `render` or
+    /// `flush`) drew, as instance-store indices, sorted: the camera's, then
+    /// each shadow view's. Culled on the GPU, read back from what the cull pass wrote
     /// (waiting for the GPU); culled on the CPU, from the lists. Store indices
     /// are the renderer's own business, but two renderers given the same
     /// entities in the same order number them alike. Compact instances are
     /// left out.
     #[doc(hidden)]
     pub fn drawn_instances(&self) -> Result<Vec<Vec<u32>>, RenderError> {
-        let mut views = self.read_list(&self.view.forward)?;
-        views.extend(self.read_list(&self.view.shadows)?);
+        let Some((view, _)) = self.last_keys.first().and_then(|key| self.views.get(key)) else {
+            return Ok(Vec::new());
+        };
+        let mut views = self.read_list(&view.forward)?;
+        views.extend(self.read_list(&view.shadows)?);
         Ok(views)
     }
 

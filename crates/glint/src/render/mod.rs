@@ -46,7 +46,6 @@ mod occlusion;
 mod outline;
 mod particles;
 mod pipelines;
-pub(crate) mod place;
 mod post;
 pub(crate) mod prepare;
 pub mod queue;
@@ -68,13 +67,12 @@ pub use crate::gpu::{GpuSimulation, ParticleGpu, MAX_LAYER_PARTICLES};
 pub use crate::scene::{ShadowLayout, MAX_CUBES, MAX_SHADOW_MAP_BYTES};
 pub use error::RenderError;
 pub use explain::{BatchCall, DrawCall, FrameCalls, PassCalls, PassType};
+pub use frame::{FrameInput, FrameOutput, Shadows, ViewKey, KEEP_VIEW_FRAMES};
 pub use gpu_cull::SKIP_UNPAID_OCCLUSION;
 pub use mesh_pool::MeshTooLarge;
 pub use naive::MAX_NAIVE_DRAWS;
 pub use particles::{ParticleBlend, ParticleLook, ParticlesId};
-pub use place::PlacedScene;
 pub use registry::Registry;
-pub use shadow_pass::Shadows;
 pub use stats::{FrameStats, PassStats, Passes, StageTimes, UploadStats};
 pub use timer::GpuTimes;
 
@@ -97,6 +95,8 @@ struct Submitted {
     material: MaterialId,
     render_order: Option<u8>,
     cast_shadows: bool,
+    /// Its instances.
+    instances: u64,
     /// The fraction of each tile drawn: the entity's density times the renderer's.
     density: f32,
 }
@@ -121,9 +121,12 @@ pub enum FrameMode {
 /// (lights and environment) and the views.
 ///
 /// Program structure (Tiny Graphics): create shapes, materials and entities once;
-/// each frame update them, [`submit`](Self::submit) every entity to draw, draw
-/// the shadow maps ([`shadow_pass`](Self::shadow_pass)), then
-/// [`flush`](Self::flush) with the view (or camera), lighting and shadow maps.
+/// each frame update them and draw them with
+/// [`render_frame`](Self::render_frame): the entities, views, lighting and GPU
+/// simulations of one frame in a [`FrameInput`]. The seed's calls are a thin
+/// layer over it: [`submit`](Self::submit) every entity to draw, ask for the
+/// shadow maps ([`shadow_pass`](Self::shadow_pass)), then
+/// [`flush`](Self::flush) with the view (or camera), lighting and shadows;
 /// [`render`](Self::render) is those calls for one view,
 /// [`render_views`](Self::render_views) for several.
 pub struct Renderer {
@@ -134,17 +137,14 @@ pub struct Renderer {
     /// The shapes, materials, textures, render targets and pipelines.
     registry: Registry,
     instances: InstanceBuffer,
-    /// The GPU state of the view being drawn: the single view of `flush`, or
-    /// one of `render_views`' views, swapped in from `kept_views`.
-    view: ViewGpu,
-    /// Each `render_views` view's GPU state, by its place in the list, kept
-    /// between frames while it is not the one being drawn.
-    kept_views: Vec<Option<ViewGpu>>,
-    /// The frame's one command encoder, from the first command recorded (a
-    /// shadow pass, a view, the clear of a target the views do not cover) to
-    /// the frame's one submission.
-    encoder: Option<wgpu::CommandEncoder>,
-    /// The debug groups open in `encoder`, and the last frame's.
+    /// Each view's GPU state, by the caller's key, with the last frame that
+    /// drew it: kept between frames, given back once unused for a while.
+    views: std::collections::HashMap<ViewKey, (ViewGpu, u64)>,
+    /// How views' draw lists draw (indirect, storage, GPU culling).
+    paths: ListPaths,
+    /// The keys of the last frame's views, in the order given.
+    last_keys: Vec<ViewKey>,
+    /// The debug groups open in the frame's encoder, and the last frame's.
     outline: outline::Outline,
     /// The queue's submission count when the last flush ended.
     submits_counted: u64,
@@ -154,19 +154,15 @@ pub struct Renderer {
     shadow_maps_generation: u64,
     /// The environment's prefiltered maps (image-based lighting).
     environment: environment::EnvironmentMaps,
-    /// Whether this frame's forward pipelines look up shadow maps (the `SHADOWS`
-    /// variant): set by `shadow_pass` when a light casts shadows, and by `flush`
-    /// when that pass drew maps for its lights.
-    frame_variant: FrameVariant,
     store: InstanceStore,
     mode: FrameMode,
+    /// The number of the frame being recorded: frames so far.
     frame_index: u64,
     /// The first bad id submitted this frame, reported by `flush`.
     submit_error: Option<RenderError>,
     gpu_timer: Option<timer::GpuTimer>,
     // Per-frame lists, kept to reuse their allocations.
     submitted: Vec<Submitted>,
-    instances_submitted: u64,
     visible: Visible,
     /// Transient targets: views' own and the post chain's images.
     targets: target_pool::TargetPool,
@@ -178,9 +174,6 @@ pub struct Renderer {
     base_vertex: bool,
     /// The GPU culling passes, where views can cull on the GPU ([`Gpu::culls_on_gpu`]).
     cull_pipelines: Option<gpu_cull::CullPipelines>,
-    /// Whether the last frame was `render_views`' (its views' state kept in
-    /// `kept_views`) rather than `render`'s or `flush`'s (in `view`).
-    last_frame_had_views: bool,
     /// The last prepared table and what it was made for.
     last_prepared: Option<(prepare::PrepareKey, Vec<prepare::Prepared>)>,
     /// Every tiled entity's density is multiplied by this ([`Renderer::set_density`]).
@@ -223,18 +216,8 @@ impl Renderer {
         let shadow_maps = ShadowMaps::new(&device, shadows, 1, 1, 1, 1);
         let instances = InstanceBuffer::new(&device, gpu.vertex_storage(), gpu.culls_on_gpu());
         let environment = environment::EnvironmentMaps::new(&device);
-        let shared = views::Shared {
-            device: &device,
-            pipelines,
-            instances: &instances,
-            shadow_maps: &shadow_maps,
-            shadow_maps_generation: 0,
-            environment: &environment,
-            white: &registry.defaults.white_linear,
-        };
         let paths =
             ListPaths { indirect: gpu.draws_indirect(), storage: gpu.vertex_storage(), gpu_cull: gpu.culls_on_gpu() };
-        let view = ViewGpu::new(&shared, paths);
         let layouts = (&pipelines.scene_layout, &pipelines.camera_layout);
         let particle_pipelines = particles::ParticlePipelines::new(&device, layouts, gpu.occlusion_culls());
         Self {
@@ -248,25 +231,22 @@ impl Renderer {
             queue,
             registry,
             instances,
-            view,
-            kept_views: Vec::new(),
-            encoder: None,
+            views: std::collections::HashMap::new(),
+            paths,
+            last_keys: Vec::new(),
             outline: outline::Outline::new(gpu.debug_groups()),
             shadow_maps,
             shadow_maps_generation: 0,
             environment,
-            frame_variant: FrameVariant::default(),
             store: InstanceStore::default(),
             mode: FrameMode::Optimized,
             frame_index: 0,
             submit_error: None,
             gpu_timer: None,
             submitted: Vec::new(),
-            instances_submitted: 0,
             visible: Visible::default(),
             targets: target_pool::TargetPool::default(),
             post: post::PostChain::new(&gpu.device),
-            last_frame_had_views: false,
             last_prepared: None,
             density: 1.0,
             cull_pipelines: gpu
@@ -278,22 +258,6 @@ impl Renderer {
                 flags.sample_count_supported(4) && flags.contains(wgpu::TextureFormatFeatureFlags::MULTISAMPLE_RESOLVE)
             },
         }
-    }
-
-    /// Point the view being drawn at the shared instance buffer and shadow maps,
-    /// where either was replaced since its bind groups were made.
-    fn refresh_view(&mut self) {
-        self.update_view(|view, shared| view.refresh(shared));
-    }
-
-    /// Run `update` on the view being drawn with what every view points at.
-    fn update_view(&mut self, update: impl FnOnce(&mut ViewGpu, &views::Shared)) {
-        let Self { view, device, registry, instances, shadow_maps, shadow_maps_generation, environment, .. } = self;
-        let (pipelines, white) = (&registry.pipelines, &registry.defaults.white_linear);
-        let shadow_maps_generation = *shadow_maps_generation;
-        let shared =
-            views::Shared { device, pipelines, instances, shadow_maps, shadow_maps_generation, environment, white };
-        update(view, &shared);
     }
 
     /// What every view's GPU state points at.
@@ -312,6 +276,11 @@ impl Renderer {
     /// The shapes, materials, textures and render targets added so far.
     pub fn registry(&self) -> &Registry {
         &self.registry
+    }
+
+    /// The registry, to add what a placed asset uses (`world/place.rs`).
+    pub(crate) fn registry_mut(&mut self) -> &mut Registry {
+        &mut self.registry
     }
 
     /// Add an environment image ([`Registry::add_environment`]).
@@ -406,7 +375,8 @@ impl Renderer {
         self.density = if density.is_nan() { 1.0 } else { density.clamp(0.0, 1.0) };
     }
 
-    /// Queue `entity` for the next [`flush`](Self::flush). Its transforms are kept
+    /// Queue `entity` for the next frame ([`flush`](Self::flush) or
+    /// [`render_frame`](Self::render_frame)). Its transforms are kept
     /// on the GPU between frames and copied again only when its version changed
     /// (see [`Entity::transforms_mut`]). A shape id that is not this renderer's is
     /// reported by the next flush.
@@ -418,13 +388,13 @@ impl Renderer {
         let motion = self.registry.material(entity.material).and_then(|m| m.motion);
         let (local, walk) = motion.map_or((shape.mesh.aabb(), 0.0), |m| m.reach(shape.mesh.aabb()));
         let slot = self.store.submit(entity, instances::Reach { local, walk }, self.frame_index);
-        self.instances_submitted += entity.transforms().len() as u64;
         self.submitted.push(Submitted {
             slot,
             shape: entity.shape,
             material: entity.material,
             render_order: entity.render_order,
             cast_shadows: entity.cast_shadows,
+            instances: entity.transforms().len() as u64,
             density: entity.density * self.density,
         });
     }

@@ -15,6 +15,7 @@ use super::prepare::Prepared;
 use super::queue::{sort_key, Queue};
 use super::timer::Timed;
 use super::view::ViewFrame;
+use super::views::ViewGpu;
 use super::visible::visible_instances;
 use super::{FrameStats, Laps, RenderError, Renderer};
 use crate::gpu::OffscreenTarget;
@@ -32,17 +33,18 @@ impl Renderer {
     /// `shadowed` is each light's first shadow view.
     pub(super) fn naive_frame(
         &mut self,
+        gpu: &mut ViewGpu,
         frame: &ViewFrame,
         (lighting, shadowed): (&Lighting, &[Option<u32>]),
         (target, prepared): (&OffscreenTarget, &[Prepared]),
         (encoder, stats): (&mut wgpu::CommandEncoder, &mut FrameStats),
         lap: &mut Laps,
     ) -> Result<(), RenderError> {
-        self.naive_batches(frame, stats, prepared)?;
+        self.naive_batches(gpu, frame, stats, prepared)?;
         stats.cpu_ms.batch = lap.next();
-        self.naive_upload(frame, (lighting, shadowed), stats)?;
+        self.naive_upload(gpu, frame, (lighting, shadowed), stats)?;
         stats.cpu_ms.upload = lap.next();
-        self.naive_encode(encoder, target, lighting, stats);
+        self.naive_encode(gpu, encoder, target, lighting, stats);
         stats.cpu_ms.encode = lap.next();
         Ok(())
     }
@@ -53,18 +55,20 @@ impl Renderer {
     /// Refuses a frame of more than [`MAX_NAIVE_DRAWS`] draws before building it.
     fn naive_batches(
         &mut self,
+        gpu: &mut ViewGpu,
         frame: &ViewFrame,
         stats: &mut FrameStats,
         prepared: &[Prepared],
     ) -> Result<(), RenderError> {
-        self.view.forward.clear();
+        gpu.forward.clear();
         let mut instances = Vec::new();
-        for (s, &Prepared { pipeline, draw, .. }) in self.submitted.iter().zip(prepared) {
+        let shown = self.submitted.iter().zip(prepared).filter(|(s, _)| self.shown(frame, s));
+        for (s, &Prepared { pipeline, draw, .. }) in shown {
             let slot = self.store.slot(s.slot);
             stats.instances_invalid += u64::from(slot.invalid);
             instances.clear();
             visible_instances(&frame.frustum, false, slot, s.density, (&self.store, &mut instances));
-            let drawn = self.view.forward.batches.len() + instances.len();
+            let drawn = gpu.forward.batches.len() + instances.len();
             if drawn > MAX_NAIVE_DRAWS {
                 let what = "the naive frame (one draw per instance)";
                 return Err(RenderError::TooMany { what, count: drawn as u64, limit: MAX_NAIVE_DRAWS as u64 });
@@ -76,7 +80,7 @@ impl Renderer {
             let blended = features.contains(crate::shader::ShaderFeatures::ALPHA_BLEND);
             let key = sort_key(stage, blended, pipeline, draw.texture_set, s.material, s.shape, 0.0);
             for &i in &instances {
-                let list = &mut self.view.forward;
+                let list = &mut gpu.forward;
                 // The COMPACT variant draws an instance by its number; the
                 // others read it from the draw-index list.
                 let first_instance = if slot.compact { i } else { list.draw_indices.len() as u32 };
@@ -92,7 +96,7 @@ impl Renderer {
                 list.push_alone(batch, draw, (!slot.compact).then_some(i));
             }
         }
-        stats.instances_drawn = self.view.forward.batches.len() as u64;
+        stats.instances_drawn = gpu.forward.batches.len() as u64;
         Ok(())
     }
 
@@ -101,18 +105,19 @@ impl Renderer {
     /// write each.
     fn naive_upload(
         &mut self,
+        gpu: &mut ViewGpu,
         frame: &ViewFrame,
         (lighting, shadowed): (&Lighting, &[Option<u32>]),
         stats: &mut FrameStats,
     ) -> Result<(), RenderError> {
         let bytes = &mut stats.bytes_uploaded;
-        self.upload_view_blocks(frame, lighting, shadowed, bytes)?;
-        for b in &self.view.forward.batches {
+        self.upload_view_blocks(gpu, frame, lighting, shadowed, bytes)?;
+        for b in &gpu.forward.batches {
             let block = self.registry.materials[b.material.0 as usize].material.to_gpu();
             bytes.material += self.registry.material_table.write(&self.queue, b.material.0, &block);
         }
         let layout = &self.registry.pipelines.instance_layout;
-        let list = &mut self.view.forward;
+        let list = &mut gpu.forward;
         bytes.draw_indices +=
             list.write_indices_one_by_one(&self.device, &self.queue, (layout, self.instances.array()))?;
         Ok(())
@@ -122,6 +127,7 @@ impl Renderer {
     /// state bound again and its own `draw_indexed` call.
     fn naive_encode(
         &mut self,
+        gpu: &ViewGpu,
         encoder: &mut wgpu::CommandEncoder,
         target: &OffscreenTarget,
         lighting: &Lighting,
@@ -130,9 +136,9 @@ impl Renderer {
         let start = web_time::Instant::now();
         {
             let background = lighting.environment.background;
-            let mut pass = self.begin_forward_pass(encoder, target, (background, Part::Whole), stats);
-            self.draw_sky(&mut pass, target, &lighting.environment, stats);
-            let list = &self.view.forward;
+            let mut pass = self.begin_forward_pass(gpu, encoder, target, (background, Part::Whole), stats);
+            self.draw_sky(gpu, &mut pass, target, &lighting.environment, stats);
+            let list = &gpu.forward;
             pass.push_debug_group("naive: one draw per instance");
             for (b, draw) in list.batches.iter().zip(&list.draws) {
                 let pipelines = &self.registry.pipelines;

@@ -3,13 +3,14 @@
 //! pipelines), and [`Renderer::precompile`], which does it before the first frame.
 
 use super::draw_list::BatchDraw;
+use super::frame::Frame;
 use super::pipelines::{SkyPass, VertexLayout};
 use super::{FrameStats, FrameVariant, Registry, RenderError, Renderer};
 use crate::gpu::TargetFormat;
 use crate::scene::{Background, Entity, Environment, Lighting, MaterialId, ShapeId, MAX_LIGHTS};
 
-/// What a prepared table was made for: the frame, its submissions so far,
-/// the target, the frame's variant and the environment's fog and sky.
+/// What a prepared table was made for: the frame, its submissions, the
+/// target, the view's variant and the environment's fog and sky.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(super) struct PrepareKey {
     frame: u64,
@@ -46,13 +47,13 @@ impl Renderer {
         if lighting.lights.len() > MAX_LIGHTS {
             return Err(RenderError::TooManyLights(lighting.lights.len()));
         }
-        self.frame_variant = FrameVariant::expected(lighting.lights, false);
+        let variant = FrameVariant::expected(lighting.lights, false);
         self.prepare_environment(&lighting)?;
         let mut stats = FrameStats::default();
         let uses: Vec<_> =
             entities.iter().map(|e| (e.shape, e.material, super::instances::stored_compactly(e))).collect();
         let target = TargetFormat { color: crate::gpu::COLOR_FORMAT, samples };
-        self.registry.prepare_uses(&uses, target, (&lighting.environment, self.frame_variant), &mut stats)?;
+        self.registry.prepare_uses(&uses, target, (&lighting.environment, variant), &mut stats)?;
         Ok(stats.pipelines_compiled)
     }
 
@@ -67,33 +68,34 @@ impl Renderer {
     }
 
     /// Prefilter `lighting`'s environment (image-based lighting) unless that
-    /// was done already, its passes to run first in the next submission; bind
-    /// the new maps. Returns whether it prefiltered.
+    /// was done already, its passes to run first in the next submission (views
+    /// bind the new maps when drawn next). Returns whether it prefiltered.
     pub(super) fn prepare_environment(&mut self, lighting: &Lighting) -> Result<bool, RenderError> {
         let commands = self.environment.update(&mut self.registry, &lighting.environment, lighting.lights)?;
         let done = commands.is_some();
         self.registry.mip_blits.extend(commands);
-        self.refresh_view();
         Ok(done)
     }
 
-    /// Stage 1: make sure everything the submitted entities use exists on the GPU
-    /// (for `target`, under `environment`),
-    /// and compact the instance store when it holds more garbage than data.
-    /// Returns what each submitted entity draws with, in submission order.
-    /// A view's flush reuses its shadow pass's table when nothing it depends
-    /// on changed in between: prepare runs once per view.
+    /// Stage 1 of a view: make sure everything the submitted entities use
+    /// exists on the GPU (for `target`, with the forward variant `variant`,
+    /// under `environment`). Returns what each submitted entity draws with, in
+    /// submission order. The views of one frame that draw into the same
+    /// format with the same variant share one table: prepare runs once per
+    /// frame for each (counted in `frame`).
     pub(super) fn prepare(
         &mut self,
+        frame: &mut Frame,
         target: TargetFormat,
+        variant: FrameVariant,
         environment: &Environment,
         stats: &mut FrameStats,
     ) -> Result<Vec<Prepared>, RenderError> {
         let key = PrepareKey {
-            frame: self.frame_index,
+            frame: frame.index,
             entities: self.submitted.len(),
             target,
-            variant: self.frame_variant,
+            variant,
             fog: environment.fog.is_some(),
             sky: sky_pass(environment),
             glare: environment.glare > 0.0,
@@ -101,33 +103,12 @@ impl Renderer {
         if let Some((_, table)) = self.last_prepared.as_ref().filter(|(k, _)| *k == key) {
             return Ok(table.clone());
         }
-        let table = self.prepare_anew(target, environment, stats)?;
-        self.last_prepared = Some((key, table.clone()));
-        Ok(table)
-    }
-
-    /// [`prepare`](Self::prepare)'s work.
-    fn prepare_anew(
-        &mut self,
-        target: TargetFormat,
-        environment: &Environment,
-        stats: &mut FrameStats,
-    ) -> Result<Vec<Prepared>, RenderError> {
-        // Compacting moves instances: not while commands recorded for this
-        // frame's submission (an earlier view's, or this view's shadow pass) draw
-        // from where they are now.
-        let remap = match self.encoder.is_none() {
-            true => self.store.compact_if_wasteful(self.frame_index),
-            false => None,
-        };
-        if let Some(remap) = remap {
-            for s in &mut self.submitted {
-                s.slot = remap[s.slot];
-            }
-        }
         let uses: Vec<_> =
             self.submitted.iter().map(|s| (s.shape, s.material, self.store.slot(s.slot).compact)).collect();
-        self.registry.prepare_uses(&uses, target, (environment, self.frame_variant), stats)
+        let table = self.registry.prepare_uses(&uses, target, (environment, variant), stats)?;
+        frame.prepares += 1;
+        self.last_prepared = Some((key, table.clone()));
+        Ok(table)
     }
 }
 

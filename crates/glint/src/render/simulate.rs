@@ -1,25 +1,30 @@
 //! Core layer: the frame's simulate stage. A simulation that runs on the GPU
-//! ([`GpuSimulation`]: particles, `sim/particles`) records its compute passes
-//! into the frame's encoder before the frame's views ([`Renderer::simulate`]),
-//! so what it writes (a particle layer's billboards) is drawn in the same
-//! submission, never read back. The outline shows it as `frame N › simulate`.
+//! ([`GpuSimulation`]: particles, `sim/particles`; the school, `sim/school`)
+//! is part of the frame's input ([`FrameInput::simulate`](super::FrameInput::simulate))
+//! and records its compute passes into the frame's encoder before the frame's
+//! views ([`Renderer::simulate`]), so what it writes (a particle layer's
+//! billboards) is drawn in the same submission, never read back. The outline
+//! shows it as `frame N › simulate`.
 
+use super::frame::Frame;
 use super::Renderer;
 use crate::gpu::GpuSimulation;
 
 impl Renderer {
-    /// Stage 0 of the next frame: record `sim`'s compute passes into the
+    /// Stage 1 of the frame: record `simulations`' compute passes into the
     /// frame's encoder, before any view, under the debug group "simulate".
-    /// Call it before the frame's [`render_views`](Self::render_views) (or
-    /// shadow pass and flush); where the device has no compute shaders
-    /// ([`computes`](Self::computes) is false) simulations step on the CPU instead.
-    pub fn simulate(&mut self, sim: &mut dyn GpuSimulation) {
-        let mut encoder = self.take_encoder();
-        self.outline.enter(&mut encoder, "simulate");
+    /// Where the device has no compute shaders ([`computes`](Self::computes)
+    /// is false) simulations step on the CPU instead, and give none.
+    pub(super) fn simulate(&mut self, frame: &mut Frame, simulations: &mut [&mut dyn GpuSimulation]) {
+        if simulations.is_empty() {
+            return;
+        }
+        self.outline.enter(&mut frame.encoder, "simulate");
         self.outline.pass("simulate", super::explain::PassType::Compute, &[]);
-        sim.encode(&self.device, &self.queue, &mut encoder);
-        self.outline.leave(&mut encoder);
-        self.encoder = Some(encoder);
+        for simulation in simulations {
+            simulation.encode(&self.device, &self.queue, &mut frame.encoder);
+        }
+        self.outline.leave(&mut frame.encoder);
     }
 
     /// Whether the device runs compute shaders with storage buffers here

@@ -33,20 +33,6 @@ pub struct UploadStats {
 }
 
 impl UploadStats {
-    /// Add another stage's counts to these (sums refreshed).
-    pub(crate) fn add(&mut self, other: &Self) {
-        self.scene += other.scene;
-        self.camera += other.camera;
-        self.material += other.material;
-        self.instances += other.instances;
-        self.bounds += other.bounds;
-        self.draw_indices += other.draw_indices;
-        self.indirect += other.indirect;
-        self.textures += other.textures;
-        self.meshes += other.meshes;
-        self.finish();
-    }
-
     /// Fill in the sums from the per-block counts.
     pub(crate) fn finish(&mut self) {
         self.uniforms = self.scene + self.camera + self.material;
@@ -118,11 +104,13 @@ pub struct Passes {
     pub post: PassStats,
 }
 
-/// What one frame cost: returned by [`Renderer::flush`](crate::Renderer::flush).
+/// What one view of a frame cost: one per view of
+/// [`Renderer::render_frame`](crate::Renderer::render_frame), or the one of
+/// [`Renderer::flush`](crate::Renderer::flush).
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct FrameStats {
-    /// This frame's number: the renderer's flushes counted from 0 (each view
-    /// of [`Renderer::render_views`](crate::Renderer::render_views) is one).
+    /// The frame's number: the renderer's frames counted from 0 (every view of
+    /// a frame has the same).
     pub frame: u64,
     /// Draw commands recorded into the pass: a multi-draw-indirect call counts
     /// one however many draws it holds; the sky counts one.

@@ -2,7 +2,8 @@
 //! [`View`](crate::scene::View).
 
 use super::cull::Frustum;
-use crate::scene::{AmbientOcclusion, Camera, Culling, View};
+use super::frame_variant::FrameVariant;
+use crate::scene::{AmbientOcclusion, Camera, Culling, TextureId, View};
 use glam::Mat4;
 
 /// A view's camera matrices for one frame at its aspect ratio: what culling,
@@ -21,12 +22,21 @@ pub(super) struct ViewFrame {
     pub culling: Culling,
     /// Its screen-space ambient occlusion, its values clamped into range.
     pub ambient_occlusion: Option<AmbientOcclusion>,
+    /// Its own render target's texture, which the entities it draws must not show.
+    pub hides: Option<TextureId>,
+    /// What it adds to its forward shader variants.
+    pub variant: FrameVariant,
 }
 
 impl ViewFrame {
     /// `view` drawn into a rectangle `width` × `height` pixels, by a renderer
-    /// that can cull on the GPU when `gpu_cull`.
-    pub fn new(view: &View, width: u32, height: u32, gpu_cull: bool) -> Self {
+    /// that can cull on the GPU when `gpu_cull`, leaving out the entities that
+    /// show `hides`, with the forward variant `variant`.
+    pub fn new(
+        view: &View,
+        (width, height): (u32, u32),
+        (gpu_cull, hides, variant): (bool, Option<TextureId>, FrameVariant),
+    ) -> Self {
         let aspect = width as f32 / height.max(1) as f32;
         let camera = view.camera;
         let matrix = camera.view();
@@ -36,6 +46,6 @@ impl ViewFrame {
             culling => culling,
         };
         let ambient_occlusion = view.ambient_occlusion.map(AmbientOcclusion::clamped);
-        Self { camera, aspect, view: matrix, frustum, culling, ambient_occlusion }
+        Self { camera, aspect, view: matrix, frustum, culling, ambient_occlusion, hides, variant }
     }
 }

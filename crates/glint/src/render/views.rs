@@ -81,8 +81,7 @@ pub(crate) struct Shared<'a> {
 
 /// What one view keeps on the GPU between frames: a split screen's views, or a
 /// view into a render target, each draw from their own records, lists and
-/// Shadow block (views are told apart by their place in
-/// [`Renderer::render_views`](super::Renderer::render_views)'s list).
+/// Shadow block (views are told apart by their [`ViewKey`](super::ViewKey)).
 pub(crate) struct ViewGpu {
     /// The camera's and the shadow views' Camera-block records.
     pub blocks: ViewBlocks,
@@ -103,8 +102,6 @@ pub(crate) struct ViewGpu {
     pub occlusion: Option<OcclusionTargets>,
     /// The instance buffer, shadow maps and environment maps generations the bind groups point at.
     generations: (u64, u64, u64),
-    /// How the lists draw.
-    paths: ListPaths,
 }
 
 impl ViewGpu {
@@ -124,13 +121,7 @@ impl ViewGpu {
             scene_block,
             shadow_block,
             generations: (instances.generation(), shared.shadow_maps_generation, shared.environment.generation()),
-            paths,
         }
-    }
-
-    /// A new view's state, drawing the way this one does.
-    pub(crate) fn sibling(&self, shared: &Shared) -> Self {
-        Self::new(shared, self.paths)
     }
 
     /// Point the bind groups at the instance buffer, shadow maps and

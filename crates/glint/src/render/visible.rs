@@ -92,9 +92,10 @@ impl Renderer {
     /// frustum is decided at once; only boxes crossing a plane have their
     /// instances tested one by one.
     pub(super) fn cull(&self, frame: &ViewFrame, visible: &mut Visible, stats: &mut FrameStats) {
-        self.collect_visible(&frame.frustum, frame.culling, |_| true, visible);
+        self.collect_visible(&frame.frustum, frame.culling, |s| self.shown(frame, s), visible);
         let store = &self.store;
-        stats.instances_invalid = self.submitted.iter().map(|s| u64::from(store.slot(s.slot).invalid)).sum();
+        let shown = self.submitted.iter().filter(|s| self.shown(frame, s));
+        stats.instances_invalid = shown.map(|s| u64::from(store.slot(s.slot).invalid)).sum();
         stats.instances_culled = stats.instances_submitted - stats.instances_invalid - visible.kept();
         (stats.tiles_tested, stats.tiles_drawn) = (visible.tiles.tested, visible.tiles.drawn);
         stats.culling = frame.culling;
@@ -154,7 +155,9 @@ impl Renderer {
                 runs.push(VisibleRun { entry, start: start as u32, len });
             }
         };
-        if self.submitted.len() > 1 && self.instances_submitted >= PARALLEL_ENTITY_CULL_THRESHOLD {
+        if self.submitted.len() > 1
+            && self.submitted.iter().map(|s| s.instances).sum::<u64>() >= PARALLEL_ENTITY_CULL_THRESHOLD
+        {
             // Many instances: entities culled on all cores, results kept in submission order.
             let lists: Vec<(Vec<u32>, TileCounts)> = self
                 .submitted

@@ -1,7 +1,7 @@
 //! [`View`], one camera's part of a frame: the camera, the rectangle of the
 //! target it draws into ([`Viewport`]) and its options. Plain data: a frame
-//! draws one or more views ([`Renderer::render_views`](crate::Renderer::render_views)),
-//! each culled, shadowed and drawn on its own.
+//! draws one or more views ([`Renderer::render_frame`](crate::Renderer::render_frame)),
+//! each culled and drawn on its own.
 
 use super::{Camera, PostEffect, RenderTargetId};
 

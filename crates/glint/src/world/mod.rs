@@ -23,19 +23,20 @@
 mod cloth;
 mod controls;
 mod particles;
+mod place;
 mod school;
 
 use crate::asset::{MeshRef, SceneDesc};
-use crate::render::{place, PlacedScene};
 use crate::scene::{Entity, Lighting, View};
 use crate::sim::cloth::ClothView;
 use crate::sim::particles::ParticleKernels;
-use crate::{FrameStats, OffscreenTarget, RenderError, Renderer};
+use crate::{FrameInput, FrameStats, OffscreenTarget, RenderError, Renderer};
 use cloth::ClothSim;
 use particles::EmitterSim;
 use school::SchoolSim;
 
 pub use controls::{Control, ControlKind, Controls};
+pub use place::PlacedScene;
 
 /// A scene placed in a renderer, with its simulations and clock.
 pub struct World {
@@ -108,11 +109,7 @@ impl World {
     /// last pose where a material moves with time (elsewhere the Scene block
     /// stays the same from frame to frame, and is not uploaded again).
     pub fn lighting(&self) -> Lighting<'_> {
-        let mut lighting = self.desc.lighting();
-        if self.moves {
-            lighting.environment.time = self.time;
-        }
-        lighting
+        lighting_at(&self.desc, self.moves.then_some(self.time))
     }
 
     /// The meshes of cloth `index` (in file order) as of the last pose: its
@@ -226,11 +223,12 @@ impl World {
         }
     }
 
-    /// Draw `views` of it into `target` ([`Renderer::render_views`]) and return
-    /// each view's statistics, with the scene's particles alive and spawned
-    /// since the last frame drawn. Its emitters' billboards go first: written
-    /// from the CPU, or stepped to the time of the last pose by compute passes
-    /// in the frame's simulate stage; alpha-blended ones sorted back to front
+    /// Draw `views` of it into `target` (one [`Renderer::render_frame`], each
+    /// view keyed by its place in `views`) and return each view's statistics,
+    /// with the scene's particles alive and spawned since the last frame
+    /// drawn. Its emitters' billboards go first: written from the CPU, or
+    /// stepped to the time of the last pose by compute passes in the frame's
+    /// simulate stage (its GPU emitters are the frame's simulations); alpha-blended ones sorted back to front
     /// from the last view's camera (the picture's own, after any views into
     /// render targets).
     pub fn draw(
@@ -240,10 +238,14 @@ impl World {
         target: &mut OffscreenTarget,
     ) -> Result<Vec<FrameStats>, RenderError> {
         let eye = views.last().map_or(glam::Vec3::ZERO, |v| v.camera.eye);
+        let lighting = lighting_at(&self.desc, self.moves.then_some(self.time));
+        let mut input = FrameInput::new(&self.placed.entities, lighting).views(views);
         for (sim, emitter) in self.emitters.iter_mut().zip(&self.desc.emitters) {
-            sim.draw(emitter, self.time, eye, renderer);
+            if let Some(on_gpu) = sim.draw(emitter, self.time, eye, renderer) {
+                input = input.simulate(on_gpu);
+            }
         }
-        let mut stats = renderer.render_views(&self.placed.entities, views, self.lighting(), target)?;
+        let mut stats = renderer.render_frame(input, target)?.views;
         particles::count(&self.desc.emitters, (self.drawn_at, self.time), &mut stats);
         self.drawn_at = self.time;
         Ok(stats)
@@ -253,4 +255,14 @@ impl World {
     pub fn particles_on_gpu(&self) -> bool {
         self.emitters.iter().any(EmitterSim::on_gpu)
     }
+}
+
+/// `desc`'s lights under its environment, at scene time `time` where a
+/// material moves with it.
+fn lighting_at(desc: &SceneDesc, time: Option<f32>) -> Lighting<'_> {
+    let mut lighting = desc.lighting();
+    if let Some(time) = time {
+        lighting.environment.time = time;
+    }
+    lighting
 }

@@ -4,7 +4,7 @@
 //! WebGL2), from the same description and seed.
 
 use crate::asset::EmitterDesc;
-use crate::render::{ParticleBlend, ParticleLook, ParticlesId};
+use crate::render::{GpuSimulation, ParticleBlend, ParticleLook, ParticlesId};
 use crate::scene::TextureId;
 use crate::sim::particles::{GpuParticles, ParticleKernels, ParticleSystem};
 use crate::{FrameStats, RenderError, Renderer};
@@ -79,18 +79,28 @@ impl EmitterSim {
         }
     }
 
-    /// Before the frame's views: its billboards into its layer, sorted from
-    /// `eye` when alpha-blended (written from the CPU, or stepped to `time`
-    /// and written by compute passes in the frame's simulate stage).
-    pub(crate) fn draw(&mut self, desc: &EmitterDesc, time: f32, eye: Vec3, renderer: &mut Renderer) {
+    /// Before the frame: its billboards into its layer, sorted from `eye`
+    /// when alpha-blended: written from the CPU, or stepped to `time` by
+    /// compute passes in the frame's simulate stage (the simulation returned,
+    /// for the frame's input).
+    pub(crate) fn draw(
+        &mut self,
+        desc: &EmitterDesc,
+        time: f32,
+        eye: Vec3,
+        renderer: &mut Renderer,
+    ) -> Option<&mut dyn GpuSimulation> {
         let eye_if_sorted = (desc.blend == ParticleBlend::Alpha).then_some(eye);
         match &mut self.run {
-            None => {}
-            Some(Run::Cpu(system)) => renderer.write_particles(self.layer, &system.records(eye_if_sorted)),
+            None => None,
+            Some(Run::Cpu(system)) => {
+                renderer.write_particles(self.layer, &system.records(eye_if_sorted));
+                None
+            }
             Some(Run::Gpu(on_gpu)) => {
                 on_gpu.advance_to(renderer.device_and_queue().1, time, eye);
-                renderer.simulate(on_gpu.as_mut());
                 renderer.set_particle_count(self.layer, on_gpu.slots());
+                Some(on_gpu.as_mut())
             }
         }
     }

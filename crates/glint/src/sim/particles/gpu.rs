@@ -1,5 +1,5 @@
 //! [`GpuParticles`]: an emitter's slots on the GPU, stepped by compute
-//! passes in the frame's encoder ([`Renderer::simulate`](crate::Renderer::simulate))
+//! passes in the frame's encoder ([`FrameInput::simulate`](crate::FrameInput::simulate))
 //! and written into a particle layer as billboards, back to front for
 //! alpha blending (a counting sort by distance, `shader/particles_step.wgsl`).
 

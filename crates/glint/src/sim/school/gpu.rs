@@ -189,7 +189,7 @@ impl GpuSchool {
     }
 
     /// Have the next [`GpuSimulation::encode`] (a frame's simulate stage,
-    /// [`Renderer::simulate`](crate::Renderer::simulate)) record `steps` more
+    /// [`FrameInput::simulate`](crate::FrameInput::simulate)) record `steps` more
     /// steps of `dt` seconds.
     pub fn advance(&mut self, queue: &wgpu::Queue, steps: u32, dt: f32) {
         if self.block.more[3] != dt {

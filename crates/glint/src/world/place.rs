@@ -1,12 +1,12 @@
-//! Core layer: placing loaded assets into a renderer. A [`Model`] or a
+//! World layer: placing loaded assets into a renderer. A [`Model`] or a
 //! [`SceneDesc`] is plain data read from a file; placing it adds its textures,
 //! render targets, materials and shapes to the renderer's [`Registry`] and
 //! returns the entities that draw them ([`PlacedScene`]).
 //! [`World::pose`](crate::World::pose) moves them along as the scene's
 //! animations and cloths advance.
 
-use super::{Registry, Renderer};
 use crate::asset::{MeshRef, Model, SceneDesc, ShapeKind, Texture};
+use crate::render::{Registry, Renderer};
 use crate::scene::{Entity, Material, MaterialId, RenderTargetId, ShadingModel, ShapeId, TextureId};
 use crate::sim::cloth::ClothView;
 use glam::{Mat4, Quat, Vec3};
@@ -37,7 +37,7 @@ impl Renderer {
     /// Add `model`'s shapes, textures and materials, and return one entity per
     /// part, instanced at every transform of `placements` (model to world).
     pub fn place_model(&mut self, model: &Model, placements: &[Mat4]) -> Vec<Entity> {
-        let ids = self.registry.add_model(model);
+        let ids = self.registry_mut().add_model(model);
         model_entities(model, &ids, placements)
     }
 
@@ -46,7 +46,7 @@ impl Renderer {
     /// and environment are not the renderer's: give [`SceneDesc::lighting`] to
     /// each frame.
     pub fn place_scene(&mut self, desc: &SceneDesc) -> PlacedScene {
-        let registry = &mut self.registry;
+        let registry = self.registry_mut();
         if let Some(image) = &desc.environment_image {
             registry.add_environment(image);
         }
