@@ -87,15 +87,21 @@ impl std::ops::AddAssign for TileCounts {
 }
 
 impl Renderer {
-    /// Stage 2: each submitted entity's instances that `frame` sees, into
-    /// `visible`. An entity whose world box is wholly inside or outside the
+    /// Stage 3 of a view: each submitted entity's instances that `frame`
+    /// sees (not those whose materials show its own target), into `visible`. An entity whose world box is wholly inside or outside the
     /// frustum is decided at once; only boxes crossing a plane have their
     /// instances tested one by one.
     pub(super) fn cull(&self, frame: &ViewFrame, visible: &mut Visible, stats: &mut FrameStats) {
-        self.collect_visible(&frame.frustum, frame.culling, |s| self.shown(frame, s), visible);
+        // The materials showing the view's own target (a plain list: the
+        // predicate crosses threads, and the renderer may not).
+        let hidden: Vec<bool> = (0..self.registry.materials.len() as u32)
+            .map(|m| frame.hides.is_some_and(|t| self.registry.shows(crate::scene::MaterialId(m), t)))
+            .collect();
+        let shown = |s: &Submitted| !hidden.get(s.material.0 as usize).copied().unwrap_or(false);
+        self.collect_visible(&frame.frustum, frame.culling, shown, visible);
         let store = &self.store;
-        let shown = self.submitted.iter().filter(|s| self.shown(frame, s));
-        stats.instances_invalid = shown.map(|s| u64::from(store.slot(s.slot).invalid)).sum();
+        let drawn = self.submitted.iter().filter(|s| shown(s));
+        stats.instances_invalid = drawn.map(|s| u64::from(store.slot(s.slot).invalid)).sum();
         stats.instances_culled = stats.instances_submitted - stats.instances_invalid - visible.kept();
         (stats.tiles_tested, stats.tiles_drawn) = (visible.tiles.tested, visible.tiles.drawn);
         stats.culling = frame.culling;
