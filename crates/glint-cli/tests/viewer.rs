@@ -139,7 +139,7 @@ fn at(frame: u32, action: &str) -> [String; 2] {
 }
 
 /// What a scripted `stats=PATH` wrote: the scene time, whether the overlay
-/// was shown, and each view's statistics.
+/// was shown, the frame's command submissions and each view's statistics.
 fn read_stats(path: &Path) -> serde_json::Value {
     let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     serde_json::from_str(&text).expect("one JSON object")
@@ -203,6 +203,10 @@ fn the_controls_change_what_they_claim() {
     let [before, after, paused, still] = ["before", "after", "paused", "still"].map(|n| read_stats(&stats(n)));
     let view = |s: &serde_json::Value, key: &str| s["views"][0][key].as_u64().unwrap_or_else(|| panic!("{key} in {s}"));
     assert!(view(&before, "shadow_views") > 0, "the scene's sun casts shadows: {before}");
+    // A displayed frame (views, overlay, blit onto the window) is one submission.
+    for s in [&before, &after, &paused, &still] {
+        assert_eq!((s["overlay"].as_bool(), s["submits"].as_u64()), (Some(true), Some(1)), "{s}");
+    }
     assert_eq!(view(&after, "shadow_views"), 0, "shadows off: no shadow views");
     assert_eq!(paused["time"], still["time"], "paused, the clock stays");
     assert!(after["time"].as_f64() > before["time"].as_f64(), "playing, it moves");

@@ -50,7 +50,7 @@ pub mod text;
 pub mod world;
 
 pub use asset::{Diagnostic, Texture};
-pub use gpu::{Gpu, GpuError, OffscreenTarget, WindowSurface};
+pub use gpu::{AfterViews, Gpu, GpuError, OffscreenTarget, SurfaceFrame, WindowSurface};
 pub use render::{FrameInput, FrameMode, FrameOutput, FrameStats, RenderError, Renderer, Shadows, ViewKey};
 pub use scene::{
     AlphaMode, AmbientOcclusion, Background, Camera, Culling, Entity, Environment, Light, Lighting, Material,

@@ -132,6 +132,9 @@ struct View {
     overlay_ms: Vec<f64>,
     /// The last frame's statistics, per view.
     stats: Vec<FrameStats>,
+    /// The last frame's command submissions (its overlay and the blit onto
+    /// the window included): 1.
+    submits: u32,
 }
 
 /// A loaded scene placed in its own renderer, and the views it shows (the fly
@@ -247,6 +250,7 @@ impl App {
             overlay,
             overlay_ms: Vec::new(),
             stats: Vec::new(),
+            submits: 0,
             gpu,
         })
     }
@@ -344,13 +348,23 @@ impl View {
             let flown = scene.flown();
             views[flown].camera = self.fly.apply(&views[flown].camera);
         }
-        scene.renderer.set_explaining(self.overlay.visible && self.overlay.calls_open);
-        let stats = scene.world.draw(&mut scene.renderer, &views, &mut self.target)?;
+        // The overlay shows the last frame's statistics and calls, and is drawn
+        // into this frame, before the blit onto the window: one submission.
         self.overlay.record(dt.as_secs_f32() * 1e3);
-        let calls = scene.renderer.explained();
-        let overlay = self.overlay.draw((&self.window, &self.gpu), &self.target, controls, (&stats, calls));
-        self.overlay_ms.extend(overlay);
-        self.surface.present(&self.gpu, &self.target);
+        let size = (self.target.width(), self.target.height());
+        let last = (&self.stats[..], scene.renderer.explained());
+        let overlay_ms = self.overlay.prepare((&self.window, &self.gpu), size, controls, last);
+        scene.renderer.set_explaining(self.overlay.visible && self.overlay.calls_open);
+        let mut window = self.surface.acquire(&self.gpu);
+        let mut after: Vec<&mut dyn glint::AfterViews> = vec![&mut self.overlay];
+        after.extend(window.as_mut().map(|w| w as &mut dyn glint::AfterViews));
+        let output = scene.world.draw_then(&mut scene.renderer, (&views, &mut self.target), after)?;
+        if let Some(window) = window {
+            window.present(&self.gpu);
+        }
+        self.overlay_ms.extend(overlay_ms.map(|ms| ms + self.overlay.take_record_ms()));
+        self.submits = output.submits;
+        let stats = output.views;
         if self.last_title.elapsed() >= TITLE_INTERVAL {
             let recent = self.clock.take_recent();
             self.window.set_title(&format!(
@@ -402,7 +416,12 @@ impl View {
                 eprintln!("{id} set to {value}");
             }
             Action::Stats(path) => {
-                let json = serde_json::json!({ "time": self.clock.time, "overlay": self.overlay.visible, "views": self.stats });
+                let json = serde_json::json!({
+                    "time": self.clock.time,
+                    "overlay": self.overlay.visible,
+                    "submits": self.submits,
+                    "views": self.stats
+                });
                 crate::output::write_file(path, format!("{json}\n").as_bytes())?;
             }
         }

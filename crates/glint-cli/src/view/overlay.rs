@@ -13,7 +13,7 @@
 
 use glint::render::FrameCalls;
 use glint::world::{ControlKind, Controls};
-use glint::{FrameStats, Gpu, OffscreenTarget};
+use glint::{AfterViews, FrameStats, Gpu, OffscreenTarget};
 use std::collections::VecDeque;
 use winit::window::Window;
 
@@ -47,6 +47,8 @@ pub struct Overlay {
     due: bool,
     /// Layouts so far.
     layouts: u32,
+    /// CPU time of the last recording into a frame, ms.
+    record_ms: f64,
 }
 
 /// One layout of the panels, painted until the next.
@@ -74,6 +76,7 @@ impl Overlay {
             laid_out: None,
             due: true,
             layouts: 0,
+            record_ms: 0.0,
         }
     }
 
@@ -111,15 +114,15 @@ impl Overlay {
         self.history.push_back(frame_ms);
     }
 
-    /// Lay out the panels (applying what the user changes to `controls`) and
-    /// draw them over `target`'s frame; returns the CPU time it took, ms
-    /// (`None` while hidden): laying out, tessellating, uploading and
-    /// recording, not the submission, which on a CPU rasterizer waits for
-    /// the frame submitted before it (as presenting would without the overlay).
-    pub fn draw(
+    /// Before the frame: lay out the panels again where due (applying what
+    /// the user changes to `controls`), from the last frame's `stats` and
+    /// `calls`, for a target of `size`. Returns the CPU time it took, ms
+    /// (`None` while hidden); recording the panels into the frame
+    /// ([`AfterViews`]) adds its own time ([`Overlay::take_record_ms`]).
+    pub fn prepare(
         &mut self,
         (window, gpu): (&Window, &Gpu),
-        target: &OffscreenTarget,
+        size: (u32, u32),
         controls: &mut Controls,
         (stats, calls): (&[FrameStats], Option<&FrameCalls>),
     ) -> Option<f64> {
@@ -127,34 +130,16 @@ impl Overlay {
             return None;
         }
         let start = std::time::Instant::now();
-        let size = (target.width(), target.height());
         let stale = self.laid_out.as_ref().is_none_or(|l| l.size != size || l.at.elapsed() >= REFRESH);
         if self.due || stale {
             self.lay_out((window, gpu), size, controls, (stats, calls));
         }
-        let layout = self.laid_out.as_ref().expect("laid out above");
-        let screen =
-            egui_wgpu::ScreenDescriptor { size_in_pixels: [size.0, size.1], pixels_per_point: layout.pixels_per_point };
-        let label = Some("overlay");
-        let mut encoder = gpu.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label });
-        let extra = self.renderer.update_buffers(&gpu.device, &gpu.queue, &mut encoder, &layout.primitives, &screen);
-        {
-            let pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label,
-                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: target.color_view(),
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations { load: wgpu::LoadOp::Load, store: wgpu::StoreOp::Store },
-                })],
-                ..Default::default()
-            });
-            self.renderer.render(&mut pass.forget_lifetime(), &layout.primitives, &screen);
-        }
-        let commands = extra.into_iter().chain([encoder.finish()]).collect::<Vec<_>>();
-        let cpu_ms = start.elapsed().as_secs_f64() * 1e3;
-        gpu.queue.submit(commands);
-        Some(cpu_ms)
+        Some(start.elapsed().as_secs_f64() * 1e3)
+    }
+
+    /// The CPU time of the last recording into a frame, ms (0 when none).
+    pub fn take_record_ms(&mut self) -> f64 {
+        std::mem::take(&mut self.record_ms)
     }
 
     /// Run egui over the panels (applying what the user changes to
@@ -343,4 +328,38 @@ fn calls_list(ui: &mut egui::Ui, calls: Option<&FrameCalls>) {
             }
         }
     });
+}
+
+/// The panels as last laid out, drawn over the frame's picture in the frame's
+/// own encoder (uploading egui's buffers first), when shown.
+impl AfterViews for Overlay {
+    fn record(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        encoder: &mut wgpu::CommandEncoder,
+        target: &OffscreenTarget,
+    ) -> Vec<wgpu::CommandBuffer> {
+        let Some(layout) = self.laid_out.as_ref().filter(|_| self.visible) else { return Vec::new() };
+        let start = std::time::Instant::now();
+        let size = (target.width(), target.height());
+        let screen =
+            egui_wgpu::ScreenDescriptor { size_in_pixels: [size.0, size.1], pixels_per_point: layout.pixels_per_point };
+        let before = self.renderer.update_buffers(device, queue, encoder, &layout.primitives, &screen);
+        {
+            let pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("overlay"),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view: target.color_view(),
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations { load: wgpu::LoadOp::Load, store: wgpu::StoreOp::Store },
+                })],
+                ..Default::default()
+            });
+            self.renderer.render(&mut pass.forget_lifetime(), &layout.primitives, &screen);
+        }
+        self.record_ms = start.elapsed().as_secs_f64() * 1e3;
+        before
+    }
 }

@@ -6,6 +6,7 @@
 //! [`WindowSurface`] that shows it in a window; and what GPU simulations and
 //! the renderer share ([`GpuSimulation`], [`ParticleGpu`], compute helpers).
 
+mod after_views;
 mod blit;
 mod context;
 mod errors;
@@ -15,13 +16,14 @@ mod submit;
 mod target;
 mod window;
 
+pub use after_views::AfterViews;
 pub(crate) use context::read_buffer;
 pub use context::{Gpu, GpuError, WindowHandles};
 pub use heap::keep_freed_heap_memory;
 pub(crate) use simulation::{bind_buffers, buffers_layout, compute_pipeline};
 pub use simulation::{GpuSimulation, ParticleGpu, MAX_LAYER_PARTICLES};
 pub use target::{OffscreenTarget, Readback, TargetFormat};
-pub use window::WindowSurface;
+pub use window::{SurfaceFrame, WindowSurface};
 
 pub(crate) use blit::{full_screen_pipeline, sampler_entry, texture_entry, Blitter};
 pub(crate) use errors::{DriverErrors, UncapturedErrors};

@@ -2,7 +2,7 @@
 //! [`OffscreenTarget`] as always and then blitted onto the window's next
 //! surface texture, so everything headless works the same in a window.
 
-use super::{Blitter, Gpu, GpuError, OffscreenTarget};
+use super::{AfterViews, Blitter, Gpu, GpuError, OffscreenTarget};
 
 /// A window's surface, configured for its size, showing [`OffscreenTarget`]s.
 pub struct WindowSurface {
@@ -65,31 +65,58 @@ impl WindowSurface {
         (self.config.width, self.config.height)
     }
 
-    /// Show `frame`, scaled to the window if their sizes differ. Returns whether
-    /// it was shown: not while the window has no area or is hidden, or when the
-    /// surface had to be configured again (the next frame is shown).
-    pub fn present(&mut self, gpu: &Gpu, frame: &OffscreenTarget) -> bool {
+    /// The window's next surface texture, to show a frame on: record it into
+    /// the frame ([`SurfaceFrame`] is [`AfterViews`]), then
+    /// [`present`](SurfaceFrame::present) it. `None` while the window has no
+    /// area or is hidden, or when the surface had to be configured again (the
+    /// next frame is shown).
+    pub fn acquire(&mut self, gpu: &Gpu) -> Option<SurfaceFrame<'_>> {
         if self.config.width == 0 || self.config.height == 0 {
-            return false;
+            return None;
         }
         let texture = match self.surface.get_current_texture() {
             wgpu::CurrentSurfaceTexture::Success(t) | wgpu::CurrentSurfaceTexture::Suboptimal(t) => t,
             wgpu::CurrentSurfaceTexture::Outdated | wgpu::CurrentSurfaceTexture::Lost => {
                 self.surface.configure(&gpu.device, &self.config);
-                return false;
+                return None;
             }
             wgpu::CurrentSurfaceTexture::Timeout
             | wgpu::CurrentSurfaceTexture::Occluded
-            | wgpu::CurrentSurfaceTexture::Validation => return false,
+            | wgpu::CurrentSurfaceTexture::Validation => return None,
         };
         let view = texture
             .texture
             .create_view(&wgpu::TextureViewDescriptor { format: Some(self.view_format), ..Default::default() });
-        let mut encoder =
-            gpu.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("window: present") });
-        self.blitter.blit(&gpu.device, &mut encoder, &self.pipeline, frame.color_view(), &view);
-        gpu.queue.submit([encoder.finish()]);
-        gpu.queue.present(texture);
-        true
+        Some(SurfaceFrame { window: self, texture, view })
+    }
+}
+
+/// A window's surface texture for one frame ([`WindowSurface::acquire`]):
+/// as [`AfterViews`], it blits the frame's picture onto it, scaled to the
+/// window if their sizes differ; once the frame is submitted, present it.
+pub struct SurfaceFrame<'w> {
+    window: &'w WindowSurface,
+    texture: wgpu::SurfaceTexture,
+    view: wgpu::TextureView,
+}
+
+impl SurfaceFrame<'_> {
+    /// Show the texture, after the frame that drew it was submitted.
+    pub fn present(self, gpu: &Gpu) {
+        gpu.queue.present(self.texture);
+    }
+}
+
+impl AfterViews for SurfaceFrame<'_> {
+    fn record(
+        &mut self,
+        device: &wgpu::Device,
+        _queue: &wgpu::Queue,
+        encoder: &mut wgpu::CommandEncoder,
+        target: &OffscreenTarget,
+    ) -> Vec<wgpu::CommandBuffer> {
+        let window = self.window;
+        window.blitter.blit(device, encoder, &window.pipeline, target.color_view(), &self.view);
+        Vec::new()
     }
 }

@@ -30,7 +30,7 @@ use crate::asset::{MeshRef, SceneDesc};
 use crate::scene::{Entity, Lighting, View};
 use crate::sim::cloth::ClothView;
 use crate::sim::particles::ParticleKernels;
-use crate::{FrameInput, FrameStats, OffscreenTarget, RenderError, Renderer};
+use crate::{AfterViews, FrameInput, FrameOutput, FrameStats, OffscreenTarget, RenderError, Renderer};
 use cloth::ClothSim;
 use particles::EmitterSim;
 use school::SchoolSim;
@@ -237,6 +237,18 @@ impl World {
         views: &[View],
         target: &mut OffscreenTarget,
     ) -> Result<Vec<FrameStats>, RenderError> {
+        Ok(self.draw_then(renderer, (views, target), Vec::new())?.views)
+    }
+
+    /// [`draw`](Self::draw), with `after` recorded into the frame after its
+    /// views (an overlay, the blit onto a window: [`FrameInput::then`]), and
+    /// the whole frame's output.
+    pub fn draw_then<'a>(
+        &'a mut self,
+        renderer: &mut Renderer,
+        (views, target): (&'a [View], &mut OffscreenTarget),
+        after: Vec<&'a mut dyn AfterViews>,
+    ) -> Result<FrameOutput, RenderError> {
         let eye = views.last().map_or(glam::Vec3::ZERO, |v| v.camera.eye);
         let lighting = lighting_at(&self.desc, self.moves.then_some(self.time));
         let mut input = FrameInput::new(&self.placed.entities, lighting).views(views);
@@ -245,10 +257,11 @@ impl World {
                 input = input.simulate(on_gpu);
             }
         }
-        let mut stats = renderer.render_frame(input, target)?.views;
-        particles::count(&self.desc.emitters, (self.drawn_at, self.time), &mut stats);
+        input.after = after;
+        let mut output = renderer.render_frame(input, target)?;
+        particles::count(&self.desc.emitters, (self.drawn_at, self.time), &mut output.views);
         self.drawn_at = self.time;
-        Ok(stats)
+        Ok(output)
     }
 
     /// Whether its emitters step with compute shaders (else on the CPU).

@@ -17,7 +17,7 @@ mod view;
 pub use beginner::Shadows;
 
 use super::{ms_since, FrameStats, GpuTimes, RenderError, Renderer};
-use crate::gpu::{GpuSimulation, OffscreenTarget};
+use crate::gpu::{AfterViews, GpuSimulation, OffscreenTarget};
 use crate::scene::{Entity, Lighting, MaterialId, TextureId, View, MAX_LIGHTS, MAX_POST_EFFECTS};
 use std::collections::HashMap;
 use web_time::Instant;
@@ -47,12 +47,16 @@ pub struct FrameInput<'a> {
     /// GPU simulations stepped in the frame's simulate stage, before any view,
     /// so that what they write is drawn in the same submission.
     pub simulations: Vec<&'a mut dyn GpuSimulation>,
+    /// Work recorded after the views, in this order (an overlay, the blit
+    /// onto a window), so that a displayed frame is one submission.
+    pub after: Vec<&'a mut dyn AfterViews>,
 }
 
 impl<'a> FrameInput<'a> {
     /// A frame of `entities` under `lighting`, with no view yet.
     pub fn new(entities: &'a [Entity], lighting: impl Into<Lighting<'a>>) -> Self {
-        Self { entities, views: Vec::new(), lighting: lighting.into(), shadows: true, simulations: Vec::new() }
+        let (views, simulations, after) = (Vec::new(), Vec::new(), Vec::new());
+        Self { entities, views, lighting: lighting.into(), shadows: true, simulations, after }
     }
 
     /// Add `view`, its GPU state kept under `key`.
@@ -70,6 +74,12 @@ impl<'a> FrameInput<'a> {
     /// Step `simulation` in the frame's simulate stage.
     pub fn simulate(mut self, simulation: &'a mut dyn GpuSimulation) -> Self {
         self.simulations.push(simulation);
+        self
+    }
+
+    /// Record `work` after the views (and after the work given before it).
+    pub fn then(mut self, work: &'a mut dyn AfterViews) -> Self {
+        self.after.push(work);
         self
     }
 
@@ -110,6 +120,8 @@ pub(super) struct Frame {
     pub prefiltered: bool,
     /// The view drawn first, which carries the frame's own costs.
     pub first_view: Option<usize>,
+    /// Command buffers to submit before the frame's (the after-view work's).
+    pub before: Vec<wgpu::CommandBuffer>,
     /// The newest finished earlier frame's GPU times.
     pub gpu: Option<GpuTimes>,
     pub start: Instant,
@@ -118,7 +130,7 @@ pub(super) struct Frame {
 impl Renderer {
     /// Draw one frame of `input` into `target`: simulate → plan shadows →
     /// per view (prepare, shadow views, cull, queue, sort, batch, upload,
-    /// encode, compose) → one submission. Errors (the frame's commands and
+    /// encode, compose) → the work after the views → one submission. Errors (the frame's commands and
     /// entities are dropped): more than [`MAX_LIGHTS`] lights, an id that is
     /// not this renderer's, a viewport outside its target, views that need
     /// each other's render targets.
@@ -127,7 +139,7 @@ impl Renderer {
         input: FrameInput,
         target: &mut OffscreenTarget,
     ) -> Result<FrameOutput, RenderError> {
-        let FrameInput { entities, views, lighting, shadows, mut simulations } = input;
+        let FrameInput { entities, views, lighting, shadows, mut simulations, mut after } = input;
         let mut frame = self.begin_frame(entities, &views); // its number and encoder; entities into the store
         let mut stages = || {
             self.check_frame(&views, &lighting)?; // lights, ids, viewports, post chains
@@ -143,6 +155,7 @@ impl Renderer {
                 stats[k] = self.draw_view(&mut frame, (k, views[k]), (&lighting, &shadows), target)?;
             }
             frame.first_view = order.first().copied();
+            self.after_views(&mut frame, &mut after, target); // an overlay, the blit onto a window
             Ok(stats)
         };
         let drawn = stages();
@@ -162,7 +175,8 @@ impl Renderer {
         let mut encoder = self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label });
         self.outline.enter(&mut encoder, &format!("frame {}", self.frame_index));
         let gpu = self.gpu_timer.as_mut().and_then(|t| t.collect(&self.device));
-        Frame { index: self.frame_index, encoder, prepares: 0, prefiltered: false, first_view: None, gpu, start }
+        let (prepares, prefiltered, first_view, before) = (0, false, None, Vec::new());
+        Frame { index: self.frame_index, encoder, prepares, prefiltered, first_view, before, gpu, start }
     }
 
     /// The errors a frame finds before drawing: a bad id submitted, too many
@@ -185,6 +199,15 @@ impl Renderer {
         Ok(())
     }
 
+    /// Record `after`'s work into the frame, in order, after its views have
+    /// drawn `target`.
+    fn after_views(&self, frame: &mut Frame, after: &mut [&mut dyn AfterViews], target: &OffscreenTarget) {
+        for work in after {
+            let before = work.record(&self.device, &self.queue, &mut frame.encoder, target);
+            frame.before.extend(before);
+        }
+    }
+
     /// Compact the instance store when it holds more garbage than data: at the
     /// frame's start, before any command recorded draws from where instances are.
     fn compact_store(&mut self) {
@@ -196,7 +219,8 @@ impl Renderer {
     }
 
     /// Submit `frame`'s commands (new textures' mip levels first: the shadow
-    /// passes may sample them) in one submission, and fill in `drawn`, its
+    /// passes may sample them; then what its after-view work must run first)
+    /// in one submission, and fill in `drawn`, its
     /// views' statistics, with the frame's number and costs; a failed frame's
     /// commands are dropped. The frame's entities are dropped either way.
     fn submit_frame(
@@ -206,7 +230,7 @@ impl Renderer {
     ) -> Result<FrameOutput, RenderError> {
         self.submitted.clear();
         self.frame_index += 1;
-        let Frame { index, mut encoder, prepares, prefiltered, first_view, gpu, start } = frame;
+        let Frame { index, mut encoder, prepares, prefiltered, first_view, before, gpu, start } = frame;
         let mut views = match drawn {
             Ok(views) => views,
             Err(e) => {
@@ -216,7 +240,8 @@ impl Renderer {
         };
         let t = Instant::now();
         self.outline.finish(&mut encoder);
-        let commands = std::mem::take(&mut self.registry.mip_blits).into_iter().chain([encoder.finish()]);
+        let mip_blits = std::mem::take(&mut self.registry.mip_blits);
+        let commands = mip_blits.into_iter().chain(before).chain([encoder.finish()]);
         self.queue.submit(commands);
         if let Some(timer) = &mut self.gpu_timer {
             timer.submitted();
