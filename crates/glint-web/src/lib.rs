@@ -24,8 +24,7 @@ mod panel;
 mod startup;
 
 use glam::Vec2;
-use glint::scene::FlyCamera;
-use glint::world::Controls;
+use glint::world::{Controls, Moves, Player};
 use glint::{Gpu, OffscreenTarget, Renderer, View, WindowSurface, World};
 use input::Input;
 use std::cell::RefCell;
@@ -124,15 +123,14 @@ struct Shown {
     renderer: Renderer,
     /// The views of the camera shown (all of the scene's for the free camera).
     views: Vec<View>,
-    fly: FlyCamera,
+    /// The scene clock and the fly camera.
+    player: Player,
     /// What a touch drag orbits: the first view's target.
     centre: glam::Vec3,
     /// What the user chose in the panel.
     controls: Controls,
     /// The scene camera shown (`None`: the free camera).
     camera: Option<usize>,
-    /// The scene clock, seconds.
-    time: f32,
 }
 
 /// Everything the frame loop needs.
@@ -317,23 +315,7 @@ impl Viewer {
         }
         shown.show_cloth_debug_if_chosen(&self.gpu)?;
         shown.show_chosen_camera();
-        if shown.controls.free_camera() {
-            if wheel != 0.0 {
-                shown.fly.change_speed(wheel);
-            }
-            shown.fly.update(dt.min(0.25) as f32, &fly_input);
-            if orbit != Vec2::ZERO {
-                shown.fly.orbit(shown.centre, orbit);
-            }
-        }
-        let (advance, restart) = shown.controls.advance(dt.min(0.25) as f32);
-        shown.time = if restart { 0.0 } else { shown.time + advance };
-        shown.controls.apply(&mut shown.world, &mut shown.renderer);
-        shown.world.pose(shown.time, &mut shown.renderer).map_err(|e| e.to_string())?;
-        let mut views = shown.controls.views(shown.views.clone());
-        if let Some(flown) = views.iter_mut().find(|v| v.output.is_none()).filter(|_| shown.controls.free_camera()) {
-            flown.camera = shown.fly.apply(&flown.camera);
-        }
+        let moves = Moves { fly: fly_input, wheel, orbit: Some((shown.centre, orbit)) };
         if let Some(startup) = &mut self.startup {
             // The controls panel, and the wait for the first animation frame.
             startup.lap("waiting");
@@ -342,7 +324,10 @@ impl Viewer {
         let mut canvas = self.surface.acquire(&self.gpu);
         let after: Vec<&mut dyn glint::AfterViews> =
             canvas.as_mut().map(|c| c as &mut dyn glint::AfterViews).into_iter().collect();
-        let output = shown.world.draw_then(&mut shown.renderer, (&views, &mut self.target), after);
+        let real = std::time::Duration::try_from_secs_f64(dt).unwrap_or_default();
+        let world = (&mut shown.world, &mut shown.renderer);
+        let drawn = (&shown.views[..], &mut self.target);
+        let output = shown.player.frame(world, &mut shown.controls, drawn, (real, moves), after);
         let stats = output.map_err(|e| e.to_string())?.views;
         if let Some(canvas) = canvas {
             canvas.present(&self.gpu);
@@ -378,7 +363,7 @@ impl Viewer {
         let shadow_views: u32 = stats.iter().map(|s| s.shadow_views).sum();
         let _ = self.canvas.set_attribute("data-shadow-views", &shadow_views.to_string());
         let _ = self.canvas.set_attribute("data-instances", &drawn.to_string());
-        let _ = self.canvas.set_attribute("data-time", &shown.time.to_string());
+        let _ = self.canvas.set_attribute("data-time", &shown.player.clock.time.to_string());
         Ok(())
     }
 
@@ -406,8 +391,8 @@ impl Shown {
         let world = World::place(desc, &mut renderer).map_err(|e| e.to_string())?;
         let views = world.views(None);
         let camera = views.iter().find(|view| view.output.is_none()).ok_or("no camera draws into the page")?.camera;
-        let fly = FlyCamera::from_camera(&camera, 0.5 * (camera.target - camera.eye).length().max(1.0));
-        Ok(Self { world, renderer, views, fly, centre: camera.target, controls, camera: None, time: 0.0 })
+        let player = Player::new(&camera);
+        Ok(Self { world, renderer, views, player, centre: camera.target, controls, camera: None })
     }
 
     /// Place the scene again when the controls turned the cloths' debug
@@ -418,7 +403,8 @@ impl Shown {
         let mut desc = self.world.desc().clone();
         desc.set_cloth_debug(debug).map_err(|e| e.to_string())?;
         let placed = Self::place(desc, gpu, self.controls.density())?;
-        (self.world, self.renderer, self.time) = (placed.world, placed.renderer, 0.0);
+        (self.world, self.renderer) = (placed.world, placed.renderer);
+        self.player.clock.restart();
         self.views = self.world.views(self.camera);
         Ok(())
     }
@@ -435,7 +421,7 @@ impl Shown {
         self.views = self.world.views(chosen);
         if let Some(view) = self.views.iter().find(|v| v.output.is_none()) {
             let camera = view.camera;
-            self.fly = FlyCamera::from_camera(&camera, 0.5 * (camera.target - camera.eye).length().max(1.0));
+            self.player.fly_from(&camera);
         }
     }
 }

@@ -124,7 +124,7 @@ impl ApplicationHandler for App {
 
     fn exiting(&mut self, _event_loop: &ActiveEventLoop) {
         if let Some(view) = &self.view {
-            let played = view.clock.total;
+            let played = view.player.clock.total;
             eprintln!(
                 "glint view: {} frames drawn in {:.2} s ({:.1} ms a frame); the scene played {:.2} s, {:.2}x real time",
                 played.frames,

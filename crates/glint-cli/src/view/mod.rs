@@ -2,7 +2,6 @@
 //! scene file and screenshots. Frames are drawn exactly as `glint render` draws
 //! them (into an offscreen target) and then shown in the window.
 
-mod clock;
 mod events;
 mod overlay;
 mod script;
@@ -10,11 +9,10 @@ mod watch;
 
 pub use script::{parse_at, Action, Scripted};
 
-use clock::SceneClock;
 use glam::Vec2;
 use glint::asset::{LoadOptions, SceneDesc};
-use glint::scene::{FlyCamera, FlyInput};
-use glint::world::Controls;
+use glint::scene::FlyInput;
+use glint::world::{Controls, Moves, Player};
 use glint::{Camera, Error, FrameStats, Gpu, GpuError, OffscreenTarget, Renderer, WindowSurface, World};
 use overlay::Overlay;
 use std::collections::HashSet;
@@ -110,10 +108,10 @@ struct View {
     scene: Scene,
     watch: SceneWatch,
     last_watch: Instant,
-    fly: FlyCamera,
     input: Input,
-    /// Animation and simulation time, and how fast it played.
-    clock: SceneClock,
+    /// The scene clock (animation and simulation time, and how fast it
+    /// played) and the fly camera.
+    player: Player,
     last_frame: Instant,
     /// Frames counted so far (drawn or skipped while the window has no area).
     frames: u32,
@@ -230,7 +228,7 @@ impl App {
         eprintln!("glint view: {} on {} ({:?})", self.args.scene.display(), gpu.info().name, gpu.info().backend);
         let now = Instant::now();
         Ok(View {
-            fly: FlyCamera::from_camera(&camera, 0.5 * (camera.target - camera.eye).length().max(1.0)),
+            player: Player::new(&camera),
             window,
             surface,
             target,
@@ -239,7 +237,6 @@ impl App {
             watch: SceneWatch::new(&self.args.scene, self.args.options.clone()),
             last_watch: now,
             input: Input::default(),
-            clock: SceneClock::default(),
             last_frame: now,
             frames: 0,
             last_title: now,
@@ -293,7 +290,7 @@ impl View {
                 }
                 // Animations and cloths start again from the beginning, rather
                 // than a new cloth stepping all the way to the old time at once.
-                self.clock.restart();
+                self.player.clock.restart();
                 eprintln!("reloaded {}", path.display());
             }
         }
@@ -311,7 +308,7 @@ impl View {
         desc.set_cloth_debug(debug)?;
         self.scene = Scene::new(&self.gpu, desc, camera, cull)?;
         self.shown_camera = None;
-        self.clock.restart();
+        self.player.clock.restart();
         Ok(())
     }
 
@@ -320,45 +317,22 @@ impl View {
         let now = Instant::now();
         let dt = now - self.last_frame;
         self.last_frame = now;
-        if self.input.wheel != 0.0 {
-            self.fly.change_speed(std::mem::take(&mut self.input.wheel));
-        }
-        let input = self.input.take();
-        if self.controls.free_camera() {
-            self.fly.update(dt.as_secs_f32().min(0.25), &input);
-        }
+        let moves = Moves { fly: self.input.take(), wheel: std::mem::take(&mut self.input.wheel), orbit: None };
         self.show_chosen_camera();
-        let scene = &mut self.scene;
-        let controls = &mut self.controls;
-        let mut restart = false;
-        let mut time = self.clock.tick(dt, |share| {
-            let (advance, pressed) = controls.advance(share);
-            restart = pressed;
-            advance
-        });
-        if restart {
-            // Animations and simulations start again from the beginning.
-            self.clock.restart();
-            time = 0.0;
-        }
-        controls.apply(&mut scene.world, &mut scene.renderer);
-        scene.world.pose(time, &mut scene.renderer)?;
-        let mut views = controls.views(scene.views.clone());
-        if controls.free_camera() {
-            let flown = scene.flown();
-            views[flown].camera = self.fly.apply(&views[flown].camera);
-        }
         // The overlay shows the last frame's statistics and calls, and is drawn
         // into this frame, before the blit onto the window: one submission.
         self.overlay.record(dt.as_secs_f32() * 1e3);
+        let scene = &mut self.scene;
         let size = (self.target.width(), self.target.height());
         let last = (&self.stats[..], scene.renderer.explained());
-        let overlay_ms = self.overlay.prepare((&self.window, &self.gpu), size, controls, last);
+        let overlay_ms = self.overlay.prepare((&self.window, &self.gpu), size, &mut self.controls, last);
         scene.renderer.set_explaining(self.overlay.visible && self.overlay.calls_open);
         let mut window = self.surface.acquire(&self.gpu);
         let mut after: Vec<&mut dyn glint::AfterViews> = vec![&mut self.overlay];
         after.extend(window.as_mut().map(|w| w as &mut dyn glint::AfterViews));
-        let output = scene.world.draw_then(&mut scene.renderer, (&views, &mut self.target), after)?;
+        let world = (&mut scene.world, &mut scene.renderer);
+        let drawn = (&scene.views[..], &mut self.target);
+        let output = self.player.frame(world, &mut self.controls, drawn, (dt, moves), after)?;
         if let Some(window) = window {
             window.present(&self.gpu);
         }
@@ -366,7 +340,7 @@ impl View {
         self.submits = output.submits;
         let stats = output.views;
         if self.last_title.elapsed() >= TITLE_INTERVAL {
-            let recent = self.clock.take_recent();
+            let recent = self.player.clock.take_recent();
             self.window.set_title(&format!(
                 "glint: {} | {:.1} ms | plays at {:.2}x | {}",
                 self.scene.world.desc().path.display(),
@@ -392,7 +366,7 @@ impl View {
         scene.views = crate::culled(scene.world.views(chosen.or(self.free_start)), self.cull);
         // The free camera starts again from the scene camera shown.
         let camera = scene.camera();
-        self.fly = FlyCamera::from_camera(&camera, 0.5 * (camera.target - camera.eye).length().max(1.0));
+        self.player.fly_from(&camera);
     }
 
     fn do_action(&mut self, action: &Action) -> Result<(), Error> {
@@ -417,7 +391,7 @@ impl View {
             }
             Action::Stats(path) => {
                 let json = serde_json::json!({
-                    "time": self.clock.time,
+                    "time": self.player.clock.time,
                     "overlay": self.overlay.visible,
                     "submits": self.submits,
                     "views": self.stats

@@ -20,10 +20,12 @@
 //! # Ok::<(), glint::Error>(())
 //! ```
 
+mod clock;
 mod cloth;
 mod controls;
 mod particles;
 mod place;
+mod player;
 mod school;
 
 use crate::asset::{MeshRef, SceneDesc};
@@ -35,8 +37,10 @@ use cloth::ClothSim;
 use particles::EmitterSim;
 use school::SchoolSim;
 
+pub use clock::{Played, SceneClock, MAX_FRAME_ADVANCE};
 pub use controls::{Control, ControlKind, Controls};
 pub use place::PlacedScene;
+pub use player::{Moves, Player};
 
 /// A scene placed in a renderer, with its simulations and clock.
 pub struct World {

@@ -1,8 +1,9 @@
-//! The viewer's scene clock: scene time follows real time, but advances at most
+//! World layer: a front end's scene clock ([`Player`](super::Player)): scene
+//! time follows real time, but advances at most
 //! [`MAX_FRAME_ADVANCE`] a frame, so a cloth slower to simulate than real time
 //! plays in slow motion instead of falling further behind every frame. It keeps
 //! how fast the scene actually played (scene seconds per real second), for the
-//! title bar and the summary `--frames` prints on quitting.
+//! viewer's title bar and the summary `glint view --frames` prints on quitting.
 
 use std::time::Duration;
 
