@@ -1,7 +1,8 @@
 //! The frame's debug groups, nested like its outline: "frame N" › "simulate"
-//! (with GPU simulations), then per view "view k" (its place in the frame's
-//! list) › "shadows" (a pass per "light n cascade c", "light n" or "light n
-//! face f"), "forward" (the cull pass, then the forward passes), "post".
+//! (with GPU simulations), then per view — in a group "view k" (its place in
+//! the frame's list) where the frame has several — "shadows" (a pass per
+//! "light n cascade c", "light n" or "light n face f"), "forward" (the cull
+//! pass, then the forward passes), "post".
 //! Capture tools show them where the driver takes them
 //! ([`Gpu::debug_groups`](crate::Gpu::debug_groups));
 //! [`Renderer::frame_outline`](super::Renderer::frame_outline) lists them everywhere.

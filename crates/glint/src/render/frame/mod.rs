@@ -7,7 +7,7 @@
 //! A frame is one command encoder, carried from stage to stage in the
 //! per-frame [`Frame`] value, and one submission, which consumes it. Debug
 //! groups nest like the outline (`outline.rs`): frame N › simulate, then per
-//! view: view k › shadows, forward, post; around passes labelled "light n
+//! view (in a group "view k" where the frame has several): shadows, forward, post; around passes labelled "light n
 //! cascade c", "cull instances", "depth pre-pass", "ambient occlusion",
 //! "forward pass: early", "depth pyramid", "post: …".
 
@@ -152,7 +152,8 @@ impl Renderer {
             let mut stats = vec![FrameStats::default(); views.len()];
             for (n, &k) in order.iter().enumerate() {
                 let shadows = plan.of_view(k, n == 0);
-                stats[k] = self.draw_view(&mut frame, (k, views[k]), (&lighting, &shadows), target)?;
+                let group = (views.len() > 1).then_some(k); // "view k" when there are several
+                stats[k] = self.draw_view(&mut frame, (group, views[k]), (&lighting, &shadows), target)?;
             }
             frame.first_view = order.first().copied();
             self.after_views(&mut frame, &mut after, target); // an overlay, the blit onto a window
@@ -170,7 +171,8 @@ impl Renderer {
         for entity in entities {
             self.submit(entity);
         }
-        self.last_keys = views.iter().map(|&(key, _)| key).collect();
+        self.last_keys.clear();
+        self.last_keys.extend(views.iter().map(|&(key, _)| key));
         let label = Some("renderer: frame");
         let mut encoder = self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label });
         self.outline.enter(&mut encoder, &format!("frame {}", self.frame_index));
@@ -283,6 +285,13 @@ impl Renderer {
     /// A view leaves out the entities whose materials show its own target.
     fn view_order(&self, views: &[(ViewKey, &View)]) -> Result<Vec<usize>, RenderError> {
         let targets = &self.registry.render_targets;
+        if targets.is_empty() {
+            // No render target: no view draws into one, nothing shows one.
+            return match views.iter().find_map(|(_, v)| v.output) {
+                Some(id) => Err(RenderError::UnknownRenderTarget(id)),
+                None => Ok((0..views.len()).collect()),
+            };
+        }
         let outputs = (views.iter())
             .map(|(_, v)| match v.output {
                 None => Ok(None),

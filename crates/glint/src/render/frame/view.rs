@@ -25,13 +25,14 @@ enum Compose<'a> {
 }
 
 impl Renderer {
-    /// View `k` of the frame, in its debug group "view k", with the GPU state
+    /// A view of the frame (in its debug group "view k" where `group` is its
+    /// place `k` in a frame of several views), with the GPU state
     /// kept under `key` (made on its first frame): drawn into `output`, or
     /// into its render target, leaving out the entities that show that target.
     pub(super) fn draw_view(
         &mut self,
         frame: &mut Frame,
-        (k, (key, view)): (usize, (ViewKey, &View)),
+        (group, (key, view)): (Option<usize>, (ViewKey, &View)),
         (lighting, shadows): (&Lighting, &ViewShadows),
         output: &OffscreenTarget,
     ) -> Result<FrameStats, RenderError> {
@@ -41,7 +42,9 @@ impl Renderer {
             None => ViewGpu::new(&self.shared(), self.paths),
         };
         gpu.refresh(&self.shared());
-        self.outline.enter(&mut frame.encoder, &format!("view {k}"));
+        if let Some(k) = group {
+            self.outline.enter(&mut frame.encoder, &format!("view {k}"));
+        }
         let drawn = match view.output {
             None => self.draw_into(frame, &mut gpu, (view, None), (lighting, shadows), output),
             Some(id) => {
@@ -55,7 +58,9 @@ impl Renderer {
                 drawn
             }
         };
-        self.outline.leave(&mut frame.encoder);
+        if group.is_some() {
+            self.outline.leave(&mut frame.encoder);
+        }
         self.views.insert(key, (gpu, frame.index));
         let mut stats = drawn?;
         stats.cpu_ms.total = ms_since(start);
