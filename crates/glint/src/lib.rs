@@ -13,7 +13,9 @@
 //!   renderer and run ([`world`]). `DESIGN.md` in the repository keeps the
 //!   table of what may import what.
 //!
-//! A frame follows Tiny Graphics' program structure:
+//! A frame is one call, [`Renderer::render_frame`], given a [`FrameInput`]
+//! (entities, views, lighting, GPU simulations); the seed's calls, in Tiny
+//! Graphics' program structure, are a thin layer over it:
 //!
 //! ```no_run
 //! use glint::{asset::ShapeKind, Camera, Entity, Gpu, Light, Material, OffscreenTarget, Renderer};
