@@ -38,7 +38,8 @@ impl Timed {
     }
 }
 
-/// GPU time of one frame's passes (one view's: a shadow pass and the flush after it).
+/// GPU time of one frame's passes. In a frame of several views each pass's
+/// pair is written by every view that draws it, and holds the last one's.
 #[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
 pub struct GpuTimes {
     /// The frame timed: its [`FrameStats::frame`](super::FrameStats::frame).
