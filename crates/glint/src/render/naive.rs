@@ -62,8 +62,10 @@ impl Renderer {
     ) -> Result<(), RenderError> {
         gpu.forward.clear();
         let mut instances = Vec::new();
-        let shown = self.submitted.iter().zip(prepared).filter(|(s, _)| self.shown(frame, s));
-        for (s, &Prepared { pipeline, draw, .. }) in shown {
+        let shown = self.shown(frame.hides);
+        for (s, &Prepared { pipeline, draw, .. }) in
+            self.submitted.iter().zip(prepared).filter(|(s, _)| shown.contains(s))
+        {
             let slot = self.store.slot(s.slot);
             stats.instances_invalid += u64::from(slot.invalid);
             instances.clear();

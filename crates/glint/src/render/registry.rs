@@ -286,6 +286,11 @@ impl Registry {
         self.material(id).is_some_and(|m| m.alpha_mode == crate::scene::AlphaMode::Blend)
     }
 
+    /// The render target `view` draws into and the texture that shows it, if any.
+    pub(super) fn render_target_of(&self, view: &crate::scene::View) -> Option<&(OffscreenTarget, TextureId)> {
+        view.output.and_then(|id| self.render_targets.get(id.0 as usize))
+    }
+
     /// Whether material `id` shows `texture` in one of its maps.
     pub(super) fn shows(&self, id: MaterialId, texture: TextureId) -> bool {
         self.materials.get(id.0 as usize).is_some_and(|m| m.material.maps().contains(&Some(texture)))

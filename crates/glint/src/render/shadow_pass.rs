@@ -153,8 +153,7 @@ impl Renderer {
 
     /// The pixel rectangle `view` draws into: of its render target, or of `output`.
     fn view_rectangle(&self, view: &View, output: &OffscreenTarget) -> [u32; 4] {
-        let own = view.output.and_then(|id| self.registry.render_targets.get(id.0 as usize)).map(|t| &t.0);
-        let target = own.unwrap_or(output);
+        let target = self.registry.render_target_of(view).map_or(output, |t| &t.0);
         view.viewport.pixels(target.width(), target.height())
     }
 

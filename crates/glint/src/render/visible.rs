@@ -86,21 +86,36 @@ impl std::ops::AddAssign for TileCounts {
     }
 }
 
+/// The submitted entities a view may draw: all but those whose materials
+/// show `hides`, the view's own render target, which it is drawing. A plain
+/// list of materials, so that the test crosses rayon's threads (the renderer
+/// is not `Sync` on the WebGPU page).
+pub(super) struct Shown(Vec<bool>);
+
+impl Shown {
+    /// Whether the view may draw `s`.
+    pub(super) fn contains(&self, s: &Submitted) -> bool {
+        !self.0.get(s.material.0 as usize).copied().unwrap_or(false)
+    }
+}
+
 impl Renderer {
+    /// What a view that draws into the render target shown by `hides` may draw.
+    pub(super) fn shown(&self, hides: Option<crate::scene::TextureId>) -> Shown {
+        let Some(texture) = hides else { return Shown(Vec::new()) };
+        let materials = 0..self.registry.materials.len() as u32;
+        Shown(materials.map(|m| self.registry.shows(crate::scene::MaterialId(m), texture)).collect())
+    }
+
     /// Stage 3 of a view: each submitted entity's instances that `frame`
     /// sees (not those whose materials show its own target), into `visible`. An entity whose world box is wholly inside or outside the
     /// frustum is decided at once; only boxes crossing a plane have their
     /// instances tested one by one.
     pub(super) fn cull(&self, frame: &ViewFrame, visible: &mut Visible, stats: &mut FrameStats) {
-        // The materials showing the view's own target (a plain list: the
-        // predicate crosses threads, and the renderer may not).
-        let hidden: Vec<bool> = (0..self.registry.materials.len() as u32)
-            .map(|m| frame.hides.is_some_and(|t| self.registry.shows(crate::scene::MaterialId(m), t)))
-            .collect();
-        let shown = |s: &Submitted| !hidden.get(s.material.0 as usize).copied().unwrap_or(false);
-        self.collect_visible(&frame.frustum, frame.culling, shown, visible);
+        let shown = self.shown(frame.hides);
+        self.collect_visible(&frame.frustum, frame.culling, |s| shown.contains(s), visible);
         let store = &self.store;
-        let drawn = self.submitted.iter().filter(|s| shown(s));
+        let drawn = self.submitted.iter().filter(|s| shown.contains(s));
         stats.instances_invalid = drawn.map(|s| u64::from(store.slot(s.slot).invalid)).sum();
         stats.instances_culled = stats.instances_submitted - stats.instances_invalid - visible.kept();
         (stats.tiles_tested, stats.tiles_drawn) = (visible.tiles.tested, visible.tiles.drawn);

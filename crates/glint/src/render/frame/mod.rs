@@ -124,16 +124,17 @@ pub(super) struct Frame {
     pub before: Vec<wgpu::CommandBuffer>,
     /// The newest finished earlier frame's GPU times.
     pub gpu: Option<GpuTimes>,
+    /// When it began, for its own CPU time.
     pub start: Instant,
 }
 
 impl Renderer {
     /// Draw one frame of `input` into `target`: simulate → plan shadows →
     /// per view (prepare, shadow views, cull, queue, sort, batch, upload,
-    /// encode, compose) → the work after the views → one submission. Errors (the frame's commands and
-    /// entities are dropped): more than [`MAX_LIGHTS`] lights, an id that is
-    /// not this renderer's, a viewport outside its target, views that need
-    /// each other's render targets.
+    /// encode, compose) → the work after the views → one submission. Errors
+    /// (the frame's commands and entities are dropped): more than
+    /// [`MAX_LIGHTS`] lights, an id that is not this renderer's, a viewport
+    /// outside its target, views that need each other's render targets.
     pub fn render_frame(
         &mut self,
         input: FrameInput,
@@ -273,12 +274,6 @@ impl Renderer {
         }
     }
 
-    /// The texture of the render target `view` draws into, if any (its own
-    /// picture, which the entities it draws must not show).
-    fn own_texture(&self, view: &View) -> Option<TextureId> {
-        view.output.and_then(|id| self.registry.render_targets.get(id.0 as usize)).map(|t| t.1)
-    }
-
     /// The order to draw `views` in: a view into a render target before every
     /// view whose entities show that target, the given order otherwise
     /// ([`draw_order`](crate::scene::draw_order): linear in views and entities).
@@ -311,8 +306,8 @@ impl Renderer {
         }
         let shown: Vec<Vec<usize>> = (views.iter())
             .map(|(_, view)| {
-                let own = self.own_texture(view);
-                let drawn = self.submitted.iter().filter(|s| own.is_none_or(|t| !self.registry.shows(s.material, t)));
+                let shown = self.shown(self.registry.render_target_of(view).map(|t| t.1));
+                let drawn = self.submitted.iter().filter(|s| shown.contains(s));
                 let mut all: Vec<usize> = drawn.flat_map(|s| shows[&s.material].iter().copied()).collect();
                 all.sort_unstable();
                 all.dedup();

@@ -48,13 +48,11 @@ impl Renderer {
         let drawn = match view.output {
             None => self.draw_into(frame, &mut gpu, (view, None), (lighting, shadows), output),
             Some(id) => {
-                // Out of the registry while it is drawn into.
-                let index = id.0 as usize;
-                let (own, texture) = self.registry.render_targets.swap_remove(index);
-                let drawn = self.draw_into(frame, &mut gpu, (view, Some(texture)), (lighting, shadows), &own);
-                self.registry.render_targets.push((own, texture));
-                let last = self.registry.render_targets.len() - 1;
-                self.registry.render_targets.swap(index, last);
+                // The render targets are out of the registry while one is drawn into.
+                let targets = std::mem::take(&mut self.registry.render_targets);
+                let (own, texture) = &targets[id.0 as usize];
+                let drawn = self.draw_into(frame, &mut gpu, (view, Some(*texture)), (lighting, shadows), own);
+                self.registry.render_targets = targets;
                 drawn
             }
         };
@@ -196,7 +194,8 @@ impl Renderer {
     /// showing its own target), their instances and instance records.
     fn view_counts(&self, view: &ViewFrame) -> FrameStats {
         let (mut entities, mut instances, mut records) = (0, 0, 0);
-        for s in self.submitted.iter().filter(|s| self.shown(view, s)) {
+        let shown = self.shown(view.hides);
+        for s in self.submitted.iter().filter(|s| shown.contains(s)) {
             let slot = self.store.slot(s.slot);
             (entities, instances, records) = (entities + 1, instances + s.instances, records + slot.len());
         }
@@ -206,12 +205,6 @@ impl Renderer {
             instance_bytes: (records * std::mem::size_of::<crate::render::blocks::InstanceGpu>()) as u64,
             ..Default::default()
         }
-    }
-
-    /// Whether `view` may draw submitted entity `s`: not when its material
-    /// shows the view's own render target.
-    pub(in crate::render) fn shown(&self, view: &ViewFrame, s: &crate::render::Submitted) -> bool {
-        view.hides.is_none_or(|t| !self.registry.shows(s.material, t))
     }
 
     /// Stage 9 of a view not drawn straight into the output: its picture copied,
