@@ -1,15 +1,15 @@
 //! Prepares glint's composed shaders when glint is built, so that no build of
 //! it (the web page's least of all) composes WGSL at run time.
 //!
-//! Each composed shader (`forward`, `sky`, `prefilter`, `particles` in
+//! Each composed shader (`forward`, `sky`, `prefilter`, `particles`, `ssao` in
 //! `src/shader/`) becomes a list of segments in `$OUT_DIR/shader_segments.rs`:
 //! its imports' text ahead of its own, comments and blank lines dropped, each
 //! piece tagged with the `#ifdef`/`#ifndef` tests around it, and each `#{DEF}`
 //! a piece of its own. `src/shader/assemble.rs` joins the pieces a set of defs
 //! selects; its tests check the result against naga_oil's composition.
 //!
-//! The other shaders (`blit`, `post`, `cull`, `pyramid`, `ssao`,
-//! `ssao_compute`, and the simulations' `particles_step`, `school` and
+//! The other shaders (`blit`, `post`, `cull`, `pyramid`, `ssao_compute`
+//! (appended to `ssao`), and the simulations' `particles_step`, `school` and
 //! `scan`) have no defs: each becomes one string there, its imports ahead of
 //! its own text, comments dropped too.
 //!
@@ -21,17 +21,16 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 /// The shaders composed from imports and defs, and the constant each becomes.
-const COMPOSED: [(&str, &str); 4] =
-    [("FORWARD", "forward"), ("SKY", "sky"), ("PREFILTER", "prefilter"), ("PARTICLES", "particles")];
+const COMPOSED: [(&str, &str); 5] =
+    [("FORWARD", "forward"), ("SKY", "sky"), ("PREFILTER", "prefilter"), ("PARTICLES", "particles"), ("SSAO", "ssao")];
 
 /// The shaders without defs (their imports ahead of their own text), and the
 /// constant each becomes.
-const PLAIN: [(&str, &str); 9] = [
+const PLAIN: [(&str, &str); 8] = [
     ("BLIT", "blit"),
     ("POST", "post"),
     ("CULL", "cull"),
     ("PYRAMID", "pyramid"),
-    ("SSAO", "ssao"),
     ("SSAO_COMPUTE", "ssao_compute"),
     ("PARTICLES_STEP", "particles_step"),
     ("SCHOOL", "school"),

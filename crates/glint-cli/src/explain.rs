@@ -240,10 +240,11 @@ fn describe(e: &Explained) -> String {
     if let Some(g) = &s.gpu {
         let post: Vec<String> = g.post_ms.iter().map(|ms| format!("{ms:.3}")).collect();
         let shadow = g.shadow_ms.map_or(String::new(), |ms| format!("shadow pass {ms:.3}, "));
+        let depth = g.depth_prepass_ms.map_or(String::new(), |ms| format!("depth pre-pass {ms:.3}, "));
         let occlusion = g.ambient_occlusion_ms.map_or(String::new(), |ms| format!("ambient occlusion {ms:.3}, "));
         let _ = writeln!(
             t,
-            "GPU ms (frame {}): {shadow}{occlusion}forward pass {:.3}, post [{}]",
+            "GPU ms (frame {}): {shadow}{depth}{occlusion}forward pass {:.3}, post [{}]",
             g.frame,
             g.forward_ms,
             post.join(", ")

@@ -5,7 +5,8 @@
 //! light instead), and with its environment and screen-space ambient occlusion,
 //! in alternating rounds so all see the same machine; with ambient occlusion,
 //! its passes' share of the frame's GPU time (timestamp queries, where the
-//! adapter has them).
+//! adapter has them), and the depth pre-pass's, which draws the view's depth
+//! for the forward pass as well (`render/ambient_occlusion.rs`).
 //! Run: `cargo bench -p glint --bench environment` (median, min and max of each).
 
 use glint::asset::EnvironmentImage;
@@ -88,8 +89,8 @@ fn main() {
                 let gpu_times = renderer.read_gpu_times().filter(|_| round > 0 && timed && k == 2);
                 if let Some(g) = gpu_times {
                     let total = g.shadow_ms.unwrap_or(0.0) + g.forward_ms + g.post_ms.iter().sum::<f64>();
-                    let ao = g.ambient_occlusion_ms.unwrap_or(0.0);
-                    shares.push((ao, total + ao));
+                    let (ao, depth) = (g.ambient_occlusion_ms.unwrap_or(0.0), g.depth_prepass_ms.unwrap_or(0.0));
+                    shares.push((ao, depth, g.forward_ms, total + ao + depth));
                 }
             }
         }
@@ -104,7 +105,12 @@ fn main() {
         println!("no GPU timestamps on this adapter: no GPU share");
         return;
     }
-    let ao = summary("ambient occlusion passes, GPU", shares.iter().map(|s| s.0).collect());
-    let frame = summary("the frame's passes with it, GPU", shares.iter().map(|s| s.1).collect());
+    let ao = summary("ambient occlusion passes (occlusion, blur), GPU", shares.iter().map(|s| s.0).collect());
+    let depth = summary("depth pre-pass (the view's depth, shared with the forward pass), GPU", {
+        shares.iter().map(|s| s.1).collect()
+    });
+    summary("forward pass (testing the pre-pass's depth for equality), GPU", shares.iter().map(|s| s.2).collect());
+    let frame = summary("the frame's passes with it, GPU", shares.iter().map(|s| s.3).collect());
     println!("ambient occlusion's share of the frame's GPU time: {:.1} %", ao / frame * 100.0);
+    println!("the depth pre-pass's share: {:.1} %", depth / frame * 100.0);
 }

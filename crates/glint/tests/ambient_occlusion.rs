@@ -2,13 +2,15 @@
 //! lit only by a sky): the crease where the box meets the floor darkens, open
 //! floor stays exactly as it was, on Vulkan (compute passes), GL and the WebGL2
 //! path (fragment passes), which agree; the passes' draws and GPU time are in
-//! the frame's statistics.
+//! the frame's statistics. With occlusion culling the pre-pass draws the view's
+//! depth once a phase, and what the late phase reveals is occluded in the
+//! frame it appears.
 
 mod common;
 
 use glam::Vec3;
 use glint::asset::SceneDesc;
-use glint::{FrameStats, Gpu, OffscreenTarget, Renderer, View};
+use glint::{Culling, FrameStats, Gpu, OffscreenTarget, Renderer, View};
 
 const SIZE: u32 = 256;
 
@@ -16,11 +18,12 @@ fn scene() -> SceneDesc {
     common::load_scene(&common::repo_root().join("tests/scenes/ssao.scn"))
 }
 
-/// One frame of `desc`'s first camera, with its ambient occlusion or without.
-fn frame(gpu: &Gpu, desc: &SceneDesc, occluded: bool) -> (image::RgbaImage, FrameStats, Renderer) {
+/// One frame of `desc`'s first camera into a target of `samples`, with its
+/// ambient occlusion or without.
+fn frame(gpu: &Gpu, desc: &SceneDesc, (occluded, samples): (bool, u32)) -> (image::RgbaImage, FrameStats, Renderer) {
     let mut renderer = Renderer::new(gpu);
     let entities = renderer.place_scene(desc).entities;
-    let mut target = OffscreenTarget::new(gpu, SIZE, SIZE, 4).expect("target");
+    let mut target = OffscreenTarget::new(gpu, SIZE, SIZE, samples).expect("target");
     let mut view = desc.camera_view(0);
     if !occluded {
         view = view.with_ambient_occlusion(None);
@@ -43,12 +46,13 @@ fn ratio(image: &image::RgbaImage, reference: &image::RgbaImage, (x, y): (u32, u
 }
 
 /// The crease in front of the box is darker with ambient occlusion; floor
-/// further than the radius from the box is the same bytes. Returns the picture.
-fn assert_crease_darkens(gpu: &Gpu) -> image::RgbaImage {
+/// further than the radius from the box is the same bytes (into a target of
+/// `samples`). Returns the picture.
+fn assert_crease_darkens(gpu: &Gpu, samples: u32) -> image::RgbaImage {
     let desc = scene();
     let radius = desc.camera_views[0].ambient_occlusion.expect("the camera's ssao").radius;
-    let (occluded, stats, _) = frame(gpu, &desc, true);
-    let (open, plain, _) = frame(gpu, &desc, false);
+    let (occluded, stats, _) = frame(gpu, &desc, (true, samples));
+    let (open, plain, _) = frame(gpu, &desc, (false, samples));
     // The floor just in front of each visible face of the box (a unit cube at 0 0.5 0).
     for crease in [Vec3::new(0.0, 0.0, 0.55), Vec3::new(0.55, 0.0, 0.0)] {
         let at = pixel(&desc, crease);
@@ -113,27 +117,84 @@ fn pixel_is_floor(desc: &SceneDesc, p: Vec3) -> bool {
 #[test]
 fn ambient_occlusion_darkens_the_crease_and_leaves_open_floor() {
     let Some(gpu) = common::gpu() else { return };
-    assert_crease_darkens(gpu);
+    // Multisampled, the pre-pass draws the target's depth with its samples.
+    assert_crease_darkens(gpu, 4);
+    assert_crease_darkens(gpu, 1);
 }
 
 #[test]
 fn compute_and_fragment_passes_agree() {
     let (Some(compute), Some(fragment)) = (common::gpu(), common::webgl2_gpu()) else { return };
     assert!(compute.culls_on_gpu() && !fragment.culls_on_gpu(), "one path each");
-    let (a, b) = (assert_crease_darkens(compute), assert_crease_darkens(fragment));
+    // Into one sample both read the same pre-pass, the target's depth.
+    let (a, b) = (assert_crease_darkens(compute, 1), assert_crease_darkens(fragment, 1));
     assert!(common::max_difference(&a, &b) <= 2, "differ by {}", common::max_difference(&a, &b));
+    // Multisampled, fragment passes cannot read the target's samples: their
+    // pre-pass has one sample and a depth of its own, and still darkens the crease.
+    assert_crease_darkens(fragment, 4);
 }
 
 #[test]
 fn ambient_occlusion_on_gl() {
     let Some(gpu) = common::gl_gpu() else { return };
-    assert_crease_darkens(gpu);
+    assert_crease_darkens(gpu, 4);
 }
 
 #[test]
 fn ambient_occlusion_on_the_webgl2_path() {
     let Some(gpu) = common::gl_webgl2_gpu() else { return };
-    assert_crease_darkens(gpu);
+    assert_crease_darkens(gpu, 4);
+}
+
+/// The names of the last explained frame's passes, in encoding order.
+fn pass_names(renderer: &Renderer) -> Vec<String> {
+    renderer.explained().expect("explained").passes.iter().map(|p| p.name.clone()).collect()
+}
+
+#[test]
+fn with_occlusion_culling_depth_is_drawn_once_a_phase_and_what_the_late_phase_reveals_is_occluded() {
+    let Some(gpu) = common::gpu() else { return };
+    if !gpu.occlusion_culls() {
+        eprintln!("skipping: {} cannot occlusion-cull", gpu.info().name);
+        return;
+    }
+    let desc = scene();
+    let view = desc.camera_view(0).with_culling(Culling::Gpu);
+    let camera = desc.cameras[0];
+    // Looking away from the box (behind the camera), then at it: the box was
+    // not seen last frame, so the late phase draws it.
+    let away = View { camera: camera.looking_at(camera.eye, camera.eye * 2.0), ..view.clone() };
+    let mut renderer = Renderer::new(gpu);
+    let entities = renderer.place_scene(&desc).entities;
+    let mut target = OffscreenTarget::new(gpu, SIZE, SIZE, 4).expect("target");
+    renderer.set_explaining(true);
+    let mut draw = |renderer: &mut Renderer, view: &View| {
+        let stats = renderer.render(&entities, view.clone(), desc.lighting(), &mut target).expect("frame");
+        (target.read_rgba8(gpu).expect("readback"), stats)
+    };
+    draw(&mut renderer, &away);
+    let (revealed, stats) = draw(&mut renderer, &view);
+    assert!(stats.occlusion, "occlusion-culled: {stats:?}");
+    let expected = [
+        "cull instances",
+        "depth pre-pass: early",
+        "depth pyramid",
+        "cull instances: late",
+        "depth pre-pass: late",
+        "ambient occlusion",
+        "ambient occlusion: blur",
+        "forward pass",
+    ];
+    assert_eq!(pass_names(&renderer), expected, "one depth pre-pass a phase, one forward pass testing it");
+    // Seen again, the box is drawn early: the picture is the one it had when revealed.
+    let (seen, _) = draw(&mut renderer, &view);
+    assert_eq!(pass_names(&renderer), expected);
+    assert!(common::max_difference(&revealed, &seen) <= 2, "differ by {}", common::max_difference(&revealed, &seen));
+    // And the crease of the revealed box is darkened.
+    let (open, _, _) = frame(gpu, &desc, (false, 4));
+    let at = pixel(&desc, Vec3::new(0.0, 0.0, 0.55));
+    let r = ratio(&revealed, &open, at);
+    assert!(r < 0.9, "the revealed box's crease ({at:?}) darkens in its first frame: ratio {r}");
 }
 
 #[test]
@@ -154,6 +215,8 @@ fn ambient_occlusion_has_its_gpu_time() {
     let times = draw(desc.camera_view(0));
     let ms = times.ambient_occlusion_ms.expect("the occlusion passes are timed");
     assert!(ms > 0.0 && ms < 60_000.0, "{times:?}");
+    let depth = times.depth_prepass_ms.expect("the depth pre-pass the forward pass shares is timed");
+    assert!(depth > 0.0 && depth < 60_000.0, "{times:?}");
     let without = draw(desc.camera_view(0).with_ambient_occlusion(None));
-    assert_eq!(without.ambient_occlusion_ms, None, "{without:?}");
+    assert_eq!((without.ambient_occlusion_ms, without.depth_prepass_ms), (None, None), "{without:?}");
 }

@@ -271,8 +271,9 @@ fn stats_panel(ui: &mut egui::Ui, history: &VecDeque<f32>, stats: &[FrameStats])
                 let gpu = s.gpu.as_ref().map_or("not measured here".to_owned(), |g| {
                     let post: Vec<String> = g.post_ms.iter().map(|ms| format!("{ms:.3}")).collect();
                     let shadow = g.shadow_ms.map_or(String::new(), |ms| format!("shadows {ms:.3}, "));
+                    let depth = g.depth_prepass_ms.map_or(String::new(), |ms| format!("depth {ms:.3}, "));
                     let ao = g.ambient_occlusion_ms.map_or(String::new(), |ms| format!("ambient occlusion {ms:.3}, "));
-                    format!("{shadow}{ao}forward {:.3}, post [{}]", g.forward_ms, post.join(", "))
+                    format!("{shadow}{depth}{ao}forward {:.3}, post [{}]", g.forward_ms, post.join(", "))
                 });
                 row("GPU ms", gpu);
             });

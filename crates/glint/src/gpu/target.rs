@@ -193,12 +193,7 @@ impl OffscreenTarget {
             resolve_target: None,
             ops: wgpu::Operations { load: wgpu::LoadOp::Clear(clear), store: wgpu::StoreOp::Store },
         };
-        let depth = wgpu::RenderPassDepthStencilAttachment {
-            view: &self.depth_view,
-            depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(1.0), store: wgpu::StoreOp::Store }),
-            stencil_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(0), store: wgpu::StoreOp::Store }),
-        };
-        (color, depth)
+        (color, self.depth_stencil(true, true))
     }
 
     /// The attachments of the second: colour, depth and stencil loaded; the
@@ -215,12 +210,7 @@ impl OffscreenTarget {
             },
             ..color
         };
-        let depth = wgpu::RenderPassDepthStencilAttachment {
-            view: &self.depth_view,
-            depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Load, store: wgpu::StoreOp::Discard }),
-            stencil_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Load, store: wgpu::StoreOp::Discard }),
-        };
-        (color, depth)
+        (color, self.depth_stencil(false, false))
     }
 
     /// The attachments of a pass between two others: colour, depth and
@@ -228,18 +218,12 @@ impl OffscreenTarget {
     pub(crate) fn middle_of_three(
         &self,
     ) -> (wgpu::RenderPassColorAttachment<'_>, wgpu::RenderPassDepthStencilAttachment<'_>) {
-        let (color, depth) = self.first_of_two(wgpu::Color::BLACK);
-        let keep = |ops: Option<wgpu::Operations<_>>| ops.map(|o| wgpu::Operations { load: wgpu::LoadOp::Load, ..o });
+        let (color, _) = self.first_of_two(wgpu::Color::BLACK);
         let color = wgpu::RenderPassColorAttachment {
             ops: wgpu::Operations { load: wgpu::LoadOp::Load, ..color.ops },
             ..color
         };
-        let depth = wgpu::RenderPassDepthStencilAttachment {
-            depth_ops: keep(depth.depth_ops),
-            stencil_ops: depth.stencil_ops.map(|o| wgpu::Operations { load: wgpu::LoadOp::Load, ..o }),
-            ..depth
-        };
-        (color, depth)
+        (color, self.depth_stencil(false, true))
     }
 
     /// The attachments of a last pass that reads the depth it is tested
@@ -260,10 +244,25 @@ impl OffscreenTarget {
 
     /// The depth-stencil attachment, cleared to the far plane (1.0) and stencil 0.
     pub(crate) fn depth_attachment(&self) -> wgpu::RenderPassDepthStencilAttachment<'_> {
+        self.depth_stencil(true, false)
+    }
+
+    /// The depth-stencil attachment: cleared (to the far plane, 1.0, and
+    /// stencil 0) when `cleared`, else loaded; kept after the pass when
+    /// `kept`, else discarded.
+    pub(crate) fn depth_stencil(&self, cleared: bool, kept: bool) -> wgpu::RenderPassDepthStencilAttachment<'_> {
+        let store = if kept { wgpu::StoreOp::Store } else { wgpu::StoreOp::Discard };
+        let ops = |clear| wgpu::Operations {
+            load: if cleared { wgpu::LoadOp::Clear(clear) } else { wgpu::LoadOp::Load },
+            store,
+        };
         wgpu::RenderPassDepthStencilAttachment {
             view: &self.depth_view,
-            depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(1.0), store: wgpu::StoreOp::Discard }),
-            stencil_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(0), store: wgpu::StoreOp::Discard }),
+            depth_ops: Some(ops(1.0)),
+            stencil_ops: Some(wgpu::Operations {
+                load: if cleared { wgpu::LoadOp::Clear(0) } else { wgpu::LoadOp::Load },
+                store,
+            }),
         }
     }
 

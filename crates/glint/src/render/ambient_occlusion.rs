@@ -5,9 +5,20 @@
 //! WebGL2 and WebGPU:
 //! 1. **depth pre-pass** — the forward list's opaque and alpha-tested runs, each
 //!    with its pipeline's pre-pass twin (`fs_prepass`: [`PassKind::Prepass`](super::pipelines::PassKind)),
-//!    write the view-space normal and distance into a full-resolution target
-//!    of their own ([`PREPASS_FORMAT`], with its own depth buffer);
-//! 2. **occlusion** — `shader/ssao.wgsl`'s ground-truth-style pass at half resolution;
+//!    write the view-space normal and distance into a target of their own
+//!    ([`PREPASS_FORMAT`]) and their depth into the view target's, with its
+//!    samples ([`PrepassDepth::Shared`]). The forward pass then loads that
+//!    depth and tests it for equality (each run's equal-depth twin), drawing
+//!    no depth of its own: depth is drawn once, and each pixel is shaded once.
+//!    With occlusion culling the pre-pass draws the early phase, the depth
+//!    pyramid and late cull are built from its depth, and a second pre-pass
+//!    draws the late phase: what comes into view is occluded in the frame it
+//!    appears. Into a multisampled target where the next passes are fragment
+//!    passes (GL, WebGL2: they cannot read a multisampled texture), the
+//!    pre-pass has one sample and a depth of its own ([`PrepassDepth::Own`]),
+//!    drawn before the forward pass draws depth as without ambient occlusion.
+//! 2. **occlusion** — `shader/ssao.wgsl`'s ground-truth-style pass at half
+//!    resolution (reading the pre-pass's first sample where it has several);
 //! 3. **blur** — depth-aware, at half resolution, into the texture the forward
 //!    shader's `AMBIENT_OCCLUSION` variant reads (group 0, binding 9), which
 //!    darkens ambient and environment light only, never the lights'.
@@ -16,20 +27,21 @@
 //! cull on the GPU: [`Gpu::culls_on_gpu`](crate::Gpu::culls_on_gpu)), full-screen
 //! fragment passes otherwise (GL, WebGL2); both run the same functions.
 //!
-//! With occlusion culling, the pre-pass draws the early phase (what the view
-//! saw last frame): what comes into view gets its occlusion a frame later.
-//! The passes' GPU time is [`GpuTimes::ambient_occlusion_ms`](super::GpuTimes::ambient_occlusion_ms),
-//! their draws [`Passes::ambient_occlusion`](super::Passes::ambient_occlusion)
+//! GPU time: the shared pre-pass is [`GpuTimes::depth_prepass_ms`](super::GpuTimes::depth_prepass_ms)
+//! (the view's depth), occlusion and blur (and a pre-pass with a depth of its
+//! own) [`GpuTimes::ambient_occlusion_ms`](super::GpuTimes::ambient_occlusion_ms);
+//! the draws are [`Passes::ambient_occlusion`](super::Passes::ambient_occlusion)
 //! (the pre-pass's, and one each for occlusion and blur as fragment passes).
 
 use super::blocks::UniformBlock;
-use super::encode::Bound;
+use super::encode::{Bound, Twin};
 use super::explain::PassType;
 use super::queue::SKY_STAGE;
 use super::timer::Timed;
 use super::view::ViewFrame;
 use super::views::{ViewBlocks, ViewGpu};
-use super::{draw_list::run_stage, FrameStats, PassStats, RenderError, Renderer};
+use super::{draw_list::run_stage, FrameStats, RenderError, Renderer};
+use crate::gpu::OffscreenTarget;
 use crate::scene::{AmbientOcclusion, Projection};
 
 /// The pre-pass target: octahedral view-space normal (xy), distance as a half
@@ -68,15 +80,17 @@ enum Kind {
     Compute([wgpu::ComputePipeline; 2]),
 }
 
-/// The occlusion and blur pipelines, made with the first view that has ambient occlusion.
+/// The occlusion and blur pipelines reading a pre-pass of one sample or of
+/// several, made with the first view that needs them.
 pub(crate) struct AmbientOcclusionPipelines {
     layouts: [wgpu::BindGroupLayout; 2],
     kind: Kind,
 }
 
 impl AmbientOcclusionPipelines {
-    /// As compute passes when `compute`, else as fragment passes.
-    pub(crate) fn new(device: &wgpu::Device, compute: bool) -> Self {
+    /// As compute passes when `compute`, else as fragment passes; reading a
+    /// `multisampled` pre-pass or not.
+    pub(crate) fn new(device: &wgpu::Device, compute: bool, multisampled: bool) -> Self {
         let visibility = if compute { wgpu::ShaderStages::COMPUTE } else { wgpu::ShaderStages::FRAGMENT };
         let entry = |binding, ty| wgpu::BindGroupLayoutEntry { binding, visibility, ty, count: None };
         let texture = |binding| {
@@ -85,7 +99,8 @@ impl AmbientOcclusionPipelines {
                 wgpu::BindingType::Texture {
                     sample_type: wgpu::TextureSampleType::Float { filterable: false },
                     view_dimension: wgpu::TextureViewDimension::D2,
-                    multisampled: false,
+                    // The pre-pass (binding 1).
+                    multisampled: multisampled && binding == 1,
                 },
             )
         };
@@ -114,8 +129,8 @@ impl AmbientOcclusionPipelines {
             layout("ambient occlusion: blur", &[uniform, texture(1), texture(2)]),
         ];
         let source = match compute {
-            true => format!("{}{}", crate::shader::SSAO, crate::shader::SSAO_COMPUTE),
-            false => crate::shader::SSAO.to_string(),
+            true => format!("{}{}", crate::shader::ssao(multisampled), crate::shader::SSAO_COMPUTE),
+            false => crate::shader::ssao(multisampled),
         };
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("ssao.wgsl"),
@@ -147,11 +162,31 @@ impl AmbientOcclusionPipelines {
     }
 }
 
+/// Where a view's depth pre-pass writes its depth.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum PrepassDepth {
+    /// Into the view target's depth, with its samples: the forward pass tests
+    /// it for equality and draws no depth of its own; with occlusion culling,
+    /// the pre-pass draws each phase (the depth pyramid built between them),
+    /// so what the late phase reveals is occluded in the frame it appears.
+    Shared,
+    /// Into a single-sample depth buffer of its own, thrown away: where the
+    /// target is multisampled and the occlusion passes are fragment passes
+    /// (GL, WebGL2, which cannot read a multisampled texture). With occlusion
+    /// culling it draws the early phase only.
+    Own,
+}
+
 /// One view's ambient-occlusion textures at its size, and its parameters.
 pub(crate) struct OcclusionTargets {
     size: (u32, u32),
+    depth_of: PrepassDepth,
+    /// With the target's samples where it shares its depth.
     prepass: wgpu::TextureView,
-    depth: wgpu::TextureView,
+    /// Whether `prepass` has several samples.
+    multisampled: bool,
+    /// Its own depth ([`PrepassDepth::Own`]).
+    depth: Option<wgpu::TextureView>,
     raw: wgpu::TextureView,
     /// What the forward pass reads.
     pub(crate) blurred: wgpu::TextureView,
@@ -160,15 +195,21 @@ pub(crate) struct OcclusionTargets {
 }
 
 impl OcclusionTargets {
-    fn new(device: &wgpu::Device, pipelines: &AmbientOcclusionPipelines, (width, height): (u32, u32)) -> Self {
+    /// Textures for a view of `size` drawn into a target of `samples`.
+    fn new(
+        device: &wgpu::Device,
+        pipelines: &AmbientOcclusionPipelines,
+        ((width, height), samples): ((u32, u32), u32),
+        depth_of: PrepassDepth,
+    ) -> Self {
         let compute = matches!(pipelines.kind, Kind::Compute(_));
-        let texture = |label, (width, height), format, usage| {
+        let texture = |label, (width, height), (format, sample_count), usage| {
             device
                 .create_texture(&wgpu::TextureDescriptor {
                     label: Some(label),
                     size: wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
                     mip_level_count: 1,
-                    sample_count: 1,
+                    sample_count,
                     dimension: wgpu::TextureDimension::D2,
                     format,
                     usage,
@@ -183,15 +224,15 @@ impl OcclusionTargets {
         };
         let full = (width, height);
         let half = (width.div_ceil(2), height.div_ceil(2));
-        let prepass = texture("ambient occlusion: pre-pass", full, PREPASS_FORMAT, read);
-        let depth = texture(
-            "ambient occlusion: pre-pass depth",
-            full,
-            super::shadow_maps::SHADOW_FORMAT,
-            wgpu::TextureUsages::RENDER_ATTACHMENT,
-        );
-        let raw = texture("ambient occlusion: raw", half, OCCLUSION_FORMAT, written);
-        let blurred = texture("ambient occlusion: blurred", half, OCCLUSION_FORMAT, written);
+        let samples = if depth_of == PrepassDepth::Shared { samples } else { 1 };
+        let prepass = texture("ambient occlusion: pre-pass", full, (PREPASS_FORMAT, samples), read);
+        let depth = (depth_of == PrepassDepth::Own).then(|| {
+            let format = super::shadow_maps::SHADOW_FORMAT;
+            let attachment = wgpu::TextureUsages::RENDER_ATTACHMENT;
+            texture("ambient occlusion: pre-pass depth", full, (format, 1), attachment)
+        });
+        let raw = texture("ambient occlusion: raw", half, (OCCLUSION_FORMAT, 1), written);
+        let blurred = texture("ambient occlusion: blurred", half, (OCCLUSION_FORMAT, 1), written);
         let block = UniformBlock::new(device, "ambient occlusion: parameters");
         // Binding 0 the parameters, 1 the pre-pass, 2 the raw occlusion (the
         // blur's), 3 the output (compute passes').
@@ -210,8 +251,16 @@ impl OcclusionTargets {
             })
         };
         let groups = [group(0, &[&prepass], &raw), group(1, &[&prepass, &raw], &blurred)];
-        Self { size: full, prepass, depth, raw, blurred, block, groups }
+        Self { size: full, depth_of, prepass, multisampled: samples > 1, depth, raw, blurred, block, groups }
     }
+}
+
+/// Which of a view's pre-pass passes is recorded: the first clears, the last
+/// resolves (several with occlusion culling's phases).
+#[derive(Clone, Copy)]
+pub(super) struct PrepassPart {
+    pub first: bool,
+    pub last: bool,
 }
 
 impl Renderer {
@@ -222,32 +271,40 @@ impl Renderer {
     }
 
     /// The start of stage 6 for a view with ambient occlusion (after batching,
-    /// which says what the pre-pass draws): the occlusion pipelines, each forward
-    /// pipeline's pre-pass twin, the view's textures at its size `size` (the
-    /// Scene bind group pointed at them) and its parameters.
+    /// which says what the pre-pass draws) drawn into `target`: the occlusion
+    /// pipelines, each forward pipeline's pre-pass twin (and its twin testing
+    /// the shared depth), the view's textures (the Scene bind group pointed at
+    /// them) and its parameters.
     pub(super) fn prepare_ambient_occlusion(
         &mut self,
         gpu: &mut ViewGpu,
         frame: &ViewFrame,
-        size: (u32, u32),
+        target: &OffscreenTarget,
         stats: &mut FrameStats,
     ) -> Result<(), RenderError> {
         let Some(settings) = frame.ambient_occlusion.filter(|_| frame.variant.ambient_occlusion) else {
             return Ok(());
         };
         let compute = self.cull_pipelines.is_some();
-        let pipelines = self
-            .ambient_occlusion_pipelines
-            .get_or_insert_with(|| AmbientOcclusionPipelines::new(&self.device, compute));
+        let depth_of = match target.samples() == 1 || compute {
+            true => PrepassDepth::Shared,
+            false => PrepassDepth::Own,
+        };
+        let multisampled = depth_of == PrepassDepth::Shared && target.samples() > 1;
+        let pipelines = self.ambient_occlusion_pipelines[usize::from(multisampled)]
+            .get_or_insert_with(|| AmbientOcclusionPipelines::new(&self.device, compute, multisampled));
         // A run's batches share one pipeline (what `draw_run` binds).
         let list = &gpu.forward;
         for run in &list.runs {
             let forward = list.batches[run.first as usize].pipeline;
-            let (_, built) = self.registry.pipelines.prepass_id(&self.device, forward)?;
-            stats.pipelines_compiled += u32::from(built);
+            let (_, built) =
+                self.registry.pipelines.prepass_id(&self.device, forward, depth_of == PrepassDepth::Shared)?;
+            stats.pipelines_compiled += built;
         }
-        if gpu.occlusion.as_ref().is_none_or(|t| t.size != size) {
-            let targets = OcclusionTargets::new(&self.device, pipelines, size);
+        let size = (target.width(), target.height());
+        if gpu.occlusion.as_ref().is_none_or(|t| (t.size, t.depth_of, t.multisampled) != (size, depth_of, multisampled))
+        {
+            let targets = OcclusionTargets::new(&self.device, pipelines, (size, target.samples()), depth_of);
             gpu.set_occlusion(&self.shared(), targets);
         }
         let targets = gpu.occlusion.as_mut().expect("made above");
@@ -255,47 +312,62 @@ impl Renderer {
         Ok(())
     }
 
-    /// Stage 7's first passes for a view with ambient occlusion (prepared by
-    /// [`prepare_ambient_occlusion`](Self::prepare_ambient_occlusion)): the
-    /// depth pre-pass of the forward list's runs before the sky, then the
+    /// Where the pre-pass of `view` writes its depth; `None` when it has no
+    /// ambient occlusion this frame.
+    pub(super) fn prepass_depth(&self, gpu: &ViewGpu, view: &ViewFrame) -> Option<PrepassDepth> {
+        let targets = gpu.occlusion.as_ref().filter(|_| view.variant.ambient_occlusion)?;
+        self.ambient_occlusion_pipelines[usize::from(targets.multisampled)].as_ref().map(|_| targets.depth_of)
+    }
+
+    /// Stage 7's ambient occlusion for a view with it (prepared by
+    /// [`prepare_ambient_occlusion`](Self::prepare_ambient_occlusion)): `part`
+    /// of the depth pre-pass of the forward list's runs before the sky, from
+    /// occlusion culling's late phase when `late`; after the last, the
     /// occlusion and blur passes.
     pub(super) fn encode_ambient_occlusion(
         &mut self,
         gpu: &ViewGpu,
-        view: &ViewFrame,
-        encoder: &mut wgpu::CommandEncoder,
+        (encoder, target): (&mut wgpu::CommandEncoder, &OffscreenTarget),
+        (part, late): (PrepassPart, bool),
         stats: &mut FrameStats,
     ) {
-        let (Some(targets), Some(pipelines)) = (&gpu.occlusion, &self.ambient_occlusion_pipelines) else {
-            return;
-        };
-        if !view.variant.ambient_occlusion {
-            return;
-        }
+        let Some(targets) = &gpu.occlusion else { return };
+        let Some(pipelines) = &self.ambient_occlusion_pipelines[usize::from(targets.multisampled)] else { return };
         let start = web_time::Instant::now();
+        let shared = targets.depth_of == PrepassDepth::Shared;
+        // The shared pre-pass is the view's depth, timed as such; its own is ambient occlusion's alone.
+        let timed = if shared { Timed::DepthPrepass } else { Timed::AmbientOcclusion };
         let list = &gpu.forward;
         let sky_at = list.runs.partition_point(|r| run_stage(list, r) < SKY_STAGE);
         let timer = self.gpu_timer.as_ref();
         let mut drawn = FrameStats::default();
         {
-            let label = "depth pre-pass";
-            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some(label),
-                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: &targets.prepass,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
-                        store: wgpu::StoreOp::Store,
-                    },
-                })],
-                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view: &targets.depth,
+            let label = match (part.first, part.last) {
+                (true, false) => "depth pre-pass: early",
+                (false, _) => "depth pre-pass: late",
+                (true, true) => "depth pre-pass",
+            };
+            let load = |clear| if part.first { wgpu::LoadOp::Clear(clear) } else { wgpu::LoadOp::Load };
+            let color = wgpu::RenderPassColorAttachment {
+                view: &targets.prepass,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations { load: load(wgpu::Color::TRANSPARENT), store: wgpu::StoreOp::Store },
+            };
+            let depth = match &targets.depth {
+                Some(own) => wgpu::RenderPassDepthStencilAttachment {
+                    view: own,
                     depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(1.0), store: wgpu::StoreOp::Discard }),
                     stencil_ops: None,
-                }),
-                timestamp_writes: timer.and_then(|t| t.pass_writes(Timed::AmbientOcclusion, true, false)),
+                },
+                // Kept for the forward pass (and the depth pyramid between the phases).
+                None => target.depth_stencil(part.first, true),
+            };
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some(label),
+                color_attachments: &[Some(color)],
+                depth_stencil_attachment: Some(depth),
+                timestamp_writes: timer.and_then(|t| t.pass_writes(timed, part.first, shared && part.last)),
                 ..Default::default()
             });
             pass.set_bind_group(1, &gpu.blocks.bind_group, &[ViewBlocks::offset(0)]);
@@ -303,11 +375,44 @@ impl Renderer {
             drawn.bind_groups_set += 2;
             let bound = ["bind group 1 (camera)", "bind group 3 (instances, draw indices)"];
             self.outline.pass(label, PassType::Render, &bound);
-            let mut bound = Bound::prepass();
-            self.draw_stages(list, &mut pass, (0..sky_at, &[false]), &mut bound, &mut drawn);
+            let mut bound = Bound::twin(Twin::Prepass { shared });
+            self.draw_stages(list, &mut pass, (0..sky_at, &[late]), &mut bound, &mut drawn);
         }
+        let ambient = &mut stats.passes.ambient_occlusion;
+        ambient.draw_calls += drawn.draw_calls;
+        ambient.draws += drawn.draws;
+        if part.first {
+            // Both phases draw from the same batches: their instances once.
+            ambient.instances += drawn.passes.opaque.instances + drawn.passes.alpha_test.instances;
+        }
+        if part.last {
+            self.encode_occlusion(targets, pipelines, encoder, shared, stats);
+        }
+        stats.passes.ambient_occlusion.cpu_ms += super::ms_since(start);
+        if let Some(timer) = self.gpu_timer.as_mut().filter(|_| part.last) {
+            if shared {
+                timer.resolve(encoder, Timed::DepthPrepass, self.frame_index);
+            }
+            timer.resolve(encoder, Timed::AmbientOcclusion, self.frame_index);
+        }
+    }
+
+    /// The occlusion and blur passes, from the pre-pass's target into the
+    /// texture the forward pass reads; timed from the first when
+    /// `begins` (else from the pre-pass).
+    fn encode_occlusion(
+        &self,
+        targets: &OcclusionTargets,
+        pipelines: &AmbientOcclusionPipelines,
+        encoder: &mut wgpu::CommandEncoder,
+        begins: bool,
+        stats: &mut FrameStats,
+    ) {
+        let timer = self.gpu_timer.as_ref();
+        let ambient = &mut stats.passes.ambient_occlusion;
         let outputs = [&targets.raw, &targets.blurred];
         for (k, label) in ["ambient occlusion", "ambient occlusion: blur"].into_iter().enumerate() {
+            let (begin, end) = (k == 0 && begins, k == 1);
             match &pipelines.kind {
                 Kind::Fragment(pipelines) => {
                     let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
@@ -321,7 +426,7 @@ impl Renderer {
                                 store: wgpu::StoreOp::Store,
                             },
                         })],
-                        timestamp_writes: timer.and_then(|t| t.pass_writes(Timed::AmbientOcclusion, false, k == 1)),
+                        timestamp_writes: timer.and_then(|t| t.pass_writes(Timed::AmbientOcclusion, begin, end)),
                         ..Default::default()
                     });
                     self.outline.pass(label, PassType::Render, &["bind group 0 (pre-pass, occlusion)"]);
@@ -330,13 +435,13 @@ impl Renderer {
                     pass.draw(0..3, 0..1);
                     let changed = ["pipeline", "bind group 0"];
                     self.outline.call(|| super::explain::DrawCall::single(label, "draw", (1, 1), &changed));
-                    (drawn.draw_calls, drawn.draws) = (drawn.draw_calls + 1, drawn.draws + 1);
+                    (ambient.draw_calls, ambient.draws) = (ambient.draw_calls + 1, ambient.draws + 1);
                 }
                 Kind::Compute(pipelines) => {
                     let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                         label: Some(label),
                         timestamp_writes: timer
-                            .and_then(|t| t.compute_pass_writes(Timed::AmbientOcclusion, false, k == 1)),
+                            .and_then(|t| t.compute_pass_writes(Timed::AmbientOcclusion, begin, end)),
                     });
                     self.outline.pass(label, PassType::Compute, &[]);
                     pass.set_pipeline(&pipelines[k]);
@@ -346,15 +451,6 @@ impl Renderer {
                 }
             }
         }
-        if let Some(timer) = &mut self.gpu_timer {
-            timer.resolve(encoder, Timed::AmbientOcclusion, self.frame_index);
-        }
-        stats.passes.ambient_occlusion = PassStats {
-            draw_calls: drawn.draw_calls,
-            draws: drawn.draws,
-            instances: drawn.passes.opaque.instances + drawn.passes.alpha_test.instances,
-            cpu_ms: super::ms_since(start),
-        };
     }
 }
 
@@ -366,7 +462,7 @@ mod tests {
     fn the_occlusion_parameters_mirror_their_wgsl_struct() {
         crate::shader::layout::assert_mirrors!(
             AmbientOcclusionGpu,
-            crate::shader::SSAO,
+            &crate::shader::ssao(false),
             "AmbientOcclusion",
             [projection, params]
         );

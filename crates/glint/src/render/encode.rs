@@ -9,6 +9,7 @@
 //! `MULTI_DRAW_INDIRECT_COUNT`). (The naive baseline has its own encoder:
 //! `naive.rs`.)
 
+use super::ambient_occlusion::{PrepassDepth, PrepassPart};
 use super::draw_list::{run_stage, DrawList};
 use super::explain::{queue_name, state, DrawCall, PassType};
 use super::gpu_cull::{Run, COMMAND_BYTES};
@@ -36,6 +37,21 @@ pub(super) enum Part {
     Particles,
 }
 
+/// Which pipeline draws a run: its own, or one of its twins
+/// ([`Pipelines::prepass_id`](super::pipelines::Pipelines::prepass_id)).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub(super) enum Twin {
+    /// Its own.
+    #[default]
+    Own,
+    /// Its depth pre-pass twin (runs without one are skipped), drawing into
+    /// the view target's depth when `shared`.
+    Prepass { shared: bool },
+    /// Its twin testing the shared pre-pass's depth for equality (runs
+    /// without one draw with their own).
+    Equal,
+}
+
 /// What the pass has bound, to skip redundant state changes.
 #[derive(Default)]
 pub(super) struct Bound {
@@ -43,22 +59,23 @@ pub(super) struct Bound {
     texture_set: Option<u16>,
     page: Option<u16>,
     stencil_reference: u32,
-    /// Draw each run with its pipeline's pre-pass twin (runs without one are
-    /// skipped): ambient occlusion's depth pre-pass.
-    prepass: bool,
+    /// Which of each run's pipelines draws it.
+    twin: Twin,
 }
 
 impl Bound {
-    /// Nothing bound yet, in a depth pre-pass.
-    pub(super) fn prepass() -> Self {
-        Self { prepass: true, ..Self::default() }
+    /// Nothing bound yet, drawing each run with `twin`.
+    pub(super) fn twin(twin: Twin) -> Self {
+        Self { twin, ..Self::default() }
     }
 }
 
 impl Renderer {
     /// Stage 7: record the forward pass, cleared to `background`: opaque →
     /// alpha-test → sky → transparent (or as `render_order` stages say) →
-    /// particles → glare.
+    /// particles → glare. With ambient occlusion, its depth pre-pass and
+    /// passes first; where the pre-pass draws the target's depth, the forward
+    /// pass tests it for equality and draws no depth of its own.
     pub(super) fn encode(
         &mut self,
         gpu: &mut ViewGpu,
@@ -76,17 +93,27 @@ impl Renderer {
             }
             gpu.forward.record_cull(encoder, pipelines, self.queue.submits());
         }
-        self.encode_ambient_occlusion(gpu, view, encoder, stats);
         let depth = target.depth_only_view().filter(|_| gpu.forward.gpu.as_ref().is_some_and(|g| g.occluding));
+        let prepass = self.prepass_depth(gpu, view);
+        let shared = prepass == Some(PrepassDepth::Shared);
+        // The pre-pass draws occlusion culling's phases where it draws the target's depth.
+        let phased = shared && depth.is_some() && self.cull_pipelines.is_some();
+        if prepass.is_some() {
+            let part = PrepassPart { first: true, last: !phased };
+            self.encode_ambient_occlusion(gpu, (encoder, target), (part, false), stats);
+        }
         let end = gpu.forward.runs.len();
-        let mut bound = Bound::default();
         // Occlusion culling: the opaque stages of what was seen last frame, then
-        // the late phase (depth pyramid, late cull), then what it found in a
-        // second pass, which goes on with the sky and the later stages.
-        let (late, after_sky) = match (depth, &self.cull_pipelines) {
+        // the late phase (depth pyramid, late cull), then what it found, in a
+        // second forward pass that goes on with the sky and the later stages;
+        // or, where the pre-pass draws the depth, its two phases around the late
+        // phase and one forward pass drawing both.
+        let (part, before_sky, after_sky) = match (depth, &self.cull_pipelines) {
             (Some(depth), Some(pipelines)) => {
-                {
-                    let mut pass = self.begin_forward_pass(gpu, encoder, target, (background, Part::First), stats);
+                if !phased {
+                    let mut bound = Bound::default();
+                    let mut pass =
+                        self.begin_forward_pass(gpu, encoder, target, (background, Part::First, false), stats);
                     self.draw_stages(&gpu.forward, &mut pass, (0..sky_at, &[false]), &mut bound, stats);
                 }
                 if let Some(culled) = &mut gpu.forward.gpu {
@@ -94,26 +121,30 @@ impl Renderer {
                     self.outline.pass("cull instances: late", PassType::Compute, &[]);
                     culled.record_late((&self.device, encoder), pipelines, depth, self.queue.submits());
                 }
-                (Part::Second, &[false, true][..])
+                match phased {
+                    true => {
+                        let part = PrepassPart { first: false, last: true };
+                        self.encode_ambient_occlusion(gpu, (encoder, target), (part, true), stats);
+                        (Part::Whole, &[false, true][..], &[false, true][..])
+                    }
+                    false => (Part::Second, &[true][..], &[false, true][..]),
+                }
             }
-            _ => (Part::Whole, &[false][..]),
+            _ => (Part::Whole, &[false][..], &[false][..]),
         };
         // Soft particles read the depth: they and the glare get a pass of their own.
         let particle_depth = self.particle_depth(target);
-        let part = match (late, &particle_depth) {
+        let part = match (part, &particle_depth) {
             (Part::Whole, Some(_)) => Part::First,
             (Part::Second, Some(_)) => Part::Middle,
             (part, _) => part,
         };
         {
-            let mut pass = self.begin_forward_pass(gpu, encoder, target, (background, part), stats);
-            if late == Part::Second {
-                bound = Bound::default();
-                self.draw_stages(&gpu.forward, &mut pass, (0..sky_at, &[true]), &mut bound, stats);
-            } else {
-                self.draw_stages(&gpu.forward, &mut pass, (0..sky_at, &[false]), &mut bound, stats);
-            }
-            if self.draw_sky(gpu, &mut pass, target, environment, stats) {
+            let mut pass = self.begin_forward_pass(gpu, encoder, target, (background, part, shared), stats);
+            let mut bound = Bound::twin(if shared { Twin::Equal } else { Twin::Own });
+            self.draw_stages(&gpu.forward, &mut pass, (0..sky_at, before_sky), &mut bound, stats);
+            // The pre-pass drew only the stages before the sky.
+            if self.draw_sky(gpu, &mut pass, target, environment, stats) || shared {
                 bound = Bound { stencil_reference: bound.stencil_reference, ..Bound::default() };
             }
             self.draw_stages(&gpu.forward, &mut pass, (sky_at..end, after_sky), &mut bound, stats);
@@ -123,7 +154,7 @@ impl Renderer {
             }
         }
         if let Some(depth) = &particle_depth {
-            let mut pass = self.begin_forward_pass(gpu, encoder, target, (background, Part::Particles), stats);
+            let mut pass = self.begin_forward_pass(gpu, encoder, target, (background, Part::Particles, false), stats);
             self.draw_particles(&mut pass, target.format(), Some(depth), stats);
             self.draw_glare(&mut pass, target, environment, stats);
         }
@@ -133,13 +164,14 @@ impl Renderer {
     }
 
     /// Begin the view's forward pass (or `part` of it) into `target`, cleared
-    /// to `background`, with the Scene, Camera and Renderer blocks bound.
+    /// to `background`, with the Scene, Camera and Renderer blocks bound; its
+    /// depth loaded, not cleared, where a pre-pass drew it (`drawn`).
     pub(super) fn begin_forward_pass<'e>(
         &self,
         gpu: &ViewGpu,
         encoder: &'e mut wgpu::CommandEncoder,
         target: &OffscreenTarget,
-        (background, part): (Background, Part),
+        (background, part, drawn): (Background, Part, bool),
         stats: &mut FrameStats,
     ) -> wgpu::RenderPass<'e> {
         let clear = match background {
@@ -153,6 +185,11 @@ impl Renderer {
             Part::Second => target.second_of_two(),
             Part::Middle => target.middle_of_three(),
             Part::Particles => target.last_reading_depth(),
+        };
+        let depth = match (drawn, part) {
+            (true, Part::Whole) => target.depth_stencil(false, false),
+            (true, Part::First) => target.depth_stencil(false, true),
+            _ => depth,
         };
         let (begins, ends) =
             (matches!(part, Part::Whole | Part::First), matches!(part, Part::Whole | Part::Second | Part::Particles));
@@ -268,12 +305,13 @@ impl Renderer {
     ) {
         let (first, draw) = (&list.batches[run.first as usize], &list.draws[run.first as usize]);
         let pipelines = &self.registry.pipelines;
-        let pipeline = match bound.prepass {
-            true => match pipelines.prepass_of(first.pipeline) {
+        let pipeline = match bound.twin {
+            Twin::Own => first.pipeline,
+            Twin::Prepass { shared } => match pipelines.prepass_of(first.pipeline, shared) {
                 Some(twin) => twin,
                 None => return,
             },
-            false => first.pipeline,
+            Twin::Equal => pipelines.equal_of(first.pipeline).unwrap_or(first.pipeline),
         };
         let mut changed = 0;
         let reference = pipelines.stencil_reference(pipeline);

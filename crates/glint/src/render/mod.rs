@@ -183,8 +183,9 @@ pub struct Renderer {
     /// The soft round spot the layers without a sprite show, added once.
     particle_spot: Option<crate::scene::TextureId>,
     particle_pipelines: particles::ParticlePipelines,
-    /// Ambient occlusion's passes, made with the first view that has it.
-    ambient_occlusion_pipelines: Option<ambient_occlusion::AmbientOcclusionPipelines>,
+    /// Ambient occlusion's passes reading a single-sample pre-pass (0) and a
+    /// multisampled one (1), each made with the first view that needs it.
+    ambient_occlusion_pipelines: [Option<ambient_occlusion::AmbientOcclusionPipelines>; 2],
 }
 
 fn ms_since(t: Instant) -> f64 {
@@ -224,7 +225,7 @@ impl Renderer {
             particle_layers: Vec::new(),
             particle_spot: None,
             particle_pipelines,
-            ambient_occlusion_pipelines: None,
+            ambient_occlusion_pipelines: [None, None],
             submits_counted: queue.submits(),
             uncaptured: gpu.uncaptured(),
             device,

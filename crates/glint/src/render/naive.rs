@@ -138,7 +138,7 @@ impl Renderer {
         let start = web_time::Instant::now();
         {
             let background = lighting.environment.background;
-            let mut pass = self.begin_forward_pass(gpu, encoder, target, (background, Part::Whole), stats);
+            let mut pass = self.begin_forward_pass(gpu, encoder, target, (background, Part::Whole, false), stats);
             self.draw_sky(gpu, &mut pass, target, &lighting.environment, stats);
             let list = &gpu.forward;
             pass.push_debug_group("naive: one draw per instance");

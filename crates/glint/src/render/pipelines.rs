@@ -8,7 +8,7 @@
 
 use super::gpu_array;
 use crate::gpu::{sampler_entry, texture_entry, DriverErrors, TargetFormat, COLOR_FORMAT, DEPTH_FORMAT};
-use crate::scene::{BlendState, Compare, Cull, Mesh, RenderStates, SkinVertex, StencilOp, Vertex};
+use crate::scene::{BlendState, Compare, Cull, DepthState, Mesh, RenderStates, SkinVertex, StencilOp, Vertex};
 use crate::shader::{LightCounts, ShaderError, ShaderFeatures};
 use std::collections::HashMap;
 
@@ -126,7 +126,7 @@ pub(crate) enum PassKind {
     /// A cube-map face: the distance to the light over its range as depth.
     ShadowDistance,
     /// A view's depth pre-pass for ambient occlusion: normal and distance
-    /// (`fs_prepass`) into its own target, one sample.
+    /// (`fs_prepass`) into its target, depth into the view's (or its own).
     Prepass,
 }
 
@@ -160,8 +160,11 @@ pub(crate) struct Pipelines {
     /// Forward and shadow pipelines; a key's index is its id in sort keys.
     forward_cache: Vec<(PipelineKey, wgpu::RenderPipeline)>,
     forward_index: HashMap<PipelineKey, u16>,
-    /// Each forward pipeline's pre-pass twin, once asked for.
-    prepass_of: HashMap<u16, Option<u16>>,
+    /// Each forward pipeline's pre-pass twin (drawing into the view target's
+    /// depth, or into its own), once asked for.
+    prepass_of: HashMap<(u16, bool), Option<u16>>,
+    /// Each forward pipeline's twin testing a shared pre-pass's depth for equality.
+    equal_of: HashMap<u16, u16>,
     /// The sky shader's pipelines by target and pass.
     sky_cache: HashMap<(TargetFormat, SkyPass), wgpu::RenderPipeline>,
 }
@@ -238,6 +241,19 @@ pub(crate) fn depth_stencil(states: &RenderStates, format: wgpu::TextureFormat) 
             clamp: 0.0,
         },
     }
+}
+
+/// The features a depth-only variant of a forward variant with `features`
+/// keeps: those that move vertices, and for an alpha-tested material those its
+/// test reads (with `tested`, more of them).
+fn depth_features(features: ShaderFeatures, tested: ShaderFeatures) -> ShaderFeatures {
+    let moving = ShaderFeatures::SKINNED | ShaderFeatures::COMPACT | ShaderFeatures::MOTION;
+    let read = ShaderFeatures::ALPHA_MASK
+        | ShaderFeatures::DIFFUSE_MAP
+        | ShaderFeatures::VERTEX_COLOR
+        | ShaderFeatures::UV1
+        | tested;
+    features & if features.contains(ShaderFeatures::ALPHA_MASK) { moving | read } else { moving }
 }
 
 impl Pipelines {
@@ -338,6 +354,7 @@ impl Pipelines {
             forward_cache: Vec::new(),
             forward_index: HashMap::new(),
             prepass_of: HashMap::new(),
+            equal_of: HashMap::new(),
             sky_cache: HashMap::new(),
         }
     }
@@ -369,25 +386,16 @@ impl Pipelines {
     }
 
     /// The key of the shadow pipeline drawing what `forward` draws into a shadow
-    /// map of `pass` (or ambient occlusion's pre-pass): only the features that
-    /// move vertices, and for an alpha-tested material those its test reads,
-    /// stay (so a textured and a plain material share one shadow pipeline:
-    /// fewer programs to compile before a WebGL2 page's first frame); depth
-    /// writes, one sample, no colour (the pre-pass: its normal-and-distance target).
+    /// map of `pass`: only the features that move vertices, and for an
+    /// alpha-tested material those its test reads, stay (so a textured and a
+    /// plain material share one shadow pipeline: fewer programs to compile
+    /// before a WebGL2 page's first frame); depth writes, one sample, no colour.
     pub(crate) fn shadow_key(forward: PipelineKey, pass: PassKind) -> PipelineKey {
-        debug_assert!(pass != PassKind::Forward);
-        let moving = ShaderFeatures::SKINNED | ShaderFeatures::COMPACT | ShaderFeatures::MOTION;
-        let tested = ShaderFeatures::ALPHA_MASK
-            | ShaderFeatures::DIFFUSE_MAP
-            | ShaderFeatures::VERTEX_COLOR
-            | ShaderFeatures::UV1;
-        let mask = forward.features.contains(ShaderFeatures::ALPHA_MASK);
-        let features = forward.features & if mask { moving | tested } else { moving };
+        debug_assert!(matches!(pass, PassKind::ShadowDepth | PassKind::ShadowDistance));
         let states = RenderStates {
-            depth: crate::scene::DepthState { compare: Compare::Less, write: true },
+            depth: DepthState { compare: Compare::Less, write: true },
             raster: crate::scene::RasterState {
-                // The pre-pass sees what the camera sees; shadow views both sides.
-                cull: if pass == PassKind::Prepass { forward.states.raster.cull } else { Cull::None },
+                cull: Cull::None,
                 depth_bias: 0,
                 // Depth views lean on slope-scaled bias; distance views write their own depth.
                 slope_bias_bits: if pass == PassKind::ShadowDepth { SHADOW_SLOPE_BIAS.to_bits() } else { 0 },
@@ -396,46 +404,93 @@ impl Pipelines {
         };
         PipelineKey {
             pass,
-            features,
+            features: depth_features(forward.features, ShaderFeatures::empty()),
             // Shadow maps are drawn unlit.
             lights: LightCounts::default(),
             vertex_layout: forward.vertex_layout,
             states,
-            color_format: if pass == PassKind::Prepass {
-                super::ambient_occlusion::PREPASS_FORMAT
-            } else {
-                COLOR_FORMAT
-            },
+            color_format: COLOR_FORMAT,
             depth_format: super::shadow_maps::SHADOW_FORMAT,
             samples: 1,
         }
     }
 
-    /// The pre-pass pipeline drawing what forward pipeline `forward` draws, or
-    /// `None` where that draws nothing into the pre-pass (blended, or not
-    /// writing depth); built on first use. Returns whether it was built now.
+    /// The key of the depth pre-pass pipeline drawing what `forward` draws
+    /// (ambient occlusion's: `render/ambient_occlusion.rs`): normal and distance
+    /// into its target, and depth with the forward pipeline's own test, bias and
+    /// culling, into the view target's depth when `shared` (the forward pass
+    /// then tests it for equality), else into one of its own (one sample). An
+    /// alpha-tested material keeps what its forward test reads, edge fade too:
+    /// both passes drop the same fragments.
+    pub(crate) fn prepass_key(forward: PipelineKey, shared: bool) -> PipelineKey {
+        let states = RenderStates { depth: forward.states.depth, raster: forward.states.raster, ..Default::default() };
+        PipelineKey {
+            pass: PassKind::Prepass,
+            features: depth_features(forward.features, ShaderFeatures::EDGE_FADE),
+            lights: LightCounts::default(),
+            vertex_layout: forward.vertex_layout,
+            states,
+            color_format: super::ambient_occlusion::PREPASS_FORMAT,
+            depth_format: if shared { forward.depth_format } else { super::shadow_maps::SHADOW_FORMAT },
+            samples: if shared { forward.samples } else { 1 },
+        }
+    }
+
+    /// The pre-pass pipeline drawing what forward pipeline `forward` draws,
+    /// into the view target's depth when `shared` (see
+    /// [`prepass_key`](Self::prepass_key)), with the forward twin that then
+    /// tests that depth for equality; `None` where `forward` draws nothing into
+    /// the pre-pass (blended, not writing depth, testing other than nearer, or
+    /// using the stencil: its forward draw keeps its own test, and what it
+    /// covers is shaded as without a pre-pass). Built on
+    /// first use; returns how many pipelines were built now.
     pub(crate) fn prepass_id(
         &mut self,
         device: &wgpu::Device,
         forward: u16,
-    ) -> Result<(Option<u16>, bool), ShaderError> {
-        if let Some(&id) = self.prepass_of.get(&forward) {
-            return Ok((id, false));
+        shared: bool,
+    ) -> Result<(Option<u16>, u32), ShaderError> {
+        if let Some(&id) = self.prepass_of.get(&(forward, shared)) {
+            return Ok((id, 0));
         }
         let key = self.key_of(forward);
-        let drawn = key.states.depth.write && !key.features.contains(ShaderFeatures::ALPHA_BLEND);
-        let (id, built) = match drawn {
-            true => self.forward_id(device, Self::shadow_key(key, PassKind::Prepass)).map(|(id, b)| (Some(id), b))?,
-            false => (None, false),
+        let states = key.states;
+        let drawn = states.depth.write
+            && matches!(states.depth.compare, Compare::Less | Compare::LessEqual)
+            && states.stencil == Default::default()
+            && states.blend == BlendState::Replace
+            && !key.features.contains(ShaderFeatures::ALPHA_BLEND);
+        let mut built = 0;
+        let id = match drawn {
+            true => {
+                let (id, b) = self.forward_id(device, Self::prepass_key(key, shared))?;
+                built += u32::from(b);
+                if shared {
+                    let depth = DepthState { compare: Compare::Equal, write: false };
+                    let equal = PipelineKey { states: RenderStates { depth, ..states }, ..key };
+                    let (twin, b) = self.forward_id(device, equal)?;
+                    built += u32::from(b);
+                    self.equal_of.insert(forward, twin);
+                }
+                Some(id)
+            }
+            false => None,
         };
-        self.prepass_of.insert(forward, id);
+        self.prepass_of.insert((forward, shared), id);
         Ok((id, built))
     }
 
     /// The pre-pass pipeline of forward pipeline `forward`, once
     /// [`prepass_id`](Self::prepass_id) made it (`None`: it draws nothing there).
-    pub(crate) fn prepass_of(&self, forward: u16) -> Option<u16> {
-        self.prepass_of.get(&forward).copied().flatten()
+    pub(crate) fn prepass_of(&self, forward: u16, shared: bool) -> Option<u16> {
+        self.prepass_of.get(&(forward, shared)).copied().flatten()
+    }
+
+    /// The twin of forward pipeline `forward` that tests a shared pre-pass's
+    /// depth for equality and writes none, once [`prepass_id`](Self::prepass_id)
+    /// made it (`None`: `forward` itself draws, with its own test).
+    pub(crate) fn equal_of(&self, forward: u16) -> Option<u16> {
+        self.equal_of.get(&forward).copied()
     }
 
     /// The id of the forward pipeline for `key`, building it (and its shader variant)

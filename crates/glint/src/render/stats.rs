@@ -89,8 +89,9 @@ pub struct Passes {
     /// Every shadow view (cascades, spot lights, cube faces), culled and batched one by one.
     pub shadow: PassStats,
     /// Screen-space ambient occlusion: its depth pre-pass (the opaque and
-    /// alpha-tested draws again), then its occlusion and blur passes (one
-    /// draw each). Not in the frame's totals, as the shadow pass is not.
+    /// alpha-tested draws again, once a phase of occlusion culling), then its
+    /// occlusion and blur passes (one draw each as fragment passes). Not in
+    /// the frame's totals, as the shadow pass is not.
     pub ambient_occlusion: PassStats,
     /// Opaque materials, near to far.
     pub opaque: PassStats,

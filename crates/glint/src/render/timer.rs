@@ -18,14 +18,20 @@ pub(crate) enum Timed {
     Shadow,
     /// The forward pass.
     Forward,
-    /// Ambient occlusion: from its depth pre-pass to its blur's end.
+    /// Ambient occlusion: from its occlusion pass (or its depth pre-pass, where
+    /// that has a depth of its own) to its blur's end.
     AmbientOcclusion,
+    /// The depth pre-pass a view with ambient occlusion shares with its forward
+    /// pass: from its first pass to its last's end (with occlusion culling,
+    /// the depth pyramid and late cull between its phases).
+    DepthPrepass,
     /// Post effect k of the view's chain (all its passes).
     Post(u8),
 }
 
-/// Timestamp pairs: shadow, forward, ambient occlusion, then one per post effect.
-const PAIRS: usize = 3 + MAX_POST_EFFECTS;
+/// Timestamp pairs: shadow, forward, ambient occlusion, depth pre-pass, then
+/// one per post effect.
+const PAIRS: usize = 4 + MAX_POST_EFFECTS;
 
 impl Timed {
     fn pair(self) -> usize {
@@ -33,7 +39,8 @@ impl Timed {
             Timed::Shadow => 0,
             Timed::Forward => 1,
             Timed::AmbientOcclusion => 2,
-            Timed::Post(k) => 3 + usize::from(k),
+            Timed::DepthPrepass => 3,
+            Timed::Post(k) => 4 + usize::from(k),
         }
     }
 }
@@ -48,9 +55,12 @@ pub struct GpuTimes {
     pub shadow_ms: Option<f64>,
     /// The forward pass: opaque, alpha-test, sky and transparent.
     pub forward_ms: f64,
-    /// Ambient occlusion's passes (depth pre-pass, occlusion, blur); `None`
-    /// for a view without it.
+    /// Ambient occlusion's passes (occlusion and blur, and its depth pre-pass
+    /// where that has a depth of its own); `None` for a view without it.
     pub ambient_occlusion_ms: Option<f64>,
+    /// The depth pre-pass a view with ambient occlusion shares with its forward
+    /// pass (which then draws no depth); `None` without one.
+    pub depth_prepass_ms: Option<f64>,
     /// Each post effect of the view's chain, in order (empty without one).
     pub post_ms: Vec<f64>,
 }
@@ -113,7 +123,7 @@ impl GpuTimer {
         };
         Some(Self {
             queries: device.create_query_set(&wgpu::QuerySetDescriptor {
-                label: Some("gpu timer: shadow, forward, ambient occlusion and post pass timestamps"),
+                label: Some("gpu timer: shadow, forward, ambient occlusion, depth pre-pass and post pass timestamps"),
                 ty: wgpu::QueryType::Timestamp,
                 count: 2 * PAIRS as u32,
             }),
@@ -250,6 +260,7 @@ impl GpuTimer {
             forward_ms: ms(Timed::Forward.pair()),
             ambient_occlusion_ms: slot.written[Timed::AmbientOcclusion.pair()]
                 .then(|| ms(Timed::AmbientOcclusion.pair())),
+            depth_prepass_ms: slot.written[Timed::DepthPrepass.pair()].then(|| ms(Timed::DepthPrepass.pair())),
             post_ms: post.map(|t| ms(t.pair())).collect(),
         })
     }

@@ -185,6 +185,13 @@ fn the_other_composed_shaders_are_what_naga_oil_composes() {
     for soft in [None, Some(false), Some(true)] {
         check(&mut composer, &particles(soft), include_str!("particles.wgsl"), &particle_defs(soft));
     }
+    let (ssao_source, compute) = (include_str!("ssao.wgsl"), include_str!("ssao_compute.wgsl"));
+    for multisampled in [false, true] {
+        let defs = ssao_defs(multisampled);
+        check(&mut composer, &ssao(multisampled), ssao_source, &defs);
+        let both = format!("{}{SSAO_COMPUTE}", ssao(multisampled));
+        check(&mut composer, &both, &format!("{ssao_source}{compute}"), &defs);
+    }
 }
 
 #[test]
@@ -195,7 +202,6 @@ fn the_shaders_without_defs_are_what_naga_oil_composes() {
         (POST, include_str!("post.wgsl")),
         (CULL, include_str!("cull.wgsl")),
         (PYRAMID, include_str!("pyramid.wgsl")),
-        (SSAO, include_str!("ssao.wgsl")),
         (PARTICLES_STEP, include_str!("particles_step.wgsl")),
         (SCHOOL, include_str!("school.wgsl")),
         (SCAN, include_str!("scan.wgsl")),
@@ -205,8 +211,6 @@ fn the_shaders_without_defs_are_what_naga_oil_composes() {
         assert!(!plain.contains("//") && !plain.contains('#'));
         check(&mut composer, plain, source, &Defs::default());
     }
-    let (ssao, compute) = (include_str!("ssao.wgsl"), include_str!("ssao_compute.wgsl"));
-    check(&mut composer, &format!("{SSAO}{SSAO_COMPUTE}"), &format!("{ssao}{compute}"), &Defs::default());
 }
 
 #[test]

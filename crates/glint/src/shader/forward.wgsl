@@ -176,7 +176,10 @@ struct VertexIn {
 }
 
 struct VertexOut {
-    @builtin(position) clip: vec4<f32>,
+    // Invariant: a view's depth pre-pass and its forward pass compute the same
+    // depth for the same vertex, whatever else their variants compute (the
+    // forward pass tests the pre-pass's depth for equality).
+    @builtin(position) @invariant clip: vec4<f32>,
     @location(0) world_position: vec3<f32>,
     @location(1) normal: vec3<f32>,
     // Texture coordinates and tangents only where a map reads them: for the
@@ -741,8 +744,12 @@ fn map_uv(in: VertexOut, slot: u32) -> vec2<f32> {
 }
 #endif
 
-@fragment
-fn fs_main(in: VertexOut, @builtin(front_facing) front: bool) -> @location(0) vec4<f32> {
+// The surface's base colour: the material's, times the vertex colour and the
+// diffuse map, its alpha faded at the tile's edge. Alpha-tested materials drop
+// the fragment here, in the forward pass and the depth pre-pass alike (the
+// forward pass tests the pre-pass's depth for equality: both keep the same
+// fragments).
+fn base_color(in: VertexOut) -> vec4<f32> {
     let material = material_at(in.material);
     var base = material.base_color;
 #ifdef VERTEX_COLOR
@@ -759,6 +766,13 @@ fn fs_main(in: VertexOut, @builtin(front_facing) front: bool) -> @location(0) ve
         discard;
     }
 #endif
+    return base;
+}
+
+@fragment
+fn fs_main(in: VertexOut, @builtin(front_facing) front: bool) -> @location(0) vec4<f32> {
+    let material = material_at(in.material);
+    let base = base_color(in);
     // Double-sided materials light back faces with the flipped normal.
     let side = select(-1.0, 1.0, front);
     var n = normalize(in.normal) * side;
@@ -836,7 +850,7 @@ fn screen_occlusion(pixel: vec2<f32>) -> f32 {
 // as a half float plus what it rounded away, for ssao.wgsl.
 @fragment
 fn fs_prepass(in: VertexOut, @builtin(front_facing) front: bool) -> @location(0) vec4<f32> {
-    shadow_alpha_test(in);
+    base_color(in);
     let n = normalize((camera.view * vec4<f32>(normalize(in.normal) * select(-1.0, 1.0, front), 0.0)).xyz);
     let e = n.xy / (abs(n.x) + abs(n.y) + abs(n.z));
     let folded = (1.0 - abs(e.yx)) * select(vec2<f32>(-1.0), vec2<f32>(1.0), e >= vec2<f32>(0.0));

@@ -257,9 +257,19 @@ pub(crate) const POST: &str = assemble::POST;
 pub(crate) const CULL: &str = assemble::CULL;
 /// The depth pyramid of occlusion culling (`render/occlusion.rs`).
 pub(crate) const PYRAMID: &str = assemble::PYRAMID;
-/// Screen-space ambient occlusion (`render/ambient_occlusion.rs`): its fragment passes.
-pub(crate) const SSAO: &str = assemble::SSAO;
-/// Its compute passes, appended to [`SSAO`].
+/// The defs of the ambient occlusion passes' module: `PREPASS_MSAA` where the
+/// pre-pass they read is `multisampled`.
+fn ssao_defs(multisampled: bool) -> Defs {
+    Defs { set: multisampled.then_some("PREPASS_MSAA").into_iter().collect(), values: Vec::new() }
+}
+
+/// Screen-space ambient occlusion (`render/ambient_occlusion.rs`): its
+/// fragment passes, reading a `multisampled` pre-pass or not.
+pub(crate) fn ssao(multisampled: bool) -> String {
+    assemble(assemble::SSAO, &ssao_defs(multisampled))
+}
+
+/// Its compute passes, appended to [`ssao`].
 pub(crate) const SSAO_COMPUTE: &str = assemble::SSAO_COMPUTE;
 /// Particles stepped on the GPU (`sim/particles/gpu.rs`).
 pub(crate) const PARTICLES_STEP: &str = assemble::PARTICLES_STEP;

@@ -23,8 +23,14 @@ struct AmbientOcclusion {
 @group(0) @binding(0) var<uniform> ao: AmbientOcclusion;
 // The depth pre-pass (forward.wgsl fs_prepass): xy the view-space normal
 // (octahedral), z + w the distance in front of the camera (a half float and
-// what it rounded away); 0 where nothing was drawn.
+// what it rounded away); 0 where nothing was drawn. With the view target's
+// samples where they are several (PREPASS_MSAA): its first sample is read, a
+// surface's own (a resolve's average would put one between two surfaces).
+#ifdef PREPASS_MSAA
+@group(0) @binding(1) var prepass: texture_multisampled_2d<f32>;
+#else
 @group(0) @binding(1) var prepass: texture_2d<f32>;
+#endif
 // fs_blur: fs_occlusion's output.
 @group(0) @binding(2) var raw: texture_2d<f32>;
 

@@ -132,11 +132,13 @@ impl Renderer {
     ///    parameters (`render/ambient_occlusion.rs`); Scene and Camera blocks
     ///    if changed, changed instances, draw indices and indirect commands if changed
     /// 8. encode — culled on the GPU, the cull pass first; with ambient
-    ///    occlusion, its depth pre-pass, occlusion and blur passes; one pass:
+    ///    occlusion, its depth pre-pass (the view's depth, which the forward
+    ///    pass then tests for equality), occlusion and blur passes; one pass:
     ///    opaque → alpha-test → sky → transparent (or as `render_order` says)
     ///    → particle layers → glare; batches sharing pipeline, texture set and
     ///    mesh page go in one multi-draw-indirect call. Occlusion culling
-    ///    splits the pass around its depth pyramid and late cull (`render/occlusion.rs`)
+    ///    splits the pass (or the depth pre-pass) around its depth pyramid and
+    ///    late cull (`render/occlusion.rs`)
     /// 9. compose — a view drawn into a target of its own reaches its
     ///    rectangle: copied, or through its post chain (`render/post.rs`)
     fn view_stages(
@@ -177,7 +179,7 @@ impl Renderer {
                 gpu.forward.build(0, &visible.instances, view.frustum, draw_of, placed);
                 stats.cpu_ms.batch = lap.next();
                 self.visible = visible;
-                self.prepare_ambient_occlusion(gpu, view, (target.width(), target.height()), &mut stats)?;
+                self.prepare_ambient_occlusion(gpu, view, target, &mut stats)?;
                 self.upload(gpu, view, (lighting, shadows.shadowed()), target, &mut stats)?;
                 stats.cpu_ms.upload = lap.next();
                 self.encode(gpu, view, (encoder, target), &lighting.environment, &mut stats);
