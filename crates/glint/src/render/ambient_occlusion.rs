@@ -10,6 +10,10 @@
 //!    samples ([`PrepassDepth::Shared`]). The forward pass then loads that
 //!    depth and tests it for equality (each run's equal-depth twin), drawing
 //!    no depth of its own: depth is drawn once, and each pixel is shaded once.
+//!    (Where two surfaces land on the same depth value, as far-off grass can
+//!    in a 24-bit depth buffer, the last drawn shows rather than the first:
+//!    the meadow with ambient occlusion shows two such pixels of 65,536 at its
+//!    horizon with its near plane at 0.05, none with it at 1.)
 //!    With occlusion culling the pre-pass draws the early phase, the depth
 //!    pyramid and late cull are built from its depth, and a second pre-pass
 //!    draws the late phase: what comes into view is occluded in the frame it
