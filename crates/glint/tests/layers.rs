@@ -46,12 +46,10 @@ const ROOT: [(&str, &str); 9] = [
 
 /// Crossings from before the table was kept (file, module it names), to be
 /// taken off as the layers are fixed (issue 46).
-const KNOWN: [(&str, &str); 6] = [
+const KNOWN: [(&str, &str); 4] = [
     ("asset/mod.rs", "sim"),
     ("asset/scn_cloth.rs", "sim"),
-    ("asset/scn_emitter.rs", "sim"),
     ("asset/scn_hostile_tests.rs", "sim"),
-    ("asset/scn_school.rs", "sim"),
     ("sim/cloth/mesh.rs", "asset"),
 ];
 

@@ -291,8 +291,8 @@ impl SceneDesc {
     /// [`MAX_POSE_STEPS`](super::MAX_POSE_STEPS) steps too: the error names
     /// the block that goes over. Posing at an earlier time takes no more work.
     /// A school's or emitter's parameters changed since loading are checked
-    /// again ([`SchoolParams::check`](crate::sim::school::SchoolParams::check),
-    /// [`EmitterParams::check`](crate::sim::particles::EmitterParams::check)).
+    /// again ([`SchoolParams::check`](crate::scene::school::SchoolParams::check),
+    /// [`EmitterParams::check`](crate::scene::emitter::EmitterParams::check)).
     pub fn check_pose(&self, time: f32) -> Result<(), Diagnostic> {
         let mut work = 0u64;
         for cloth in &self.cloths {

@@ -6,8 +6,8 @@
 use super::scn_fields::{numbers, Fields};
 use super::scn_syntax::Pair;
 use super::{Diagnostic, TextureRef};
+use crate::scene::emitter::{Burst, EmitterParams, SpawnShape, MAX_PARTICLES};
 use crate::scene::ParticleBlend;
-use crate::sim::particles::{Burst, EmitterParams, Schedule, SpawnShape, MAX_PARTICLES};
 use crate::text::quote;
 use glam::{Vec3, Vec4};
 
@@ -39,7 +39,7 @@ pub(crate) fn check_scene_room(emitters: &[EmitterDesc], params: &EmitterParams)
     if emitters.len() >= MAX_EMITTERS {
         return Err(format!("a scene may have at most {MAX_EMITTERS} emitters; this is one more"));
     }
-    let slots = |p: &EmitterParams| Schedule::new(p).slots();
+    let slots = |p: &EmitterParams| p.slots();
     let total = emitters.iter().map(|e| slots(&e.params)).sum::<u64>() + slots(params);
     if total > MAX_SCENE_PARTICLES {
         return Err(format!(
@@ -76,7 +76,7 @@ impl EmitterDesc {
     /// Particle-steps posing at `time` takes: every slot, every step, and
     /// each step's own [`STEP_OVERHEAD`].
     pub fn pose_work(&self, time: f32) -> u64 {
-        let slots = Schedule::new(&self.params).slots();
+        let slots = self.params.slots();
         self.steps_to(time).saturating_mul(slots.saturating_add(STEP_OVERHEAD))
     }
 }
@@ -237,7 +237,7 @@ pub(crate) fn parse(f: &mut Fields, line: usize) -> Result<(EmitterParams, Looks
 /// each block's line, steps, particle-steps, and what they are.
 pub(crate) fn pose_work(emitters: &[EmitterDesc], time: f32) -> impl Iterator<Item = (usize, u64, u64, String)> + '_ {
     emitters.iter().map(move |e| {
-        let slots = Schedule::new(&e.params).slots();
+        let slots = e.params.slots();
         let what = format!(
             "emitter: time {time} s is {} steps of {slots} particle slots (each step counting {STEP_OVERHEAD} more for itself)",
             e.steps_to(time)
@@ -249,8 +249,8 @@ pub(crate) fn pose_work(emitters: &[EmitterDesc], time: f32) -> impl Iterator<It
 #[cfg(test)]
 mod tests {
     use crate::asset::{parse_scene, Diagnostic, SceneDesc};
+    use crate::scene::emitter::SpawnShape;
     use crate::scene::ParticleBlend;
-    use crate::sim::particles::SpawnShape;
     use glam::Vec3;
     use std::path::Path;
 

@@ -220,7 +220,7 @@ fn a_school_s_budget_counts_its_density_and_its_grid() {
     let dense = parse(&school("\"count\" \"40000\"\n\"bounds\" \"-1 -1 -1 1 1 1\"\n")).unwrap();
     let sparse = parse(&school("\"count\" \"40000\"\n\"bounds\" \"-30 -30 -30 30 30 30\"\n")).unwrap();
     let cost = |scene: &SceneDesc| scene.schools[0].params.step_cost();
-    let tests = u64::from(crate::sim::school::MAX_NEIGHBOUR_TESTS) + crate::sim::school::FISH_STEP_TESTS;
+    let tests = u64::from(crate::scene::school::MAX_NEIGHBOUR_TESTS) + crate::scene::school::FISH_STEP_TESTS;
     assert!(cost(&dense) >= 40_000 * tests, "{}", cost(&dense));
     assert!(cost(&sparse) < cost(&dense) / 4, "{} against {}", cost(&sparse), cost(&dense));
     let err = dense.check_pose(60.0).unwrap_err();

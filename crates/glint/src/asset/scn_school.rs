@@ -1,14 +1,14 @@
 //! The `.scn` `school` class: a school of fish (instances of one mesh) and
-//! optionally a predator hunting it, simulated by [`School`](crate::sim::school::School).
+//! optionally a predator hunting it, simulated by `sim::school::School`.
 //! This is what the block says; a [`World`](crate::World) steps the school to
 //! the requested time from its seeded start, deterministically.
 
 use super::scn::{Loader, Placement};
 use super::scn_fields::{numbers, Fields};
 use super::Diagnostic;
+use crate::scene::school::{Hunter, Obstacle, SchoolParams, Weights, MAX_FISH};
 use crate::scene::Aabb;
-use crate::sim::school::{Hunter, Obstacle, SchoolParams, Weights, MAX_FISH};
-use glam::Vec3;
+use glam::{Mat4, Quat, Vec3};
 
 /// Most work one pose may take over a scene's schools, in neighbour tests
 /// (steps to the time × [`SchoolParams::step_cost`]: each fish's tests at
@@ -18,7 +18,7 @@ use glam::Vec3;
 pub const MAX_POSE_SCHOOL_TESTS: u64 = 7_000_000_000;
 
 /// Most obstacles one school may have (the GPU school's block holds as many).
-pub const MAX_OBSTACLES: usize = crate::sim::school::MAX_GPU_OBSTACLES;
+pub use crate::scene::school::MAX_OBSTACLES;
 
 /// A `school` block: the simulation's parameters and how its fish are drawn.
 #[derive(Clone, Debug)]
@@ -162,8 +162,9 @@ pub(crate) fn parse(f: &mut Fields, line: usize) -> Result<(SchoolParams, f32, f
 
 impl Loader<'_> {
     /// A `school` block: the simulation ([`parse`]), and two
-    /// placements of their own, the fish (`mesh`, `material`) at the start
-    /// and the predator (`predator_mesh`, `predator_material`).
+    /// placements of their own, the fish (`mesh`, `material`; in the middle
+    /// of their bounds until a world places them at their seeded start) and
+    /// the predator (`predator_mesh`, `predator_material`) at its start.
     pub(super) fn school(&mut self, f: &mut Fields) -> Result<(), Diagnostic> {
         let line = f.block.line;
         let mesh = self.mesh(f, "mesh")?;
@@ -188,13 +189,18 @@ impl Loader<'_> {
             fish_entity: self.placements.len(),
             predator_entity: None,
         };
-        let start =
-            crate::sim::school::School::new(school.params.clone()).map_err(|m| Diagnostic::at(self.path, line, m))?;
-        let transforms = start.fish().iter().enumerate().map(|(i, f)| f.transform(school.fish_scale(i))).collect();
+        school.params.check().map_err(|m| Diagnostic::at(self.path, line, m))?;
+        // The fish in the middle of their bounds until a world places them at
+        // their seeded start ([`World::place`](crate::World::place)).
+        let middle = (school.params.bounds.min + school.params.bounds.max) * 0.5;
+        let at =
+            |scale: f32, position| Mat4::from_scale_rotation_translation(Vec3::splat(scale), Quat::IDENTITY, position);
+        let transforms = (0..school.params.count).map(|i| at(school.fish_scale(i), middle)).collect();
         self.placements.push(Placement { mesh, material, draw, transforms, tiles: None, alone: true });
-        if let (Some(mesh), Some(hunter)) = (predator_mesh, start.predator()) {
+        if let (Some(mesh), Some(hunter)) = (predator_mesh, school.params.predator) {
             school.predator_entity = Some(self.placements.len());
-            let transforms = vec![hunter.transform(predator_size)];
+            // Its start, facing +Z as it starts.
+            let transforms = vec![at(predator_size, hunter.start)];
             self.placements.push(Placement {
                 mesh,
                 material: predator_material,

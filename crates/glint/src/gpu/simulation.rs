@@ -13,8 +13,9 @@ pub trait GpuSimulation {
     fn encode(&mut self, device: &wgpu::Device, queue: &wgpu::Queue, encoder: &mut wgpu::CommandEncoder);
 }
 
-/// Most records one layer holds: 128 MiB, the storage binding every adapter has.
-pub const MAX_LAYER_PARTICLES: u32 = 1 << 22;
+/// Most records one layer holds: one emitter's particles at most
+/// ([`MAX_PARTICLES`](crate::scene::emitter::MAX_PARTICLES), 128 MiB of records).
+pub const MAX_LAYER_PARTICLES: u32 = crate::scene::emitter::MAX_PARTICLES;
 
 /// One billboard (32 bytes): the per-instance vertex data of the particle
 /// pipeline (locations 0 and 1) and what `shader/particles_step.wgsl` writes.

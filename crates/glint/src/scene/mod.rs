@@ -7,6 +7,7 @@
 
 mod camera;
 mod daylight;
+pub mod emitter;
 mod entity;
 mod environment;
 mod environment_image;
@@ -18,6 +19,7 @@ mod mesh;
 mod motion;
 mod post;
 pub mod procedural;
+pub mod school;
 pub(crate) mod shadow_layout;
 mod states;
 mod texture;

@@ -4,6 +4,9 @@
 
 /// Most entries a scan covers: 256 blocks of 256, 16 block totals a thread.
 pub const MAX_SCAN: u32 = 256 * 256 * 16;
+
+// A school's grid, counted by cell, is scanned one past its last cell.
+const _: () = assert!(crate::scene::school::MAX_GRID_CELLS < MAX_SCAN);
 const WORKGROUP: u32 = 256;
 
 /// The scan's three pipelines and their bind group layout.

@@ -69,9 +69,8 @@ impl World {
     /// at its seeded start, no particle spawned. Errors when the device
     /// cannot hold the emitters' layers (out of memory).
     pub fn place(desc: SceneDesc, renderer: &mut Renderer) -> Result<Self, crate::RenderError> {
-        let mut placed = renderer.place_scene(&desc);
+        let (placed, schools) = renderer.place_scene_and_schools(&desc);
         let cloths = desc.cloths.iter().map(ClothSim::new).collect();
-        let schools: Vec<SchoolSim> = desc.schools.iter().map(SchoolSim::new).collect();
         let ranges = school::entity_ranges(&desc);
         // The emitters stepped by compute shaders share one set of kernels.
         let kernels = (renderer.computes() && !desc.emitters.is_empty())
@@ -79,10 +78,6 @@ impl World {
         let emitters = (desc.emitters.iter())
             .map(|e| EmitterSim::new(e, (&placed.textures, kernels.as_ref()), renderer))
             .collect::<Result<_, _>>()?;
-        for (sim, school) in schools.iter().zip(&desc.schools) {
-            // Each fish's own tail beat from the first frame.
-            sim.show(school, &desc, &ranges, &mut placed.entities);
-        }
         let models = desc.models.iter().flat_map(|m| &m.materials);
         let moves = desc.materials.iter().chain(models).any(|m| m.material.motion.is_some());
         Ok(Self {

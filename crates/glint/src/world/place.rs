@@ -5,6 +5,7 @@
 //! [`World::pose`](crate::World::pose) moves them along as the scene's
 //! animations and cloths advance.
 
+use super::school::SchoolSim;
 use crate::asset::{MeshRef, Model, SceneDesc, ShapeKind, Texture};
 use crate::render::{Registry, Renderer};
 use crate::scene::{Entity, Material, MaterialId, RenderTargetId, ShadingModel, ShapeId, TextureId};
@@ -42,10 +43,15 @@ impl Renderer {
     }
 
     /// Add the scene's textures, render targets, materials, shapes and models,
-    /// and return its entities with the ids of its render targets. Its lights
-    /// and environment are not the renderer's: give [`SceneDesc::lighting`] to
-    /// each frame.
+    /// and return its entities with the ids of its render targets, every
+    /// school at its seeded start. Its lights and environment are not the
+    /// renderer's: give [`SceneDesc::lighting`] to each frame.
     pub fn place_scene(&mut self, desc: &SceneDesc) -> PlacedScene {
+        self.place_scene_and_schools(desc).0
+    }
+
+    /// [`place_scene`](Self::place_scene), with each school's run at its start.
+    pub(crate) fn place_scene_and_schools(&mut self, desc: &SceneDesc) -> (PlacedScene, Vec<SchoolSim>) {
         let registry = self.registry_mut();
         if let Some(image) = &desc.environment_image {
             registry.add_environment(image);
@@ -132,7 +138,13 @@ impl Renderer {
                 cloth.draw.apply(entity);
             }
         }
-        PlacedScene { entities, render_targets, textures }
+        let ranges = super::school::entity_ranges(desc);
+        let schools: Vec<SchoolSim> = desc.schools.iter().map(SchoolSim::new).collect();
+        for (sim, school) in schools.iter().zip(&desc.schools) {
+            // Each fish at its start, with its own tail beat from the first frame.
+            sim.show(school, desc, &ranges, &mut entities);
+        }
+        (PlacedScene { entities, render_targets, textures }, schools)
     }
 }
 

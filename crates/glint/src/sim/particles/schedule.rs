@@ -26,19 +26,13 @@ impl Schedule {
     /// The schedule of `params` (its slots are not checked against any limit).
     pub fn new(params: &EmitterParams) -> Self {
         let life_max = params.lifetime.1.max(params.lifetime.0);
-        let rate = f64::from(params.rate.max(0.0));
-        let stream =
-            if rate > 0.0 { (rate * f64::from(life_max)).ceil().min(f64::from(u32::MAX - 1)) as u32 + 1 } else { 0 };
-        let every = f64::from(params.burst.every.max(0.0));
-        let bursts_alive = match (params.burst.count, every > 0.0) {
-            (0, _) => 0,
-            (_, false) => 1,
-            (_, true) => (f64::from(life_max) / every).ceil().min(1e6) as u32 + 1,
-        };
+        let (rate, every) = (f64::from(params.rate.max(0.0)), f64::from(params.burst.every.max(0.0)));
+        let (stream, bursts_alive) = params.slot_counts();
         Self { rate, every, burst: params.burst.count, stream, bursts_alive, life_max }
     }
 
-    /// Slots in all: the most particles alive at once (and a few more).
+    /// Slots in all: the most particles alive at once (and a few more:
+    /// [`EmitterParams::slots`]).
     pub fn slots(&self) -> u64 {
         u64::from(self.stream) + u64::from(self.burst) * u64::from(self.bursts_alive)
     }

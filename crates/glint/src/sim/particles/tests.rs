@@ -2,6 +2,7 @@
 
 use super::*;
 use glam::Vec3;
+use glam::Vec4;
 
 fn counted_alive(system: &ParticleSystem) -> u64 {
     system.slots().iter().filter(|p| p.id > 0 && p.age < system.params().life(p.id - 1)).count() as u64

@@ -8,7 +8,7 @@ use crate::sim::scan::{GpuScan, ScanGroup};
 use crate::Gpu;
 
 /// Obstacles the GPU's parameter block holds.
-pub const MAX_GPU_OBSTACLES: usize = 64;
+pub const MAX_GPU_OBSTACLES: usize = crate::scene::school::MAX_OBSTACLES;
 const WORKGROUP: u32 = 256;
 
 /// The uniform block `Params` of `shader/school.wgsl`.

@@ -5,60 +5,10 @@
 //! outside the bounds count in the nearest border cell, which keeps that true
 //! (clamping never moves two points further apart in cells).
 
-use crate::scene::Aabb;
-use glam::{IVec3, UVec3, Vec3};
+use glam::{IVec3, Vec3};
 use p3_maybe_rayon::prelude::*;
 
-/// Most cells a grid has: wider cells beyond that (the counting sort's
-/// running sum is over cells, and the GPU's scan covers 2²⁰ entries, one
-/// past the last cell).
-pub const MAX_CELLS: u32 = crate::sim::scan::MAX_SCAN - 1;
-
-/// The grid's shape: where it starts, its cell width and its cells per axis.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct GridShape {
-    /// The corner of cell (0, 0, 0): the bounds' smallest corner less one cell.
-    pub origin: Vec3,
-    /// Cell width, at least the view radius.
-    pub cell: f32,
-    /// Cells along x, y and z.
-    pub dims: UVec3,
-}
-
-impl GridShape {
-    /// The grid over `bounds` (plus one cell each side) whose cells are
-    /// `radius` wide, or wider where that would take more than `max_cells`.
-    pub fn new(bounds: Aabb, radius: f32, max_cells: u32) -> Self {
-        let extent = (bounds.max - bounds.min).max(Vec3::ZERO);
-        let mut cell = radius.max(1e-3);
-        loop {
-            let dims = (extent / cell).ceil().as_uvec3().max(UVec3::ONE) + 2;
-            let cells = dims.x as u64 * dims.y as u64 * dims.z as u64;
-            if cells <= max_cells.max(27) as u64 {
-                return Self { origin: bounds.min - cell, cell, dims };
-            }
-            cell *= 1.25;
-        }
-    }
-
-    /// How many cells.
-    pub fn cells(&self) -> u32 {
-        self.dims.x * self.dims.y * self.dims.z
-    }
-
-    /// The cell (x, y, z) holding `p`, border cells for points outside.
-    pub fn coords(&self, p: Vec3) -> IVec3 {
-        let c = ((p - self.origin) / self.cell).floor();
-        // NaN clamps to the first cell too.
-        let c = c.max(Vec3::ZERO).min((self.dims - 1).as_vec3());
-        c.as_ivec3()
-    }
-
-    /// The index of cell `c`, x fastest.
-    pub fn index(&self, c: IVec3) -> u32 {
-        (c.x as u32) + self.dims.x * ((c.y as u32) + self.dims.y * (c.z as u32))
-    }
-}
+pub use crate::scene::school::{GridShape, MAX_GRID_CELLS as MAX_CELLS};
 
 /// The fish sorted by cell: `order[start[c]..start[c + 1]]` are cell `c`'s
 /// fish, in the order they were numbered.

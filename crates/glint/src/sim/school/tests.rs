@@ -3,6 +3,7 @@
 
 use super::grid::{brute_neighbours, Grid, GridShape};
 use super::*;
+use crate::scene::Aabb;
 use rand::{Rng, SeedableRng};
 
 fn swimmer(position: Vec3, velocity: Vec3) -> Swimmer {
