@@ -296,3 +296,39 @@ fn a_split_screen_draws_a_point_lights_six_faces_once_in_one_frame_that_prepares
     assert_eq!(next.frame, frame.frame + 1);
     assert!(next.views.iter().all(|s| s.frame == next.frame));
 }
+
+/// The median of `ms`.
+fn median(mut ms: Vec<f64>) -> f64 {
+    ms.sort_by(f64::total_cmp);
+    ms[ms.len() / 2]
+}
+
+#[test]
+fn a_frames_gpu_times_are_its_views_summed() {
+    let Some(gpu) = common::gpu() else { return };
+    let desc = common::load_scene(&common::repo_root().join("tests/scenes/ssao.scn"));
+    let mut renderer = Renderer::new(gpu);
+    if !renderer.enable_gpu_timing() {
+        eprintln!("skipping: {} has no timestamp queries", gpu.info().name);
+        return;
+    }
+    let entities = renderer.place_scene(&desc).entities;
+    let mut target = OffscreenTarget::new(gpu, 256, 256, 1).expect("target");
+    // The whole picture, and one pixel in its corner drawn after it.
+    let whole = View::new(desc.cameras[0]);
+    let corner = whole.clone().with_viewport(Viewport { width: 1.0 / 256.0, height: 1.0 / 256.0, ..Viewport::FULL });
+    let mut forward_ms = |views: &[View]| {
+        let times = (0..5).map(|_| {
+            let input = FrameInput::new(&entities, desc.lighting()).views(views);
+            renderer.render_frame(input, &mut target).expect("frame");
+            renderer.read_gpu_times().expect("timed frame").forward_ms
+        });
+        median(times.collect())
+    };
+    let (alone, corner_alone) = (forward_ms(std::slice::from_ref(&whole)), forward_ms(std::slice::from_ref(&corner)));
+    let both = forward_ms(&[whole, corner]);
+    // The corner's pass alone is the smaller by far: were only the last view's
+    // pass reported, the frame would show about the corner's time.
+    assert!(corner_alone < alone / 4.0, "the corner {corner_alone} ms, the whole picture {alone} ms");
+    assert!(both > alone / 2.0, "both views {both} ms, the whole picture alone {alone} ms");
+}

@@ -29,9 +29,16 @@ pub(crate) enum Timed {
     Post(u8),
 }
 
-/// Timestamp pairs: shadow, forward, ambient occlusion, depth pre-pass, then
-/// one per post effect.
+/// Timestamp pairs of a view: shadow, forward, ambient occlusion, depth
+/// pre-pass, then one per post effect.
 const PAIRS: usize = 4 + MAX_POST_EFFECTS;
+
+/// The views of a frame timed, each with pairs of its own (a frame's later
+/// views are not timed).
+const TIMED_VIEWS: usize = 8;
+
+/// Timestamp pairs in all: each timed view's.
+const ALL_PAIRS: usize = PAIRS * TIMED_VIEWS;
 
 impl Timed {
     fn pair(self) -> usize {
@@ -45,8 +52,8 @@ impl Timed {
     }
 }
 
-/// GPU time of one frame's passes. In a frame of several views each pass's
-/// pair is written by every view that draws it, and holds the last one's.
+/// GPU time of one frame's passes, each summed over the frame's views (the
+/// first 8 of them).
 #[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
 pub struct GpuTimes {
     /// The frame timed: its [`FrameStats::frame`](super::FrameStats::frame).
@@ -61,7 +68,8 @@ pub struct GpuTimes {
     /// The depth pre-pass a view with ambient occlusion shares with its forward
     /// pass (which then draws no depth); `None` without one.
     pub depth_prepass_ms: Option<f64>,
-    /// Each post effect of the view's chain, in order (empty without one).
+    /// Each post effect of the views' chains, in order: effect k summed over
+    /// the views that have a k-th (empty without one).
     pub post_ms: Vec<f64>,
 }
 
@@ -80,8 +88,8 @@ const RECORDED: u8 = 4;
 struct Slot {
     buffer: wgpu::Buffer,
     state: Arc<AtomicU8>,
-    /// Which pairs its frame wrote.
-    written: [bool; PAIRS],
+    /// Which pairs its frame wrote (each view's, in turn).
+    written: [bool; ALL_PAIRS],
     frame: u64,
 }
 
@@ -93,6 +101,9 @@ pub(crate) struct GpuTimer {
     slots: Vec<Slot>,
     /// The slot this frame's timestamps go to, once its first pass resolved.
     current: Option<usize>,
+    /// The view whose passes are being recorded: its place in the frame
+    /// ([`begin_view`](Self::begin_view)).
+    view: usize,
     period_ns: f64,
     /// The newest frame's times collected so far, and whether `read` returned them.
     latest: Option<(GpuTimes, bool)>,
@@ -114,29 +125,40 @@ impl GpuTimer {
         let slot = |_| Slot {
             buffer: buffer(
                 "gpu timer: readback",
-                PAIRS as u64 * PAIR_BYTES,
+                ALL_PAIRS as u64 * PAIR_BYTES,
                 wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
             ),
             state: Arc::new(AtomicU8::new(FREE)),
-            written: [false; PAIRS],
+            written: [false; ALL_PAIRS],
             frame: 0,
         };
         Some(Self {
             queries: device.create_query_set(&wgpu::QuerySetDescriptor {
                 label: Some("gpu timer: shadow, forward, ambient occlusion, depth pre-pass and post pass timestamps"),
                 ty: wgpu::QueryType::Timestamp,
-                count: 2 * PAIRS as u32,
+                count: 2 * ALL_PAIRS as u32,
             }),
             resolved: buffer(
                 "gpu timer: resolved",
-                (PAIRS as u64 - 1) * RESOLVE_STRIDE + PAIR_BYTES,
+                (ALL_PAIRS as u64 - 1) * RESOLVE_STRIDE + PAIR_BYTES,
                 wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
             ),
             slots: (0..SLOTS).map(slot).collect(),
             current: None,
+            view: 0,
             period_ns: f64::from(queue.get_timestamp_period()),
             latest: None,
         })
+    }
+
+    /// The passes recorded from now on are the view at place `k` of the frame's.
+    pub(crate) fn begin_view(&mut self, k: usize) {
+        self.view = k;
+    }
+
+    /// The pair of `which` of the view being recorded; `None` past the views timed.
+    fn pair(&self, which: Timed) -> Option<usize> {
+        (self.view < TIMED_VIEWS).then(|| self.view * PAIRS + which.pair())
     }
 
     /// Timestamp writes for a pass of `which`: at its beginning when `begin`,
@@ -147,7 +169,7 @@ impl GpuTimer {
         begin: bool,
         end: bool,
     ) -> Option<wgpu::RenderPassTimestampWrites<'_>> {
-        let first = 2 * which.pair() as u32;
+        let first = 2 * self.pair(which)? as u32;
         (begin || end).then_some(wgpu::RenderPassTimestampWrites {
             query_set: &self.queries,
             beginning_of_pass_write_index: begin.then_some(first),
@@ -172,14 +194,14 @@ impl GpuTimer {
     /// After the last pass of `which` in frame `frame`: resolve its timestamps
     /// and copy them into the frame's readback slot (none free: not timed).
     pub(crate) fn resolve(&mut self, encoder: &mut wgpu::CommandEncoder, which: Timed, frame: u64) {
+        let Some(pair) = self.pair(which) else { return };
         if self.current.is_none_or(|k| self.slots[k].frame != frame) {
             self.current = self.slots.iter().position(|s| s.state.load(Ordering::Acquire) == FREE);
             let Some(k) = self.current else { return };
-            (self.slots[k].frame, self.slots[k].written) = (frame, [false; PAIRS]);
+            (self.slots[k].frame, self.slots[k].written) = (frame, [false; ALL_PAIRS]);
             self.slots[k].state.store(RECORDED, Ordering::Release);
         }
         let Some(k) = self.current else { return };
-        let pair = which.pair();
         let first = 2 * pair as u32;
         let at = pair as u64 * RESOLVE_STRIDE;
         encoder.resolve_query_set(&self.queries, first..first + 2, &self.resolved, at);
@@ -194,7 +216,7 @@ impl GpuTimer {
     pub(crate) fn submitted(&mut self) {
         self.current = None;
         for slot in self.slots.iter().filter(|s| s.state.load(Ordering::Acquire) == RECORDED) {
-            if !slot.written[Timed::Forward.pair()] {
+            if !(0..TIMED_VIEWS).any(|v| slot.written[v * PAIRS + Timed::Forward.pair()]) {
                 slot.state.store(FREE, Ordering::Release);
                 continue;
             }
@@ -244,24 +266,26 @@ impl GpuTimer {
     /// Slot `k`'s times, read from its mapped buffer (then unmapped).
     fn take(&self, k: usize) -> Option<GpuTimes> {
         let slot = &self.slots[k];
-        let ticks: Option<[u64; 2 * PAIRS]> = slot
-            .buffer
-            .get_mapped_range(..)
-            .ok()
-            .map(|view| bytemuck::pod_read_unaligned(&view[..PAIRS * PAIR_BYTES as usize]));
+        let ticks: Option<Vec<u64>> = slot.buffer.get_mapped_range(..).ok().map(|view| {
+            view[..ALL_PAIRS * PAIR_BYTES as usize].chunks_exact(8).map(bytemuck::pod_read_unaligned).collect()
+        });
         slot.buffer.unmap();
         let ticks = ticks?;
         let ms = |pair: usize| ticks[2 * pair + 1].saturating_sub(ticks[2 * pair]) as f64 * self.period_ns / 1e6;
-        // Post effects are timed in order: the chain is the written pairs after the forward pass.
-        let post = (0..MAX_POST_EFFECTS as u8).map(Timed::Post).take_while(|t| slot.written[t.pair()]);
+        // Each pass summed over the views that wrote it; `None` where none did.
+        let sum = |which: Timed| {
+            let pairs = (0..TIMED_VIEWS).map(|v| v * PAIRS + which.pair()).filter(|&p| slot.written[p]);
+            pairs.map(ms).reduce(|a, b| a + b)
+        };
+        // Post effects are timed in order: a chain is the written pairs after the forward pass.
+        let post = (0..MAX_POST_EFFECTS as u8).map(Timed::Post).map_while(sum);
         Some(GpuTimes {
             frame: slot.frame,
-            shadow_ms: slot.written[Timed::Shadow.pair()].then(|| ms(Timed::Shadow.pair())),
-            forward_ms: ms(Timed::Forward.pair()),
-            ambient_occlusion_ms: slot.written[Timed::AmbientOcclusion.pair()]
-                .then(|| ms(Timed::AmbientOcclusion.pair())),
-            depth_prepass_ms: slot.written[Timed::DepthPrepass.pair()].then(|| ms(Timed::DepthPrepass.pair())),
-            post_ms: post.map(|t| ms(t.pair())).collect(),
+            shadow_ms: sum(Timed::Shadow),
+            forward_ms: sum(Timed::Forward).unwrap_or(0.0),
+            ambient_occlusion_ms: sum(Timed::AmbientOcclusion),
+            depth_prepass_ms: sum(Timed::DepthPrepass),
+            post_ms: post.collect(),
         })
     }
 }

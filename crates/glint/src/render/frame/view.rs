@@ -45,6 +45,9 @@ impl Renderer {
         if let Some(k) = group {
             self.outline.enter(&mut frame.encoder, &format!("view {k}"));
         }
+        if let Some(timer) = &mut self.gpu_timer {
+            timer.begin_view(group.unwrap_or(0));
+        }
         let drawn = match view.output {
             None => self.draw_into(frame, &mut gpu, (view, None), (lighting, shadows), output),
             Some(id) => {
