@@ -133,7 +133,7 @@ enum IntegratorArg {
 /// Run `glint sim cloth`.
 pub fn cloth(args: &ClothArgs) -> Result<(), Error> {
     let mesh = match (&args.mesh, args.sheet, args.resolution) {
-        (Some(path), _, _) => ClothMesh::load(path)?,
+        (Some(path), _, _) => glint::asset::load_cloth_mesh(path)?,
         (None, Some((w, h)), Some((n, m))) => {
             let sizes = w.is_finite() && h.is_finite() && w > 0.0 && h > 0.0;
             if !(sizes && (2..=MAX_SIDE).contains(&n) && (2..=MAX_SIDE).contains(&m)) {

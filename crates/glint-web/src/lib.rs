@@ -401,7 +401,7 @@ impl Shown {
     fn show_cloth_debug_if_chosen(&mut self, gpu: &Gpu) -> Result<(), String> {
         let Some(debug) = self.controls.cloth_debug_to_show(self.world.desc()) else { return Ok(()) };
         let mut desc = self.world.desc().clone();
-        desc.set_cloth_debug(debug).map_err(|e| e.to_string())?;
+        desc.set_cloth_debug(debug);
         let placed = Self::place(desc, gpu, self.controls.density())?;
         (self.world, self.renderer) = (placed.world, placed.renderer);
         self.player.clock.restart();

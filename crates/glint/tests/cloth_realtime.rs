@@ -80,7 +80,7 @@ fn tablecloth(solve: Solve) -> (Cloth, f64) {
     let desc = load_scene(&common::repo_root().join("scenes/tablecloth.scn")).expect("tablecloth.scn");
     let mut setup = desc.cloths[0].setup.clone();
     setup.solve = solve;
-    (setup.start().expect("cloth"), desc.cloths[0].dt)
+    (glint::sim::cloth::Cloth::start(&setup).expect("cloth"), desc.cloths[0].dt)
 }
 
 #[test]

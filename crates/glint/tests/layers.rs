@@ -10,9 +10,8 @@
 //! | 1 | `gpu`, `shader` | row 0 and each other |
 //! | 0 | `scene`, `text` | row 0 |
 //!
-//! The crossings left over from before the table was kept are listed in
-//! [`KNOWN`], file by file: a new crossing fails, and so does a listed one
-//! that is gone (take it off the list), so the list only shrinks.
+//! No file crosses the table (the last crossings, asset ↔ sim over the
+//! simulations' parameters and the cloth mesh's file reading, went in issue 46).
 
 use std::collections::BTreeSet;
 use std::path::Path;
@@ -42,15 +41,6 @@ const ROOT: [(&str, &str); 9] = [
     ("World", "world"),
     ("Error", "world"),
     ("FrameStats", "render"),
-];
-
-/// Crossings from before the table was kept (file, module it names), to be
-/// taken off as the layers are fixed (issue 46).
-const KNOWN: [(&str, &str); 4] = [
-    ("asset/mod.rs", "sim"),
-    ("asset/scn_cloth.rs", "sim"),
-    ("asset/scn_hostile_tests.rs", "sim"),
-    ("sim/cloth/mesh.rs", "asset"),
 ];
 
 fn row(module: &str) -> Option<(u8, bool)> {
@@ -130,11 +120,7 @@ fn no_module_names_one_its_row_may_not_use() {
             found.insert((relative.clone(), to));
         }
     }
-    let known: BTreeSet<(String, String)> = KNOWN.iter().map(|&(f, m)| (f.to_string(), m.to_string())).collect();
-    let new: Vec<_> = found.difference(&known).collect();
-    let gone: Vec<_> = known.difference(&found).collect();
-    assert!(new.is_empty(), "files naming a module their row may not use (DESIGN.md's layers): {new:?}");
-    assert!(gone.is_empty(), "crossings fixed: take them off KNOWN: {gone:?}");
+    assert!(found.is_empty(), "files naming a module their row may not use (DESIGN.md's layers): {found:?}");
 }
 
 #[test]

@@ -305,7 +305,7 @@ impl View {
     ) -> Result<(), Error> {
         let Some(debug) = self.controls.cloth_debug_to_show(self.scene.world.desc()) else { return Ok(()) };
         let mut desc = self.scene.world.desc().clone();
-        desc.set_cloth_debug(debug)?;
+        desc.set_cloth_debug(debug);
         self.scene = Scene::new(&self.gpu, desc, camera, cull)?;
         self.shown_camera = None;
         self.player.clock.restart();

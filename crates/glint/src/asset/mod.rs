@@ -3,6 +3,7 @@
 //! [`Diagnostic`] naming the file, the line where there is one, and what was expected.
 
 pub mod animation;
+mod cloth_mesh;
 mod environment;
 mod files;
 mod gltf;
@@ -28,7 +29,9 @@ mod scn_syntax;
 mod scn_targets;
 mod texture;
 
+pub use crate::scene::cloth::ClothSetup;
 pub use crate::scene::ShapeKind;
+pub use cloth_mesh::{load_cloth_mesh, parse_nodes_triangles, read_cloth_mesh};
 pub(crate) use environment::{decoded_bytes, read_environment};
 pub use environment::{
     equirect_direction, equirect_uv, EnvironmentImage, MAX_ENVIRONMENT_PIXELS, MAX_HDR_HEADER_BYTES, MAX_RADIANCE,
@@ -42,7 +45,7 @@ pub use files::{
 pub use model::{Model, ModelPart, Morph, Skin};
 pub use scene_desc::{CameraView, DrawOptions, EntityDesc, LightSway, MaterialDesc, MeshRef, SceneDesc, TextureRef};
 pub use scn::{load_scene, load_scene_with, parse_scene, parse_scene_with, MAX_CAMERAS, MAX_INSTANCES};
-pub use scn_cloth::{ClothDesc, ClothSetup, MAX_POSE_STEPS};
+pub use scn_cloth::{ClothDesc, MAX_POSE_STEPS};
 pub use scn_emitter::{EmitterDesc, MAX_EMITTERS, MAX_POSE_PARTICLE_STEPS, MAX_SCENE_PARTICLES, STEP_OVERHEAD};
 pub use scn_school::{SchoolDesc, MAX_POSE_SCHOOL_TESTS};
 pub use scn_targets::{RenderTargetDesc, MAX_RENDER_TARGETS, MAX_RENDER_TARGET_BYTES, MAX_RENDER_TARGET_SIDE};
@@ -68,7 +71,7 @@ pub struct LoadOptions {
     /// [`MAX_TEXTURE_MEMORY`]); a scene passes what it has left to its models.
     pub texture_memory: u64,
     /// How every cloth is solved, whatever its scene block says (`None`: as it says).
-    pub cloth_solve: Option<crate::sim::cloth::Solve>,
+    pub cloth_solve: Option<crate::scene::cloth::Solve>,
     /// A scene file's time of day, whatever its world block says (`None`: as
     /// it says; see [`SceneDesc::set_time_of_day`]).
     pub time_of_day: Option<f32>,

@@ -257,15 +257,15 @@ impl SceneDesc {
             .with_ambient_occlusion(c.ambient_occlusion)
     }
 
-    /// Draw every cloth's debug view or not ([`ClothDesc::set_debug`]);
+    /// Draw every cloth's debug view (edge ribbons, pin markers) or not;
     /// whether any cloth changed (place the scene again to show it).
-    pub fn set_cloth_debug(&mut self, debug: bool) -> Result<bool, Diagnostic> {
+    pub fn set_cloth_debug(&mut self, debug: bool) -> bool {
         let mut changed = false;
         for cloth in self.cloths.iter_mut().filter(|c| c.debug != debug) {
-            cloth.set_debug(debug, &self.path)?;
+            cloth.debug = debug;
             changed = true;
         }
-        Ok(changed)
+        changed
     }
 
     /// Total instances over all render tasks: a model's placements count once
@@ -290,12 +290,16 @@ impl SceneDesc {
     /// ([`MAX_POSE_PARTICLE_STEPS`](super::MAX_POSE_PARTICLE_STEPS)), each at most
     /// [`MAX_POSE_STEPS`](super::MAX_POSE_STEPS) steps too: the error names
     /// the block that goes over. Posing at an earlier time takes no more work.
-    /// A school's or emitter's parameters changed since loading are checked
-    /// again ([`SchoolParams::check`](crate::scene::school::SchoolParams::check),
+    /// A cloth's, school's or emitter's description changed since loading is
+    /// checked again ([`ClothSetup::check`](crate::scene::cloth::ClothSetup::check),
+    /// [`SchoolParams::check`](crate::scene::school::SchoolParams::check),
     /// [`EmitterParams::check`](crate::scene::emitter::EmitterParams::check)).
     pub fn check_pose(&self, time: f32) -> Result<(), Diagnostic> {
         let mut work = 0u64;
         for cloth in &self.cloths {
+            let at =
+                |e: crate::scene::cloth::ClothMeshError| Diagnostic::at(&self.path, cloth.line, format!("cloth: {e}"));
+            cloth.setup.check().map_err(at)?;
             cloth.check_pose(time, work, &self.path)?;
             work = work.saturating_add(cloth.pose_work(time));
         }

@@ -5,9 +5,7 @@
 
 use super::scn_fields::Fields;
 use super::{AssetFolder, Diagnostic};
-use crate::sim::cloth::{
-    Cloth, ClothMesh, ClothParams, ClothView, Collider, Integrator, PinMotion, PinSelector, Solve,
-};
+use crate::scene::cloth::{ClothMesh, ClothParams, ClothSetup, Collider, Integrator, PinMotion, PinSelector, Solve};
 use crate::text::quote;
 use glam::{DVec3, Vec3};
 use std::path::Path;
@@ -30,7 +28,7 @@ pub const MAX_SCENE_CLOTH_NODES: u64 = 4 * 129 * 129;
 
 /// Steps a static cloth's equilibrium counts as against [`MAX_POSE_NODE_STEPS`]:
 /// its load is applied in increments, each a Newton solve like a step's, and
-/// it may take [`MAX_STATIC_ITERATIONS`](crate::sim::cloth::MAX_STATIC_ITERATIONS)
+/// it may take `MAX_STATIC_ITERATIONS` (`sim::cloth`)
 /// Newton iterations in all, about four to a step's solve. (Counted as ten
 /// steps before, a 65 × 65 static sheet that did not converge ran 25–30 s.)
 pub const STATIC_STEPS: u64 = 500;
@@ -49,7 +47,8 @@ pub const MAX_CLOTH_ACCELERATION: f32 = 1e4;
 /// 257 × 257 sheet took two minutes: see [`MAX_POSE_NODE_STEPS`]).
 const MAX_SIDE: i64 = 129;
 
-/// A `cloth` block: everything needed to (re)start its simulation, and how it looks now.
+/// A `cloth` block: everything needed to (re)start its simulation, and how it
+/// is drawn (a [`World`](crate::World) makes its meshes from the simulation).
 #[derive(Clone, Debug)]
 pub struct ClothDesc {
     /// The simulation at rest.
@@ -66,55 +65,9 @@ pub struct ClothDesc {
     pub debug: bool,
     /// The block's line, for errors while posing.
     pub line: usize,
-    /// Its meshes at rest.
-    pub view: ClothView,
-}
-
-/// What a cloth starts from.
-#[derive(Clone, Debug)]
-pub struct ClothSetup {
-    /// The rest mesh, placed in the world (`origin`, `angles`).
-    pub mesh: ClothMesh,
-    /// Material and gravity.
-    pub params: ClothParams,
-    /// Which nodes are pinned.
-    pub pinned: Vec<bool>,
-    /// How the pinned nodes move (`pin_velocity`, `pin_spin` about `origin`).
-    pub pin_motion: PinMotion,
-    /// Rigid obstacles (`colliders`).
-    pub colliders: Vec<Collider>,
-    /// Contact distance δ, metres.
-    pub contact_distance: f64,
-    /// Mass-proportional damping, 1/s (see [`Cloth::set_damping`]).
-    pub damping: f64,
-    /// How each step is solved (`solve`: `converged` or `realtime`).
-    pub solve: Solve,
-}
-
-impl ClothSetup {
-    /// A fresh simulation at rest.
-    pub fn start(&self) -> Result<Cloth, String> {
-        let mut cloth = Cloth::new(self.mesh.clone(), self.params, &self.pinned).map_err(|e| e.to_string())?;
-        cloth.set_pin_motion(self.pin_motion);
-        cloth.set_colliders(self.colliders.clone(), self.contact_distance);
-        cloth.set_damping(self.damping);
-        cloth.set_solve(self.solve);
-        Ok(cloth)
-    }
 }
 
 impl ClothDesc {
-    /// Draw seed 003's debug view (edge ribbons, pin markers) or not: the
-    /// view is made again from the cloth at rest (place the scene again to
-    /// show it). Errors name the cloth's block in `scene`.
-    pub fn set_debug(&mut self, debug: bool, scene: &Path) -> Result<(), Diagnostic> {
-        let at = |m: String| Diagnostic::at(scene, self.line, format!("cloth: {m}"));
-        let cloth = self.setup.start().map_err(at)?;
-        self.view = ClothView::new(&cloth, debug).map_err(|e| at(e.to_string()))?;
-        self.debug = debug;
-        Ok(())
-    }
-
     /// Steps a pose at `time` takes from rest (1 for a static cloth).
     pub fn steps_to(&self, time: f32) -> u64 {
         match self.integrator {
@@ -232,8 +185,7 @@ pub(crate) fn parse(f: &mut Fields, assets: &AssetFolder, nodes_before: u64) -> 
     };
     let debug = f.flag("debug")?.unwrap_or(false);
     let setup = ClothSetup { mesh, params, pinned, pin_motion, colliders, contact_distance, damping, solve };
-    let cloth = setup.start().map_err(|m| at(f.block.line, format!("cloth: {m}")))?;
-    let view = ClothView::new(&cloth, debug).map_err(|e| at(f.block.line, format!("cloth: {e}")))?;
+    setup.check().map_err(|e| at(f.block.line, format!("cloth: {e}")))?;
     Ok(ClothDesc {
         setup,
         integrator,
@@ -242,7 +194,6 @@ pub(crate) fn parse(f: &mut Fields, assets: &AssetFolder, nodes_before: u64) -> 
         draw: super::DrawOptions::default(),
         debug,
         line: f.block.line,
-        view,
     })
 }
 
@@ -264,7 +215,7 @@ fn local_mesh(f: &mut Fields, assets: &AssetFolder) -> Result<ClothMesh, Diagnos
     if let Some(pair) = f.get("mesh") {
         let at = |e: Diagnostic| Diagnostic::at(f.path, pair.line, format!("\"mesh\": {}", e.message));
         let file = assets.resolve(pair.value.trim(), f.path).map_err(at)?;
-        return ClothMesh::read(&file, &assets.files)
+        return super::read_cloth_mesh(&file, &assets.files)
             .map_err(|e| Diagnostic::at(f.path, pair.line, format!("\"mesh\": {e}")));
     }
     let [w, d] = f.numbers::<2>("size", "2 numbers (width depth)")?.unwrap_or([1.0, 1.0]);
@@ -316,7 +267,6 @@ mod tests {
         assert_eq!(cloth.setup.solve, Solve::Converged, "the default");
         let realtime = parse("\"size\" \"2 1\"\n\"resolution\" \"3 2\"\n\"solve\" \"realtime\"\n").unwrap();
         assert_eq!(realtime.cloths[0].setup.solve, Solve::Realtime);
-        assert_eq!(realtime.cloths[0].setup.start().unwrap().solve(), Solve::Realtime, "the simulation solves so");
         let wrong = parse("\"size\" \"2 1\"\n\"resolution\" \"3 2\"\n\"solve\" \"fast\"\n").unwrap_err().to_string();
         assert!(wrong.contains("t.scn:5") && wrong.contains("converged") && wrong.contains("realtime"), "{wrong}");
         // `--solve` on `render` and `view`: every cloth, whatever its block says.
@@ -327,7 +277,7 @@ mod tests {
         assert_eq!(cloth.setup.colliders.len(), 2);
         assert_eq!(cloth.setup.contact_distance, 1e-3);
         assert_eq!(cloth.setup.params.gravity, DVec3::new(0.0, -9.81, 0.0));
-        assert!(cloth.view.edges.is_none());
+        assert!(!cloth.debug, "no debug view unless asked for");
     }
 
     #[test]

@@ -82,7 +82,7 @@ fn cloth_work_outside_the_posing_budget_is_refused_at_load() {
     let fits = vec![sphere; scn_cloth::MAX_COLLIDERS].join("; ");
     assert_eq!(cloth(&format!("\"colliders\" \"{fits}\"\n")).unwrap().cloths[0].setup.colliders.len(), 64);
 
-    let terms = vec!["x<0"; crate::sim::cloth::pins::MAX_PIN_TERMS + 1].join(" || ");
+    let terms = vec!["x<0"; crate::scene::cloth::MAX_PIN_TERMS + 1].join(" || ");
     let err = cloth(&format!("\"resolution\" \"129 129\"\n\"pins\" \"{terms}\"\n")).unwrap_err();
     assert_eq!(err.line, Some(4), "{err}");
     assert!(err.message.contains("65 comparisons, at most 64"), "{err}");

@@ -6,6 +6,7 @@
 //! owns the GPU twins and turns submitted entities into draws.
 
 mod camera;
+pub mod cloth;
 mod daylight;
 pub mod emitter;
 mod entity;

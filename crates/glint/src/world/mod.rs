@@ -69,8 +69,7 @@ impl World {
     /// at its seeded start, no particle spawned. Errors when the device
     /// cannot hold the emitters' layers (out of memory).
     pub fn place(desc: SceneDesc, renderer: &mut Renderer) -> Result<Self, crate::RenderError> {
-        let (placed, schools) = renderer.place_scene_and_schools(&desc);
-        let cloths = desc.cloths.iter().map(ClothSim::new).collect();
+        let (placed, cloths, schools) = renderer.place_scene_and_runs(&desc);
         let ranges = school::entity_ranges(&desc);
         // The emitters stepped by compute shaders share one set of kernels.
         let kernels = (renderer.computes() && !desc.emitters.is_empty())
@@ -114,7 +113,7 @@ impl World {
     /// The meshes of cloth `index` (in file order) as of the last pose: its
     /// surface, and with the debug view its edge ribbons and pins.
     pub fn cloth_view(&self, index: usize) -> Option<&ClothView> {
-        self.cloths.get(index).map(|c| &c.view)
+        self.cloths.get(index).and_then(|c| c.view.as_ref())
     }
 
     /// The time of the last pose, in seconds (0 before the first).
@@ -170,9 +169,9 @@ impl World {
             next += model.parts.len();
         }
         for (sim, cloth) in self.cloths.iter_mut().zip(&desc.cloths) {
-            let count = place::cloth_entity_count(&sim.view);
+            let count = place::cloth_entity_count(sim.view.as_ref());
             if sim.pose(cloth, time, &desc.path)? {
-                let view = &sim.view;
+                let Some(view) = &sim.view else { continue };
                 let meshes = std::iter::once(&view.surface).chain(&view.edges);
                 for (entity, mesh) in entities[next..].iter().zip(meshes) {
                     renderer.update_shape(entity.shape, mesh.clone());

@@ -5,6 +5,7 @@
 //! [`World::pose`](crate::World::pose) moves them along as the scene's
 //! animations and cloths advance.
 
+use super::cloth::ClothSim;
 use super::school::SchoolSim;
 use crate::asset::{MeshRef, Model, SceneDesc, ShapeKind, Texture};
 use crate::render::{Registry, Renderer};
@@ -47,11 +48,11 @@ impl Renderer {
     /// school at its seeded start. Its lights and environment are not the
     /// renderer's: give [`SceneDesc::lighting`] to each frame.
     pub fn place_scene(&mut self, desc: &SceneDesc) -> PlacedScene {
-        self.place_scene_and_schools(desc).0
+        self.place_scene_and_runs(desc).0
     }
 
-    /// [`place_scene`](Self::place_scene), with each school's run at its start.
-    pub(crate) fn place_scene_and_schools(&mut self, desc: &SceneDesc) -> (PlacedScene, Vec<SchoolSim>) {
+    /// [`place_scene`](Self::place_scene), with each cloth's and school's run at its start.
+    pub(crate) fn place_scene_and_runs(&mut self, desc: &SceneDesc) -> (PlacedScene, Vec<ClothSim>, Vec<SchoolSim>) {
         let registry = self.registry_mut();
         if let Some(image) = &desc.environment_image {
             registry.add_environment(image);
@@ -108,14 +109,17 @@ impl Renderer {
                 }
             }
         }
-        for cloth in &desc.cloths {
+        let cloths: Vec<ClothSim> = desc.cloths.iter().map(ClothSim::new).collect();
+        for (cloth, sim) in desc.cloths.iter().zip(&cloths) {
+            // A cloth that cannot be simulated shows nothing.
+            let Some(view) = &sim.view else { continue };
             let first = entities.len();
             // Cloth is thin: both sides show, whatever the named material says.
             let look = cloth.material.map_or_else(Material::default, |i| desc.materials[i].resolve(&textures));
             let material = registry.add_material(Material { double_sided: true, ..look });
-            let surface = registry.add_named_shape(cloth.view.surface.clone(), "cloth".into());
+            let surface = registry.add_named_shape(view.surface.clone(), "cloth".into());
             entities.push(Entity::new(surface, material, Mat4::IDENTITY));
-            if let Some(edges) = &cloth.view.edges {
+            if let Some(edges) = &view.edges {
                 let ink = Material {
                     shading: ShadingModel::Unlit,
                     double_sided: true,
@@ -124,14 +128,14 @@ impl Renderer {
                 let edges = registry.add_named_shape(edges.clone(), "cloth edges".into());
                 let ink = registry.add_material(ink);
                 entities.push(Entity::new(edges, ink, Mat4::IDENTITY));
-                if !cloth.view.pins.is_empty() {
+                if !view.pins.is_empty() {
                     let red =
                         Material { shading: ShadingModel::Unlit, ..Material::color("cloth pins", 1.0, 0.1, 0.05) };
                     let red = registry.add_material(red);
                     let ball = *shapes
                         .entry(ShapeKind::Sphere)
                         .or_insert_with(|| registry.add_named_shape(ShapeKind::Sphere.mesh(), "sphere".into()));
-                    entities.push(Entity::instanced(ball, red, pin_transforms(&cloth.view)));
+                    entities.push(Entity::instanced(ball, red, pin_transforms(view)));
                 }
             }
             for entity in &mut entities[first..] {
@@ -144,7 +148,7 @@ impl Renderer {
             // Each fish at its start, with its own tail beat from the first frame.
             sim.show(school, desc, &ranges, &mut entities);
         }
-        (PlacedScene { entities, render_targets, textures }, schools)
+        (PlacedScene { entities, render_targets, textures }, cloths, schools)
     }
 }
 
@@ -184,12 +188,13 @@ fn model_entities(model: &Model, ids: &ModelIds, placements: &[Mat4]) -> Vec<Ent
 
 /// Entities [`Renderer::place_scene`] makes for a cloth showing `view`: its
 /// surface, and with the debug view its edge ribbons and (when it has pins)
-/// its pin markers.
-pub(crate) fn cloth_entity_count(view: &ClothView) -> usize {
-    match (&view.edges, view.pins.is_empty()) {
-        (None, _) => 1,
-        (Some(_), true) => 2,
-        (Some(_), false) => 3,
+/// its pin markers; none for a cloth that cannot be simulated.
+pub(crate) fn cloth_entity_count(view: Option<&ClothView>) -> usize {
+    match view.map(|v| (&v.edges, v.pins.is_empty())) {
+        None => 0,
+        Some((None, _)) => 1,
+        Some((Some(_), true)) => 2,
+        Some((Some(_), false)) => 3,
     }
 }
 

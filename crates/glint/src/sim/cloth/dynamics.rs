@@ -22,14 +22,16 @@
 //! That is the converged solve ([`Solve::Converged`]); [`realtime`] is the other,
 //! on a fixed budget per step.
 
-use super::contact::{Collider, Contact};
+use super::contact::Contact;
 use super::energy::{
     bend_energy, bend_gradient, bend_hessian, hinge_angle, stretch_energy, stretch_gradient, stretch_hessian_block,
     Hessian,
 };
 use super::pins::PinMotion;
-use super::system::{SparseSystem, SystemError, BYTES_PER_PATTERN_ENTRY, MAX_SYSTEM_BYTES};
+use super::system::{SparseSystem, SystemError, MAX_SYSTEM_BYTES};
 use super::{ClothMesh, ClothMeshError, Topology};
+use crate::scene::cloth::Collider;
+pub use crate::scene::cloth::{ClothParams, ClothSetup, Integrator, Solve};
 use glam::DVec3;
 use p3_maybe_rayon::prelude::*;
 
@@ -57,47 +59,6 @@ const COLLAPSED_AREA: f64 = 1e-3;
 /// Contact stiffness per node, in units of the node's weight over the contact
 /// distance: a resting node sinks this fraction of the contact distance.
 const CONTACT_STIFFNESS: f64 = 100.0;
-
-/// The plate's material and the world it hangs in (SI units).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ClothParams {
-    /// Thickness h, metres.
-    pub thickness: f64,
-    /// Young's modulus E, pascals.
-    pub young: f64,
-    /// Poisson's ratio ν. Recorded for reference: the DEP constants used here
-    /// (`k_s = (√3/2) E h l̄`, `k_b = (2/√3) E h³ / 12`) do not depend on it.
-    pub poisson: f64,
-    /// Density ρ, kg/m³.
-    pub density: f64,
-    /// Gravity, m/s².
-    pub gravity: DVec3,
-}
-
-/// How [`Cloth::step`] advances time.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Integrator {
-    /// Backward Euler: stable at any step, loses energy.
-    ImplicitEuler,
-    /// Newmark-β with β = ¼, γ = ½: keeps energy much better.
-    Newmark,
-    /// No time: each step solves for the equilibrium under the full load.
-    Static,
-}
-
-/// How [`Cloth::step`] solves each time step's implicit equations (a static
-/// solve always converges).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum Solve {
-    /// Newton's method to convergence every step: the reference.
-    #[default]
-    Converged,
-    /// A fixed budget per step for interactive use, with the same energies: at
-    /// most three Newton iterations on the definite Jacobian with a cut-short
-    /// line search (see [`realtime`]). Its error against the converged solve is measured in
-    /// `tests/cloth_realtime.rs` and `docs/cloth.md`.
-    Realtime,
-}
 
 /// Why a step could not be taken (the cloth is left as it was).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
@@ -163,6 +124,16 @@ pub struct Cloth {
 }
 
 impl Cloth {
+    /// A fresh simulation of `setup`, at rest.
+    pub fn start(setup: &ClothSetup) -> Result<Self, ClothMeshError> {
+        let mut cloth = Cloth::new(setup.mesh.clone(), setup.params, &setup.pinned)?;
+        cloth.set_pin_motion(setup.pin_motion);
+        cloth.set_colliders(setup.colliders.clone(), setup.contact_distance);
+        cloth.set_damping(setup.damping);
+        cloth.set_solve(setup.solve);
+        Ok(cloth)
+    }
+
     /// A cloth at rest in `mesh`'s positions with the nodes in `pinned` held fixed.
     pub fn new(mesh: ClothMesh, params: ClothParams, pinned: &[bool]) -> Result<Self, ClothMeshError> {
         let topology = mesh.topology()?;
@@ -194,13 +165,8 @@ impl Cloth {
             .collect();
         // Refuse a system too large for memory before allocating its pattern
         // (a 1025 × 1025 sheet's alone would be 3.5 GB).
-        let free_in = |nodes: &[u32]| 3 * nodes.iter().filter(|&&v| dof[v as usize].is_some()).count() as u64;
-        let entries = (topology.edges.iter().map(|e| free_in(e)))
-            .chain(topology.hinges.iter().map(|h| free_in(h)))
-            .map(|k| k * (k + 1) / 2)
-            .sum::<u64>()
-            + 2 * free_dofs as u64;
-        let estimate = entries.saturating_mul(BYTES_PER_PATTERN_ENTRY);
+        let free: Vec<bool> = dof.iter().map(Option::is_some).collect();
+        let estimate = crate::scene::cloth::system_bytes(&topology, &free);
         if estimate > MAX_SYSTEM_BYTES {
             return Err(ClothMeshError::TooLarge { nodes: n, bytes: estimate, max: MAX_SYSTEM_BYTES });
         }

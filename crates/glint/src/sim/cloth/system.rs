@@ -13,17 +13,7 @@ use faer::sparse::{Pair, SparseColMat, SparseColMatRef, SymbolicSparseColMat};
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct SolveFailed;
 
-/// Most bytes one cloth's linear system may hold: its pattern and the numeric
-/// Cholesky factor (estimated from the pattern before either is allocated), or
-/// an LU factor. Chosen from measurements on the 23 GiB, 2-core reference
-/// machine (see `docs/limits.md`): a 257 × 257 sheet's system takes about
-/// 0.3 GiB, while a 1025 × 1025 sheet would need over 8 GiB.
-pub const MAX_SYSTEM_BYTES: u64 = 2 << 30;
-
-/// Bytes per pattern entry while a system is built: the entry itself (16), its
-/// faer index pair (16) and the sort faer does on them (16), its value (8)
-/// and slot (8), and the element's local index (2), rounded up.
-pub const BYTES_PER_PATTERN_ENTRY: u64 = 72;
+pub use crate::scene::cloth::{BYTES_PER_PATTERN_ENTRY, MAX_SYSTEM_BYTES};
 
 /// An LU factor's size over the Cholesky factor's, for the memory check before
 /// an LU factorisation: partial pivoting fills in far more than Cholesky (a
