@@ -22,8 +22,8 @@ pub use crate::scene::MAX_POSE_STEPS;
 pub const MAX_POSE_NODE_STEPS: u64 = 1_000_000_000;
 
 /// Most cloth nodes one scene may have, over all its cloth blocks: four
-/// 129 × 129 sheets. Each cloth's solver is built as the scene loads (about
-/// 14 KB a node), so this bounds what `glint check` allocates too.
+/// 129 × 129 sheets. Each cloth's solver is built when a world places the
+/// scene (about 14 KB a node), so this bounds what that allocates.
 pub const MAX_SCENE_CLOTH_NODES: u64 = 4 * 129 * 129;
 
 /// Steps a static cloth's equilibrium counts as against [`MAX_POSE_NODE_STEPS`]:
