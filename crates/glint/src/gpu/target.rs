@@ -251,18 +251,14 @@ impl OffscreenTarget {
     /// stencil 0) when `cleared`, else loaded; kept after the pass when
     /// `kept`, else discarded.
     pub(crate) fn depth_stencil(&self, cleared: bool, kept: bool) -> wgpu::RenderPassDepthStencilAttachment<'_> {
-        let store = if kept { wgpu::StoreOp::Store } else { wgpu::StoreOp::Discard };
-        let ops = |clear| wgpu::Operations {
-            load: if cleared { wgpu::LoadOp::Clear(clear) } else { wgpu::LoadOp::Load },
-            store,
-        };
+        use wgpu::{LoadOp, Operations, StoreOp};
+        let store = if kept { StoreOp::Store } else { StoreOp::Discard };
+        let (depth, stencil) =
+            if cleared { (LoadOp::Clear(1.0), LoadOp::Clear(0)) } else { (LoadOp::Load, LoadOp::Load) };
         wgpu::RenderPassDepthStencilAttachment {
             view: &self.depth_view,
-            depth_ops: Some(ops(1.0)),
-            stencil_ops: Some(wgpu::Operations {
-                load: if cleared { wgpu::LoadOp::Clear(0) } else { wgpu::LoadOp::Load },
-                store,
-            }),
+            depth_ops: Some(Operations { load: depth, store }),
+            stencil_ops: Some(Operations { load: stencil, store }),
         }
     }
 

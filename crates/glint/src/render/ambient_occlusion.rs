@@ -351,12 +351,12 @@ impl Renderer {
                 (false, _) => "depth pre-pass: late",
                 (true, true) => "depth pre-pass",
             };
-            let load = |clear| if part.first { wgpu::LoadOp::Clear(clear) } else { wgpu::LoadOp::Load };
+            let load = if part.first { wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT) } else { wgpu::LoadOp::Load };
             let color = wgpu::RenderPassColorAttachment {
                 view: &targets.prepass,
                 depth_slice: None,
                 resolve_target: None,
-                ops: wgpu::Operations { load: load(wgpu::Color::TRANSPARENT), store: wgpu::StoreOp::Store },
+                ops: wgpu::Operations { load, store: wgpu::StoreOp::Store },
             };
             let depth = match &targets.depth {
                 Some(own) => wgpu::RenderPassDepthStencilAttachment {
