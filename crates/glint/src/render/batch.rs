@@ -1,6 +1,6 @@
 //! Core layer: merging sorted draw items into instanced draws.
 
-use super::queue::{stage_of, DrawItem};
+use crate::render::queue::{stage_of, DrawItem};
 use crate::scene::{MaterialId, ShapeId};
 
 /// One instanced draw: a run of adjacent items with equal stage, pipeline,
@@ -77,8 +77,8 @@ pub(crate) fn merge_placed(
 
 #[cfg(test)]
 mod tests {
-    use super::super::queue::{sort, sort_key, Queue};
     use super::*;
+    use crate::render::queue::{sort, sort_key, Queue};
 
     fn item(material: u32, shape: u32, first: u32, count: u32, depth: f32) -> DrawItem {
         let (m, s) = (MaterialId(material), ShapeId(shape));

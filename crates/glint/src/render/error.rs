@@ -1,6 +1,6 @@
 //! Core layer: [`RenderError`], what a frame can fail with.
 
-use super::mesh_pool::MeshTooLarge;
+use crate::render::resources::mesh_pool::MeshTooLarge;
 use crate::scene::MAX_POST_EFFECTS;
 use crate::scene::{MaterialId, RenderTargetId, ShapeId, TextureId, Viewport, MAX_LIGHTS};
 

@@ -8,7 +8,7 @@ use crate::shader::LightCounts;
 /// and the light loops' counts: each view's, from the frame's shadow plan and
 /// lights, and `precompile`'s from its lights.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub(super) struct FrameVariant {
+pub(crate) struct FrameVariant {
     /// The frame samples shadow maps (`SHADOWS`).
     pub shadows: bool,
     /// The frame samples point lights' shadow cubes (`SHADOW_CUBES`).
@@ -22,7 +22,7 @@ pub(super) struct FrameVariant {
 impl FrameVariant {
     /// The variant of a frame lit by `lights` whose shadow pass draws every map
     /// they ask for (what `precompile` builds). `ambient_occlusion`: the view's.
-    pub(super) fn expected(lights: &[Light], ambient_occlusion: bool) -> Self {
+    pub(crate) fn expected(lights: &[Light], ambient_occlusion: bool) -> Self {
         let point = |l: &Light| matches!(l.kind, LightKind::Point { .. });
         Self {
             shadows: lights.iter().any(|l| l.shadows.is_some()),
@@ -34,7 +34,7 @@ impl FrameVariant {
 
     /// The variant of a view lit by `lights` whose `views` shadow views were
     /// planned with `first_view`, each light's first (empty: no shadows).
-    pub(super) fn after(first_view: &[Option<u32>], views: usize, lights: &[Light], ambient_occlusion: bool) -> Self {
+    pub(crate) fn after(first_view: &[Option<u32>], views: usize, lights: &[Light], ambient_occlusion: bool) -> Self {
         let point = |l: &Light| matches!(l.kind, LightKind::Point { .. });
         Self {
             shadows: views > 0,

@@ -22,70 +22,42 @@
 //! so a run of batches with one pipeline, texture set and pool page is a single
 //! `multi_draw_indexed_indirect` call: one indirect command per batch.
 
-mod ambient_occlusion;
 pub mod batch;
-mod blocks;
 pub mod cull;
-mod cull_pipelines;
-mod draw_list;
-mod encode;
-mod environment;
+mod debug;
 mod error;
-mod explain;
-mod forward;
 mod frame;
 mod frame_variant;
-mod gpu_array;
-mod gpu_cull;
-mod inspect;
-mod instances;
-mod materials;
-mod mesh_pool;
-mod naive;
-mod occlusion;
-mod outline;
-mod particles;
-mod pipelines;
-mod post;
-pub(crate) mod prepare;
+mod gpu_driven;
+mod passes;
 pub mod queue;
-mod readback;
-mod registry;
 mod resources;
-mod shadow_maps;
-mod shadow_pass;
-mod shadow_views;
-mod simulate;
-mod stats;
-mod target_pool;
-mod timer;
 mod view;
 mod views;
-mod visible;
 
 pub use crate::gpu::{GpuSimulation, ParticleGpu, MAX_LAYER_PARTICLES};
 pub use crate::scene::{ShadowLayout, MAX_CUBES, MAX_SHADOW_MAP_BYTES};
+pub use debug::explain::{BatchCall, DrawCall, FrameCalls, PassCalls, PassType};
+pub use debug::stats::{FrameStats, PassStats, Passes, StageTimes, UploadStats};
+pub use debug::timer::GpuTimes;
 pub use error::RenderError;
-pub use explain::{BatchCall, DrawCall, FrameCalls, PassCalls, PassType};
+pub use frame::naive::MAX_NAIVE_DRAWS;
 pub use frame::{FrameInput, FrameOutput, Shadows, ViewKey, KEEP_VIEW_FRAMES};
-pub use gpu_cull::SKIP_UNPAID_OCCLUSION;
-pub use mesh_pool::MeshTooLarge;
-pub use naive::MAX_NAIVE_DRAWS;
-pub use particles::{ParticleBlend, ParticleLook, ParticlesId};
-pub use registry::Registry;
-pub use stats::{FrameStats, PassStats, Passes, StageTimes, UploadStats};
-pub use timer::GpuTimes;
+pub use gpu_driven::gpu_cull::SKIP_UNPAID_OCCLUSION;
+pub use passes::particles::{ParticleBlend, ParticleLook, ParticlesId};
+pub use resources::mesh_pool::MeshTooLarge;
+pub use resources::registry::Registry;
 
 use crate::gpu::{Gpu, SubmitQueue};
 use crate::scene::Texture;
 use crate::scene::{Entity, Material, MaterialId, Mesh, RenderTargetId, ShapeId, TextureId};
-use draw_list::ListPaths;
+use frame::visible::Visible;
 use frame_variant::FrameVariant;
-use instances::InstanceStore;
-use resources::InstanceBuffer;
-use shadow_maps::{ShadowMaps, ShadowSupport};
+use gpu_driven::draw_list::ListPaths;
+use passes::shadow_maps::{ShadowMaps, ShadowSupport};
+use resources::buffers::InstanceBuffer;
+use resources::instances::InstanceStore;
 use views::ViewGpu;
-use visible::Visible;
 use web_time::Instant;
 
 /// An entity as submitted this frame: its store slot and what it draws with.
@@ -145,7 +117,7 @@ pub struct Renderer {
     /// The keys of the last frame's views, in the order given.
     last_keys: Vec<ViewKey>,
     /// The debug groups open in the frame's encoder, and the last frame's.
-    outline: outline::Outline,
+    outline: debug::outline::Outline,
     /// The queue's submission count when the last flush ended.
     submits_counted: u64,
     shadow_maps: ShadowMaps,
@@ -153,39 +125,39 @@ pub struct Renderer {
     /// group points at one generation).
     shadow_maps_generation: u64,
     /// The environment's prefiltered maps (image-based lighting).
-    environment: environment::EnvironmentMaps,
+    environment: passes::environment::EnvironmentMaps,
     store: InstanceStore,
     mode: FrameMode,
     /// The number of the frame being recorded: frames so far.
     frame_index: u64,
     /// The first bad id submitted this frame, reported by `flush`.
     submit_error: Option<RenderError>,
-    gpu_timer: Option<timer::GpuTimer>,
+    gpu_timer: Option<debug::timer::GpuTimer>,
     // Per-frame lists, kept to reuse their allocations.
     submitted: Vec<Submitted>,
     visible: Visible,
     /// Transient targets: views' own and the post chain's images.
-    targets: target_pool::TargetPool,
-    post: post::PostChain,
+    targets: resources::target_pool::TargetPool,
+    post: passes::post::PostChain,
     /// Samples of a post-processed view's HDR target: the output's where the
     /// adapter multisamples the HDR format, else 1.
     hdr_msaa: bool,
     /// Whether indexed draws take a base vertex ([`Gpu::base_vertex`]).
     base_vertex: bool,
     /// The GPU culling passes, where views can cull on the GPU ([`Gpu::culls_on_gpu`]).
-    cull_pipelines: Option<gpu_cull::CullPipelines>,
+    cull_pipelines: Option<gpu_driven::gpu_cull::CullPipelines>,
     /// The last prepared table and what it was made for.
-    last_prepared: Option<(prepare::PrepareKey, Vec<prepare::Prepared>)>,
+    last_prepared: Option<(frame::prepare::PrepareKey, Vec<frame::prepare::Prepared>)>,
     /// Every tiled entity's density is multiplied by this ([`Renderer::set_density`]).
     density: f32,
     /// Particle layers ([`Renderer::add_particles`]), drawn in every view.
-    particle_layers: Vec<particles::ParticleLayer>,
+    particle_layers: Vec<passes::particles::ParticleLayer>,
     /// The soft round spot the layers without a sprite show, added once.
     particle_spot: Option<crate::scene::TextureId>,
-    particle_pipelines: particles::ParticlePipelines,
+    particle_pipelines: passes::particles::ParticlePipelines,
     /// Ambient occlusion's passes reading a single-sample pre-pass (0) and a
     /// multisampled one (1), each made with the first view that needs it.
-    ambient_occlusion_pipelines: [Option<ambient_occlusion::AmbientOcclusionPipelines>; 2],
+    ambient_occlusion_pipelines: [Option<passes::ambient_occlusion::AmbientOcclusionPipelines>; 2],
 }
 
 fn ms_since(t: Instant) -> f64 {
@@ -216,11 +188,11 @@ impl Renderer {
         let pipelines = &registry.pipelines;
         let shadow_maps = ShadowMaps::new(&device, shadows, 1, 1, 1, 1);
         let instances = InstanceBuffer::new(&device, gpu.vertex_storage(), gpu.culls_on_gpu());
-        let environment = environment::EnvironmentMaps::new(&device);
+        let environment = passes::environment::EnvironmentMaps::new(&device);
         let paths =
             ListPaths { indirect: gpu.draws_indirect(), storage: gpu.vertex_storage(), gpu_cull: gpu.culls_on_gpu() };
         let layouts = (&pipelines.scene_layout, &pipelines.camera_layout);
-        let particle_pipelines = particles::ParticlePipelines::new(&device, layouts, gpu.occlusion_culls());
+        let particle_pipelines = passes::particles::ParticlePipelines::new(&device, layouts, gpu.occlusion_culls());
         Self {
             particle_layers: Vec::new(),
             particle_spot: None,
@@ -235,7 +207,7 @@ impl Renderer {
             views: std::collections::HashMap::new(),
             paths,
             last_keys: Vec::new(),
-            outline: outline::Outline::new(gpu.debug_groups()),
+            outline: debug::outline::Outline::new(gpu.debug_groups()),
             shadow_maps,
             shadow_maps_generation: 0,
             environment,
@@ -246,13 +218,13 @@ impl Renderer {
             gpu_timer: None,
             submitted: Vec::new(),
             visible: Visible::default(),
-            targets: target_pool::TargetPool::default(),
-            post: post::PostChain::new(&gpu.device),
+            targets: resources::target_pool::TargetPool::default(),
+            post: passes::post::PostChain::new(&gpu.device),
             last_prepared: None,
             density: 1.0,
             cull_pipelines: gpu
                 .culls_on_gpu()
-                .then(|| gpu_cull::CullPipelines::new(&gpu.device, gpu.occlusion_culls())),
+                .then(|| gpu_driven::gpu_cull::CullPipelines::new(&gpu.device, gpu.occlusion_culls())),
             base_vertex: gpu.base_vertex(),
             hdr_msaa: {
                 let flags = gpu.adapter.get_texture_format_features(crate::gpu::HDR_FORMAT).flags;
@@ -340,7 +312,7 @@ impl Renderer {
     /// times; [`Renderer::read_gpu_times`] waits for the last frame's.
     pub fn enable_gpu_timing(&mut self) -> bool {
         if self.gpu_timer.is_none() {
-            self.gpu_timer = timer::GpuTimer::new(&self.device, &self.queue);
+            self.gpu_timer = debug::timer::GpuTimer::new(&self.device, &self.queue);
         }
         self.gpu_timer.is_some()
     }
@@ -388,7 +360,7 @@ impl Renderer {
         };
         let motion = self.registry.material(entity.material).and_then(|m| m.motion);
         let (local, walk) = motion.map_or((shape.mesh.aabb(), 0.0), |m| m.reach(shape.mesh.aabb()));
-        let slot = self.store.submit(entity, instances::Reach { local, walk }, self.frame_index);
+        let slot = self.store.submit(entity, resources::instances::Reach { local, walk }, self.frame_index);
         self.submitted.push(Submitted {
             slot,
             shape: entity.shape,

@@ -1,15 +1,15 @@
 //! Core layer: [`ViewFrame`], what the frame's stages read of one
 //! [`View`](crate::scene::View).
 
-use super::cull::Frustum;
-use super::frame_variant::FrameVariant;
+use crate::render::cull::Frustum;
+use crate::render::frame_variant::FrameVariant;
 use crate::scene::{AmbientOcclusion, Camera, Culling, TextureId, View};
 use glam::Mat4;
 
 /// A view's camera matrices for one frame at its aspect ratio: what culling,
 /// queueing and the Camera block read.
 #[derive(Clone, Copy, Debug)]
-pub(super) struct ViewFrame {
+pub(crate) struct ViewFrame {
     /// The camera.
     pub camera: Camera,
     /// Width over height of the rectangle it draws into.

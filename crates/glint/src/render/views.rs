@@ -4,14 +4,14 @@
 //! draw lists. Records and lists are written only where their bytes change, so
 //! a view that did not change uploads nothing, however many views a frame has.
 
-use super::ambient_occlusion::OcclusionTargets;
-use super::blocks::CameraGpu;
-use super::blocks::{SceneGpu, UniformBlock};
-use super::draw_list::{DrawList, ListPaths};
-use super::pipelines::Pipelines;
-use super::post::PostParams;
-use super::resources::InstanceBuffer;
-use super::shadow_maps::{ShadowGpu, ShadowMaps};
+use crate::render::gpu_driven::draw_list::{DrawList, ListPaths};
+use crate::render::passes::ambient_occlusion::OcclusionTargets;
+use crate::render::passes::post::PostParams;
+use crate::render::passes::shadow_maps::{ShadowGpu, ShadowMaps};
+use crate::render::resources::blocks::CameraGpu;
+use crate::render::resources::blocks::{SceneGpu, UniformBlock};
+use crate::render::resources::buffers::InstanceBuffer;
+use crate::render::resources::pipelines::Pipelines;
 
 /// Records the buffer holds: the camera and up to this many shadow views.
 pub(crate) const MAX_SHADOW_VIEWS: usize = 64;
@@ -74,14 +74,14 @@ pub(crate) struct Shared<'a> {
     pub instances: &'a InstanceBuffer,
     pub shadow_maps: &'a ShadowMaps,
     pub shadow_maps_generation: u64,
-    pub environment: &'a super::environment::EnvironmentMaps,
+    pub environment: &'a crate::render::passes::environment::EnvironmentMaps,
     /// A 1 × 1 white texture: the ambient occlusion of a view without it.
     pub white: &'a wgpu::TextureView,
 }
 
 /// What one view keeps on the GPU between frames: a split screen's views, or a
 /// view into a render target, each draw from their own records, lists and
-/// Shadow block (views are told apart by their [`ViewKey`](super::ViewKey)).
+/// Shadow block (views are told apart by their [`ViewKey`](crate::render::ViewKey)).
 pub(crate) struct ViewGpu {
     /// The camera's and the shadow views' Camera-block records.
     pub blocks: ViewBlocks,

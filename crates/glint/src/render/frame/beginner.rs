@@ -5,8 +5,8 @@
 //! and [`Renderer::flush`] is the frame of one view. [`Renderer::render`] is
 //! those calls in order, [`Renderer::render_views`] the frame of several views.
 
-use super::{FrameInput, ViewKey};
 use crate::gpu::OffscreenTarget;
+use crate::render::frame::{FrameInput, ViewKey};
 use crate::render::{FrameStats, RenderError, Renderer};
 use crate::scene::{Entity, Light, Lighting, View, MAX_LIGHTS};
 

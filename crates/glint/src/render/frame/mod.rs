@@ -12,12 +12,19 @@
 //! "forward pass: early", "depth pyramid", "post: …".
 
 mod beginner;
+pub(crate) mod encode;
+pub(crate) mod forward;
+pub(crate) mod naive;
+pub(crate) mod prepare;
+pub(crate) mod shadow_pass;
+pub(crate) mod simulate;
 mod view;
+pub(crate) mod visible;
 
 pub use beginner::Shadows;
 
-use super::{ms_since, FrameStats, GpuTimes, RenderError, Renderer};
 use crate::gpu::{AfterViews, GpuSimulation, OffscreenTarget};
+use crate::render::{ms_since, FrameStats, GpuTimes, RenderError, Renderer};
 use crate::scene::{Entity, Lighting, MaterialId, TextureId, View, MAX_LIGHTS, MAX_POST_EFFECTS};
 use std::collections::HashMap;
 use web_time::Instant;
@@ -109,7 +116,7 @@ pub struct FrameOutput {
 /// The frame being recorded: handed `&mut` from stage to stage, consumed by
 /// its submission ([`Renderer::submit_frame`]); dropped with its commands when
 /// a stage fails.
-pub(super) struct Frame {
+pub(crate) struct Frame {
     /// Its number.
     pub index: u64,
     /// Its one command encoder.

@@ -3,11 +3,11 @@
 //! prepare → shadow views → cull → queue → sort → batch → upload → encode,
 //! and compose.
 
-use super::{Frame, ViewKey};
 use crate::gpu::{OffscreenTarget, TargetFormat, HDR_FORMAT};
+use crate::render::frame::shadow_pass::ViewShadows;
+use crate::render::frame::{Frame, ViewKey};
 use crate::render::frame_variant::FrameVariant;
-use crate::render::post::ChainImages;
-use crate::render::shadow_pass::ViewShadows;
+use crate::render::passes::post::ChainImages;
 use crate::render::view::ViewFrame;
 use crate::render::views::ViewGpu;
 use crate::render::{ms_since, queue, FrameMode, FrameStats, Laps, RenderError, Renderer};
@@ -29,7 +29,7 @@ impl Renderer {
     /// place `k` in a frame of several views), with the GPU state
     /// kept under `key` (made on its first frame): drawn into `output`, or
     /// into its render target, leaving out the entities that show that target.
-    pub(super) fn draw_view(
+    pub(crate) fn draw_view(
         &mut self,
         frame: &mut Frame,
         (group, (key, view)): (Option<usize>, (ViewKey, &View)),
@@ -207,7 +207,7 @@ impl Renderer {
         FrameStats {
             entities_submitted: entities,
             instances_submitted: instances,
-            instance_bytes: (records * std::mem::size_of::<crate::render::blocks::InstanceGpu>()) as u64,
+            instance_bytes: (records * std::mem::size_of::<crate::render::resources::blocks::InstanceGpu>()) as u64,
             ..Default::default()
         }
     }

@@ -1,0 +1,361 @@
+//! Core layer: particle layers, drawn as camera-facing billboards at the end
+//! of every view's forward pass (after the transparent stages, before the
+//! glare), depth-tested against the scene without writing depth; a soft
+//! layer fades in front of geometry where the target's depth is readable (a
+//! pass of their own then: `encode.rs`). A layer is a
+//! buffer of [`ParticleGpu`] records, one instance of a four-vertex strip
+//! each: written from the CPU ([`Renderer::write_particles`]) or by a compute
+//! shader ([`Renderer::particle_buffer`], `sim/particles`). Alpha-blended
+//! layers must be written back to front; additive ones in any order. One draw
+//! call a layer, whatever its count.
+
+use crate::gpu::TargetFormat;
+use crate::gpu::{ParticleGpu, MAX_LAYER_PARTICLES};
+use crate::render::debug::explain::DrawCall;
+use crate::render::RenderError;
+use crate::render::Renderer;
+pub use crate::scene::ParticleBlend;
+use crate::scene::{Texture, TextureId};
+use crate::FrameStats;
+use std::collections::HashMap;
+
+/// What a layer's particles look like.
+#[derive(Clone, Debug)]
+pub struct ParticleLook {
+    /// How they blend.
+    pub blend: ParticleBlend,
+    /// The sprite each billboard shows, times its colour (a soft round spot
+    /// without one): a texture of this renderer's registry, uploaded once
+    /// however many layers and materials show it.
+    pub texture: Option<TextureId>,
+    /// World units over which a particle fades out in front of geometry
+    /// (0: none). Soft where the target's depth is readable (the devices that
+    /// occlusion-cull: [`Gpu::occlusion_culls`](crate::Gpu::occlusion_culls));
+    /// elsewhere (GL, WebGL2) particles meet geometry hard.
+    pub soft: f32,
+}
+
+/// A particle layer of a [`Renderer`] ([`Renderer::add_particles`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct ParticlesId(pub(crate) u32);
+
+/// One layer's records and sprite.
+pub(crate) struct ParticleLayer {
+    buffer: wgpu::Buffer,
+    capacity: u32,
+    count: u32,
+    blend: ParticleBlend,
+    soft: f32,
+    /// The registry texture it shows, uploaded on its first frame.
+    sprite: TextureId,
+    look_block: wgpu::Buffer,
+    /// Its sprite group (group 2), made on its first frame.
+    group: Option<wgpu::BindGroup>,
+}
+
+/// A particle pipeline: for a target, a blend, and whether it reads depth.
+type PipelineKey = (TargetFormat, ParticleBlend, bool);
+
+/// The particle pipelines and their layouts: the sprite group, and for soft
+/// layers the scene's depth (single-sampled or multisampled).
+pub(crate) struct ParticlePipelines {
+    texture_layout: wgpu::BindGroupLayout,
+    depth_layouts: [wgpu::BindGroupLayout; 2],
+    /// Hard; soft on one sample; soft on several.
+    layouts: [wgpu::PipelineLayout; 3],
+    modules: HashMap<Option<bool>, wgpu::ShaderModule>,
+    cache: HashMap<PipelineKey, wgpu::RenderPipeline>,
+    /// Whether targets' depth is readable here (the devices that
+    /// occlusion-cull; GL's shaders cannot load from depth textures).
+    soft: bool,
+}
+
+/// The soft round spot a layer without a texture shows.
+fn spot() -> Texture {
+    let image = image::RgbaImage::from_fn(64, 64, |x, y| {
+        let d = ((x as f32 - 31.5).powi(2) + (y as f32 - 31.5).powi(2)).sqrt() / 32.0;
+        let a = (1.0 - d).clamp(0.0, 1.0).powf(1.5);
+        image::Rgba([255, 255, 255, (a * 255.0) as u8])
+    });
+    Texture::new("particle spot", image, true)
+}
+
+impl ParticlePipelines {
+    pub(crate) fn new(
+        device: &wgpu::Device,
+        (scene, camera): (&wgpu::BindGroupLayout, &wgpu::BindGroupLayout),
+        soft: bool,
+    ) -> Self {
+        let look = wgpu::BindGroupLayoutEntry {
+            binding: 2,
+            visibility: wgpu::ShaderStages::FRAGMENT,
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Uniform,
+                has_dynamic_offset: false,
+                min_binding_size: None,
+            },
+            count: None,
+        };
+        let texture_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("renderer: particle sprite layout (group 2)"),
+            entries: &[crate::gpu::texture_entry(0), crate::gpu::sampler_entry(1), look],
+        });
+        let depth_layout = |multisampled: bool| {
+            device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some("renderer: particle scene depth layout (group 3)"),
+                entries: &[wgpu::BindGroupLayoutEntry {
+                    binding: 0,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Depth,
+                        view_dimension: wgpu::TextureViewDimension::D2,
+                        multisampled,
+                    },
+                    count: None,
+                }],
+            })
+        };
+        let depth_layouts = [depth_layout(false), depth_layout(true)];
+        let layout = |depth: Option<&wgpu::BindGroupLayout>| {
+            device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("renderer: particle pipeline layout"),
+                bind_group_layouts: &[Some(scene), Some(camera), Some(&texture_layout), depth],
+                immediate_size: 0,
+            })
+        };
+        let layouts = [layout(None), layout(Some(&depth_layouts[0])), layout(Some(&depth_layouts[1]))];
+        Self { texture_layout, depth_layouts, layouts, modules: HashMap::new(), cache: HashMap::new(), soft }
+    }
+
+    /// Build the pipeline of `key` unless it exists; returns whether it was
+    /// built now.
+    fn build(&mut self, device: &wgpu::Device, (target, blend, soft): PipelineKey) -> bool {
+        if self.cache.contains_key(&(target, blend, soft)) {
+            return false;
+        }
+        let variant = soft.then_some(target.samples > 1);
+        let module = match self.modules.entry(variant) {
+            std::collections::hash_map::Entry::Occupied(built) => built.into_mut(),
+            std::collections::hash_map::Entry::Vacant(slot) => {
+                let wgsl = crate::shader::particles(variant);
+                slot.insert(crate::render::resources::pipelines::shader_module(
+                    device,
+                    "renderer: particle shader",
+                    wgsl,
+                ))
+            }
+        };
+        let layout = &self.layouts[match variant {
+            None => 0,
+            Some(false) => 1,
+            Some(true) => 2,
+        }];
+        let color = match blend {
+            ParticleBlend::Additive => wgpu::BlendComponent {
+                src_factor: wgpu::BlendFactor::One,
+                dst_factor: wgpu::BlendFactor::One,
+                operation: wgpu::BlendOperation::Add,
+            },
+            // The shader's colour is premultiplied by its alpha.
+            ParticleBlend::Alpha => wgpu::BlendComponent::OVER,
+        };
+        let keep_alpha = wgpu::BlendComponent {
+            src_factor: wgpu::BlendFactor::Zero,
+            dst_factor: wgpu::BlendFactor::One,
+            operation: wgpu::BlendOperation::Add,
+        };
+        let states = crate::scene::RenderStates {
+            depth: crate::scene::DepthState { compare: crate::scene::Compare::LessEqual, write: false },
+            ..Default::default()
+        };
+        let attributes = wgpu::vertex_attr_array![0 => Float32x4, 1 => Float32x4];
+        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("renderer: particle pipeline"),
+            layout: Some(layout),
+            vertex: wgpu::VertexState {
+                module,
+                entry_point: Some("vs_particle"),
+                compilation_options: Default::default(),
+                buffers: &[Some(wgpu::VertexBufferLayout {
+                    array_stride: std::mem::size_of::<ParticleGpu>() as u64,
+                    step_mode: wgpu::VertexStepMode::Instance,
+                    attributes: &attributes,
+                })],
+            },
+            primitive: wgpu::PrimitiveState { topology: wgpu::PrimitiveTopology::TriangleStrip, ..Default::default() },
+            depth_stencil: Some(crate::render::resources::pipelines::depth_stencil(&states, crate::gpu::DEPTH_FORMAT)),
+            multisample: wgpu::MultisampleState { count: target.samples, ..Default::default() },
+            fragment: Some(wgpu::FragmentState {
+                module,
+                entry_point: Some("fs_particle"),
+                compilation_options: Default::default(),
+                targets: &[Some(wgpu::ColorTargetState {
+                    format: target.color,
+                    blend: Some(wgpu::BlendState { color, alpha: keep_alpha }),
+                    write_mask: wgpu::ColorWrites::ALL,
+                })],
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
+        self.cache.insert((target, blend, soft), pipeline);
+        true
+    }
+}
+
+impl Renderer {
+    /// A particle layer of `capacity` billboards (at most [`MAX_LAYER_PARTICLES`]), drawn in
+    /// every view from the next frame on; none to draw until written.
+    pub fn add_particles(&mut self, capacity: u32, look: ParticleLook) -> Result<ParticlesId, RenderError> {
+        let capacity = capacity.clamp(1, MAX_LAYER_PARTICLES);
+        let sprite = match look.texture {
+            Some(id) => id,
+            None => *self.particle_spot.get_or_insert_with(|| self.registry.add_texture(spot())),
+        };
+        let device = &self.registry.device;
+        let scope = crate::gpu::DriverErrors::watch(device);
+        let buffer = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("renderer: particles"),
+            size: capacity as u64 * std::mem::size_of::<ParticleGpu>() as u64,
+            usage: match self.cull_pipelines.is_some() {
+                true => wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+                false => wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
+            },
+            mapped_at_creation: false,
+        });
+        let soft = if look.soft.is_finite() { look.soft.max(0.0) } else { 0.0 };
+        let look_block = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("renderer: particle look"),
+            size: 16,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        self.registry.queue.write_buffer(&look_block, 0, bytemuck::cast_slice(&[soft, 0.0, 0.0, 0.0]));
+        if let Some(error) = scope.finish() {
+            return Err(RenderError::Device { what: "a particle layer", message: error.to_string() });
+        }
+        let blend = look.blend;
+        self.particle_layers.push(ParticleLayer {
+            buffer,
+            capacity,
+            count: 0,
+            blend,
+            soft,
+            sprite,
+            look_block,
+            group: None,
+        });
+        Ok(ParticlesId(self.particle_layers.len() as u32 - 1))
+    }
+
+    /// Draw `records` in layer `id` from the next frame on (as many as fit).
+    pub fn write_particles(&mut self, id: ParticlesId, records: &[ParticleGpu]) {
+        let Some(layer) = self.particle_layers.get_mut(id.0 as usize) else { return };
+        let count = records.len().min(layer.capacity as usize);
+        self.queue.write_buffer(&layer.buffer, 0, bytemuck::cast_slice(&records[..count]));
+        layer.count = count as u32;
+    }
+
+    /// Layer `id`'s record buffer, for a compute shader to write (it allows
+    /// storage where the device computes), and its capacity.
+    pub fn particle_buffer(&self, id: ParticlesId) -> Option<(&wgpu::Buffer, u32)> {
+        self.particle_layers.get(id.0 as usize).map(|l| (&l.buffer, l.capacity))
+    }
+
+    /// Draw the first `count` records of layer `id` (as written by a compute shader).
+    pub fn set_particle_count(&mut self, id: ParticlesId, count: u32) {
+        if let Some(layer) = self.particle_layers.get_mut(id.0 as usize) {
+            layer.count = count.min(layer.capacity);
+        }
+    }
+
+    /// Stage 1 for particles: every layer to draw gets its sprite (uploaded
+    /// once however many layers and materials show it, counted in `stats`)
+    /// and its pipelines for `target` (a soft layer's both ways where depth is
+    /// readable: a view's target may not be).
+    pub(crate) fn prepare_particles(
+        &mut self,
+        target: TargetFormat,
+        stats: &mut FrameStats,
+    ) -> Result<(), RenderError> {
+        let registry = &mut self.registry;
+        for layer in self.particle_layers.iter_mut().filter(|l| l.count > 0) {
+            if layer.group.is_none() {
+                stats.bytes_uploaded.textures += registry.upload_texture(layer.sprite, "particle layer")?;
+                // A sprite that could not be uploaded shows white, as a material's map does.
+                let uploaded = registry.textures[layer.sprite.0 as usize].view.as_ref();
+                let view = uploaded.unwrap_or(&registry.defaults.white_srgb);
+                layer.group = Some(registry.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: Some("renderer: particle sprite"),
+                    layout: &self.particle_pipelines.texture_layout,
+                    entries: &[
+                        wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(view) },
+                        wgpu::BindGroupEntry {
+                            binding: 1,
+                            resource: wgpu::BindingResource::Sampler(&registry.sampler),
+                        },
+                        wgpu::BindGroupEntry { binding: 2, resource: layer.look_block.as_entire_binding() },
+                    ],
+                }));
+            }
+            for soft in [false, layer.soft > 0.0 && self.particle_pipelines.soft] {
+                let built = self.particle_pipelines.build(&registry.device, (target, layer.blend, soft));
+                stats.pipelines_compiled += u32::from(built);
+            }
+        }
+        Ok(())
+    }
+
+    /// The scene depth a frame's soft layers read from `target`, when some
+    /// layer to draw is soft and the depth is readable; the frame then draws
+    /// its particles in a pass of their own.
+    pub(crate) fn particle_depth(&self, target: &crate::OffscreenTarget) -> Option<wgpu::BindGroup> {
+        let depth = target.depth_only_view().filter(|_| self.particle_pipelines.soft)?;
+        self.particle_layers.iter().any(|l| l.count > 0 && l.soft > 0.0).then(|| {
+            self.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("renderer: particle scene depth"),
+                layout: &self.particle_pipelines.depth_layouts[usize::from(target.samples() > 1)],
+                entries: &[wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(depth) }],
+            })
+        })
+    }
+
+    /// Stage 7's last draws before the glare: every layer with records, one
+    /// draw each, soft ones reading `depth` when given (group 3). Leaves
+    /// groups 0 and 1 bound.
+    pub(crate) fn draw_particles(
+        &self,
+        pass: &mut wgpu::RenderPass<'_>,
+        target: TargetFormat,
+        depth: Option<&wgpu::BindGroup>,
+        stats: &mut FrameStats,
+    ) {
+        for layer in self.particle_layers.iter().filter(|l| l.count > 0) {
+            let soft = depth.filter(|_| layer.soft > 0.0);
+            let pipeline = self.particle_pipelines.cache.get(&(target, layer.blend, soft.is_some()));
+            let (Some(pipeline), Some(group)) = (pipeline, &layer.group) else { continue };
+            pass.set_pipeline(pipeline);
+            pass.set_bind_group(2, group, &[]);
+            if let Some(depth) = soft {
+                pass.set_bind_group(3, depth, &[]);
+            }
+            pass.set_vertex_buffer(0, layer.buffer.slice(..));
+            pass.draw(0..4, 0..layer.count);
+            self.outline.call(|| {
+                let what = format!(
+                    "particles ({}{})",
+                    format!("{:?}", layer.blend).to_lowercase(),
+                    if soft.is_some() { ", soft" } else { "" }
+                );
+                let mut changed = vec!["pipeline", "bind group 2 (particle layer)", "vertex buffer 0 (records)"];
+                changed.extend(soft.map(|_| "bind group 3 (scene depth)"));
+                let count = u64::from(layer.count);
+                DrawCall::single(&what, "draw", (count, 2 * count), &changed)
+            });
+            stats.draw_calls += 1;
+            stats.draws += 1;
+            stats.bind_groups_set += 1 + u32::from(soft.is_some());
+            stats.particles_drawn += layer.count;
+        }
+    }
+}

@@ -1,0 +1,394 @@
+//! Core layer: a view's post-processing chain. The view was drawn into an HDR
+//! target; each [`PostEffect`] runs in order on full-screen triangles
+//! (`shader/post.wgsl`), between two full-size intermediate targets (bloom also
+//! uses two at half size), and the last pass writes the view's rectangle of the
+//! output. Intermediates are kept between frames by size, never made per frame;
+//! each effect's parameters are written only when they change.
+
+use crate::gpu::{sampler_entry, texture_entry, HDR_FORMAT};
+use crate::render::debug::timer::{GpuTimer, Timed};
+use crate::render::resources::target_pool::TargetPool;
+use crate::render::{PassStats, RenderError};
+use crate::scene::{PostEffect, Tonemap, MAX_POST_EFFECTS};
+use std::collections::HashMap;
+
+/// Full-screen passes one chain may take (bloom takes four).
+const MAX_PASSES: usize = 4 * MAX_POST_EFFECTS;
+/// Bytes between pass parameter records: the dynamic-offset alignment every device accepts.
+const PARAMS_STRIDE: u64 = 256;
+
+/// A full-screen pass: one fragment entry point of `post.wgsl`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+enum Pass {
+    Bright,
+    Blur,
+    BloomAdd,
+    Tonemap,
+    Fxaa,
+    Edges,
+    Vignette,
+}
+
+impl Pass {
+    fn entry_point(self) -> &'static str {
+        match self {
+            Pass::Bright => "fs_bright",
+            Pass::Blur => "fs_blur",
+            Pass::BloomAdd => "fs_bloom_add",
+            Pass::Tonemap => "fs_tonemap",
+            Pass::Fxaa => "fs_fxaa",
+            Pass::Edges => "fs_edges",
+            Pass::Vignette => "fs_vignette",
+        }
+    }
+}
+
+/// The parameters block of `post.wgsl`: `a`, then the input's texel size.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+struct Params {
+    a: [f32; 4],
+    texel: [f32; 4],
+}
+
+/// Where a pass reads or writes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Image {
+    /// The view as drawn (HDR).
+    Scene,
+    /// Intermediate `k`: 0 and 1 full size, 2 and 3 half size.
+    Pooled(usize),
+    /// The view's rectangle of the output.
+    Output,
+}
+
+/// One full-screen pass of a chain.
+struct Step {
+    pass: Pass,
+    a: [f32; 4],
+    source: Image,
+    extra: Option<Image>,
+    target: Image,
+}
+
+/// The passes `chain` takes, in order.
+fn steps(chain: &[PostEffect]) -> Vec<(usize, Step)> {
+    let mut out = Vec::new();
+    let mut current = Image::Scene;
+    for (k, effect) in chain.iter().enumerate() {
+        let target = if k + 1 == chain.len() {
+            Image::Output
+        } else if current == Image::Pooled(0) {
+            Image::Pooled(1)
+        } else {
+            Image::Pooled(0)
+        };
+        let step = |pass, a, source, extra, target| (k, Step { pass, a, source, extra, target });
+        match *effect {
+            PostEffect::Bloom { threshold, intensity } => {
+                let (half, other) = (Image::Pooled(2), Image::Pooled(3));
+                out.push(step(Pass::Bright, [threshold, 0.0, 0.0, 0.0], current, None, half));
+                out.push(step(Pass::Blur, [1.0, 0.0, 0.0, 0.0], half, None, other));
+                out.push(step(Pass::Blur, [0.0, 1.0, 0.0, 0.0], other, None, half));
+                out.push(step(Pass::BloomAdd, [intensity, 0.0, 0.0, 0.0], current, Some(half), target));
+            }
+            PostEffect::Tonemap { operator, exposure } => {
+                let op = match operator {
+                    Tonemap::None => 0.0,
+                    Tonemap::Reinhard => 1.0,
+                    Tonemap::Aces => 2.0,
+                    Tonemap::Agx => 3.0,
+                };
+                out.push(step(Pass::Tonemap, [exposure, op, 0.0, 0.0], current, None, target));
+            }
+            PostEffect::Fxaa => out.push(step(Pass::Fxaa, [0.0; 4], current, None, target)),
+            PostEffect::Edges { color, threshold } => {
+                out.push(step(Pass::Edges, [color.x, color.y, color.z, threshold], current, None, target))
+            }
+            PostEffect::Vignette { strength } => {
+                out.push(step(Pass::Vignette, [strength, 0.0, 0.0, 0.0], current, None, target))
+            }
+        }
+        current = target;
+    }
+    out
+}
+
+/// What a chain draws from and into.
+pub(crate) struct ChainImages<'a> {
+    /// The view drawn in HDR, and its size.
+    pub scene: &'a wgpu::TextureView,
+    /// Its size in pixels (the rectangle's).
+    pub size: (u32, u32),
+    /// The output and its colour format.
+    pub output: &'a wgpu::TextureView,
+    /// The output's colour format.
+    pub output_format: wgpu::TextureFormat,
+    /// The rectangle of the output the chain's last pass fills: x, y, width, height.
+    pub rect: [u32; 4],
+}
+
+/// A view's post-pass parameter records, one per pass of its chain, each
+/// written only when it changes.
+pub(crate) struct PostParams {
+    buffer: wgpu::Buffer,
+    last: Vec<Option<Params>>,
+}
+
+impl PostParams {
+    pub(crate) fn new(device: &wgpu::Device) -> Self {
+        let buffer = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("post: pass parameters"),
+            size: PARAMS_STRIDE * MAX_PASSES as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        Self { buffer, last: vec![None; MAX_PASSES] }
+    }
+}
+
+/// The post shader, its pipelines and intermediate targets.
+pub(crate) struct PostChain {
+    layout: wgpu::BindGroupLayout,
+    pipeline_layout: wgpu::PipelineLayout,
+    module: Option<wgpu::ShaderModule>,
+    sampler: wgpu::Sampler,
+    pipelines: HashMap<(Pass, wgpu::TextureFormat), wgpu::RenderPipeline>,
+    /// Bound as the second input where a pass has none.
+    black: wgpu::TextureView,
+}
+
+impl PostChain {
+    pub(crate) fn new(device: &wgpu::Device) -> Self {
+        let params_entry = wgpu::BindGroupLayoutEntry {
+            binding: 3,
+            visibility: wgpu::ShaderStages::FRAGMENT,
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Uniform,
+                has_dynamic_offset: true,
+                min_binding_size: wgpu::BufferSize::new(std::mem::size_of::<Params>() as u64),
+            },
+            count: None,
+        };
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("post: layout"),
+            entries: &[texture_entry(0), texture_entry(1), sampler_entry(2), params_entry],
+        });
+        let black = device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("post: black"),
+            size: wgpu::Extent3d { width: 1, height: 1, depth_or_array_layers: 1 },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: HDR_FORMAT,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING,
+            view_formats: &[],
+        });
+        Self {
+            pipeline_layout: device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("post: pipeline layout"),
+                bind_group_layouts: &[Some(&layout)],
+                immediate_size: 0,
+            }),
+            layout,
+            module: None,
+            sampler: device.create_sampler(&wgpu::SamplerDescriptor {
+                label: Some("post: linear clamp"),
+                mag_filter: wgpu::FilterMode::Linear,
+                min_filter: wgpu::FilterMode::Linear,
+                ..Default::default()
+            }),
+            pipelines: HashMap::new(),
+            black: black.create_view(&Default::default()),
+        }
+    }
+
+    /// Record `chain` from `images.scene` into `images.output`, its passes'
+    /// parameters in `params` (the view's own: views' chains share one
+    /// submission), its intermediate images from `pool`. Returns the chain's draws; the GPU time of effect k is timed
+    /// as `Timed::Post(k)` by `timer`, for frame `frame_index`.
+    pub(crate) fn encode(
+        &mut self,
+        (device, queue): (&wgpu::Device, &wgpu::Queue),
+        (params, pool): (&mut PostParams, &mut TargetPool),
+        encoder: &mut wgpu::CommandEncoder,
+        chain: &[PostEffect],
+        images: &ChainImages,
+        (frame_index, mut timer, outline): (u64, Option<&mut GpuTimer>, &crate::render::debug::outline::Outline),
+    ) -> Result<PassStats, RenderError> {
+        if chain.len() > MAX_POST_EFFECTS {
+            return Err(RenderError::PostChainTooLong(chain.len()));
+        }
+        let steps = steps(chain);
+        self.prepare(device, &steps, images, (pool, frame_index))?;
+        let pool = &*pool;
+        let (width, height) = images.size;
+        let half = ((width / 2).max(1), (height / 2).max(1));
+        let size_of = |image: Image| match image {
+            Image::Pooled(2 | 3) => half,
+            _ => images.size,
+        };
+        let mut stats = PassStats::default();
+        for (k, (effect, step)) in steps.iter().enumerate() {
+            let (sw, sh) = size_of(step.source);
+            let record = Params { a: step.a, texel: [1.0 / sw as f32, 1.0 / sh as f32, 0.0, 0.0] };
+            if params.last[k] != Some(record) {
+                queue.write_buffer(&params.buffer, PARAMS_STRIDE * k as u64, bytemuck::bytes_of(&record));
+                params.last[k] = Some(record);
+            }
+            let source = self.view(step.source, images, pool)?;
+            let extra = match step.extra {
+                Some(e) => self.view(e, images, pool)?,
+                None => &self.black,
+            };
+            let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("post: pass inputs"),
+                layout: &self.layout,
+                entries: &[
+                    wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(source) },
+                    wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::TextureView(extra) },
+                    wgpu::BindGroupEntry { binding: 2, resource: wgpu::BindingResource::Sampler(&self.sampler) },
+                    wgpu::BindGroupEntry {
+                        binding: 3,
+                        resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                            buffer: &params.buffer,
+                            offset: 0,
+                            size: wgpu::BufferSize::new(std::mem::size_of::<Params>() as u64),
+                        }),
+                    },
+                ],
+            });
+            let first = k == 0 || steps[k - 1].0 != *effect;
+            let last = steps.get(k + 1).is_none_or(|(next, _)| next != effect);
+            let writes = timer.as_ref().and_then(|t| t.pass_writes(Timed::Post(*effect as u8), first, last));
+            let format = if step.target == Image::Output { images.output_format } else { HDR_FORMAT };
+            let label = format!("post: {} ({})", chain[*effect].name(), step.pass.entry_point());
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some(&label),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view: self.view(step.target, images, pool)?,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations { load: wgpu::LoadOp::Load, store: wgpu::StoreOp::Store },
+                })],
+                timestamp_writes: writes,
+                ..Default::default()
+            });
+            if step.target == Image::Output {
+                let [x, y, w, h] = images.rect;
+                pass.set_viewport(x as f32, y as f32, w as f32, h as f32, 0.0, 1.0);
+            }
+            pass.set_pipeline(&self.pipelines[&(step.pass, format)]);
+            pass.set_bind_group(0, &bind_group, &[(PARAMS_STRIDE * k as u64) as u32]);
+            pass.draw(0..3, 0..1);
+            drop(pass);
+            outline.pass(&label, crate::render::debug::explain::PassType::Render, &[]);
+            let changed = ["pipeline", "bind group 0 (the step's images and parameters)"];
+            outline.call(|| crate::render::debug::explain::DrawCall::single(&label, "draw", (1, 1), &changed));
+            if last {
+                if let Some(timer) = timer.as_deref_mut() {
+                    timer.resolve(encoder, Timed::Post(*effect as u8), frame_index);
+                }
+            }
+            stats.draw_calls += 1;
+            stats.draws += 1;
+        }
+        Ok(stats)
+    }
+
+    /// Build the pipelines and intermediate targets `steps` need.
+    fn prepare(
+        &mut self,
+        device: &wgpu::Device,
+        steps: &[(usize, Step)],
+        images: &ChainImages,
+        (pool, frame_index): (&mut TargetPool, u64),
+    ) -> Result<(), RenderError> {
+        let scope = crate::gpu::DriverErrors::watch(device);
+        let module = self.module.get_or_insert_with(|| {
+            device.create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some("post: shader"),
+                source: wgpu::ShaderSource::Wgsl(crate::shader::POST.into()),
+            })
+        });
+        for (_, step) in steps {
+            let format = if step.target == Image::Output { images.output_format } else { HDR_FORMAT };
+            self.pipelines.entry((step.pass, format)).or_insert_with(|| {
+                let label = format!("post: {} ({format:?})", step.pass.entry_point());
+                let shader = (&self.pipeline_layout, &*module);
+                crate::gpu::full_screen_pipeline(device, &label, shader, ("vs_post", step.pass.entry_point()), format)
+            });
+        }
+        let (width, height) = images.size;
+        let half = ((width / 2).max(1), (height / 2).max(1));
+        let used = |image: &Image| matches!(image, Image::Pooled(_)).then_some(*image);
+        for image in steps.iter().flat_map(|(_, s)| [used(&s.source), s.extra, used(&s.target)]).flatten() {
+            let Image::Pooled(slot) = image else { continue };
+            pool.keep_image(device, if slot >= 2 { half } else { images.size }, slot, frame_index);
+        }
+        match scope.finish() {
+            Some(error) => {
+                self.module = None;
+                self.pipelines.clear();
+                Err(RenderError::Device { what: "the post-processing passes", message: error.to_string() })
+            }
+            None => Ok(()),
+        }
+    }
+
+    /// The texture view of `image` (a pooled image as `prepare` made it).
+    fn view<'a>(
+        &'a self,
+        image: Image,
+        images: &'a ChainImages,
+        pool: &'a TargetPool,
+    ) -> Result<&'a wgpu::TextureView, RenderError> {
+        let (width, height) = images.size;
+        let half = ((width / 2).max(1), (height / 2).max(1));
+        match image {
+            Image::Scene => Ok(images.scene),
+            Image::Output => Ok(images.output),
+            Image::Pooled(slot) => {
+                let size = if slot >= 2 { half } else { images.size };
+                let missing = || RenderError::Device {
+                    what: "the post-processing passes",
+                    message: format!("no intermediate image {slot} of {}x{}", size.0, size.1),
+                };
+                pool.image(size, slot).ok_or_else(missing)
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_post_parameters_mirror_their_wgsl_struct() {
+        crate::shader::layout::assert_mirrors!(Params, crate::shader::POST, "Params", [a, texel]);
+    }
+
+    #[test]
+    fn a_chain_ping_pongs_between_two_targets_and_ends_in_the_output() {
+        let chain = [PostEffect::BLOOM, PostEffect::TONEMAP, PostEffect::Fxaa];
+        let steps = steps(&chain);
+        let shape: Vec<(usize, Pass, Image, Image)> =
+            steps.iter().map(|(k, s)| (*k, s.pass, s.source, s.target)).collect();
+        assert_eq!(
+            shape,
+            vec![
+                (0, Pass::Bright, Image::Scene, Image::Pooled(2)),
+                (0, Pass::Blur, Image::Pooled(2), Image::Pooled(3)),
+                (0, Pass::Blur, Image::Pooled(3), Image::Pooled(2)),
+                (0, Pass::BloomAdd, Image::Scene, Image::Pooled(0)),
+                (1, Pass::Tonemap, Image::Pooled(0), Image::Pooled(1)),
+                (2, Pass::Fxaa, Image::Pooled(1), Image::Output),
+            ]
+        );
+        assert_eq!(steps[3].1.extra, Some(Image::Pooled(2)), "the blurred light is added back");
+        assert!(super::steps(&[]).is_empty(), "no chain, no passes");
+        let one = super::steps(&[PostEffect::Fxaa]);
+        assert_eq!((one.len(), one[0].1.source, one[0].1.target), (1, Image::Scene, Image::Output));
+    }
+}

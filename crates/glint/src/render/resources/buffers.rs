@@ -1,0 +1,231 @@
+//! Core layer: GPU twins of scene data — textures (with mipmaps made on the GPU),
+//! the material table — and the Renderer block's instance records.
+
+use crate::gpu::{Blitter, DriverErrors};
+use crate::render::cull::Boxes;
+use crate::render::gpu_driven::gpu_cull::BoundsGpu;
+use crate::render::resources::blocks::{InstanceGpu, MaterialGpu};
+use crate::render::resources::gpu_array::GpuArray;
+use crate::render::RenderError;
+use crate::scene::Texture;
+
+/// Builds textures and fills their mip chains by repeated half-size blits.
+pub(crate) struct TextureUploader {
+    blitter: Blitter,
+    srgb: wgpu::RenderPipeline,
+    linear: wgpu::RenderPipeline,
+}
+
+impl TextureUploader {
+    pub(crate) fn new(device: &wgpu::Device) -> Self {
+        let blitter = Blitter::new(device);
+        Self {
+            srgb: blitter.pipeline(device, wgpu::TextureFormat::Rgba8UnormSrgb),
+            linear: blitter.pipeline(device, wgpu::TextureFormat::Rgba8Unorm),
+            blitter,
+        }
+    }
+
+    /// Create the GPU texture for `texture` and write level 0; record the blits
+    /// of the rest of the mip chain for the next submission (`None` for a
+    /// texture of one level). Returns the view, the bytes written from the CPU
+    /// and the blits.
+    pub(crate) fn upload(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        texture: &Texture,
+    ) -> (wgpu::TextureView, u64, Option<wgpu::CommandBuffer>) {
+        let (width, height) = texture.image.dimensions();
+        let format = if texture.srgb { wgpu::TextureFormat::Rgba8UnormSrgb } else { wgpu::TextureFormat::Rgba8Unorm };
+        let levels = texture.mip_levels();
+        let size = wgpu::Extent3d { width, height, depth_or_array_layers: 1 };
+        let gpu_texture = device.create_texture(&wgpu::TextureDescriptor {
+            label: Some(&format!("texture '{}'", texture.name)),
+            size,
+            mip_level_count: levels,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING
+                | wgpu::TextureUsages::COPY_DST
+                | wgpu::TextureUsages::RENDER_ATTACHMENT,
+            view_formats: &[],
+        });
+        // Only level 0 comes from the CPU; the blits below fill the rest.
+        queue.write_texture(
+            gpu_texture.as_image_copy(),
+            texture.image.as_raw(),
+            wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(4 * width), rows_per_image: Some(height) },
+            size,
+        );
+        let pipeline = if texture.srgb { &self.srgb } else { &self.linear };
+        let mut encoder =
+            device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("texture uploader: mips") });
+        let level_view = |level| {
+            gpu_texture.create_view(&wgpu::TextureViewDescriptor {
+                base_mip_level: level,
+                mip_level_count: Some(1),
+                ..Default::default()
+            })
+        };
+        for level in 1..levels {
+            self.blitter.blit(device, &mut encoder, pipeline, &level_view(level - 1), &level_view(level));
+        }
+        let blits = (levels > 1).then(|| encoder.finish());
+        (gpu_texture.create_view(&Default::default()), texture.image.as_raw().len() as u64, blits)
+    }
+}
+
+/// A buffer that grows by doubling (its contents are lost when it grows).
+pub(crate) struct GrowBuffer {
+    pub buffer: wgpu::Buffer,
+    label: &'static str,
+    usage: wgpu::BufferUsages,
+}
+
+impl GrowBuffer {
+    pub(crate) fn new(device: &wgpu::Device, label: &'static str, usage: wgpu::BufferUsages, bytes: u64) -> Self {
+        let buffer = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some(label),
+            size: bytes.max(256).next_power_of_two(),
+            usage: usage | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        Self { buffer, label, usage }
+    }
+
+    /// Make room for `bytes`; returns whether the buffer was replaced.
+    ///
+    /// Fails, keeping the old buffer, when `bytes` is over the adapter's largest
+    /// buffer (or, for a storage buffer, its largest binding), or when the device
+    /// cannot allocate it. Growth doubles, but never past that limit.
+    pub(crate) fn reserve(&mut self, device: &wgpu::Device, bytes: u64) -> Result<bool, RenderError> {
+        if bytes <= self.buffer.size() {
+            return Ok(false);
+        }
+        let limits = device.limits();
+        let (limit, limit_name) = if self.usage.contains(wgpu::BufferUsages::STORAGE)
+            && limits.max_storage_buffer_binding_size < limits.max_buffer_size
+        {
+            (limits.max_storage_buffer_binding_size, "the adapter's max_storage_buffer_binding_size")
+        } else {
+            (limits.max_buffer_size, "the adapter's max_buffer_size")
+        };
+        if bytes > limit {
+            return Err(RenderError::TooLarge { what: self.label, bytes, limit, limit_name });
+        }
+        let size = bytes.max(256).next_power_of_two().min(limit & !255).max(bytes);
+        let scope = DriverErrors::watch(device);
+        let buffer = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some(self.label),
+            size,
+            usage: self.usage | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        if let Some(error) = scope.finish() {
+            return Err(RenderError::Device { what: self.label, message: error.to_string() });
+        }
+        self.buffer = buffer;
+        Ok(true)
+    }
+
+    /// Write `data` at element `first` (elements of `T`); returns bytes written.
+    pub(crate) fn write<T: bytemuck::Pod>(&self, queue: &wgpu::Queue, first: u64, data: &[T]) -> u64 {
+        let bytes: &[u8] = bytemuck::cast_slice(data);
+        if !bytes.is_empty() {
+            queue.write_buffer(&self.buffer, first * std::mem::size_of::<T>() as u64, bytes);
+        }
+        bytes.len() as u64
+    }
+}
+
+/// Bytes of one record of `T` (records are small: a few dozen bytes).
+fn record_bytes<T>() -> u32 {
+    std::mem::size_of::<T>() as u32
+}
+
+/// The material table of the Material block (`@group(2) @binding(0)`): one
+/// [`MaterialGpu`] per material id.
+pub(crate) struct MaterialTable(GpuArray);
+
+impl MaterialTable {
+    /// A table with room for 64 materials: a storage buffer when `storage`, else a data texture.
+    pub(crate) fn new(device: &wgpu::Device, storage: bool) -> Self {
+        let label = "material block: material table";
+        Self(GpuArray::new(device, label, record_bytes::<MaterialGpu>(), 64, storage))
+    }
+
+    /// Make room for `materials`; returns whether the table was replaced (every
+    /// material must be written again and every material bind group rebuilt).
+    pub(crate) fn reserve(&mut self, device: &wgpu::Device, materials: usize) -> Result<bool, RenderError> {
+        self.0.reserve(device, record_bytes::<MaterialGpu>(), materials)
+    }
+
+    /// Write material `id`'s entry; returns bytes written.
+    pub(crate) fn write(&self, queue: &wgpu::Queue, id: u32, block: &MaterialGpu) -> u64 {
+        self.0.write(queue, id.into(), std::slice::from_ref(block))
+    }
+
+    pub(crate) fn binding(&self) -> wgpu::BindingResource<'_> {
+        self.0.binding()
+    }
+}
+
+/// The instances of the Renderer block (`@group(3) @binding(0)`): every stored
+/// instance record, persistent between frames (each [`DrawList`](crate::render::gpu_driven::draw_list::DrawList)
+/// binds it beside its own draw indices).
+pub(crate) struct InstanceBuffer {
+    array: GpuArray,
+    /// Each instance's world box, where views cull on the GPU.
+    bounds: Option<GrowBuffer>,
+    /// How many times the buffer was replaced: bind groups made for an older
+    /// generation point at a dropped buffer.
+    generation: u64,
+}
+
+impl InstanceBuffer {
+    /// Room for 1,024 records: a storage buffer when `storage`, else a data
+    /// texture; with their world boxes when `bounds` (GPU culling).
+    pub(crate) fn new(device: &wgpu::Device, storage: bool, bounds: bool) -> Self {
+        let array = GpuArray::new(device, "renderer block: instances", record_bytes::<InstanceGpu>(), 1024, storage);
+        let size = 1024 * u64::from(record_bytes::<BoundsGpu>());
+        let bounds =
+            bounds.then(|| GrowBuffer::new(device, "gpu culling: instance bounds", wgpu::BufferUsages::STORAGE, size));
+        Self { array, bounds, generation: 0 }
+    }
+
+    /// Make room for `instances` records. Returns whether the buffer was replaced
+    /// (its contents must be written again and its bind groups rebuilt).
+    pub(crate) fn reserve(&mut self, device: &wgpu::Device, instances: usize) -> Result<bool, RenderError> {
+        let mut replaced = self.array.reserve(device, record_bytes::<InstanceGpu>(), instances)?;
+        if let Some(bounds) = &mut self.bounds {
+            replaced |= bounds.reserve(device, u64::from(record_bytes::<BoundsGpu>()) * instances as u64)?;
+        }
+        self.generation += u64::from(replaced);
+        Ok(replaced)
+    }
+
+    /// Write `data` at record `first`, and their world boxes where views cull
+    /// on the GPU; returns bytes written: instances, boxes.
+    pub(crate) fn write(&self, queue: &wgpu::Queue, first: u32, data: &[InstanceGpu], boxes: &Boxes) -> (u64, u64) {
+        let written = self.array.write(queue, first.into(), data);
+        let Some(bounds) = &self.bounds else { return (written, 0) };
+        let range = first as usize..first as usize + data.len();
+        (written, bounds.write(queue, first.into(), &BoundsGpu::of(boxes, range)))
+    }
+
+    /// The world boxes, where views cull on the GPU.
+    pub(crate) fn bounds(&self) -> Option<&wgpu::Buffer> {
+        self.bounds.as_ref().map(|b| &b.buffer)
+    }
+
+    pub(crate) fn array(&self) -> &GpuArray {
+        &self.array
+    }
+
+    /// How many times the buffer was replaced.
+    pub(crate) fn generation(&self) -> u64 {
+        self.generation
+    }
+}
