@@ -6,7 +6,7 @@
 //! in alternating rounds so all see the same machine; with ambient occlusion,
 //! its passes' share of the frame's GPU time (timestamp queries, where the
 //! adapter has them), and the depth pre-pass's, which draws the view's depth
-//! for the forward pass as well (`render/ambient_occlusion.rs`).
+//! for the forward pass as well (`render/passes/ambient_occlusion.rs`).
 //! Run: `cargo bench -p glint --bench environment` (median, min and max of each).
 
 use glint::asset::EnvironmentImage;

@@ -1,6 +1,5 @@
 //! Core layer: [`RenderError`], what a frame can fail with.
 
-use crate::render::resources::mesh_pool::MeshTooLarge;
 use crate::scene::MAX_POST_EFFECTS;
 use crate::scene::{MaterialId, RenderTargetId, ShapeId, TextureId, Viewport, MAX_LIGHTS};
 
@@ -99,4 +98,14 @@ pub enum RenderError {
         /// The bad id.
         texture: TextureId,
     },
+}
+
+/// Why a mesh could not be placed.
+#[derive(Debug, thiserror::Error)]
+#[error("mesh of {bytes} bytes is larger than the device's largest buffer ({max} bytes)")]
+pub struct MeshTooLarge {
+    /// The largest stream of the mesh, in bytes.
+    pub bytes: u64,
+    /// The device limit.
+    pub max: u64,
 }

@@ -4,17 +4,19 @@
 //! draw lists. Records and lists are written only where their bytes change, so
 //! a view that did not change uploads nothing, however many views a frame has.
 
+use crate::render::frame::input::{ViewKey, KEEP_VIEW_FRAMES};
 use crate::render::gpu_driven::draw_list::{DrawList, ListPaths};
 use crate::render::passes::ambient_occlusion::OcclusionTargets;
 use crate::render::passes::post::PostParams;
 use crate::render::passes::shadow_maps::{ShadowGpu, ShadowMaps};
+use crate::render::passes::shadow_views::MAX_SHADOW_VIEWS;
 use crate::render::resources::blocks::CameraGpu;
 use crate::render::resources::blocks::{SceneGpu, UniformBlock};
 use crate::render::resources::buffers::InstanceBuffer;
 use crate::render::resources::pipelines::Pipelines;
+use std::collections::HashMap;
 
-/// Records the buffer holds: the camera and up to this many shadow views.
-pub(crate) const MAX_SHADOW_VIEWS: usize = 64;
+/// Records the buffer holds: the camera and up to [`MAX_SHADOW_VIEWS`] shadow views.
 const RECORDS: usize = 1 + MAX_SHADOW_VIEWS;
 /// Bytes between records: the dynamic-offset alignment every device accepts.
 pub(crate) const RECORD_STRIDE: u64 = 256;
@@ -165,4 +167,53 @@ fn scene_group(
     let blocks = (&scene.buffer, &shadow.buffer);
     let occlusion = occlusion.unwrap_or(shared.white);
     shared.shadow_maps.scene_group(shared.device, layout, blocks, (shared.environment, occlusion))
+}
+
+/// Every view's GPU state, by the caller's key, with the last frame that drew
+/// it: kept between frames, given back once unused for
+/// [`KEEP_VIEW_FRAMES`] frames.
+#[derive(Default)]
+pub(crate) struct ViewStates {
+    by_key: HashMap<ViewKey, (ViewGpu, u64)>,
+    /// The keys of the last frame's views, in the order given.
+    last_keys: Vec<ViewKey>,
+}
+
+impl ViewStates {
+    /// Remember `keys` as the frame's views, in order.
+    pub(crate) fn begin_frame(&mut self, keys: impl Iterator<Item = ViewKey>) {
+        self.last_keys.clear();
+        self.last_keys.extend(keys);
+    }
+
+    /// The state kept under `key` (made on its first frame), taken out while
+    /// the view is drawn.
+    pub(crate) fn take(&mut self, key: ViewKey, shared: &Shared, paths: ListPaths) -> ViewGpu {
+        let mut gpu = match self.by_key.remove(&key) {
+            Some((gpu, _)) => gpu,
+            None => ViewGpu::new(shared, paths),
+        };
+        gpu.refresh(shared);
+        gpu
+    }
+
+    /// Keep `gpu` under `key`, drawn in frame `frame`.
+    pub(crate) fn put_back(&mut self, key: ViewKey, gpu: ViewGpu, frame: u64) {
+        self.by_key.insert(key, (gpu, frame));
+    }
+
+    /// Give back the state of views not drawn for [`KEEP_VIEW_FRAMES`] frames before `frame`.
+    pub(crate) fn drop_unused(&mut self, frame: u64) {
+        self.by_key.retain(|_, (_, drawn)| *drawn + KEEP_VIEW_FRAMES >= frame);
+    }
+
+    /// The state of the last frame's view `k` (in the order given).
+    pub(crate) fn last(&self, k: usize) -> Option<&ViewGpu> {
+        self.last_keys.get(k).and_then(|key| self.by_key.get(key)).map(|(gpu, _)| gpu)
+    }
+
+    /// The state of the last frame's view `k`, to update.
+    pub(crate) fn last_mut(&mut self, k: usize) -> Option<&mut ViewGpu> {
+        self.last_keys.get(k).and_then(|key| self.by_key.get_mut(key)).map(|(gpu, _)| gpu)
+    }
 }

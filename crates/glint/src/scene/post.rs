@@ -1,7 +1,7 @@
 //! [`PostEffect`]: the passes of a view's post-processing chain, as plain data.
 //! A view with effects is drawn into a floating-point (HDR) target and each
 //! effect runs in order on a full-screen triangle; the last writes the view's
-//! rectangle of the output (see `render/post.rs`).
+//! rectangle of the output (see `render/passes/post.rs`).
 
 use glam::Vec3;
 

@@ -90,7 +90,7 @@ impl Culling {
 
 /// Screen-space ambient occlusion of a view (camera key `ssao`): the contact
 /// shadows an environment cannot give, darkening only ambient and environment
-/// light (`render/ambient_occlusion.rs`).
+/// light (`render/passes/ambient_occlusion.rs`).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct AmbientOcclusion {
     /// How far around a point (world units) geometry occludes it.

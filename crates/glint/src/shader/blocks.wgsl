@@ -1,5 +1,5 @@
 // Shader data blocks shared by every glint shader (bind-group convention in
-// src/render/mod.rs). Field layouts match the #[repr(C)] twins in render/blocks.rs.
+// src/render/mod.rs). Field layouts match the #[repr(C)] twins in render/resources/blocks.rs.
 #define_import_path glint::blocks
 
 #import glint::equirect::equirect_uv
@@ -26,7 +26,7 @@ struct SceneBlock {
     fog: vec4<f32>,
     // x: number of lights; y: directional lights (first in `lights`); z, w: reserved.
     counts: vec4<u32>,
-    // Image-based lighting (render/environment.rs): x: intensity (0: none);
+    // Image-based lighting (render/passes/environment.rs): x: intensity (0: none);
     // y, z: cos and sin of the environment's turn about +Y; w: the specular
     // map's last level (roughness 1).
     environment: vec4<f32>,
@@ -66,7 +66,7 @@ struct ShadowBlock {
 // lavapipe's process grew every frame a shader holding a cube-map lookup drew.
 @group(0) @binding(3) var shadow_cubes: texture_depth_2d_array;
 @group(0) @binding(4) var shadow_sampler: sampler_comparison;
-// The environment (render/environment.rs; 1 × 1 stand-ins without one): the
+// The environment (render/passes/environment.rs; 1 × 1 stand-ins without one): the
 // specular map (equirectangular, a level per roughness step), the diffuse
 // light's nine spherical-harmonic coefficients (texels 0..9 of row 0), the
 // split-sum BRDF table (x: n·v, y: roughness) and their sampler.
@@ -75,7 +75,7 @@ struct ShadowBlock {
 @group(0) @binding(7) var environment_brdf: texture_2d<f32>;
 @group(0) @binding(8) var environment_sampler: sampler;
 // The view's screen-space ambient occlusion at half its resolution
-// (render/ambient_occlusion.rs; a 1 × 1 white stand-in without it).
+// (render/passes/ambient_occlusion.rs; a 1 × 1 white stand-in without it).
 @group(0) @binding(9) var ambient_occlusion: texture_2d<f32>;
 @group(1) @binding(0) var<uniform> camera: CameraBlock;
 

@@ -1,4 +1,4 @@
-// GPU frustum culling of one draw list (render/gpu_cull.rs), two entry points
+// GPU frustum culling of one draw list (render/gpu_driven/gpu_cull.rs), two entry points
 // dispatched in order within one compute pass:
 //
 // `cull`: one invocation per candidate instance. The list's cull ranges give
@@ -9,7 +9,7 @@
 // and writes its store index there. The test is the CPU culler's, term for
 // term: a box is culled only when it is wholly outside one plane, so NaN keeps it.
 //
-// With occlusion culling (two phases, render/occlusion.rs), `cull_early` and
+// With occlusion culling (two phases, render/gpu_driven/occlusion.rs), `cull_early` and
 // `cull_late` take `cull`'s place. `cull_early` keeps only what was visible last
 // frame (its flag in `hidden` is 0); the frame draws that, builds a depth pyramid
 // from it, and `cull_late` tests every candidate against frustum and pyramid,

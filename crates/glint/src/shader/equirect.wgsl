@@ -1,6 +1,6 @@
 // Environment maps: the equirectangular mapping (asset/environment.rs has the
 // convention and its Rust twin) and the nine-coefficient spherical-harmonic
-// basis the diffuse light is stored in (render/environment.rs).
+// basis the diffuse light is stored in (render/passes/environment.rs).
 #define_import_path glint::equirect
 
 const EQUIRECT_PI: f32 = 3.14159265;

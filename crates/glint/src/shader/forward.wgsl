@@ -71,7 +71,7 @@ struct Instance {
 #ifdef DATA_TEXTURES
 // Where vertex shaders have no storage buffers (WebGL2), the three arrays are
 // data textures of DATA_WIDTH texels a row, a record's 16-byte pieces in
-// consecutive texels (render/gpu_array.rs).
+// consecutive texels (render/resources/gpu_array.rs).
 @group(3) @binding(0) var instance_texels: texture_2d<u32>;
 @group(3) @binding(1) var draw_index_texels: texture_2d<u32>;
 
@@ -252,7 +252,7 @@ fn half_float(h: u32) -> f32 {
     return sign * (1.0 + m / 1024.0) * exp2(f32(e) - 15.0);
 }
 
-// Compact instance `q` (render/blocks.rs CompactGpu) as a full one: x and z,
+// Compact instance `q` (render/resources/blocks.rs CompactGpu) as a full one: x and z,
 // y and scale (half floats), a turn about +Y in 1/65536 of a turn, its
 // material (15 bits) and its shadow flag (the top bit); never skinned.
 fn compact_instance(q: u32) -> Instance {
@@ -845,7 +845,7 @@ fn screen_occlusion(pixel: vec2<f32>) -> f32 {
     return mix(mix(v.x, v.y, f.x), mix(v.z, v.w, f.x), f.y);
 }
 
-// Depth pre-pass of a view with ambient occlusion (render/ambient_occlusion.rs):
+// Depth pre-pass of a view with ambient occlusion (render/passes/ambient_occlusion.rs):
 // the view-space normal (octahedral) and the distance in front of the camera
 // as a half float plus what it rounded away, for ssao.wgsl.
 @fragment

@@ -199,7 +199,7 @@ impl ShaderError {
 
 /// Texels in a row of the data textures that stand in for storage buffers
 /// where vertex shaders cannot read those (`DATA_WIDTH` in `forward.wgsl`, see
-/// `render/gpu_array.rs`): WebGL2's guaranteed smallest texture limit.
+/// `render/resources/gpu_array.rs`): WebGL2's guaranteed smallest texture limit.
 pub(crate) const DATA_TEXTURE_WIDTH: u32 = 2048;
 
 /// The defs of the forward shader for one feature set and mix of lights,
@@ -251,11 +251,11 @@ pub(crate) fn particles(soft: Option<bool>) -> String {
 
 /// Mip blit shader: `vs_blit` / `fs_blit`, its own group 0.
 pub(crate) const BLIT: &str = assemble::BLIT;
-/// The post-processing passes (render/post.rs).
+/// The post-processing passes (render/passes/post.rs).
 pub(crate) const POST: &str = assemble::POST;
-/// GPU frustum culling of a draw list (`render/gpu_cull.rs`).
+/// GPU frustum culling of a draw list (`render/gpu_driven/gpu_cull.rs`).
 pub(crate) const CULL: &str = assemble::CULL;
-/// The depth pyramid of occlusion culling (`render/occlusion.rs`).
+/// The depth pyramid of occlusion culling (`render/gpu_driven/occlusion.rs`).
 pub(crate) const PYRAMID: &str = assemble::PYRAMID;
 /// The defs of the ambient occlusion passes' module: `PREPASS_MSAA` where the
 /// pre-pass they read is `multisampled`.
@@ -263,7 +263,7 @@ fn ssao_defs(multisampled: bool) -> Defs {
     Defs { set: multisampled.then_some("PREPASS_MSAA").into_iter().collect(), values: Vec::new() }
 }
 
-/// Screen-space ambient occlusion (`render/ambient_occlusion.rs`): its
+/// Screen-space ambient occlusion (`render/passes/ambient_occlusion.rs`): its
 /// fragment passes, reading a `multisampled` pre-pass or not.
 pub(crate) fn ssao(multisampled: bool) -> String {
     assemble(assemble::SSAO, &ssao_defs(multisampled))

@@ -1,4 +1,4 @@
-// Particle billboards (render/particles.rs): one instance a particle, four
+// Particle billboards (render/passes/particles.rs): one instance a particle, four
 // vertices of a strip each, facing the camera; the sprite times the
 // particle's colour, under the scene's fog. A record of size 0 draws nothing.
 // SOFT (SOFT_MSAA for a multisampled target): the scene's depth is read, and

@@ -1,5 +1,5 @@
 // Post-processing passes on a full-screen triangle: each fragment entry point is
-// one pass of a view's post chain (render/post.rs). Colours are linear; a pass
+// one pass of a view's post chain (render/passes/post.rs). Colours are linear; a pass
 // into the view's output (an sRGB target) is encoded by the hardware.
 //
 // Bindings: the pass's input, a second input (bloom's blurred light), a linear

@@ -1,4 +1,4 @@
-// Prefiltering an environment for image-based lighting (render/environment.rs):
+// Prefiltering an environment for image-based lighting (render/passes/environment.rs):
 // full-screen passes, so every backend (WebGL2 too) runs them the same way.
 // - fs_specular: one level of the specular map (equirectangular, level k for
 //   roughness k / (levels − 1)): GGX importance sampling with n = v = r, each

@@ -1,4 +1,4 @@
-// The depth pyramid of occlusion culling (render/occlusion.rs): texel t of
+// The depth pyramid of occlusion culling (render/gpu_driven/occlusion.rs): texel t of
 // level 0 is the farthest depth of the depth buffer's pixels 2t and 2t + 1 on
 // each axis (all their samples), and the far plane (1) past the buffer, in a
 // level padded to powers of two so that every level halves the one before

@@ -1,4 +1,4 @@
-// Screen-space ambient occlusion (render/ambient_occlusion.rs), two passes at
+// Screen-space ambient occlusion (render/passes/ambient_occlusion.rs), two passes at
 // half the view's resolution over the depth pre-pass, full-screen fragment
 // passes here, compute passes with ssao_compute.wgsl appended:
 // - fs_occlusion: ground-truth ambient occlusion (Jimenez et al. 2016, "Practical

@@ -1,5 +1,5 @@
 // The compute passes of screen-space ambient occlusion, appended to ssao.wgsl
-// where the frame's path has compute (render/ambient_occlusion.rs): one
+// where the frame's path has compute (render/passes/ambient_occlusion.rs): one
 // invocation per half-resolution pixel, into a storage texture.
 
 @group(0) @binding(3) var output: texture_storage_2d<rgba8unorm, write>;

@@ -1,5 +1,5 @@
 //! Core layer: the frame as the GPU receives it, for people
-//! ([`Renderer::set_explaining`], `glint explain`). While explaining, every
+//! ([`Renderer::set_explaining`](crate::Renderer::set_explaining), `glint explain`). While explaining, every
 //! pass the frame records (compute and render, in encoding order) and every
 //! draw call in it is written down: the command, what it draws (each batch's
 //! sort key decoded into its queue, pipeline variant and the shader features
@@ -8,10 +8,10 @@
 //! built where the calls are recorded, so it is the frame, not a model of it:
 //! its draw calls and draws add up to [`FrameStats`](crate::render::FrameStats)'.
 
+use crate::render::gpu_driven::commands::Run;
 use crate::render::gpu_driven::draw_list::DrawList;
-use crate::render::gpu_driven::gpu_cull::Run;
 use crate::render::queue::{decode_key, Queue};
-use crate::render::Renderer;
+use crate::render::resources::registry::Registry;
 use crate::shader::ShaderFeatures;
 use serde::Serialize;
 use std::sync::Mutex;
@@ -189,82 +189,67 @@ fn changed_and_kept(changed: u8, uses: u8) -> (Vec<String>, Vec<String>) {
     (names(true), names(false))
 }
 
-impl Renderer {
-    /// Write down every pass and draw call of the frames from now on (or stop):
-    /// [`explained`](Self::explained) then holds the last submitted frame's.
-    /// Explaining costs CPU time per call; it is for tools, not every frame.
-    pub fn set_explaining(&mut self, on: bool) {
-        self.outline.set_tape(on.then(Tape::default));
-    }
-
-    /// The last submitted frame's passes and draw calls, while explaining.
-    pub fn explained(&self) -> Option<&FrameCalls> {
-        self.outline.last_calls()
-    }
-
-    /// The calls that draw `run` of `list` with `command` (in occlusion
-    /// culling's late phase when `late`), after setting the state bits in
-    /// `changed`: one multi-draw, or one `draw_indexed` per batch (each but
-    /// the first binding only its vertices, where the device has no base vertex).
-    pub(crate) fn run_calls(
-        &self,
-        list: &DrawList,
-        run: &Run,
-        (command, late): (&'static str, bool),
-        changed: u8,
-    ) -> Vec<DrawCall> {
-        let batches = self.batch_calls(list, run);
-        let uses = state::STENCIL | state::PIPELINE | state::TEXTURES | state::VERTICES;
-        let call = |batches: Vec<BatchCall>, changed| {
-            let (changed, kept) = changed_and_kept(changed, uses);
-            DrawCall {
-                command,
-                what: "batches".into(),
-                late,
-                draws: batches.len() as u32,
-                instances: batches.iter().map(|b| u64::from(b.instances)).sum(),
-                triangles: batches.iter().map(|b| b.triangles).sum(),
-                changed,
-                kept,
-                batches,
-            }
-        };
-        if command != "draw_indexed" {
-            return vec![call(batches, changed)];
+/// The calls that draw `run` of `list` with `command` (in occlusion
+/// culling's late phase when `late`), after setting the state bits in
+/// `changed`: one multi-draw, or one `draw_indexed` per batch (each but
+/// the first binding only its vertices, where the device has no base vertex).
+pub(crate) fn run_calls(
+    (registry, base_vertex): (&Registry, bool),
+    list: &DrawList,
+    run: &Run,
+    (command, late): (&'static str, bool),
+    changed: u8,
+) -> Vec<DrawCall> {
+    let batches = batch_calls(registry, list, run);
+    let uses = state::STENCIL | state::PIPELINE | state::TEXTURES | state::VERTICES;
+    let call = |batches: Vec<BatchCall>, changed| {
+        let (changed, kept) = changed_and_kept(changed, uses);
+        DrawCall {
+            command,
+            what: "batches".into(),
+            late,
+            draws: batches.len() as u32,
+            instances: batches.iter().map(|b| u64::from(b.instances)).sum(),
+            triangles: batches.iter().map(|b| b.triangles).sum(),
+            changed,
+            kept,
+            batches,
         }
-        let later = if self.base_vertex { 0 } else { state::VERTICES };
-        batches.into_iter().enumerate().map(|(k, b)| call(vec![b], if k == 0 { changed } else { later })).collect()
+    };
+    if command != "draw_indexed" {
+        return vec![call(batches, changed)];
     }
+    let later = if base_vertex { 0 } else { state::VERTICES };
+    batches.into_iter().enumerate().map(|(k, b)| call(vec![b], if k == 0 { changed } else { later })).collect()
+}
 
-    /// The batches of `run`, their keys decoded.
-    fn batch_calls(&self, list: &DrawList, run: &Run) -> Vec<BatchCall> {
-        let registry = &self.registry;
-        (list.batches[run.batches()].iter().zip(&list.draws[run.batches()]))
-            .map(|(b, draw)| {
-                let key = self.registry.pipelines.key_of(b.pipeline);
-                let blended = key.features.contains(ShaderFeatures::ALPHA_BLEND);
-                let fields = decode_key(b.key, blended);
-                let shape = &registry.shapes[b.shape.0 as usize];
-                let triangles = (shape.mesh.indices().len() / 3) as u64 * u64::from(b.instance_count);
-                BatchCall {
-                    key: format!("{:#018x}", b.key),
-                    stage: fields.stage,
-                    queue: queue_name(fields.stage),
-                    blended,
-                    pipeline: fields.pipeline.unwrap_or(b.pipeline),
-                    features: key.features.iter_names().map(|(n, _)| n.to_owned()).collect(),
-                    texture_set: fields.texture_set.or((!blended).then_some(draw.texture_set)),
-                    material: fields.material,
-                    material_name: registry.materials[b.material.0 as usize].material.name.clone(),
-                    mesh: fields.shape,
-                    mesh_name: shape.name.clone(),
-                    depth: fields.depth,
-                    instances: b.instance_count,
-                    triangles,
-                }
-            })
-            .collect()
-    }
+/// The batches of `run`, their keys decoded.
+fn batch_calls(registry: &Registry, list: &DrawList, run: &Run) -> Vec<BatchCall> {
+    (list.batches[run.batches()].iter().zip(&list.draws[run.batches()]))
+        .map(|(b, draw)| {
+            let key = registry.pipelines.key_of(b.pipeline);
+            let blended = key.features.contains(ShaderFeatures::ALPHA_BLEND);
+            let fields = decode_key(b.key, blended);
+            let shape = &registry.shapes[b.shape.0 as usize];
+            let triangles = (shape.mesh.indices().len() / 3) as u64 * u64::from(b.instance_count);
+            BatchCall {
+                key: format!("{:#018x}", b.key),
+                stage: fields.stage,
+                queue: queue_name(fields.stage),
+                blended,
+                pipeline: fields.pipeline.unwrap_or(b.pipeline),
+                features: key.features.iter_names().map(|(n, _)| n.to_owned()).collect(),
+                texture_set: fields.texture_set.or((!blended).then_some(draw.texture_set)),
+                material: fields.material,
+                material_name: registry.materials[b.material.0 as usize].material.name.clone(),
+                mesh: fields.shape,
+                mesh_name: shape.name.clone(),
+                depth: fields.depth,
+                instances: b.instance_count,
+                triangles,
+            }
+        })
+        .collect()
 }
 
 impl DrawCall {

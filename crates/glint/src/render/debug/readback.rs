@@ -14,7 +14,7 @@ const COPIED: u8 = 4;
 /// Its slots: a frame's counts are read two or three frames later.
 const SLOTS: usize = 3;
 /// Frustums a list has at most: the camera, or every shadow view.
-const MAX_FRUSTUMS: u64 = crate::render::views::MAX_SHADOW_VIEWS as u64;
+const MAX_FRUSTUMS: u64 = crate::render::passes::shadow_views::MAX_SHADOW_VIEWS as u64;
 
 /// A few small buffers the per-frustum totals are copied into and mapped from.
 pub(crate) struct CountReadback {

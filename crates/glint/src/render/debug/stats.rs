@@ -1,8 +1,9 @@
 //! Core layer: [`FrameStats`], the cost of one frame in numbers.
 
-use crate::render::GpuTimes;
+use crate::render::debug::timer::GpuTimes;
 use crate::scene::Culling;
 use serde::Serialize;
+use web_time::Instant;
 
 /// Bytes written to the GPU during a frame, per shader data block and kind.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
@@ -198,5 +199,24 @@ impl FrameStats {
             true => "culled on the GPU, with occlusion",
             false => self.culling.describe(),
         }
+    }
+}
+
+/// Milliseconds since `t`.
+pub(crate) fn ms_since(t: Instant) -> f64 {
+    t.elapsed().as_secs_f64() * 1e3
+}
+
+/// The CPU time of consecutive stages: each [`Laps::next`] is the time since
+/// the last (or since [`Laps::start`]), in milliseconds.
+pub(crate) struct Laps(Instant);
+
+impl Laps {
+    pub(crate) fn start() -> Self {
+        Self(Instant::now())
+    }
+
+    pub(crate) fn next(&mut self) -> f64 {
+        ms_since(std::mem::replace(&mut self.0, Instant::now()))
     }
 }

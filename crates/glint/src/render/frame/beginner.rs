@@ -6,7 +6,7 @@
 //! those calls in order, [`Renderer::render_views`] the frame of several views.
 
 use crate::gpu::OffscreenTarget;
-use crate::render::frame::{FrameInput, ViewKey};
+use crate::render::frame::input::{FrameInput, ViewKey};
 use crate::render::{FrameStats, RenderError, Renderer};
 use crate::scene::{Entity, Light, Lighting, View, MAX_LIGHTS};
 
@@ -119,7 +119,7 @@ impl Renderer {
         if lighting.lights.len() > MAX_LIGHTS {
             return Err(RenderError::TooManyLights(lighting.lights.len()));
         }
-        let asked = Asked { frame_index: self.frame_index, view, lights: lighting.lights.to_vec() };
+        let asked = Asked { frame_index: self.next.index, view, lights: lighting.lights.to_vec() };
         Ok(Shadows { asked: Some(asked) })
     }
 
@@ -143,11 +143,11 @@ impl Renderer {
     ) -> Result<FrameStats, RenderError> {
         let (view, lighting) = (view.into(), lighting.into());
         let mut input = FrameInput::new(&[], lighting).view(ViewKey(0), &view);
-        match shadows.drawn_for(self.frame_index, &view, lighting.lights) {
+        match shadows.drawn_for(self.next.index, &view, lighting.lights) {
             Ok(drawn) => input.shadows = drawn,
             // The frame is drawn to drop what was submitted, and the error returned.
             Err(e) => {
-                self.submit_error.get_or_insert(e);
+                self.next.submit_error.get_or_insert(e);
             }
         }
         let mut output = self.render_frame(input, target)?;

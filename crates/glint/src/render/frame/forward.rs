@@ -1,134 +1,139 @@
 //! Core layer: the forward view's stages 3 (queue) and 6 (upload).
 
 use crate::gpu::OffscreenTarget;
-use crate::render::frame::prepare::Prepared;
-use crate::render::frame::visible::Visible;
+use crate::render::debug::stats::{FrameStats, UploadStats};
+use crate::render::error::RenderError;
+use crate::render::frame::prepared::Prepared;
+use crate::render::frame::state::Frame;
 use crate::render::queue::{self, DrawItem, Queue};
 use crate::render::resources::blocks::SceneGpu;
+use crate::render::resources::Resources;
 use crate::render::view::ViewFrame;
 use crate::render::views::ViewGpu;
-use crate::render::{FrameStats, RenderError, Renderer, UploadStats};
 use crate::scene::{Culling, Lighting};
 use glam::Vec3A;
 
-impl Renderer {
-    /// Stage 3: one draw item per visible run, or per visible instance for blended
-    /// materials so that they can be sorted far to near one by one; one per run
-    /// of store instances (an entity's candidates culled on the GPU, a whole tile). Depth is the view distance of the
-    /// run's (or instance's, or entity's) box centre over the far plane.
-    pub(crate) fn build_queue(&self, gpu: &mut ViewGpu, frame: &ViewFrame, visible: &Visible, prepared: &[Prepared]) {
-        let far = frame.camera.far();
-        let depth = |center: Vec3A| -frame.view.transform_point3a(center).z / far;
-        let runs = visible.runs.iter().map(|r| (r, false)).chain(visible.ranges.iter().map(|r| (r, true)));
-        for (run, of_store) in runs {
-            let s = &self.submitted[run.entry];
-            let material = &self.registry.materials[s.material.0 as usize];
-            let Prepared { pipeline, draw, .. } = prepared[run.entry];
-            let texture_set = draw.texture_set;
-            let queue = match material.material.alpha_mode {
-                crate::scene::AlphaMode::Opaque => Queue::Opaque,
-                crate::scene::AlphaMode::Mask { .. } => Queue::AlphaTest,
-                crate::scene::AlphaMode::Blend => Queue::Transparent,
-            };
-            let stage = s.render_order.unwrap_or(queue.stage());
-            let blended = queue == Queue::Transparent;
-            let item = |first, count, depth| DrawItem {
-                key: queue::sort_key(stage, blended, pipeline, texture_set, s.material, s.shape, depth),
-                pipeline,
-                material: s.material,
-                shape: s.shape,
-                first,
-                count,
-                entry: run.entry as u32,
-            };
-            if blended && !of_store {
-                for k in run.start..run.start + run.len {
-                    let instance = visible.instances[k as usize] as usize;
-                    gpu.forward.items.push(item(k, 1, depth(self.store.bounds.center(instance))));
-                }
-            } else {
-                let center = self.store.slot(s.slot).bounds.map_or(Vec3A::ZERO, |(c, _)| c);
-                gpu.forward.items.push(item(run.start, run.len, depth(center)));
+/// Stage 3: one draw item per visible run, or per visible instance for blended
+/// materials so that they can be sorted far to near one by one; one per run
+/// of store instances (an entity's candidates culled on the GPU, a whole tile). Depth is the view distance of the
+/// run's (or instance's, or entity's) box centre over the far plane.
+pub(crate) fn build_queue(res: &Resources, frame: &Frame, gpu: &mut ViewGpu, view: &ViewFrame, prepared: &[Prepared]) {
+    let visible = &frame.visible;
+    let far = view.camera.far();
+    let depth = |center: Vec3A| -view.view.transform_point3a(center).z / far;
+    let runs = visible.runs.iter().map(|r| (r, false)).chain(visible.ranges.iter().map(|r| (r, true)));
+    for (run, of_store) in runs {
+        let s = &frame.submitted[run.entry];
+        let material = &res.registry.materials[s.material.0 as usize];
+        let Prepared { pipeline, draw, .. } = prepared[run.entry];
+        let texture_set = draw.texture_set;
+        let queue = match material.material.alpha_mode {
+            crate::scene::AlphaMode::Opaque => Queue::Opaque,
+            crate::scene::AlphaMode::Mask { .. } => Queue::AlphaTest,
+            crate::scene::AlphaMode::Blend => Queue::Transparent,
+        };
+        let stage = s.render_order.unwrap_or(queue.stage());
+        let blended = queue == Queue::Transparent;
+        let item = |first, count, depth| DrawItem {
+            key: queue::sort_key(stage, blended, pipeline, texture_set, s.material, s.shape, depth),
+            pipeline,
+            material: s.material,
+            shape: s.shape,
+            first,
+            count,
+            entry: run.entry as u32,
+        };
+        if blended && !of_store {
+            for k in run.start..run.start + run.len {
+                let instance = visible.instances[k as usize] as usize;
+                gpu.forward.items.push(item(k, 1, depth(res.store.bounds.center(instance))));
             }
+        } else {
+            let center = res.store.slot(s.slot).bounds.map_or(Vec3A::ZERO, |(c, _)| c);
+            gpu.forward.items.push(item(run.start, run.len, depth(center)));
         }
     }
+}
 
-    /// Stage 6: write the blocks that changed, the instances that changed, and this
-    /// frame's draw indices and indirect commands where they differ from the last frame's.
-    /// `shadowed` is each light's first shadow view (empty: no shadows).
-    /// Culled on the GPU, the view is occlusion-culled against its depth in `target`.
-    pub(crate) fn upload(
-        &mut self,
-        gpu: &mut ViewGpu,
-        frame: &ViewFrame,
-        (lighting, shadowed): (&Lighting, &[Option<u32>]),
-        target: &OffscreenTarget,
-        stats: &mut FrameStats,
-    ) -> Result<(), RenderError> {
-        self.upload_view_blocks(gpu, frame, lighting, shadowed, &mut stats.bytes_uploaded)?;
-        let bytes = &mut stats.bytes_uploaded;
-        let layout = &self.registry.pipelines.instance_layout;
-        let culls = self.cull_pipelines.as_ref().zip(self.instances.bounds());
-        let view_proj = frame.camera.projection(frame.aspect) * frame.view;
-        let depth = (target.width(), target.height(), target.samples());
-        let occlusion = (frame.culling == Culling::Gpu).then_some((view_proj, depth));
-        let list = &mut gpu.forward;
-        let written = list.upload(&self.device, &self.queue, (layout, self.instances.array()), culls, occlusion)?;
-        stats.occlusion = list.gpu.as_ref().is_some_and(|g| g.occluding);
-        bytes.draw_indices += written.draw_indices;
-        bytes.indirect += written.indirect;
-        stats.instances_drawn = gpu.forward.cpu_instances();
-        if gpu.forward.culled_on_gpu() {
-            // Counted on the GPU (blended instances included), a frame or two late.
-            let submits = self.queue.submits();
-            let drawn = gpu.forward.gpu.as_mut().and_then(|g| g.drawn(&self.device, submits));
-            let drawn = drawn.map(|d| d.iter().map(|&n| u64::from(n)).sum::<u64>());
-            let valid = stats.instances_submitted - stats.instances_invalid;
-            stats.instances_drawn = drawn.unwrap_or(0);
-            stats.instances_culled = drawn.map_or(0, |d| valid.saturating_sub(d));
-        }
-        Ok(())
+/// Stage 6: write the blocks that changed, the instances that changed, and this
+/// frame's draw indices and indirect commands where they differ from the last frame's.
+/// `shadowed` is each light's first shadow view (empty: no shadows).
+/// Culled on the GPU, the view is occlusion-culled against its depth in `target`.
+pub(crate) fn upload(
+    res: &mut Resources,
+    gpu: &mut ViewGpu,
+    frame: &ViewFrame,
+    (lighting, shadowed): (&Lighting, &[Option<u32>]),
+    target: &OffscreenTarget,
+    stats: &mut FrameStats,
+) -> Result<(), RenderError> {
+    upload_view_blocks(res, gpu, frame, lighting, shadowed, &mut stats.bytes_uploaded)?;
+    let bytes = &mut stats.bytes_uploaded;
+    let layout = &res.registry.pipelines.instance_layout;
+    let culls = res.cull_pipelines.as_ref().zip(res.instances.bounds());
+    let view_proj = frame.camera.projection(frame.aspect) * frame.view;
+    let depth = (target.width(), target.height(), target.samples());
+    let occlusion = (frame.culling == Culling::Gpu).then_some((view_proj, depth));
+    let list = &mut gpu.forward;
+    let written = list.upload(&res.device, &res.queue, (layout, res.instances.array()), culls, occlusion)?;
+    stats.occlusion = list.gpu.as_ref().is_some_and(|g| g.occluding);
+    bytes.draw_indices += written.draw_indices;
+    bytes.indirect += written.indirect;
+    stats.instances_drawn = gpu.forward.cpu_instances();
+    if gpu.forward.culled_on_gpu() {
+        // Counted on the GPU (blended instances included), a frame or two late.
+        let submits = res.queue.submits();
+        let drawn = gpu.forward.gpu.as_mut().and_then(|g| g.drawn(&res.device, submits));
+        let drawn = drawn.map(|d| d.iter().map(|&n| u64::from(n)).sum::<u64>());
+        let valid = stats.instances_submitted - stats.instances_invalid;
+        stats.instances_drawn = drawn.unwrap_or(0);
+        stats.instances_culled = drawn.map_or(0, |d| valid.saturating_sub(d));
     }
+    Ok(())
+}
 
-    /// The view's Scene and Camera blocks where they changed, and the instances
-    /// that changed.
-    pub(crate) fn upload_view_blocks(
-        &mut self,
-        gpu: &mut ViewGpu,
-        frame: &ViewFrame,
-        lighting: &Lighting,
-        shadowed: &[Option<u32>],
-        bytes: &mut UploadStats,
-    ) -> Result<(), RenderError> {
-        let scene = SceneGpu::new(&lighting.environment, lighting.lights, shadowed)
-            .with_specular_levels(self.environment.last_level());
-        bytes.scene += gpu.scene_block.update(&self.queue, scene);
-        let camera = frame.camera.to_gpu(frame.aspect).with_motion(&lighting.environment);
-        bytes.camera += gpu.blocks.update(&self.queue, 0, camera);
-        self.upload_instances(gpu, bytes)
-    }
+/// The view's Scene and Camera blocks where they changed, and the instances
+/// that changed.
+pub(crate) fn upload_view_blocks(
+    res: &mut Resources,
+    gpu: &mut ViewGpu,
+    frame: &ViewFrame,
+    lighting: &Lighting,
+    shadowed: &[Option<u32>],
+    bytes: &mut UploadStats,
+) -> Result<(), RenderError> {
+    let scene = SceneGpu::new(&lighting.environment, lighting.lights, shadowed)
+        .with_specular_levels(res.environment.last_level());
+    bytes.scene += gpu.scene_block.update(&res.queue, scene);
+    let camera = frame.camera.to_gpu(frame.aspect).with_motion(&lighting.environment);
+    bytes.camera += gpu.blocks.update(&res.queue, 0, camera);
+    upload_instances(res, gpu, bytes)
+}
 
-    /// Write the instances that changed (all of them when the buffer grew, and
-    /// then `gpu`'s draw lists are bound to the new buffer; other views' are
-    /// when they are drawn next).
-    pub(crate) fn upload_instances(&mut self, gpu: &mut ViewGpu, bytes: &mut UploadStats) -> Result<(), RenderError> {
-        if self.instances.reserve(&self.device, self.store.len())? {
-            self.store.mark_all_dirty();
-            gpu.refresh(&self.shared());
-        }
-        for range in self.store.take_dirty() {
-            let data = &self.store.instances[range.start as usize..range.end as usize];
-            let (instances, bounds) = self.instances.write(&self.queue, range.start, data, &self.store.bounds);
-            (bytes.instances, bytes.bounds) = (bytes.instances + instances, bytes.bounds + bounds);
-        }
-        Ok(())
+/// Write the instances that changed (all of them when the buffer grew, and
+/// then `gpu`'s draw lists are bound to the new buffer; other views' are
+/// when they are drawn next).
+pub(crate) fn upload_instances(
+    res: &mut Resources,
+    gpu: &mut ViewGpu,
+    bytes: &mut UploadStats,
+) -> Result<(), RenderError> {
+    if res.instances.reserve(&res.device, res.store.len())? {
+        res.store.mark_all_dirty();
+        gpu.refresh(&res.shared());
     }
+    for range in res.store.take_dirty() {
+        let data = &res.store.instances[range.start as usize..range.end as usize];
+        let (instances, bounds) = res.instances.write(&res.queue, range.start, data, &res.store.bounds);
+        (bytes.instances, bytes.bounds) = (bytes.instances + instances, bytes.bounds + bounds);
+    }
+    Ok(())
 }
 
 #[cfg(test)]
 mod tests {
-    use super::*;
     use crate::gpu::{Gpu, OffscreenTarget};
+    use crate::render::Renderer;
     use crate::render::Shadows;
     use crate::scene::ShapeKind;
     use crate::scene::{Background, Camera, Entity, Environment, Lighting, Material};
@@ -183,14 +188,14 @@ mod tests {
         };
         let stats = r.flush(camera, Lighting::new(&[], sky), &Shadows::none(), &mut target).expect("frame");
         // Drawn order: `front` (opaque), sky, the five glass instances far to near, then the ground (200).
-        let forward = &r.views[&crate::render::ViewKey(0)].0.forward;
+        let forward = &r.views.last(0).expect("drawn").forward;
         let stages: Vec<u8> = forward.batches.iter().map(|b| b.stage).collect();
         assert_eq!(stages, vec![64, 192, 200]);
         let glass_batch = forward.batches[1];
         assert_eq!(glass_batch.instance_count, 5, "one entity's instances merge into one draw once sorted");
         let order: Vec<f32> = forward.draw_indices[glass_batch.first_instance as usize..][..5]
             .iter()
-            .map(|&i| r.store.instances[i as usize].transform().w_axis.z)
+            .map(|&i| r.res.store.instances[i as usize].transform().w_axis.z)
             .collect();
         assert_eq!(order, vec![-2.0, 0.0, 3.0, 5.0, 6.0], "far (low z) to near");
         assert_eq!(stats.draws, 4, "front, sky, glass, ground");

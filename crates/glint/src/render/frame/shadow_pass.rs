@@ -16,18 +16,24 @@
 use crate::gpu::OffscreenTarget;
 use crate::render::cull::Frustum;
 use crate::render::debug::explain::PassType;
+use crate::render::debug::stats::{ms_since, FrameStats, PassStats};
 use crate::render::debug::timer::Timed;
-use crate::render::frame::encode::Bound;
-use crate::render::frame::prepare::Prepared;
+use crate::render::error::RenderError;
+use crate::render::frame::draw::{draw_stages, Bound};
+use crate::render::frame::forward::upload_instances;
+use crate::render::frame::input::ViewKey;
+use crate::render::frame::prepared::Prepared;
+use crate::render::frame::state::Frame;
 use crate::render::frame::visible::VisibleRun;
-use crate::render::frame::{Frame, ViewKey};
+use crate::render::frame::visible::{collect_visible, Submitted};
 use crate::render::passes::shadow_maps::{ShadowGpu, ShadowMaps};
+use crate::render::passes::shadow_views::MAX_SHADOW_VIEWS;
 use crate::render::passes::shadow_views::{self, ShadowView, ViewTarget};
 use crate::render::queue::{self, DrawItem, Queue};
 use crate::render::resources::blocks::CameraGpu;
 use crate::render::resources::pipelines::PassKind;
-use crate::render::views::{ViewBlocks, ViewGpu, MAX_SHADOW_VIEWS};
-use crate::render::{ms_since, FrameStats, PassStats, RenderError, Renderer};
+use crate::render::resources::Resources;
+use crate::render::views::{ViewBlocks, ViewGpu};
 use crate::scene::{Aabb, AlphaMode, Culling, Environment, LightKind, Lighting, ShadowLayout, View};
 use glam::Vec3;
 use web_time::Instant;
@@ -80,269 +86,271 @@ impl ViewShadows<'_> {
     }
 }
 
-impl Renderer {
-    /// Stage 2 of the frame: every shadow view of `lighting`'s lights that cast
-    /// shadows (see [`Light::with_shadows`](crate::Light::with_shadows)) for
-    /// `views` (drawn into `output` or their render targets), unless `on` is
-    /// false. Sizes the shadow maps for them once. Lights past the maps' room
-    /// (16 two-dimensional views: four per directional light, one per spot
-    /// light; 4 point lights) are drawn without shadows, with a warning in the log.
-    pub(crate) fn plan_shadows(
-        &mut self,
-        views: &[(ViewKey, &View)],
-        lighting: &Lighting,
-        on: bool,
-        output: &OffscreenTarget,
-    ) -> Result<ShadowPlan, RenderError> {
-        let lights = lighting.lights;
-        if !on || lights.iter().all(|l| l.shadows.is_none()) {
-            return Ok(ShadowPlan { first: Vec::new(), views: vec![Vec::new(); views.len()] });
-        }
-        let layout = ShadowLayout::plan(lights);
-        let casters = self.caster_bounds();
-        // Each view's shadow views, in the lights' order.
-        let mut planned: Vec<Vec<PlannedShadow>> = vec![Vec::new(); views.len()];
-        for (k, (light, first)) in lights.iter().zip(&layout.first).enumerate() {
-            let Some(settings) = light.shadows else { continue };
-            let Some(first) = *first else {
-                log::warn!("light {k}: no room left in the shadow maps; drawn without shadows");
+/// Stage 2 of the frame: every shadow view of `lighting`'s lights that cast
+/// shadows (see [`Light::with_shadows`](crate::Light::with_shadows)) for
+/// `views` (drawn into `output` or their render targets), unless `on` is
+/// false. Sizes the shadow maps for them once. Lights past the maps' room
+/// (16 two-dimensional views: four per directional light, one per spot
+/// light; 4 point lights) are drawn without shadows, with a warning in the log.
+pub(crate) fn plan_shadows(
+    res: &mut Resources,
+    frame: &Frame,
+    (views, output): (&[(ViewKey, &View)], &OffscreenTarget),
+    lighting: &Lighting,
+    on: bool,
+) -> Result<ShadowPlan, RenderError> {
+    let lights = lighting.lights;
+    if !on || lights.iter().all(|l| l.shadows.is_none()) {
+        return Ok(ShadowPlan { first: Vec::new(), views: vec![Vec::new(); views.len()] });
+    }
+    let layout = ShadowLayout::plan(lights);
+    let casters = caster_bounds(res, &frame.submitted);
+    // Each view's shadow views, in the lights' order.
+    let mut planned: Vec<Vec<PlannedShadow>> = vec![Vec::new(); views.len()];
+    for (k, (light, first)) in lights.iter().zip(&layout.first).enumerate() {
+        let Some(settings) = light.shadows else { continue };
+        let Some(first) = *first else {
+            log::warn!("light {k}: no room left in the shadow maps; drawn without shadows");
+            continue;
+        };
+        let sized = |size| crate::scene::ShadowSettings { map_size: size, ..settings };
+        let name = |j| match light.kind {
+            LightKind::Directional { .. } => format!("light {k} cascade {j}"),
+            LightKind::Spot { .. } => format!("light {k}"),
+            LightKind::Point { .. } => format!("light {k} face {j}"),
+        };
+        let shared: Vec<ShadowView> = match light.kind {
+            LightKind::Directional { direction } => {
+                let settings = sized(layout.size_2d);
+                for (list, (_, view)) in planned.iter_mut().zip(views) {
+                    let [.., width, height] = view_rectangle(res, view, output);
+                    let aspect = width as f32 / height.max(1) as f32;
+                    let cascades = shadow_views::cascades(&view.camera, aspect, direction, &settings, casters, first);
+                    let named = cascades.into_iter().enumerate();
+                    list.extend(named.map(|(j, view)| PlannedShadow { view, name: name(j), shared: false }));
+                }
                 continue;
-            };
-            let sized = |size| crate::scene::ShadowSettings { map_size: size, ..settings };
-            let name = |j| match light.kind {
-                LightKind::Directional { .. } => format!("light {k} cascade {j}"),
-                LightKind::Spot { .. } => format!("light {k}"),
-                LightKind::Point { .. } => format!("light {k} face {j}"),
-            };
-            let shared: Vec<ShadowView> = match light.kind {
-                LightKind::Directional { direction } => {
-                    let settings = sized(layout.size_2d);
-                    for (list, (_, view)) in planned.iter_mut().zip(views) {
-                        let [.., width, height] = self.view_rectangle(view, output);
-                        let aspect = width as f32 / height.max(1) as f32;
-                        let cascades =
-                            shadow_views::cascades(&view.camera, aspect, direction, &settings, casters, first);
-                        let named = cascades.into_iter().enumerate();
-                        list.extend(named.map(|(j, view)| PlannedShadow { view, name: name(j), shared: false }));
-                    }
-                    continue;
-                }
-                LightKind::Spot { .. } => {
-                    shadow_views::spot(light, &sized(layout.size_2d), first).into_iter().collect()
-                }
-                LightKind::Point { .. } => {
-                    shadow_views::cube(light, &sized(layout.size_cube), first).into_iter().flatten().collect()
-                }
-            };
-            for list in &mut planned {
-                let named = shared.iter().enumerate();
-                list.extend(named.map(|(j, &view)| PlannedShadow { view, name: name(j), shared: true }));
             }
-        }
-        let ShadowLayout { size_2d, size_cube, layers, cubes, first } = layout;
-        debug_assert!(planned.iter().all(|v| v.len() <= MAX_SHADOW_VIEWS));
-        let any = planned.iter().any(|v| !v.is_empty());
-        if any && !self.shadow_maps.fits(size_2d, layers, size_cube, cubes) {
-            let (layers, cubes) = (layers.max(self.shadow_maps.layers), cubes.max(self.shadow_maps.cubes));
-            self.shadow_maps =
-                ShadowMaps::checked(&self.device, self.shadow_maps.support, size_2d, layers, size_cube, cubes)?;
-            self.shadow_maps_generation += 1;
-        }
-        Ok(ShadowPlan { first, views: planned })
-    }
-
-    /// The pixel rectangle `view` draws into: of its render target, or of `output`.
-    fn view_rectangle(&self, view: &View, output: &OffscreenTarget) -> [u32; 4] {
-        let target = self.registry.render_target_of(view).map_or(output, |t| &t.0);
-        view.viewport.pixels(target.width(), target.height())
-    }
-
-    /// The world box around every submitted entity that casts shadows.
-    fn caster_bounds(&self) -> Option<Aabb> {
-        let boxes = self.submitted.iter().filter(|s| s.cast_shadows).filter_map(|s| self.store.slot(s.slot).bounds);
-        Aabb::from_points(boxes.flat_map(|(c, e)| [Vec3::from(c - e), Vec3::from(c + e)]))
-    }
-
-    /// Stage 2 of a view: the shadow views it draws of `shadows`, culled (as
-    /// `culling` says) from every submitted caster, batched into its shadow
-    /// list, uploaded and drawn, each entity drawing as `prepared` says; its
-    /// Shadow block holds all of `shadows`' views. Counted in `stats` (shadow
-    /// views, the shadow pass's cost).
-    pub(crate) fn draw_shadows(
-        &mut self,
-        frame: &mut Frame,
-        gpu: &mut ViewGpu,
-        (culling, shadows): (Culling, &ViewShadows),
-        (prepared, environment): (&[Prepared], &Environment),
-        stats: &mut FrameStats,
-    ) -> Result<(), RenderError> {
-        if shadows.views.is_empty() {
-            return Ok(());
-        }
-        let start = Instant::now();
-        let drawn: Vec<&PlannedShadow> = shadows.drawn().collect();
-        let ranges = self.batch_shadow_views(gpu, (&drawn, prepared), culling, stats)?;
-        self.upload_shadow_views(gpu, (&drawn, shadows.views), environment, stats)?;
-        let mut cost = PassStats::default();
-        if !drawn.is_empty() {
-            self.outline.enter(&mut frame.encoder, "shadows");
-            self.encode_shadow_views(gpu, &mut frame.encoder, &drawn, &ranges, &mut cost);
-            self.outline.leave(&mut frame.encoder);
-        }
-        stats.shadow_views = drawn.len() as u32;
-        cost.cpu_ms = ms_since(start);
-        stats.passes.shadow = cost;
-        Ok(())
-    }
-
-    /// Cull, queue, sort and batch each shadow view's casters into the view's
-    /// shadow list (culled on the GPU: every valid instance a candidate), each
-    /// submitted entity drawing as `prepared` says; returns each shadow view's
-    /// range of runs.
-    fn batch_shadow_views(
-        &mut self,
-        gpu: &mut ViewGpu,
-        (views, prepared): (&[&PlannedShadow], &[Prepared]),
-        culling: Culling,
-        stats: &mut FrameStats,
-    ) -> Result<Vec<std::ops::Range<usize>>, RenderError> {
-        gpu.shadows.clear();
-        let mut visible = std::mem::take(&mut self.visible);
-        let mut ranges = Vec::with_capacity(views.len());
-        // Blended materials cast no shadow.
-        let blended: Vec<bool> =
-            self.registry.materials.iter().map(|m| m.material.alpha_mode == AlphaMode::Blend).collect();
-        for planned in views {
-            let view = &planned.view;
-            let view_proj = view.view_proj();
-            let casts = |s: &crate::render::Submitted| s.cast_shadows && !blended[s.material.0 as usize];
-            let frustum = Frustum::from_view_proj(view_proj);
-            self.collect_visible(&frustum, culling, casts, &mut visible);
-            let pass = match view.target {
-                ViewTarget::Layer(_) => PassKind::ShadowDepth,
-                ViewTarget::CubeFace { .. } => PassKind::ShadowDistance,
-            };
-            let first_item = gpu.shadows.items.len();
-            for &VisibleRun { entry, start, len } in visible.runs.iter().chain(&visible.ranges) {
-                let material = self.submitted[entry].material;
-                let pipeline = match self.registry.shadow_pipeline(material, &prepared[entry], pass, stats) {
-                    Ok(pipeline) => pipeline,
-                    Err(e) => {
-                        self.visible = visible;
-                        return Err(e);
-                    }
-                };
-                let s = &self.submitted[entry];
-                let (material, shape) = (s.material, s.shape);
-                let slot = &self.registry.materials[material.0 as usize];
-                let queue = match slot.material.alpha_mode {
-                    AlphaMode::Mask { .. } => Queue::AlphaTest,
-                    _ => Queue::Opaque,
-                };
-                let texture_set = prepared[entry].draw.texture_set;
-                // Near to far from the light, so nearer casters hide the rest early.
-                let center = self.store.slot(s.slot).bounds.map_or(Vec3::ZERO, |(c, _)| Vec3::from(c));
-                let depth = view_proj.project_point3(center).z.clamp(0.0, 1.0);
-                gpu.shadows.items.push(DrawItem {
-                    key: queue::sort_key(queue.stage(), false, pipeline, texture_set, material, shape, depth),
-                    pipeline,
-                    material,
-                    shape,
-                    first: start,
-                    count: len,
-                    entry: entry as u32,
-                });
+            LightKind::Spot { .. } => shadow_views::spot(light, &sized(layout.size_2d), first).into_iter().collect(),
+            LightKind::Point { .. } => {
+                shadow_views::cube(light, &sized(layout.size_cube), first).into_iter().flatten().collect()
             }
-            queue::sort(&mut gpu.shadows.items[first_item..]);
-            let draw_of = |item: &DrawItem| prepared[item.entry as usize].draw;
-            let placed = |item: &DrawItem| visible.placed[item.entry as usize];
-            ranges.push(gpu.shadows.build(first_item, &visible.instances, frustum, draw_of, placed));
+        };
+        for list in &mut planned {
+            let named = shared.iter().enumerate();
+            list.extend(named.map(|(j, &view)| PlannedShadow { view, name: name(j), shared: true }));
         }
-        self.visible = visible;
-        Ok(ranges)
     }
-
-    /// Write the instances that changed, each view's Camera record, the Shadow
-    /// block, and the shadow list's indices and commands.
-    fn upload_shadow_views(
-        &mut self,
-        gpu: &mut ViewGpu,
-        (drawn, all): (&[&PlannedShadow], &[PlannedShadow]),
-        environment: &Environment,
-        stats: &mut FrameStats,
-    ) -> Result<(), RenderError> {
-        let bytes = &mut stats.bytes_uploaded;
-        self.upload_instances(gpu, bytes)?;
-        for (k, planned) in drawn.iter().enumerate() {
-            let record = CameraGpu::for_shadow(&planned.view).with_motion(environment);
-            bytes.camera += gpu.blocks.update(&self.queue, 1 + k, record);
-        }
-        let views: Vec<ShadowView> = all.iter().map(|p| p.view).collect();
-        let block = ShadowGpu::new(&views, self.shadow_maps.size_2d, self.shadow_maps.size_cube);
-        bytes.scene += gpu.shadow_block.update(&self.queue, block);
-        let layout = &self.registry.pipelines.instance_layout;
-        let culls = self.cull_pipelines.as_ref().zip(self.instances.bounds());
-        let written = gpu.shadows.upload(&self.device, &self.queue, (layout, self.instances.array()), culls, None)?;
-        bytes.draw_indices += written.draw_indices;
-        bytes.indirect += written.indirect;
-        Ok(())
+    let ShadowLayout { size_2d, size_cube, layers, cubes, first } = layout;
+    debug_assert!(planned.iter().all(|v| v.len() <= MAX_SHADOW_VIEWS));
+    let any = planned.iter().any(|v| !v.is_empty());
+    if any && !res.shadow_maps.fits(size_2d, layers, size_cube, cubes) {
+        let (layers, cubes) = (layers.max(res.shadow_maps.layers), cubes.max(res.shadow_maps.cubes));
+        res.shadow_maps = ShadowMaps::checked(&res.device, res.shadow_maps.support, size_2d, layers, size_cube, cubes)?;
+        res.shadow_maps_generation += 1;
     }
+    Ok(ShadowPlan { first, views: planned })
+}
 
-    /// One depth pass per shadow view (named as planned) into its layer of
-    /// the shadow maps, after the cull pass where the list is culled on the GPU.
-    fn encode_shadow_views(
-        &mut self,
-        gpu: &mut ViewGpu,
-        encoder: &mut wgpu::CommandEncoder,
-        views: &[&PlannedShadow],
-        ranges: &[std::ops::Range<usize>],
-        cost: &mut PassStats,
-    ) {
-        if let Some(pipelines) = &self.cull_pipelines {
-            if gpu.shadows.culled_on_gpu() {
-                self.outline.pass("cull instances", PassType::Compute, &[]);
-            }
-            gpu.shadows.record_cull(encoder, pipelines, self.queue.submits());
-        }
-        let mut stats = FrameStats::default();
-        for (k, (planned, range)) in views.iter().zip(ranges).enumerate() {
-            let name = &planned.name;
-            let attachment = match planned.view.target {
-                ViewTarget::Layer(layer) => &self.shadow_maps.layer_views[layer as usize],
-                ViewTarget::CubeFace { cube, face } => &self.shadow_maps.face_views[(6 * cube + face) as usize],
+/// The pixel rectangle `view` draws into: of its render target, or of `output`.
+fn view_rectangle(res: &Resources, view: &View, output: &OffscreenTarget) -> [u32; 4] {
+    let target = res.registry.render_target_of(view).map_or(output, |t| &t.0);
+    view.viewport.pixels(target.width(), target.height())
+}
+
+/// The world box around every entity of `submitted` that casts shadows.
+fn caster_bounds(res: &Resources, submitted: &[Submitted]) -> Option<Aabb> {
+    let boxes = submitted.iter().filter(|s| s.cast_shadows).filter_map(|s| res.store.slot(s.slot).bounds);
+    Aabb::from_points(boxes.flat_map(|(c, e)| [Vec3::from(c - e), Vec3::from(c + e)]))
+}
+
+/// Stage 2 of a view: the shadow views it draws of `shadows`, culled (as
+/// `culling` says) from every submitted caster, batched into its shadow
+/// list, uploaded and drawn, each entity drawing as `prepared` says; its
+/// Shadow block holds all of `shadows`' views. Counted in `stats` (shadow
+/// views, the shadow pass's cost).
+pub(crate) fn draw_shadows(
+    res: &mut Resources,
+    frame: &mut Frame,
+    gpu: &mut ViewGpu,
+    (culling, shadows): (Culling, &ViewShadows),
+    (prepared, environment): (&[Prepared], &Environment),
+    stats: &mut FrameStats,
+) -> Result<(), RenderError> {
+    if shadows.views.is_empty() {
+        return Ok(());
+    }
+    let start = Instant::now();
+    let drawn: Vec<&PlannedShadow> = shadows.drawn().collect();
+    let ranges = batch_shadow_views(res, frame, gpu, (&drawn, prepared), culling, stats)?;
+    upload_shadow_views(res, gpu, (&drawn, shadows.views), environment, stats)?;
+    let mut cost = PassStats::default();
+    if !drawn.is_empty() {
+        frame.outline.enter(&mut frame.encoder, "shadows");
+        encode_shadow_views(res, frame, gpu, &drawn, &ranges, &mut cost);
+        frame.outline.leave(&mut frame.encoder);
+    }
+    stats.shadow_views = drawn.len() as u32;
+    cost.cpu_ms = ms_since(start);
+    stats.passes.shadow = cost;
+    Ok(())
+}
+
+/// Cull, queue, sort and batch each shadow view's casters into the view's
+/// shadow list (culled on the GPU: every valid instance a candidate), each
+/// submitted entity drawing as `prepared` says; returns each shadow view's
+/// range of runs.
+fn batch_shadow_views(
+    res: &mut Resources,
+    frame: &mut Frame,
+    gpu: &mut ViewGpu,
+    (views, prepared): (&[&PlannedShadow], &[Prepared]),
+    culling: Culling,
+    stats: &mut FrameStats,
+) -> Result<Vec<std::ops::Range<usize>>, RenderError> {
+    gpu.shadows.clear();
+    let mut visible = std::mem::take(&mut frame.visible);
+    let mut ranges = Vec::with_capacity(views.len());
+    // Blended materials cast no shadow.
+    let blended: Vec<bool> = res.registry.materials.iter().map(|m| m.material.alpha_mode == AlphaMode::Blend).collect();
+    for planned in views {
+        let view = &planned.view;
+        let view_proj = view.view_proj();
+        let casts = |s: &Submitted| s.cast_shadows && !blended[s.material.0 as usize];
+        let frustum = Frustum::from_view_proj(view_proj);
+        collect_visible(res, (&frustum, culling), (&frame.submitted, casts), &mut visible);
+        let pass = match view.target {
+            ViewTarget::Layer(_) => PassKind::ShadowDepth,
+            ViewTarget::CubeFace { .. } => PassKind::ShadowDistance,
+        };
+        let first_item = gpu.shadows.items.len();
+        for &VisibleRun { entry, start, len } in visible.runs.iter().chain(&visible.ranges) {
+            let material = frame.submitted[entry].material;
+            let pipeline = match res.registry.shadow_pipeline(material, &prepared[entry], pass, stats) {
+                Ok(pipeline) => pipeline,
+                Err(e) => {
+                    frame.visible = visible;
+                    return Err(e);
+                }
             };
-            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some(name),
-                color_attachments: &[],
-                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view: attachment,
-                    depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(1.0), store: wgpu::StoreOp::Store }),
-                    stencil_ops: None,
-                }),
-                timestamp_writes: self
-                    .gpu_timer
-                    .as_ref()
-                    .and_then(|t| t.pass_writes(Timed::Shadow, k == 0, k + 1 == views.len())),
-                ..Default::default()
+            let s = &frame.submitted[entry];
+            let (material, shape) = (s.material, s.shape);
+            let slot = &res.registry.materials[material.0 as usize];
+            let queue = match slot.material.alpha_mode {
+                AlphaMode::Mask { .. } => Queue::AlphaTest,
+                _ => Queue::Opaque,
+            };
+            let texture_set = prepared[entry].draw.texture_set;
+            // Near to far from the light, so nearer casters hide the rest early.
+            let center = res.store.slot(s.slot).bounds.map_or(Vec3::ZERO, |(c, _)| Vec3::from(c));
+            let depth = view_proj.project_point3(center).z.clamp(0.0, 1.0);
+            gpu.shadows.items.push(DrawItem {
+                key: queue::sort_key(queue.stage(), false, pipeline, texture_set, material, shape, depth),
+                pipeline,
+                material,
+                shape,
+                first: start,
+                count: len,
+                entry: entry as u32,
             });
-            pass.set_bind_group(1, &gpu.blocks.bind_group, &[ViewBlocks::offset(1 + k)]);
-            pass.set_bind_group(3, &gpu.shadows.bind_group, &[]);
-            stats.bind_groups_set += 2;
-            let bound = ["bind group 1 (the light's camera)", "bind group 3 (instances, draw indices)"];
-            self.outline.pass(name, PassType::Render, &bound);
-            self.draw_stages(&gpu.shadows, &mut pass, (range.clone(), &[false]), &mut Bound::default(), &mut stats);
         }
-        if let Some(timer) = &mut self.gpu_timer {
-            timer.resolve(encoder, Timed::Shadow, self.frame_index);
-        }
-        cost.draw_calls = stats.draw_calls;
-        cost.draws = stats.draws;
-        cost.instances = gpu.shadows.cpu_instances();
+        queue::sort(&mut gpu.shadows.items[first_item..]);
+        let draw_of = |item: &DrawItem| prepared[item.entry as usize].draw;
+        let placed = |item: &DrawItem| visible.placed[item.entry as usize];
+        ranges.push(gpu.shadows.build(first_item, &visible.instances, frustum, draw_of, placed));
+    }
+    frame.visible = visible;
+    Ok(ranges)
+}
+
+/// Write the instances that changed, each view's Camera record, the Shadow
+/// block, and the shadow list's indices and commands.
+fn upload_shadow_views(
+    res: &mut Resources,
+    gpu: &mut ViewGpu,
+    (drawn, all): (&[&PlannedShadow], &[PlannedShadow]),
+    environment: &Environment,
+    stats: &mut FrameStats,
+) -> Result<(), RenderError> {
+    let bytes = &mut stats.bytes_uploaded;
+    upload_instances(res, gpu, bytes)?;
+    for (k, planned) in drawn.iter().enumerate() {
+        let record = CameraGpu::for_shadow(&planned.view).with_motion(environment);
+        bytes.camera += gpu.blocks.update(&res.queue, 1 + k, record);
+    }
+    let views: Vec<ShadowView> = all.iter().map(|p| p.view).collect();
+    let block = ShadowGpu::new(&views, res.shadow_maps.size_2d, res.shadow_maps.size_cube);
+    bytes.scene += gpu.shadow_block.update(&res.queue, block);
+    let layout = &res.registry.pipelines.instance_layout;
+    let culls = res.cull_pipelines.as_ref().zip(res.instances.bounds());
+    let written = gpu.shadows.upload(&res.device, &res.queue, (layout, res.instances.array()), culls, None)?;
+    bytes.draw_indices += written.draw_indices;
+    bytes.indirect += written.indirect;
+    Ok(())
+}
+
+/// One depth pass per shadow view (named as planned) into its layer of
+/// the shadow maps, after the cull pass where the list is culled on the GPU.
+fn encode_shadow_views(
+    res: &mut Resources,
+    frame: &mut Frame,
+    gpu: &mut ViewGpu,
+    views: &[&PlannedShadow],
+    ranges: &[std::ops::Range<usize>],
+    cost: &mut PassStats,
+) {
+    if let Some(pipelines) = &res.cull_pipelines {
         if gpu.shadows.culled_on_gpu() {
-            // Counted on the GPU, a frame or two late (0 before the first count comes back).
-            let submits = self.queue.submits();
-            let drawn = gpu.shadows.gpu.as_mut().and_then(|g| g.drawn(&self.device, submits));
-            cost.instances = drawn.map_or(0, |d| d.iter().map(|&n| u64::from(n)).sum());
+            frame.outline.pass("cull instances", PassType::Compute, &[]);
         }
+        gpu.shadows.record_cull(&mut frame.encoder, pipelines, res.queue.submits());
+    }
+    let mut stats = FrameStats::default();
+    for (k, (planned, range)) in views.iter().zip(ranges).enumerate() {
+        let name = &planned.name;
+        let attachment = match planned.view.target {
+            ViewTarget::Layer(layer) => &res.shadow_maps.layer_views[layer as usize],
+            ViewTarget::CubeFace { cube, face } => &res.shadow_maps.face_views[(6 * cube + face) as usize],
+        };
+        let mut pass = frame.encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some(name),
+            color_attachments: &[],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: attachment,
+                depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(1.0), store: wgpu::StoreOp::Store }),
+                stencil_ops: None,
+            }),
+            timestamp_writes: res
+                .gpu_timer
+                .as_ref()
+                .and_then(|t| t.pass_writes(Timed::Shadow, k == 0, k + 1 == views.len())),
+            ..Default::default()
+        });
+        pass.set_bind_group(1, &gpu.blocks.bind_group, &[ViewBlocks::offset(1 + k)]);
+        pass.set_bind_group(3, &gpu.shadows.bind_group, &[]);
+        stats.bind_groups_set += 2;
+        let bound = ["bind group 1 (the light's camera)", "bind group 3 (instances, draw indices)"];
+        frame.outline.pass(name, PassType::Render, &bound);
+        draw_stages(
+            res,
+            &frame.outline,
+            &gpu.shadows,
+            &mut pass,
+            (range.clone(), &[false]),
+            &mut Bound::default(),
+            &mut stats,
+        );
+    }
+    if let Some(timer) = &mut res.gpu_timer {
+        timer.resolve(&mut frame.encoder, Timed::Shadow, frame.index);
+    }
+    cost.draw_calls = stats.draw_calls;
+    cost.draws = stats.draws;
+    cost.instances = gpu.shadows.cpu_instances();
+    if gpu.shadows.culled_on_gpu() {
+        // Counted on the GPU, a frame or two late (0 before the first count comes back).
+        let submits = res.queue.submits();
+        let drawn = gpu.shadows.gpu.as_mut().and_then(|g| g.drawn(&res.device, submits));
+        cost.instances = drawn.map_or(0, |d| d.iter().map(|&n| u64::from(n)).sum());
     }
 }

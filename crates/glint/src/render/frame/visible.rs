@@ -4,11 +4,26 @@
 //! instances tested one by one.
 
 use crate::render::cull::{self, Containment, Frustum};
+use crate::render::debug::stats::FrameStats;
+use crate::render::gpu_driven::commands::Placed;
 use crate::render::resources::instances::{InstanceStore, Slot};
+use crate::render::resources::Resources;
 use crate::render::view::ViewFrame;
-use crate::render::{FrameStats, Renderer, Submitted};
-use crate::scene::Culling;
+use crate::scene::{Culling, MaterialId, ShapeId};
 use p3_maybe_rayon::prelude::*;
+
+/// An entity as submitted this frame: its store slot and what it draws with.
+pub(crate) struct Submitted {
+    pub slot: usize,
+    pub shape: ShapeId,
+    pub material: MaterialId,
+    pub render_order: Option<u8>,
+    pub cast_shadows: bool,
+    /// Its instances.
+    pub instances: u64,
+    /// The fraction of each tile drawn: the entity's density times the renderer's.
+    pub density: f32,
+}
 
 /// Submitted instances above which entities are culled on all cores. Tiles make
 /// culling cheap enough that threads rarely pay: on many.scn (100,000 instances in
@@ -46,25 +61,6 @@ pub(crate) struct Visible {
     pub tiles: TileCounts,
 }
 
-/// How a submitted entity's instances reach a draw list: which of
-/// [`Visible`]'s lists holds them.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub(crate) enum Placed {
-    /// Its visible instances, listed one by one in `instances` (culled on the
-    /// CPU; blended ones always, to be sorted).
-    #[default]
-    Listed,
-    /// Runs of store instances in `ranges`, which the GPU culls.
-    OnGpu,
-    /// Runs of store instances in `ranges` drawn whole: a tiled entity's
-    /// visible tiles, culled on the CPU.
-    Whole,
-    /// Runs of compact instances in `ranges` (numbered by quarter records,
-    /// [`Slot::instance_base`]), drawn whole: a compact entity's visible tiles,
-    /// culled on the CPU whatever the culling path.
-    Compact,
-}
-
 impl Visible {
     /// Instances kept: listed, and in whole tiles.
     pub(crate) fn kept(&self) -> u64 {
@@ -99,114 +95,111 @@ impl Shown {
     }
 }
 
-impl Renderer {
-    /// What a view that draws into the render target shown by `hides` may draw.
-    pub(crate) fn shown(&self, hides: Option<crate::scene::TextureId>) -> Shown {
-        let Some(texture) = hides else { return Shown(Vec::new()) };
-        let materials = 0..self.registry.materials.len() as u32;
-        Shown(materials.map(|m| self.registry.shows(crate::scene::MaterialId(m), texture)).collect())
-    }
+/// What a view that draws into the render target shown by `hides` may draw.
+pub(crate) fn shown(res: &Resources, hides: Option<crate::scene::TextureId>) -> Shown {
+    let Some(texture) = hides else { return Shown(Vec::new()) };
+    let materials = 0..res.registry.materials.len() as u32;
+    Shown(materials.map(|m| res.registry.shows(crate::scene::MaterialId(m), texture)).collect())
+}
 
-    /// Stage 3 of a view: each submitted entity's instances that `frame`
-    /// sees (not those whose materials show its own target), into `visible`. An entity whose world box is wholly inside or outside the
-    /// frustum is decided at once; only boxes crossing a plane have their
-    /// instances tested one by one.
-    pub(crate) fn cull(&self, frame: &ViewFrame, visible: &mut Visible, stats: &mut FrameStats) {
-        let shown = self.shown(frame.hides);
-        self.collect_visible(&frame.frustum, frame.culling, |s| shown.contains(s), visible);
-        let store = &self.store;
-        let drawn = self.submitted.iter().filter(|s| shown.contains(s));
-        stats.instances_invalid = drawn.map(|s| u64::from(store.slot(s.slot).invalid)).sum();
-        stats.instances_culled = stats.instances_submitted - stats.instances_invalid - visible.kept();
-        (stats.tiles_tested, stats.tiles_drawn) = (visible.tiles.tested, visible.tiles.drawn);
-        stats.culling = frame.culling;
-    }
+/// Stage 3 of a view: each of the `submitted` entities' instances that
+/// `view` sees (not those whose materials show its own target), into
+/// `visible`. An entity whose world box is wholly inside or outside the
+/// frustum is decided at once; only boxes crossing a plane have their
+/// instances tested one by one.
+pub(crate) fn cull(
+    res: &Resources,
+    (submitted, visible): (&[Submitted], &mut Visible),
+    view: &ViewFrame,
+    stats: &mut FrameStats,
+) {
+    let shown = shown(res, view.hides);
+    collect_visible(res, (&view.frustum, view.culling), (submitted, |s| shown.contains(s)), visible);
+    let store = &res.store;
+    let drawn = submitted.iter().filter(|s| shown.contains(s));
+    stats.instances_invalid = drawn.map(|s| u64::from(store.slot(s.slot).invalid)).sum();
+    stats.instances_culled = stats.instances_submitted - stats.instances_invalid - visible.kept();
+    (stats.tiles_tested, stats.tiles_drawn) = (visible.tiles.tested, visible.tiles.drawn);
+    stats.culling = view.culling;
+}
 
-    /// Fill `out` with the instances of the submitted entities `wanted` keeps
-    /// that `frustum` sees (every valid one when `culling` is off): listed, or
-    /// as runs of instances (whole tiles, compact ones whatever the culling;
-    /// culling on the GPU, the candidates of the entities not blended), as
-    /// `out.placed` says.
-    pub(crate) fn collect_visible(
-        &self,
-        frustum: &Frustum,
-        culling: Culling,
-        wanted: impl Fn(&Submitted) -> bool + Sync,
-        out: &mut Visible,
-    ) {
-        out.instances.clear();
-        out.runs.clear();
-        out.ranges.clear();
-        out.tiles = TileCounts::default();
-        let store = &self.store;
-        let blended: Vec<bool> = (0..self.registry.materials.len() as u32)
-            .map(|m| self.registry.blended(crate::scene::MaterialId(m)))
-            .collect();
-        out.placed.clear();
-        out.placed.extend(self.submitted.iter().map(|s| match blended[s.material.0 as usize] {
-            _ if store.slot(s.slot).compact => Placed::Compact,
-            true => Placed::Listed,
-            false if culling == Culling::Gpu => Placed::OnGpu,
-            false if store.slot(s.slot).tiled => Placed::Whole,
-            false => Placed::Listed,
-        }));
-        let frustum_on = culling != Culling::Off;
-        for (entry, s) in
-            self.submitted.iter().enumerate().filter(|&(k, s)| out.placed[k] != Placed::Listed && wanted(s))
-        {
-            let slot = store.slot(s.slot);
-            let ranges = &mut out.ranges;
-            if slot.tiled {
-                // The GPU culls by the same boxes: every instance carries its
-                // tile's (compact ones are culled here alone).
-                out.tiles += visible_tiles(frustum, frustum_on, slot, s.density, |r| {
-                    ranges.push(VisibleRun { entry, start: r.start, len: r.end - r.start });
-                });
-            } else if slot.count > slot.invalid {
-                ranges.push(VisibleRun { entry, start: slot.first, len: slot.count - slot.invalid });
-            }
+/// Fill `out` with the instances of the submitted entities `wanted` keeps
+/// that `frustum` sees (every valid one when `culling` is off): listed, or
+/// as runs of instances (whole tiles, compact ones whatever the culling;
+/// culling on the GPU, the candidates of the entities not blended), as
+/// `out.placed` says.
+pub(crate) fn collect_visible(
+    res: &Resources,
+    (frustum, culling): (&Frustum, Culling),
+    (submitted, wanted): (&[Submitted], impl Fn(&Submitted) -> bool + Sync),
+    out: &mut Visible,
+) {
+    out.instances.clear();
+    out.runs.clear();
+    out.ranges.clear();
+    out.tiles = TileCounts::default();
+    let store = &res.store;
+    let blended: Vec<bool> =
+        (0..res.registry.materials.len() as u32).map(|m| res.registry.blended(crate::scene::MaterialId(m))).collect();
+    out.placed.clear();
+    out.placed.extend(submitted.iter().map(|s| match blended[s.material.0 as usize] {
+        _ if store.slot(s.slot).compact => Placed::Compact,
+        true => Placed::Listed,
+        false if culling == Culling::Gpu => Placed::OnGpu,
+        false if store.slot(s.slot).tiled => Placed::Whole,
+        false => Placed::Listed,
+    }));
+    let frustum_on = culling != Culling::Off;
+    for (entry, s) in submitted.iter().enumerate().filter(|&(k, s)| out.placed[k] != Placed::Listed && wanted(s)) {
+        let slot = store.slot(s.slot);
+        let ranges = &mut out.ranges;
+        if slot.tiled {
+            // The GPU culls by the same boxes: every instance carries its
+            // tile's (compact ones are culled here alone).
+            out.tiles += visible_tiles(frustum, frustum_on, slot, s.density, |r| {
+                ranges.push(VisibleRun { entry, start: r.start, len: r.end - r.start });
+            });
+        } else if slot.count > slot.invalid {
+            ranges.push(VisibleRun { entry, start: slot.first, len: slot.count - slot.invalid });
         }
-        let placed = &out.placed;
-        let listed = |entry: usize, s: &Submitted| placed[entry] == Placed::Listed && wanted(s);
-        let culling = frustum_on;
-        let (visible, runs, tiles) = (&mut out.instances, &mut out.runs, &mut out.tiles);
-        let mut push_run = |entry: usize, visible: &mut Vec<u32>, start: usize| {
-            let len = (visible.len() - start) as u32;
-            if len > 0 {
-                runs.push(VisibleRun { entry, start: start as u32, len });
-            }
-        };
-        if self.submitted.len() > 1
-            && self.submitted.iter().map(|s| s.instances).sum::<u64>() >= PARALLEL_ENTITY_CULL_THRESHOLD
-        {
-            // Many instances: entities culled on all cores, results kept in submission order.
-            let lists: Vec<(Vec<u32>, TileCounts)> = self
-                .submitted
-                .par_iter()
-                .enumerate()
-                .map(|(entry, s)| {
-                    let mut list = Vec::new();
-                    let mut counts = TileCounts::default();
-                    if listed(entry, s) {
-                        counts = visible_instances(frustum, culling, store.slot(s.slot), s.density, (store, &mut list));
-                    }
-                    (list, counts)
-                })
-                .collect();
-            for (entry, (list, counts)) in lists.into_iter().enumerate() {
-                let start = visible.len();
-                visible.extend_from_slice(&list);
-                push_run(entry, visible, start);
-                *tiles += counts;
-            }
-        } else {
-            for (entry, s) in self.submitted.iter().enumerate() {
-                let start = visible.len();
+    }
+    let placed = &out.placed;
+    let listed = |entry: usize, s: &Submitted| placed[entry] == Placed::Listed && wanted(s);
+    let culling = frustum_on;
+    let (visible, runs, tiles) = (&mut out.instances, &mut out.runs, &mut out.tiles);
+    let mut push_run = |entry: usize, visible: &mut Vec<u32>, start: usize| {
+        let len = (visible.len() - start) as u32;
+        if len > 0 {
+            runs.push(VisibleRun { entry, start: start as u32, len });
+        }
+    };
+    if submitted.len() > 1 && submitted.iter().map(|s| s.instances).sum::<u64>() >= PARALLEL_ENTITY_CULL_THRESHOLD {
+        // Many instances: entities culled on all cores, results kept in submission order.
+        let lists: Vec<(Vec<u32>, TileCounts)> = submitted
+            .par_iter()
+            .enumerate()
+            .map(|(entry, s)| {
+                let mut list = Vec::new();
+                let mut counts = TileCounts::default();
                 if listed(entry, s) {
-                    *tiles += visible_instances(frustum, culling, store.slot(s.slot), s.density, (store, visible));
+                    counts = visible_instances(frustum, culling, store.slot(s.slot), s.density, (store, &mut list));
                 }
-                push_run(entry, visible, start);
+                (list, counts)
+            })
+            .collect();
+        for (entry, (list, counts)) in lists.into_iter().enumerate() {
+            let start = visible.len();
+            visible.extend_from_slice(&list);
+            push_run(entry, visible, start);
+            *tiles += counts;
+        }
+    } else {
+        for (entry, s) in submitted.iter().enumerate() {
+            let start = visible.len();
+            if listed(entry, s) {
+                *tiles += visible_instances(frustum, culling, store.slot(s.slot), s.density, (store, visible));
             }
+            push_run(entry, visible, start);
         }
     }
 }

@@ -13,14 +13,14 @@
 
 use crate::render::batch::{self, Batch};
 use crate::render::cull::Frustum;
-use crate::render::frame::visible::Placed;
-use crate::render::gpu_driven::gpu_cull::{CullBindings, CullInput, CullPipelines, CullRange, GpuCull, Run};
+use crate::render::error::RenderError;
+use crate::render::gpu_driven::commands::{Placed, Run};
+use crate::render::gpu_driven::gpu_cull::{CullBindings, CullInput, CullPipelines, CullRange, GpuCull};
 use crate::render::gpu_driven::occlusion::{late_commands, LateInput};
 use crate::render::queue::DrawItem;
-use crate::render::resources::buffers::GrowBuffer;
 use crate::render::resources::gpu_array::GpuArray;
+use crate::render::resources::gpu_array::GrowBuffer;
 use crate::render::resources::mesh_pool::MeshRange;
-use crate::render::RenderError;
 
 /// What a list may rely on: indirect drawing, storage buffers, GPU culling.
 #[derive(Clone, Copy, Debug)]

@@ -10,7 +10,7 @@
 //! Each frame the list's indirect commands are copied from the CPU's (whose
 //! GPU-culled instance counts are 0) into [`GpuCull::args`], then one compute
 //! pass (`shader/cull.wgsl`) tests every candidate's world box (uploaded with
-//! the instances, [`BoundsGpu`]) against its frustum, writes the visible ones'
+//! the instances, [`BoundsGpu`](crate::render::resources::buffers::BoundsGpu)) against its frustum, writes the visible ones'
 //! store indices into their batch's range and counts them into the command;
 //! then copies each run's non-empty commands to the front of the run's range of
 //! [`GpuCull::drawn_args`] with their count, which a
@@ -19,13 +19,14 @@
 //! [`GpuCull::args`], empty commands included). Each frustum's instances drawn
 //! come back to the CPU a frame or two late, without a stall.
 
-use crate::render::cull::{Boxes, Frustum};
+use crate::render::cull::Frustum;
 use crate::render::debug::readback::CountReadback;
+use crate::render::error::RenderError;
+use crate::render::gpu_driven::commands::{Run, COMMAND_BYTES};
 pub(crate) use crate::render::gpu_driven::cull_pipelines::CullPipelines;
 use crate::render::gpu_driven::cull_pipelines::OcclusionPipelines;
 use crate::render::gpu_driven::occlusion::{LateInput, LatePhase};
-use crate::render::resources::buffers::GrowBuffer;
-use crate::render::RenderError;
+use crate::render::resources::gpu_array::GrowBuffer;
 
 /// Frames a view is culled by frustum alone after an occlusion-culled frame
 /// that hid nothing.
@@ -33,29 +34,6 @@ pub const SKIP_UNPAID_OCCLUSION: u32 = 30;
 
 /// Invocations per workgroup of both entry points.
 const WORKGROUP: u32 = 64;
-/// Bytes of one indexed indirect command.
-pub(crate) const COMMAND_BYTES: u64 = std::mem::size_of::<wgpu::util::DrawIndexedIndirectArgs>() as u64;
-
-/// One instance's world box as the cull pass reads it (`w` unused).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
-pub(crate) struct BoundsGpu {
-    center: [f32; 4],
-    extent: [f32; 4],
-}
-
-impl BoundsGpu {
-    /// Boxes `range` of `boxes`, as the cull pass reads them.
-    pub(crate) fn of(boxes: &Boxes, range: std::ops::Range<usize>) -> Vec<Self> {
-        (range)
-            .map(|i| {
-                let (c, e) = (boxes.center(i), boxes.extent(i));
-                Self { center: [c.x, c.y, c.z, 0.0], extent: [e.x, e.y, e.z, 0.0] }
-            })
-            .collect()
-    }
-}
-
 /// Candidates `start .. start + count` of a list: store instances `first ..`,
 /// tested against frustum `frustum`, drawn by batch `batch`, whose instances
 /// start at `out` in the draw-index buffer.
@@ -68,27 +46,6 @@ pub(crate) struct CullRange {
     pub batch: u32,
     pub frustum: u32,
     pub out: u32,
-}
-
-/// Batches `first .. first + len` of a list, drawn by one call, seen by `frustum`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq, Eq, bytemuck::Pod, bytemuck::Zeroable)]
-pub(crate) struct Run {
-    pub first: u32,
-    pub len: u32,
-    pub frustum: u32,
-    pad: u32,
-}
-
-impl Run {
-    pub(crate) fn new(first: usize, len: usize, frustum: u32) -> Self {
-        Self { first: first as u32, len: len as u32, frustum, pad: 0 }
-    }
-
-    /// Its batches.
-    pub(crate) fn batches(&self) -> std::ops::Range<usize> {
-        self.first as usize..(self.first + self.len) as usize
-    }
 }
 
 /// `cull.wgsl`'s `Params`: one set for the early (or only) phase, one for the late.
@@ -522,9 +479,7 @@ mod layout_tests {
     #[test]
     fn the_culling_records_mirror_their_wgsl_structs() {
         let wgsl = crate::shader::CULL;
-        assert_mirrors!(BoundsGpu, wgsl, "Bounds", [center, extent]);
         assert_mirrors!(CullRange, wgsl, "CullRange", [first, count, start, batch, frustum, out]);
-        assert_mirrors!(Run, wgsl, "Run", [first, len, frustum, pad]);
         let pad = std::mem::offset_of!(Params, pad);
         let fields = [
             ("ranges", std::mem::offset_of!(Params, ranges)),

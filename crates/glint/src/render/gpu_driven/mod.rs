@@ -2,6 +2,7 @@
 //! built from sorted batches), culled on the GPU by compute passes, with
 //! two-phase occlusion culling against a depth pyramid.
 
+pub(crate) mod commands;
 pub(crate) mod cull_pipelines;
 pub(crate) mod draw_list;
 pub(crate) mod gpu_cull;

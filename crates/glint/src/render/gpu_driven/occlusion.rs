@@ -17,10 +17,9 @@
 //! the frustum-only picture: only the work behind occluders goes. A new or
 //! changed set of candidates starts with every flag clear (all drawn early).
 
-use crate::render::frame::visible::Placed;
-use crate::render::gpu_driven::gpu_cull::{Run, COMMAND_BYTES};
-use crate::render::resources::buffers::GrowBuffer;
-use crate::render::RenderError;
+use crate::render::error::RenderError;
+use crate::render::gpu_driven::commands::{Placed, Run, COMMAND_BYTES};
+use crate::render::resources::gpu_array::GrowBuffer;
 
 /// The pyramid's compute pipelines.
 pub(crate) struct PyramidPipelines {

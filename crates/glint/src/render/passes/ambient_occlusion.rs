@@ -37,21 +37,11 @@
 //! the draws are [`Passes::ambient_occlusion`](crate::render::Passes::ambient_occlusion)
 //! (the pre-pass's, and one each for occlusion and blur as fragment passes).
 
-use crate::gpu::OffscreenTarget;
-use crate::render::debug::explain::PassType;
-use crate::render::debug::timer::Timed;
-use crate::render::frame::encode::{Bound, Twin};
-use crate::render::gpu_driven::draw_list::run_stage;
-use crate::render::queue::SKY_STAGE;
 use crate::render::resources::blocks::UniformBlock;
+use crate::render::resources::pipelines::{PREPASS_FORMAT, SHADOW_FORMAT};
 use crate::render::view::ViewFrame;
-use crate::render::views::{ViewBlocks, ViewGpu};
-use crate::render::{FrameStats, RenderError, Renderer};
 use crate::scene::{AmbientOcclusion, Projection};
 
-/// The pre-pass target: octahedral view-space normal (xy), distance as a half
-/// float (z) plus what it rounded away (w); 0 where nothing was drawn.
-pub(crate) const PREPASS_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
 /// The occlusion textures (half resolution), in red: 1 open, 0 wholly
 /// occluded. Four channels, as compute passes store it and one is not a
 /// storage format.
@@ -63,13 +53,13 @@ const MAX_RADIUS_PIXELS: f32 = 64.0;
 /// The occlusion passes' parameters (`Occlusion` in `shader/ssao.wgsl`).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
-struct AmbientOcclusionGpu {
+pub(crate) struct AmbientOcclusionGpu {
     projection: [f32; 4],
     params: [f32; 4],
 }
 
 impl AmbientOcclusionGpu {
-    fn new(frame: &ViewFrame, settings: AmbientOcclusion) -> Self {
+    pub(crate) fn new(frame: &ViewFrame, settings: AmbientOcclusion) -> Self {
         let p = frame.camera.projection(frame.aspect);
         let orthographic = matches!(frame.camera.projection, Projection::Orthographic { .. });
         Self {
@@ -80,7 +70,7 @@ impl AmbientOcclusionGpu {
 }
 
 /// How the occlusion and blur passes run.
-enum Kind {
+pub(crate) enum Kind {
     Fragment([wgpu::RenderPipeline; 2]),
     Compute([wgpu::ComputePipeline; 2]),
 }
@@ -89,7 +79,7 @@ enum Kind {
 /// several, made with the first view that needs them.
 pub(crate) struct AmbientOcclusionPipelines {
     layouts: [wgpu::BindGroupLayout; 2],
-    kind: Kind,
+    pub(crate) kind: Kind,
 }
 
 impl AmbientOcclusionPipelines {
@@ -184,24 +174,24 @@ pub(crate) enum PrepassDepth {
 
 /// One view's ambient-occlusion textures at its size, and its parameters.
 pub(crate) struct OcclusionTargets {
-    size: (u32, u32),
-    depth_of: PrepassDepth,
+    pub(crate) size: (u32, u32),
+    pub(crate) depth_of: PrepassDepth,
     /// With the target's samples where it shares its depth.
-    prepass: wgpu::TextureView,
+    pub(crate) prepass: wgpu::TextureView,
     /// Whether `prepass` has several samples.
-    multisampled: bool,
+    pub(crate) multisampled: bool,
     /// Its own depth ([`PrepassDepth::Own`]).
-    depth: Option<wgpu::TextureView>,
-    raw: wgpu::TextureView,
+    pub(crate) depth: Option<wgpu::TextureView>,
+    pub(crate) raw: wgpu::TextureView,
     /// What the forward pass reads.
     pub(crate) blurred: wgpu::TextureView,
-    block: UniformBlock<AmbientOcclusionGpu>,
-    groups: [wgpu::BindGroup; 2],
+    pub(crate) block: UniformBlock<AmbientOcclusionGpu>,
+    pub(crate) groups: [wgpu::BindGroup; 2],
 }
 
 impl OcclusionTargets {
     /// Textures for a view of `size` drawn into a target of `samples`.
-    fn new(
+    pub(crate) fn new(
         device: &wgpu::Device,
         pipelines: &AmbientOcclusionPipelines,
         ((width, height), samples): ((u32, u32), u32),
@@ -232,7 +222,7 @@ impl OcclusionTargets {
         let samples = if depth_of == PrepassDepth::Shared { samples } else { 1 };
         let prepass = texture("ambient occlusion: pre-pass", full, (PREPASS_FORMAT, samples), read);
         let depth = (depth_of == PrepassDepth::Own).then(|| {
-            let format = crate::render::passes::shadow_maps::SHADOW_FORMAT;
+            let format = SHADOW_FORMAT;
             let attachment = wgpu::TextureUsages::RENDER_ATTACHMENT;
             texture("ambient occlusion: pre-pass depth", full, (format, 1), attachment)
         });
@@ -266,198 +256,6 @@ impl OcclusionTargets {
 pub(crate) struct PrepassPart {
     pub first: bool,
     pub last: bool,
-}
-
-impl Renderer {
-    /// Whether a view with these settings gets ambient occlusion: only the
-    /// optimized frame draws it (the naive baseline has no pre-pass).
-    pub(crate) fn occludes(&self, settings: Option<AmbientOcclusion>) -> bool {
-        settings.is_some() && self.mode == crate::render::FrameMode::Optimized
-    }
-
-    /// The start of stage 6 for a view with ambient occlusion (after batching,
-    /// which says what the pre-pass draws) drawn into `target`: the occlusion
-    /// pipelines, each forward pipeline's pre-pass twin (and its twin testing
-    /// the shared depth), the view's textures (the Scene bind group pointed at
-    /// them) and its parameters.
-    pub(crate) fn prepare_ambient_occlusion(
-        &mut self,
-        gpu: &mut ViewGpu,
-        frame: &ViewFrame,
-        target: &OffscreenTarget,
-        stats: &mut FrameStats,
-    ) -> Result<(), RenderError> {
-        let Some(settings) = frame.ambient_occlusion.filter(|_| frame.variant.ambient_occlusion) else {
-            return Ok(());
-        };
-        let compute = self.cull_pipelines.is_some();
-        let depth_of = match target.samples() == 1 || compute {
-            true => PrepassDepth::Shared,
-            false => PrepassDepth::Own,
-        };
-        let multisampled = depth_of == PrepassDepth::Shared && target.samples() > 1;
-        let pipelines = self.ambient_occlusion_pipelines[usize::from(multisampled)]
-            .get_or_insert_with(|| AmbientOcclusionPipelines::new(&self.device, compute, multisampled));
-        // A run's batches share one pipeline (what `draw_run` binds).
-        let list = &gpu.forward;
-        for run in &list.runs {
-            let forward = list.batches[run.first as usize].pipeline;
-            let (_, built) =
-                self.registry.pipelines.prepass_id(&self.device, forward, depth_of == PrepassDepth::Shared)?;
-            stats.pipelines_compiled += built;
-        }
-        let size = (target.width(), target.height());
-        if gpu.occlusion.as_ref().is_none_or(|t| (t.size, t.depth_of, t.multisampled) != (size, depth_of, multisampled))
-        {
-            let targets = OcclusionTargets::new(&self.device, pipelines, (size, target.samples()), depth_of);
-            gpu.set_occlusion(&self.shared(), targets);
-        }
-        let targets = gpu.occlusion.as_mut().expect("made above");
-        stats.bytes_uploaded.camera += targets.block.update(&self.queue, AmbientOcclusionGpu::new(frame, settings));
-        Ok(())
-    }
-
-    /// Where the pre-pass of `view` writes its depth; `None` when it has no
-    /// ambient occlusion this frame.
-    pub(crate) fn prepass_depth(&self, gpu: &ViewGpu, view: &ViewFrame) -> Option<PrepassDepth> {
-        let targets = gpu.occlusion.as_ref().filter(|_| view.variant.ambient_occlusion)?;
-        self.ambient_occlusion_pipelines[usize::from(targets.multisampled)].as_ref().map(|_| targets.depth_of)
-    }
-
-    /// Stage 7's ambient occlusion for a view with it (prepared by
-    /// [`prepare_ambient_occlusion`](Self::prepare_ambient_occlusion)): `part`
-    /// of the depth pre-pass of the forward list's runs before the sky, from
-    /// occlusion culling's late phase when `late`; after the last, the
-    /// occlusion and blur passes.
-    pub(crate) fn encode_ambient_occlusion(
-        &mut self,
-        gpu: &ViewGpu,
-        (encoder, target): (&mut wgpu::CommandEncoder, &OffscreenTarget),
-        (part, late): (PrepassPart, bool),
-        stats: &mut FrameStats,
-    ) {
-        let Some(targets) = &gpu.occlusion else { return };
-        let Some(pipelines) = &self.ambient_occlusion_pipelines[usize::from(targets.multisampled)] else { return };
-        let start = web_time::Instant::now();
-        let shared = targets.depth_of == PrepassDepth::Shared;
-        // The shared pre-pass is the view's depth, timed as such; its own is ambient occlusion's alone.
-        let timed = if shared { Timed::DepthPrepass } else { Timed::AmbientOcclusion };
-        let list = &gpu.forward;
-        let sky_at = list.runs.partition_point(|r| run_stage(list, r) < SKY_STAGE);
-        let timer = self.gpu_timer.as_ref();
-        let mut drawn = FrameStats::default();
-        {
-            let label = match (part.first, part.last) {
-                (true, false) => "depth pre-pass: early",
-                (false, _) => "depth pre-pass: late",
-                (true, true) => "depth pre-pass",
-            };
-            let load = if part.first { wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT) } else { wgpu::LoadOp::Load };
-            let color = wgpu::RenderPassColorAttachment {
-                view: &targets.prepass,
-                depth_slice: None,
-                resolve_target: None,
-                ops: wgpu::Operations { load, store: wgpu::StoreOp::Store },
-            };
-            let depth = match &targets.depth {
-                Some(own) => wgpu::RenderPassDepthStencilAttachment {
-                    view: own,
-                    depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(1.0), store: wgpu::StoreOp::Discard }),
-                    stencil_ops: None,
-                },
-                // Kept for the forward pass (and the depth pyramid between the phases).
-                None => target.depth_stencil(part.first, true),
-            };
-            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some(label),
-                color_attachments: &[Some(color)],
-                depth_stencil_attachment: Some(depth),
-                timestamp_writes: timer.and_then(|t| t.pass_writes(timed, part.first, shared && part.last)),
-                ..Default::default()
-            });
-            pass.set_bind_group(1, &gpu.blocks.bind_group, &[ViewBlocks::offset(0)]);
-            pass.set_bind_group(3, &list.bind_group, &[]);
-            drawn.bind_groups_set += 2;
-            let bound = ["bind group 1 (camera)", "bind group 3 (instances, draw indices)"];
-            self.outline.pass(label, PassType::Render, &bound);
-            let mut bound = Bound::twin(Twin::Prepass { shared });
-            self.draw_stages(list, &mut pass, (0..sky_at, &[late]), &mut bound, &mut drawn);
-        }
-        let ambient = &mut stats.passes.ambient_occlusion;
-        ambient.draw_calls += drawn.draw_calls;
-        ambient.draws += drawn.draws;
-        if part.first {
-            // Both phases draw from the same batches: their instances once.
-            ambient.instances += drawn.passes.opaque.instances + drawn.passes.alpha_test.instances;
-        }
-        if part.last {
-            self.encode_occlusion(targets, pipelines, encoder, shared, stats);
-        }
-        stats.passes.ambient_occlusion.cpu_ms += crate::render::ms_since(start);
-        if let Some(timer) = self.gpu_timer.as_mut().filter(|_| part.last) {
-            if shared {
-                timer.resolve(encoder, Timed::DepthPrepass, self.frame_index);
-            }
-            timer.resolve(encoder, Timed::AmbientOcclusion, self.frame_index);
-        }
-    }
-
-    /// The occlusion and blur passes, from the pre-pass's target into the
-    /// texture the forward pass reads; timed from the first when
-    /// `begins` (else from the pre-pass).
-    fn encode_occlusion(
-        &self,
-        targets: &OcclusionTargets,
-        pipelines: &AmbientOcclusionPipelines,
-        encoder: &mut wgpu::CommandEncoder,
-        begins: bool,
-        stats: &mut FrameStats,
-    ) {
-        let timer = self.gpu_timer.as_ref();
-        let ambient = &mut stats.passes.ambient_occlusion;
-        let outputs = [&targets.raw, &targets.blurred];
-        for (k, label) in ["ambient occlusion", "ambient occlusion: blur"].into_iter().enumerate() {
-            let (begin, end) = (k == 0 && begins, k == 1);
-            match &pipelines.kind {
-                Kind::Fragment(pipelines) => {
-                    let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                        label: Some(label),
-                        color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                            view: outputs[k],
-                            depth_slice: None,
-                            resolve_target: None,
-                            ops: wgpu::Operations {
-                                load: wgpu::LoadOp::Clear(wgpu::Color::WHITE),
-                                store: wgpu::StoreOp::Store,
-                            },
-                        })],
-                        timestamp_writes: timer.and_then(|t| t.pass_writes(Timed::AmbientOcclusion, begin, end)),
-                        ..Default::default()
-                    });
-                    self.outline.pass(label, PassType::Render, &["bind group 0 (pre-pass, occlusion)"]);
-                    pass.set_pipeline(&pipelines[k]);
-                    pass.set_bind_group(0, &targets.groups[k], &[]);
-                    pass.draw(0..3, 0..1);
-                    let changed = ["pipeline", "bind group 0"];
-                    self.outline
-                        .call(|| crate::render::debug::explain::DrawCall::single(label, "draw", (1, 1), &changed));
-                    (ambient.draw_calls, ambient.draws) = (ambient.draw_calls + 1, ambient.draws + 1);
-                }
-                Kind::Compute(pipelines) => {
-                    let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                        label: Some(label),
-                        timestamp_writes: timer
-                            .and_then(|t| t.compute_pass_writes(Timed::AmbientOcclusion, begin, end)),
-                    });
-                    self.outline.pass(label, PassType::Compute, &[]);
-                    pass.set_pipeline(&pipelines[k]);
-                    pass.set_bind_group(0, &targets.groups[k], &[]);
-                    let (width, height) = (targets.size.0.div_ceil(2), targets.size.1.div_ceil(2));
-                    pass.dispatch_workgroups(width.div_ceil(8), height.div_ceil(8), 1);
-                }
-            }
-        }
-    }
 }
 
 #[cfg(test)]

@@ -1,6 +1,6 @@
 //! Core layer: image-based lighting on the GPU. An environment image
 //! ([`EnvironmentImage`], equirectangular) is uploaded once as a *source* with a
-//! box-filtered mip chain ([`Registry::add_environment`]); when a frame's
+//! box-filtered mip chain ([`Registry::add_environment`](crate::render::Registry::add_environment)); when a frame's
 //! environment differs from the one prefiltered last (another image, or the sky
 //! baked for another time of day), full-screen passes (`shader/prefilter.wgsl`;
 //! render passes, so WebGL2 runs them too) make:
@@ -15,7 +15,7 @@
 //! applied where it is looked up, so changing them prefilters nothing.
 
 use crate::gpu::{full_screen_pipeline, sampler_entry, texture_entry, HDR_FORMAT};
-use crate::render::{Registry, RenderError};
+use crate::render::error::RenderError;
 use crate::scene::EnvironmentImage;
 use crate::scene::{Background, Environment, EnvironmentId, EnvironmentSource, Light, LightKind};
 
@@ -194,9 +194,10 @@ impl EnvironmentMaps {
     /// light is a baked sky's sun) unless the maps already hold it: the passes
     /// are recorded into a command buffer, returned to run before the frame.
     /// None when nothing had to be done.
-    pub(crate) fn update(
+    pub(crate) fn update<'s>(
         &mut self,
-        registry: &mut Registry,
+        (device, queue): (&wgpu::Device, &wgpu::Queue),
+        sources: impl Fn(EnvironmentId) -> Option<&'s SourceImage>,
         environment: &Environment,
         lights: &[Light],
     ) -> Result<Option<wgpu::CommandBuffer>, RenderError> {
@@ -208,29 +209,25 @@ impl EnvironmentMaps {
         if self.prefiltered == Some(wanted) && self.brdf.is_some() {
             return Ok(None);
         }
-        let scope = crate::gpu::DriverErrors::watch(&registry.device);
+        let scope = crate::gpu::DriverErrors::watch(device);
         if self.pipelines.is_none() {
             let wgsl = crate::shader::prefilter();
-            let module = crate::render::resources::pipelines::shader_module(
-                &registry.device,
-                "environment: prefilter shader",
-                wgsl,
-            );
-            self.pipelines = Some(PrefilterPipelines::new(&registry.device, &module));
+            let module =
+                crate::render::resources::pipelines::shader_module(device, "environment: prefilter shader", wgsl);
+            self.pipelines = Some(PrefilterPipelines::new(device, &module));
         }
-        let device = &registry.device;
         let baked;
         let source = match wanted {
-            Prefiltered::Image(id) => registry.environment(id).ok_or(RenderError::UnknownEnvironment(id))?,
+            Prefiltered::Image(id) => sources(id).ok_or(RenderError::UnknownEnvironment(id))?,
             Prefiltered::Sky(inputs) => {
                 let [tx, ty, tz, bx, by, bz, dx, dy, dz, cx, cy, cz] = inputs;
                 let sun = (inputs[9..] != [0.0; 3]).then(|| (glam::vec3(dx, dy, dz), glam::vec3(cx, cy, cz)));
                 let sky = EnvironmentImage::sky(glam::vec3(tx, ty, tz), glam::vec3(bx, by, bz), sun);
-                baked = SourceImage::upload(device, &registry.queue, &sky, device.limits().max_texture_dimension_2d);
+                baked = SourceImage::upload(device, queue, &sky, device.limits().max_texture_dimension_2d);
                 &baked
             }
         };
-        let commands = self.prefilter(device, &registry.queue, source);
+        let commands = self.prefilter(device, queue, source);
         if let Some(error) = scope.finish() {
             return Err(RenderError::Device { what: "the environment's prefiltering", message: error.to_string() });
         }
@@ -504,12 +501,16 @@ mod tests {
         let wide = EnvironmentImage::from_fn("wide", 4 * MAX_SOURCE_SIDE, 8, |d| Vec3::splat(0.5 + 0.5 * d.y));
         let mut renderer = crate::render::Renderer::new(&gpu);
         let id = renderer.add_environment(&wide);
-        let source = renderer.registry.environment(id).expect("uploaded");
+        let source = renderer.res.registry.environment(id).expect("uploaded");
         assert_eq!((source.texture.width(), source.texture.height()), (MAX_SOURCE_SIDE, 2));
         let light = Some(EnvironmentLight::new(EnvironmentSource::Image(id)));
         let environment = Environment { light, ..Environment::default() };
-        assert!(renderer.prepare_environment(&Lighting::new(&[], environment)).expect("prefiltered"));
-        let (specular, _) = renderer.environment.textures.clone().expect("made");
+        assert!(crate::render::frame::prepare::prepare_environment(
+            &mut renderer.res,
+            &Lighting::new(&[], environment)
+        )
+        .expect("prefiltered"));
+        let (specular, _) = renderer.res.environment.textures.clone().expect("made");
         assert_eq!(specular.width(), MAX_SOURCE_SIDE);
     }
 
@@ -525,10 +526,18 @@ mod tests {
         let id = renderer.add_environment(&env);
         let light = Some(EnvironmentLight::new(EnvironmentSource::Image(id)));
         let environment = Environment { light, ..Environment::default() };
-        assert!(renderer.prepare_environment(&Lighting::new(&[], environment)).expect("prefiltered"));
-        assert!(!renderer.prepare_environment(&Lighting::new(&[], environment)).expect("kept"), "done once");
-        gpu.queue.submit(std::mem::take(&mut renderer.registry.mip_blits));
-        let (specular, irradiance_map) = renderer.environment.textures.clone().expect("made");
+        assert!(crate::render::frame::prepare::prepare_environment(
+            &mut renderer.res,
+            &Lighting::new(&[], environment)
+        )
+        .expect("prefiltered"));
+        assert!(
+            !crate::render::frame::prepare::prepare_environment(&mut renderer.res, &Lighting::new(&[], environment))
+                .expect("kept"),
+            "done once"
+        );
+        gpu.queue.submit(std::mem::take(&mut renderer.res.registry.mip_blits));
+        let (specular, irradiance_map) = renderer.res.environment.textures.clone().expect("made");
         assert_eq!(specular.mip_level_count(), SPECULAR_LEVELS);
         let texels = texels(&env);
         // Roughness 0.2, 0.6 and 1 (levels 1, 3 and 5), at directions toward,

@@ -12,11 +12,12 @@
 use crate::gpu::TargetFormat;
 use crate::gpu::{ParticleGpu, MAX_LAYER_PARTICLES};
 use crate::render::debug::explain::DrawCall;
-use crate::render::RenderError;
-use crate::render::Renderer;
+use crate::render::debug::outline::Outline;
+use crate::render::debug::stats::FrameStats;
+use crate::render::error::RenderError;
+use crate::render::resources::registry::Registry;
 pub use crate::scene::ParticleBlend;
 use crate::scene::{Texture, TextureId};
-use crate::FrameStats;
 use std::collections::HashMap;
 
 /// What a layer's particles look like.
@@ -35,7 +36,7 @@ pub struct ParticleLook {
     pub soft: f32,
 }
 
-/// A particle layer of a [`Renderer`] ([`Renderer::add_particles`]).
+/// A particle layer of a [`Renderer`](crate::Renderer) ([`Renderer::add_particles`](crate::Renderer::add_particles)).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct ParticlesId(pub(crate) u32);
 
@@ -203,21 +204,44 @@ impl ParticlePipelines {
     }
 }
 
-impl Renderer {
+/// The particle layers a renderer draws in every view, their pipelines, and
+/// the soft round spot the layers without a sprite show (added once).
+pub(crate) struct Particles {
+    layers: Vec<ParticleLayer>,
+    spot: Option<TextureId>,
+    pipelines: ParticlePipelines,
+}
+
+impl Particles {
+    /// No layers yet; pipelines over the Scene and Camera layouts, soft layers
+    /// reading depth where `soft`.
+    pub(crate) fn new(
+        device: &wgpu::Device,
+        layouts: (&wgpu::BindGroupLayout, &wgpu::BindGroupLayout),
+        soft: bool,
+    ) -> Self {
+        Self { layers: Vec::new(), spot: None, pipelines: ParticlePipelines::new(device, layouts, soft) }
+    }
+
     /// A particle layer of `capacity` billboards (at most [`MAX_LAYER_PARTICLES`]), drawn in
     /// every view from the next frame on; none to draw until written.
-    pub fn add_particles(&mut self, capacity: u32, look: ParticleLook) -> Result<ParticlesId, RenderError> {
+    pub(crate) fn add(
+        &mut self,
+        registry: &mut Registry,
+        storage: bool,
+        (capacity, look): (u32, ParticleLook),
+    ) -> Result<ParticlesId, RenderError> {
         let capacity = capacity.clamp(1, MAX_LAYER_PARTICLES);
         let sprite = match look.texture {
             Some(id) => id,
-            None => *self.particle_spot.get_or_insert_with(|| self.registry.add_texture(spot())),
+            None => *self.spot.get_or_insert_with(|| registry.add_texture(spot())),
         };
-        let device = &self.registry.device;
+        let device = &registry.device;
         let scope = crate::gpu::DriverErrors::watch(device);
         let buffer = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("renderer: particles"),
             size: capacity as u64 * std::mem::size_of::<ParticleGpu>() as u64,
-            usage: match self.cull_pipelines.is_some() {
+            usage: match storage {
                 true => wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
                 false => wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
             },
@@ -230,41 +254,32 @@ impl Renderer {
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        self.registry.queue.write_buffer(&look_block, 0, bytemuck::cast_slice(&[soft, 0.0, 0.0, 0.0]));
+        registry.queue.write_buffer(&look_block, 0, bytemuck::cast_slice(&[soft, 0.0, 0.0, 0.0]));
         if let Some(error) = scope.finish() {
             return Err(RenderError::Device { what: "a particle layer", message: error.to_string() });
         }
         let blend = look.blend;
-        self.particle_layers.push(ParticleLayer {
-            buffer,
-            capacity,
-            count: 0,
-            blend,
-            soft,
-            sprite,
-            look_block,
-            group: None,
-        });
-        Ok(ParticlesId(self.particle_layers.len() as u32 - 1))
+        self.layers.push(ParticleLayer { buffer, capacity, count: 0, blend, soft, sprite, look_block, group: None });
+        Ok(ParticlesId(self.layers.len() as u32 - 1))
     }
 
     /// Draw `records` in layer `id` from the next frame on (as many as fit).
-    pub fn write_particles(&mut self, id: ParticlesId, records: &[ParticleGpu]) {
-        let Some(layer) = self.particle_layers.get_mut(id.0 as usize) else { return };
+    pub(crate) fn write(&mut self, queue: &wgpu::Queue, id: ParticlesId, records: &[ParticleGpu]) {
+        let Some(layer) = self.layers.get_mut(id.0 as usize) else { return };
         let count = records.len().min(layer.capacity as usize);
-        self.queue.write_buffer(&layer.buffer, 0, bytemuck::cast_slice(&records[..count]));
+        queue.write_buffer(&layer.buffer, 0, bytemuck::cast_slice(&records[..count]));
         layer.count = count as u32;
     }
 
     /// Layer `id`'s record buffer, for a compute shader to write (it allows
     /// storage where the device computes), and its capacity.
-    pub fn particle_buffer(&self, id: ParticlesId) -> Option<(&wgpu::Buffer, u32)> {
-        self.particle_layers.get(id.0 as usize).map(|l| (&l.buffer, l.capacity))
+    pub(crate) fn buffer(&self, id: ParticlesId) -> Option<(&wgpu::Buffer, u32)> {
+        self.layers.get(id.0 as usize).map(|l| (&l.buffer, l.capacity))
     }
 
     /// Draw the first `count` records of layer `id` (as written by a compute shader).
-    pub fn set_particle_count(&mut self, id: ParticlesId, count: u32) {
-        if let Some(layer) = self.particle_layers.get_mut(id.0 as usize) {
+    pub(crate) fn set_count(&mut self, id: ParticlesId, count: u32) {
+        if let Some(layer) = self.layers.get_mut(id.0 as usize) {
             layer.count = count.min(layer.capacity);
         }
     }
@@ -273,13 +288,13 @@ impl Renderer {
     /// once however many layers and materials show it, counted in `stats`)
     /// and its pipelines for `target` (a soft layer's both ways where depth is
     /// readable: a view's target may not be).
-    pub(crate) fn prepare_particles(
+    pub(crate) fn prepare(
         &mut self,
+        registry: &mut Registry,
         target: TargetFormat,
         stats: &mut FrameStats,
     ) -> Result<(), RenderError> {
-        let registry = &mut self.registry;
-        for layer in self.particle_layers.iter_mut().filter(|l| l.count > 0) {
+        for layer in self.layers.iter_mut().filter(|l| l.count > 0) {
             if layer.group.is_none() {
                 stats.bytes_uploaded.textures += registry.upload_texture(layer.sprite, "particle layer")?;
                 // A sprite that could not be uploaded shows white, as a material's map does.
@@ -287,7 +302,7 @@ impl Renderer {
                 let view = uploaded.unwrap_or(&registry.defaults.white_srgb);
                 layer.group = Some(registry.device.create_bind_group(&wgpu::BindGroupDescriptor {
                     label: Some("renderer: particle sprite"),
-                    layout: &self.particle_pipelines.texture_layout,
+                    layout: &self.pipelines.texture_layout,
                     entries: &[
                         wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(view) },
                         wgpu::BindGroupEntry {
@@ -298,8 +313,8 @@ impl Renderer {
                     ],
                 }));
             }
-            for soft in [false, layer.soft > 0.0 && self.particle_pipelines.soft] {
-                let built = self.particle_pipelines.build(&registry.device, (target, layer.blend, soft));
+            for soft in [false, layer.soft > 0.0 && self.pipelines.soft] {
+                let built = self.pipelines.build(&registry.device, (target, layer.blend, soft));
                 stats.pipelines_compiled += u32::from(built);
             }
         }
@@ -309,12 +324,12 @@ impl Renderer {
     /// The scene depth a frame's soft layers read from `target`, when some
     /// layer to draw is soft and the depth is readable; the frame then draws
     /// its particles in a pass of their own.
-    pub(crate) fn particle_depth(&self, target: &crate::OffscreenTarget) -> Option<wgpu::BindGroup> {
-        let depth = target.depth_only_view().filter(|_| self.particle_pipelines.soft)?;
-        self.particle_layers.iter().any(|l| l.count > 0 && l.soft > 0.0).then(|| {
-            self.device.create_bind_group(&wgpu::BindGroupDescriptor {
+    pub(crate) fn depth(&self, device: &wgpu::Device, target: &crate::OffscreenTarget) -> Option<wgpu::BindGroup> {
+        let depth = target.depth_only_view().filter(|_| self.pipelines.soft)?;
+        self.layers.iter().any(|l| l.count > 0 && l.soft > 0.0).then(|| {
+            device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("renderer: particle scene depth"),
-                layout: &self.particle_pipelines.depth_layouts[usize::from(target.samples() > 1)],
+                layout: &self.pipelines.depth_layouts[usize::from(target.samples() > 1)],
                 entries: &[wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(depth) }],
             })
         })
@@ -323,16 +338,16 @@ impl Renderer {
     /// Stage 7's last draws before the glare: every layer with records, one
     /// draw each, soft ones reading `depth` when given (group 3). Leaves
     /// groups 0 and 1 bound.
-    pub(crate) fn draw_particles(
+    pub(crate) fn draw(
         &self,
-        pass: &mut wgpu::RenderPass<'_>,
+        (pass, outline): (&mut wgpu::RenderPass<'_>, &Outline),
         target: TargetFormat,
         depth: Option<&wgpu::BindGroup>,
         stats: &mut FrameStats,
     ) {
-        for layer in self.particle_layers.iter().filter(|l| l.count > 0) {
+        for layer in self.layers.iter().filter(|l| l.count > 0) {
             let soft = depth.filter(|_| layer.soft > 0.0);
-            let pipeline = self.particle_pipelines.cache.get(&(target, layer.blend, soft.is_some()));
+            let pipeline = self.pipelines.cache.get(&(target, layer.blend, soft.is_some()));
             let (Some(pipeline), Some(group)) = (pipeline, &layer.group) else { continue };
             pass.set_pipeline(pipeline);
             pass.set_bind_group(2, group, &[]);
@@ -341,7 +356,7 @@ impl Renderer {
             }
             pass.set_vertex_buffer(0, layer.buffer.slice(..));
             pass.draw(0..4, 0..layer.count);
-            self.outline.call(|| {
+            outline.call(|| {
                 let what = format!(
                     "particles ({}{})",
                     format!("{:?}", layer.blend).to_lowercase(),

@@ -6,9 +6,10 @@
 //! each effect's parameters are written only when they change.
 
 use crate::gpu::{sampler_entry, texture_entry, HDR_FORMAT};
+use crate::render::debug::stats::PassStats;
 use crate::render::debug::timer::{GpuTimer, Timed};
+use crate::render::error::RenderError;
 use crate::render::resources::target_pool::TargetPool;
-use crate::render::{PassStats, RenderError};
 use crate::scene::{PostEffect, Tonemap, MAX_POST_EFFECTS};
 use std::collections::HashMap;
 

@@ -5,13 +5,12 @@
 //! view's matrix. Maps of one kind share the largest size any light asks for.
 
 use crate::gpu::DriverErrors;
+use crate::render::error::RenderError;
 use crate::render::passes::shadow_views::{ShadowView, ViewTarget};
-use crate::render::RenderError;
+use crate::render::resources::pipelines::SHADOW_FORMAT;
 use crate::scene::shadow_layout::MAX_2D_VIEWS;
 use crate::scene::{ShadowLayout, MAX_SHADOW_MAP_BYTES};
 
-/// Shadow maps are 32-bit float depth.
-pub(crate) const SHADOW_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 /// Fraction of a cascade over which it blends into the next.
 const CASCADE_BLEND: f32 = 0.1;
 

@@ -15,6 +15,10 @@
 use crate::scene::{Aabb, Camera, Light, LightKind, Projection, ShadowSettings, CASCADES};
 use glam::{Mat4, Vec3, Vec4};
 
+/// The most shadow views one camera view draws from (its Camera block
+/// holds a record for each, after the camera's).
+pub(crate) const MAX_SHADOW_VIEWS: usize = 64;
+
 /// Where a shadow view's depth goes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) enum ViewTarget {

@@ -1,13 +1,32 @@
 //! Core layer: GPU twins of scene data — textures (with mipmaps made on the GPU),
 //! the material table — and the Renderer block's instance records.
 
-use crate::gpu::{Blitter, DriverErrors};
+use crate::gpu::Blitter;
 use crate::render::cull::Boxes;
-use crate::render::gpu_driven::gpu_cull::BoundsGpu;
+use crate::render::error::RenderError;
 use crate::render::resources::blocks::{InstanceGpu, MaterialGpu};
-use crate::render::resources::gpu_array::GpuArray;
-use crate::render::RenderError;
+use crate::render::resources::gpu_array::{GpuArray, GrowBuffer};
 use crate::scene::Texture;
+
+/// One instance's world box as the cull pass reads it (`w` unused).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub(crate) struct BoundsGpu {
+    center: [f32; 4],
+    extent: [f32; 4],
+}
+
+impl BoundsGpu {
+    /// Boxes `range` of `boxes`, as the cull pass reads them.
+    pub(crate) fn of(boxes: &Boxes, range: std::ops::Range<usize>) -> Vec<Self> {
+        (range)
+            .map(|i| {
+                let (c, e) = (boxes.center(i), boxes.extent(i));
+                Self { center: [c.x, c.y, c.z, 0.0], extent: [e.x, e.y, e.z, 0.0] }
+            })
+            .collect()
+    }
+}
 
 /// Builds textures and fills their mip chains by repeated half-size blits.
 pub(crate) struct TextureUploader {
@@ -74,69 +93,6 @@ impl TextureUploader {
         }
         let blits = (levels > 1).then(|| encoder.finish());
         (gpu_texture.create_view(&Default::default()), texture.image.as_raw().len() as u64, blits)
-    }
-}
-
-/// A buffer that grows by doubling (its contents are lost when it grows).
-pub(crate) struct GrowBuffer {
-    pub buffer: wgpu::Buffer,
-    label: &'static str,
-    usage: wgpu::BufferUsages,
-}
-
-impl GrowBuffer {
-    pub(crate) fn new(device: &wgpu::Device, label: &'static str, usage: wgpu::BufferUsages, bytes: u64) -> Self {
-        let buffer = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some(label),
-            size: bytes.max(256).next_power_of_two(),
-            usage: usage | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        Self { buffer, label, usage }
-    }
-
-    /// Make room for `bytes`; returns whether the buffer was replaced.
-    ///
-    /// Fails, keeping the old buffer, when `bytes` is over the adapter's largest
-    /// buffer (or, for a storage buffer, its largest binding), or when the device
-    /// cannot allocate it. Growth doubles, but never past that limit.
-    pub(crate) fn reserve(&mut self, device: &wgpu::Device, bytes: u64) -> Result<bool, RenderError> {
-        if bytes <= self.buffer.size() {
-            return Ok(false);
-        }
-        let limits = device.limits();
-        let (limit, limit_name) = if self.usage.contains(wgpu::BufferUsages::STORAGE)
-            && limits.max_storage_buffer_binding_size < limits.max_buffer_size
-        {
-            (limits.max_storage_buffer_binding_size, "the adapter's max_storage_buffer_binding_size")
-        } else {
-            (limits.max_buffer_size, "the adapter's max_buffer_size")
-        };
-        if bytes > limit {
-            return Err(RenderError::TooLarge { what: self.label, bytes, limit, limit_name });
-        }
-        let size = bytes.max(256).next_power_of_two().min(limit & !255).max(bytes);
-        let scope = DriverErrors::watch(device);
-        let buffer = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some(self.label),
-            size,
-            usage: self.usage | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        if let Some(error) = scope.finish() {
-            return Err(RenderError::Device { what: self.label, message: error.to_string() });
-        }
-        self.buffer = buffer;
-        Ok(true)
-    }
-
-    /// Write `data` at element `first` (elements of `T`); returns bytes written.
-    pub(crate) fn write<T: bytemuck::Pod>(&self, queue: &wgpu::Queue, first: u64, data: &[T]) -> u64 {
-        let bytes: &[u8] = bytemuck::cast_slice(data);
-        if !bytes.is_empty() {
-            queue.write_buffer(&self.buffer, first * std::mem::size_of::<T>() as u64, bytes);
-        }
-        bytes.len() as u64
     }
 }
 
@@ -227,5 +183,16 @@ impl InstanceBuffer {
     /// How many times the buffer was replaced.
     pub(crate) fn generation(&self) -> u64 {
         self.generation
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::shader::layout::assert_mirrors;
+
+    #[test]
+    fn an_instances_bounds_record_mirrors_its_wgsl_struct() {
+        assert_mirrors!(BoundsGpu, crate::shader::CULL, "Bounds", [center, extent]);
     }
 }

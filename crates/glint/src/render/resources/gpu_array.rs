@@ -8,9 +8,71 @@
 //! `textureLoad` (its `DATA_TEXTURES` variant).
 
 use crate::gpu::DriverErrors;
-use crate::render::resources::buffers::GrowBuffer;
-use crate::render::RenderError;
+use crate::render::error::RenderError;
 use crate::shader::DATA_TEXTURE_WIDTH;
+
+/// A buffer that grows by doubling (its contents are lost when it grows).
+pub(crate) struct GrowBuffer {
+    pub buffer: wgpu::Buffer,
+    label: &'static str,
+    usage: wgpu::BufferUsages,
+}
+
+impl GrowBuffer {
+    pub(crate) fn new(device: &wgpu::Device, label: &'static str, usage: wgpu::BufferUsages, bytes: u64) -> Self {
+        let buffer = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some(label),
+            size: bytes.max(256).next_power_of_two(),
+            usage: usage | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        Self { buffer, label, usage }
+    }
+
+    /// Make room for `bytes`; returns whether the buffer was replaced.
+    ///
+    /// Fails, keeping the old buffer, when `bytes` is over the adapter's largest
+    /// buffer (or, for a storage buffer, its largest binding), or when the device
+    /// cannot allocate it. Growth doubles, but never past that limit.
+    pub(crate) fn reserve(&mut self, device: &wgpu::Device, bytes: u64) -> Result<bool, RenderError> {
+        if bytes <= self.buffer.size() {
+            return Ok(false);
+        }
+        let limits = device.limits();
+        let (limit, limit_name) = if self.usage.contains(wgpu::BufferUsages::STORAGE)
+            && limits.max_storage_buffer_binding_size < limits.max_buffer_size
+        {
+            (limits.max_storage_buffer_binding_size, "the adapter's max_storage_buffer_binding_size")
+        } else {
+            (limits.max_buffer_size, "the adapter's max_buffer_size")
+        };
+        if bytes > limit {
+            return Err(RenderError::TooLarge { what: self.label, bytes, limit, limit_name });
+        }
+        let size = bytes.max(256).next_power_of_two().min(limit & !255).max(bytes);
+        let scope = DriverErrors::watch(device);
+        let buffer = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some(self.label),
+            size,
+            usage: self.usage | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        if let Some(error) = scope.finish() {
+            return Err(RenderError::Device { what: self.label, message: error.to_string() });
+        }
+        self.buffer = buffer;
+        Ok(true)
+    }
+
+    /// Write `data` at element `first` (elements of `T`); returns bytes written.
+    pub(crate) fn write<T: bytemuck::Pod>(&self, queue: &wgpu::Queue, first: u64, data: &[T]) -> u64 {
+        let bytes: &[u8] = bytemuck::cast_slice(data);
+        if !bytes.is_empty() {
+            queue.write_buffer(&self.buffer, first * std::mem::size_of::<T>() as u64, bytes);
+        }
+        bytes.len() as u64
+    }
+}
 
 /// An array the shaders read: a storage buffer, or a data texture.
 pub(crate) enum GpuArray {

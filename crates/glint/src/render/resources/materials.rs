@@ -3,9 +3,11 @@
 //! their pipelines, made ready in stage 1 of the frame.
 
 use crate::gpu::TargetFormat;
+use crate::render::debug::stats::FrameStats;
+use crate::render::error::RenderError;
+use crate::render::frame_variant::FrameVariant;
 use crate::render::resources::pipelines::{Pipelines, VertexLayout};
 use crate::render::resources::registry::{Maps, MaterialGpuTwin, Registry, TextureSet};
-use crate::render::{FrameStats, FrameVariant, RenderError};
 use crate::scene::{Environment, MaterialId, TextureId};
 use crate::shader::ShaderFeatures;
 

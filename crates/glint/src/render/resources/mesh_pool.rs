@@ -9,6 +9,7 @@
 //! optional colours, second uv set and skin weights the layout has). Pages grow by doubling, copying their contents on
 //! the GPU, up to the device's largest buffer; then a new page starts.
 
+use crate::render::error::MeshTooLarge;
 use crate::render::resources::pipelines::{Stream, VertexLayout};
 use crate::scene::Mesh;
 
@@ -23,16 +24,6 @@ pub(crate) struct MeshRange {
     pub first_index: u32,
     /// Indices drawn.
     pub index_count: u32,
-}
-
-/// Why a mesh could not be placed.
-#[derive(Debug, thiserror::Error)]
-#[error("mesh of {bytes} bytes is larger than the device's largest buffer ({max} bytes)")]
-pub struct MeshTooLarge {
-    /// The largest stream of the mesh, in bytes.
-    pub bytes: u64,
-    /// The device limit.
-    pub max: u64,
 }
 
 struct Page {

@@ -12,6 +12,13 @@ use crate::scene::{BlendState, Compare, Cull, DepthState, Mesh, RenderStates, Sk
 use crate::shader::{LightCounts, ShaderError, ShaderFeatures};
 use std::collections::HashMap;
 
+/// Shadow maps are 32-bit float depth.
+pub(crate) const SHADOW_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+
+/// Ambient occlusion's pre-pass target: octahedral view-space normal (xy), distance as a half
+/// float (z) plus what it rounded away (w); 0 where nothing was drawn.
+pub(crate) const PREPASS_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
+
 /// One vertex buffer of a mesh: the interleaved [`Vertex`] stream, or one of
 /// the optional ones, in this order (a layout's streams are buffer slots 0, 1, ...).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -259,7 +266,7 @@ fn depth_features(features: ShaderFeatures, tested: ShaderFeatures) -> ShaderFea
 impl Pipelines {
     /// The layouts and an empty cache; the material table and the Renderer
     /// block are storage buffers when `vertex_storage`, else data textures
-    /// (`render/gpu_array.rs`), in the layouts and in the shaders.
+    /// (`render/resources/gpu_array.rs`), in the layouts and in the shaders.
     pub(crate) fn new(device: &wgpu::Device, vertex_storage: bool) -> Self {
         let all = wgpu::ShaderStages::VERTEX_FRAGMENT;
         let layout = |label, entries: &[wgpu::BindGroupLayoutEntry]| {
@@ -289,12 +296,12 @@ impl Pipelines {
                     ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Comparison),
                     count: None,
                 },
-                // The environment's maps (render/environment.rs).
+                // The environment's maps (render/passes/environment.rs).
                 texture_entry(5),
                 texture_entry(6),
                 texture_entry(7),
                 sampler_entry(8),
-                // The view's ambient occlusion (render/ambient_occlusion.rs).
+                // The view's ambient occlusion (render/passes/ambient_occlusion.rs).
                 texture_entry(9),
             ],
         );
@@ -410,13 +417,13 @@ impl Pipelines {
             vertex_layout: forward.vertex_layout,
             states,
             color_format: COLOR_FORMAT,
-            depth_format: crate::render::passes::shadow_maps::SHADOW_FORMAT,
+            depth_format: SHADOW_FORMAT,
             samples: 1,
         }
     }
 
     /// The key of the depth pre-pass pipeline drawing what `forward` draws
-    /// (ambient occlusion's: `render/ambient_occlusion.rs`): normal and distance
+    /// (ambient occlusion's: `render/passes/ambient_occlusion.rs`): normal and distance
     /// into its target, and depth with the forward pipeline's own test, bias and
     /// culling, into the view target's depth when `shared` (the forward pass
     /// then tests it for equality), else into one of its own (one sample). An
@@ -430,8 +437,8 @@ impl Pipelines {
             lights: LightCounts::default(),
             vertex_layout: forward.vertex_layout,
             states,
-            color_format: crate::render::passes::ambient_occlusion::PREPASS_FORMAT,
-            depth_format: if shared { forward.depth_format } else { crate::render::passes::shadow_maps::SHADOW_FORMAT },
+            color_format: PREPASS_FORMAT,
+            depth_format: if shared { forward.depth_format } else { SHADOW_FORMAT },
             samples: if shared { forward.samples } else { 1 },
         }
     }

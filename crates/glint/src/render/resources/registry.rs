@@ -5,11 +5,11 @@
 //! [`Registry::prepare_uses`]).
 
 use crate::gpu::{Gpu, OffscreenTarget, TargetFormat};
+use crate::render::error::RenderError;
 use crate::render::frame_variant::FrameVariant;
 use crate::render::resources::buffers::{MaterialTable, TextureUploader};
 use crate::render::resources::mesh_pool::{MeshPool, MeshRange};
 use crate::render::resources::pipelines::{Pipelines, VertexLayout};
-use crate::render::RenderError;
 use crate::scene::Texture;
 use crate::scene::{Material, MaterialId, Mesh, RenderTargetId, ShapeId, TextureId};
 
@@ -268,9 +268,9 @@ impl Registry {
     pub(crate) fn shadow_pipeline(
         &mut self,
         material: MaterialId,
-        prepared: &crate::render::frame::prepare::Prepared,
+        prepared: &crate::render::frame::prepared::Prepared,
         pass: crate::render::resources::pipelines::PassKind,
-        stats: &mut crate::render::FrameStats,
+        stats: &mut crate::render::debug::stats::FrameStats,
     ) -> Result<u16, RenderError> {
         let (layout, kind) = (
             prepared.layout.index(),
