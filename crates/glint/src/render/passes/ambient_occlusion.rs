@@ -23,7 +23,8 @@
 //!    drawn before the forward pass draws depth as without ambient occlusion.
 //! 2. **occlusion** — `shader/ssao.wgsl`'s ground-truth-style pass at half
 //!    resolution (reading the pre-pass's first sample where it has several);
-//! 3. **blur** — depth-aware, at half resolution, into the texture the forward
+//! 3. **blur** — depth-aware (by the distance the occlusion pass wrote beside
+//!    each pixel's occlusion), at half resolution, into the texture the forward
 //!    shader's `AMBIENT_OCCLUSION` variant reads (group 0, binding 9), which
 //!    darkens ambient and environment light only, never the lights'.
 //!
@@ -43,8 +44,8 @@ use crate::render::view::ViewFrame;
 use crate::scene::{AmbientOcclusion, Projection};
 
 /// The occlusion textures (half resolution), in red: 1 open, 0 wholly
-/// occluded. Four channels, as compute passes store it and one is not a
-/// storage format.
+/// occluded; the raw one has the pixel's distance in the other three
+/// (`ssao.wgsl`'s `pack_distance`), which the blur weighs its taps by.
 const OCCLUSION_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
 /// The largest radius searched, in full-resolution pixels (nearer surfaces
 /// search no further, so a close-up costs what a distant view does).
@@ -121,7 +122,7 @@ impl AmbientOcclusionPipelines {
         };
         let layouts = [
             layout("ambient occlusion: occlusion", &[uniform, texture(1)]),
-            layout("ambient occlusion: blur", &[uniform, texture(1), texture(2)]),
+            layout("ambient occlusion: blur", &[uniform, texture(2)]),
         ];
         let source = match compute {
             true => format!("{}{}", crate::shader::ssao(multisampled), crate::shader::SSAO_COMPUTE),
@@ -229,14 +230,14 @@ impl OcclusionTargets {
         let raw = texture("ambient occlusion: raw", half, (OCCLUSION_FORMAT, 1), written);
         let blurred = texture("ambient occlusion: blurred", half, (OCCLUSION_FORMAT, 1), written);
         let block = UniformBlock::new(device, "ambient occlusion: parameters");
-        // Binding 0 the parameters, 1 the pre-pass, 2 the raw occlusion (the
-        // blur's), 3 the output (compute passes').
-        let group = |k: usize, inputs: &[&wgpu::TextureView], output: &wgpu::TextureView| {
+        // Binding 0 the parameters, 1 the pre-pass (the occlusion's input), 2
+        // the raw occlusion and distance (the blur's), 3 the output (compute passes').
+        let group = |k: usize, input: &wgpu::TextureView, output: &wgpu::TextureView| {
             let view =
                 |binding, view| wgpu::BindGroupEntry { binding, resource: wgpu::BindingResource::TextureView(view) };
             let entries: Vec<_> =
                 std::iter::once(wgpu::BindGroupEntry { binding: 0, resource: block.buffer.as_entire_binding() })
-                    .chain(inputs.iter().enumerate().map(|(j, v)| view(1 + j as u32, v)))
+                    .chain([view(1 + k as u32, input)])
                     .chain(compute.then(|| view(3, output)))
                     .collect();
             device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -245,7 +246,7 @@ impl OcclusionTargets {
                 entries: &entries,
             })
         };
-        let groups = [group(0, &[&prepass], &raw), group(1, &[&prepass, &raw], &blurred)];
+        let groups = [group(0, &prepass, &raw), group(1, &raw, &blurred)];
         Self { size: full, depth_of, prepass, multisampled: samples > 1, depth, raw, blurred, block, groups }
     }
 }
