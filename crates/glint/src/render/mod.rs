@@ -13,7 +13,7 @@
 //! | `view.rs`, `views.rs` | what the stages read of a view this frame; the GPU state a view keeps |
 //! | `batch.rs`, `cull.rs`, `queue.rs` | batching, frustum culling and sort keys, pure CPU code |
 //!
-//! No two files import each other, even through others (`tests/render_rooms.rs`).
+//! No two files import each other, even through others (`tests/layers.rs`).
 //!
 //! ## Bind-group convention (shader data blocks)
 //! | group | block | written when | holds |
