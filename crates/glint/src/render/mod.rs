@@ -4,7 +4,7 @@
 //! ## Rooms
 //! | folder or file | what it holds |
 //! | --- | --- |
-//! | `renderer.rs` | the [`Renderer`]: its [`Resources`](resources::Resources), each view's GPU state by key ([`ViewStates`](views::ViewStates)), what the next frame starts from; making one, its registry and settings |
+//! | `renderer.rs` | the [`Renderer`]: its `Resources`, each view's GPU state by key (`ViewStates`), what the next frame starts from; making one, its registry and settings |
 //! | `frame/` | [`Renderer::render_frame`] and the stages it runs, free functions over the resources, the frame and a view's state |
 //! | `passes/` | the GPU passes and what they own: shadow maps and views, ambient occlusion, particle layers, environment maps, the post chain |
 //! | `gpu_driven/` | draw lists of indirect commands, culled on the GPU, with occlusion culling's depth pyramid |

@@ -27,7 +27,7 @@ use crate::scene::{Lighting, MAX_LIGHTS};
 /// The renderer: its [`Registry`] holds the GPU resources (shapes, materials,
 /// textures, render targets, pipelines); the rest is what frames reuse (the
 /// instances kept on the GPU, the blocks, draw lists and shadow maps). The scene
-/// is not its own: each frame is given the entities, the [`Lighting`](crate::Lighting)
+/// is not its own: each frame is given the entities, the [`Lighting`]
 /// (lights and environment) and the views.
 ///
 /// Program structure (Tiny Graphics): create shapes, materials and entities once;

@@ -1,5 +1,5 @@
 //! Core layer: [`ViewFrame`], what the frame's stages read of one
-//! [`View`](crate::scene::View).
+//! [`View`].
 
 use crate::render::cull::Frustum;
 use crate::render::frame_variant::FrameVariant;

@@ -83,7 +83,7 @@ pub(crate) struct Shared<'a> {
 
 /// What one view keeps on the GPU between frames: a split screen's views, or a
 /// view into a render target, each draw from their own records, lists and
-/// Shadow block (views are told apart by their [`ViewKey`](crate::render::ViewKey)).
+/// Shadow block (views are told apart by their [`ViewKey`]).
 pub(crate) struct ViewGpu {
     /// The camera's and the shadow views' Camera-block records.
     pub blocks: ViewBlocks,

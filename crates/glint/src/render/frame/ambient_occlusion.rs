@@ -75,7 +75,7 @@ pub(crate) fn prepass_depth(res: &Resources, gpu: &ViewGpu, view: &ViewFrame) ->
 }
 
 /// Stage 7's ambient occlusion for a view with it (prepared by
-/// [`prepare_ambient_occlusion`](prepare_ambient_occlusion)): `part`
+/// [`prepare_ambient_occlusion`]): `part`
 /// of the depth pre-pass of the forward list's runs before the sky, from
 /// occlusion culling's late phase when `late`; after the last, the
 /// occlusion and blur passes.

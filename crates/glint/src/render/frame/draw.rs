@@ -73,7 +73,7 @@ pub(crate) fn draw_glare(
 }
 
 /// Draw the sky of `environment` (its image, or its gradient; none for a
-/// plain colour: [`sky_pass`](crate::render::frame::prepared::sky_pass)); returns
+/// plain colour: [`sky_pass`]); returns
 /// whether it drew, after which only groups 0, 1 and 3 are bound.
 pub(crate) fn draw_sky(
     res: &Resources,

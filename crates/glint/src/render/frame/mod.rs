@@ -19,7 +19,7 @@
 //! | `encode.rs`, `draw.rs`, `ambient_occlusion.rs` | the forward pass and its depth pre-pass, occlusion culling's phases, ambient occlusion (stage 8) |
 //! | `naive.rs` | the naive baseline's batch, upload and encode |
 //! | `input.rs`, `state.rs` | what a frame is given and gives back; the frame being recorded and what the renderer keeps for the next |
-//! | `beginner.rs` | the seed's calls (`submit`, `shadow_pass`, `flush`, `render`, `render_views`): a thin layer that builds a [`FrameInput`](input::FrameInput) |
+//! | `beginner.rs` | the seed's calls (`submit`, `shadow_pass`, `flush`, `render`, `render_views`): a thin layer that builds a `FrameInput` |
 //!
 //! A frame is one command encoder, carried from stage to stage in the
 //! per-frame `Frame` value, and one submission, which consumes it. Debug

@@ -1,4 +1,4 @@
-//! Core layer: the frame's shadow maps. [`Renderer::plan_shadows`] plans
+//! Core layer: the frame's shadow maps. [`plan_shadows`] plans
 //! every shadow view once a frame: a spot light's view and a point light's six
 //! cube faces are the same for every camera view, so they are planned once and
 //! drawn once, by the frame's first view; a directional light's cascades follow
@@ -9,7 +9,7 @@
 //! from every submitted entity that casts shadows — so a caster outside the
 //! camera's view still casts — and its draws are sorted and batched like the
 //! forward view's, into one [`DrawList`](crate::render::gpu_driven::draw_list::DrawList) for all
-//! the view's shadow views ([`Renderer::draw_shadows`]). Each is one
+//! the view's shadow views ([`draw_shadows`]). Each is one
 //! depth-only render pass into its layer of the shadow maps, recorded into the
 //! frame's one encoder before the view's forward pass.
 

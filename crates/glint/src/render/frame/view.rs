@@ -1,5 +1,5 @@
-//! Core layer: one view of the frame ([`Renderer::draw_view`]): the target
-//! it is drawn into, then its stages, one a line ([`Renderer::view_stages`]):
+//! Core layer: one view of the frame ([`draw_view`]): the target
+//! it is drawn into, then its stages, one a line ([`view_stages`]):
 //! prepare → shadow views → cull → queue → sort → batch → upload → encode,
 //! and compose.
 

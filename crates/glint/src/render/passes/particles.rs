@@ -4,8 +4,8 @@
 //! layer fades in front of geometry where the target's depth is readable (a
 //! pass of their own then: `encode.rs`). A layer is a
 //! buffer of [`ParticleGpu`] records, one instance of a four-vertex strip
-//! each: written from the CPU ([`Renderer::write_particles`]) or by a compute
-//! shader ([`Renderer::particle_buffer`], `sim/particles`). Alpha-blended
+//! each: written from the CPU ([`Renderer::write_particles`](crate::Renderer::write_particles)) or by a compute
+//! shader ([`Renderer::particle_buffer`](crate::Renderer::particle_buffer), `sim/particles`). Alpha-blended
 //! layers must be written back to front; additive ones in any order. One draw
 //! call a layer, whatever its count.
 
