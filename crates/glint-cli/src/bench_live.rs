@@ -27,8 +27,14 @@ pub struct LiveReport {
     /// recording, the renderer's frame), ms.
     pub draw_cpu_ms_median: f64,
     /// Median GPU time of the forward pass (particles included), from
-    /// timestamp queries; null where unsupported.
+    /// timestamp queries, every view's summed; null where unsupported.
     pub forward_gpu_ms_median: Option<f64>,
+    /// Median GPU time of the shadow passes, every view's summed; null where
+    /// unsupported or the scene draws no shadows.
+    pub shadow_gpu_ms_median: Option<f64>,
+    /// Shadow views the last frame drew (a cascade, a spot light, a cube
+    /// face each), every view's summed.
+    pub shadow_views: u32,
     /// Whether the particles stepped with compute shaders.
     pub particles_on_gpu: bool,
     /// Particles alive in the last frame.
@@ -50,8 +56,9 @@ pub fn run(gpu: &Gpu, desc: SceneDesc, config: &BenchConfig, (start, step): (f32
     let timed = renderer.enable_gpu_timing();
     let mut world = World::place(desc, &mut renderer)?;
     let views = world.views(None);
-    let (mut frame_ms, mut pose_ms, mut draw_ms, mut gpu_ms) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
-    let mut last = None;
+    let (mut frame_ms, mut pose_ms, mut draw_ms) = (Vec::new(), Vec::new(), Vec::new());
+    let (mut gpu_ms, mut shadow_ms) = (Vec::new(), Vec::new());
+    let (mut last, mut shadow_views) = (None, 0);
     for i in 0..config.warmup + config.frames {
         let time = start + step * (i as f32 - config.warmup as f32).max(0.0);
         let frame_start = Instant::now();
@@ -65,7 +72,11 @@ pub fn run(gpu: &Gpu, desc: SceneDesc, config: &BenchConfig, (start, step): (f32
             frame_ms.push(whole);
             pose_ms.push(posed);
             draw_ms.push(drawn);
-            gpu_ms.extend(renderer.read_gpu_times().map(|t| t.forward_ms));
+            if let Some(times) = renderer.read_gpu_times() {
+                gpu_ms.push(times.forward_ms);
+                shadow_ms.extend(times.shadow_ms);
+            }
+            shadow_views = stats.iter().map(|s| s.shadow_views).sum();
             last = stats.into_iter().last();
         }
     }
@@ -80,6 +91,8 @@ pub fn run(gpu: &Gpu, desc: SceneDesc, config: &BenchConfig, (start, step): (f32
         pose_ms_median: median(&mut pose_ms),
         draw_cpu_ms_median: median(&mut draw_ms),
         forward_gpu_ms_median: (timed && !gpu_ms.is_empty()).then(|| median(&mut gpu_ms)),
+        shadow_gpu_ms_median: (timed && !shadow_ms.is_empty()).then(|| median(&mut shadow_ms)),
+        shadow_views,
         particles_on_gpu: world.particles_on_gpu(),
         particles_alive: last.particles_alive,
         instances: last.instances_submitted,

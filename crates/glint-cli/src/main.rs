@@ -358,7 +358,7 @@ fn run_live(
     let text = match json {
         true => format!("{}\n", serde_json::json!({"scene": scene.display().to_string(), "adapter": adapter, "size": format!("{}x{}", config.size.0, config.size.1), "live": r})),
         false => format!(
-            "{} on {adapter}, {}x{}, {} frames from {} s, {:.4} s a frame\n  frame {:.2} ms median ({:.2} p95): pose {:.2} ms, draw (CPU) {:.2} ms, forward pass (GPU) {}\n  particles on the {}: {} alive; {} instances\n",
+            "{} on {adapter}, {}x{}, {} frames from {} s, {:.4} s a frame\n  frame {:.2} ms median ({:.2} p95): pose {:.2} ms, draw (CPU) {:.2} ms, forward pass (GPU) {}, shadows (GPU, {} views) {}\n  particles on the {}: {} alive; {} instances\n",
             scene.display(),
             config.size.0,
             config.size.1,
@@ -370,6 +370,8 @@ fn run_live(
             r.pose_ms_median,
             r.draw_cpu_ms_median,
             r.forward_gpu_ms_median.map_or("n/a".into(), |ms| format!("{ms:.2} ms")),
+            r.shadow_views,
+            r.shadow_gpu_ms_median.map_or("n/a".into(), |ms| format!("{ms:.2} ms")),
             if r.particles_on_gpu { "GPU" } else { "CPU" },
             r.particles_alive,
             r.instances

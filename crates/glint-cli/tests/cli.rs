@@ -762,3 +762,34 @@ fn bench_live_runs_a_scene_as_it_plays() {
     let far = ["bench", scene.to_str().unwrap(), "--live", "60", "--time", "1e9", "--frames", "1"];
     assert_eq!(glint(&far).status.code(), Some(1), "a pose past the budget is bad input");
 }
+
+#[test]
+fn bench_live_times_every_views_shadows_of_a_split_screen() {
+    // Two views and two shadowed point lights: each light's six faces drawn once a frame.
+    let scene = repo("scenes/bench/split_points.scn");
+    let args = [
+        "bench",
+        scene.to_str().unwrap(),
+        "--live",
+        "30",
+        "--frames",
+        "2",
+        "--warmup",
+        "1",
+        "--size",
+        "96x48",
+        "--json",
+    ];
+    let out = glint(&args);
+    if out.status.code() == Some(2) {
+        eprintln!("skipped: no GPU adapter");
+        return;
+    }
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let r: serde_json::Value = serde_json::from_slice(&out.stdout).expect("one JSON object");
+    let live = &r["live"];
+    assert_eq!(live["shadow_views"].as_u64(), Some(12), "{r}");
+    if live["forward_gpu_ms_median"].is_f64() {
+        assert!(live["shadow_gpu_ms_median"].as_f64().is_some_and(|ms| ms > 0.0), "{r}");
+    }
+}
