@@ -179,6 +179,8 @@ pub(crate) fn submit_frame(
     mut frame: Frame,
     drawn: Result<Vec<FrameStats>, RenderError>,
 ) -> Result<FrameOutput, RenderError> {
+    // The submission's time: closing the debug groups, finishing and submitting the commands.
+    let t = Instant::now();
     match drawn {
         Ok(_) => frame.outline.finish(&mut frame.encoder),
         Err(_) => frame.outline.drop_frame(),
@@ -200,7 +202,6 @@ pub(crate) fn submit_frame(
     submitted.clear();
     (next.index, next.submitted, next.visible, next.outline) = (index + 1, submitted, visible, outline);
     let mut views = drawn?;
-    let t = Instant::now();
     let mip_blits = std::mem::take(&mut res.registry.mip_blits);
     res.queue.submit(mip_blits.into_iter().chain(before).chain([encoder.finish()]));
     if let Some(timer) = &mut res.gpu_timer {
