@@ -730,6 +730,18 @@ fn every_shipped_scene_checks_without_a_gpu() {
     assert!(checked >= 15, "{checked} scenes");
 }
 
+/// The JSON report of `glint bench --live` run with `args`; `None` (skipped)
+/// where the machine has no GPU adapter.
+fn bench_live(args: &[&str]) -> Option<serde_json::Value> {
+    let out = glint(args);
+    if out.status.code() == Some(2) {
+        eprintln!("skipped: no GPU adapter");
+        return None;
+    }
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    Some(serde_json::from_slice(&out.stdout).expect("one JSON object"))
+}
+
 #[test]
 fn bench_live_runs_a_scene_as_it_plays() {
     let scene = repo("tests/scenes/emitter.scn");
@@ -748,13 +760,7 @@ fn bench_live_runs_a_scene_as_it_plays() {
         "64x64",
         "--json",
     ];
-    let out = glint(&args);
-    if out.status.code() == Some(2) {
-        eprintln!("skipped: no GPU adapter");
-        return;
-    }
-    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
-    let r: serde_json::Value = serde_json::from_slice(&out.stdout).expect("one JSON object");
+    let Some(r) = bench_live(&args) else { return };
     let live = &r["live"];
     assert_eq!((live["frames"].as_u64(), live["start"].as_f64()), (Some(3), Some(1.0)));
     assert!(live["particles_alive"].as_u64().unwrap() > 300, "{r}");
@@ -780,13 +786,7 @@ fn bench_live_times_every_views_shadows_of_a_split_screen() {
         "96x48",
         "--json",
     ];
-    let out = glint(&args);
-    if out.status.code() == Some(2) {
-        eprintln!("skipped: no GPU adapter");
-        return;
-    }
-    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
-    let r: serde_json::Value = serde_json::from_slice(&out.stdout).expect("one JSON object");
+    let Some(r) = bench_live(&args) else { return };
     let live = &r["live"];
     assert_eq!(live["shadow_views"].as_u64(), Some(12), "{r}");
     if live["forward_gpu_ms_median"].is_f64() {
