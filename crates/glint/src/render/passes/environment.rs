@@ -505,11 +505,7 @@ mod tests {
         assert_eq!((source.texture.width(), source.texture.height()), (MAX_SOURCE_SIDE, 2));
         let light = Some(EnvironmentLight::new(EnvironmentSource::Image(id)));
         let environment = Environment { light, ..Environment::default() };
-        assert!(crate::render::frame::prepare::prepare_environment(
-            &mut renderer.res,
-            &Lighting::new(&[], environment)
-        )
-        .expect("prefiltered"));
+        assert!(renderer.prefilter_environment(&Lighting::new(&[], environment)).expect("prefiltered"));
         let (specular, _) = renderer.res.environment.textures.clone().expect("made");
         assert_eq!(specular.width(), MAX_SOURCE_SIDE);
     }
@@ -526,17 +522,8 @@ mod tests {
         let id = renderer.add_environment(&env);
         let light = Some(EnvironmentLight::new(EnvironmentSource::Image(id)));
         let environment = Environment { light, ..Environment::default() };
-        assert!(crate::render::frame::prepare::prepare_environment(
-            &mut renderer.res,
-            &Lighting::new(&[], environment)
-        )
-        .expect("prefiltered"));
-        assert!(
-            !crate::render::frame::prepare::prepare_environment(&mut renderer.res, &Lighting::new(&[], environment))
-                .expect("kept"),
-            "done once"
-        );
-        gpu.queue.submit(std::mem::take(&mut renderer.res.registry.mip_blits));
+        assert!(renderer.prefilter_environment(&Lighting::new(&[], environment)).expect("prefiltered"));
+        assert!(!renderer.prefilter_environment(&Lighting::new(&[], environment)).expect("kept"), "done once");
         let (specular, irradiance_map) = renderer.res.environment.textures.clone().expect("made");
         assert_eq!(specular.mip_level_count(), SPECULAR_LEVELS);
         let texels = texels(&env);
