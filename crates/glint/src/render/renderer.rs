@@ -24,10 +24,11 @@ use crate::render::views::ViewStates;
 use crate::scene::{Entity, Material, MaterialId, Mesh, RenderTargetId, ShapeId, Texture, TextureId};
 use crate::scene::{Lighting, MAX_LIGHTS};
 
-/// The renderer: its [`Registry`] holds the GPU resources (shapes, materials,
-/// textures, render targets, pipelines); the rest is what frames reuse (the
-/// instances kept on the GPU, the blocks, draw lists and shadow maps). The scene
-/// is not its own: each frame is given the entities, the [`Lighting`]
+/// The renderer, three owners: `res`, what frames draw with and keep (its
+/// [`Registry`] of shapes, materials, textures, render targets and pipelines,
+/// the instances kept on the GPU, the passes' maps); `views`, each view's GPU
+/// state (blocks, draw lists) by the caller's key; `next`, what the next frame
+/// starts from. The scene is not its own: each frame is given the entities, the [`Lighting`]
 /// (lights and environment) and the views.
 ///
 /// Program structure (Tiny Graphics): create shapes, materials and entities once;
