@@ -318,17 +318,25 @@ fn a_frames_gpu_times_are_its_views_summed() {
     let whole = View::new(desc.cameras[0]);
     let corner = whole.clone().with_viewport(Viewport { width: 1.0 / 256.0, height: 1.0 / 256.0, ..Viewport::FULL });
     let mut forward_ms = |views: &[View]| {
-        let times = (0..5).map(|_| {
-            let input = FrameInput::new(&entities, desc.lighting()).views(views);
-            renderer.render_frame(input, &mut target).expect("frame");
-            renderer.read_gpu_times().expect("timed frame").forward_ms
-        });
-        median(times.collect())
+        let input = FrameInput::new(&entities, desc.lighting()).views(views);
+        renderer.render_frame(input, &mut target).expect("frame");
+        renderer.read_gpu_times().expect("timed frame").forward_ms
     };
-    let (alone, corner_alone) = (forward_ms(std::slice::from_ref(&whole)), forward_ms(std::slice::from_ref(&corner)));
-    let both = forward_ms(&[whole, corner]);
+    // The three frames of a round run back to back, so a neighbour test
+    // loading the CPU (lavapipe's GPU) slows all three alike; each round
+    // gives ratios and the test takes their medians.
+    let rounds: Vec<[f64; 3]> = (0..7)
+        .map(|_| {
+            let alone_ms = forward_ms(std::slice::from_ref(&whole));
+            let corner_ms = forward_ms(std::slice::from_ref(&corner));
+            let both_ms = forward_ms(&[whole.clone(), corner.clone()]);
+            [alone_ms, corner_ms, both_ms]
+        })
+        .collect();
+    let corner_share = median(rounds.iter().map(|[alone, corner, _]| corner / alone).collect());
+    let both_share = median(rounds.iter().map(|[alone, _, both]| both / alone).collect());
     // The corner's pass alone is the smaller by far: were only the last view's
     // pass reported, the frame would show about the corner's time.
-    assert!(corner_alone < alone / 4.0, "the corner {corner_alone} ms, the whole picture {alone} ms");
-    assert!(both > alone / 2.0, "both views {both} ms, the whole picture alone {alone} ms");
+    assert!(corner_share < 0.25, "the corner takes {corner_share} of the whole picture's time ({rounds:?})");
+    assert!(both_share > 0.5, "both views take {both_share} of the whole picture's time alone ({rounds:?})");
 }
