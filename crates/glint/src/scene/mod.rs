@@ -10,6 +10,7 @@ pub mod cloth;
 mod daylight;
 pub mod emitter;
 mod entity;
+pub mod levels;
 mod environment;
 mod environment_image;
 mod fly;

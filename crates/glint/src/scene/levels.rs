@@ -1,0 +1,124 @@
+//! Levels of detail: a mesh's coarser triangle lists over its own vertices,
+//! each with the geometric error it makes, from meshoptimizer's
+//! attribute-aware edge-collapse simplifier (its pure-Rust port, so the web
+//! page makes the same levels).
+//!
+//! Levels share the mesh's vertices (only indices are added), so a level keeps
+//! the skin weights, colours and UVs of the vertices it keeps, and the
+//! vertex shader's motions (swim, wind) move it as they move the full mesh.
+//! Vertices on a UV or normal seam are kept apart, so seams stay closed.
+//!
+//! A level's error is in units of the mesh's bounding-sphere radius: an
+//! instance whose world radius is `r` is off by at most about `error × r`.
+//! The renderer picks, per instance and view, the coarsest level whose error
+//! projects to at most [`View::lod_error`](crate::scene::View::lod_error) pixels.
+
+use crate::scene::Mesh;
+use meshoptimizer_rs::{
+    build_lod_chain, Attributes, LodChainAttributes, LodChainOptions, LodErrors, LodTargets, Positions, Workspace,
+};
+
+/// Levels a shape draws at most: full detail and four coarser ones.
+pub const MAX_LEVELS: usize = 5;
+
+/// Meshes with fewer triangles get no coarser levels: what they would save is
+/// less than a draw of their own costs.
+pub const MIN_TRIANGLES: usize = 64;
+
+/// Each level aims at this fraction of the triangles of the one before.
+const STEP: f32 = 0.5;
+
+/// A level keeps at least this many triangles.
+const MIN_LEVEL_TRIANGLES: usize = 8;
+
+/// How much normals and UVs weigh against position in the simplifier's error
+/// (positions are relative to the mesh's extent, so these are comparable).
+const NORMAL_WEIGHT: f32 = 0.5;
+const UV_WEIGHT: f32 = 0.5;
+
+/// One coarser level of a mesh.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DetailLevel {
+    /// Triangles over the mesh's vertices.
+    pub indices: Vec<u32>,
+    /// The most any surface point moved, in units of the mesh's bounding-sphere
+    /// radius (the sum of the chain's steps: each level is simplified from the
+    /// one before). Non-decreasing along the chain.
+    pub error: f32,
+}
+
+impl DetailLevel {
+    /// Its triangles.
+    pub fn triangles(&self) -> usize {
+        self.indices.len() / 3
+    }
+}
+
+/// The coarser levels of `mesh`, finest first: each at most about half the
+/// triangles of the one before, at most `MAX_LEVELS - 1` of them; none for a
+/// mesh under [`MIN_TRIANGLES`] or where the simplifier cannot remove a
+/// quarter of the triangles (a flat card, a mesh of separate triangles).
+pub fn detail_levels(mesh: &Mesh) -> Vec<DetailLevel> {
+    let triangles = mesh.indices().len() / 3;
+    let radius = mesh.bounding_sphere().radius;
+    if triangles < MIN_TRIANGLES || !(radius > 0.0) {
+        return Vec::new();
+    }
+    let floats: &[f32] = bytemuck::cast_slice(mesh.vertices());
+    let stride = std::mem::size_of::<crate::scene::Vertex>() / 4;
+    let count = mesh.vertices().len();
+    let (Ok(positions), Ok(attributes)) = (
+        Positions::from_interleaved(floats, count, stride, 0),
+        // Normal (3) and UV (2), right after the position.
+        Attributes::from_interleaved(floats, count, 5, stride, 3),
+    ) else {
+        return Vec::new();
+    };
+    let weights = [NORMAL_WEIGHT, NORMAL_WEIGHT, NORMAL_WEIGHT, UV_WEIGHT, UV_WEIGHT];
+    let ratios: Vec<f32> = (1..MAX_LEVELS as i32).map(|k| STEP.powi(k)).collect();
+    let options = LodChainOptions::new(LodTargets::Ratios(&ratios), LodErrors::Uniform(1.0))
+        .with_attributes(LodChainAttributes::new(attributes, &weights));
+    let Ok(chain) = build_lod_chain(mesh.indices(), positions, &options, &mut Workspace::default()) else {
+        return Vec::new();
+    };
+    let mut levels: Vec<DetailLevel> = Vec::new();
+    let (mut error, mut before) = (0.0f32, triangles);
+    for level in chain.levels {
+        // The simplifier's error is relative to the extent of its input.
+        error += level.error * level.scale / radius;
+        let kept = level.triangle_count;
+        if kept < MIN_LEVEL_TRIANGLES || kept * 4 > before * 3 || !error.is_finite() {
+            break;
+        }
+        levels.push(DetailLevel { indices: level.indices, error });
+        before = kept;
+    }
+    levels
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::procedural;
+
+    #[test]
+    fn a_spheres_levels_halve_their_triangles_and_grow_their_error() {
+        let sphere = procedural::sphere(48, 32);
+        let levels = detail_levels(&sphere);
+        assert_eq!(levels.len(), MAX_LEVELS - 1, "{:?}", levels.iter().map(DetailLevel::triangles).collect::<Vec<_>>());
+        let mut before = (sphere.indices().len() / 3, 0.0);
+        for level in &levels {
+            assert!(level.triangles() * 4 <= before.0 * 3, "{} after {}", level.triangles(), before.0);
+            assert!(level.error >= before.1 && level.error > 0.0 && level.error < 1.0, "{}", level.error);
+            assert!(level.indices.iter().all(|&i| (i as usize) < sphere.vertices().len()));
+            before = (level.triangles(), level.error);
+        }
+    }
+
+    #[test]
+    fn small_meshes_have_no_levels_and_a_flat_grid_loses_nothing() {
+        assert!(detail_levels(&procedural::cube()).is_empty());
+        let grid = detail_levels(&procedural::plane(16));
+        assert!(!grid.is_empty() && grid.iter().all(|l| l.error < 1e-3), "{:?}", grid.iter().map(|l| l.error).collect::<Vec<_>>());
+    }
+}
