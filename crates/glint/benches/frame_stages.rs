@@ -35,6 +35,7 @@ fn random_items(n: usize) -> Vec<DrawItem> {
         .map(|i| {
             let (m, s) = (MaterialId(rng.random_range(0..10)), ShapeId(rng.random_range(0..10)));
             DrawItem {
+                level: 0,
                 key: sort_key(Queue::Opaque.stage(), false, 0, 0, m, s, rng.random()),
                 pipeline: 0,
                 material: m,

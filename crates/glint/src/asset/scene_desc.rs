@@ -201,6 +201,9 @@ pub struct CameraView {
     pub culling: Culling,
     /// `ssao`, `ssao_radius`, `ssao_intensity`: its screen-space ambient occlusion.
     pub ambient_occlusion: Option<crate::scene::AmbientOcclusion>,
+    /// `lod_error`: the pixels of error its levels of detail may make
+    /// ([`View::lod_error`]; `None`: the default).
+    pub lod_error: Option<f32>,
 }
 
 impl SceneDesc {
@@ -253,8 +256,12 @@ impl SceneDesc {
     /// Camera `index` over the whole image, with its post chain.
     pub fn camera_view(&self, index: usize) -> View {
         let c = &self.camera_views[index];
-        (View::new(self.cameras[index]).with_post(c.post.clone()).with_culling(c.culling))
-            .with_ambient_occlusion(c.ambient_occlusion)
+        let view = View::new(self.cameras[index]).with_post(c.post.clone()).with_culling(c.culling);
+        let view = view.with_ambient_occlusion(c.ambient_occlusion);
+        match c.lod_error {
+            Some(pixels) => view.with_lod_error(pixels),
+            None => view,
+        }
     }
 
     /// Draw every cloth's debug view (edge ribbons, pin markers) or not;

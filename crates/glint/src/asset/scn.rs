@@ -367,7 +367,8 @@ impl Loader<'_> {
         let output = self.targets.named(f, "output")?;
         let culling = f.choice("cull", &Culling::NAMES)?.map_or(Culling::default(), |(k, _)| Culling::ALL[k]);
         let ambient_occlusion = ambient_occlusion(f)?;
-        self.scene.camera_views.push(CameraView { viewport, post, output, culling, ambient_occlusion });
+        let lod_error = f.number("lod_error", 0.0..=1e4)?;
+        self.scene.camera_views.push(CameraView { viewport, post, output, culling, ambient_occlusion, lod_error });
         self.camera_lines.push(f.block.line);
         self.scene.cameras.push(camera);
         Ok(())

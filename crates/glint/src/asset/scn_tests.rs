@@ -201,6 +201,20 @@ fn a_camera_takes_ambient_occlusion_with_its_radius_and_intensity() {
 }
 
 #[test]
+fn a_camera_takes_the_error_its_levels_of_detail_may_make() {
+    let camera = |keys: &str| format!("{{\n\"classname\" \"camera\"\n{keys}\n}}");
+    let scene = parse(&camera("\"lod_error\" \"2.5\"")).unwrap();
+    assert_eq!(scene.camera_views[0].lod_error, Some(2.5));
+    assert_eq!(scene.camera_view(0).lod_error, 2.5, "the view has it");
+    let plain = parse(&camera("")).unwrap();
+    assert_eq!(plain.camera_view(0).lod_error, crate::scene::DEFAULT_LOD_ERROR);
+    for keys in ["\"lod_error\" \"-1\"", "\"lod_error\" \"nan\"", "\"lod_error\" \"1e9\""] {
+        let err = parse(&camera(keys)).unwrap_err();
+        assert!(err.line == Some(3) && err.message.contains("lod_error"), "{keys}: {err}");
+    }
+}
+
+#[test]
 fn tiled_instances_are_an_entity_of_their_own_with_their_tiles_and_density() {
     let both = format!(
         "{}\n{}",

@@ -4,7 +4,7 @@ use crate::render::queue::{stage_of, DrawItem};
 use crate::scene::{MaterialId, ShapeId};
 
 /// One instanced draw: a run of adjacent items with equal stage, pipeline,
-/// material and shape.
+/// material, shape and level of detail.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Batch {
     /// The sort key of its first item.
@@ -21,6 +21,8 @@ pub struct Batch {
     pub first_instance: u32,
     /// Instances drawn.
     pub instance_count: u32,
+    /// Its level of detail (0: full detail).
+    pub level: u8,
 }
 
 /// Merge adjacent equal items of a sorted list into batches appended to
@@ -51,7 +53,11 @@ pub(crate) fn merge_placed(
     for item in items {
         let stage = stage_of(item.key);
         let joins = batches[first_batch..].last().is_some_and(|b| {
-            b.stage == stage && b.pipeline == item.pipeline && b.material == item.material && b.shape == item.shape
+            b.stage == stage
+                && b.pipeline == item.pipeline
+                && b.material == item.material
+                && b.shape == item.shape
+                && b.level == item.level
         }) && before.is_some_and(|b| follows(b, item));
         before = Some(item);
         if !joins {
@@ -63,6 +69,7 @@ pub(crate) fn merge_placed(
                 shape: item.shape,
                 first_instance: 0,
                 instance_count: 0,
+                level: item.level,
             });
         }
         let k = batches.len() - 1;
@@ -90,6 +97,7 @@ mod tests {
             first,
             count,
             entry: 0,
+            level: 0,
         }
     }
 

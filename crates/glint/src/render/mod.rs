@@ -43,6 +43,7 @@ mod error;
 mod frame;
 mod frame_variant;
 mod gpu_driven;
+mod lod;
 mod passes;
 pub mod queue;
 mod renderer;

@@ -151,6 +151,13 @@ impl Renderer {
         self.res.mode = mode;
     }
 
+    /// Draw levels of detail (the default: each instance the coarsest level
+    /// whose error its view allows, [`View::lod_error`](crate::scene::View::lod_error))
+    /// or every mesh at full detail, to compare.
+    pub fn set_levels_of_detail(&mut self, on: bool) {
+        self.res.levels_of_detail = on;
+    }
+
     /// Multiply every tiled entity's [`density`](Entity::density) by `density`
     /// (clamped to 0..=1; default 1) from the next submission on: a scene-wide
     /// control that changes no GPU data.

@@ -3,6 +3,7 @@
 
 use crate::render::cull::Frustum;
 use crate::render::frame_variant::FrameVariant;
+use crate::render::lod::LodView;
 use crate::scene::{AmbientOcclusion, Camera, Culling, TextureId, View};
 use glam::Mat4;
 
@@ -26,6 +27,10 @@ pub(crate) struct ViewFrame {
     pub hides: Option<TextureId>,
     /// What it adds to its forward shader variants.
     pub variant: FrameVariant,
+    /// How it picks levels of detail.
+    pub lod: LodView,
+    /// The pixels of error its levels of detail may make (0: full detail).
+    pub lod_error: f32,
 }
 
 impl ViewFrame {
@@ -40,12 +45,25 @@ impl ViewFrame {
         let aspect = width as f32 / height.max(1) as f32;
         let camera = view.camera;
         let matrix = camera.view();
-        let frustum = Frustum::from_view_proj(camera.projection(aspect) * matrix);
+        let view_proj = camera.projection(aspect) * matrix;
+        let frustum = Frustum::from_view_proj(view_proj);
+        let lod = LodView::new(view_proj, height, view.lod_error);
         let culling = match view.culling {
             Culling::Gpu if !gpu_cull => Culling::Cpu,
             culling => culling,
         };
         let ambient_occlusion = view.ambient_occlusion.map(AmbientOcclusion::clamped);
-        Self { camera, aspect, view: matrix, frustum, culling, ambient_occlusion, hides, variant }
+        Self {
+            camera,
+            aspect,
+            view: matrix,
+            frustum,
+            culling,
+            ambient_occlusion,
+            hides,
+            variant,
+            lod,
+            lod_error: view.lod_error,
+        }
     }
 }

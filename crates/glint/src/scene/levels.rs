@@ -6,7 +6,10 @@
 //! Levels share the mesh's vertices (only indices are added), so a level keeps
 //! the skin weights, colours and UVs of the vertices it keeps, and the
 //! vertex shader's motions (swim, wind) move it as they move the full mesh.
-//! Vertices on a UV or normal seam are kept apart, so seams stay closed.
+//! Vertices on a UV or normal seam are kept apart, so seams stay closed. A
+//! skinned mesh's joints weigh in as an attribute (each joint a fixed
+//! direction, a vertex the weighted sum of its joints'), so vertices that
+//! different joints move are not merged: a bent arm stays bent at every level.
 //!
 //! A level's error is in units of the mesh's bounding-sphere radius: an
 //! instance whose world radius is `r` is off by at most about `error × r`.
@@ -25,16 +28,30 @@ pub const MAX_LEVELS: usize = 5;
 /// less than a draw of their own costs.
 pub const MIN_TRIANGLES: usize = 64;
 
-/// Each level aims at this fraction of the triangles of the one before.
+/// Meshes with more triangles get no levels (drawn at full detail): making
+/// them takes about 2.5 s a million triangles on one core (`benches/levels.rs`)
+/// and memory to match; see `docs/limits.md`.
+pub const MAX_TRIANGLES: usize = 4_000_000;
+
+/// Each level aims at this fraction of the triangles of the one before; a
+/// mesh over [`LARGE`] triangles takes longer steps, so that its coarsest
+/// level is a few thousand triangles, not tens of thousands.
 const STEP: f32 = 0.5;
+const LARGE_STEP: f32 = 0.25;
+const LARGE: usize = 16_384;
 
 /// A level keeps at least this many triangles.
 const MIN_LEVEL_TRIANGLES: usize = 8;
 
-/// How much normals and UVs weigh against position in the simplifier's error
-/// (positions are relative to the mesh's extent, so these are comparable).
+/// How much normals, UVs and joints weigh against position in the
+/// simplifier's error (positions are relative to the mesh's extent, so these
+/// are comparable).
 const NORMAL_WEIGHT: f32 = 0.5;
 const UV_WEIGHT: f32 = 0.5;
+const JOINT_WEIGHT: f32 = 1.0;
+
+/// Attributes per vertex: normal, UV, joints.
+const ATTRIBUTES: usize = 8;
 
 /// One coarser level of a mesh.
 #[derive(Clone, Debug, PartialEq)]
@@ -55,27 +72,35 @@ impl DetailLevel {
 }
 
 /// The coarser levels of `mesh`, finest first: each at most about half the
-/// triangles of the one before, at most `MAX_LEVELS - 1` of them; none for a
-/// mesh under [`MIN_TRIANGLES`] or where the simplifier cannot remove a
-/// quarter of the triangles (a flat card, a mesh of separate triangles).
+/// triangles of the one before (a quarter past [`LARGE`] triangles), at most
+/// `MAX_LEVELS - 1` of them; none for a mesh under [`MIN_TRIANGLES`] or over
+/// [`MAX_TRIANGLES`], or where the simplifier cannot remove a quarter of the
+/// triangles (a mesh of separate triangles).
 pub fn detail_levels(mesh: &Mesh) -> Vec<DetailLevel> {
+    detail_levels_within(mesh, MAX_TRIANGLES)
+}
+
+/// [`detail_levels`] for meshes of at most `most` triangles.
+fn detail_levels_within(mesh: &Mesh, most: usize) -> Vec<DetailLevel> {
     let triangles = mesh.indices().len() / 3;
     let radius = mesh.bounding_sphere().radius;
-    if triangles < MIN_TRIANGLES || !(radius > 0.0) {
+    if !(MIN_TRIANGLES..=most).contains(&triangles) || radius.is_nan() || radius <= 0.0 {
         return Vec::new();
     }
     let floats: &[f32] = bytemuck::cast_slice(mesh.vertices());
     let stride = std::mem::size_of::<crate::scene::Vertex>() / 4;
     let count = mesh.vertices().len();
+    let packed = attributes_of(mesh);
     let (Ok(positions), Ok(attributes)) = (
         Positions::from_interleaved(floats, count, stride, 0),
-        // Normal (3) and UV (2), right after the position.
-        Attributes::from_interleaved(floats, count, 5, stride, 3),
+        Attributes::from_interleaved(&packed, count, ATTRIBUTES, ATTRIBUTES, 0),
     ) else {
         return Vec::new();
     };
-    let weights = [NORMAL_WEIGHT, NORMAL_WEIGHT, NORMAL_WEIGHT, UV_WEIGHT, UV_WEIGHT];
-    let ratios: Vec<f32> = (1..MAX_LEVELS as i32).map(|k| STEP.powi(k)).collect();
+    let weights =
+        [NORMAL_WEIGHT, NORMAL_WEIGHT, NORMAL_WEIGHT, UV_WEIGHT, UV_WEIGHT, JOINT_WEIGHT, JOINT_WEIGHT, JOINT_WEIGHT];
+    let step = if triangles > LARGE { LARGE_STEP } else { STEP };
+    let ratios: Vec<f32> = (1..MAX_LEVELS as i32).map(|k| step.powi(k)).collect();
     let options = LodChainOptions::new(LodTargets::Ratios(&ratios), LodErrors::Uniform(1.0))
         .with_attributes(LodChainAttributes::new(attributes, &weights));
     let Ok(chain) = build_lod_chain(mesh.indices(), positions, &options, &mut Workspace::default()) else {
@@ -94,6 +119,25 @@ pub fn detail_levels(mesh: &Mesh) -> Vec<DetailLevel> {
         before = kept;
     }
     levels
+}
+
+/// Each vertex's normal, UV and joints (0 without a skin): the weighted sum of
+/// its joints' directions, each joint a fixed direction of its own.
+fn attributes_of(mesh: &Mesh) -> Vec<f32> {
+    let joint = |j: u16| {
+        let j = f32::from(j);
+        glam::Vec3::new((1.7 * j + 0.3).sin(), (2.9 * j + 1.1).sin(), (4.3 * j + 2.3).sin())
+    };
+    let skin = mesh.skin();
+    let mut packed = Vec::with_capacity(mesh.vertices().len() * ATTRIBUTES);
+    for (k, v) in mesh.vertices().iter().enumerate() {
+        let joints = skin.map_or(glam::Vec3::ZERO, |skin| {
+            (skin[k].joints.iter().zip(skin[k].weights)).map(|(&j, w)| joint(j) * w).sum()
+        });
+        packed.extend_from_slice(&[v.normal[0], v.normal[1], v.normal[2], v.uv[0], v.uv[1]]);
+        packed.extend_from_slice(&joints.to_array());
+    }
+    packed
 }
 
 #[cfg(test)]
@@ -116,9 +160,16 @@ mod tests {
     }
 
     #[test]
-    fn small_meshes_have_no_levels_and_a_flat_grid_loses_nothing() {
+    fn small_and_too_large_meshes_have_no_levels_and_a_flat_grid_loses_nothing() {
         assert!(detail_levels(&procedural::cube()).is_empty());
+        let sphere = procedural::sphere(48, 32);
+        let n = sphere.indices().len() / 3;
+        assert!(detail_levels_within(&sphere, n - 1).is_empty() && !detail_levels_within(&sphere, n).is_empty());
         let grid = detail_levels(&procedural::plane(16));
-        assert!(!grid.is_empty() && grid.iter().all(|l| l.error < 1e-3), "{:?}", grid.iter().map(|l| l.error).collect::<Vec<_>>());
+        assert!(
+            !grid.is_empty() && grid.iter().all(|l| l.error < 1e-3),
+            "{:?}",
+            grid.iter().map(|l| l.error).collect::<Vec<_>>()
+        );
     }
 }

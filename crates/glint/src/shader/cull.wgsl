@@ -20,8 +20,9 @@
 // `compact`: one invocation per run of batches drawn by one multi-draw call.
 // It copies the run's non-empty commands, in order, to the start of the run's
 // range of `drawn_args`, writes how many there are (the count a
-// multi-draw-indirect-count call reads) and adds the run's instances to its
-// frustum's total (read back late for FrameStats).
+// multi-draw-indirect-count call reads) and adds the run's instances and their
+// triangles to its frustum's totals (read back late for FrameStats; the cull
+// passes count the instances they place at each level of detail).
 
 struct Bounds {
     center: vec4<f32>,
@@ -30,7 +31,10 @@ struct Bounds {
 
 // Candidates `start .. start + count` (numbered across the whole list) are
 // store instances `first ..`, tested against `frustum`, drawn by `batch`, whose
-// instances start at `out` in the draw-index buffer.
+// instances start at `out` in the draw-index buffer. With `levels` > 1 each
+// visible candidate picks its level of detail (render/lod.rs's rule): level l
+// is drawn by batch `batch + l`, its places `l * params.level_stride` further
+// on, its error (in units of the box's radius) `error[l - 1]`.
 struct CullRange {
     first: u32,
     count: u32,
@@ -38,6 +42,9 @@ struct CullRange {
     batch: u32,
     frustum: u32,
     out: u32,
+    levels: u32,
+    pad: u32,
+    error: vec4<f32>,
 }
 
 // Batches `first .. first + len` drawn by one call, seen by `frustum`.
@@ -59,8 +66,9 @@ struct Params {
     // range's `out` its places are (the late phase's region).
     counts_first: u32,
     place_offset: u32,
-    pad0: u32,
-    pad1: u32,
+    // How far apart each level of detail's places are.
+    level_stride: u32,
+    pad: u32,
 }
 
 // The view seen by the occlusion test: its view-projection matrix, the depth
@@ -76,16 +84,23 @@ struct Occlusion {
 @group(0) @binding(0) var<uniform> params: Params;
 @group(0) @binding(1) var<storage, read> bounds: array<Bounds>;
 @group(0) @binding(2) var<storage, read> ranges: array<CullRange>;
+// Per view, eight rows: its six frustum planes, then its level-of-detail rule
+// (render/lod.rs): row 3 of its view-projection, then its pixel scale over the
+// error allowed (0: full detail) and padding.
 @group(0) @binding(3) var<storage, read> planes: array<vec4<f32>>;
 @group(0) @binding(4) var<storage, read_write> draw_indices: array<u32>;
 // Indirect commands, five words each: index count, instance count, first index,
 // base vertex, first instance.
 @group(0) @binding(5) var<storage, read_write> args: array<atomic<u32>>;
+// Each run's command count (the early phase's, then the late's), then each
+// frustum's totals (TOTAL_WORDS words: instances drawn, triangles drawn, then
+// instances culled here drawn at each level of detail), then the late phase's
+// hidden count.
+@group(0) @binding(6) var<storage, read_write> counts: array<atomic<u32>>;
 
 @group(1) @binding(0) var<storage, read> runs: array<Run>;
 @group(1) @binding(1) var<storage, read_write> drawn_args: array<u32>;
-// Each run's command count, then each frustum's instances drawn.
-@group(1) @binding(2) var<storage, read_write> counts: array<atomic<u32>>;
+
 
 // Per candidate: 1 when it was not visible last frame; then one more word,
 // where the late phase counts the instances it found hidden.
@@ -94,6 +109,8 @@ struct Occlusion {
 @group(2) @binding(2) var<uniform> occlusion: Occlusion;
 
 const WORKGROUP: u32 = 64u;
+// Words of a frustum's totals in `counts` (render/gpu_driven/gpu_cull.rs).
+const TOTAL_WORDS: u32 = 7u;
 // How much farther than the pyramid's depth a box must be to count hidden:
 // more than a 24-bit depth buffer's rounding, so a surface never hides itself.
 const DEPTH_MARGIN: f32 = 1e-6;
@@ -131,10 +148,35 @@ fn candidate(g: u32) -> CullRange {
     return ranges[lo];
 }
 
-// Place store instance `instance` of range `r` among its batch's instances.
-fn place(r: CullRange, instance: u32) {
-    let at = atomicAdd(&args[r.batch * 5u + 1u], 1u);
-    draw_indices[r.out + params.place_offset + at] = instance;
+// The level of detail a box `c ± e` of range `r` draws at: the coarsest whose
+// error projects to at most the view's allowed pixels at the box's nearest depth.
+fn level_of(r: CullRange, c: vec3<f32>, e: vec3<f32>) -> u32 {
+    let w_row = planes[r.frustum * 8u + 6u];
+    let scale = planes[r.frustum * 8u + 7u].x;
+    if r.levels <= 1u || scale <= 0.0 {
+        return 0u;
+    }
+    let radius = length(e);
+    let w = dot(w_row, vec4<f32>(c, 1.0)) - radius * length(w_row.xyz);
+    let allowed = w / (radius * scale);
+    if !(allowed > 0.0) {
+        return 0u;
+    }
+    for (var l = r.levels - 1u; l > 0u; l--) {
+        if r.error[l - 1u] <= allowed {
+            return l;
+        }
+    }
+    return 0u;
+}
+
+// Place store instance `instance` of range `r`, whose box is `c ± e`, among
+// the instances of its batch at its level of detail.
+fn place(r: CullRange, instance: u32, c: vec3<f32>, e: vec3<f32>) {
+    let level = level_of(r, c, e);
+    atomicAdd(&counts[params.totals + r.frustum * TOTAL_WORDS + 2u + level], 1u);
+    let at = atomicAdd(&args[(r.batch + level) * 5u + 1u], 1u);
+    draw_indices[r.out + level * params.level_stride + params.place_offset + at] = instance;
 }
 
 // Whether the box `c ± e` is wholly behind what the depth pyramid holds.
@@ -186,7 +228,7 @@ struct Candidate {
 fn candidate_of(id: vec3<u32>, groups: vec3<u32>) -> Candidate {
     let g = invocation(id, groups);
     if g >= params.candidates {
-        return Candidate(false, g, CullRange(0u, 0u, 0u, 0u, 0u, 0u), 0u, vec3<f32>(0.0), vec3<f32>(0.0));
+        return Candidate(false, g, CullRange(0u, 0u, 0u, 0u, 0u, 0u, 0u, 0u, vec4<f32>(0.0)), 0u, vec3<f32>(0.0), vec3<f32>(0.0));
     }
     let r = candidate(g);
     let instance = r.first + (g - r.start);
@@ -197,16 +239,16 @@ fn candidate_of(id: vec3<u32>, groups: vec3<u32>) -> Candidate {
 @compute @workgroup_size(64)
 fn cull(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let c = candidate_of(id, groups);
-    if c.valid && visible(c.center, c.extent, c.range.frustum * 6u) {
-        place(c.range, c.instance);
+    if c.valid && visible(c.center, c.extent, c.range.frustum * 8u) {
+        place(c.range, c.instance, c.center, c.extent);
     }
 }
 
 @compute @workgroup_size(64)
 fn cull_early(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let c = candidate_of(id, groups);
-    if c.valid && atomicLoad(&hidden[c.g]) == 0u && visible(c.center, c.extent, c.range.frustum * 6u) {
-        place(c.range, c.instance);
+    if c.valid && atomicLoad(&hidden[c.g]) == 0u && visible(c.center, c.extent, c.range.frustum * 8u) {
+        place(c.range, c.instance, c.center, c.extent);
     }
 }
 
@@ -216,7 +258,7 @@ fn cull_late(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgrou
     if !c.valid {
         return;
     }
-    let in_frustum = visible(c.center, c.extent, c.range.frustum * 6u);
+    let in_frustum = visible(c.center, c.extent, c.range.frustum * 8u);
     let seen = in_frustum && !occluded(c.center, c.extent);
     if in_frustum && !seen {
         atomicAdd(&hidden[params.candidates], 1u);
@@ -224,7 +266,7 @@ fn cull_late(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgrou
     let drawn_early = atomicLoad(&hidden[c.g]) == 0u;
     atomicStore(&hidden[c.g], select(1u, 0u, seen));
     if seen && !drawn_early {
-        place(c.range, c.instance);
+        place(c.range, c.instance, c.center, c.extent);
     }
 }
 
@@ -237,6 +279,8 @@ fn compact(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups
     let run = runs[k];
     var kept = 0u;
     var instances = 0u;
+    var triangles = 0u;
+    let totals = params.totals + run.frustum * TOTAL_WORDS;
     for (var b = run.first; b < run.first + run.len; b++) {
         let count = atomicLoad(&args[b * 5u + 1u]);
         if count > 0u {
@@ -246,8 +290,10 @@ fn compact(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups
             }
             kept += 1u;
             instances += count;
+            triangles += count * (atomicLoad(&args[b * 5u]) / 3u);
         }
     }
     atomicStore(&counts[params.counts_first + k], kept);
-    atomicAdd(&counts[params.totals + run.frustum], instances);
+    atomicAdd(&counts[totals], instances);
+    atomicAdd(&counts[totals + 1u], triangles);
 }

@@ -117,7 +117,7 @@ impl Renderer {
             // Cloth is thin: both sides show, whatever the named material says.
             let look = cloth.material.map_or_else(Material::default, |i| desc.materials[i].resolve(&textures));
             let material = registry.add_material(Material { double_sided: true, ..look });
-            let surface = registry.add_named_shape(view.surface.clone(), "cloth".into());
+            let surface = registry.add_deforming_shape(view.surface.clone(), "cloth".into());
             entities.push(Entity::new(surface, material, Mat4::IDENTITY));
             if let Some(edges) = &view.edges {
                 let ink = Material {
@@ -125,7 +125,7 @@ impl Renderer {
                     double_sided: true,
                     ..Material::color("cloth edges", 0.02, 0.02, 0.03)
                 };
-                let edges = registry.add_named_shape(edges.clone(), "cloth edges".into());
+                let edges = registry.add_deforming_shape(edges.clone(), "cloth edges".into());
                 let ink = registry.add_material(ink);
                 entities.push(Entity::new(edges, ink, Mat4::IDENTITY));
                 if !view.pins.is_empty() {
@@ -170,7 +170,12 @@ impl Registry {
                     .path
                     .file_name()
                     .map_or_else(|| model.path.display().to_string(), |f| f.to_string_lossy().into());
-                (self.add_named_shape(part.mesh.clone(), format!("{file}: {}", part.name)), material)
+                let name = format!("{file}: {}", part.name);
+                let shape = match part.morph {
+                    Some(_) => self.add_deforming_shape(part.mesh.clone(), name),
+                    None => self.add_named_shape(part.mesh.clone(), name),
+                };
+                (shape, material)
             })
             .collect();
         ModelIds { parts }

@@ -89,7 +89,8 @@ pub fn render_desc(
 }
 
 /// Render one frame of a loaded scene from its first camera at `width`×`height`
-/// with `samples` MSAA samples.
+/// with `samples` MSAA samples, every mesh at full detail (the references'
+/// pictures and counts; `render_with_levels` draws levels of detail).
 pub fn render_sized(
     gpu: &Gpu,
     desc: &glint::asset::SceneDesc,
@@ -97,7 +98,25 @@ pub fn render_sized(
     samples: u32,
     culling: glint::Culling,
 ) -> (image::RgbaImage, FrameStats) {
+    render_levels(gpu, desc, ((width, height), samples), (culling, false))
+}
+
+/// Render one frame of a scene under `tests/scenes/` at `size`×`size` with
+/// 4× MSAA, culled on the GPU where the adapter can, with levels of detail.
+pub fn render_with_levels(gpu: &Gpu, name: &str, size: u32) -> (image::RgbaImage, FrameStats) {
+    let desc = load_scene(&repo_root().join("tests/scenes").join(format!("{name}.scn")));
+    render_levels(gpu, &desc, ((size, size), 4), (glint::Culling::Gpu, true))
+}
+
+/// One frame of `desc` from its first camera, levels of detail on where `levels`.
+fn render_levels(
+    gpu: &Gpu,
+    desc: &glint::asset::SceneDesc,
+    ((width, height), samples): ((u32, u32), u32),
+    (culling, levels): (glint::Culling, bool),
+) -> (image::RgbaImage, FrameStats) {
     let mut renderer = Renderer::new(gpu);
+    renderer.set_levels_of_detail(levels);
     let entities = renderer.place_scene(desc).entities;
     let mut target = OffscreenTarget::new(gpu, width, height, samples).expect("target");
     let view = glint::View::new(desc.cameras[0]).with_culling(culling);

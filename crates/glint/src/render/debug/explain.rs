@@ -127,7 +127,12 @@ pub struct BatchCall {
     pub mesh_name: String,
     /// View depth over the far plane, as the key holds it.
     pub depth: f32,
-    /// Instances.
+    /// Its level of detail (0: full detail) and that level's triangles.
+    pub level: u8,
+    /// Triangles of one instance at that level.
+    pub level_triangles: u32,
+    /// Instances (culled on the GPU: the candidates, of which the GPU draws
+    /// the visible ones at the level each picks).
     pub instances: u32,
     /// Triangles of those instances.
     pub triangles: u64,
@@ -231,7 +236,8 @@ fn batch_calls(registry: &Registry, list: &DrawList, run: &Run) -> Vec<BatchCall
             let blended = key.features.contains(ShaderFeatures::ALPHA_BLEND);
             let fields = decode_key(b.key, blended);
             let shape = &registry.shapes[b.shape.0 as usize];
-            let triangles = (shape.mesh.indices().len() / 3) as u64 * u64::from(b.instance_count);
+            let level_triangles = draw.mesh.index_count / 3;
+            let triangles = u64::from(level_triangles) * u64::from(b.instance_count);
             BatchCall {
                 key: format!("{:#018x}", b.key),
                 stage: fields.stage,
@@ -245,6 +251,8 @@ fn batch_calls(registry: &Registry, list: &DrawList, run: &Run) -> Vec<BatchCall
                 mesh: fields.shape,
                 mesh_name: shape.name.clone(),
                 depth: fields.depth,
+                level: b.level,
+                level_triangles,
                 instances: b.instance_count,
                 triangles,
             }

@@ -1,5 +1,5 @@
 //! Core layer: [`CountReadback`], small counts from the GPU (GPU culling's
-//! instances drawn per frustum) read back a frame or two late without a stall:
+//! instances and triangles drawn per frustum) read back a frame or two late without a stall:
 //! a few buffers copied into, mapped once their submission has gone, and read
 //! when the map is done.
 
@@ -13,29 +13,31 @@ const FAILED: u8 = 3;
 const COPIED: u8 = 4;
 /// Its slots: a frame's counts are read two or three frames later.
 const SLOTS: usize = 3;
-/// Frustums a list has at most: the camera, or every shadow view.
-const MAX_FRUSTUMS: u64 = crate::render::passes::shadow_views::MAX_SHADOW_VIEWS as u64;
 
-/// A few small buffers the per-frustum totals are copied into and mapped from.
+/// A few small buffers the per-frustum totals are copied into and mapped from
+/// (`copy` is given their length in words).
 pub(crate) struct CountReadback {
     slots: Vec<(wgpu::Buffer, Arc<AtomicU8>, u64, u32)>,
     latest: Option<Vec<u32>>,
+    /// Words each slot holds.
+    max_words: u32,
     /// Whether `latest` came back since [`take_fresh`](CountReadback::take_fresh).
     fresh: bool,
 }
 
 impl CountReadback {
-    pub(crate) fn new(device: &wgpu::Device) -> Self {
+    /// Slots of `max_words` words each.
+    pub(crate) fn new(device: &wgpu::Device, max_words: u32) -> Self {
         let slot = |_| {
             let buffer = device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("gpu culling: instances drawn, read back"),
-                size: 4 * MAX_FRUSTUMS,
+                size: 4 * u64::from(max_words),
                 usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
                 mapped_at_creation: false,
             });
             (buffer, Arc::new(AtomicU8::new(FREE)), 0, 0)
         };
-        Self { slots: (0..SLOTS).map(slot).collect(), latest: None, fresh: false }
+        Self { slots: (0..SLOTS).map(slot).collect(), latest: None, max_words, fresh: false }
     }
 
     /// Copy `frustums` totals from `at` in `counts` into a free slot (none free: skipped).
@@ -44,10 +46,10 @@ impl CountReadback {
         encoder: &mut wgpu::CommandEncoder,
         counts: &wgpu::Buffer,
         at: u64,
-        frustums: u32,
+        words: u32,
         submits: u64,
     ) {
-        let frustums = frustums.min(MAX_FRUSTUMS as u32);
+        let frustums = words.min(self.max_words);
         let Some(slot) = self.slots.iter_mut().find(|s| s.1.load(Ordering::Acquire) == FREE) else { return };
         if frustums > 0 {
             encoder.copy_buffer_to_buffer(counts, at, &slot.0, 0, 4 * u64::from(frustums));

@@ -1,6 +1,7 @@
 //! Core layer: [`FrameStats`], the cost of one frame in numbers.
 
 use crate::render::debug::timer::GpuTimes;
+use crate::scene::levels::MAX_LEVELS;
 use crate::scene::Culling;
 use serde::Serialize;
 use web_time::Instant;
@@ -70,6 +71,18 @@ pub struct StageTimes {
     pub total: f64,
 }
 
+/// What a pass drew: instances, triangles, and instances at each level of
+/// detail ([`crate::scene::levels`]; 0 is full detail).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+pub struct DrawnCounts {
+    /// Instances drawn.
+    pub instances: u64,
+    /// Triangles drawn: each instance's level's.
+    pub triangles: u64,
+    /// Instances drawn at each level.
+    pub per_level: [u64; MAX_LEVELS],
+}
+
 /// Draws and CPU time of one named pass.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
 pub struct PassStats {
@@ -79,6 +92,10 @@ pub struct PassStats {
     pub draws: u32,
     /// Instances drawn.
     pub instances: u64,
+    /// Triangles the shadow pass drew (from the GPU's counts where it culls,
+    /// as [`FrameStats::triangles_drawn`] is); 0 for the forward passes,
+    /// whose total is [`FrameStats::triangles_drawn`].
+    pub triangles: u64,
     /// CPU time: for the shadow pass all of [`Renderer::shadow_pass`](crate::Renderer::shadow_pass);
     /// for the forward passes, recording their draws.
     pub cpu_ms: f64,
@@ -159,6 +176,12 @@ pub struct FrameStats {
     /// without waiting), plus the blended instances culled on the CPU; 0 until
     /// the first comes back.
     pub instances_drawn: u64,
+    /// Triangles drawn: each instance's level of detail's (counted where
+    /// [`instances_drawn`](Self::instances_drawn) is).
+    pub triangles_drawn: u64,
+    /// Instances drawn at each level of detail, full detail first (counted
+    /// where [`instances_drawn`](Self::instances_drawn) is).
+    pub instances_per_level: [u64; MAX_LEVELS],
     /// Particle billboards this view drew (every record of every particle
     /// layer written from the CPU; a layer written on the GPU counts its whole
     /// pool, dead slots drawing nothing).
@@ -192,6 +215,12 @@ pub struct FrameStats {
 }
 
 impl FrameStats {
+    /// Take the instances, triangles and levels the view drew from `drawn`.
+    pub(crate) fn set_drawn(&mut self, drawn: DrawnCounts) {
+        (self.instances_drawn, self.triangles_drawn, self.instances_per_level) =
+            (drawn.instances, drawn.triangles, drawn.per_level);
+    }
+
     /// How the view was culled, for a status line: "culled on the GPU, with
     /// occlusion", or as [`Culling::describe`] says.
     pub fn culled(&self) -> &'static str {

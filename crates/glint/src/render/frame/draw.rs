@@ -8,7 +8,7 @@ use crate::render::debug::explain::{queue_name, run_calls, state, DrawCall};
 use crate::render::debug::outline::Outline;
 use crate::render::debug::stats::{ms_since, FrameStats, PassStats};
 use crate::render::frame::prepared::sky_pass;
-use crate::render::gpu_driven::commands::{Run, COMMAND_BYTES};
+use crate::render::gpu_driven::commands::{Placed, Run, COMMAND_BYTES};
 use crate::render::gpu_driven::draw_list::{run_stage, DrawList};
 use crate::render::queue::{Queue, SKY_STAGE};
 use crate::render::resources::pipelines::SkyPass;
@@ -88,7 +88,7 @@ pub(crate) fn draw_sky(
     let Some(sky) = sky else { return false };
     full_screen(pass, sky, "sky", stats);
     outline.call(|| DrawCall::single("sky", "draw", (1, 1), &["pipeline"]));
-    stats.passes.sky = PassStats { draw_calls: 1, draws: 1, instances: 1, cpu_ms: 0.0 };
+    stats.passes.sky = PassStats { draw_calls: 1, draws: 1, instances: 1, triangles: 0, cpu_ms: 0.0 };
     // The sky's layout has groups 0–1 only: bind the forward groups again.
     pass.set_bind_group(3, &gpu.forward.bind_group, &[]);
     stats.bind_groups_set += 1;
@@ -127,8 +127,12 @@ pub(crate) fn draw_stages(
         };
         cost.draw_calls += stats.draw_calls - calls;
         cost.draws += stats.draws - draws;
-        let batches = stage.iter().flat_map(|r| &list.batches[r.batches()]);
-        cost.instances += batches.map(|b| u64::from(b.instance_count)).sum::<u64>();
+        // A GPU-culled batch counts its candidates, once for all its levels.
+        let batches = stage
+            .iter()
+            .flat_map(|r| r.batches())
+            .filter(|&k| list.placed[k] != Placed::OnGpu || list.batches[k].level == 0);
+        cost.instances += batches.map(|k| u64::from(list.batches[k].instance_count)).sum::<u64>();
         cost.cpu_ms += ms_since(start);
     }
 }

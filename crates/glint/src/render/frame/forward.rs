@@ -5,6 +5,7 @@ use crate::render::debug::stats::{FrameStats, UploadStats};
 use crate::render::error::RenderError;
 use crate::render::frame::prepared::Prepared;
 use crate::render::frame::state::Frame;
+use crate::render::lod::level_items;
 use crate::render::queue::{self, DrawItem, Queue};
 use crate::render::resources::blocks::SceneGpu;
 use crate::render::resources::Resources;
@@ -13,17 +14,25 @@ use crate::render::views::ViewGpu;
 use crate::scene::{Culling, Lighting};
 use glam::Vec3A;
 
-/// Stage 3: one draw item per visible run, or per visible instance for blended
-/// materials so that they can be sorted far to near one by one; one per run
-/// of store instances (an entity's candidates culled on the GPU, a whole tile). Depth is the view distance of the
-/// run's (or instance's, or entity's) box centre over the far plane.
-pub(crate) fn build_queue(res: &Resources, frame: &Frame, gpu: &mut ViewGpu, view: &ViewFrame, prepared: &[Prepared]) {
-    let visible = &frame.visible;
+/// Stage 3: one draw item per visible run and level of detail (its
+/// instances reordered by level, [`level_items`]), or per visible instance for
+/// blended materials so that they can be sorted far to near one by one; one
+/// per run of store instances (an entity's candidates culled on the GPU, a
+/// whole tile). Depth is the view distance of the run's (or instance's, or
+/// entity's) box centre over the far plane.
+pub(crate) fn build_queue(
+    res: &Resources,
+    frame: &mut Frame,
+    gpu: &mut ViewGpu,
+    view: &ViewFrame,
+    prepared: &[Prepared],
+) {
+    let Frame { visible, submitted, .. } = frame;
     let far = view.camera.far();
     let depth = |center: Vec3A| -view.view.transform_point3a(center).z / far;
     let runs = visible.runs.iter().map(|r| (r, false)).chain(visible.ranges.iter().map(|r| (r, true)));
     for (run, of_store) in runs {
-        let s = &frame.submitted[run.entry];
+        let s = &submitted[run.entry];
         let material = &res.registry.materials[s.material.0 as usize];
         let Prepared { pipeline, draw, .. } = prepared[run.entry];
         let texture_set = draw.texture_set;
@@ -34,7 +43,7 @@ pub(crate) fn build_queue(res: &Resources, frame: &Frame, gpu: &mut ViewGpu, vie
         };
         let stage = s.render_order.unwrap_or(queue.stage());
         let blended = queue == Queue::Transparent;
-        let item = |first, count, depth| DrawItem {
+        let item = |level, first, count, depth| DrawItem {
             key: queue::sort_key(stage, blended, pipeline, texture_set, s.material, s.shape, depth),
             pipeline,
             material: s.material,
@@ -42,15 +51,27 @@ pub(crate) fn build_queue(res: &Resources, frame: &Frame, gpu: &mut ViewGpu, vie
             first,
             count,
             entry: run.entry as u32,
+            level,
         };
+        let (levels, bounds) = (&draw.mesh.levels, &res.store.bounds);
         if blended && !of_store {
             for k in run.start..run.start + run.len {
                 let instance = visible.instances[k as usize] as usize;
-                gpu.forward.items.push(item(k, 1, depth(res.store.bounds.center(instance))));
+                let level = view.lod.level(levels, bounds.center(instance), bounds.extent(instance));
+                gpu.forward.items.push(item(level, k, 1, depth(bounds.center(instance))));
             }
         } else {
-            let center = res.store.slot(s.slot).bounds.map_or(Vec3A::ZERO, |(c, _)| c);
-            gpu.forward.items.push(item(run.start, run.len, depth(center)));
+            let depth = depth(res.store.slot(s.slot).bounds.map_or(Vec3A::ZERO, |(c, _)| c));
+            let placed = visible.placed[run.entry];
+            let listed = match of_store {
+                false => &mut visible.instances[run.start as usize..(run.start + run.len) as usize],
+                true => &mut [][..],
+            };
+            let items = &mut gpu.forward.items;
+            let run_of = (placed, run.start, run.len, listed);
+            level_items(&view.lod, levels, run_of, bounds, |level, first, count| {
+                items.push(item(level, first, count, depth));
+            });
         }
     }
 }
@@ -79,15 +100,14 @@ pub(crate) fn upload(
     stats.occlusion = list.gpu.as_ref().is_some_and(|g| g.occluding);
     bytes.draw_indices += written.draw_indices;
     bytes.indirect += written.indirect;
-    stats.instances_drawn = gpu.forward.cpu_instances();
+    stats.set_drawn(gpu.forward.cpu_drawn());
     if gpu.forward.culled_on_gpu() {
         // Counted on the GPU (blended instances included), a frame or two late.
         let submits = res.queue.submits();
-        let drawn = gpu.forward.gpu.as_mut().and_then(|g| g.drawn(&res.device, submits));
-        let drawn = drawn.map(|d| d.iter().map(|&n| u64::from(n)).sum::<u64>());
+        let drawn = gpu.forward.gpu_drawn(&res.device, submits, false);
         let valid = stats.instances_submitted - stats.instances_invalid;
-        stats.instances_drawn = drawn.unwrap_or(0);
-        stats.instances_culled = drawn.map_or(0, |d| valid.saturating_sub(d));
+        stats.set_drawn(drawn.unwrap_or_default());
+        stats.instances_culled = drawn.map_or(0, |d| valid.saturating_sub(d.instances));
     }
     Ok(())
 }
@@ -168,6 +188,8 @@ mod tests {
     fn blended_instances_are_drawn_far_to_near_and_render_order_overrides_queues() {
         let Some(gpu) = gpu() else { return };
         let mut r = Renderer::new(&gpu);
+        // Each instance at its own level of detail would split the draws this counts.
+        r.set_levels_of_detail(false);
         let sphere = r.add_shape(ShapeKind::Sphere.mesh());
         let glass = r.add_material(Material { alpha_mode: crate::AlphaMode::Blend, ..Material::default() });
         let solid = r.add_material(Material::default());

@@ -117,11 +117,11 @@ impl Renderer {
     pub fn wait_for_counts(&mut self, stats: &mut [FrameStats]) {
         let submits = self.res.queue.submits();
         for (k, stats) in stats.iter_mut().enumerate().filter(|(_, s)| s.culling == crate::scene::Culling::Gpu) {
-            let Some(gpu) = self.views.last_mut(k).and_then(|v| v.forward.gpu.as_mut()) else { continue };
-            if let Some(drawn) = gpu.wait_drawn(&self.res.device, submits) {
-                let drawn: u64 = drawn.iter().map(|&n| u64::from(n)).sum();
+            let Some(view) = self.views.last_mut(k) else { continue };
+            if let Some(drawn) = view.forward.gpu_drawn(&self.res.device, submits, true) {
                 let valid = stats.instances_submitted - stats.instances_invalid;
-                (stats.instances_drawn, stats.instances_culled) = (drawn, valid.saturating_sub(drawn));
+                stats.set_drawn(drawn);
+                stats.instances_culled = valid.saturating_sub(drawn.instances);
             }
         }
     }

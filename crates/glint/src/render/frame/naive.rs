@@ -90,12 +90,20 @@ fn naive_batches(
             // The COMPACT variant draws an instance by its number; the
             // others read it from the draw-index list.
             let first_instance = if slot.compact { i } else { list.draw_indices.len() as u32 };
-            let batch =
-                Batch { key, stage, pipeline, material: s.material, shape: s.shape, first_instance, instance_count: 1 };
+            let batch = Batch {
+                key,
+                stage,
+                pipeline,
+                material: s.material,
+                shape: s.shape,
+                first_instance,
+                instance_count: 1,
+                level: 0,
+            };
             list.push_alone(batch, draw, (!slot.compact).then_some(i));
         }
     }
-    stats.instances_drawn = gpu.forward.batches.len() as u64;
+    stats.set_drawn(gpu.forward.cpu_drawn());
     Ok(())
 }
 
@@ -172,7 +180,7 @@ fn naive_encode(
         (stats.pipelines_bound, stats.bind_groups_set) = (stats.pipelines_bound + n, stats.bind_groups_set + n);
         (stats.draws, stats.draw_calls) = (stats.draws + n, stats.draw_calls + n);
         let instances = u64::from(n);
-        stats.passes.opaque = PassStats { draw_calls: n, draws: n, instances, cpu_ms: ms_since(start) };
+        stats.passes.opaque = PassStats { draw_calls: n, draws: n, instances, triangles: 0, cpu_ms: ms_since(start) };
     }
     if let Some(timer) = &mut res.gpu_timer {
         timer.resolve(encoder, Timed::Forward, index);

@@ -85,7 +85,11 @@ impl Registry {
                 Some(range) => range,
                 None => {
                     let scope = crate::gpu::DriverErrors::watch(&self.device);
-                    let added = self.mesh_pool.add(&self.device, &self.queue, &slot.mesh);
+                    let levels = match slot.deforms {
+                        true => Vec::new(),
+                        false => crate::scene::levels::detail_levels(&slot.mesh),
+                    };
+                    let added = self.mesh_pool.add(&self.device, &self.queue, (&slot.mesh, &levels));
                     if let Some(error) = scope.finish() {
                         return Err(RenderError::Device { what: "the mesh pool", message: error.to_string() });
                     }

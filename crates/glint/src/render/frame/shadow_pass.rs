@@ -26,6 +26,7 @@ use crate::render::frame::prepared::Prepared;
 use crate::render::frame::state::Frame;
 use crate::render::frame::visible::VisibleRun;
 use crate::render::frame::visible::{collect_visible, Submitted};
+use crate::render::lod::{level_items, LodView, SHADOW_ERROR_FACTOR};
 use crate::render::passes::shadow_maps::{ShadowGpu, ShadowMaps};
 use crate::render::passes::shadow_views::MAX_SHADOW_VIEWS;
 use crate::render::passes::shadow_views::{self, ShadowView, ViewTarget};
@@ -33,8 +34,9 @@ use crate::render::queue::{self, DrawItem, Queue};
 use crate::render::resources::blocks::CameraGpu;
 use crate::render::resources::pipelines::PassKind;
 use crate::render::resources::Resources;
+use crate::render::view::ViewFrame;
 use crate::render::views::{ViewBlocks, ViewGpu};
-use crate::scene::{Aabb, AlphaMode, Culling, Environment, LightKind, Lighting, ShadowLayout, View};
+use crate::scene::{Aabb, AlphaMode, Environment, LightKind, Lighting, ShadowLayout, View};
 use glam::Vec3;
 use web_time::Instant;
 
@@ -173,7 +175,7 @@ pub(crate) fn draw_shadows(
     res: &mut Resources,
     frame: &mut Frame,
     gpu: &mut ViewGpu,
-    (culling, shadows): (Culling, &ViewShadows),
+    (view, shadows): (&ViewFrame, &ViewShadows),
     (prepared, environment): (&[Prepared], &Environment),
     stats: &mut FrameStats,
 ) -> Result<(), RenderError> {
@@ -182,7 +184,7 @@ pub(crate) fn draw_shadows(
     }
     let start = Instant::now();
     let drawn: Vec<&PlannedShadow> = shadows.drawn().collect();
-    let ranges = batch_shadow_views(res, frame, gpu, (&drawn, prepared), culling, stats)?;
+    let ranges = batch_shadow_views(res, frame, gpu, (&drawn, prepared), view, stats)?;
     upload_shadow_views(res, gpu, (&drawn, shadows.views), environment, stats)?;
     let mut cost = PassStats::default();
     if !drawn.is_empty() {
@@ -198,14 +200,15 @@ pub(crate) fn draw_shadows(
 
 /// Cull, queue, sort and batch each shadow view's casters into the view's
 /// shadow list (culled on the GPU: every valid instance a candidate), each
-/// submitted entity drawing as `prepared` says; returns each shadow view's
-/// range of runs.
+/// submitted entity drawing as `prepared` says, at the levels of detail the
+/// light's view allows (`camera`'s error times [`SHADOW_ERROR_FACTOR`] in
+/// texels); returns each shadow view's range of runs.
 fn batch_shadow_views(
     res: &mut Resources,
     frame: &mut Frame,
     gpu: &mut ViewGpu,
     (views, prepared): (&[&PlannedShadow], &[Prepared]),
-    culling: Culling,
+    camera: &ViewFrame,
     stats: &mut FrameStats,
 ) -> Result<Vec<std::ops::Range<usize>>, RenderError> {
     gpu.shadows.clear();
@@ -213,9 +216,11 @@ fn batch_shadow_views(
     let mut ranges = Vec::with_capacity(views.len());
     // Blended materials cast no shadow.
     let blended: Vec<bool> = res.registry.materials.iter().map(|m| m.material.alpha_mode == AlphaMode::Blend).collect();
+    let culling = camera.culling;
     for planned in views {
         let view = &planned.view;
         let view_proj = view.view_proj();
+        let lod = LodView::texels(view_proj, view.texel, camera.lod_error * SHADOW_ERROR_FACTOR);
         let casts = |s: &Submitted| s.cast_shadows && !blended[s.material.0 as usize];
         let frustum = Frustum::from_view_proj(view_proj);
         collect_visible(res, (&frustum, culling), (&frame.submitted, casts), &mut visible);
@@ -224,7 +229,8 @@ fn batch_shadow_views(
             ViewTarget::CubeFace { .. } => PassKind::ShadowDistance,
         };
         let first_item = gpu.shadows.items.len();
-        for &VisibleRun { entry, start, len } in visible.runs.iter().chain(&visible.ranges) {
+        let runs = visible.runs.iter().map(|r| (r, false)).chain(visible.ranges.iter().map(|r| (r, true)));
+        for (&VisibleRun { entry, start, len }, of_store) in runs {
             let material = frame.submitted[entry].material;
             let pipeline = match res.registry.shadow_pipeline(material, &prepared[entry], pass, stats) {
                 Ok(pipeline) => pipeline,
@@ -244,20 +250,36 @@ fn batch_shadow_views(
             // Near to far from the light, so nearer casters hide the rest early.
             let center = res.store.slot(s.slot).bounds.map_or(Vec3::ZERO, |(c, _)| Vec3::from(c));
             let depth = view_proj.project_point3(center).z.clamp(0.0, 1.0);
-            gpu.shadows.items.push(DrawItem {
-                key: queue::sort_key(queue.stage(), false, pipeline, texture_set, material, shape, depth),
+            let key = queue::sort_key(queue.stage(), false, pipeline, texture_set, material, shape, depth);
+            let item = |level, first, count| DrawItem {
+                key,
                 pipeline,
                 material,
                 shape,
-                first: start,
-                count: len,
+                first,
+                count,
                 entry: entry as u32,
-            });
+                level,
+            };
+            let listed = match of_store {
+                false => &mut visible.instances[start as usize..(start + len) as usize],
+                true => &mut [][..],
+            };
+            let (levels, items) = (&prepared[entry].draw.mesh.levels, &mut gpu.shadows.items);
+            level_items(
+                &lod,
+                levels,
+                (visible.placed[entry], start, len, listed),
+                &res.store.bounds,
+                |level, first, count| {
+                    items.push(item(level, first, count));
+                },
+            );
         }
         queue::sort(&mut gpu.shadows.items[first_item..]);
         let draw_of = |item: &DrawItem| prepared[item.entry as usize].draw;
         let placed = |item: &DrawItem| visible.placed[item.entry as usize];
-        ranges.push(gpu.shadows.build(first_item, &visible.instances, frustum, draw_of, placed));
+        ranges.push(gpu.shadows.build(first_item, &visible.instances, (frustum, lod), draw_of, placed));
     }
     frame.visible = visible;
     Ok(ranges)
@@ -346,11 +368,11 @@ fn encode_shadow_views(
     }
     cost.draw_calls = stats.draw_calls;
     cost.draws = stats.draws;
-    cost.instances = gpu.shadows.cpu_instances();
+    let mut drawn = gpu.shadows.cpu_drawn();
     if gpu.shadows.culled_on_gpu() {
         // Counted on the GPU, a frame or two late (0 before the first count comes back).
         let submits = res.queue.submits();
-        let drawn = gpu.shadows.gpu.as_mut().and_then(|g| g.drawn(&res.device, submits));
-        cost.instances = drawn.map_or(0, |d| d.iter().map(|&n| u64::from(n)).sum());
+        drawn = gpu.shadows.gpu_drawn(&res.device, submits, false).unwrap_or_default();
     }
+    (cost.instances, cost.triangles) = (drawn.instances, drawn.triangles);
 }

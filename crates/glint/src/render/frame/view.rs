@@ -17,6 +17,7 @@ use crate::render::frame::shadow_pass::ViewShadows;
 use crate::render::frame::state::Frame;
 use crate::render::frame::visible::{cull, shown};
 use crate::render::frame_variant::FrameVariant;
+use crate::render::lod::LodView;
 use crate::render::passes::post::ChainImages;
 use crate::render::queue;
 use crate::render::resources::Resources;
@@ -88,7 +89,10 @@ fn draw_into(
     let [x, y, width, height] = view.viewport.pixels(target.width(), target.height());
     let occluded = occludes(res, view.ambient_occlusion);
     let variant = FrameVariant::after(shadows.first, shadows.views.len(), lighting.lights, occluded);
-    let view_frame = ViewFrame::new(view, (width, height), (res.cull_pipelines.is_some(), hides, variant));
+    let mut view_frame = ViewFrame::new(view, (width, height), (res.cull_pipelines.is_some(), hides, variant));
+    if !res.levels_of_detail {
+        (view_frame.lod, view_frame.lod_error) = (LodView::full_detail(), 0.0);
+    }
     let format = scene_format(res, view, target);
     if (width, height, format) == (target.width(), target.height(), target.format()) {
         return view_stages(res, frame, gpu, &view_frame, (lighting, shadows), (target, Compose::Direct));
@@ -162,7 +166,7 @@ fn view_stages(
     let prepared = prepare(res, frame, target.format(), view.variant, &lighting.environment, &mut stats)?;
     res.particles.prepare(&mut res.registry, target.format(), &mut stats)?;
     stats.cpu_ms.prepare = lap.next();
-    draw_shadows(res, frame, gpu, (view.culling, shadows), (&prepared, &lighting.environment), &mut stats)?;
+    draw_shadows(res, frame, gpu, (view, shadows), (&prepared, &lighting.environment), &mut stats)?;
     lap.next();
     let forward = if res.mode == FrameMode::Naive { "forward (naive)" } else { "forward" };
     frame.outline.enter(&mut frame.encoder, forward);
@@ -183,7 +187,7 @@ fn view_stages(
             let visible = &frame.visible;
             let placed = |item: &queue::DrawItem| visible.placed[item.entry as usize];
             let draw_of = |item: &queue::DrawItem| prepared[item.entry as usize].draw;
-            gpu.forward.build(0, &visible.instances, view.frustum, draw_of, placed);
+            gpu.forward.build(0, &visible.instances, (view.frustum, view.lod), draw_of, placed);
             stats.cpu_ms.batch = lap.next();
             prepare_ambient_occlusion(res, gpu, view, target, &mut stats)?;
             upload(res, gpu, view, (lighting, shadows.shadowed()), target, &mut stats)?;

@@ -61,11 +61,12 @@ impl CullPipelines {
                 storage(3, true),
                 storage(4, false),
                 storage(5, false),
+                storage(6, false),
             ],
         });
         let compact_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("gpu culling: runs"),
-            entries: &[storage(0, true), storage(1, false), storage(2, false)],
+            entries: &[storage(0, true), storage(1, false)],
         });
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("cull.wgsl"),

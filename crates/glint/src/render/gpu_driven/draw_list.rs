@@ -13,14 +13,17 @@
 
 use crate::render::batch::{self, Batch};
 use crate::render::cull::Frustum;
+use crate::render::debug::stats::DrawnCounts;
 use crate::render::error::RenderError;
 use crate::render::gpu_driven::commands::{Placed, Run};
 use crate::render::gpu_driven::gpu_cull::{CullBindings, CullInput, CullPipelines, CullRange, GpuCull};
 use crate::render::gpu_driven::occlusion::{late_commands, LateInput};
+use crate::render::lod::{LodView, LEVEL_ON_GPU};
 use crate::render::queue::DrawItem;
 use crate::render::resources::gpu_array::GpuArray;
 use crate::render::resources::gpu_array::GrowBuffer;
 use crate::render::resources::mesh_pool::MeshRange;
+use crate::scene::levels::MAX_LEVELS;
 
 /// What a list may rely on: indirect drawing, storage buffers, GPU culling.
 #[derive(Clone, Copy, Debug)]
@@ -54,8 +57,10 @@ pub(crate) struct DrawList {
     pub draw_indices: Vec<u32>,
     /// The GPU-culled batches' candidates, in batch order.
     pub cull_ranges: Vec<CullRange>,
-    /// Length of the GPU-culled region of the draw-index buffer.
+    /// Length of the GPU-culled region of the draw-index buffer, for one level.
     gpu_region: u32,
+    /// Copies of that region, one per level of detail the GPU may pick (at least 1).
+    level_regions: u32,
     /// How each batch's instances are placed: listed, culled on the GPU, or
     /// whole tiles (through the ramp, or compact instances by their number).
     pub placed: Vec<Placed>,
@@ -68,6 +73,8 @@ pub(crate) struct DrawList {
     ramp_uploaded: u32,
     /// Each view's frustum (the ranges' and runs' `frustum` index it).
     pub frustums: Vec<Frustum>,
+    /// How each of those views picks levels of detail.
+    pub lods: Vec<LodView>,
     /// One command per batch, when the device draws indirect.
     pub indirect_args: Vec<wgpu::util::DrawIndexedIndirectArgs>,
     uploaded_draw_indices: Vec<u32>,
@@ -108,11 +115,13 @@ impl DrawList {
             draw_indices: Vec::new(),
             cull_ranges: Vec::new(),
             gpu_region: 0,
+            level_regions: 1,
             placed: Vec::new(),
             ramp_needed: 0,
             ramp: 0,
             ramp_uploaded: 0,
             frustums: Vec::new(),
+            lods: Vec::new(),
             indirect_args: Vec::new(),
             uploaded_draw_indices: Vec::new(),
             uploaded_indirect_args: Vec::new(),
@@ -132,9 +141,11 @@ impl DrawList {
         self.draw_indices.clear();
         self.cull_ranges.clear();
         self.gpu_region = 0;
+        self.level_regions = 1;
         self.placed.clear();
         self.ramp_needed = 0;
         self.frustums.clear();
+        self.lods.clear();
         self.indirect_args.clear();
     }
 
@@ -144,10 +155,34 @@ impl DrawList {
         (0..self.ramp).chain(self.draw_indices.iter().copied()).collect()
     }
 
-    /// Instances the batches not culled on the GPU draw (listed and whole tiles).
-    pub(crate) fn cpu_instances(&self) -> u64 {
-        let cpu = self.batches.iter().zip(&self.placed).filter(|(_, &p)| p != Placed::OnGpu);
-        cpu.map(|(b, _)| u64::from(b.instance_count)).sum()
+    /// What the batches not culled on the GPU draw (listed and whole tiles).
+    pub(crate) fn cpu_drawn(&self) -> DrawnCounts {
+        let mut drawn = DrawnCounts::default();
+        let batches = self.batches.iter().zip(&self.draws).zip(&self.placed);
+        for ((b, d), _) in batches.filter(|(_, &p)| p != Placed::OnGpu) {
+            let n = u64::from(b.instance_count);
+            drawn.instances += n;
+            drawn.triangles += n * u64::from(d.mesh.index_count / 3);
+            drawn.per_level[usize::from(b.level).min(MAX_LEVELS - 1)] += n;
+        }
+        drawn
+    }
+
+    /// What the list drew, counted on the GPU (the batches culled on the CPU
+    /// counted there too, and in their levels here), from the newest frame
+    /// whose counts came back, waiting for the last frame's when `wait`;
+    /// `None` where it is not culled on the GPU or no count came back yet.
+    pub(crate) fn gpu_drawn(&mut self, device: &wgpu::Device, submits: u64, wait: bool) -> Option<DrawnCounts> {
+        let cpu = self.cpu_drawn();
+        let gpu = self.gpu.as_mut().filter(|_| !self.cull_ranges.is_empty())?;
+        let mut drawn = match wait {
+            true => gpu.wait_drawn(device, submits)?,
+            false => gpu.drawn(device, submits)?,
+        };
+        for (level, n) in drawn.per_level.iter_mut().zip(cpu.per_level) {
+            *level += n;
+        }
+        Some(drawn)
     }
 
     /// Whether this frame's list is culled on the GPU (it has candidates there).
@@ -161,19 +196,22 @@ impl DrawList {
     /// instances (`first ..`), which all become its batch's candidates; where
     /// it is a whole tile, store instances drawn as they are (joining a batch
     /// only right after the store instances before it); else entries of
-    /// `visible`. `draw_of` says what the batch an item begins draws with.
+    /// `visible`. `draw_of` says what the batch an item begins draws with
+    /// (at full detail: a batch draws its items' level). Items whose level the
+    /// GPU picks (`lod` says how) become a batch per level of their shape.
     /// Returns the range of runs they became.
     pub(crate) fn build(
         &mut self,
         first_item: usize,
         visible: &[u32],
-        frustum: Frustum,
+        (frustum, lod): (Frustum, LodView),
         draw_of: impl Fn(&DrawItem) -> BatchDraw,
         placed: impl Fn(&DrawItem) -> Placed,
     ) -> std::ops::Range<usize> {
-        let (first_batch, first_run) = (self.batches.len(), self.runs.len());
+        let (first_batch, first_run, first_range) = (self.batches.len(), self.runs.len(), self.cull_ranges.len());
         let view = self.frustums.len() as u32;
         self.frustums.push(frustum);
+        self.lods.push(lod);
         let Self { items, batches, draws, draw_indices, cull_ranges, gpu_region, placed: kinds, ramp_needed, .. } =
             self;
         let follows = |before: &DrawItem, item: &DrawItem| match (placed(before), placed(item)) {
@@ -182,7 +220,9 @@ impl DrawList {
         };
         let place = |item: &DrawItem, batch: usize, begins: bool| {
             if begins {
-                draws.push(draw_of(item));
+                let draw = draw_of(item);
+                let level = if item.level == LEVEL_ON_GPU { 0 } else { item.level };
+                draws.push(BatchDraw { mesh: draw.mesh.level(level.into()), ..draw });
             }
             let kind = placed(item);
             kinds.resize(batch + 1, Placed::Listed);
@@ -214,12 +254,16 @@ impl DrawList {
                 batch: batch as u32,
                 frustum: view,
                 out,
+                levels: 1,
+                pad: 0,
+                error: [0.0; 4],
             });
             *gpu_region += item.count;
             at
         };
         batch::merge_placed(&items[first_item..], batches, place, follows);
         self.placed.resize(self.batches.len(), Placed::Listed);
+        self.expand_levels(first_batch, first_range);
         let key = |k: usize| {
             let (b, d) = (&self.batches[k], &self.draws[k]);
             (b.stage, b.pipeline, d.texture_set, d.mesh.page)
@@ -232,6 +276,38 @@ impl DrawList {
             }
         }
         first_run..self.runs.len()
+    }
+
+    /// Make each batch from `first_batch` on whose levels the GPU picks one
+    /// batch per level of its shape, adjacent (so in one run), and tell its
+    /// cull ranges (from `first_range` on) their shape's levels.
+    fn expand_levels(&mut self, first_batch: usize, first_range: usize) {
+        if !self.batches[first_batch..].iter().any(|b| b.level == LEVEL_ON_GPU) {
+            return;
+        }
+        let batches = self.batches.split_off(first_batch);
+        let draws = self.draws.split_off(first_batch);
+        let placed = self.placed.split_off(first_batch);
+        let mut moved_to = Vec::with_capacity(batches.len());
+        for ((batch, draw), placed) in batches.into_iter().zip(draws).zip(placed) {
+            let levels = match batch.level {
+                LEVEL_ON_GPU => draw.mesh.levels.count.max(1),
+                _ => 1,
+            };
+            moved_to.push((self.batches.len() as u32, levels));
+            for l in 0..levels {
+                let level = if batch.level == LEVEL_ON_GPU { l } else { batch.level };
+                self.batches.push(Batch { level, ..batch });
+                self.draws.push(BatchDraw { mesh: draw.mesh.level(level.into()), ..draw });
+                self.placed.push(placed);
+            }
+            self.level_regions = self.level_regions.max(levels.into());
+        }
+        for r in &mut self.cull_ranges[first_range..] {
+            let (batch, levels) = moved_to[r.batch as usize - first_batch];
+            let errors = self.draws[batch as usize].mesh.levels.error;
+            (r.batch, r.levels, r.error) = (batch, levels.into(), [errors[1], errors[2], errors[3], errors[4]]);
+        }
     }
 
     /// Append one batch of one instance drawn alone (the naive baseline's):
@@ -291,7 +367,8 @@ impl DrawList {
         }
         for (b, &placed) in self.batches.iter_mut().zip(&self.placed) {
             match placed {
-                Placed::OnGpu => b.first_instance += base,
+                // Level l's places are l regions on.
+                Placed::OnGpu => b.first_instance += base + u32::from(b.level) * self.gpu_region,
                 Placed::Listed => b.first_instance += self.ramp,
                 Placed::Whole | Placed::Compact => {}
             }
@@ -326,7 +403,8 @@ impl DrawList {
         let occlusion = occlusion.filter(|_| gpu.is_some_and(|(p, _)| p.occlusion()) && self.culled_on_gpu());
         // Occlusion culling places the late phase's instances after the early ones'.
         let regions = if occlusion.is_some() { 2 } else { 1 };
-        let capacity = self.ramp as usize + self.draw_indices.len() + regions * self.gpu_region as usize;
+        let region = (self.level_regions * self.gpu_region) as usize;
+        let capacity = self.ramp as usize + self.draw_indices.len() + regions * region;
         if self.draw_index_buffer.reserve(device, 4, capacity)? {
             self.uploaded_draw_indices.clear();
             self.ramp_uploaded = 0;
@@ -360,15 +438,17 @@ impl DrawList {
             let input = CullInput {
                 ranges: &self.cull_ranges,
                 runs: &self.runs,
-                frustums: &self.frustums,
+                frustums: (&self.frustums, &self.lods),
                 commands: self.batches.len(),
+                level_stride: self.gpu_region,
             };
-            let template = occlusion.map(|_| late_commands(&self.indirect_args, &self.placed, self.gpu_region));
+            let region = self.level_regions * self.gpu_region;
+            let template = occlusion.map(|_| late_commands(&self.indirect_args, &self.placed, region));
             let late = occlusion.zip(template.as_deref()).map(|((view_proj, depth), template)| LateInput {
                 view_proj,
                 depth,
                 template,
-                place_offset: self.gpu_region,
+                place_offset: region,
             });
             let bindings = CullBindings { bounds, draw_indices };
             written.indirect += state.upload(device, queue, (&input, late.as_ref()), pipelines, bindings)?;

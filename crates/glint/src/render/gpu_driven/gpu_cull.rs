@@ -21,24 +21,42 @@
 
 use crate::render::cull::Frustum;
 use crate::render::debug::readback::CountReadback;
+use crate::render::debug::stats::DrawnCounts;
 use crate::render::error::RenderError;
 use crate::render::gpu_driven::commands::{Run, COMMAND_BYTES};
 pub(crate) use crate::render::gpu_driven::cull_pipelines::CullPipelines;
 use crate::render::gpu_driven::cull_pipelines::OcclusionPipelines;
 use crate::render::gpu_driven::occlusion::{LateInput, LatePhase};
+use crate::render::lod::LodView;
+use crate::render::passes::shadow_views::MAX_SHADOW_VIEWS;
 use crate::render::resources::gpu_array::GrowBuffer;
+use crate::scene::levels::MAX_LEVELS;
 
 /// Frames a view is culled by frustum alone after an occlusion-culled frame
 /// that hid nothing.
 pub const SKIP_UNPAID_OCCLUSION: u32 = 30;
 
+/// Rows of the planes buffer per view: six frustum planes, then two of its
+/// level-of-detail rule ([`LodView::to_gpu`]).
+const VIEW_ROWS: usize = 8;
+
+/// Words of each frustum's totals in the counts buffer: instances drawn,
+/// triangles drawn, then the GPU-culled instances drawn at each level of detail.
+pub(crate) const TOTAL_WORDS: usize = 2 + MAX_LEVELS;
+
+/// Words read back at most: the totals of the most frustums a list has (the
+/// camera, or every shadow view), and the hidden count.
+const MAX_READBACK_WORDS: u32 = MAX_SHADOW_VIEWS as u32 * TOTAL_WORDS as u32 + 1;
+
 /// Invocations per workgroup of both entry points.
 const WORKGROUP: u32 = 64;
 /// Candidates `start .. start + count` of a list: store instances `first ..`,
 /// tested against frustum `frustum`, drawn by batch `batch`, whose instances
-/// start at `out` in the draw-index buffer.
+/// start at `out` in the draw-index buffer; with `levels` > 1, the levels of
+/// detail the GPU picks from: level l is batch `batch + l`, its places a
+/// region further on each, its error `error[l - 1]`.
 #[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq, Eq, bytemuck::Pod, bytemuck::Zeroable)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub(crate) struct CullRange {
     pub first: u32,
     pub count: u32,
@@ -46,6 +64,9 @@ pub(crate) struct CullRange {
     pub batch: u32,
     pub frustum: u32,
     pub out: u32,
+    pub levels: u32,
+    pub pad: u32,
+    pub error: [f32; 4],
 }
 
 /// `cull.wgsl`'s `Params`: one set for the early (or only) phase, one for the late.
@@ -58,7 +79,8 @@ struct Params {
     totals: u32,
     counts_first: u32,
     place_offset: u32,
-    pad: [u32; 2],
+    level_stride: u32,
+    pad: u32,
 }
 
 /// What a list culled on the GPU holds there beside its draw indices.
@@ -72,7 +94,8 @@ pub(crate) struct GpuCull {
     /// Each run's non-empty commands, from the run's first batch on.
     pub drawn_args: GrowBuffer,
     runs: GrowBuffer,
-    /// Each run's command count, then each frustum's instances drawn.
+    /// Each run's command count (the early phase's, then the late's), then
+    /// each frustum's totals ([`TOTAL_WORDS`]), then the late phase's hidden count.
     pub counts: GrowBuffer,
     groups: Option<[wgpu::BindGroup; 2]>,
     uploaded: (Vec<CullRange>, Vec<Run>, Vec<[f32; 4]>, Params),
@@ -96,9 +119,12 @@ pub(crate) struct GpuCull {
 pub(crate) struct CullInput<'a> {
     pub ranges: &'a [CullRange],
     pub runs: &'a [Run],
-    pub frustums: &'a [Frustum],
+    /// Each view's frustum, and how it picks levels of detail.
+    pub frustums: (&'a [Frustum], &'a [LodView]),
     /// Indirect commands in the list.
     pub commands: usize,
+    /// How far apart in the draw-index buffer each level's places are.
+    pub level_stride: u32,
 }
 
 /// The buffers the cull pass binds that the list does not own.
@@ -128,7 +154,7 @@ impl GpuCull {
             groups: None,
             uploaded: Default::default(),
             params_now: Params::default(),
-            readback: CountReadback::new(device),
+            readback: CountReadback::new(device, MAX_READBACK_WORDS),
             late: None,
             late_groups: None,
             occluding: false,
@@ -153,12 +179,16 @@ impl GpuCull {
         pipelines: &CullPipelines,
         bindings: CullBindings,
     ) -> Result<u64, RenderError> {
-        let planes: Vec<[f32; 4]> = input.frustums.iter().flat_map(|f| f.planes().map(|p| p.to_array())).collect();
+        // Per view: its six planes, then its level-of-detail rule.
+        let (frustums, lods) = input.frustums;
+        let planes: Vec<[f32; 4]> = (frustums.iter().zip(lods))
+            .flat_map(|(f, lod)| f.planes().map(|p| p.to_array()).into_iter().chain(lod.to_gpu()))
+            .collect();
         let candidates = input.ranges.last().map_or(0, |r| r.start + r.count);
         let runs = input.runs.len() as u32;
         // Counts: the early runs', the late runs', each frustum's total, then
         // how many instances the late phase found hidden.
-        let frustums = input.frustums.len() as u32;
+        let frustums = frustums.len() as u32;
         let params = Params {
             ranges: input.ranges.len() as u32,
             candidates,
@@ -166,7 +196,8 @@ impl GpuCull {
             totals: 2 * runs,
             counts_first: 0,
             place_offset: 0,
-            pad: [0; 2],
+            level_stride: input.level_stride,
+            pad: 0,
         };
         let commands = input.commands as u64 * COMMAND_BYTES;
         let mut replaced = false;
@@ -176,7 +207,7 @@ impl GpuCull {
             (&mut self.args, commands),
             (&mut self.drawn_args, commands),
             (&mut self.runs, std::mem::size_of_val(input.runs) as u64),
-            (&mut self.counts, 4 * u64::from(2 * runs + frustums + 1)),
+            (&mut self.counts, 4 * u64::from(2 * runs + frustums * TOTAL_WORDS as u32 + 1)),
         ] {
             replaced |= buffer.reserve(device, bytes)?;
         }
@@ -270,6 +301,7 @@ impl GpuCull {
             wgpu::BindGroupEntry { binding: 3, resource: whole(&self.planes.buffer) },
             wgpu::BindGroupEntry { binding: 4, resource: whole(bindings.draw_indices) },
             wgpu::BindGroupEntry { binding: 5, resource: whole(&args.buffer) },
+            wgpu::BindGroupEntry { binding: 6, resource: whole(&self.counts.buffer) },
         ];
         let cull = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some(self.label),
@@ -282,7 +314,6 @@ impl GpuCull {
             entries: &[
                 wgpu::BindGroupEntry { binding: 0, resource: whole(&self.runs.buffer) },
                 wgpu::BindGroupEntry { binding: 1, resource: whole(&drawn_args.buffer) },
-                wgpu::BindGroupEntry { binding: 2, resource: whole(&self.counts.buffer) },
             ],
         });
         [cull, compact]
@@ -301,7 +332,7 @@ impl GpuCull {
     ) {
         let Some([cull, compact]) = &self.groups else { return };
         let Params { candidates, runs, .. } = self.params_now;
-        let frustums = self.uploaded.2.len() as u32 / 6;
+        let frustums = self.uploaded.2.len() as u32 / VIEW_ROWS as u32;
         let commands = u64::from(self.uploaded.1.last().map_or(0, |r| r.first + r.len)) * COMMAND_BYTES;
         let occluding = self.occluding.then(|| self.late.as_ref().zip(self.late_groups.as_ref())).flatten();
         let occluding_now = occluding.is_some();
@@ -311,7 +342,8 @@ impl GpuCull {
                 encoder.copy_buffer_to_buffer(&late.template.buffer, 0, &late.args.buffer, 0, commands);
             }
         }
-        encoder.clear_buffer(&self.counts.buffer, 0, Some(4 * u64::from(2 * runs + frustums + 1)));
+        let totals = frustums * TOTAL_WORDS as u32;
+        encoder.clear_buffer(&self.counts.buffer, 0, Some(4 * u64::from(2 * runs + totals + 1)));
         if let Some((late, _)) = occluding {
             // All flags for new candidates; else only the hidden count after them.
             let from = if late.reset_hidden { 0 } else { 4 * u64::from(candidates) };
@@ -336,7 +368,7 @@ impl GpuCull {
             late.reset_hidden &= !occluding_now;
         }
         if !occluding_now {
-            self.readback.copy(encoder, &self.counts.buffer, u64::from(2 * runs) * 4, frustums, submits);
+            self.readback.copy(encoder, &self.counts.buffer, u64::from(2 * runs) * 4, totals, submits);
         }
     }
 
@@ -369,8 +401,8 @@ impl GpuCull {
             dispatch(&mut pass, (&o.late, candidates), (pipelines, compact, runs));
         }
         // The totals, and the hidden count after them.
-        let frustums = self.uploaded.2.len() as u32 / 6;
-        let hidden_at = 4 * u64::from(2 * runs + frustums);
+        let totals = (self.uploaded.2.len() / VIEW_ROWS * TOTAL_WORDS) as u32;
+        let hidden_at = 4 * u64::from(2 * runs + totals);
         encoder.copy_buffer_to_buffer(
             &late.hidden.buffer,
             4 * u64::from(candidates),
@@ -378,7 +410,7 @@ impl GpuCull {
             hidden_at,
             4,
         );
-        self.readback.copy(encoder, &self.counts.buffer, u64::from(2 * runs) * 4, frustums + 1, submits);
+        self.readback.copy(encoder, &self.counts.buffer, u64::from(2 * runs) * 4, totals + 1, submits);
     }
 
     /// Draw run `k` (`run`) of the list from the culled commands: the early
@@ -413,34 +445,47 @@ impl GpuCull {
         self.late.as_ref().filter(|_| self.occluding).map(|l| &l.args.buffer)
     }
 
-    /// Each frustum's instances drawn by the last frame, waiting for the GPU.
-    pub(crate) fn wait_drawn(&mut self, device: &wgpu::Device, submits: u64) -> Option<&[u32]> {
-        let frustums = self.uploaded.2.len() / 6;
+    /// What the last frame drew, every frustum's summed, waiting for the GPU.
+    pub(crate) fn wait_drawn(&mut self, device: &wgpu::Device, submits: u64) -> Option<DrawnCounts> {
+        let totals = self.uploaded.2.len() / VIEW_ROWS * TOTAL_WORDS;
         let latest = self.readback.wait_all(device, submits)?;
-        Some(&latest[..frustums.min(latest.len())])
+        Some(summed(&latest[..totals.min(latest.len())]))
     }
 
-    /// Each frustum's instances drawn by the newest frame whose counts came
-    /// back (`None` before the first), without waiting for the GPU. An
+    /// What the newest frame whose counts came back drew, every frustum's
+    /// summed (`None` before the first), without waiting for the GPU. An
     /// occlusion-culled frame's counts also say whether occlusion culling hid
     /// anything: where it hid nothing, the list is culled by frustum alone for
     /// [`SKIP_UNPAID_OCCLUSION`] frames, then tries again (on a CPU rasterizer
     /// the pyramid and the second pass cost more than frustum culling alone).
-    pub(crate) fn drawn(&mut self, device: &wgpu::Device, submits: u64) -> Option<&[u32]> {
-        let frustums = self.uploaded.2.len() / 6;
+    pub(crate) fn drawn(&mut self, device: &wgpu::Device, submits: u64) -> Option<DrawnCounts> {
+        let totals = self.uploaded.2.len() / VIEW_ROWS * TOTAL_WORDS;
         self.readback.collect(device, submits);
         let fresh = self.readback.take_fresh();
         let latest = self.readback.latest()?;
         if fresh {
-            if let Some(&hidden) = latest.get(frustums) {
+            if let Some(&hidden) = latest.get(totals) {
                 self.occlusion_pays = hidden > 0;
                 if !self.occlusion_pays {
                     self.skip_occlusion = SKIP_UNPAID_OCCLUSION;
                 }
             }
         }
-        Some(&latest[..frustums.min(latest.len())])
+        Some(summed(&latest[..totals.min(latest.len())]))
     }
+}
+
+/// The frustums' totals (each [`TOTAL_WORDS`] words) summed.
+fn summed(totals: &[u32]) -> DrawnCounts {
+    let mut drawn = DrawnCounts::default();
+    for frustum in totals.chunks_exact(TOTAL_WORDS) {
+        drawn.instances += u64::from(frustum[0]);
+        drawn.triangles += u64::from(frustum[1]);
+        for (level, &n) in drawn.per_level.iter_mut().zip(&frustum[2..]) {
+            *level += u64::from(n);
+        }
+    }
+    drawn
 }
 
 /// In `pass` (its group 0, and 2 where the cull pipeline reads it, bound):
@@ -479,8 +524,7 @@ mod layout_tests {
     #[test]
     fn the_culling_records_mirror_their_wgsl_structs() {
         let wgsl = crate::shader::CULL;
-        assert_mirrors!(CullRange, wgsl, "CullRange", [first, count, start, batch, frustum, out]);
-        let pad = std::mem::offset_of!(Params, pad);
+        assert_mirrors!(CullRange, wgsl, "CullRange", [first, count, start, batch, frustum, out, levels, pad, error]);
         let fields = [
             ("ranges", std::mem::offset_of!(Params, ranges)),
             ("candidates", std::mem::offset_of!(Params, candidates)),
@@ -488,9 +532,11 @@ mod layout_tests {
             ("totals", std::mem::offset_of!(Params, totals)),
             ("counts_first", std::mem::offset_of!(Params, counts_first)),
             ("place_offset", std::mem::offset_of!(Params, place_offset)),
-            ("pad0", pad),
-            ("pad1", pad + 4),
+            ("level_stride", std::mem::offset_of!(Params, level_stride)),
+            ("pad", std::mem::offset_of!(Params, pad)),
         ];
         assert_layout(wgsl, "Params", std::mem::size_of::<Params>(), &fields);
+        let words = format!("const TOTAL_WORDS: u32 = {TOTAL_WORDS}u;");
+        assert!(wgsl.contains(&words), "cull.wgsl must say {words}");
     }
 }

@@ -2,7 +2,8 @@
 //! buffers ("pages") instead of a buffer pair each, so draws of different shapes
 //! share their vertex and index bindings and can go in one multi-draw-indirect
 //! call. A shape on the GPU is a [`MeshRange`]: page, base vertex, first index and
-//! index count.
+//! index count, and its levels of detail ([`Levels`]): more index ranges right
+//! after its own, over the same vertices.
 //!
 //! A page holds meshes of one [`VertexLayout`], one buffer per vertex stream
 //! (the interleaved [`Vertex`](crate::scene::Vertex) stream, plus those of the
@@ -11,10 +12,11 @@
 
 use crate::render::error::MeshTooLarge;
 use crate::render::resources::pipelines::{Stream, VertexLayout};
+use crate::scene::levels::{DetailLevel, MAX_LEVELS};
 use crate::scene::Mesh;
 
 /// Where a shape's geometry lives in the pool.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct MeshRange {
     /// Page index: draws on the same page share their buffer bindings.
     pub page: u16,
@@ -24,6 +26,30 @@ pub(crate) struct MeshRange {
     pub first_index: u32,
     /// Indices drawn.
     pub index_count: u32,
+    /// The shape's levels of detail, this range's among them.
+    pub levels: Levels,
+}
+
+/// A shape's levels of detail in its page: level 0 is the whole mesh, each
+/// further one fewer triangles over the same vertices.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub(crate) struct Levels {
+    /// Levels, full detail included (1: the shape has no coarser ones).
+    pub count: u8,
+    /// Each level's first index in the page.
+    pub first_index: [u32; MAX_LEVELS],
+    /// Each level's index count.
+    pub index_count: [u32; MAX_LEVELS],
+    /// Each level's error in units of the shape's bounding radius (0 at full detail).
+    pub error: [f32; MAX_LEVELS],
+}
+
+impl MeshRange {
+    /// The range drawing level `level` (the coarsest where the shape has fewer).
+    pub(crate) fn level(self, level: usize) -> MeshRange {
+        let l = level.min(usize::from(self.levels.count.max(1)) - 1);
+        MeshRange { first_index: self.levels.first_index[l], index_count: self.levels.index_count[l], ..self }
+    }
 }
 
 struct Page {
@@ -49,18 +75,21 @@ impl MeshPool {
         Self { pages: Vec::new(), max_bytes: device.limits().max_buffer_size.min(1 << 30) }
     }
 
-    /// Copy `mesh` into a page of its layout, growing or starting one as needed.
-    /// Returns its range and the bytes written.
+    /// Copy `mesh` and its coarser `levels` into a page of its layout, growing
+    /// or starting one as needed. Returns its range and the bytes written.
     pub(crate) fn add(
         &mut self,
         device: &wgpu::Device,
         queue: &crate::gpu::SubmitQueue,
-        mesh: &Mesh,
+        (mesh, levels): (&Mesh, &[DetailLevel]),
     ) -> Result<(MeshRange, u64), MeshTooLarge> {
         let layout = VertexLayout::of(mesh);
         let streams: Vec<&[u8]> = layout.streams().map(|s| s.bytes(mesh)).collect();
         let vertex_count = mesh.vertices().len() as u64;
-        let index_bytes: u64 = (mesh.indices().len() * 4) as u64;
+        let levels = &levels[..levels.len().min(MAX_LEVELS - 1)];
+        let all_indices: Vec<u32> =
+            mesh.indices().iter().chain(levels.iter().flat_map(|l| &l.indices)).copied().collect();
+        let index_bytes: u64 = (all_indices.len() * 4) as u64;
         let largest = streams.iter().map(|s| s.len() as u64).chain([index_bytes]).max().unwrap_or(0);
         if largest > self.max_bytes {
             return Err(MeshTooLarge { bytes: largest, max: self.max_bytes });
@@ -70,7 +99,7 @@ impl MeshPool {
                 && (p.vertices_used + vertex_count) * u64::from(Stream::Base.stride()) <= self.max_bytes
                 && p.indices_used * 4 + index_bytes <= self.max_bytes
         };
-        let index_count = mesh.indices().len() as u64;
+        let index_count = all_indices.len() as u64;
         let index = match self.pages.iter().position(fits) {
             Some(i) => i,
             None => {
@@ -85,12 +114,24 @@ impl MeshPool {
         for ((buffer, bytes), stream) in page.streams.iter().zip(&streams).zip(layout.streams()) {
             queue.write_buffer(buffer, page.vertices_used * u64::from(stream.stride()), bytes);
         }
-        queue.write_buffer(&page.indices, page.indices_used * 4, bytemuck::cast_slice(mesh.indices()));
+        queue.write_buffer(&page.indices, page.indices_used * 4, bytemuck::cast_slice(&all_indices));
+        let first_index = page.indices_used as u32;
+        let mut ranges = Levels { count: 1 + levels.len() as u8, ..Levels::default() };
+        let (mut at, counts) =
+            (first_index, std::iter::once(mesh.indices().len()).chain(levels.iter().map(|l| l.indices.len())));
+        for (l, count) in counts.enumerate() {
+            (ranges.first_index[l], ranges.index_count[l]) = (at, count as u32);
+            at += count as u32;
+        }
+        for (l, level) in levels.iter().enumerate() {
+            ranges.error[l + 1] = level.error;
+        }
         let range = MeshRange {
             page: index as u16,
             base_vertex: page.vertices_used as i32,
-            first_index: page.indices_used as u32,
+            first_index,
             index_count: mesh.indices().len() as u32,
+            levels: ranges,
         };
         page.vertices_used += vertex_count;
         page.indices_used += index_count;

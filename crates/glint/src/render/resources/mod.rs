@@ -76,6 +76,8 @@ pub(crate) struct Resources {
     pub base_vertex: bool,
     /// How frames are built.
     pub mode: FrameMode,
+    /// Whether views draw levels of detail (else every mesh at full detail).
+    pub levels_of_detail: bool,
     /// Every tiled entity's density is multiplied by this.
     pub density: f32,
 }
@@ -114,6 +116,7 @@ impl Resources {
                 && flags.contains(wgpu::TextureFormatFeatureFlags::MULTISAMPLE_RESOLVE),
             base_vertex: gpu.base_vertex(),
             mode: FrameMode::Optimized,
+            levels_of_detail: true,
             density: 1.0,
             registry,
             device,

@@ -23,6 +23,9 @@ pub(crate) struct ShapeSlot {
     pub(crate) gpu: Option<MeshRange>,
     /// The vertices changed in place since they were uploaded.
     pub(crate) rewrite: bool,
+    /// Its vertices change (morph targets, a cloth): levels of detail made from
+    /// one shape would not fit the next, so it is drawn at full detail.
+    pub(crate) deforms: bool,
 }
 
 pub(crate) struct MaterialSlot {
@@ -155,17 +158,34 @@ impl Registry {
 
     /// [`add_shape`](Self::add_shape), named (as `glint explain` shows it).
     pub(crate) fn add_named_shape(&mut self, mesh: Mesh, name: String) -> ShapeId {
-        self.shapes.push(ShapeSlot { layout: VertexLayout::of(&mesh), mesh, name, gpu: None, rewrite: false });
+        self.add_shape_slot(mesh, name, false)
+    }
+
+    /// [`add_named_shape`](Self::add_named_shape) for a mesh whose vertices
+    /// [`update_shape`](Self::update_shape) will change: drawn at full detail.
+    pub(crate) fn add_deforming_shape(&mut self, mesh: Mesh, name: String) -> ShapeId {
+        self.add_shape_slot(mesh, name, true)
+    }
+
+    fn add_shape_slot(&mut self, mesh: Mesh, name: String, deforms: bool) -> ShapeId {
+        let layout = VertexLayout::of(&mesh);
+        self.shapes.push(ShapeSlot { layout, mesh, name, gpu: None, rewrite: false, deforms });
         ShapeId(self.shapes.len() as u32 - 1)
     }
 
     /// Replace a shape's mesh (e.g. with morph targets applied). A mesh with the
     /// same streams, vertex count and indices as the old one is written over it
     /// (only the base vertex stream is uploaded); any other goes to a new place in
-    /// the mesh pool. Entities drawing the shape pick up its new bounds. Returns
-    /// false (and changes nothing) when `id` is not this renderer's.
+    /// the mesh pool. Entities drawing the shape pick up its new bounds, and it
+    /// is drawn at full detail from then on (its levels of detail were made for
+    /// the old vertices). Returns false (and changes nothing) when `id` is not
+    /// this renderer's.
     pub fn update_shape(&mut self, id: ShapeId, mesh: Mesh) -> bool {
         let Some(slot) = self.shapes.get_mut(id.0 as usize) else { return false };
+        slot.deforms = true;
+        if let Some(range) = &mut slot.gpu {
+            range.levels.count = 1;
+        }
         let same = VertexLayout::of(&mesh) == slot.layout
             && mesh.vertices().len() == slot.mesh.vertices().len()
             && mesh.indices() == slot.mesh.indices();
