@@ -14,6 +14,9 @@ pub enum BenchRun {
     Optimized(glint::Culling),
     /// The optimized frame culled this way, beside the others (`--mode all`).
     Culled(glint::Culling),
+    /// The optimized frame culled this way at full detail, beside the frames
+    /// with levels of detail (`--mode all`, `--lod both`).
+    FullDetail(glint::Culling),
 }
 
 impl BenchRun {
@@ -26,6 +29,7 @@ impl BenchRun {
             Self::Culled(glint::Culling::Off) => "unculled",
             Self::Culled(glint::Culling::Cpu) => "cpu-culled",
             Self::Culled(glint::Culling::Gpu) => "gpu-culled",
+            Self::FullDetail(_) => "full-detail",
         }
     }
 }
@@ -111,6 +115,8 @@ pub struct BenchConfig {
     pub settle_ms: u64,
     /// Share of every tile drawn ([`Renderer::set_density`]).
     pub density: f32,
+    /// Levels of detail (`--lod`, `--lod-error`).
+    pub lod: crate::lod::LodArgs,
 }
 
 /// Whether the naive frame may draw `desc`: at most
@@ -174,13 +180,21 @@ pub fn run_mode(
     let mut target = OffscreenTarget::new(gpu, width, height, config.msaa)?;
     let mut renderer = Renderer::new(gpu);
     renderer.set_density(config.density);
+    let lod = match run {
+        BenchRun::FullDetail(_) => config.lod.with(false),
+        _ => config.lod,
+    };
+    lod.apply(&mut renderer);
     let view = &match run {
         BenchRun::Naive => {
             renderer.set_mode(FrameMode::Naive);
             view.clone()
         }
-        BenchRun::Optimized(culling) | BenchRun::Culled(culling) => view.clone().with_culling(culling),
+        BenchRun::Optimized(culling) | BenchRun::Culled(culling) | BenchRun::FullDetail(culling) => {
+            view.clone().with_culling(culling)
+        }
     };
+    let view = &lod.views(vec![view.clone()]).remove(0);
     let timed = renderer.enable_gpu_timing();
     let mut gpu_ms = Vec::new();
     let mut shadow_gpu_ms = Vec::new();
@@ -294,7 +308,7 @@ pub fn format_mode(r: &ModeReport) -> String {
     ));
     let st = &r.stats;
     text.push_str(&format!(
-        "           frame: {} draws in {} draw calls, {} pipelines bound, {} bind groups, {} instances submitted, {} culled, {} drawn, {} bytes uploaded\n",
+        "           frame: {} draws in {} draw calls, {} pipelines bound, {} bind groups, {} instances submitted, {} culled, {} drawn ({} per level of detail), {} triangles, {} bytes uploaded\n",
         st.draws,
         st.draw_calls,
         st.pipelines_bound,
@@ -302,6 +316,8 @@ pub fn format_mode(r: &ModeReport) -> String {
         st.instances_submitted,
         st.instances_culled,
         st.instances_drawn,
+        st.instances_per_level.map(|n| n.to_string()).join("/"),
+        st.triangles_drawn,
         st.bytes_uploaded.total
     ));
     if let (Some(at_100), Some(end)) = (r.resident_mib_frame_100, r.resident_mib_end) {

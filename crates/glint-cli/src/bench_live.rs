@@ -41,6 +41,43 @@ pub struct LiveReport {
     pub particles_alive: u64,
     /// Instances the last frame submitted.
     pub instances: u64,
+    /// Whether levels of detail were on.
+    pub levels_of_detail: bool,
+    /// Triangles the last frame's forward passes drew, every view's summed.
+    pub triangles: u64,
+    /// Triangles the last frame's shadow passes drew, every view's summed.
+    pub shadow_triangles: u64,
+    /// The last frame's picture, to compare.
+    #[serde(skip)]
+    pub image: Option<image::RgbaImage>,
+}
+
+/// Levels of detail against full detail, in one run.
+#[derive(serde::Serialize)]
+pub struct LodComparison {
+    /// How many times faster the whole frame is with levels (median over median).
+    pub frame_speedup: f64,
+    /// How many times fewer triangles (forward and shadow passes) it draws.
+    pub triangle_ratio: f64,
+    /// Mean difference of the two last frames' pictures, per channel, in 255ths.
+    pub mean_difference: f64,
+    /// The largest mean difference of a 4×4 block of pixels, in 255ths: where
+    /// a level's change is most visible.
+    pub block_difference: f64,
+}
+
+/// The comparison of `sides` (with levels, then at full detail), when both ran.
+pub fn compare(sides: &[LiveReport]) -> Option<LodComparison> {
+    let [with, full] = sides else { return None };
+    let (a, b) = (with.image.as_ref()?, full.image.as_ref()?);
+    let (mean, block) = glint::compare::mean_difference(a, b, 4)?;
+    Some(LodComparison {
+        frame_speedup: full.frame_ms_median / with.frame_ms_median.max(1e-9),
+        triangle_ratio: (full.triangles + full.shadow_triangles) as f64
+            / (with.triangles + with.shadow_triangles).max(1) as f64,
+        mean_difference: mean,
+        block_difference: block,
+    })
 }
 
 fn median(values: &mut [f64]) -> f64 {
@@ -53,12 +90,13 @@ pub fn run(gpu: &Gpu, desc: SceneDesc, config: &BenchConfig, (start, step): (f32
     let mut target = OffscreenTarget::new(gpu, width, height, config.msaa)?;
     let mut renderer = Renderer::new(gpu);
     renderer.set_density(config.density);
+    config.lod.apply(&mut renderer);
     let timed = renderer.enable_gpu_timing();
     let mut world = World::place(desc, &mut renderer)?;
-    let views = world.views(None);
+    let views = config.lod.views(world.views(None));
     let (mut frame_ms, mut pose_ms, mut draw_ms) = (Vec::new(), Vec::new(), Vec::new());
     let (mut gpu_ms, mut shadow_ms) = (Vec::new(), Vec::new());
-    let (mut last, mut shadow_views) = (None, 0);
+    let (mut last, mut shadow_views, mut triangles) = (None, 0, (0, 0));
     for i in 0..config.warmup + config.frames {
         let time = start + step * (i as f32 - config.warmup as f32).max(0.0);
         let frame_start = Instant::now();
@@ -77,11 +115,26 @@ pub fn run(gpu: &Gpu, desc: SceneDesc, config: &BenchConfig, (start, step): (f32
                 shadow_ms.extend(times.shadow_ms);
             }
             shadow_views = stats.iter().map(|s| s.shadow_views).sum();
+            triangles = stats
+                .iter()
+                .map(|s| (s.triangles_drawn, s.passes.shadow.triangles))
+                .fold((0, 0), |t, s| (t.0 + s.0, t.1 + s.1));
             last = stats.into_iter().last();
         }
     }
     let last = last.unwrap_or_default();
     let frame_ms_median = median(&mut frame_ms);
+    // The triangles counted on the GPU come back a frame or two late: the
+    // last frame's, waited for.
+    let mut counted = world.draw(&mut renderer, &views, &mut target)?;
+    renderer.wait_for_counts(&mut counted);
+    if counted.iter().any(|s| s.culling == glint::Culling::Gpu) {
+        triangles = counted
+            .iter()
+            .map(|s| (s.triangles_drawn, s.passes.shadow.triangles))
+            .fold((0, 0), |t, s| (t.0 + s.0, t.1 + s.1));
+    }
+    let image = target.read_rgba8(gpu).ok();
     Ok(LiveReport {
         frames: config.frames,
         start,
@@ -96,5 +149,9 @@ pub fn run(gpu: &Gpu, desc: SceneDesc, config: &BenchConfig, (start, step): (f32
         particles_on_gpu: world.particles_on_gpu(),
         particles_alive: last.particles_alive,
         instances: last.instances_submitted,
+        levels_of_detail: config.lod.lod == crate::lod::LodSwitch::On,
+        triangles: triangles.0,
+        shadow_triangles: triangles.1,
+        image,
     })
 }

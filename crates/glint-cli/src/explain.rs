@@ -31,6 +31,8 @@ pub struct ExplainArgs<'a> {
     pub cull: Option<CullArg>,
     pub size: (u32, u32),
     pub time: f32,
+    /// Levels of detail (`--lod`, `--lod-error`).
+    pub lod: crate::lod::LodArgs,
     pub options: LoadOptions,
 }
 
@@ -128,8 +130,9 @@ fn explain_mode(
     renderer.set_explaining(true);
     // Each pass's GPU time too, where the device has timestamp queries.
     renderer.enable_gpu_timing();
+    args.lod.apply(&mut renderer);
     let mut world = World::place(desc.clone(), &mut renderer)?;
-    let views = culled(world.views(args.camera), args.cull);
+    let views = args.lod.views(culled(world.views(args.camera), args.cull));
     if args.view >= views.len() {
         let message = format!("--view {} requested, but the frame has {} views", args.view, views.len());
         return Err(Diagnostic::file(args.scene, message).into());
@@ -172,7 +175,7 @@ fn call_text(call: &glint::render::DrawCall) -> String {
         let textures = b.texture_set.map_or(String::new(), |s| format!(" texture set {s},"));
         let _ = writeln!(
             t,
-            "    key {}: {} (stage {}){}, pipeline {} [{}],{textures} material {} '{}', mesh {} '{}', depth {:.3}: {} instances, {} triangles",
+            "    key {}: {} (stage {}){}, pipeline {} [{}],{textures} material {} '{}', mesh {} '{}' level {} ({} triangles), depth {:.3}: {} instances, {} triangles",
             b.key,
             b.queue,
             b.stage,
@@ -183,6 +186,8 @@ fn call_text(call: &glint::render::DrawCall) -> String {
             b.material_name,
             b.mesh,
             b.mesh_name,
+            b.level,
+            b.level_triangles,
             b.depth,
             b.instances,
             b.triangles

@@ -8,6 +8,7 @@ mod bench;
 mod bench_live;
 mod compare;
 mod explain;
+mod lod;
 mod output;
 mod particles;
 mod plot;
@@ -145,6 +146,15 @@ enum Command {
         /// With --live: the scene time of the first frame, seconds.
         #[arg(long, default_value_t = 0.0, requires = "live", value_parser = parse_time)]
         time: f32,
+        /// Levels of detail: on (each instance at the coarsest level whose
+        /// error its view allows), off (every mesh at full detail), or both
+        /// (each measurement with levels, then at full detail, and their ratios).
+        #[arg(long, value_enum, default_value_t = lod::BenchLod::On)]
+        lod: lod::BenchLod,
+        /// The error, in pixels (0..=1000), a level of detail may make,
+        /// whatever the camera's "lod_error" says (default 1).
+        #[arg(long, value_name = "PX", value_parser = lod::parse_lod_error)]
+        lod_error: Option<f32>,
     },
     /// Open a window onto a .scn scene (or a model file) and fly through it.
     #[command(after_help = view::KEYS)]
@@ -193,6 +203,8 @@ enum Command {
         /// Pose the scene at this time, in seconds.
         #[arg(long, default_value_t = 0.0, value_parser = parse_time)]
         time: f32,
+        #[command(flatten)]
+        lod: lod::LodArgs,
     },
     /// Run a simulation (see `glint sim cloth --help`, `glint sim school --help`).
     #[command(subcommand, after_help = EXIT_CODES)]
@@ -262,6 +274,8 @@ struct Picture {
     /// "time_of_day" says (scene files).
     #[arg(long, value_parser = parse_hours)]
     time_of_day: Option<f32>,
+    #[command(flatten)]
+    lod: lod::LodArgs,
 }
 
 /// `--time-of-day`: hours, 0..=24.
@@ -346,7 +360,7 @@ fn run_live(
     scene: &Path,
     config: &bench::BenchConfig,
     timing: (f32, f32),
-    json: bool,
+    (json, lod): (bool, lod::BenchLod),
     options: LoadOptions,
 ) -> Result<(), Error> {
     let desc = load(scene, options)?;
@@ -354,17 +368,46 @@ fn run_live(
     desc.check_pose(end)?;
     let gpu = Gpu::headless()?;
     let adapter = format!("{} ({:?})", gpu.info().name, gpu.info().backend);
-    let r = bench_live::run(&gpu, desc, config, timing)?;
+    let mut sides = Vec::new();
+    for &on in lod.sides() {
+        let config = bench::BenchConfig { lod: config.lod.with(on), ..*config };
+        sides.push(bench_live::run(&gpu, desc.clone(), &config, timing)?);
+    }
+    let compared = bench_live::compare(&sides);
     let text = match json {
-        true => format!("{}\n", serde_json::json!({"scene": scene.display().to_string(), "adapter": adapter, "size": format!("{}x{}", config.size.0, config.size.1), "live": r})),
-        false => format!(
-            "{} on {adapter}, {}x{}, {} frames from {} s, {:.4} s a frame\n  frame {:.2} ms median ({:.2} p95): pose {:.2} ms, draw (CPU) {:.2} ms, forward pass (GPU) {}, shadows (GPU, {} views) {}\n  particles on the {}: {} alive; {} instances\n",
+        true => {
+            let mut out = serde_json::json!({"scene": scene.display().to_string(), "adapter": adapter, "size": format!("{}x{}", config.size.0, config.size.1), "live": sides[0]});
+            if let (Some(full), Some(compared)) = (sides.get(1), &compared) {
+                out["full_detail"] = serde_json::to_value(full).expect("report serialises");
+                out["lod"] = serde_json::to_value(compared).expect("comparison serialises");
+            }
+            format!("{out}\n")
+        }
+        false => {
+            let mut text: String = sides.iter().map(|r| live_text(scene, &adapter, config, r)).collect();
+            if let Some(c) = &compared {
+                text.push_str(&format!(
+                    "levels of detail: whole frame {:.2}x faster, {:.2}x fewer triangles, images {:.3}/255 apart (mean), {:.3}/255 at most over a 4x4 block\n",
+                    c.frame_speedup, c.triangle_ratio, c.mean_difference, c.block_difference
+                ));
+            }
+            text
+        }
+    };
+    Ok(output::print(&text)?)
+}
+
+/// One `--live` report for people.
+fn live_text(scene: &Path, adapter: &str, config: &bench::BenchConfig, r: &bench_live::LiveReport) -> String {
+    format!(
+            "{} on {adapter}, {}x{}, {} frames from {} s, {:.4} s a frame, levels of detail {}\n  frame {:.2} ms median ({:.2} p95): pose {:.2} ms, draw (CPU) {:.2} ms, forward pass (GPU) {}, shadows (GPU, {} views) {}\n  particles on the {}: {} alive; {} instances; {} triangles drawn ({} in shadows)\n",
             scene.display(),
             config.size.0,
             config.size.1,
             r.frames,
             r.start,
             r.step,
+            if r.levels_of_detail { "on" } else { "off" },
             r.frame_ms_median,
             r.frame_ms_p95,
             r.pose_ms_median,
@@ -374,21 +417,21 @@ fn run_live(
             r.shadow_gpu_ms_median.map_or("n/a".into(), |ms| format!("{ms:.2} ms")),
             if r.particles_on_gpu { "GPU" } else { "CPU" },
             r.particles_alive,
-            r.instances
-        ),
-    };
-    Ok(output::print(&text)?)
+            r.instances,
+            r.triangles,
+            r.shadow_triangles
+        )
 }
 
 fn run_bench(
     scene: &Path,
     config: &bench::BenchConfig,
-    (mode, cull): (BenchMode, Option<CullArg>),
+    (mode, cull, lod): (BenchMode, Option<CullArg>, lod::BenchLod),
     BenchOutput { json, plot }: BenchOutput,
     post: Option<Vec<glint::scene::PostEffect>>,
     options: LoadOptions,
 ) -> Result<(), Error> {
-    let bench::BenchConfig { frames, warmup, size, msaa, orbit, settle_ms, density } = *config;
+    let bench::BenchConfig { frames, warmup, size, msaa, orbit, settle_ms, density, .. } = *config;
     if frames == 0 {
         return Err(glint::Diagnostic::file(scene, "--frames must be at least 1").into());
     }
@@ -408,7 +451,7 @@ fn run_bench(
     let gpu = Gpu::headless()?;
     let view = bench::bench_view(&desc, post);
     let optimized = bench::BenchRun::Optimized(cull.map_or(view.culling, CullArg::culling));
-    let runs = match mode {
+    let mut runs = match mode {
         BenchMode::All => {
             let culled = [glint::Culling::Cpu, glint::Culling::Gpu].map(bench::BenchRun::Culled);
             with_naive.then_some(bench::BenchRun::Naive).into_iter().chain(culled).collect()
@@ -417,6 +460,12 @@ fn run_bench(
         BenchMode::Naive => vec![bench::BenchRun::Naive],
         BenchMode::Both => vec![optimized, bench::BenchRun::Naive],
     };
+    // The optimized frame at full detail beside the frames with levels:
+    // with --mode all, and wherever --lod both asks.
+    let optimized_culling = cull.map_or(glint::Culling::Gpu, CullArg::culling);
+    if lod == lod::BenchLod::Both || (matches!(mode, BenchMode::All) && lod == lod::BenchLod::On) {
+        runs.push(bench::BenchRun::FullDetail(optimized_culling));
+    }
     let reports =
         runs.into_iter().map(|r| bench::run_mode(&gpu, &desc, &view, r, config)).collect::<Result<Vec<_>, _>>()?;
     let speedup = match mode {
@@ -424,6 +473,15 @@ fn run_bench(
         BenchMode::All if with_naive => Some(reports[0].cpu_ms_median / reports[2].cpu_ms_median),
         _ => None,
     };
+    let detail = |run: &&bench::ModeReport| run.mode == bench::BenchRun::FullDetail(optimized_culling).name();
+    let lod_speedup = reports.iter().find(detail).map(|full| {
+        let with_levels = reports.iter().rev().find(|r| !detail(r) && r.mode != "naive").unwrap_or(full);
+        serde_json::json!({
+            "frame": full.frame_ms_median / with_levels.frame_ms_median,
+            "triangles": full.stats.triangles_drawn as f64 / with_levels.stats.triangles_drawn.max(1) as f64,
+            "with_levels": with_levels.mode,
+        })
+    });
     let ratios = bench::ratios(&reports);
     if json {
         let modes: serde_json::Map<String, serde_json::Value> =
@@ -439,6 +497,7 @@ fn run_bench(
             "density": density,
             "modes": modes,
             "speedup": speedup,
+            "lod_speedup": lod_speedup,
             "ratios": ratios.iter().map(|(name, frame, cpu)| serde_json::json!({"runs": name, "frame": frame, "cpu": cpu})).collect::<Vec<_>>(),
         });
         output::print(&format!("{out}\n"))?;
@@ -457,6 +516,12 @@ fn run_bench(
         }
         for (name, frame, cpu) in &ratios {
             text.push_str(&format!("{name}: whole frame {frame:.2}x, flush CPU {cpu:.2}x\n"));
+        }
+        if let Some(lod) = &lod_speedup {
+            text.push_str(&format!(
+                "levels of detail ({}): whole frame {:.2}x faster, {:.2}x fewer triangles than full detail\n",
+                lod["with_levels"], lod["frame"], lod["triangles"]
+            ));
         }
         output::print(&text)?;
     }
@@ -654,11 +719,12 @@ fn main() -> ExitCode {
                 fps: *fps,
                 turntable: *turntable,
                 apng: *apng,
+                lod: picture.lod,
                 options: picture.load_options(options),
             })
         }
         Command::Check { scene } => check(scene, options),
-        Command::Explain { scene, naive, json, view, camera, cull, size, time } => {
+        Command::Explain { scene, naive, json, view, camera, cull, size, time, lod } => {
             explain::explain(explain::ExplainArgs {
                 scene,
                 naive: *naive,
@@ -668,6 +734,7 @@ fn main() -> ExitCode {
                 cull: *cull,
                 size: *size,
                 time: *time,
+                lod: *lod,
                 options,
             })
         }
@@ -689,6 +756,7 @@ fn main() -> ExitCode {
                     camera: picture.camera,
                     cull: picture.cull,
                     density: picture.density,
+                    lod: picture.lod,
                     frames: *frames,
                     screenshot: screenshot.clone(),
                     script: at.clone(),
@@ -697,7 +765,20 @@ fn main() -> ExitCode {
                 view::run(args, desc)
             })
         }
-        Command::Bench { scene, frames, warmup, size, msaa, json, density, live: Some(fps), time, .. } => {
+        Command::Bench {
+            scene,
+            frames,
+            warmup,
+            size,
+            msaa,
+            json,
+            density,
+            live: Some(fps),
+            time,
+            lod,
+            lod_error,
+            ..
+        } => {
             let config = bench::BenchConfig {
                 frames: *frames,
                 warmup: *warmup,
@@ -706,8 +787,9 @@ fn main() -> ExitCode {
                 orbit: 0.0,
                 settle_ms: 0,
                 density: *density,
+                lod: lod::LodArgs { lod_error: *lod_error, ..lod::LodArgs::default() },
             };
-            run_live(scene, &config, (*time, 1.0 / *fps), *json, options)
+            run_live(scene, &config, (*time, 1.0 / *fps), (*json, *lod), options)
         }
         Command::Bench {
             scene,
@@ -723,6 +805,8 @@ fn main() -> ExitCode {
             json,
             plot,
             post,
+            lod,
+            lod_error,
             ..
         } => {
             let config = bench::BenchConfig {
@@ -733,9 +817,10 @@ fn main() -> ExitCode {
                 orbit: *orbit,
                 settle_ms: *settle,
                 density: *density,
+                lod: lod::LodArgs { lod_error: *lod_error, ..lod::LodArgs::default() }.with(*lod != lod::BenchLod::Off),
             };
             let output = BenchOutput { json: *json, plot: plot.as_deref() };
-            run_bench(scene, &config, (*mode, *cull), output, post.clone().map(|p| p.0), options)
+            run_bench(scene, &config, (*mode, *cull, *lod), output, post.clone().map(|p| p.0), options)
         }
     };
     match result {

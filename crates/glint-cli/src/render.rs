@@ -32,12 +32,15 @@ pub struct RenderArgs<'a> {
     pub turntable: bool,
     /// Write one animated PNG rather than numbered PNGs.
     pub apng: bool,
+    /// Levels of detail (`--lod`, `--lod-error`).
+    pub lod: crate::lod::LodArgs,
     pub options: LoadOptions,
 }
 
 /// Render the frames and write them as `args.output` says.
 pub fn render(args: RenderArgs) -> Result<(), Error> {
-    let RenderArgs { scene, output, size: (width, height), msaa, camera, stats, cull, density, time, fps, .. } = args;
+    let RenderArgs { scene, output, size: (width, height), msaa, camera, stats, cull, density, time, fps, lod, .. } =
+        args;
     let desc = load(scene, args.options)?;
     check_camera(&desc, scene, camera)?;
     let range = args.range.unwrap_or(0..args.frames);
@@ -62,8 +65,9 @@ pub fn render(args: RenderArgs) -> Result<(), Error> {
     let mut target = OffscreenTarget::new(&gpu, width, height, msaa)?;
     let mut renderer = Renderer::new(&gpu);
     renderer.set_density(density);
+    lod.apply(&mut renderer);
     let mut world = World::place(desc, &mut renderer)?;
-    let views = culled(world.views(camera), cull);
+    let views = lod.views(culled(world.views(camera), cull));
     let progress = (range.len() > 1).then(|| {
         let bar = indicatif::ProgressBar::new(range.len() as u64);
         let style = indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} frames, {elapsed} ({eta} left)");

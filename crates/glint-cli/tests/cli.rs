@@ -181,6 +181,9 @@ fn render_writes_the_png_and_prints_stats_json() {
         "--size",
         "320x180",
         "--stats",
+        // The draws counted below are at full detail (a level the GPU picks is a draw of its own).
+        "--lod",
+        "off",
     ]);
     if out.status.code() == Some(2) && std::env::var("GLINT_REQUIRE_ADAPTER").as_deref() != Ok("1") {
         eprintln!("skipping: no GPU adapter ({})", stderr(&out));
@@ -205,6 +208,9 @@ fn render_writes_the_png_and_prints_stats_json() {
         (stats["instances_drawn"].as_u64().expect("n"), stats["instances_culled"].as_u64().expect("n"));
     assert!(culled > 1000, "the camera sees part of the gravel field: {culled} culled");
     assert_eq!(drawn + culled, 12040);
+    // At full detail, every instance drawn is at level 0, and each draws its mesh's triangles.
+    assert_eq!(stats["instances_per_level"], serde_json::json!([drawn, 0, 0, 0, 0]));
+    assert!(stats["triangles_drawn"].as_u64().expect("n") >= 2 * drawn, "{stats}");
     // 11 render tasks (mesh × material pairs) plus the sky, in fewer calls: batches
     // sharing pipeline and texture set go in one multi-draw-indirect call.
     assert_eq!(stats["draws"], 12);
@@ -375,7 +381,19 @@ fn bench_reports_naive_cpu_culled_and_gpu_culled_side_by_side_as_json() {
     // Each pair of runs, the earlier over the later.
     let ratios = report["ratios"].as_array().expect("ratios");
     let names: Vec<&str> = ratios.iter().map(|r| r["runs"].as_str().expect("runs")).collect();
-    assert_eq!(names, ["naive / cpu-culled", "naive / gpu-culled", "cpu-culled / gpu-culled"]);
+    let expected = [
+        "naive / cpu-culled",
+        "naive / gpu-culled",
+        "naive / full-detail",
+        "cpu-culled / gpu-culled",
+        "cpu-culled / full-detail",
+        "gpu-culled / full-detail",
+    ];
+    assert_eq!(names, expected);
+    // Levels of detail beside full detail: cubes and a plane have no coarser
+    // levels, so the same draws and triangles.
+    assert_eq!(report["modes"]["full-detail"]["stats"]["draws"], 2);
+    assert_eq!(report["lod_speedup"]["triangles"], 1.0);
     assert!(ratios.iter().all(|r| r["frame"].as_f64().is_some_and(|x| x > 0.0)));
     // One way alone keeps the name "optimized", culled as asked.
     let out = glint(&[&args[..], &["--mode", "optimized", "--cull", "cpu"]].concat());
@@ -792,4 +810,49 @@ fn bench_live_times_every_views_shadows_of_a_split_screen() {
     if live["forward_gpu_ms_median"].is_f64() {
         assert!(live["shadow_gpu_ms_median"].as_f64().is_some_and(|ms| ms > 0.0), "{r}");
     }
+}
+
+#[test]
+fn bench_live_puts_levels_of_detail_beside_full_detail() {
+    // The small school: 400 fish of the underwater scene's model.
+    let scene = repo("tests/scenes/school.scn");
+    let args = [
+        "bench",
+        scene.to_str().unwrap(),
+        "--live",
+        "30",
+        "--time",
+        "3",
+        "--frames",
+        "2",
+        "--warmup",
+        "1",
+        "--size",
+        "128x72",
+        "--lod",
+        "both",
+        "--json",
+    ];
+    let Some(r) = bench_live(&args) else { return };
+    let (with, full, lod) = (&r["live"], &r["full_detail"], &r["lod"]);
+    assert_eq!((with["levels_of_detail"].as_bool(), full["levels_of_detail"].as_bool()), (Some(true), Some(false)));
+    let triangles = |side: &serde_json::Value| {
+        side["triangles"].as_u64().expect("n") + side["shadow_triangles"].as_u64().expect("n")
+    };
+    assert!(triangles(with) > 0 && triangles(with) * 2 < triangles(full), "{r}");
+    let ratio = lod["triangle_ratio"].as_f64().expect("ratio");
+    assert!((ratio - triangles(full) as f64 / triangles(with) as f64).abs() < 1e-9, "{r}");
+    assert!(lod["frame_speedup"].as_f64().is_some_and(|x| x > 0.0), "{r}");
+    let mean = lod["mean_difference"].as_f64().expect("mean");
+    assert!(mean > 0.0 && mean < 2.0, "the pictures differ a little: {r}");
+    assert!(lod["block_difference"].as_f64().expect("block") >= mean);
+    // No error allowed is full detail: the same triangles.
+    let exact = [&args[..14], &["--lod-error", "0", "--json"]].concat();
+    let Some(r) = bench_live(&exact) else { return };
+    assert_eq!(r["lod"]["triangle_ratio"].as_f64(), Some(1.0), "{r}");
+    assert_eq!(r["lod"]["mean_difference"].as_f64(), Some(0.0), "{r}");
+    // A negative error is a usage error, said of the flag.
+    let bad = glint(&[&args[..14], &["--lod-error=-1"]].concat());
+    assert_eq!(bad.status.code(), Some(1));
+    assert!(stderr(&bad).contains("--lod-error"), "{}", stderr(&bad));
 }

@@ -176,8 +176,9 @@ impl App {
             view.do_action(&step.action)?;
         }
         let density = view.controls.density();
-        view.reload_if_changed(&self.args.scene, self.args.camera, (self.args.cull, density));
-        view.show_cloth_debug_if_chosen(self.args.camera, (self.args.cull, density))?;
+        let placing = (self.args.cull, density, self.args.lod);
+        view.reload_if_changed(&self.args.scene, self.args.camera, placing);
+        view.show_cloth_debug_if_chosen(self.args.camera, placing)?;
         if draw {
             view.draw()?;
         }

@@ -70,6 +70,8 @@ pub struct ViewArgs {
     pub cull: Option<crate::CullArg>,
     /// Share of every tile drawn ([`Renderer::set_density`]).
     pub density: f32,
+    /// Levels of detail (`--lod`, `--lod-error`).
+    pub lod: crate::lod::LodArgs,
     /// Quit after this many frames.
     pub frames: Option<u32>,
     /// Write the last frame here on quitting.
@@ -125,6 +127,8 @@ struct View {
     free_start: Option<usize>,
     /// How every view culls, where `--cull` says.
     cull: Option<crate::CullArg>,
+    /// Levels of detail, as `--lod` and `--lod-error` say.
+    lod: crate::lod::LodArgs,
     overlay: Overlay,
     /// CPU time of each frame's overlay, ms.
     overlay_ms: Vec<f64>,
@@ -150,14 +154,15 @@ impl Scene {
         gpu: &Gpu,
         desc: SceneDesc,
         camera: Option<usize>,
-        (cull, density): (Option<crate::CullArg>, f32),
+        (cull, density, lod): (Option<crate::CullArg>, f32, crate::lod::LodArgs),
     ) -> Result<Self, Error> {
         let mut renderer = Renderer::new(gpu);
         renderer.set_density(density);
+        lod.apply(&mut renderer);
         // The overlay shows each pass's GPU time, where the device can tell.
         renderer.enable_gpu_timing();
         let world = World::place(desc, &mut renderer)?;
-        let views = crate::culled(world.views(camera), cull);
+        let views = lod.views(crate::culled(world.views(camera), cull));
         Ok(Self { world, renderer, views })
     }
 
@@ -221,8 +226,17 @@ impl App {
         let surface = WindowSurface::new(&gpu, surface, size.width, size.height)?;
         let msaa = if gpu.supports_msaa(self.args.msaa) { self.args.msaa } else { 1 };
         let target = OffscreenTarget::new(&gpu, size.width.max(1), size.height.max(1), msaa)?;
-        let controls = free_controls(&desc, self.args.density);
-        let scene = Scene::new(&gpu, desc, self.args.camera, (self.args.cull, self.args.density))?;
+        let mut controls = free_controls(&desc, self.args.density);
+        // `--lod` and `--lod-error` as the controls' first choices.
+        let lod = self.args.lod;
+        let chosen =
+            [("levels", Some(f32::from(u8::from(lod.lod == crate::lod::LodSwitch::On)))), ("lod_error", lod.lod_error)];
+        for (id, value) in chosen {
+            if let Some(value) = value {
+                controls.set(id, value).map_err(|e| glint::Diagnostic::file(&self.args.scene, e))?;
+            }
+        }
+        let scene = Scene::new(&gpu, desc, self.args.camera, (self.args.cull, self.args.density, self.args.lod))?;
         let camera = scene.camera();
         let overlay = Overlay::new(&window, &gpu, target.format().color);
         eprintln!("glint view: {} on {} ({:?})", self.args.scene.display(), gpu.info().name, gpu.info().backend);
@@ -244,6 +258,7 @@ impl App {
             shown_camera: None,
             free_start: self.args.camera,
             cull: self.args.cull,
+            lod: self.args.lod,
             overlay,
             overlay_ms: Vec::new(),
             stats: Vec::new(),
@@ -265,7 +280,12 @@ impl View {
 
     /// Load the scene again if its file changed; a bad file is reported and the
     /// current scene stays.
-    fn reload_if_changed(&mut self, path: &Path, camera_index: Option<usize>, cull: (Option<crate::CullArg>, f32)) {
+    fn reload_if_changed(
+        &mut self,
+        path: &Path,
+        camera_index: Option<usize>,
+        cull: (Option<crate::CullArg>, f32, crate::lod::LodArgs),
+    ) {
         if self.last_watch.elapsed() < WATCH_INTERVAL {
             return;
         }
@@ -301,7 +321,7 @@ impl View {
     fn show_cloth_debug_if_chosen(
         &mut self,
         camera: Option<usize>,
-        cull: (Option<crate::CullArg>, f32),
+        cull: (Option<crate::CullArg>, f32, crate::lod::LodArgs),
     ) -> Result<(), Error> {
         let Some(debug) = self.controls.cloth_debug_to_show(self.scene.world.desc()) else { return Ok(()) };
         let mut desc = self.scene.world.desc().clone();
@@ -363,7 +383,7 @@ impl View {
         }
         self.shown_camera = chosen;
         let scene = &mut self.scene;
-        scene.views = crate::culled(scene.world.views(chosen.or(self.free_start)), self.cull);
+        scene.views = self.lod.views(crate::culled(scene.world.views(chosen.or(self.free_start)), self.cull));
         // The free camera starts again from the scene camera shown.
         let camera = scene.camera();
         self.player.fly_from(&camera);

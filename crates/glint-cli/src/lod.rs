@@ -1,0 +1,82 @@
+//! `--lod on|off` and `--lod-error PX`: levels of detail on `render`, `view`,
+//! `explain` and `bench` (whose `--lod` also takes `both`: the frame with
+//! levels beside the frame at full detail).
+
+use glint::{Renderer, View};
+
+/// Whether views draw levels of detail.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum LodSwitch {
+    /// Each instance at the coarsest level its view's error allows (the default).
+    #[default]
+    On,
+    /// Every mesh at full detail.
+    Off,
+}
+
+/// `glint bench --lod`: as [`LodSwitch`], or both frames side by side.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum BenchLod {
+    /// With levels of detail (the default).
+    #[default]
+    On,
+    /// At full detail.
+    Off,
+    /// Both, side by side, with their ratios.
+    Both,
+}
+
+impl BenchLod {
+    /// The sides measured: with levels (true), at full detail (false).
+    pub fn sides(self) -> &'static [bool] {
+        match self {
+            Self::On => &[true],
+            Self::Off => &[false],
+            Self::Both => &[true, false],
+        }
+    }
+}
+
+/// `--lod` and `--lod-error`.
+#[derive(Clone, Copy, Debug, clap::Args)]
+pub struct LodArgs {
+    /// Levels of detail: on (each instance at the coarsest level whose error
+    /// its view allows) or off (every mesh at full detail).
+    #[arg(long, value_enum, default_value_t = LodSwitch::On)]
+    pub lod: LodSwitch,
+    /// The error, in pixels (0..=1000), a level of detail may make in every
+    /// view, whatever its camera's "lod_error" says (default 1).
+    #[arg(long, value_name = "PX", value_parser = parse_lod_error)]
+    pub lod_error: Option<f32>,
+}
+
+impl Default for LodArgs {
+    fn default() -> Self {
+        Self { lod: LodSwitch::On, lod_error: None }
+    }
+}
+
+/// `--lod-error`: pixels, 0..=1000.
+pub fn parse_lod_error(s: &str) -> Result<f32, String> {
+    crate::number_in(s, 0.0..=1000.0, "pixels of error")
+}
+
+impl LodArgs {
+    /// These settings with levels `on` or not (for one side of `--lod both`).
+    pub fn with(self, on: bool) -> Self {
+        Self { lod: if on { LodSwitch::On } else { LodSwitch::Off }, ..self }
+    }
+
+    /// Tell `renderer` whether to draw levels.
+    pub fn apply(self, renderer: &mut Renderer) {
+        renderer.set_levels_of_detail(self.lod == LodSwitch::On);
+    }
+
+    /// `views` with `--lod-error`'s error where given.
+    pub fn views(self, views: Vec<View>) -> Vec<View> {
+        match self.lod_error {
+            Some(pixels) => views.into_iter().map(|v| v.with_lod_error(pixels)).collect(),
+            None => views,
+        }
+    }
+}
