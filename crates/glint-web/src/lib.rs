@@ -33,13 +33,15 @@ use wasm_bindgen::prelude::*;
 use wasm_bindgen::JsCast;
 
 /// The demo scenes the picker offers, under the page.
-const SCENES: [&str; 6] = [
+const SCENES: [&str; 7] = [
     "scenes/showcase.scn",
     "scenes/split.scn",
     "scenes/monitor.scn",
     "scenes/tablecloth.scn",
     "scenes/meadow.scn",
     "scenes/aquarium.scn",
+    // 24,000 fish, drawn at the levels of detail their size needs.
+    "scenes/underwater.scn",
 ];
 
 thread_local! {

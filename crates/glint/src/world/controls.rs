@@ -67,6 +67,9 @@ const CULLINGS: [(Culling, &str); 3] = [(Culling::Off, "off"), (Culling::Cpu, "C
 const TONEMAPS: [(Tonemap, &str); 4] =
     [(Tonemap::None, "none"), (Tonemap::Reinhard, "Reinhard"), (Tonemap::Aces, "ACES"), (Tonemap::Agx, "AgX")];
 
+/// The largest level-of-detail error offered, pixels.
+const LOD_ERROR_MAX: f32 = 8.0;
+
 /// The clock speeds offered, times real time.
 const SPEED_RANGE: (f32, f32) = (0.0, 4.0);
 
@@ -81,6 +84,10 @@ pub struct Controls {
     camera: usize,
     /// 0 for as each camera says, else 1 + an index of [`CULLINGS`].
     culling: usize,
+    /// Whether views draw levels of detail, and the error they allow in
+    /// pixels where chosen (else as each camera says).
+    levels: bool,
+    lod_error: Option<f32>,
     /// Whether the scene has shadow-casting lights, and whether they cast.
     has_shadows: bool,
     shadows: bool,
@@ -115,6 +122,8 @@ impl Controls {
             cameras: desc.cameras.len().max(1),
             camera: 0,
             culling: 0,
+            levels: true,
+            lod_error: None,
             has_shadows: desc.lights.iter().any(|l| l.shadows.is_some()),
             shadows: true,
             has_tonemap,
@@ -145,6 +154,10 @@ impl Controls {
         let mut cullings = vec!["as the scene says".to_owned()];
         cullings.extend(CULLINGS.iter().map(|(_, n)| (*n).to_owned()));
         add("culling".into(), "View", "culling", ControlKind::Choice { index: self.culling, options: cullings });
+        add("levels".into(), "View", "levels of detail", ControlKind::Toggle { on: self.levels });
+        let error = self.lod_error.unwrap_or(crate::scene::DEFAULT_LOD_ERROR);
+        let kind = ControlKind::Slider { value: error, min: 0.0, max: LOD_ERROR_MAX, step: 0.05 };
+        add("lod_error".into(), "View", "level error (px)", kind);
         if self.has_shadows {
             add("shadows".into(), "Scene", "shadows", ControlKind::Toggle { on: self.shadows });
         }
@@ -220,6 +233,8 @@ impl Controls {
         match (id, &control.kind) {
             ("camera", ControlKind::Choice { options, .. }) => self.camera = index(options.len()),
             ("culling", ControlKind::Choice { options, .. }) => self.culling = index(options.len()),
+            ("levels", _) => self.levels = on,
+            ("lod_error", _) => self.lod_error = Some(clamp(value)),
             ("shadows", _) => self.shadows = on,
             ("cloth_debug", _) => self.cloth_debug = Some(on),
             ("exposure", _) => self.exposure = clamp(value),
@@ -328,10 +343,11 @@ impl Controls {
         self.time_of_day = Some(hours.rem_euclid(24.0));
     }
 
-    /// Put the density, time of day and shadows into `world` and `renderer`
+    /// Put the density, levels of detail, time of day and shadows into `world` and `renderer`
     /// (each frame: each is cheap where it did not change).
     pub fn apply(&self, world: &mut World, renderer: &mut Renderer) {
         renderer.set_density(self.density);
+        renderer.set_levels_of_detail(self.levels);
         if let Some(hours) = self.time_of_day.filter(|&h| world.desc().time_of_day != Some(h)) {
             if let Err(e) = world.set_time_of_day(hours) {
                 log::warn!("{e}");
@@ -349,6 +365,9 @@ impl Controls {
             .map(|mut view| {
                 if self.culling > 0 {
                     view.culling = CULLINGS[self.culling - 1].0;
+                }
+                if let Some(pixels) = self.lod_error {
+                    view.lod_error = pixels;
                 }
                 let camera = self.scene_cameras.iter().position(|c| *c == view.camera);
                 if let Some(effects) = camera.and_then(|c| self.post.get(c)) {
@@ -422,7 +441,8 @@ mod tests {
     fn the_list_follows_the_scene() {
         let c = controls(SCENE);
         let ids: Vec<String> = c.list().into_iter().map(|c| c.id).collect();
-        for id in ["camera", "culling", "shadows", "exposure", "time_of_day", "paused", "speed", "restart"] {
+        for id in ["camera", "culling", "levels", "lod_error", "shadows", "exposure", "time_of_day", "paused", "speed"]
+        {
             assert!(ids.contains(&id.to_owned()), "{id} in {ids:?}");
         }
         assert!(!ids.contains(&"density".to_owned()), "no tiles, no density");
@@ -436,10 +456,13 @@ mod tests {
     fn setting_a_control_changes_what_it_claims() {
         let mut c = controls(SCENE);
         let base = vec![View::new(c.scene_cameras[0]).with_post(vec![PostEffect::BLOOM, PostEffect::TONEMAP])];
+        assert_eq!(c.views(base.clone())[0].lod_error, crate::scene::DEFAULT_LOD_ERROR, "as the camera says");
         c.set("post.0.0.on", 0.0).unwrap();
         c.set("exposure", 1.5).unwrap();
         c.set("culling", 2.0).unwrap();
+        c.set("lod_error", 99.0).unwrap();
         let views = c.views(base.clone());
+        assert_eq!(views[0].lod_error, LOD_ERROR_MAX, "the error clamps to its range");
         assert_eq!(views[0].post, vec![PostEffect::Tonemap { operator: Tonemap::Aces, exposure: 1.5 }]);
         assert_eq!(views[0].culling, Culling::Cpu);
         assert_eq!(views[0].ambient_occlusion, None, "the scene's camera has none");
