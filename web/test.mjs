@@ -317,6 +317,45 @@ for (const backend of backends) {
   }
 }
 
+// The underwater scene: 24,000 fish schooling, drawn at the levels of detail
+// their size on screen needs (the panel can turn them off).
+for (const backend of backends) {
+  const { page, state, logs } = await open("scenes/underwater.scn", backend);
+  try {
+    if (state.error) {
+      report(false, `the 24,000 fish on ${backend}`, `${state.error}\n  ${logs.join("\n  ")}`);
+      continue;
+    }
+    const seen = await page.evaluate(async () => {
+      const f = await window.glintReadFrame();
+      // The fish: pixels of the upper half (the water; the sand is below)
+      // away from their row's median colour, the water's.
+      let fish = 0;
+      const rows = f.height >> 1;
+      for (let y = 0; y < rows; y++) {
+        const row = f.data.subarray(4 * y * f.width, 4 * (y + 1) * f.width);
+        const median = [0, 1, 2].map((c) => {
+          const v = [];
+          for (let x = 0; x < f.width; x++) v.push(row[4 * x + c]);
+          v.sort((a, b) => a - b);
+          return v[v.length >> 1];
+        });
+        for (let x = 0; x < f.width; x++) {
+          const d = [0, 1, 2].reduce((sum, c) => sum + Math.abs(row[4 * x + c] - median[c]), 0);
+          if (d > 24) fish++;
+        }
+      }
+      const control = document.querySelector('#controls [data-control="levels"]');
+      return { fish: fish / (f.width * rows), control: control !== null };
+    });
+    report(seen.fish > 0.03 && seen.control, `the 24,000 fish on ${backend}`,
+      `first frame ${Math.round(state.first)} ms after navigation; ${(100 * seen.fish).toFixed(1)} % of the upper half fish; ` +
+      `levels-of-detail control ${seen.control ? "shown" : "missing"}`);
+  } finally {
+    await page.close();
+  }
+}
+
 // The tablecloth falls onto its table as it does natively: the page's cloth
 // (faer's simplicial factorisations and plain loops in the wasm module, where
 // glint natively may use supernodal ones and rayon) is paused once it has

@@ -25,9 +25,12 @@ if [ ! -f web/dist/glint_web_webgpu_bg.wasm ] || [ -n "$stale" ]; then
 fi
 # The page's size budgets: gzipped bytes a browser downloads (its module's
 # wasm and js, and the html; build.sh prints them). A change that grows the
-# page past one fails here. Lowered as the page shrinks; the WebGL2 one is its
-# target (issue 33), the WebGPU one 2% over its size when set.
-for budget in webgl2:1300000 webgpu:660000; do
+# page past one fails here. Lowered as the page shrinks; the WebGL2 one was its
+# target (issue 33, 1,300,000), the WebGPU one 2% over its size when set. Both
+# were raised by 45 KB and 60 KB for levels of detail (issue 47): meshoptimizer's
+# simplifier, which the page runs to make its shapes' levels, is about 51 KB
+# gzipped in each module.
+for budget in webgl2:1345000 webgpu:720000; do
   module=${budget%%:*} budget=${budget#*:}
   page=0
   for f in "web/dist/glint_web_${module}_bg.wasm" "web/dist/glint_web_$module.js" web/dist/index.html; do
