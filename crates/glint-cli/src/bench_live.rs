@@ -96,7 +96,7 @@ pub fn run(gpu: &Gpu, desc: SceneDesc, config: &BenchConfig, (start, step): (f32
     let views = config.lod.views(world.views(None));
     let (mut frame_ms, mut pose_ms, mut draw_ms) = (Vec::new(), Vec::new(), Vec::new());
     let (mut gpu_ms, mut shadow_ms) = (Vec::new(), Vec::new());
-    let (mut last, mut shadow_views, mut triangles) = (None, 0, (0, 0));
+    let (mut last, mut shadow_views) = (None, 0);
     for i in 0..config.warmup + config.frames {
         let time = start + step * (i as f32 - config.warmup as f32).max(0.0);
         let frame_start = Instant::now();
@@ -115,25 +115,16 @@ pub fn run(gpu: &Gpu, desc: SceneDesc, config: &BenchConfig, (start, step): (f32
                 shadow_ms.extend(times.shadow_ms);
             }
             shadow_views = stats.iter().map(|s| s.shadow_views).sum();
-            triangles = stats
-                .iter()
-                .map(|s| (s.triangles_drawn, s.passes.shadow.triangles))
-                .fold((0, 0), |t, s| (t.0 + s.0, t.1 + s.1));
             last = stats.into_iter().last();
         }
     }
     let last = last.unwrap_or_default();
     let frame_ms_median = median(&mut frame_ms);
-    // The triangles counted on the GPU come back a frame or two late: the
-    // last frame's, waited for.
+    // Triangles counted on the GPU come back a frame or two late: one more
+    // frame of the last pose, its counts waited for.
     let mut counted = world.draw(&mut renderer, &views, &mut target)?;
     renderer.wait_for_counts(&mut counted);
-    if counted.iter().any(|s| s.culling == glint::Culling::Gpu) {
-        triangles = counted
-            .iter()
-            .map(|s| (s.triangles_drawn, s.passes.shadow.triangles))
-            .fold((0, 0), |t, s| (t.0 + s.0, t.1 + s.1));
-    }
+    let triangles = counted.iter().fold((0, 0), |t, s| (t.0 + s.triangles_drawn, t.1 + s.passes.shadow.triangles));
     let image = target.read_rgba8(gpu).ok();
     Ok(LiveReport {
         frames: config.frames,

@@ -38,7 +38,7 @@ impl BenchLod {
 }
 
 /// `--lod` and `--lod-error`.
-#[derive(Clone, Copy, Debug, clap::Args)]
+#[derive(Clone, Copy, Debug, Default, clap::Args)]
 pub struct LodArgs {
     /// Levels of detail: on (each instance at the coarsest level whose error
     /// its view allows) or off (every mesh at full detail).
@@ -48,12 +48,6 @@ pub struct LodArgs {
     /// view, whatever its camera's "lod_error" says (default 1).
     #[arg(long, value_name = "PX", value_parser = parse_lod_error)]
     pub lod_error: Option<f32>,
-}
-
-impl Default for LodArgs {
-    fn default() -> Self {
-        Self { lod: LodSwitch::On, lod_error: None }
-    }
 }
 
 /// `--lod-error`: pixels, 0..=1000.

@@ -229,12 +229,9 @@ impl App {
         let mut controls = free_controls(&desc, self.args.density);
         // `--lod` and `--lod-error` as the controls' first choices.
         let lod = self.args.lod;
-        let chosen =
-            [("levels", Some(f32::from(u8::from(lod.lod == crate::lod::LodSwitch::On)))), ("lod_error", lod.lod_error)];
-        for (id, value) in chosen {
-            if let Some(value) = value {
-                controls.set(id, value).map_err(|e| glint::Diagnostic::file(&self.args.scene, e))?;
-            }
+        let off = (lod.lod == crate::lod::LodSwitch::Off).then_some(("levels", 0.0));
+        for (id, value) in off.into_iter().chain(lod.lod_error.map(|px| ("lod_error", px))) {
+            controls.set(id, value).map_err(|e| glint::Diagnostic::file(&self.args.scene, e))?;
         }
         let scene = Scene::new(&gpu, desc, self.args.camera, (self.args.cull, self.args.density, self.args.lod))?;
         let camera = scene.camera();

@@ -13,6 +13,7 @@
 use crate::render::cull::Boxes;
 use crate::render::gpu_driven::commands::Placed;
 use crate::render::resources::mesh_pool::Levels;
+use crate::scene::levels::MAX_LEVELS;
 use glam::{Mat4, Vec3A, Vec4};
 
 /// A draw item's level when the GPU picks each instance's in its cull pass.
@@ -78,16 +79,15 @@ impl LodView {
 
 /// The draw items of one visible run of a shape with `levels`, `count`
 /// instances from `first`, as `(level, first, count)` given to `item`:
-/// placed `Listed`, its instances (`instances`, entries `first ..` of the
-/// view's visible list, else empty) reordered so
-/// that each level's are adjacent, finest first, an item per level used; a
-/// whole tile at its box's level; GPU-culled candidates at [`LEVEL_ON_GPU`]
-/// where the shape has levels; compact instances at full detail.
+/// placed `Listed`, entries `first ..` of the view's visible list `visible`,
+/// reordered so that each level's are adjacent, finest first, an item per
+/// level used; a whole tile at its box's level; GPU-culled candidates at
+/// [`LEVEL_ON_GPU`] where the shape has levels; compact instances at full detail.
 pub(crate) fn level_items(
     lod: &LodView,
     levels: &Levels,
-    (placed, first, count, instances): (Placed, u32, u32, &mut [u32]),
-    bounds: &Boxes,
+    (placed, first, count): (Placed, u32, u32),
+    (visible, bounds): (&mut [u32], &Boxes),
     mut item: impl FnMut(u8, u32, u32),
 ) {
     let chosen = |i: u32| lod.level(levels, bounds.center(i as usize), bounds.extent(i as usize));
@@ -97,20 +97,20 @@ pub(crate) fn level_items(
         Placed::Compact => item(0, first, count),
         // A tile's instances all carry its box.
         Placed::Whole => item(chosen(first), first, count),
-        Placed::Listed if instances.len() == count as usize => {
+        Placed::Listed => {
+            let instances = &mut visible[first as usize..(first + count) as usize];
             let chosen: Vec<u8> = instances.iter().map(|&i| chosen(i)).collect();
-            let mut per_level = [0u32; 256];
+            let mut per_level = [0u32; MAX_LEVELS];
             for &l in &chosen {
                 per_level[usize::from(l)] += 1;
             }
             if per_level[usize::from(chosen[0])] == count {
                 return item(chosen[0], first, count);
             }
-            let mut at = [0u32; 256];
-            let mut start = 0;
-            for l in 0..usize::from(levels.count) {
-                at[l] = start;
-                start += per_level[l];
+            // A counting sort: each level's place starts after the finer levels'.
+            let mut at = [0u32; MAX_LEVELS];
+            for l in 1..MAX_LEVELS {
+                at[l] = at[l - 1] + per_level[l - 1];
             }
             let mut sorted = vec![0u32; instances.len()];
             for (&i, &l) in instances.iter().zip(&chosen) {
@@ -119,15 +119,11 @@ pub(crate) fn level_items(
             }
             instances.copy_from_slice(&sorted);
             let mut start = first;
-            for l in 0..levels.count {
-                let n = per_level[usize::from(l)];
-                if n > 0 {
-                    item(l, start, n);
-                }
+            for (l, &n) in per_level.iter().enumerate().filter(|(_, &n)| n > 0) {
+                item(l as u8, start, n);
                 start += n;
             }
         }
-        Placed::Listed => item(0, first, count),
     }
 }
 
@@ -175,9 +171,11 @@ mod tests {
         for (i, z) in [1000.0, 1.0, 1000.0, 1.0].into_iter().enumerate() {
             bounds.set(i, Vec3A::new(0.0, 0.0, -z), Vec3A::splat(0.5));
         }
-        let mut instances = vec![0, 1, 2, 3];
+        // Entries 10 .. 14 of the visible list.
+        let mut visible: Vec<u32> = [9; 10].into_iter().chain([0, 1, 2, 3]).collect();
         let mut items = Vec::new();
-        level_items(&lod, &levels(), (Placed::Listed, 10, 4, &mut instances), &bounds, |l, f, n| items.push((l, f, n)));
+        level_items(&lod, &levels(), (Placed::Listed, 10, 4), (&mut visible, &bounds), |l, f, n| items.push((l, f, n)));
+        let instances = &visible[10..];
         assert_eq!(instances, vec![1, 3, 0, 2]);
         assert_eq!(items, vec![(0, 10, 2), (2, 12, 2)]);
     }

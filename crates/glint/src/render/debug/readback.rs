@@ -40,7 +40,8 @@ impl CountReadback {
         Self { slots: (0..SLOTS).map(slot).collect(), latest: None, max_words, fresh: false }
     }
 
-    /// Copy `frustums` totals from `at` in `counts` into a free slot (none free: skipped).
+    /// Copy `words` words of totals from `at` in `counts` into a free slot
+    /// (none free: skipped).
     pub(crate) fn copy(
         &mut self,
         encoder: &mut wgpu::CommandEncoder,
@@ -49,12 +50,12 @@ impl CountReadback {
         words: u32,
         submits: u64,
     ) {
-        let frustums = words.min(self.max_words);
+        let words = words.min(self.max_words);
         let Some(slot) = self.slots.iter_mut().find(|s| s.1.load(Ordering::Acquire) == FREE) else { return };
-        if frustums > 0 {
-            encoder.copy_buffer_to_buffer(counts, at, &slot.0, 0, 4 * u64::from(frustums));
+        if words > 0 {
+            encoder.copy_buffer_to_buffer(counts, at, &slot.0, 0, 4 * u64::from(words));
             slot.1.store(COPIED, Ordering::Release);
-            (slot.2, slot.3) = (submits, frustums);
+            (slot.2, slot.3) = (submits, words);
         }
     }
 
@@ -63,7 +64,7 @@ impl CountReadback {
     pub(crate) fn collect(&mut self, device: &wgpu::Device, submits: u64) -> Option<&[u32]> {
         let _ = device.poll(wgpu::PollType::Poll);
         let mut newest: Option<(u64, Vec<u32>)> = None;
-        for (buffer, state, copied_at, frustums) in &self.slots {
+        for (buffer, state, copied_at, words) in &self.slots {
             match state.load(Ordering::Acquire) {
                 COPIED if submits > *copied_at => {
                     state.store(MAPPING, Ordering::Release);
@@ -76,7 +77,7 @@ impl CountReadback {
                     let totals = buffer
                         .get_mapped_range(..)
                         .ok()
-                        .map(|view| bytemuck::cast_slice::<u8, u32>(&view[..4 * *frustums as usize]).to_vec());
+                        .map(|view| bytemuck::cast_slice::<u8, u32>(&view[..4 * *words as usize]).to_vec());
                     buffer.unmap();
                     state.store(FREE, Ordering::Release);
                     if let Some(totals) = totals.filter(|_| newest.as_ref().is_none_or(|n| n.0 < *copied_at)) {

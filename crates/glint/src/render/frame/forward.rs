@@ -62,14 +62,8 @@ pub(crate) fn build_queue(
             }
         } else {
             let depth = depth(res.store.slot(s.slot).bounds.map_or(Vec3A::ZERO, |(c, _)| c));
-            let placed = visible.placed[run.entry];
-            let listed = match of_store {
-                false => &mut visible.instances[run.start as usize..(run.start + run.len) as usize],
-                true => &mut [][..],
-            };
-            let items = &mut gpu.forward.items;
-            let run_of = (placed, run.start, run.len, listed);
-            level_items(&view.lod, levels, run_of, bounds, |level, first, count| {
+            let (items, run_of) = (&mut gpu.forward.items, (visible.placed[run.entry], run.start, run.len));
+            level_items(&view.lod, levels, run_of, (&mut visible.instances, bounds), |level, first, count| {
                 items.push(item(level, first, count, depth));
             });
         }

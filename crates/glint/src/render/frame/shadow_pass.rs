@@ -229,8 +229,7 @@ fn batch_shadow_views(
             ViewTarget::CubeFace { .. } => PassKind::ShadowDistance,
         };
         let first_item = gpu.shadows.items.len();
-        let runs = visible.runs.iter().map(|r| (r, false)).chain(visible.ranges.iter().map(|r| (r, true)));
-        for (&VisibleRun { entry, start, len }, of_store) in runs {
+        for &VisibleRun { entry, start, len } in visible.runs.iter().chain(&visible.ranges) {
             let material = frame.submitted[entry].material;
             let pipeline = match res.registry.shadow_pipeline(material, &prepared[entry], pass, stats) {
                 Ok(pipeline) => pipeline,
@@ -261,20 +260,11 @@ fn batch_shadow_views(
                 entry: entry as u32,
                 level,
             };
-            let listed = match of_store {
-                false => &mut visible.instances[start as usize..(start + len) as usize],
-                true => &mut [][..],
-            };
             let (levels, items) = (&prepared[entry].draw.mesh.levels, &mut gpu.shadows.items);
-            level_items(
-                &lod,
-                levels,
-                (visible.placed[entry], start, len, listed),
-                &res.store.bounds,
-                |level, first, count| {
-                    items.push(item(level, first, count));
-                },
-            );
+            let run = (visible.placed[entry], start, len);
+            level_items(&lod, levels, run, (&mut visible.instances, &res.store.bounds), |level, first, count| {
+                items.push(item(level, first, count));
+            });
         }
         queue::sort(&mut gpu.shadows.items[first_item..]);
         let draw_of = |item: &DrawItem| prepared[item.entry as usize].draw;
