@@ -6,7 +6,6 @@ use super::Diagnostic;
 use crate::scene::MAX_COMPACT_HALF;
 use crate::text::quote;
 use glam::{Mat4, Quat, Vec3};
-use rand::seq::SliceRandom;
 use rand::{Rng, SeedableRng};
 
 /// Place `count` instances in the box `origin ± extent/2`: on an evenly spaced grid
@@ -53,9 +52,17 @@ pub(crate) fn place_instances(
 /// Sort `transforms` into `n` × `n` tiles over the box `origin ± extent/2`
 /// (by x and z; a tile holds the instances whose position falls in its cell,
 /// the box's edges clamped), tile by tile with x fastest, each tile's
-/// instances shuffled (PCG32 from `seed`), so any first share of a tile is
-/// spread over it. Returns each tile's size.
-pub(crate) fn sort_into_tiles(transforms: &mut Vec<Mat4>, n: u32, origin: Vec3, extent: Vec3, seed: u64) -> Vec<u32> {
+/// instances in order of their far-field rank ([`rank_order`]), so any
+/// first share of a tile is spread over it, and is the share a far field
+/// draws. Returns the tiles, their boxes grown by `padding`.
+///
+/// [`rank_order`]: crate::scene::far_field::rank_order
+pub(crate) fn sort_into_tiles(
+    transforms: &mut Vec<Mat4>,
+    n: u32,
+    (origin, extent): (Vec3, Vec3),
+    padding: f32,
+) -> crate::scene::Tiles {
     let corner = origin - extent * 0.5;
     let cell = |v: f32, lo: f32, size: f32| match size > 0.0 {
         true => (((v - lo) / size * n as f32).floor().max(0.0) as u32).min(n - 1),
@@ -69,14 +76,10 @@ pub(crate) fn sort_into_tiles(transforms: &mut Vec<Mat4>, n: u32, origin: Vec3, 
     let mut keyed: Vec<(u32, Mat4)> = transforms.drain(..).map(|m| (tile(&m), m)).collect();
     keyed.iter().for_each(|&(t, _)| sizes[t as usize] += 1);
     radsort::sort_by_key(&mut keyed, |&(t, _)| t);
-    let mut rng = rand_pcg::Pcg32::seed_from_u64(seed);
-    let mut start = 0;
-    for &size in &sizes {
-        keyed[start..start + size as usize].shuffle(&mut rng);
-        start += size as usize;
-    }
     transforms.extend(keyed.into_iter().map(|(_, m)| m));
-    sizes
+    let tiles = crate::scene::Tiles::from_sizes(sizes, padding);
+    crate::scene::far_field::rank_order(transforms, &tiles);
+    tiles
 }
 
 /// Whether every instance's y and scale fit a compact instance's half floats
@@ -155,8 +158,7 @@ impl Loader<'_> {
                 if compact == Some(true) {
                     check_compact(&transforms).map_err(|m| Diagnostic::at(self.path, f.block.line, m))?;
                 }
-                let sizes = sort_into_tiles(&mut transforms, n as u32, origin, extent, seed.wrapping_add(1));
-                let tiles = crate::scene::Tiles::from_sizes(sizes, padding.unwrap_or(0.0));
+                let tiles = sort_into_tiles(&mut transforms, n as u32, (origin, extent), padding.unwrap_or(0.0));
                 Some((tiles, density.unwrap_or(1.0), compact.unwrap_or(false)))
             }
             None if density.is_some() || padding.is_some() || compact.is_some() => {
@@ -176,11 +178,12 @@ mod tests {
     use super::*;
 
     #[test]
-    fn tiles_hold_their_cells_instances_shuffled() {
+    fn tiles_hold_their_cells_instances_in_rank_order() {
         let (origin, extent) = (Vec3::new(5.0, 0.0, 0.0), Vec3::new(40.0, 0.0, 20.0));
         let placed = place_instances(4000, true, origin, extent, 9, (1.0, 1.0), false);
         let mut tiled = placed.clone();
-        let sizes = sort_into_tiles(&mut tiled, 4, origin, extent, 2);
+        let tiles = sort_into_tiles(&mut tiled, 4, (origin, extent), 0.0);
+        let sizes: Vec<u32> = tiles.ranges(4000).map(|r| r.end - r.start).collect();
         assert_eq!(sizes.len(), 16);
         assert_eq!(sizes.iter().sum::<u32>(), 4000);
         assert!(sizes.iter().all(|&s| s > 150), "about 250 each: {sizes:?}");
@@ -193,7 +196,9 @@ mod tests {
                 assert!(p.x >= -15.0 + 10.0 * col && p.x <= -15.0 + 10.0 * (col + 1.0), "tile {t}: x {}", p.x);
                 assert!(p.z >= -10.0 + 5.0 * row && p.z <= -10.0 + 5.0 * (row + 1.0), "tile {t}: z {}", p.z);
             }
-            // Shuffled: the first half of a tile is spread over it, not its own corner.
+            let rank = |m: &Mat4| crate::scene::FarField::rank(m.w_axis.x, m.w_axis.z);
+            assert!(run.windows(2).all(|w| rank(&w[0]) <= rank(&w[1])), "tile {t} in rank order");
+            // Ranks are random: the first half of a tile is spread over it, not its own corner.
             let mean_x = |r: &[Mat4]| r.iter().map(|m| m.w_axis.x).sum::<f32>() / r.len() as f32;
             assert!((mean_x(&run[..run.len() / 2]) - mean_x(run)).abs() < 1.5, "tile {t}");
             start += size as usize;
@@ -204,8 +209,8 @@ mod tests {
         b.sort_unstable();
         assert_eq!(a, b, "the same instances");
         let mut again = placed.clone();
-        sort_into_tiles(&mut again, 4, origin, extent, 2);
-        assert_eq!(again, tiled, "the same seed, the same order");
+        sort_into_tiles(&mut again, 4, (origin, extent), 0.0);
+        assert_eq!(again, tiled, "the same instances, the same order");
     }
 
     #[test]

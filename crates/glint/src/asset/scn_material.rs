@@ -94,6 +94,19 @@ pub(crate) fn material_fields(f: &mut Fields, base: Material) -> Result<Material
                 }
             },
         },
+        far_field: match f.get("far_field") {
+            None => base.far_field,
+            Some(pair) => {
+                let [start, end] = numbers::<2>(f.path, pair, "2 numbers (start end)")?;
+                match crate::scene::FarField::new(start, end).filter(|_| end <= 1e6) {
+                    Some(field) => Some(field),
+                    None => {
+                        let message = "\"far_field\" must be start end with 0 < start < end <= 1000000";
+                        return Err(Diagnostic::at(f.path, pair.line, message));
+                    }
+                }
+            }
+        },
         ..base.clone()
     };
     let states = render_states(f, material.render_states())?.or(base.states);

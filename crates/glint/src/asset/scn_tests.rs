@@ -120,6 +120,9 @@ fn materials_move_with_their_keys_and_the_world_sets_the_wind() {
     );
     let wind = scene.environment.wind;
     assert_eq!((wind.strength, wind.direction), (0.5, glam::Vec2::Y));
+    let far = parse(&motion("\"far_field\" \"6 130\"")).unwrap();
+    assert_eq!(far.materials[0].material.far_field, crate::scene::FarField::new(6.0, 130.0));
+    assert!(scene.materials.iter().all(|m| m.material.far_field.is_none()));
 }
 
 #[test]
@@ -311,6 +314,9 @@ fn semantic_errors_name_file_line_and_expectation() {
         ("{\n\"classname\" \"world\"\n\"glare\" \"5\"\n}", 3, "\"glare\" is 5, expected a value in 0..=4"),
         ("{\n\"classname\" \"world\"\n\"time_of_day\" \"25\"\n}", 3, "expected a value in 0..=24"),
         (&motion("\"edge_fade\" \"5 2\""), 4, "0 <= inner < outer <= 1000000"),
+        (&motion("\"far_field\" \"8 8\""), 4, "0 < start < end <= 1000000"),
+        (&motion("\"far_field\" \"0 8\""), 4, "0 < start < end <= 1000000"),
+        (&motion("\"far_field\" \"8\""), 4, "2 numbers (start end)"),
         ("{\n\"classname\" \"world\"\n\"sky_blur\" \"0.5\"\n}", 1, "\"sky_blur\" needs \"environment\""),
         ("{\n\"classname\" \"world\"\n\"environment\" \"sky\"\n\"sky_blur\" \"2\"\n}", 4, "expected a value in 0..=1"),
         ("{\n\"classname\" \"world\"\n\"environment\" \"none.hdr\"\n}", 3, "\"environment\": "),

@@ -31,6 +31,9 @@ pub(crate) struct ViewFrame {
     pub lod: LodView,
     /// The pixels of error its levels of detail may make (0: full detail).
     pub lod_error: f32,
+    /// Where far fields are measured from: its camera's eye, `None` with
+    /// levels of detail off ([`FarField`](crate::scene::FarField)).
+    pub far_eye: Option<glam::Vec3>,
 }
 
 impl ViewFrame {
@@ -64,6 +67,7 @@ impl ViewFrame {
             variant,
             lod,
             lod_error: view.lod_error,
+            far_eye: (view.lod_error > 0.0).then_some(camera.eye),
         }
     }
 }

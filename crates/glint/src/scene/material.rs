@@ -123,6 +123,9 @@ pub struct Material {
     /// instance's placed position in x and z (the seed's ground, whose edges
     /// blend into the sky): shows with [`AlphaMode::Blend`].
     pub edge_fade: Option<(f32, f32)>,
+    /// Fewer, wider instances far from the camera (the meadow's far field):
+    /// see [`FarField`](super::FarField).
+    pub far_field: Option<super::FarField>,
 }
 
 impl Default for Material {
@@ -154,6 +157,7 @@ impl Default for Material {
             states: None,
             motion: None,
             edge_fade: None,
+            far_field: None,
         }
     }
 }

@@ -3,7 +3,11 @@
 //! tile is culled as a whole by one box (the union of its instances' boxes,
 //! grown by the padding) and drawn as one range, and [`Entity::density`]
 //! draws the first ⌈len × density⌉ instances of every tile, so a tile's
-//! instances should be in random order (the `.scn` loader shuffles them).
+//! instances should be in random order: the `.scn` loader puts them in order
+//! of their far-field rank ([`rank_order`]), which a material's far field
+//! needs (it draws a tile's first share).
+//!
+//! [`rank_order`]: super::far_field::rank_order
 //!
 //! [`Entity::density`]: super::Entity::density
 

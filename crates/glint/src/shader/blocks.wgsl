@@ -43,6 +43,9 @@ struct CameraBlock {
     // x: the scene time in seconds; y: wind strength; zw: wind direction (x, z),
     // unit (here rather than in the Scene block: shadow passes bind no Scene block).
     motion: vec4<f32>,
+    // xyz: the eye far fields are measured from (a shadow view's: its camera
+    // view's); w: 1 when far fields are on (scene/far_field.rs).
+    far_eye: vec4<f32>,
 }
 
 // Directional lights' cascades (src/scene/light.rs CASCADES).

@@ -332,6 +332,43 @@ fn walk(material: MaterialBlock, origin: vec3<f32>) -> Walk {
 }
 #endif
 
+#ifdef FAR_FIELD
+// The far field (scene/far_field.rs, which these follow step by step and whose
+// constants these are): an instance's rank, a hash of its position's x and z bits.
+const FAR_MIN_SHARE: f32 = 0.0625;
+const FAR_BAND: f32 = 0.25;
+const FAR_RING: f32 = 0.2;
+
+fn far_rank(origin: vec3<f32>) -> f32 {
+    var h = (bitcast<u32>(origin.x) * 0x9e3779b1u) ^ bitcast<u32>(origin.z);
+    h ^= h >> 16u;
+    h *= 0x7feb352du;
+    h ^= h >> 15u;
+    h *= 0x846ca68bu;
+    h ^= h >> 16u;
+    return f32(h >> 8u) / 16777216.0;
+}
+
+// The width (times its own, in x and z) of the instance placed at `origin`:
+// FarField::width at its distance from the far-field eye, 1 with far fields
+// off. The material's fade.zw are the field's start and end.
+fn far_field_width(material: MaterialBlock, origin: vec3<f32>) -> f32 {
+    if camera.far_eye.w == 0.0 {
+        return 1.0;
+    }
+    let start = material.fade.z;
+    let end = material.fade.w;
+    let d = distance(camera.far_eye.xyz, origin);
+    let r = start / max(d, 1e-6);
+    let falloff = clamp(r * r, FAR_MIN_SHARE, 1.0);
+    let share = falloff * saturate((end - d) / (FAR_RING * end));
+    let band = FAR_BAND * falloff * (1.0 - falloff);
+    let rank = far_rank(origin);
+    let narrowing = select(select(0.0, 1.0, rank < share), saturate((share - rank) / band), band > 0.0);
+    return narrowing / (falloff - 0.5 * band);
+}
+#endif
+
 #ifdef SWIM
 // A tail's sideways swing: vertices d = pivot - z behind the pivot move by
 // amplitude · d² along x, a wave running down the body at the instance's
@@ -374,6 +411,11 @@ fn vs_main(v: VertexIn, @builtin(instance_index) draw_instance: u32) -> VertexOu
 #endif
 #ifdef FLAP
     position.y += flap_lift(position.x, material_at(instance.material), model[3].xyz);
+#endif
+#ifdef FAR_FIELD
+    // Wider (or narrowed away) about the model's axis; normals are kept.
+    let far_width = far_field_width(material_at(instance.material), model[3].xyz);
+    position = vec4<f32>(position.x * far_width, position.y, position.z * far_width, position.w);
 #endif
     var world = model * position;
 #ifdef WIND

@@ -48,8 +48,9 @@ bitflags::bitflags! {
     /// | 21 | `SWIM` | swing a fish's tail with its instance's phase ([`Motion::Swim`](crate::scene::Motion::Swim)) |
     /// | 22 | `ENVIRONMENT` | light from the environment (image-based lighting) instead of the ambient colour ([`Environment::light`]) |
     /// | 23 | `AMBIENT_OCCLUSION` | darken ambient and environment light by the view's screen-space ambient occlusion (set by the frame, for a view with [`View::ambient_occlusion`](crate::View::ambient_occlusion); not for blended or unlit materials) |
+    /// | 24 | `FAR_FIELD` | draw fewer, wider instances far from the camera ([`Material::far_field`]) |
     ///
-    /// Bits 24–31 are free for more (shadow receiving comes with shadow maps).
+    /// Bits 25–31 are free for more (shadow receiving comes with shadow maps).
     /// The motion bits stay in shadow passes' variants, so shadows move too.
     ///
     /// One def follows from the bits rather than being one: `TEXCOORDS`, set with
@@ -105,6 +106,8 @@ bitflags::bitflags! {
         const ENVIRONMENT = 1 << 22;
         /// `AMBIENT_OCCLUSION`.
         const AMBIENT_OCCLUSION = 1 << 23;
+        /// `FAR_FIELD`.
+        const FAR_FIELD = 1 << 24;
     }
 }
 
@@ -133,6 +136,7 @@ impl ShaderFeatures {
         f.set(Self::EMISSIVE_MAP, material.emissive_map.is_some());
         f.set(Self::FOG, material.fog && environment.fog.is_some());
         f.set(Self::EDGE_FADE, material.edge_fade.is_some());
+        f.set(Self::FAR_FIELD, material.far_field.is_some());
         f.set(Self::ENVIRONMENT, environment.light.is_some() && material.shading != ShadingModel::Unlit);
         f |= match material.motion {
             None => Self::empty(),
@@ -144,8 +148,8 @@ impl ShaderFeatures {
         f
     }
 
-    /// The vertex-animation bits: kept in shadow passes.
-    pub const MOTION: Self = Self::WIND.union(Self::FLAP).union(Self::CIRCLE).union(Self::SWIM);
+    /// The vertex-animation bits (the far field's widening too): kept in shadow passes.
+    pub const MOTION: Self = Self::WIND.union(Self::FLAP).union(Self::CIRCLE).union(Self::SWIM).union(Self::FAR_FIELD);
 
     /// The shader defs of this set: one per bit that is set, and `TEXCOORDS`
     /// with any map.

@@ -119,7 +119,7 @@ pub(crate) fn upload_view_blocks(
     let scene = SceneGpu::new(&lighting.environment, lighting.lights, shadowed)
         .with_specular_levels(res.environment.last_level());
     bytes.scene += gpu.scene_block.update(&res.queue, scene);
-    let camera = frame.camera.to_gpu(frame.aspect).with_motion(&lighting.environment);
+    let camera = frame.camera.to_gpu(frame.aspect).with_motion(&lighting.environment).with_far_eye(frame.far_eye);
     bytes.camera += gpu.blocks.update(&res.queue, 0, camera);
     upload_instances(res, gpu, bytes)
 }

@@ -73,7 +73,7 @@ fn naive_batches(
         let slot = res.store.slot(s.slot);
         stats.instances_invalid += u64::from(slot.invalid);
         instances.clear();
-        visible_instances(&frame.frustum, false, slot, s.density, (&res.store, &mut instances));
+        visible_instances(&frame.frustum, false, slot, s.share(frame.far_eye), (&res.store, &mut instances));
         let drawn = gpu.forward.batches.len() + instances.len();
         if drawn > MAX_NAIVE_DRAWS {
             let what = "the naive frame (one draw per instance)";

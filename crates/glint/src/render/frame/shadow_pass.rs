@@ -185,7 +185,7 @@ pub(crate) fn draw_shadows(
     let start = Instant::now();
     let drawn: Vec<&PlannedShadow> = shadows.drawn().collect();
     let ranges = batch_shadow_views(res, frame, gpu, (&drawn, prepared), view, stats)?;
-    upload_shadow_views(res, gpu, (&drawn, shadows.views), environment, stats)?;
+    upload_shadow_views(res, gpu, (&drawn, shadows.views), (environment, view.far_eye), stats)?;
     let mut cost = PassStats::default();
     if !drawn.is_empty() {
         frame.outline.enter(&mut frame.encoder, "shadows");
@@ -223,7 +223,7 @@ fn batch_shadow_views(
         let lod = LodView::texels(view_proj, view.texel, camera.lod_error * SHADOW_ERROR_FACTOR);
         let casts = |s: &Submitted| s.cast_shadows && !blended[s.material.0 as usize];
         let frustum = Frustum::from_view_proj(view_proj);
-        collect_visible(res, (&frustum, culling), (&frame.submitted, casts), &mut visible);
+        collect_visible(res, (&frustum, culling, camera.far_eye), (&frame.submitted, casts), &mut visible);
         let pass = match view.target {
             ViewTarget::Layer(_) => PassKind::ShadowDepth,
             ViewTarget::CubeFace { .. } => PassKind::ShadowDistance,
@@ -275,19 +275,20 @@ fn batch_shadow_views(
     Ok(ranges)
 }
 
-/// Write the instances that changed, each view's Camera record, the Shadow
-/// block, and the shadow list's indices and commands.
+/// Write the instances that changed, each view's Camera record (far fields
+/// measured from `far_eye`, the camera view's), the Shadow block, and the
+/// shadow list's indices and commands.
 fn upload_shadow_views(
     res: &mut Resources,
     gpu: &mut ViewGpu,
     (drawn, all): (&[&PlannedShadow], &[PlannedShadow]),
-    environment: &Environment,
+    (environment, far_eye): (&Environment, Option<Vec3>),
     stats: &mut FrameStats,
 ) -> Result<(), RenderError> {
     let bytes = &mut stats.bytes_uploaded;
     upload_instances(res, gpu, bytes)?;
     for (k, planned) in drawn.iter().enumerate() {
-        let record = CameraGpu::for_shadow(&planned.view).with_motion(environment);
+        let record = CameraGpu::for_shadow(&planned.view).with_motion(environment).with_far_eye(far_eye);
         bytes.camera += gpu.blocks.update(&res.queue, 1 + k, record);
     }
     let views: Vec<ShadowView> = all.iter().map(|p| p.view).collect();

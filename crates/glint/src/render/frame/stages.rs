@@ -25,8 +25,11 @@ pub(crate) fn submit(res: &mut Resources, next: &mut NextFrame, entity: &Entity)
         next.submit_error.get_or_insert(RenderError::UnknownShape(entity.shape));
         return;
     };
-    let motion = res.registry.material(entity.material).and_then(|m| m.motion);
-    let (local, walk) = motion.map_or((shape.mesh.aabb(), 0.0), |m| m.reach(shape.mesh.aabb()));
+    let material = res.registry.material(entity.material);
+    let (motion, far_field) = material.map_or((None, None), |m| (m.motion, m.far_field));
+    // Widened in the far field first, then moved.
+    let local = far_field.map_or(shape.mesh.aabb(), |f| f.reach(shape.mesh.aabb()));
+    let (local, walk) = motion.map_or((local, 0.0), |m| m.reach(local));
     let slot = res.store.submit(entity, Reach { local, walk }, next.index);
     next.submitted.push(Submitted {
         slot,
@@ -36,6 +39,7 @@ pub(crate) fn submit(res: &mut Resources, next: &mut NextFrame, entity: &Entity)
         cast_shadows: entity.cast_shadows,
         instances: entity.transforms().len() as u64,
         density: entity.density * res.density,
+        far_field,
     });
 }
 

@@ -91,7 +91,7 @@ fn draw_into(
     let variant = FrameVariant::after(shadows.first, shadows.views.len(), lighting.lights, occluded);
     let mut view_frame = ViewFrame::new(view, (width, height), (res.cull_pipelines.is_some(), hides, variant));
     if !res.levels_of_detail {
-        (view_frame.lod, view_frame.lod_error) = (LodView::full_detail(), 0.0);
+        (view_frame.lod, view_frame.lod_error, view_frame.far_eye) = (LodView::full_detail(), 0.0, None);
     }
     let format = scene_format(res, view, target);
     if (width, height, format) == (target.width(), target.height(), target.format()) {

@@ -9,7 +9,8 @@ use crate::render::gpu_driven::commands::Placed;
 use crate::render::resources::instances::{InstanceStore, Slot};
 use crate::render::resources::Resources;
 use crate::render::view::ViewFrame;
-use crate::scene::{Culling, MaterialId, ShapeId};
+use crate::scene::{Culling, FarField, MaterialId, ShapeId};
+use glam::Vec3;
 use p3_maybe_rayon::prelude::*;
 
 /// An entity as submitted this frame: its store slot and what it draws with.
@@ -23,6 +24,41 @@ pub(crate) struct Submitted {
     pub instances: u64,
     /// The fraction of each tile drawn: the entity's density times the renderer's.
     pub density: f32,
+    /// Its material's far field, which draws less of its far tiles.
+    pub far_field: Option<FarField>,
+}
+
+impl Submitted {
+    /// How much of each of its tiles a view whose far fields are measured
+    /// from `far_eye` draws.
+    pub(crate) fn share(&self, far_eye: Option<Vec3>) -> TileShare {
+        TileShare { density: self.density, far: self.far_field.zip(far_eye) }
+    }
+}
+
+/// How much of each tile of a tiled entity is drawn: the first `density` of
+/// it, and no more than a far field (`far`: it and the eye it is measured
+/// from) draws where the tile's box comes nearest.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct TileShare {
+    pub density: f32,
+    pub far: Option<(FarField, Vec3)>,
+}
+
+impl TileShare {
+    /// Every tile's first `density`, no far field.
+    #[cfg(test)]
+    pub(crate) fn density(density: f32) -> Self {
+        Self { density, far: None }
+    }
+
+    /// The instances drawn of a tile of `len` whose box is `center ± extent`.
+    fn drawn(self, len: u32, (center, extent): (glam::Vec3A, glam::Vec3A)) -> u32 {
+        let drawn = crate::scene::Tiles::drawn(len, self.density);
+        let Some((field, eye)) = self.far else { return drawn };
+        let nearest = (glam::Vec3A::from(eye) - center).abs() - extent;
+        drawn.min(field.drawn(len, nearest.max(glam::Vec3A::ZERO).length()))
+    }
 }
 
 /// Submitted instances above which entities are culled on all cores. Tiles make
@@ -114,7 +150,7 @@ pub(crate) fn cull(
     stats: &mut FrameStats,
 ) {
     let shown = shown(res, view.hides);
-    collect_visible(res, (&view.frustum, view.culling), (submitted, |s| shown.contains(s)), visible);
+    collect_visible(res, (&view.frustum, view.culling, view.far_eye), (submitted, |s| shown.contains(s)), visible);
     let store = &res.store;
     let drawn = submitted.iter().filter(|s| shown.contains(s));
     stats.instances_invalid = drawn.map(|s| u64::from(store.slot(s.slot).invalid)).sum();
@@ -130,7 +166,7 @@ pub(crate) fn cull(
 /// `out.placed` says.
 pub(crate) fn collect_visible(
     res: &Resources,
-    (frustum, culling): (&Frustum, Culling),
+    (frustum, culling, far_eye): (&Frustum, Culling, Option<Vec3>),
     (submitted, wanted): (&[Submitted], impl Fn(&Submitted) -> bool + Sync),
     out: &mut Visible,
 ) {
@@ -156,7 +192,7 @@ pub(crate) fn collect_visible(
         if slot.tiled {
             // The GPU culls by the same boxes: every instance carries its
             // tile's (compact ones are culled here alone).
-            out.tiles += visible_tiles(frustum, frustum_on, slot, s.density, |r| {
+            out.tiles += visible_tiles(frustum, frustum_on, slot, s.share(far_eye), |r| {
                 ranges.push(VisibleRun { entry, start: r.start, len: r.end - r.start });
             });
         } else if slot.count > slot.invalid {
@@ -182,7 +218,8 @@ pub(crate) fn collect_visible(
                 let mut list = Vec::new();
                 let mut counts = TileCounts::default();
                 if listed(entry, s) {
-                    counts = visible_instances(frustum, culling, store.slot(s.slot), s.density, (store, &mut list));
+                    counts =
+                        visible_instances(frustum, culling, store.slot(s.slot), s.share(far_eye), (store, &mut list));
                 }
                 (list, counts)
             })
@@ -197,7 +234,7 @@ pub(crate) fn collect_visible(
         for (entry, s) in submitted.iter().enumerate() {
             let start = visible.len();
             if listed(entry, s) {
-                *tiles += visible_instances(frustum, culling, store.slot(s.slot), s.density, (store, visible));
+                *tiles += visible_instances(frustum, culling, store.slot(s.slot), s.share(far_eye), (store, visible));
             }
             push_run(entry, visible, start);
         }
@@ -208,17 +245,17 @@ pub(crate) fn collect_visible(
 /// `out`, as store indices; with `culling` off, every valid one. An entity box
 /// wholly inside or outside decides at once, else its clusters are tested, and
 /// only the instances of clusters crossing a plane one by one. A tiled entity's
-/// tiles are culled whole, `density` of each drawn ([`visible_tiles`]).
+/// tiles are culled whole, `share` of each drawn ([`visible_tiles`]).
 /// Invalid instances are never appended.
 pub(crate) fn visible_instances(
     frustum: &Frustum,
     culling: bool,
     slot: &Slot,
-    density: f32,
+    share: TileShare,
     (store, out): (&InstanceStore, &mut Vec<u32>),
 ) -> TileCounts {
     if slot.tiled {
-        return visible_tiles(frustum, culling, slot, density, |range| out.extend(range));
+        return visible_tiles(frustum, culling, slot, share, |range| out.extend(range));
     }
     let valid = slot.first..slot.first + slot.count - slot.invalid;
     let test = |range: std::ops::Range<u32>, out: &mut Vec<u32>| {
@@ -244,13 +281,13 @@ pub(crate) fn visible_instances(
 }
 
 /// Give `keep` the store range of each tile of tiled `slot` that `frustum`
-/// sees (every tile with `culling` off), cut to its first ⌈valid × `density`⌉
-/// instances; empty ones are not given. Returns the tiles tested and kept.
+/// sees (every tile with `culling` off), cut to its first instances as
+/// `share` says; empty ones are not given. Returns the tiles tested and kept.
 fn visible_tiles(
     frustum: &Frustum,
     culling: bool,
     slot: &Slot,
-    density: f32,
+    share: TileShare,
     mut keep: impl FnMut(std::ops::Range<u32>),
 ) -> TileCounts {
     let mut counts = TileCounts::default();
@@ -260,7 +297,7 @@ fn visible_tiles(
         Containment::Intersecting => false,
     };
     for tile in &slot.clusters {
-        let drawn = crate::scene::Tiles::drawn(tile.valid, density);
+        let drawn = share.drawn(tile.valid, (tile.center, tile.extent));
         if drawn == 0 {
             continue;
         }
@@ -321,7 +358,7 @@ mod tests {
             let camera = Camera::perspective(60.0, 0.5, 80.0).looking_at(eye, target);
             let frustum = Frustum::from_view_proj(camera.projection(1.5) * camera.view());
             let mut tiled = Vec::new();
-            visible_instances(&frustum, true, store.slot(slot), 1.0, (&store, &mut tiled));
+            visible_instances(&frustum, true, store.slot(slot), TileShare::density(1.0), (&store, &mut tiled));
             tiled.sort_unstable();
             let each: Vec<u32> = (0..5000u32)
                 .filter(|&i| store.bounds.is_valid(i as usize))
@@ -379,7 +416,7 @@ mod tests {
             Camera::perspective(50.0, 0.5, 90.0).looking_at(Vec3::new(-30.0, 20.0, -60.0), Vec3::new(10.0, 0.0, 0.0));
         let frustum = Frustum::from_view_proj(camera.projection(1.5) * camera.view());
         let mut kept = Vec::new();
-        let counts = visible_instances(&frustum, true, store.slot(slot), 1.0, (&store, &mut kept));
+        let counts = visible_instances(&frustum, true, store.slot(slot), TileShare::density(1.0), (&store, &mut kept));
         let kept: std::collections::BTreeSet<u32> = kept.into_iter().map(|i| i - first).collect();
         // Each tile's box from the instances' own boxes, grown by the padding.
         let mut boxes = vec![(glam::Vec3A::splat(f32::INFINITY), glam::Vec3A::splat(f32::NEG_INFINITY)); 64];
@@ -426,7 +463,8 @@ mod tests {
         let valid = own.iter().filter(|b| b.is_some()).count() as f64;
         for density in [1.0, 0.5, 0.25, 0.0] {
             let mut kept = Vec::new();
-            let counts = visible_instances(&frustum, false, store.slot(slot), density, (&store, &mut kept));
+            let counts =
+                visible_instances(&frustum, false, store.slot(slot), TileShare::density(density), (&store, &mut kept));
             let mut start = 0;
             let mut expected = Vec::new();
             for (tile, &n) in store.slot(slot).clusters.iter().zip(&sizes) {

@@ -113,7 +113,7 @@ impl SceneGpu {
     }
 }
 
-/// The Camera block, `@group(1) @binding(0)` (224 bytes).
+/// The Camera block, `@group(1) @binding(0)` (240 bytes).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub(crate) struct CameraGpu {
@@ -122,8 +122,9 @@ pub(crate) struct CameraGpu {
     inv_view_proj: [f32; 16], // 64
     position: [f32; 4],       // 16
     motion: [f32; 4],         // 16: scene time (s), wind strength, wind direction x, z
+    far_eye: [f32; 4],        // 16: the eye far fields are measured from; w: 1 when they are on
 }
-const _: () = assert!(std::mem::size_of::<CameraGpu>() == 224);
+const _: () = assert!(std::mem::size_of::<CameraGpu>() == 240);
 
 impl Camera {
     /// The shader's view of this camera for a target of `aspect` = width / height.
@@ -136,6 +137,7 @@ impl Camera {
             inv_view_proj: view_proj.inverse().to_cols_array(),
             position: self.eye.extend(1.0).to_array(),
             motion: [0.0; 4],
+            far_eye: [0.0; 4],
         }
     }
 }
@@ -151,6 +153,7 @@ impl CameraGpu {
             inv_view_proj: view_proj.inverse().to_cols_array(),
             position: view.eye.extend(view.distance_scale).to_array(),
             motion: [0.0; 4],
+            far_eye: [0.0; 4],
         }
     }
 
@@ -161,6 +164,14 @@ impl CameraGpu {
         let [strength, x, z] = environment.wind.to_gpu();
         let time = if environment.time.is_finite() { environment.time } else { 0.0 };
         Self { motion: [time, strength, x, z], ..self }
+    }
+
+    /// The record with far fields ([`FarField`](crate::scene::FarField))
+    /// measured from `eye` (a camera view's own, or the camera view's a shadow
+    /// view is drawn for), or off (`None`: every instance at its own width).
+    pub(crate) fn with_far_eye(self, eye: Option<glam::Vec3>) -> Self {
+        let far_eye = eye.map_or([0.0; 4], |e| e.extend(1.0).to_array());
+        Self { far_eye, ..self }
     }
 }
 
@@ -178,7 +189,7 @@ pub(crate) struct MaterialGpu {
     uv_y: [f32; 3],       // 12: second row
     uv1_maps: u32,        // 4: MapSlots reading the second uv set
     motion: [f32; 4],     // 16: the Motion's parameters (scene/motion.rs), reserved
-    fade: [f32; 4],       // 16: edge fade's inner and outer radius, 2 reserved
+    fade: [f32; 4],       // 16: edge fade's inner and outer radius, far field's start and end
 }
 const _: () = assert!(std::mem::size_of::<MaterialGpu>() == 128);
 
@@ -194,13 +205,14 @@ impl Material {
         let (s, c) = self.uv_rotation.sin_cos();
         let [m0, m1, m2] = self.motion.map_or([0.0; 3], crate::scene::Motion::params);
         let (inner, outer) = self.edge_fade.unwrap_or((0.0, 0.0));
+        let far = self.far_field.map_or([0.0; 2], |f| [f.start, f.end]);
         MaterialGpu {
             base_color: self.base_color.to_array(),
             coeffs: Vec4::new(self.ambient, self.diffuse, self.specular, exponent).to_array(),
             pbr: [self.metallic.clamp(0.0, 1.0), self.roughness.clamp(0.0, 1.0), 0.0, 0.0],
             emissive: self.emissive.extend(0.0).to_array(),
             motion: [m0, m1, m2, 0.0],
-            fade: [inner, outer, 0.0, 0.0],
+            fade: [inner, outer, far[0], far[1]],
             uv_x: [c * self.uv_scale.x, -s * self.uv_scale.y, self.uv_offset.x],
             alpha_cutoff: cutoff,
             uv_y: [s * self.uv_scale.x, c * self.uv_scale.y, self.uv_offset.y],
