@@ -374,7 +374,7 @@ mod tests {
             "SceneBlock",
             [ambient, sky_top, sky_bottom, fog, counts, environment, environment_sky, lights]
         );
-        assert_mirrors!(CameraGpu, &wgsl, "CameraBlock", [view_proj, view, inv_view_proj, position, motion]);
+        assert_mirrors!(CameraGpu, &wgsl, "CameraBlock", [view_proj, view, inv_view_proj, position, motion, far_eye]);
         assert_mirrors!(
             MaterialGpu,
             &wgsl,
