@@ -36,6 +36,7 @@ fn random_items(n: usize) -> Vec<DrawItem> {
             let (m, s) = (MaterialId(rng.random_range(0..10)), ShapeId(rng.random_range(0..10)));
             DrawItem {
                 level: 0,
+                copies: false,
                 key: sort_key(Queue::Opaque.stage(), false, 0, 0, m, s, rng.random()),
                 pipeline: 0,
                 material: m,

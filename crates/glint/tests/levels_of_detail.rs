@@ -1,8 +1,10 @@
 //! Levels of detail (`scene/levels.rs`, `render/lod.rs`): a near instance is
 //! drawn at full detail and its picture equals full detail's exactly, a far one
 //! at a coarser level; the GPU's cull pass and the CPU pick the same levels;
-//! shadows of far casters are drawn coarser; a skinned model keeps its pose at
-//! every level; the reference scenes stay within the reference tolerance.
+//! shadows of far casters are drawn coarser; a sphere crossing from one level
+//! to the next shows each pixel from one of the two; a skinned model keeps
+//! its pose at every level; the reference scenes stay within the reference
+//! tolerance.
 
 mod common;
 
@@ -105,6 +107,57 @@ fn a_coarser_error_draws_fewer_triangles_and_zero_draws_full_detail() {
     let (none, half, four) = (triangles(0.0), triangles(0.5), triangles(4.0));
     assert_eq!(none, 40 * sphere_triangles());
     assert!(four < half && half < none, "{four} < {half} < {none}");
+}
+
+#[test]
+fn a_fading_sphere_shows_each_pixel_from_one_of_its_two_levels_never_both() {
+    let Some(gpu) = common::gpu() else { return };
+    let mut renderer = Renderer::new(gpu);
+    let mut sphere = row(&mut renderer, (2.0, 2.0), 1);
+    let mut target = OffscreenTarget::new(gpu, 128, 128, 1).expect("target");
+    let mut at = |z: f32, error: f32, culling: Culling| {
+        sphere.set_transform(0, Mat4::from_translation(Vec3::new(0.0, 0.0, -z)));
+        let view = View::new(camera()).with_culling(culling).with_lod_error(error);
+        let mut stats = renderer.render([&sphere], view, &[] as &[Light], &mut target).expect("frame");
+        renderer.wait_for_counts(std::slice::from_mut(&mut stats));
+        (stats, target.read_rgba8(gpu).expect("readback"))
+    };
+    // The triangles of one level: a sphere drawing any other count draws two.
+    let levels = glint::scene::levels::detail_levels(&ShapeKind::Sphere.mesh());
+    let single: Vec<u64> =
+        std::iter::once(sphere_triangles()).chain(levels.iter().map(|l| l.triangles() as u64)).collect();
+    // Levels 8 pixels off: far enough apart to tell in a picture.
+    const ERROR: f32 = 8.0;
+    let fading: Vec<f32> = (1..240)
+        .map(|k| k as f32 * 0.25)
+        .filter(|&z| !single.contains(&at(z, ERROR, Culling::Cpu).0.triangles_drawn))
+        .collect();
+    assert!(fading.len() > 3, "some distances fade: {fading:?}");
+    // The middle of the first fade.
+    let end = fading.windows(2).position(|w| w[1] - w[0] > 0.3).unwrap_or(fading.len() - 1);
+    let z = fading[end / 2];
+    let (faded, image) = at(z, ERROR, Culling::Cpu);
+    assert_eq!(faded.instances_drawn, 1, "one instance, drawn at two levels");
+    // A little less error allowed draws the finer level alone; a little more, the coarser.
+    let ((fine, fine_image), (coarse, coarse_image)) =
+        (at(z, ERROR * 0.78, Culling::Cpu), at(z, ERROR * 1.3, Culling::Cpu));
+    assert!(single.contains(&fine.triangles_drawn) && single.contains(&coarse.triangles_drawn), "{fine:?} {coarse:?}");
+    assert_eq!(faded.triangles_drawn, fine.triangles_drawn + coarse.triangles_drawn);
+    let pixels = image.pixels().zip(fine_image.pixels()).zip(coarse_image.pixels());
+    let (mut from_fine, mut from_coarse) = (0, 0);
+    for ((p, f), c) in pixels {
+        assert!(p == f || p == c, "each pixel shows one level: {p:?} against {f:?} and {c:?}");
+        from_fine += u32::from(p == f && p != c);
+        from_coarse += u32::from(p == c && p != f);
+    }
+    assert!(from_fine > 0 && from_coarse > 0, "both levels show: {from_fine} and {from_coarse} pixels");
+    // The GPU's cull pass fades it alike.
+    let (on_gpu, gpu_image) = at(z, ERROR, Culling::Gpu);
+    assert_eq!(
+        (on_gpu.culling, on_gpu.triangles_drawn, on_gpu.instances_drawn),
+        (Culling::Gpu, faded.triangles_drawn, 1)
+    );
+    assert!(gpu_image == image, "the GPU's fade is the CPU's");
 }
 
 #[test]

@@ -4,7 +4,7 @@ use crate::render::queue::{stage_of, DrawItem};
 use crate::scene::{MaterialId, ShapeId};
 
 /// One instanced draw: a run of adjacent items with equal stage, pipeline,
-/// material, shape and level of detail.
+/// material, shape, level of detail and fade copies.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Batch {
     /// The sort key of its first item.
@@ -23,6 +23,8 @@ pub struct Batch {
     pub instance_count: u32,
     /// Its level of detail (0: full detail).
     pub level: u8,
+    /// Whether it draws fading instances' coarser copies ([`DrawItem::copies`]).
+    pub copies: bool,
 }
 
 /// Merge adjacent equal items of a sorted list into batches appended to
@@ -58,6 +60,7 @@ pub(crate) fn merge_placed(
                 && b.material == item.material
                 && b.shape == item.shape
                 && b.level == item.level
+                && b.copies == item.copies
         }) && before.is_some_and(|b| follows(b, item));
         before = Some(item);
         if !joins {
@@ -70,6 +73,7 @@ pub(crate) fn merge_placed(
                 first_instance: 0,
                 instance_count: 0,
                 level: item.level,
+                copies: item.copies,
             });
         }
         let k = batches.len() - 1;
@@ -98,6 +102,7 @@ mod tests {
             count,
             entry: 0,
             level: 0,
+            copies: false,
         }
     }
 

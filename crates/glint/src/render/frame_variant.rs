@@ -1,5 +1,6 @@
 //! Core layer: what a frame adds to its forward shader variants (shadow lookups,
-//! light counts, ambient occlusion), chosen before its pipelines are prepared.
+//! light counts, ambient occlusion, levels of detail's cross-fade), chosen
+//! before its pipelines are prepared.
 
 use crate::scene::{Light, LightKind};
 use crate::shader::LightCounts;
@@ -17,6 +18,8 @@ pub(crate) struct FrameVariant {
     pub lights: LightCounts,
     /// The view has screen-space ambient occlusion (`AMBIENT_OCCLUSION`).
     pub ambient_occlusion: bool,
+    /// The view cross-fades levels of detail (`LOD_FADE`: render/lod.rs).
+    pub lod_fade: bool,
 }
 
 impl FrameVariant {
@@ -29,7 +32,13 @@ impl FrameVariant {
             shadow_cubes: lights.iter().any(|l| l.shadows.is_some() && point(l)),
             lights: LightCounts::of(lights),
             ambient_occlusion,
+            lod_fade: false,
         }
+    }
+
+    /// The variant with levels of detail cross-faded, or not.
+    pub(crate) fn with_lod_fade(self, lod_fade: bool) -> Self {
+        Self { lod_fade, ..self }
     }
 
     /// The variant of a view lit by `lights` whose `views` shadow views were
@@ -41,6 +50,7 @@ impl FrameVariant {
             shadow_cubes: lights.iter().zip(first_view).any(|(l, v)| v.is_some() && point(l)),
             lights: LightCounts::of(lights),
             ambient_occlusion,
+            lod_fade: false,
         }
     }
 }

@@ -185,6 +185,10 @@ pub struct DrawItem {
     /// Its level of detail (0: full detail), or `u8::MAX` where the GPU's
     /// cull pass picks each instance's.
     pub level: u8,
+    /// Whether its entries are the coarser copies of instances fading into
+    /// `level` (their triangles are drawn, their instances counted at the
+    /// finer level: see `render/lod.rs`).
+    pub copies: bool,
 }
 
 /// Below this many items a comparison sort beats the radix sort's eight fixed passes.
@@ -277,8 +281,17 @@ mod tests {
 
     #[test]
     fn sort_orders_by_key_and_is_stable_on_both_paths() {
-        let item =
-            |key, first| DrawItem { key, pipeline: 0, material: M0, shape: S0, first, count: 1, entry: 0, level: 0 };
+        let item = |key, first| DrawItem {
+            key,
+            pipeline: 0,
+            material: M0,
+            shape: S0,
+            first,
+            count: 1,
+            entry: 0,
+            level: 0,
+            copies: false,
+        };
         let mut items = vec![item(5, 0), item(1, 1), item(5, 2), item(u64::MAX, 3), item(0, 4)];
         sort(&mut items);
         let firsts: Vec<u32> = items.iter().map(|i| i.first).collect();

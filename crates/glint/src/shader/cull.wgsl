@@ -93,8 +93,9 @@ struct Occlusion {
 // base vertex, first instance.
 @group(0) @binding(5) var<storage, read_write> args: array<atomic<u32>>;
 // Each run's command count (the early phase's, then the late's), then each
-// frustum's totals (TOTAL_WORDS words: instances drawn, triangles drawn, then
-// instances culled here drawn at each level of detail), then the late phase's
+// frustum's totals (TOTAL_WORDS words: instances drawn, triangles drawn,
+// instances culled here drawn at each level of detail, then the coarser copies
+// of fading ones, counted among the instances drawn), then the late phase's
 // hidden count.
 @group(0) @binding(6) var<storage, read_write> counts: array<atomic<u32>>;
 
@@ -110,7 +111,7 @@ struct Occlusion {
 
 const WORKGROUP: u32 = 64u;
 // Words of a frustum's totals in `counts` (render/gpu_driven/gpu_cull.rs).
-const TOTAL_WORDS: u32 = 7u;
+const TOTAL_WORDS: u32 = 8u;
 // How much farther than the pyramid's depth a box must be to count hidden:
 // more than a 24-bit depth buffer's rounding, so a surface never hides itself.
 const DEPTH_MARGIN: f32 = 1e-6;
@@ -148,35 +149,61 @@ fn candidate(g: u32) -> CullRange {
     return ranges[lo];
 }
 
+// A draw index's fade bits start here (render/lod.rs FADE_SHIFT).
+const FADE_SHIFT: u32 = 27u;
+
 // The level of detail a box `c ± e` of range `r` draws at: the coarsest whose
-// error projects to at most the view's allowed pixels at the box's nearest depth.
-fn level_of(r: CullRange, c: vec3<f32>, e: vec3<f32>) -> u32 {
+// error projects to at most the view's allowed pixels at the box's nearest
+// depth; and (y) how far it has faded into the next, in 16ths (render/lod.rs
+// LodView::pick, term for term).
+fn pick_of(r: CullRange, c: vec3<f32>, e: vec3<f32>) -> vec2<u32> {
     let w_row = planes[r.frustum * 8u + 6u];
     let scale = planes[r.frustum * 8u + 7u].x;
+    let band = planes[r.frustum * 8u + 7u].y;
     if r.levels <= 1u || scale <= 0.0 {
-        return 0u;
+        return vec2<u32>(0u);
     }
     let radius = length(e);
     let w = dot(w_row, vec4<f32>(c, 1.0)) - radius * length(w_row.xyz);
     let allowed = w / (radius * scale);
     if !(allowed > 0.0) {
-        return 0u;
+        return vec2<u32>(0u);
     }
+    var level = 0u;
     for (var l = r.levels - 1u; l > 0u; l--) {
         if r.error[l - 1u] <= allowed {
-            return l;
+            level = l;
+            break;
         }
     }
-    return 0u;
+    if band <= 0.0 || level + 1u >= r.levels {
+        return vec2<u32>(level, 0u);
+    }
+    let coarser = (allowed / r.error[level] * (1.0 + band) - 1.0) / band;
+    return vec2<u32>(level, min(u32(clamp(coarser, 0.0, 1.0) * 16.0), 15u));
+}
+
+// Put draw index `value` among the instances of range `r`'s batch at `level`.
+fn put(r: CullRange, level: u32, value: u32) {
+    let at = atomicAdd(&args[(r.batch + level) * 5u + 1u], 1u);
+    draw_indices[r.out + level * params.level_stride + params.place_offset + at] = value;
 }
 
 // Place store instance `instance` of range `r`, whose box is `c ± e`, among
-// the instances of its batch at its level of detail.
+// the instances of its batch at its level of detail; one fading into the next
+// level goes there too, its coarser copy, both with their fade bits.
 fn place(r: CullRange, instance: u32, c: vec3<f32>, e: vec3<f32>) {
-    let level = level_of(r, c, e);
-    atomicAdd(&counts[params.totals + r.frustum * TOTAL_WORDS + 2u + level], 1u);
-    let at = atomicAdd(&args[(r.batch + level) * 5u + 1u], 1u);
-    draw_indices[r.out + level * params.level_stride + params.place_offset + at] = instance;
+    let pick = pick_of(r, c, e);
+    let totals = params.totals + r.frustum * TOTAL_WORDS;
+    atomicAdd(&counts[totals + 2u + pick.x], 1u);
+    if pick.y == 0u {
+        put(r, pick.x, instance);
+        return;
+    }
+    let fade = instance | (pick.y << (FADE_SHIFT + 1u));
+    put(r, pick.x, fade);
+    put(r, pick.x + 1u, fade | (1u << FADE_SHIFT));
+    atomicAdd(&counts[totals + TOTAL_WORDS - 1u], 1u);
 }
 
 // Whether the box `c ± e` is wholly behind what the depth pyramid holds.

@@ -211,6 +211,11 @@ struct VertexOut {
     // The instance's placed position in x and z, where its fade is measured from.
     @location(9) @interpolate(flat) origin: vec2<f32>,
 #endif
+#ifdef LOD_FADE
+    // The draw index's fade bits (render/lod.rs): bit 0 on the coarser copy,
+    // bits 1..=4 the 16ths of the pixels the coarser draws (0: not fading).
+    @location(10) @interpolate(flat) lod_fade: u32,
+#endif
 }
 
 fn record_matrix(r: Instance) -> mat4x4<f32> {
@@ -284,6 +289,27 @@ fn instance_hash(p: vec3<f32>) -> f32 {
 }
 
 const TAU: f32 = 6.2831853;
+
+// A draw index's fade bits start here (render/lod.rs FADE_SHIFT).
+const FADE_SHIFT: u32 = 27u;
+
+#ifdef LOD_FADE
+// Whether the pixel at `pixel` belongs to the other level of an instance
+// fading by `fade` (render/lod.rs coarser_pixel): the coarser copy draws the
+// pixels whose place in the 4 × 4 ordered-dither matrix is under its 16ths,
+// the finer the rest, so every pixel shows one level.
+fn lod_dithered_out(pixel: vec2<f32>, fade: u32) -> bool {
+    let q = fade >> 1u;
+    if q == 0u {
+        return false;
+    }
+    let p = vec2<u32>(pixel);
+    let low = (((p.x ^ p.y) & 1u) << 1u) | (p.y & 1u);
+    let high = ((((p.x >> 1u) ^ (p.y >> 1u)) & 1u) << 1u) | ((p.y >> 1u) & 1u);
+    let coarser_pixel = ((low << 2u) | high) < q;
+    return coarser_pixel != ((fade & 1u) == 1u);
+}
+#endif
 
 #ifdef WIND
 // How far a vertex `h` object units above the model's base moves in the world
@@ -387,7 +413,9 @@ fn vs_main(v: VertexIn, @builtin(instance_index) draw_instance: u32) -> VertexOu
     let at = draw_instance;
     let instance = compact_instance(at);
 #else
-    let at = draw_index_at(draw_instance);
+    // A draw index is a store index with a level-of-detail fade above it.
+    let drawn = draw_index_at(draw_instance);
+    let at = drawn & ((1u << FADE_SHIFT) - 1u);
     let instance = instance_at(at);
 #endif
     let model = record_matrix(instance);
@@ -454,6 +482,9 @@ fn vs_main(v: VertexIn, @builtin(instance_index) draw_instance: u32) -> VertexOu
 #endif
 #ifdef EDGE_FADE
     out.origin = model[3].xz;
+#endif
+#ifdef LOD_FADE
+    out.lod_fade = drawn >> FADE_SHIFT;
 #endif
 #ifdef VERTEX_COLOR
     out.color = v.color;
@@ -805,6 +836,11 @@ fn base_color(in: VertexOut) -> vec4<f32> {
 #endif
 #ifdef ALPHA_MASK
     if base.a < material.alpha_cutoff {
+        discard;
+    }
+#endif
+#ifdef LOD_FADE
+    if lod_dithered_out(in.clip.xy, in.lod_fade) {
         discard;
     }
 #endif

@@ -49,8 +49,9 @@ bitflags::bitflags! {
     /// | 22 | `ENVIRONMENT` | light from the environment (image-based lighting) instead of the ambient colour ([`Environment::light`]) |
     /// | 23 | `AMBIENT_OCCLUSION` | darken ambient and environment light by the view's screen-space ambient occlusion (set by the frame, for a view with [`View::ambient_occlusion`](crate::View::ambient_occlusion); not for blended or unlit materials) |
     /// | 24 | `FAR_FIELD` | draw fewer, wider instances far from the camera ([`Material::far_field`]) |
+    /// | 25 | `LOD_FADE` | drop the pixels of a fading instance's other level of detail (set by the frame, for a view with levels of detail on; not for blended materials or compact instances: `render/lod.rs`) |
     ///
-    /// Bits 25–31 are free for more (shadow receiving comes with shadow maps).
+    /// Bits 26–31 are free for more (shadow receiving comes with shadow maps).
     /// The motion bits stay in shadow passes' variants, so shadows move too.
     ///
     /// One def follows from the bits rather than being one: `TEXCOORDS`, set with
@@ -108,6 +109,8 @@ bitflags::bitflags! {
         const AMBIENT_OCCLUSION = 1 << 23;
         /// `FAR_FIELD`.
         const FAR_FIELD = 1 << 24;
+        /// `LOD_FADE`.
+        const LOD_FADE = 1 << 25;
     }
 }
 

@@ -33,7 +33,12 @@ pub(crate) fn read_list(
             }
         }
     }
-    views.iter_mut().for_each(|v| v.sort_unstable());
+    // A fading instance is drawn at two levels: its store index once.
+    for v in &mut views {
+        v.iter_mut().for_each(|i| *i &= crate::render::lod::INDEX_MASK);
+        v.sort_unstable();
+        v.dedup();
+    }
     Ok(views)
 }
 

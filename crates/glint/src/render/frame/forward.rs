@@ -43,7 +43,7 @@ pub(crate) fn build_queue(
         };
         let stage = s.render_order.unwrap_or(queue.stage());
         let blended = queue == Queue::Transparent;
-        let item = |level, first, count, depth| DrawItem {
+        let item = |level, first, count, copies, depth| DrawItem {
             key: queue::sort_key(stage, blended, pipeline, texture_set, s.material, s.shape, depth),
             pipeline,
             material: s.material,
@@ -52,19 +52,20 @@ pub(crate) fn build_queue(
             count,
             entry: run.entry as u32,
             level,
+            copies,
         };
         let (levels, bounds) = (&draw.mesh.levels, &res.store.bounds);
         if blended && !of_store {
             for k in run.start..run.start + run.len {
                 let instance = visible.instances[k as usize] as usize;
                 let level = view.lod.level(levels, bounds.center(instance), bounds.extent(instance));
-                gpu.forward.items.push(item(level, k, 1, depth(bounds.center(instance))));
+                gpu.forward.items.push(item(level, k, 1, false, depth(bounds.center(instance))));
             }
         } else {
             let depth = depth(res.store.slot(s.slot).bounds.map_or(Vec3A::ZERO, |(c, _)| c));
             let (items, run_of) = (&mut gpu.forward.items, (visible.placed[run.entry], run.start, run.len));
-            level_items(&view.lod, levels, run_of, (&mut visible.instances, bounds), |level, first, count| {
-                items.push(item(level, first, count, depth));
+            level_items(&view.lod, levels, run_of, (&mut visible.instances, bounds), |level, first, count, copies| {
+                items.push(item(level, first, count, copies, depth));
             });
         }
     }

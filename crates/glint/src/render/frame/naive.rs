@@ -99,6 +99,7 @@ fn naive_batches(
                 first_instance,
                 instance_count: 1,
                 level: 0,
+                copies: false,
             };
             list.push_alone(batch, draw, (!slot.compact).then_some(i));
         }

@@ -250,7 +250,7 @@ fn batch_shadow_views(
             let center = res.store.slot(s.slot).bounds.map_or(Vec3::ZERO, |(c, _)| Vec3::from(c));
             let depth = view_proj.project_point3(center).z.clamp(0.0, 1.0);
             let key = queue::sort_key(queue.stage(), false, pipeline, texture_set, material, shape, depth);
-            let item = |level, first, count| DrawItem {
+            let item = |level, first, count, copies| DrawItem {
                 key,
                 pipeline,
                 material,
@@ -259,12 +259,19 @@ fn batch_shadow_views(
                 count,
                 entry: entry as u32,
                 level,
+                copies,
             };
             let (levels, items) = (&prepared[entry].draw.mesh.levels, &mut gpu.shadows.items);
             let run = (visible.placed[entry], start, len);
-            level_items(&lod, levels, run, (&mut visible.instances, &res.store.bounds), |level, first, count| {
-                items.push(item(level, first, count));
-            });
+            level_items(
+                &lod,
+                levels,
+                run,
+                (&mut visible.instances, &res.store.bounds),
+                |level, first, count, copies| {
+                    items.push(item(level, first, count, copies));
+                },
+            );
         }
         queue::sort(&mut gpu.shadows.items[first_item..]);
         let draw_of = |item: &DrawItem| prepared[item.entry as usize].draw;

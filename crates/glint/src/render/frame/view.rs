@@ -88,7 +88,9 @@ fn draw_into(
 ) -> Result<FrameStats, RenderError> {
     let [x, y, width, height] = view.viewport.pixels(target.width(), target.height());
     let occluded = occludes(res, view.ambient_occlusion);
-    let variant = FrameVariant::after(shadows.first, shadows.views.len(), lighting.lights, occluded);
+    let fades = res.levels_of_detail && view.lod_error > 0.0;
+    let variant =
+        FrameVariant::after(shadows.first, shadows.views.len(), lighting.lights, occluded).with_lod_fade(fades);
     let mut view_frame = ViewFrame::new(view, (width, height), (res.cull_pipelines.is_some(), hides, variant));
     if !res.levels_of_detail {
         (view_frame.lod, view_frame.lod_error, view_frame.far_eye) = (LodView::full_detail(), 0.0, None);

@@ -155,15 +155,18 @@ impl DrawList {
         (0..self.ramp).chain(self.draw_indices.iter().copied()).collect()
     }
 
-    /// What the batches not culled on the GPU draw (listed and whole tiles).
+    /// What the batches not culled on the GPU draw (listed and whole tiles):
+    /// fading instances' coarser copies add their triangles, not instances.
     pub(crate) fn cpu_drawn(&self) -> DrawnCounts {
         let mut drawn = DrawnCounts::default();
         let batches = self.batches.iter().zip(&self.draws).zip(&self.placed);
         for ((b, d), _) in batches.filter(|(_, &p)| p != Placed::OnGpu) {
             let n = u64::from(b.instance_count);
-            drawn.instances += n;
             drawn.triangles += n * u64::from(d.mesh.index_count / 3);
-            drawn.per_level[usize::from(b.level).min(MAX_LEVELS - 1)] += n;
+            if !b.copies {
+                drawn.instances += n;
+                drawn.per_level[usize::from(b.level).min(MAX_LEVELS - 1)] += n;
+            }
         }
         drawn
     }

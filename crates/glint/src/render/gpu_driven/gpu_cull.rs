@@ -40,9 +40,10 @@ pub const SKIP_UNPAID_OCCLUSION: u32 = 30;
 /// level-of-detail rule ([`LodView::to_gpu`]).
 const VIEW_ROWS: usize = 8;
 
-/// Words of each frustum's totals in the counts buffer: instances drawn,
-/// triangles drawn, then the GPU-culled instances drawn at each level of detail.
-pub(crate) const TOTAL_WORDS: usize = 2 + MAX_LEVELS;
+/// Words of each frustum's totals in the counts buffer: instances drawn
+/// (fading instances' coarser copies among them), triangles drawn, the
+/// GPU-culled instances drawn at each level of detail, then those copies.
+pub(crate) const TOTAL_WORDS: usize = 3 + MAX_LEVELS;
 
 /// Words read back at most: the totals of the most frustums a list has (the
 /// camera, or every shadow view), and the hidden count.
@@ -479,9 +480,9 @@ impl GpuCull {
 fn summed(totals: &[u32]) -> DrawnCounts {
     let mut drawn = DrawnCounts::default();
     for frustum in totals.chunks_exact(TOTAL_WORDS) {
-        drawn.instances += u64::from(frustum[0]);
+        drawn.instances += u64::from(frustum[0].saturating_sub(frustum[2 + MAX_LEVELS]));
         drawn.triangles += u64::from(frustum[1]);
-        for (level, &n) in drawn.per_level.iter_mut().zip(&frustum[2..]) {
+        for (level, &n) in drawn.per_level.iter_mut().zip(&frustum[2..2 + MAX_LEVELS]) {
             *level += u64::from(n);
         }
     }
@@ -538,5 +539,7 @@ mod layout_tests {
         assert_layout(wgsl, "Params", std::mem::size_of::<Params>(), &fields);
         let words = format!("const TOTAL_WORDS: u32 = {TOTAL_WORDS}u;");
         assert!(wgsl.contains(&words), "cull.wgsl must say {words}");
+        let shift = format!("const FADE_SHIFT: u32 = {}u;", crate::render::lod::FADE_SHIFT);
+        assert!(wgsl.contains(&shift), "cull.wgsl must say {shift}");
     }
 }

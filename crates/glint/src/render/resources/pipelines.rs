@@ -82,16 +82,20 @@ pub(crate) struct VertexLayout {
     pub skin: bool,
     /// Compact instances, 16 bytes each ([`ShaderFeatures::COMPACT`]).
     pub compact: bool,
+    /// Levels of detail, which a frame that fades cross-fades
+    /// ([`ShaderFeatures::LOD_FADE`]; a shape without keeps its early depth test).
+    pub levels: bool,
 }
 
 impl VertexLayout {
-    /// The layout a mesh's streams need.
+    /// The layout a mesh's streams need (its instances stored in full, no levels yet).
     pub(crate) fn of(mesh: &Mesh) -> Self {
-        Self { colors: mesh.colors().is_some(), uv1: mesh.uv1().is_some(), skin: mesh.skin().is_some(), compact: false }
+        let (colors, uv1, skin) = (mesh.colors().is_some(), mesh.uv1().is_some(), mesh.skin().is_some());
+        Self { colors, uv1, skin, compact: false, levels: false }
     }
 
     /// How many layouts there are ([`VertexLayout::index`] is below this).
-    pub(crate) const COUNT: usize = 16;
+    pub(crate) const COUNT: usize = 32;
 
     /// A dense number for the layout, for per-layout tables.
     pub(crate) fn index(self) -> usize {
@@ -99,6 +103,7 @@ impl VertexLayout {
             | usize::from(self.uv1) << 1
             | usize::from(self.skin) << 2
             | usize::from(self.compact) << 3
+            | usize::from(self.levels) << 4
     }
 
     /// The streams, in buffer-slot order.
@@ -380,6 +385,9 @@ impl Pipelines {
         features.set(ShaderFeatures::UV1, vertex_layout.uv1);
         features.set(ShaderFeatures::SKINNED, vertex_layout.skin);
         features.set(ShaderFeatures::COMPACT, vertex_layout.compact);
+        // Compact instances are drawn at full detail, by their number.
+        let fades = vertex_layout.levels && !vertex_layout.compact;
+        features.set(ShaderFeatures::LOD_FADE, features.contains(ShaderFeatures::LOD_FADE) && fades);
         PipelineKey {
             pass: PassKind::Forward,
             features,
@@ -433,7 +441,9 @@ impl Pipelines {
         let states = RenderStates { depth: forward.states.depth, raster: forward.states.raster, ..Default::default() };
         PipelineKey {
             pass: PassKind::Prepass,
-            features: depth_features(forward.features, ShaderFeatures::EDGE_FADE),
+            // A cross-fade drops the same pixels from both passes.
+            features: depth_features(forward.features, ShaderFeatures::EDGE_FADE)
+                | (forward.features & ShaderFeatures::LOD_FADE),
             lights: LightCounts::default(),
             vertex_layout: forward.vertex_layout,
             states,
