@@ -91,6 +91,12 @@ fn three_materials_by_two_shapes_are_six_draws_in_one_indirect_call() {
     let entities: Vec<Entity> =
         grid(60).into_iter().enumerate().map(|(i, t)| Entity::new(shapes[(i / 3) % 2], materials[i % 3], t)).collect();
     let refs: Vec<&Entity> = entities.iter().collect();
+    // With levels of detail the torus's pipeline cross-fades them and the
+    // cube's (no levels) keeps its early depth test: two pipelines, two calls.
+    let faded = frame(&mut r, gpu, &refs, &sun());
+    assert_eq!((faded.draws, faded.pipelines_bound), (6, 2));
+    assert_eq!(faded.draw_calls, if gpu.draws_indirect() { 2 } else { 6 });
+    r.set_levels_of_detail(false);
     let stats = frame(&mut r, gpu, &refs, &sun());
     assert_eq!(stats.draws, 6);
     // One pipeline, one texture set (none), one mesh-pool page: one multi-draw-indirect call.

@@ -411,6 +411,8 @@ fn vs_main(v: VertexIn, @builtin(instance_index) draw_instance: u32) -> VertexOu
 #ifdef COMPACT
     // Drawn by their number: whole tiles, no draw indices (and never skinned).
     let at = draw_instance;
+    // Never faded: compact instances are drawn at full detail.
+    let drawn = 0u;
     let instance = compact_instance(at);
 #else
     // A draw index is a store index with a level-of-detail fade above it.

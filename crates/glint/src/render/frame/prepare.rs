@@ -102,7 +102,9 @@ impl Registry {
             if std::mem::take(&mut slot.rewrite) {
                 stats.bytes_uploaded.meshes += self.mesh_pool.rewrite_vertices(&self.queue, mesh, &slot.mesh);
             }
-            let layout = VertexLayout { compact, levels: mesh.levels.count > 1, ..slot.layout };
+            // Levels matter to the pipeline only where the frame cross-fades them.
+            let levels = frame.lod_fade && mesh.levels.count > 1;
+            let layout = VertexLayout { compact, levels, ..slot.layout };
             let (pipeline, texture_set) =
                 self.prepare_material(material, layout, target, (environment, frame), stats)?;
             prepared.push(Prepared { pipeline, layout, draw: BatchDraw { mesh, texture_set } });

@@ -82,7 +82,7 @@ pub(crate) struct VertexLayout {
     pub skin: bool,
     /// Compact instances, 16 bytes each ([`ShaderFeatures::COMPACT`]).
     pub compact: bool,
-    /// Levels of detail, which a frame that fades cross-fades
+    /// Levels of detail in a frame that cross-fades them
     /// ([`ShaderFeatures::LOD_FADE`]; a shape without keeps its early depth test).
     pub levels: bool,
 }
