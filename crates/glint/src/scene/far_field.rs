@@ -17,8 +17,8 @@
 //!
 //! [`rank`]: FarField::rank
 
-/// The smallest share of instances drawn before the ring: at most
-/// about 1 / `MIN_SHARE` = 8× widening.
+/// The smallest share of instances drawn before the ring: at most about
+/// 1 / `MIN_SHARE` = 16× widening.
 pub const MIN_SHARE: f32 = 0.0625;
 /// The band of ranks under the share in which an instance narrows from its
 /// full width to nothing, times f · (1 − f) of the falloff f (none where
