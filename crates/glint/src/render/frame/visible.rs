@@ -38,7 +38,7 @@ impl Submitted {
 
 /// How much of each tile of a tiled entity is drawn: the first `density` of
 /// it, and no more than a far field (`far`: it and the eye it is measured
-/// from) draws where the tile's box comes nearest.
+/// from) draws where the box of the tile's placed positions comes nearest.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct TileShare {
     pub density: f32,
@@ -52,7 +52,8 @@ impl TileShare {
         Self { density, far: None }
     }
 
-    /// The instances drawn of a tile of `len` whose box is `center ± extent`.
+    /// The instances drawn of a tile of `len` whose instances are placed in
+    /// the box `center ± extent`.
     fn drawn(self, len: u32, (center, extent): (glam::Vec3A, glam::Vec3A)) -> u32 {
         let drawn = crate::scene::Tiles::drawn(len, self.density);
         let Some((field, eye)) = self.far else { return drawn };
@@ -297,7 +298,7 @@ fn visible_tiles(
         Containment::Intersecting => false,
     };
     for tile in &slot.clusters {
-        let drawn = share.drawn(tile.valid, (tile.center, tile.extent));
+        let drawn = share.drawn(tile.valid, tile.origins);
         if drawn == 0 {
             continue;
         }

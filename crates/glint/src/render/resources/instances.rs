@@ -278,6 +278,9 @@ pub(crate) struct Cluster {
     /// Its box: centre and half extent.
     pub center: Vec3A,
     pub extent: Vec3A,
+    /// The box (centre, half extent) of its valid instances' placed
+    /// positions, which a far field measures its distances from.
+    pub origins: (Vec3A, Vec3A),
 }
 
 /// Whether `entity`'s instances are stored compactly: asked for, tiled, not
@@ -357,6 +360,13 @@ fn write_range(
             0 => (Vec3A::ZERO, Vec3A::splat(crate::render::cull::NEVER_VISIBLE_EXTENT)),
             _ => ((lo + hi) * 0.5, (hi - lo) * 0.5 + padding),
         };
+        let placed = run
+            .iter()
+            .filter(|&&i| world[i as usize].is_some())
+            .map(|&i| Vec3A::from(src[i as usize].w_axis.truncate()));
+        let (olo, ohi) = placed
+            .fold((Vec3A::splat(f32::INFINITY), Vec3A::splat(f32::NEG_INFINITY)), |(lo, hi), p| (lo.min(p), hi.max(p)));
+        let origins = if valid == 0 { (Vec3A::ZERO, Vec3A::ZERO) } else { ((olo + ohi) * 0.5, (ohi - olo) * 0.5) };
         for (k, &i) in run.iter().enumerate().filter(|_| !compact) {
             let at = group.start as usize + k;
             match world[i as usize] {
@@ -378,7 +388,7 @@ fn write_range(
                 }
             }
         }
-        clusters.push(Cluster { first: group.start, valid, center, extent });
+        clusters.push(Cluster { first: group.start, valid, center, extent, origins });
     }
     if entity.tiles().is_some() {
         // The entity's box holds its tiles' padding too.
@@ -543,7 +553,7 @@ mod tests {
         // Each tile's box holds its instances, and Morton order keeps tiles small:
         // 16 tiles over a 200 × 200 field average far less than the whole field.
         let mut area = 0.0;
-        for (k, &Cluster { first, valid, center: c, extent: e }) in clusters.iter().enumerate() {
+        for (k, &Cluster { first, valid, center: c, extent: e, .. }) in clusters.iter().enumerate() {
             assert_eq!((first as usize, valid as usize), (k * CLUSTER, CLUSTER.min(1000 - k * CLUSTER)));
             for i in k * CLUSTER..((k + 1) * CLUSTER).min(1000) {
                 let (bc, be) = (store.bounds.center(i), store.bounds.extent(i));
