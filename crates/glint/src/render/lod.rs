@@ -107,11 +107,6 @@ impl LodView {
         Self { w_row: view_proj.row(3), scale, fade_band: 0.0 }
     }
 
-    /// Full detail everywhere.
-    pub(crate) fn full_detail() -> Self {
-        Self::default()
-    }
-
     /// The level a box `center ± extent` of a shape with `levels` draws at,
     /// not fading.
     pub(crate) fn level(&self, levels: &Levels, center: Vec3A, extent: Vec3A) -> u8 {
@@ -240,7 +235,8 @@ mod tests {
         assert_eq!(chosen[3], 2, "{chosen:?}");
         // A box around the eye, and LOD off, draw full detail.
         assert_eq!(lod.level(&levels(), Vec3A::ZERO, Vec3A::splat(0.5)), 0);
-        assert_eq!(LodView::full_detail().level(&levels(), Vec3A::new(0.0, 0.0, -1000.0), Vec3A::splat(0.5)), 0);
+        let off = LodView::new(camera.projection(1.0) * camera.view(), 256, 0.0);
+        assert_eq!(off.level(&levels(), Vec3A::new(0.0, 0.0, -1000.0), Vec3A::splat(0.5)), 0);
     }
 
     #[test]

@@ -254,8 +254,8 @@ impl Renderer {
         if lighting.lights.len() > MAX_LIGHTS {
             return Err(RenderError::TooManyLights(lighting.lights.len()));
         }
-        let lod_fade = self.res.levels_of_detail && crate::scene::DEFAULT_LOD_ERROR > 0.0;
-        let variant = FrameVariant::expected(lighting.lights, false).with_lod_fade(lod_fade);
+        // Views fade levels at their default error.
+        let variant = FrameVariant::expected(lighting.lights, false).with_lod_fade(self.res.levels_of_detail);
         prepare_environment(&mut self.res, &lighting)?;
         let mut stats = FrameStats::default();
         let uses: Vec<_> = entities

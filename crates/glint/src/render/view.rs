@@ -38,19 +38,21 @@ pub(crate) struct ViewFrame {
 
 impl ViewFrame {
     /// `view` drawn into a rectangle `width` × `height` pixels, by a renderer
-    /// that can cull on the GPU when `gpu_cull`, leaving out the entities that
-    /// show `hides`, with the forward variant `variant`.
+    /// that can cull on the GPU when `gpu_cull` and draws levels of detail
+    /// (and far fields, and their cross-fade) when `levels_of_detail`, leaving
+    /// out the entities that show `hides`, with the forward variant `variant`.
     pub fn new(
         view: &View,
         (width, height): (u32, u32),
-        (gpu_cull, hides, variant): (bool, Option<TextureId>, FrameVariant),
+        (gpu_cull, levels_of_detail, hides, variant): (bool, bool, Option<TextureId>, FrameVariant),
     ) -> Self {
         let aspect = width as f32 / height.max(1) as f32;
         let camera = view.camera;
         let matrix = camera.view();
         let view_proj = camera.projection(aspect) * matrix;
         let frustum = Frustum::from_view_proj(view_proj);
-        let lod = LodView::new(view_proj, height, view.lod_error);
+        let lod_error = if levels_of_detail { view.lod_error } else { 0.0 };
+        let lod = LodView::new(view_proj, height, lod_error);
         let culling = match view.culling {
             Culling::Gpu if !gpu_cull => Culling::Cpu,
             culling => culling,
@@ -64,10 +66,10 @@ impl ViewFrame {
             culling,
             ambient_occlusion,
             hides,
-            variant,
+            variant: variant.with_lod_fade(lod_error > 0.0),
             lod,
-            lod_error: view.lod_error,
-            far_eye: (view.lod_error > 0.0).then_some(camera.eye),
+            lod_error,
+            far_eye: (lod_error > 0.0).then_some(camera.eye),
         }
     }
 }

@@ -17,7 +17,6 @@ use crate::render::frame::shadow_pass::ViewShadows;
 use crate::render::frame::state::Frame;
 use crate::render::frame::visible::{cull, shown};
 use crate::render::frame_variant::FrameVariant;
-use crate::render::lod::LodView;
 use crate::render::passes::post::ChainImages;
 use crate::render::queue;
 use crate::render::resources::Resources;
@@ -88,13 +87,9 @@ fn draw_into(
 ) -> Result<FrameStats, RenderError> {
     let [x, y, width, height] = view.viewport.pixels(target.width(), target.height());
     let occluded = occludes(res, view.ambient_occlusion);
-    let fades = res.levels_of_detail && view.lod_error > 0.0;
-    let variant =
-        FrameVariant::after(shadows.first, shadows.views.len(), lighting.lights, occluded).with_lod_fade(fades);
-    let mut view_frame = ViewFrame::new(view, (width, height), (res.cull_pipelines.is_some(), hides, variant));
-    if !res.levels_of_detail {
-        (view_frame.lod, view_frame.lod_error, view_frame.far_eye) = (LodView::full_detail(), 0.0, None);
-    }
+    let variant = FrameVariant::after(shadows.first, shadows.views.len(), lighting.lights, occluded);
+    let renderer = (res.cull_pipelines.is_some(), res.levels_of_detail, hides, variant);
+    let view_frame = ViewFrame::new(view, (width, height), renderer);
     let format = scene_format(res, view, target);
     if (width, height, format) == (target.width(), target.height(), target.format()) {
         return view_stages(res, frame, gpu, &view_frame, (lighting, shadows), (target, Compose::Direct));

@@ -64,8 +64,6 @@ impl Registry {
         features.set(ShaderFeatures::SHADOW_CUBES, frame.shadow_cubes);
         let lit = !features.intersects(ShaderFeatures::UNLIT | ShaderFeatures::ALPHA_BLEND);
         features.set(ShaderFeatures::AMBIENT_OCCLUSION, frame.ambient_occlusion && lit);
-        // Blended instances pick one level (render/lod.rs).
-        features.set(ShaderFeatures::LOD_FADE, frame.lod_fade && !features.contains(ShaderFeatures::ALPHA_BLEND));
         let key = Pipelines::key(features, frame.lights, layout, material.render_states(), target);
         let (pipeline, built) = self.pipelines.forward_id(&self.device, key)?;
         stats.pipelines_compiled += u32::from(built);

@@ -385,9 +385,10 @@ impl Pipelines {
         features.set(ShaderFeatures::UV1, vertex_layout.uv1);
         features.set(ShaderFeatures::SKINNED, vertex_layout.skin);
         features.set(ShaderFeatures::COMPACT, vertex_layout.compact);
-        // Compact instances are drawn at full detail, by their number.
-        let fades = vertex_layout.levels && !vertex_layout.compact;
-        features.set(ShaderFeatures::LOD_FADE, features.contains(ShaderFeatures::LOD_FADE) && fades);
+        // Compact instances are drawn at full detail, by their number, and
+        // blended ones at one level (render/lod.rs).
+        let blended = features.contains(ShaderFeatures::ALPHA_BLEND);
+        features.set(ShaderFeatures::LOD_FADE, vertex_layout.levels && !vertex_layout.compact && !blended);
         PipelineKey {
             pass: PassKind::Forward,
             features,
