@@ -2,7 +2,8 @@
 //! through the `gltf` crate: the default scene's node hierarchy, every triangle
 //! primitive with its material, cameras and `KHR_lights_punctual` lights. A mesh
 //! used by several nodes becomes one part with a transform per node (one instanced
-//! draw). Missing normals are made flat; tangents come from MikkTSpace.
+//! draw). Missing normals are made flat; tangents come from MikkTSpace. A
+//! node's `MSFT_lod` levels become its mesh's levels of detail (`gltf_lod`).
 //!
 //! Materials use the metallic-roughness shading model: base colour, metallic,
 //! roughness, emissive (and `KHR_materials_emissive_strength`), their maps, the
@@ -19,10 +20,12 @@
 use super::animation::{Animation, Channel, Interpolation, ModelNode, Property};
 use super::gltf_check::{check_buffers, check_json};
 use super::gltf_data::{read_buffers, read_image, UriBase};
+use super::gltf_lod::{level_nodes, lod_ids, read_levels};
 use super::model::{Model, ModelPart};
 use super::model::{Morph, Skin};
 use super::texture::{decode_texture, TextureCache};
 use super::{AssetFolder, Diagnostic, LoadOptions, MaterialDesc};
+use crate::scene::levels::with_given_levels;
 use crate::scene::{AlphaMode, Camera, Light, MapSlots, Material, Mesh, ShadingModel, SkinVertex};
 use glam::{Mat4, Quat, Vec2, Vec3, Vec4};
 use std::collections::HashMap;
@@ -181,8 +184,12 @@ pub(crate) fn parse_gltf(path: &Path, bytes: &[u8], options: LoadOptions) -> Res
         warnings: Vec::new(),
     };
     let scene = document.default_scene().or_else(|| document.scenes().next());
-    // Parts by (mesh, primitive, skin): one mesh under two skins is two parts.
-    let mut part_of: HashMap<(usize, usize, Option<usize>), Option<usize>> = HashMap::new();
+    // Parts by (mesh, primitive, skin, levels): one mesh under two skins is two parts.
+    type PartKey = (usize, usize, Option<usize>, Vec<usize>);
+    let mut part_of: HashMap<PartKey, Option<usize>> = HashMap::new();
+    // Nodes that are another's coarser level are drawn only as that level.
+    let levels_only = level_nodes(document.as_json());
+    let read = |p: &gltf::Primitive| read_primitive(p, &buffers);
     // Depth-first over the hierarchy with world transforms; a node seen twice (a
     // cycle, which valid files do not have) is not entered again.
     // `glint_node[i]`: the model node of glTF node i, once visited.
@@ -190,7 +197,7 @@ pub(crate) fn parse_gltf(path: &Path, bytes: &[u8], options: LoadOptions) -> Res
     let mut stack: Vec<(gltf::Node, Option<usize>, Mat4)> =
         scene.iter().flat_map(|s| s.nodes()).map(|n| (n, None, Mat4::IDENTITY)).collect();
     while let Some((node, parent_node, parent)) = stack.pop() {
-        if glint_node[node.index()].is_some() {
+        if glint_node[node.index()].is_some() || levels_only.contains(&node.index()) {
             continue;
         }
         let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
@@ -213,12 +220,37 @@ pub(crate) fn parse_gltf(path: &Path, bytes: &[u8], options: LoadOptions) -> Res
             let weights = node.weights().or(mesh.weights()).unwrap_or(&[]);
             model.nodes[this].weights = weights.to_vec();
             for primitive in mesh.primitives() {
-                let key = (mesh.index(), primitive.index(), skin);
+                let key = (
+                    mesh.index(),
+                    primitive.index(),
+                    skin,
+                    lod_ids(&document.as_json().nodes[node.index()]).unwrap_or_default(),
+                );
                 let part = match part_of.get(&key) {
                     Some(&p) => p,
                     None => {
                         let where_ = format!("mesh {} primitive {}", mesh.index(), primitive.index());
-                        let made = read_primitive(&primitive, &buffers).map_err(|e| fail(format!("{where_}: {e}")))?;
+                        let made = read(&primitive).map_err(|e| fail(format!("{where_}: {e}")))?;
+                        let made = match made {
+                            Some((full, None)) => {
+                                let mut notes = Vec::new();
+                                let levels = read_levels(&document, (&node, &primitive, &full), &read, &mut notes)
+                                    .map_err(&fail)?;
+                                let kept =
+                                    with_given_levels(full, &levels).map_err(|e| fail(format!("{where_}: {e}")))?;
+                                if kept.given_levels().len() < levels.len() {
+                                    notes.push(format!(
+                                        "node {}: {} of its {} MSFT_lod levels are used (each must have fewer triangles than the one before)",
+                                        node.index(),
+                                        kept.given_levels().len(),
+                                        levels.len()
+                                    ));
+                                }
+                                warnings.extend(notes.into_iter().map(&fail));
+                                Some((kept, None))
+                            }
+                            other => other,
+                        };
                         let p = made.map(|(mesh_data, morph)| {
                             let name = mesh.name().map_or_else(|| format!("mesh {}", mesh.index()), str::to_string);
                             let material = primitive.material().index();

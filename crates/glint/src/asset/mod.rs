@@ -9,6 +9,7 @@ mod files;
 mod gltf;
 mod gltf_check;
 mod gltf_data;
+mod gltf_lod;
 #[cfg(test)]
 mod gltf_tests;
 mod model;

@@ -15,10 +15,15 @@
 //! instance whose world radius is `r` is off by at most about `error × r`.
 //! The renderer picks, per instance and view, the coarsest level whose error
 //! projects to at most [`View::lod_error`](crate::scene::View::lod_error) pixels.
+//!
+//! A mesh may instead carry levels its author made ([`with_given_levels`], from
+//! glTF's `MSFT_lod`): their vertices are appended to full detail's, and each
+//! one's error is measured against full detail's surface by the same crate.
 
-use crate::scene::Mesh;
+use crate::scene::{Mesh, MeshError};
 use meshoptimizer_rs::{
-    build_lod_chain, Attributes, LodChainAttributes, LodChainOptions, LodErrors, LodTargets, Positions, Workspace,
+    build_lod_chain, measure_lod_quality, Attributes, LodChainAttributes, LodChainOptions, LodErrors, LodQualityMesh,
+    LodQualityOptions, LodTargets, Positions, Workspace,
 };
 
 /// Levels a shape draws at most: full detail and four coarser ones.
@@ -71,13 +76,76 @@ impl DetailLevel {
     }
 }
 
-/// The coarser levels of `mesh`, finest first: each at most about half the
+/// The coarser levels of `mesh`, finest first: those its author gave
+/// ([`Mesh::given_levels`]), else the simplifier's: each at most about half the
 /// triangles of the one before (a quarter past [`LARGE`] triangles), at most
 /// `MAX_LEVELS - 1` of them; none for a mesh under [`MIN_TRIANGLES`] or over
 /// [`MAX_TRIANGLES`], or where the simplifier cannot remove a quarter of the
 /// triangles (a mesh of separate triangles).
 pub fn detail_levels(mesh: &Mesh) -> Vec<DetailLevel> {
-    detail_levels_within(mesh, MAX_TRIANGLES)
+    match mesh.given_levels() {
+        [] => detail_levels_within(mesh, MAX_TRIANGLES),
+        given => given.to_vec(),
+    }
+}
+
+/// Surface samples (besides every triangle's corners) that measure a given
+/// level's error: spread over full detail's area.
+const ERROR_SAMPLES: f64 = 4096.0;
+
+/// `mesh` with `coarser` as its levels of detail, finest first: each level's
+/// vertices are appended to the mesh's (they must have its vertex streams) and
+/// its error is the largest distance between its surface and full detail's,
+/// sampled both ways, in units of the bounding-sphere radius (made
+/// non-decreasing along the chain). Levels are kept while each has fewer
+/// triangles than the one before, at most `MAX_LEVELS - 1` of them; the rest
+/// are dropped (compare the count of [`Mesh::given_levels`] with `coarser`).
+pub fn with_given_levels(mut mesh: Mesh, coarser: &[Mesh]) -> Result<Mesh, MeshError> {
+    let mut kept: Vec<&Mesh> = Vec::new();
+    let mut before = mesh.indices().len();
+    for level in coarser.iter().take(MAX_LEVELS - 1) {
+        if level.indices().len() >= before {
+            break;
+        }
+        before = level.indices().len();
+        kept.push(level);
+    }
+    let mut levels = Vec::with_capacity(kept.len());
+    for level in kept {
+        let base = mesh.append_vertices(level)?;
+        levels.push(DetailLevel { indices: level.indices().iter().map(|&i| i + base).collect(), error: 0.0 });
+    }
+    let radius = f64::from(mesh.bounding_sphere().radius);
+    let floats: &[f32] = bytemuck::cast_slice(mesh.vertices());
+    let stride = std::mem::size_of::<crate::scene::Vertex>() / 4;
+    let positions = Positions::from_interleaved(floats, mesh.vertices().len(), stride, 0);
+    let (Ok(positions), true) = (positions, radius > 0.0) else {
+        return Ok(mesh);
+    };
+    let area: f64 = (mesh.indices().chunks_exact(3))
+        .map(|t| {
+            let p = |i: u32| glam::Vec3::from(mesh.vertices()[i as usize].position);
+            f64::from((p(t[1]) - p(t[0])).cross(p(t[2]) - p(t[0])).length() / 2.0)
+        })
+        .sum();
+    let mut options = LodQualityOptions::default();
+    options.samples_per_unit_area = if area > 0.0 { ERROR_SAMPLES / area } else { 0.0 };
+    let full = LodQualityMesh::new(mesh.indices(), positions);
+    let mut workspace = Workspace::default();
+    let mut error = 0.0f32;
+    let mut measured = Vec::with_capacity(levels.len());
+    for mut level in levels {
+        let Ok(quality) =
+            measure_lod_quality(full, LodQualityMesh::new(&level.indices, positions), &options, &mut workspace)
+        else {
+            break;
+        };
+        error = error.max((quality.symmetric.max / radius) as f32);
+        level.error = error;
+        measured.push(level);
+    }
+    mesh.set_given_levels(measured);
+    Ok(mesh)
 }
 
 /// [`detail_levels`] for meshes of at most `most` triangles.

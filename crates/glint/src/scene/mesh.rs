@@ -96,6 +96,9 @@ pub enum MeshError {
     /// The attribute arrays differ in length.
     #[error("attribute arrays differ in length")]
     AttributeLengths,
+    /// A level of detail whose vertex streams differ from full detail's.
+    #[error("a level of detail must have the vertex streams (colours, second uvs, skin) of full detail")]
+    LevelStreams,
 }
 
 /// A triangle mesh on the CPU: interleaved vertices, u32 indices (counter-clockwise
@@ -111,6 +114,9 @@ pub struct Mesh {
     /// Joints and weights per vertex (skinned meshes).
     skin: Option<Vec<SkinVertex>>,
     indices: Vec<u32>,
+    /// Coarser levels its author made (glTF `MSFT_lod`), over vertices appended
+    /// after full detail's; empty when glint makes the levels itself.
+    given_levels: Vec<crate::scene::levels::DetailLevel>,
     aabb: Aabb,
     sphere: BoundingSphere,
 }
@@ -171,18 +177,9 @@ impl Mesh {
         {
             return Err(MeshError::NonFinite(i));
         }
-        let aabb = Aabb::from_points(vertices.iter().map(|v| Vec3::from(v.position))).ok_or(MeshError::Empty)?;
-        let center = aabb.center();
-        let radius = vertices.iter().map(|v| Vec3::from(v.position).distance(center)).fold(0.0, f32::max);
-        Ok(Self {
-            vertices,
-            colors: None,
-            uv1: None,
-            skin: None,
-            indices,
-            aabb,
-            sphere: BoundingSphere { center, radius },
-        })
+        let positions: Vec<Vec3> = vertices.iter().map(|v| Vec3::from(v.position)).collect();
+        let (aabb, sphere) = bounds_of(&positions).ok_or(MeshError::Empty)?;
+        Ok(Self { vertices, colors: None, uv1: None, skin: None, indices, given_levels: Vec::new(), aabb, sphere })
     }
 
     /// Give every vertex a linear RGBA colour, multiplied into the material's base
@@ -250,11 +247,44 @@ impl Mesh {
             v.position = p.to_array();
             v.normal = nrm.normalize_or(Vec3::Y).to_array();
         }
-        self.aabb = Aabb::from_points(positions.iter().copied()).unwrap_or(self.aabb);
-        let center = self.aabb.center();
-        self.sphere =
-            BoundingSphere { center, radius: positions.iter().map(|p| p.distance(center)).fold(0.0, f32::max) };
+        (self.aabb, self.sphere) = bounds_of(positions).unwrap_or((self.aabb, self.sphere));
         true
+    }
+
+    /// Whether it has the vertex streams `other` has (colours, second uvs, skin),
+    /// and no others.
+    pub fn has_streams_of(&self, other: &Mesh) -> bool {
+        (self.colors.is_some(), self.uv1.is_some(), self.skin.is_some())
+            == (other.colors.is_some(), other.uv1.is_some(), other.skin.is_some())
+    }
+
+    /// The coarser levels its author made, finest first (see
+    /// [`levels::with_given_levels`](crate::scene::levels::with_given_levels));
+    /// empty when glint makes them.
+    pub fn given_levels(&self) -> &[crate::scene::levels::DetailLevel] {
+        &self.given_levels
+    }
+
+    /// Append `other`'s vertices (every stream, which must be the ones this mesh
+    /// has) after this mesh's, growing the bounds to hold them; its triangles are
+    /// not added. Returns the index of its first vertex here.
+    pub(super) fn append_vertices(&mut self, other: &Mesh) -> Result<u32, MeshError> {
+        if !self.has_streams_of(other) {
+            return Err(MeshError::LevelStreams);
+        }
+        let base = u32::try_from(self.vertices.len()).map_err(|_| MeshError::AttributeLengths)?;
+        self.vertices.extend_from_slice(&other.vertices);
+        self.colors.iter_mut().zip(&other.colors).for_each(|(m, t)| m.extend_from_slice(t));
+        self.uv1.iter_mut().zip(&other.uv1).for_each(|(m, t)| m.extend_from_slice(t));
+        self.skin.iter_mut().zip(&other.skin).for_each(|(m, t)| m.extend_from_slice(t));
+        let positions: Vec<Vec3> = self.vertices.iter().map(|v| Vec3::from(v.position)).collect();
+        (self.aabb, self.sphere) = bounds_of(&positions).unwrap_or((self.aabb, self.sphere));
+        Ok(base)
+    }
+
+    /// Set the levels its author made (indices over this mesh's vertices).
+    pub(super) fn set_given_levels(&mut self, levels: Vec<crate::scene::levels::DetailLevel>) {
+        self.given_levels = levels;
     }
 
     /// Triangle-list indices, counter-clockwise front faces.
@@ -434,6 +464,15 @@ fn accumulate_tangents(vertices: &mut [Vertex], faces: &[[u32; 3]]) {
         let w = if n.cross(t).dot(-dv) < 0.0 { -1.0 } else { 1.0 };
         v.tangent = [t.x, t.y, t.z, w];
     }
+}
+
+/// The box around `positions` and the sphere about its centre that holds them
+/// (none for no points).
+fn bounds_of(positions: &[Vec3]) -> Option<(Aabb, BoundingSphere)> {
+    let aabb = Aabb::from_points(positions.iter().copied())?;
+    let center = aabb.center();
+    let radius = positions.iter().map(|p| p.distance(center)).fold(0.0, f32::max);
+    Some((aabb, BoundingSphere { center, radius }))
 }
 
 /// `stream` if it has one value per vertex and each passes `finite`.
