@@ -61,9 +61,12 @@ impl LodArgs {
         Self { lod: if on { LodSwitch::On } else { LodSwitch::Off }, ..self }
     }
 
-    /// Tell `renderer` whether to draw levels.
+    /// Tell `renderer` whether to draw levels, and to keep large meshes' levels
+    /// in the user's cache folder between runs (`GLINT_CACHE_DIR`, else
+    /// `~/.cache/glint`; `GLINT_CACHE_DIR=` empty keeps none).
     pub fn apply(self, renderer: &mut Renderer) {
         renderer.set_levels_of_detail(self.lod == LodSwitch::On);
+        renderer.set_level_cache(glint::scene::level_cache::LevelCache::user());
     }
 
     /// `views` with `--lod-error`'s error where given.

@@ -1,9 +1,12 @@
 //! Making levels of detail (`scene/levels.rs`) for a mesh of about a million
 //! triangles, on the CPU: the time (median, min and max of a few runs; the
 //! simplifier runs on one core) and what the levels add: their triangles and
-//! the bytes of their indices (they share the mesh's vertices).
-//! Run: `cargo bench -p glint --bench levels`.
+//! the bytes of their indices (they share the mesh's vertices); then the time
+//! to read them back from the level cache (`scene/level_cache.rs`: hashing the
+//! mesh, reading and checking the file), the other side of "cached where that
+//! pays". Run: `cargo bench -p glint --bench levels`.
 
+use glint::scene::level_cache::{LevelCache, LevelSource};
 use glint::scene::levels::detail_levels;
 use glint::scene::{procedural, Mesh};
 use std::time::Instant;
@@ -34,6 +37,23 @@ fn measure(name: &str, mesh: &Mesh) {
         levels.iter().map(|l| (l.error * 1e4).round() / 1e4).collect::<Vec<_>>(),
         100.0 * added as f64 / mesh_bytes as f64
     );
+    let cache = LevelCache::new(std::env::temp_dir().join(format!("glint-levels-bench-{}", std::process::id())));
+    assert_eq!(cache.levels(mesh).1, LevelSource::Made);
+    let mut read_ms = Vec::new();
+    for _ in 0..RUNS {
+        let start = Instant::now();
+        let (read, source) = cache.levels(mesh);
+        read_ms.push(start.elapsed().as_secs_f64() * 1e3);
+        assert_eq!((source, &read), (LevelSource::Read, &levels));
+    }
+    read_ms.sort_by(f64::total_cmp);
+    println!(
+        "  read back from the level cache in {:.1} ms median (min {:.1}, max {:.1})",
+        read_ms[RUNS / 2],
+        read_ms[0],
+        read_ms[RUNS - 1]
+    );
+    let _ = std::fs::remove_dir_all(cache.dir());
 }
 
 fn main() {

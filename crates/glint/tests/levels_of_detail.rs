@@ -110,6 +110,32 @@ fn a_coarser_error_draws_fewer_triangles_and_zero_draws_full_detail() {
 }
 
 #[test]
+fn a_large_meshs_levels_are_cached_on_disk_and_drawn_the_same_from_there() {
+    use glint::scene::level_cache::{LevelCache, CACHE_FROM};
+    let Some(gpu) = common::gpu() else { return };
+    let dir = std::env::temp_dir().join(format!("glint-level-cache-test-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let mesh = glint::scene::procedural::sphere(320, 160);
+    assert!(mesh.indices().len() / 3 >= CACHE_FROM);
+    let triangles = || {
+        let mut renderer = Renderer::new(gpu);
+        renderer.set_level_cache(Some(LevelCache::new(&dir)));
+        let shape = renderer.add_shape(mesh.clone());
+        let material = renderer.add_material(Material::default());
+        let far = Entity::new(shape, material, Mat4::from_translation(Vec3::new(0.0, 0.0, -60.0)));
+        let mut target = OffscreenTarget::new(gpu, 64, 64, 1).expect("target");
+        let view = View::new(camera()).with_culling(Culling::Cpu);
+        renderer.render([&far], view, &[] as &[Light], &mut target).expect("frame").triangles_drawn
+    };
+    let made = triangles();
+    let files: Vec<_> = std::fs::read_dir(&dir).expect("the cache folder is made").collect();
+    assert_eq!(files.len(), 1, "one file for the one large mesh");
+    assert!(made < (mesh.indices().len() / 3) as u64 / 4, "a far sphere draws a coarse level: {made}");
+    assert_eq!(triangles(), made, "the levels read back draw as those made");
+    std::fs::remove_dir_all(&dir).expect("removed");
+}
+
+#[test]
 fn a_fading_sphere_shows_each_pixel_from_one_of_its_two_levels_never_both() {
     let Some(gpu) = common::gpu() else { return };
     let mut renderer = Renderer::new(gpu);

@@ -158,6 +158,13 @@ impl Renderer {
         self.res.levels_of_detail = on;
     }
 
+    /// Keep the levels of detail of large meshes in `cache` between runs (see
+    /// [`LevelCache`](crate::scene::level_cache::LevelCache); the default is
+    /// none: they are made each run). Shapes drawn before keep theirs.
+    pub fn set_level_cache(&mut self, cache: Option<crate::scene::level_cache::LevelCache>) {
+        self.res.registry.level_cache = cache;
+    }
+
     /// Multiply every tiled entity's [`density`](Entity::density) by `density`
     /// (clamped to 0..=1; default 1) from the next submission on: a scene-wide
     /// control that changes no GPU data.

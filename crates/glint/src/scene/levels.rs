@@ -34,7 +34,7 @@ pub const MAX_LEVELS: usize = 5;
 pub const MIN_TRIANGLES: usize = 64;
 
 /// Meshes with more triangles get no levels (drawn at full detail): making
-/// them takes about 1.9 s a million triangles on one core (`benches/levels.rs`)
+/// them takes 1.5–1.9 s a million triangles on one core (`benches/levels.rs`)
 /// and memory to match; see `docs/limits.md`.
 pub const MAX_TRIANGLES: usize = 4_000_000;
 

@@ -14,6 +14,7 @@ mod environment;
 mod environment_image;
 pub mod far_field;
 mod fly;
+pub mod level_cache;
 pub mod levels;
 mod light;
 mod lighting;

@@ -85,9 +85,10 @@ impl Registry {
                 Some(range) => range,
                 None => {
                     let scope = crate::gpu::DriverErrors::watch(&self.device);
-                    let levels = match slot.deforms {
-                        true => Vec::new(),
-                        false => crate::scene::levels::detail_levels(&slot.mesh),
+                    let levels = match (slot.deforms, &self.level_cache) {
+                        (true, _) => Vec::new(),
+                        (false, Some(cache)) => cache.levels(&slot.mesh).0,
+                        (false, None) => crate::scene::levels::detail_levels(&slot.mesh),
                     };
                     let added = self.mesh_pool.add(&self.device, &self.queue, (&slot.mesh, &levels));
                     if let Some(error) = scope.finish() {

@@ -100,6 +100,8 @@ pub struct Registry {
     pub(crate) render_targets: Vec<(OffscreenTarget, TextureId)>,
     /// Whether the device occlusion-culls (render targets' depth is then readable).
     pub(crate) occlusion: bool,
+    /// Where large meshes' levels of detail are kept between runs (none: made each run).
+    pub(crate) level_cache: Option<crate::scene::level_cache::LevelCache>,
     /// Environment images ([`add_environment`](Self::add_environment)), uploaded.
     environments:
         std::collections::HashMap<crate::scene::EnvironmentId, crate::render::passes::environment::SourceImage>,
@@ -132,6 +134,7 @@ impl Registry {
         });
         Self {
             occlusion: gpu.occlusion_culls(),
+            level_cache: None,
             pipelines: Pipelines::new(&device, gpu.vertex_storage()),
             mesh_pool: MeshPool::new(&device),
             material_table: MaterialTable::new(&device, gpu.vertex_storage()),
