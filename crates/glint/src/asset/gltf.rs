@@ -20,7 +20,7 @@
 use super::animation::{Animation, Channel, Interpolation, ModelNode, Property};
 use super::gltf_check::{check_buffers, check_json};
 use super::gltf_data::{read_buffers, read_image, UriBase};
-use super::gltf_lod::{level_nodes, lod_ids, read_levels};
+use super::gltf_lod::{read_levels, NodeLevels};
 use super::model::{Model, ModelPart};
 use super::model::{Morph, Skin};
 use super::texture::{decode_texture, TextureCache};
@@ -187,8 +187,9 @@ pub(crate) fn parse_gltf(path: &Path, bytes: &[u8], options: LoadOptions) -> Res
     // Parts by (mesh, primitive, skin, levels): one mesh under two skins is two parts.
     type PartKey = (usize, usize, Option<usize>, Vec<usize>);
     let mut part_of: HashMap<PartKey, Option<usize>> = HashMap::new();
+    let node_levels = NodeLevels::read(bytes, document.nodes().len()).map_err(fail)?;
     // Nodes that are another's coarser level are drawn only as that level.
-    let levels_only = level_nodes(document.as_json());
+    let levels_only = node_levels.level_nodes();
     let read = |p: &gltf::Primitive| read_primitive(p, &buffers);
     // Depth-first over the hierarchy with world transforms; a node seen twice (a
     // cycle, which valid files do not have) is not entered again.
@@ -220,12 +221,7 @@ pub(crate) fn parse_gltf(path: &Path, bytes: &[u8], options: LoadOptions) -> Res
             let weights = node.weights().or(mesh.weights()).unwrap_or(&[]);
             model.nodes[this].weights = weights.to_vec();
             for primitive in mesh.primitives() {
-                let key = (
-                    mesh.index(),
-                    primitive.index(),
-                    skin,
-                    lod_ids(&document.as_json().nodes[node.index()]).unwrap_or_default(),
-                );
+                let key = (mesh.index(), primitive.index(), skin, node_levels.of(node.index()).to_vec());
                 let part = match part_of.get(&key) {
                     Some(&p) => p,
                     None => {
@@ -234,8 +230,13 @@ pub(crate) fn parse_gltf(path: &Path, bytes: &[u8], options: LoadOptions) -> Res
                         let made = match made {
                             Some((full, None)) => {
                                 let mut notes = Vec::new();
-                                let levels = read_levels(&document, (&node, &primitive, &full), &read, &mut notes)
-                                    .map_err(&fail)?;
+                                let levels = read_levels(
+                                    (&document, &node_levels),
+                                    (&node, &primitive, &full),
+                                    &read,
+                                    &mut notes,
+                                )
+                                .map_err(&fail)?;
                                 let kept =
                                     with_given_levels(full, &levels).map_err(|e| fail(format!("{where_}: {e}")))?;
                                 if kept.given_levels().len() < levels.len() {

@@ -173,11 +173,6 @@ fn check_indices(root: &json::Root) -> Result<(), String> {
         if let Some(light) = node.extensions.as_ref().and_then(|e| e.khr_lights_punctual.as_ref()) {
             exists(light.light, lights, "light").map_err(at)?;
         }
-        for level in super::gltf_lod::lod_ids(node).map_err(at)? {
-            if level >= nodes || level == i {
-                return Err(at(format!("MSFT_lod names node {level}, which is not another node")));
-            }
-        }
     }
     for (m, mesh) in root.meshes.iter().enumerate() {
         for (p, primitive) in mesh.primitives.iter().enumerate() {

@@ -14,28 +14,68 @@
 use super::model::Morph;
 use crate::scene::levels::MAX_LEVELS;
 use crate::scene::Mesh;
-use gltf::json;
-use json::Value;
 use std::collections::HashSet;
 
-/// The nodes `node` names as its coarser levels, finest first (empty without
-/// `MSFT_lod`); not checked against the node count (`gltf_check` does that).
-pub(super) fn lod_ids(node: &json::Node) -> Result<Vec<usize>, String> {
-    let Some(lod) = node.extensions.as_ref().and_then(|e| e.others.get("MSFT_lod")) else {
-        return Ok(Vec::new());
-    };
-    let ids = lod.get("ids").and_then(Value::as_array).ok_or("MSFT_lod: expected \"ids\", an array of node indices")?;
-    (ids.iter())
-        .map(|id| {
-            let index = id.as_u64().and_then(|i| usize::try_from(i).ok());
-            index.ok_or_else(|| format!("MSFT_lod: expected node indices in \"ids\", found {id}"))
-        })
-        .collect()
+/// Each node's coarser levels, finest first (empty without `MSFT_lod`). Read
+/// from the document's JSON with these few types rather than the gltf crate's
+/// `extensions` feature, which keeps every unknown extension of every object
+/// and adds about 20 KB to each module of the web page.
+pub(super) struct NodeLevels(Vec<Vec<usize>>);
+
+#[derive(serde::Deserialize)]
+struct Document {
+    #[serde(default)]
+    nodes: Vec<Node>,
 }
 
-/// Every node some node names as a coarser level: drawn only as that level.
-pub(super) fn level_nodes(root: &json::Root) -> HashSet<usize> {
-    root.nodes.iter().flat_map(|node| lod_ids(node).unwrap_or_default()).collect()
+#[derive(serde::Deserialize)]
+struct Node {
+    #[serde(default)]
+    extensions: Option<Extensions>,
+}
+
+#[derive(serde::Deserialize)]
+struct Extensions {
+    #[serde(rename = "MSFT_lod")]
+    lod: Option<MsftLod>,
+}
+
+#[derive(serde::Deserialize)]
+struct MsftLod {
+    ids: Vec<usize>,
+}
+
+impl NodeLevels {
+    /// The levels `bytes` (a `.gltf`'s JSON or a `.glb`) names: each id must
+    /// be another of its `nodes` nodes.
+    pub(super) fn read(bytes: &[u8], nodes: usize) -> Result<Self, String> {
+        let json = match bytes.starts_with(b"glTF") {
+            true => gltf::binary::Glb::from_slice(bytes).map_err(|e| e.to_string())?.json,
+            false => std::borrow::Cow::Borrowed(bytes),
+        };
+        let document: Document = gltf::json::deserialize::from_slice(&json).map_err(|e| format!("MSFT_lod: {e}"))?;
+        let levels: Vec<Vec<usize>> = document
+            .nodes
+            .into_iter()
+            .map(|n| n.extensions.and_then(|e| e.lod).map_or(Vec::new(), |l| l.ids))
+            .collect();
+        for (node, ids) in levels.iter().enumerate() {
+            if let Some(id) = ids.iter().find(|&&id| id >= nodes || id == node) {
+                return Err(format!("node {node}: MSFT_lod names node {id}, which is not another node"));
+            }
+        }
+        Ok(Self(levels))
+    }
+
+    /// The nodes `node` names as its coarser levels, finest first.
+    pub(super) fn of(&self, node: usize) -> &[usize] {
+        self.0.get(node).map_or(&[], Vec::as_slice)
+    }
+
+    /// Every node some node names as a coarser level: drawn only as that level.
+    pub(super) fn level_nodes(&self) -> HashSet<usize> {
+        self.0.iter().flatten().copied().collect()
+    }
 }
 
 /// Reads one triangle primitive (`None` for other modes), as the loader does
@@ -46,12 +86,12 @@ pub(super) type ReadPrimitive<'r> = dyn Fn(&gltf::Primitive) -> Result<Option<(M
 /// documentation), at most `MAX_LEVELS - 1`. A level the file gets wrong is an
 /// error (as full detail's would be); one that does not match is a warning.
 pub(super) fn read_levels(
-    document: &gltf::Document,
+    (document, levels): (&gltf::Document, &NodeLevels),
     (node, primitive, full): (&gltf::Node, &gltf::Primitive, &Mesh),
     read: &ReadPrimitive,
     warnings: &mut Vec<String>,
 ) -> Result<Vec<Mesh>, String> {
-    let ids = lod_ids(&document.as_json().nodes[node.index()])?;
+    let ids = levels.of(node.index());
     if ids.len() >= MAX_LEVELS {
         warnings.push(format!(
             "node {}: MSFT_lod names {} levels; the first {} are used",
@@ -60,8 +100,8 @@ pub(super) fn read_levels(
             MAX_LEVELS - 1
         ));
     }
-    let mut levels = Vec::new();
-    for id in ids.into_iter().take(MAX_LEVELS - 1) {
+    let mut coarser = Vec::new();
+    for &id in ids.iter().take(MAX_LEVELS - 1) {
         let at = format!("node {}: MSFT_lod level node {id}", node.index());
         let Some(level) = document.nodes().nth(id) else { return Err(format!("{at} does not exist")) };
         let mesh = level.mesh();
@@ -88,7 +128,7 @@ pub(super) fn read_levels(
             warnings.push(format!("{at}: {where_} has other vertex streams than full detail; levels stop before it"));
             break;
         }
-        levels.push(mesh);
+        coarser.push(mesh);
     }
-    Ok(levels)
+    Ok(coarser)
 }
