@@ -1,5 +1,8 @@
 //! [`GpuSchool`]: a [`School`] stepped by compute shaders (`shader/school.wgsl`),
-//! its state kept on the GPU between steps and read back on request.
+//! its state kept on the GPU between steps and read back on request. A step
+//! is deterministic: the fish are sorted by cell as the CPU sorts them (by
+//! number inside a cell, not in the order atomics ran), so the same start
+//! gives the same bits on the same device.
 
 use super::{School, SchoolParams, Swimmer};
 use crate::gpu::GpuError;
@@ -76,7 +79,7 @@ impl From<&Swimmer> for HuntGpu {
 
 /// The passes of one step before the scan, and after it.
 const BEFORE_SCAN: [&str; 2] = ["clear", "count"];
-const AFTER_SCAN: [&str; 3] = ["scatter", "steer", "hunt"];
+const AFTER_SCAN: [&str; 4] = ["place", "scatter", "steer", "hunt"];
 
 /// A school whose steps run as compute passes. Needs compute shaders and
 /// eight storage buffers a stage ([`Gpu::culls_on_gpu`]); elsewhere (GL,
@@ -133,7 +136,7 @@ impl GpuSchool {
         let fish_data: Vec<FishGpu> = school.fish().iter().map(FishGpu::from).collect();
         gpu.queue.write_buffer(&fish[0], 0, bytemuck::cast_slice(&fish_data));
         let sorted = buffer("school: fish by cell", fish_bytes);
-        let keys = buffer("school: cell and rank", 8 * n as u64);
+        let keys = buffer("school: cell and place, then each slot's fish", 16 * n as u64);
         let counts = buffer("school: fish per cell", 4 * (cells as u64 + 1));
         let starts = buffer("school: first slot per cell", 4 * (cells as u64 + 1));
         let hunt = buffer("school: predator", std::mem::size_of::<HuntGpu>() as u64);
@@ -204,7 +207,7 @@ impl GpuSchool {
     fn encode_step(&mut self, encoder: &mut wgpu::CommandEncoder) {
         let fish_groups = (self.block.count).div_ceil(WORKGROUP);
         let cell_groups = (self.cells + 1).div_ceil(WORKGROUP);
-        let threads = [cell_groups, fish_groups, fish_groups, fish_groups, 1];
+        let threads = [cell_groups, fish_groups, fish_groups, fish_groups, fish_groups, 1];
         let mut pass = encoder
             .begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("school step"), timestamp_writes: None });
         for (k, (pipeline, groups)) in self.pipelines.iter().zip(threads).enumerate() {
