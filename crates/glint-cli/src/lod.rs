@@ -62,8 +62,9 @@ impl LodArgs {
     }
 
     /// Tell `renderer` whether to draw levels, and to keep large meshes' levels
-    /// in the user's cache folder between runs (`GLINT_CACHE_DIR`, else
-    /// `~/.cache/glint`; `GLINT_CACHE_DIR=` empty keeps none).
+    /// in the user's cache folder between runs (`levels/` under
+    /// `$GLINT_CACHE_DIR`, else `$XDG_CACHE_HOME/glint`, else `~/.cache/glint`;
+    /// `GLINT_CACHE_DIR=` empty keeps none).
     pub fn apply(self, renderer: &mut Renderer) {
         renderer.set_levels_of_detail(self.lod == LodSwitch::On);
         renderer.set_level_cache(glint::scene::level_cache::LevelCache::user());

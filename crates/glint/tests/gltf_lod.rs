@@ -115,6 +115,18 @@ fn levels_that_do_not_match_full_detail_are_warnings_and_missing_nodes_errors() 
         model.warnings
     );
 
+    let mut moved = lod_spheres(&SPHERES);
+    moved["nodes"][3]["translation"] = json!([1.0, 0.0, 0.0]);
+    let model = parse(&moved).expect("loads");
+    assert_eq!(model.parts[0].mesh.given_levels().len(), 2);
+    assert!(
+        model.warnings.iter().any(|w| w.to_string().contains("level node 3 has another transform")),
+        "{:?}",
+        model.warnings
+    );
+    let full_and_two: usize = SPHERES[..3].iter().map(|&(s, r)| procedural::sphere(s, r).vertices().len()).sum();
+    assert_eq!(model.parts[0].mesh.vertices().len(), full_and_two, "a dropped level's vertices are not kept");
+
     let finer_later = lod_spheres(&[(24, 16), (12, 8), (48, 32)]);
     let model = parse(&finer_later).expect("loads");
     assert_eq!(model.parts[0].mesh.given_levels().len(), 1);

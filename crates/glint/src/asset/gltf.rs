@@ -18,14 +18,13 @@
 //! see [`LoadOptions`]).
 
 use super::animation::{Animation, Channel, Interpolation, ModelNode, Property};
-use super::gltf_check::{check_buffers, check_json};
+use super::gltf_check::{check_buffers, check_json, MAX_MODEL_VERTICES};
 use super::gltf_data::{read_buffers, read_image, UriBase};
-use super::gltf_lod::{read_levels, NodeLevels};
+use super::gltf_lod::{with_node_levels, NodeLevels};
 use super::model::{Model, ModelPart};
 use super::model::{Morph, Skin};
 use super::texture::{decode_texture, TextureCache};
 use super::{AssetFolder, Diagnostic, LoadOptions, MaterialDesc};
-use crate::scene::levels::with_given_levels;
 use crate::scene::{AlphaMode, Camera, Light, MapSlots, Material, Mesh, ShadingModel, SkinVertex};
 use glam::{Mat4, Quat, Vec2, Vec3, Vec4};
 use std::collections::HashMap;
@@ -187,6 +186,7 @@ pub(crate) fn parse_gltf(path: &Path, bytes: &[u8], options: LoadOptions) -> Res
     // Parts by (mesh, primitive, skin, levels): one mesh under two skins is two parts.
     type PartKey = (usize, usize, Option<usize>, Vec<usize>);
     let mut part_of: HashMap<PartKey, Option<usize>> = HashMap::new();
+    let mut built: u64 = 0;
     let node_levels = NodeLevels::read(bytes, document.nodes().len()).map_err(fail)?;
     // Nodes that are another's coarser level are drawn only as that level.
     let levels_only = node_levels.level_nodes();
@@ -229,29 +229,22 @@ pub(crate) fn parse_gltf(path: &Path, bytes: &[u8], options: LoadOptions) -> Res
                         let made = read(&primitive).map_err(|e| fail(format!("{where_}: {e}")))?;
                         let made = match made {
                             Some((full, None)) => {
+                                let (at, lod) = ((&document, &node_levels), (&node, &primitive));
                                 let mut notes = Vec::new();
-                                let levels = read_levels(
-                                    (&document, &node_levels),
-                                    (&node, &primitive, &full),
-                                    &read,
-                                    &mut notes,
-                                )
-                                .map_err(&fail)?;
-                                let kept =
-                                    with_given_levels(full, &levels).map_err(|e| fail(format!("{where_}: {e}")))?;
-                                if kept.given_levels().len() < levels.len() {
-                                    notes.push(format!(
-                                        "node {}: {} of its {} MSFT_lod levels are used (each must have fewer triangles than the one before)",
-                                        node.index(),
-                                        kept.given_levels().len(),
-                                        levels.len()
-                                    ));
-                                }
+                                let full = with_node_levels(at, lod, full, &read, &mut notes).map_err(&fail)?;
                                 warnings.extend(notes.into_iter().map(&fail));
-                                Some((kept, None))
+                                Some((full, None))
                             }
                             other => other,
                         };
+                        // The JSON's count (check_work) takes each mesh once a skin;
+                        // levels may add copies, so what is built is counted too.
+                        built += made.as_ref().map_or(0, |(m, _)| m.vertices().len() as u64);
+                        if built > MAX_MODEL_VERTICES {
+                            return Err(fail(format!(
+                                "the meshes and their MSFT_lod levels build more than {MAX_MODEL_VERTICES} vertices"
+                            )));
+                        }
                         let p = made.map(|(mesh_data, morph)| {
                             let name = mesh.name().map_or_else(|| format!("mesh {}", mesh.index()), str::to_string);
                             let material = primitive.material().index();

@@ -4,15 +4,16 @@
 //!
 //! Primitive `p` of the node's mesh takes primitive `p` of each level node's
 //! mesh as its coarser level, while that primitive is a triangle list with the
-//! same material, its node has the same skin, and it has the same vertex
-//! streams; the chain stops (with a warning) at the first that is not. A
+//! same material, its node has the same skin and transform, and it has the
+//! same vertex streams; the chain stops (with a warning) at the first that is
+//! not. A level node met in the scene is skipped, with its children. A
 //! primitive with morph targets keeps no given levels: the levels would not
 //! follow its targets. Each level's error is measured against full detail
 //! ([`with_given_levels`]); the `MSFT_screencoverage` hints are not read, since
 //! the renderer chooses by projected error as it does for every mesh.
 
 use super::model::Morph;
-use crate::scene::levels::MAX_LEVELS;
+use crate::scene::levels::{with_given_levels, MAX_LEVELS};
 use crate::scene::Mesh;
 use std::collections::HashSet;
 
@@ -82,10 +83,33 @@ impl NodeLevels {
 /// for full detail.
 pub(super) type ReadPrimitive<'r> = dyn Fn(&gltf::Primitive) -> Result<Option<(Mesh, Option<Morph>)>, String> + 'r;
 
+/// `full` (primitive `primitive` of `node`'s mesh) with the levels `node`
+/// names (see the module documentation). A level the file gets wrong is an
+/// error (as full detail's would be); one that does not match, or has no fewer
+/// triangles than the one before, is a warning.
+pub(super) fn with_node_levels(
+    at: (&gltf::Document, &NodeLevels),
+    (node, primitive): (&gltf::Node, &gltf::Primitive),
+    full: Mesh,
+    read: &ReadPrimitive,
+    warnings: &mut Vec<String>,
+) -> Result<Mesh, String> {
+    let coarser = read_levels(at, (node, primitive, &full), read, warnings)?;
+    let mesh = with_given_levels(full, &coarser).map_err(|e| e.to_string())?;
+    if mesh.given_levels().len() < coarser.len() {
+        warnings.push(format!(
+            "node {}: {} of its {} MSFT_lod levels are used (each must have fewer triangles than the one before)",
+            node.index(),
+            mesh.given_levels().len(),
+            coarser.len()
+        ));
+    }
+    Ok(mesh)
+}
+
 /// The coarser levels of primitive `primitive` of `node`'s mesh (see the module
-/// documentation), at most `MAX_LEVELS - 1`. A level the file gets wrong is an
-/// error (as full detail's would be); one that does not match is a warning.
-pub(super) fn read_levels(
+/// documentation), at most `MAX_LEVELS - 1`.
+fn read_levels(
     (document, levels): (&gltf::Document, &NodeLevels),
     (node, primitive, full): (&gltf::Node, &gltf::Primitive, &Mesh),
     read: &ReadPrimitive,
@@ -112,6 +136,8 @@ pub(super) fn read_levels(
             Some(_) if level.skin().map(|s| s.index()) != node.skin().map(|s| s.index()) => {
                 Some("has another skin".into())
             }
+            // A level stands where full detail stands; glint does not move its vertices.
+            Some(_) if level.transform().matrix() != node.transform().matrix() => Some("has another transform".into()),
             Some(_) => None,
         };
         if let Some(why) = mismatch {

@@ -3,7 +3,8 @@
 //! attribute-aware edge-collapse simplifier (its pure-Rust port, so the web
 //! page makes the same levels).
 //!
-//! Levels share the mesh's vertices (only indices are added), so a level keeps
+//! Levels share the mesh's vertices (only indices are added; given levels,
+//! below, bring their own), so a level keeps
 //! the skin weights, colours and UVs of the vertices it keeps, and the
 //! vertex shader's motions (swim, wind) move it as they move the full mesh.
 //! Vertices on a UV or normal seam are kept apart, so seams stay closed. A
@@ -98,9 +99,10 @@ const ERROR_SAMPLES: f64 = 4096.0;
 /// its error is the largest distance between its surface and full detail's,
 /// sampled both ways, in units of the bounding-sphere radius (made
 /// non-decreasing along the chain). Levels are kept while each has fewer
-/// triangles than the one before, at most `MAX_LEVELS - 1` of them; the rest
-/// are dropped (compare the count of [`Mesh::given_levels`] with `coarser`).
-pub fn with_given_levels(mut mesh: Mesh, coarser: &[Mesh]) -> Result<Mesh, MeshError> {
+/// triangles than the one before and its error can be measured, at most
+/// `MAX_LEVELS - 1` of them; the rest are dropped, vertices and all (compare
+/// the count of [`Mesh::given_levels`] with `coarser`).
+pub fn with_given_levels(mesh: Mesh, coarser: &[Mesh]) -> Result<Mesh, MeshError> {
     let mut kept: Vec<&Mesh> = Vec::new();
     let mut before = mesh.indices().len();
     for level in coarser.iter().take(MAX_LEVELS - 1) {
@@ -110,42 +112,60 @@ pub fn with_given_levels(mut mesh: Mesh, coarser: &[Mesh]) -> Result<Mesh, MeshE
         before = level.indices().len();
         kept.push(level);
     }
-    let mut levels = Vec::with_capacity(kept.len());
-    for level in kept {
-        let base = mesh.append_vertices(level)?;
-        levels.push(DetailLevel { indices: level.indices().iter().map(|&i| i + base).collect(), error: 0.0 });
+    loop {
+        let mut merged = mesh.clone();
+        let mut levels = Vec::with_capacity(kept.len());
+        for level in &kept {
+            let base = merged.append_vertices(level)?;
+            levels.push(DetailLevel { indices: level.indices().iter().map(|&i| i + base).collect(), error: 0.0 });
+        }
+        let measured = measure_errors(&merged, levels);
+        // A level that cannot be measured ends the chain: its vertices go too.
+        if measured.len() == kept.len() {
+            merged.set_given_levels(measured);
+            return Ok(merged);
+        }
+        kept.truncate(measured.len());
+        if kept.is_empty() {
+            return Ok(mesh);
+        }
     }
+}
+
+/// `levels` of `mesh` with their errors, measured against full detail's
+/// surface (sampled at about [`ERROR_SAMPLES`] points over the larger of the
+/// two), while they can be measured.
+fn measure_errors(mesh: &Mesh, levels: Vec<DetailLevel>) -> Vec<DetailLevel> {
     let radius = f64::from(mesh.bounding_sphere().radius);
     let floats: &[f32] = bytemuck::cast_slice(mesh.vertices());
     let stride = std::mem::size_of::<crate::scene::Vertex>() / 4;
     let positions = Positions::from_interleaved(floats, mesh.vertices().len(), stride, 0);
     let (Ok(positions), true) = (positions, radius > 0.0) else {
-        return Ok(mesh);
+        return Vec::new();
     };
-    let area: f64 = (mesh.indices().chunks_exact(3))
-        .map(|t| {
-            let p = |i: u32| glam::Vec3::from(mesh.vertices()[i as usize].position);
-            f64::from((p(t[1]) - p(t[0])).cross(p(t[2]) - p(t[0])).length() / 2.0)
-        })
-        .sum();
-    let mut options = LodQualityOptions::default();
-    options.samples_per_unit_area = if area > 0.0 { ERROR_SAMPLES / area } else { 0.0 };
+    let area = |indices: &[u32]| -> f64 {
+        (indices.chunks_exact(3))
+            .map(|t| {
+                let p = |i: u32| glam::Vec3::from(mesh.vertices()[i as usize].position);
+                f64::from((p(t[1]) - p(t[0])).cross(p(t[2]) - p(t[0])).length() / 2.0)
+            })
+            .sum()
+    };
+    let full_area = area(mesh.indices());
     let full = LodQualityMesh::new(mesh.indices(), positions);
     let mut workspace = Workspace::default();
-    let mut error = 0.0f32;
-    let mut measured = Vec::with_capacity(levels.len());
+    let (mut error, mut measured) = (0.0f32, Vec::with_capacity(levels.len()));
     for mut level in levels {
-        let Ok(quality) =
-            measure_lod_quality(full, LodQualityMesh::new(&level.indices, positions), &options, &mut workspace)
-        else {
-            break;
-        };
+        let mut options = LodQualityOptions::default();
+        let most = full_area.max(area(&level.indices));
+        options.samples_per_unit_area = if most > 0.0 { ERROR_SAMPLES / most } else { 0.0 };
+        let surface = LodQualityMesh::new(&level.indices, positions);
+        let Ok(quality) = measure_lod_quality(full, surface, &options, &mut workspace) else { break };
         error = error.max((quality.symmetric.max / radius) as f32);
         level.error = error;
         measured.push(level);
     }
-    mesh.set_given_levels(measured);
-    Ok(mesh)
+    measured
 }
 
 /// [`detail_levels`] for meshes of at most `most` triangles.

@@ -236,8 +236,11 @@ impl Mesh {
     }
 
     /// Replace the positions and normals (morph targets applied on the CPU),
-    /// keeping everything else. Returns whether the lengths matched and every
-    /// value was finite (otherwise the mesh is unchanged).
+    /// keeping everything else but the levels its author gave (their errors
+    /// were measured against the old surface; the shape's levels are made
+    /// again, or it stays at full detail when it deforms). Returns whether the
+    /// lengths matched and every value was finite (otherwise the mesh is
+    /// unchanged).
     pub fn set_positions_normals(&mut self, positions: &[Vec3], normals: &[Vec3]) -> bool {
         let n = self.vertices.len();
         if positions.len() != n || normals.len() != n || !positions.iter().chain(normals).all(|v| v.is_finite()) {
@@ -248,6 +251,7 @@ impl Mesh {
             v.normal = nrm.normalize_or(Vec3::Y).to_array();
         }
         (self.aabb, self.sphere) = bounds_of(positions).unwrap_or((self.aabb, self.sphere));
+        self.given_levels.clear();
         true
     }
 

@@ -10,12 +10,18 @@
 //   scatter  each fish to its cell's first slot plus its rank among the
 //            members (how many have a smaller number): cells in order and
 //            fish by number inside each, as the CPU's stable counting sort
-//            orders them, whatever order the atomics ran in. The nearest
-//            fish's number (an atomic min: the smallest of equals).
+//            orders them, whatever order the atomics ran in. A cell of more
+//            than RANK_CAP fish (a crowd packed tighter than separation lets
+//            it stay) keeps its atomic places instead: ranking costs the
+//            square of a cell's fish. The nearest fish's number (an atomic
+//            min: the smallest of equals).
 //   steer    every fish from the sorted copy: rules, speed limits, confinement
 //   hunt     the predator, one thread, after the fish read where it was
-// Nothing depends on the order in which threads ran, so a step gives the
-// same bits on the same device every time.
+// Nothing else depends on the order in which threads ran, so while no cell
+// holds more than RANK_CAP fish a step gives the same bits on the same device
+// every time.
+
+const RANK_CAP: u32 = 1024u;
 
 struct Params {
     origin: vec3<f32>,
@@ -135,9 +141,12 @@ fn scatter(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let first = starts[keys[i].x];
     let last = starts[keys[i].x + 1u];
-    var rank = 0u;
-    for (var s = first; s < last; s = s + 1u) {
-        rank = rank + u32(keys[params.count + s].x < i);
+    var rank = keys[i].y;
+    if last - first <= RANK_CAP {
+        rank = 0u;
+        for (var s = first; s < last; s = s + 1u) {
+            rank = rank + u32(keys[params.count + s].x < i);
+        }
     }
     sorted[first + rank] = fish_in[i];
     if params.hunter.w > 0.0 {

@@ -2,7 +2,9 @@
 //! its state kept on the GPU between steps and read back on request. A step
 //! is deterministic: the fish are sorted by cell as the CPU sorts them (by
 //! number inside a cell, not in the order atomics ran), so the same start
-//! gives the same bits on the same device.
+//! gives the same bits on the same device, while no cell holds more than
+//! 1,024 fish (`RANK_CAP` in the shader: a fuller cell keeps atomic order,
+//! as ranking costs the square of its fish).
 
 use super::{School, SchoolParams, Swimmer};
 use crate::gpu::GpuError;
