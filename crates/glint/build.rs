@@ -26,7 +26,7 @@ const COMPOSED: [(&str, &str); 5] =
 
 /// The shaders without defs (their imports ahead of their own text), and the
 /// constant each becomes.
-const PLAIN: [(&str, &str); 8] = [
+const PLAIN: [(&str, &str); 9] = [
     ("BLIT", "blit"),
     ("POST", "post"),
     ("CULL", "cull"),
@@ -35,6 +35,7 @@ const PLAIN: [(&str, &str); 8] = [
     ("PARTICLES_STEP", "particles_step"),
     ("SCHOOL", "school"),
     ("SCAN", "scan"),
+    ("RADIX", "radix"),
 ];
 
 /// The modules others import: their import path and file.

@@ -25,6 +25,20 @@ pub use simulation::{GpuSimulation, ParticleGpu, MAX_LAYER_PARTICLES};
 pub use target::{OffscreenTarget, Readback, TargetFormat};
 pub use window::{SurfaceFrame, WindowSurface};
 
+/// A headless GPU for unit tests; none (with a message) where no adapter
+/// exists, unless `GLINT_REQUIRE_ADAPTER=1`.
+#[cfg(test)]
+pub(crate) fn test_gpu() -> Option<Gpu> {
+    match Gpu::headless() {
+        Ok(gpu) => Some(gpu),
+        Err(e) if std::env::var("GLINT_REQUIRE_ADAPTER").as_deref() == Ok("1") => panic!("{e}"),
+        Err(e) => {
+            eprintln!("skipping GPU test: {e}");
+            None
+        }
+    }
+}
+
 pub(crate) use blit::{full_screen_pipeline, sampler_entry, texture_entry, Blitter};
 pub(crate) use errors::{DriverErrors, UncapturedErrors};
 pub(crate) use submit::SubmitQueue;

@@ -284,6 +284,8 @@ pub(crate) const PARTICLES_STEP: &str = assemble::PARTICLES_STEP;
 pub(crate) const SCHOOL: &str = assemble::SCHOOL;
 /// The running sum of the GPU's counting sorts (`sim/scan.rs`).
 pub(crate) const SCAN: &str = assemble::SCAN;
+/// The stable radix sort of key-value pairs (`sim/radix.rs`).
+pub(crate) const RADIX: &str = assemble::RADIX;
 
 #[cfg(test)]
 mod tests {

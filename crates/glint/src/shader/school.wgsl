@@ -1,27 +1,19 @@
 // Fish schooling on the GPU: the same rules as sim/school/rules.rs, stepped
 // by these compute passes (gpu.rs records them in this order):
 //   clear    every cell's count to 0, and the predator's nearest fish
-//   count    each fish's cell and a place in it (an atomic add, so in no
-//            fixed order); the predator's nearest distance (an atomic min of
-//            the squared distance's bits)
+//   count    each fish's cell, as the pair (cell, fish number), and the
+//            cell's count (an atomic add); the predator's nearest distance
+//            (an atomic min of the squared distance's bits)
 //   (sim/scan.wgsl: the counts' exclusive running sum, each cell's first slot)
-//   place    each fish's number at its cell's slot plus its place: the cell's
-//            members, in no fixed order
-//   scatter  each fish to its cell's first slot plus its rank among the
-//            members (how many have a smaller number): cells in order and
-//            fish by number inside each, as the CPU's stable counting sort
-//            orders them, whatever order the atomics ran in. A cell of more
-//            than RANK_CAP fish (a crowd packed tighter than separation lets
-//            it stay) keeps its atomic places instead: ranking costs the
-//            square of a cell's fish. The nearest fish's number (an atomic
-//            min: the smallest of equals).
+//   (sim/radix.wgsl: the pairs sorted by cell, stably: cells in order and
+//    fish by number inside each, as the CPU's counting sort orders them)
+//   gather   each slot's fish into the sorted copy; the nearest fish's number
+//            (an atomic min: the smallest of equals)
 //   steer    every fish from the sorted copy: rules, speed limits, confinement
 //   hunt     the predator, one thread, after the fish read where it was
-// Nothing else depends on the order in which threads ran, so while no cell
-// holds more than RANK_CAP fish a step gives the same bits on the same device
-// every time.
-
-const RANK_CAP: u32 = 1024u;
+// Nothing depends on the order in which threads ran (the atomics only count
+// and take minima), so a step gives the same bits on the same device every
+// time.
 
 struct Params {
     origin: vec3<f32>,
@@ -64,8 +56,7 @@ struct Hunt {
 @group(0) @binding(1) var<storage, read_write> fish_in: array<Fish>;
 @group(0) @binding(2) var<storage, read_write> fish_out: array<Fish>;
 @group(0) @binding(3) var<storage, read_write> sorted: array<Fish>;
-// 2 × count entries: (cell, place in cell) per fish, then per slot the
-// number of the fish `place` put there (in x).
+// (cell, fish number): by fish from `count`, by slot once sorted.
 @group(0) @binding(4) var<storage, read_write> keys: array<vec2<u32>>;
 @group(0) @binding(5) var<storage, read_write> counts: array<atomic<u32>>;
 // cells + 1 entries: each cell's first slot, then the fish count.
@@ -116,7 +107,8 @@ fn count(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let p = fish_in[i].position;
     let c = cell_index(coords(p));
-    keys[i] = vec2<u32>(c, atomicAdd(&counts[c], 1u));
+    keys[i] = vec2<u32>(c, i);
+    atomicAdd(&counts[c], 1u);
     if params.hunter.w > 0.0 {
         let d = p - hunt_state.position;
         atomicMin(&hunt_state.nearest_bits, bitcast<u32>(dot(d, d)));
@@ -124,31 +116,13 @@ fn count(@builtin(global_invocation_id) id: vec3<u32>) {
 }
 
 @compute @workgroup_size(256)
-fn place(@builtin(global_invocation_id) id: vec3<u32>) {
-    let i = id.x;
-    if i >= params.count {
+fn gather(@builtin(global_invocation_id) id: vec3<u32>) {
+    let slot = id.x;
+    if slot >= params.count {
         return;
     }
-    let key = keys[i];
-    keys[params.count + starts[key.x] + key.y].x = i;
-}
-
-@compute @workgroup_size(256)
-fn scatter(@builtin(global_invocation_id) id: vec3<u32>) {
-    let i = id.x;
-    if i >= params.count {
-        return;
-    }
-    let first = starts[keys[i].x];
-    let last = starts[keys[i].x + 1u];
-    var rank = keys[i].y;
-    if last - first <= RANK_CAP {
-        rank = 0u;
-        for (var s = first; s < last; s = s + 1u) {
-            rank = rank + u32(keys[params.count + s].x < i);
-        }
-    }
-    sorted[first + rank] = fish_in[i];
+    let i = keys[slot].y;
+    sorted[slot] = fish_in[i];
     if params.hunter.w > 0.0 {
         let d = fish_in[i].position - hunt_state.position;
         if bitcast<u32>(dot(d, d)) == atomicLoad(&hunt_state.nearest_bits) {

@@ -5,5 +5,6 @@
 
 pub mod cloth;
 pub mod particles;
+mod radix;
 mod scan;
 pub mod school;

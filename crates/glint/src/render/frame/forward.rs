@@ -147,23 +147,14 @@ pub(crate) fn upload_instances(
 
 #[cfg(test)]
 mod tests {
-    use crate::gpu::{Gpu, OffscreenTarget};
+    use crate::gpu::OffscreenTarget;
     use crate::render::Renderer;
     use crate::render::Shadows;
     use crate::scene::ShapeKind;
     use crate::scene::{Background, Camera, Entity, Environment, Lighting, Material};
     use glam::{Mat4, Vec3};
 
-    fn gpu() -> Option<Gpu> {
-        match Gpu::headless() {
-            Ok(gpu) => Some(gpu),
-            Err(e) if std::env::var("GLINT_REQUIRE_ADAPTER").as_deref() == Ok("1") => panic!("{e}"),
-            Err(e) => {
-                eprintln!("skipping GPU test: {e}");
-                None
-            }
-        }
-    }
+    use crate::gpu::test_gpu as gpu;
 
     #[test]
     fn errors_while_pipelines_are_made_are_caught_not_left_to_panic() {

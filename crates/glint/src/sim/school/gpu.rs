@@ -1,20 +1,23 @@
 //! [`GpuSchool`]: a [`School`] stepped by compute shaders (`shader/school.wgsl`),
 //! its state kept on the GPU between steps and read back on request. A step
-//! is deterministic: the fish are sorted by cell as the CPU sorts them (by
-//! number inside a cell, not in the order atomics ran), so the same start
-//! gives the same bits on the same device, while no cell holds more than
-//! 1,024 fish (`RANK_CAP` in the shader: a fuller cell keeps atomic order,
-//! as ranking costs the square of its fish).
+//! is deterministic: the fish are sorted by cell with a stable radix sort
+//! ([`GpuRadixSort`]), by number inside a cell as the CPU sorts them, not in
+//! the order atomics ran, so the same start gives the same bits on the same
+//! device.
 
 use super::{School, SchoolParams, Swimmer};
 use crate::gpu::GpuError;
 use crate::gpu::GpuSimulation;
+use crate::sim::radix::{GpuRadixSort, RadixGroup};
 use crate::sim::scan::{GpuScan, ScanGroup};
 use crate::Gpu;
 
 /// Obstacles the GPU's parameter block holds.
 pub const MAX_GPU_OBSTACLES: usize = crate::scene::school::MAX_OBSTACLES;
 const WORKGROUP: u32 = 256;
+
+// Every school's fish fit one radix sort.
+const _: () = assert!(crate::scene::school::MAX_FISH as u32 <= crate::sim::radix::MAX_PAIRS);
 
 /// The uniform block `Params` of `shader/school.wgsl`.
 #[repr(C)]
@@ -81,7 +84,7 @@ impl From<&Swimmer> for HuntGpu {
 
 /// The passes of one step before the scan, and after it.
 const BEFORE_SCAN: [&str; 2] = ["clear", "count"];
-const AFTER_SCAN: [&str; 4] = ["place", "scatter", "steer", "hunt"];
+const AFTER_SCAN: [&str; 3] = ["gather", "steer", "hunt"];
 
 /// A school whose steps run as compute passes. Needs compute shaders and
 /// eight storage buffers a stage ([`Gpu::culls_on_gpu`]); elsewhere (GL,
@@ -97,6 +100,8 @@ pub struct GpuSchool {
     pipelines: Vec<wgpu::ComputePipeline>,
     scan: GpuScan,
     scan_group: ScanGroup,
+    sort: GpuRadixSort,
+    sort_group: RadixGroup,
     /// Which fish buffer holds the current state.
     current: usize,
     cells: u32,
@@ -138,7 +143,8 @@ impl GpuSchool {
         let fish_data: Vec<FishGpu> = school.fish().iter().map(FishGpu::from).collect();
         gpu.queue.write_buffer(&fish[0], 0, bytemuck::cast_slice(&fish_data));
         let sorted = buffer("school: fish by cell", fish_bytes);
-        let keys = buffer("school: cell and place, then each slot's fish", 16 * n as u64);
+        let keys = buffer("school: cell and fish", 8 * n as u64);
+        let spare = buffer("school: cell and fish, sorting", 8 * n as u64);
         let counts = buffer("school: fish per cell", 4 * (cells as u64 + 1));
         let starts = buffer("school: first slot per cell", 4 * (cells as u64 + 1));
         let hunt = buffer("school: predator", std::mem::size_of::<HuntGpu>() as u64);
@@ -168,6 +174,9 @@ impl GpuSchool {
             .collect();
         let scan = GpuScan::new(device);
         let scan_group = scan.group((device, &gpu.queue), &counts, &starts, cells + 1);
+        let sort = GpuRadixSort::new(device);
+        let cell_bits = u32::BITS - cells.saturating_sub(1).leading_zeros();
+        let sort_group = sort.group((device, &gpu.queue), &scan, (&keys, &spare), (n as u32, cell_bits));
         Ok(Self {
             params,
             block,
@@ -178,6 +187,8 @@ impl GpuSchool {
             pipelines,
             scan,
             scan_group,
+            sort,
+            sort_group,
             current: 0,
             cells,
             pending: 0,
@@ -209,12 +220,13 @@ impl GpuSchool {
     fn encode_step(&mut self, encoder: &mut wgpu::CommandEncoder) {
         let fish_groups = (self.block.count).div_ceil(WORKGROUP);
         let cell_groups = (self.cells + 1).div_ceil(WORKGROUP);
-        let threads = [cell_groups, fish_groups, fish_groups, fish_groups, fish_groups, 1];
+        let threads = [cell_groups, fish_groups, fish_groups, fish_groups, 1];
         let mut pass = encoder
             .begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("school step"), timestamp_writes: None });
         for (k, (pipeline, groups)) in self.pipelines.iter().zip(threads).enumerate() {
             if k == BEFORE_SCAN.len() {
                 self.scan.encode(&mut pass, &self.scan_group);
+                self.sort.encode(&mut pass, &self.scan, &self.sort_group);
             }
             if k == 0 || k == BEFORE_SCAN.len() {
                 pass.set_bind_group(0, &self.groups[self.current], &[]);
