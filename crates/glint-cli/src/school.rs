@@ -36,6 +36,10 @@ pub struct SchoolArgs {
     /// Time every step and print the median.
     #[arg(long)]
     bench: bool,
+    /// With `--gpu --bench`: step the same start on the CPU too, in the same
+    /// run, and print both and the ratio.
+    #[arg(long, requires = "gpu", requires = "bench")]
+    vs_cpu: bool,
     /// With `--bench`: print one JSON object instead of text.
     #[arg(long, requires = "bench")]
     json: bool,
@@ -67,10 +71,21 @@ fn params(args: &SchoolArgs) -> SchoolParams {
     SchoolParams { count: args.fish as usize, bounds, predator, seed: args.seed, ..SchoolParams::default() }
 }
 
+/// What `--bench --vs-cpu --json` prints: both paths from one start, and how
+/// many times faster the GPU's steps are.
+#[derive(serde::Serialize)]
+struct VersusReport {
+    gpu: BenchReport,
+    cpu: BenchReport,
+    gpu_speedup: f64,
+}
+
 /// Run `glint sim school`.
 pub fn school(args: &SchoolArgs) -> Result<(), Error> {
     let params = params(args);
-    let school = School::new(params).map_err(|why| crate::sim::usage(&why))?;
+    let school = School::new(params.clone()).map_err(|why| crate::sim::usage(&why))?;
+    // The same seeded start, for the CPU's side.
+    let start = args.vs_cpu.then(|| School::new(params)).transpose().map_err(|why| crate::sim::usage(&why))?;
     let (times, stats) = if args.gpu { gpu_steps(args, school)? } else { cpu_steps(args, school) };
     if !args.bench {
         crate::output::print(&format!(
@@ -79,36 +94,61 @@ pub fn school(args: &SchoolArgs) -> Result<(), Error> {
         ))?;
         return Ok(());
     }
-    let mut sorted = times;
-    let median = crate::bench::median(&mut sorted).unwrap_or(0.0);
-    let report = BenchReport {
+    let first = report(args, if args.gpu { "gpu" } else { "cpu" }, times, stats);
+    let Some(start) = start else {
+        return match args.json {
+            true => print_json(&first),
+            false => Ok(crate::output::print(&line(&first))?),
+        };
+    };
+    let (times, stats) = cpu_steps(args, start);
+    let cpu = report(args, "cpu", times, stats);
+    let versus = VersusReport { gpu_speedup: cpu.ms_per_step / first.ms_per_step, gpu: first, cpu };
+    match args.json {
+        true => print_json(&versus),
+        false => Ok(crate::output::print(&format!(
+            "{}{}the gpu's steps: {:.2}x the cpu's speed\n",
+            line(&versus.gpu),
+            line(&versus.cpu),
+            versus.gpu_speedup
+        ))?),
+    }
+}
+
+/// The benchmark's figures from each step's milliseconds on `path`.
+fn report(args: &SchoolArgs, path: &'static str, mut times: Vec<f64>, stats: SchoolStats) -> BenchReport {
+    let median = crate::bench::median(&mut times).unwrap_or(0.0);
+    BenchReport {
         fish: args.fish,
         steps: args.steps,
-        path: if args.gpu { "gpu" } else { "cpu" },
+        path,
         threads: rayon::current_num_threads(),
         ms_per_step: median,
-        ms_per_step_min: crate::bench::percentile(&sorted, 0.0),
-        ms_per_step_max: crate::bench::percentile(&sorted, 1.0),
+        ms_per_step_min: crate::bench::percentile(&times, 0.0),
+        ms_per_step_max: crate::bench::percentile(&times, 1.0),
         steps_per_second: 1000.0 / median,
         mean_speed: stats.mean_speed,
         polarisation: stats.polarisation,
         nearest: stats.nearest,
-    };
-    if args.json {
-        crate::output::print(&format!("{}\n", serde_json::to_string(&report).expect("plain numbers serialise")))?;
-    } else {
-        crate::output::print(&format!(
-            "{} fish on the {}: {:.3} ms a step (median of {}; min {:.3}, max {:.3}), {:.1} steps/s\n",
-            report.fish,
-            report.path,
-            report.ms_per_step,
-            report.steps,
-            report.ms_per_step_min,
-            report.ms_per_step_max,
-            report.steps_per_second
-        ))?;
     }
-    Ok(())
+}
+
+fn print_json(report: &impl serde::Serialize) -> Result<(), Error> {
+    Ok(crate::output::print(&format!("{}\n", serde_json::to_string(report).expect("plain numbers serialise")))?)
+}
+
+/// One path's figures as a line of text.
+fn line(report: &BenchReport) -> String {
+    format!(
+        "{} fish on the {}: {:.3} ms a step (median of {}; min {:.3}, max {:.3}), {:.1} steps/s\n",
+        report.fish,
+        report.path,
+        report.ms_per_step,
+        report.steps,
+        report.ms_per_step_min,
+        report.ms_per_step_max,
+        report.steps_per_second
+    )
 }
 
 /// Each step's milliseconds on the CPU, and the statistics at the end.

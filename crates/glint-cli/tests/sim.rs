@@ -1,6 +1,6 @@
 //! `glint sim` as a user meets it: cloth trajectories and benchmarks, the
 //! published mesh format, fish schools and particle emitters, their JSON and
-//! their bad input (no GPU needed).
+//! their bad input (no GPU needed but where a test says so).
 
 mod common;
 
@@ -145,6 +145,29 @@ fn sim_school_prints_its_statistics_and_benchmark_as_json() {
     assert!(String::from_utf8_lossy(&plain.stdout).starts_with("500 fish after 5 steps: mean speed"));
     assert_eq!(glint(&["sim", "school", "--fish", "0"]).status.code(), Some(1));
     assert_eq!(glint(&["sim", "school", "--json"]).status.code(), Some(1), "--json needs --bench");
+}
+
+#[test]
+fn sim_school_vs_cpu_times_both_paths_from_one_start() {
+    let out = glint(&["sim", "school", "--gpu", "--vs-cpu", "--fish", "3000", "--steps", "6", "--bench", "--json"]);
+    if no_adapter(&out) {
+        return;
+    }
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let r: serde_json::Value = serde_json::from_slice(&out.stdout).expect("one JSON object");
+    let (gpu, cpu) = (&r["gpu"], &r["cpu"]);
+    assert_eq!((gpu["path"].as_str(), cpu["path"].as_str()), (Some("gpu"), Some("cpu")), "{r}");
+    let ms = |side: &serde_json::Value| side["ms_per_step"].as_f64().expect("a number");
+    let speedup = r["gpu_speedup"].as_f64().expect("a number");
+    assert!((speedup - ms(cpu) / ms(gpu)).abs() < 1e-9 * speedup, "{r}");
+    // One start, the same rules and neighbours: the two schools agree.
+    let stat = |side: &serde_json::Value, key: &str| side[key].as_f64().expect("a number");
+    for key in ["mean_speed", "polarisation", "nearest"] {
+        assert!((stat(gpu, key) - stat(cpu, key)).abs() < 1e-3 * stat(cpu, key).abs().max(1.0), "{key}: {r}");
+    }
+    let text = glint(&["sim", "school", "--gpu", "--vs-cpu", "--fish", "500", "--steps", "2", "--bench"]);
+    assert!(String::from_utf8_lossy(&text.stdout).contains("the gpu's steps: "), "{}", stderr(&text));
+    assert_eq!(glint(&["sim", "school", "--vs-cpu", "--bench"]).status.code(), Some(1), "--vs-cpu needs --gpu");
 }
 
 #[test]
