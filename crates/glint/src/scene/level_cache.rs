@@ -86,7 +86,10 @@ impl LevelCache {
         match read_bounded(&path, mesh).and_then(|bytes| decode(&bytes, mesh)) {
             Ok(levels) => {
                 // Kept in use: the folder is trimmed oldest first.
-                let touched = std::fs::File::options().append(true).open(&path).and_then(|f| f.set_modified(now()));
+                let touched = std::fs::File::options()
+                    .append(true)
+                    .open(&path)
+                    .and_then(|f| f.set_modified(std::time::SystemTime::now()));
                 if let Err(e) = touched {
                     log::debug!("{}: {e}", path.display());
                 }
@@ -137,10 +140,6 @@ impl LevelCache {
         }
         Ok(())
     }
-}
-
-fn now() -> std::time::SystemTime {
-    std::time::SystemTime::now()
 }
 
 /// The bytes of `path` if it is a regular file no longer than levels of

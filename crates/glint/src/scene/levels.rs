@@ -137,10 +137,7 @@ pub fn with_given_levels(mesh: Mesh, coarser: &[Mesh]) -> Result<Mesh, MeshError
 /// two), while they can be measured.
 fn measure_errors(mesh: &Mesh, levels: Vec<DetailLevel>) -> Vec<DetailLevel> {
     let radius = f64::from(mesh.bounding_sphere().radius);
-    let floats: &[f32] = bytemuck::cast_slice(mesh.vertices());
-    let stride = std::mem::size_of::<crate::scene::Vertex>() / 4;
-    let positions = Positions::from_interleaved(floats, mesh.vertices().len(), stride, 0);
-    let (Ok(positions), true) = (positions, radius > 0.0) else {
+    let (Ok(positions), true) = (positions_of(mesh), radius > 0.0) else {
         return Vec::new();
     };
     let area = |indices: &[u32]| -> f64 {
@@ -168,6 +165,13 @@ fn measure_errors(mesh: &Mesh, levels: Vec<DetailLevel>) -> Vec<DetailLevel> {
     measured
 }
 
+/// The positions of `mesh`'s interleaved vertices, as the simplifier reads them.
+fn positions_of(mesh: &Mesh) -> Result<Positions<'_>, meshoptimizer_rs::Error> {
+    let floats: &[f32] = bytemuck::cast_slice(mesh.vertices());
+    let stride = std::mem::size_of::<crate::scene::Vertex>() / 4;
+    Positions::from_interleaved(floats, mesh.vertices().len(), stride, 0)
+}
+
 /// [`detail_levels`] for meshes of at most `most` triangles.
 fn detail_levels_within(mesh: &Mesh, most: usize) -> Vec<DetailLevel> {
     let triangles = mesh.indices().len() / 3;
@@ -175,14 +179,11 @@ fn detail_levels_within(mesh: &Mesh, most: usize) -> Vec<DetailLevel> {
     if !(MIN_TRIANGLES..=most).contains(&triangles) || radius.is_nan() || radius <= 0.0 {
         return Vec::new();
     }
-    let floats: &[f32] = bytemuck::cast_slice(mesh.vertices());
-    let stride = std::mem::size_of::<crate::scene::Vertex>() / 4;
     let count = mesh.vertices().len();
     let packed = attributes_of(mesh);
-    let (Ok(positions), Ok(attributes)) = (
-        Positions::from_interleaved(floats, count, stride, 0),
-        Attributes::from_interleaved(&packed, count, ATTRIBUTES, ATTRIBUTES, 0),
-    ) else {
+    let (Ok(positions), Ok(attributes)) =
+        (positions_of(mesh), Attributes::from_interleaved(&packed, count, ATTRIBUTES, ATTRIBUTES, 0))
+    else {
         return Vec::new();
     };
     let weights =
