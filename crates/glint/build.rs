@@ -9,9 +9,9 @@
 //! selects; its tests check the result against naga_oil's composition.
 //!
 //! The other shaders (`blit`, `post`, `cull`, `pyramid`, `ssao_compute`
-//! (appended to `ssao`), and the simulations' `particles_step`, `school` and
-//! `scan`) have no defs: each becomes one string there, its imports ahead of
-//! its own text, comments dropped too.
+//! (appended to `ssao`), and the simulations' `particles_step`, `school`,
+//! `school_place`, `scan` and `radix`) have no defs: each becomes one string
+//! there, its imports ahead of its own text, comments dropped too.
 //!
 //! The sources keep to the subset of naga_oil's preprocessor that this reads:
 //! `#define_import_path`, `#import` (outside conditionals), `#ifdef`,
@@ -26,7 +26,7 @@ const COMPOSED: [(&str, &str); 5] =
 
 /// The shaders without defs (their imports ahead of their own text), and the
 /// constant each becomes.
-const PLAIN: [(&str, &str); 9] = [
+const PLAIN: [(&str, &str); 10] = [
     ("BLIT", "blit"),
     ("POST", "post"),
     ("CULL", "cull"),
@@ -34,6 +34,7 @@ const PLAIN: [(&str, &str); 9] = [
     ("SSAO_COMPUTE", "ssao_compute"),
     ("PARTICLES_STEP", "particles_step"),
     ("SCHOOL", "school"),
+    ("SCHOOL_PLACE", "school_place"),
     ("SCAN", "scan"),
     ("RADIX", "radix"),
 ];

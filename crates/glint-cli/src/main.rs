@@ -155,6 +155,8 @@ enum Command {
         /// whatever the camera's "lod_error" says (default 1).
         #[arg(long, value_name = "PX", value_parser = lod::parse_lod_error)]
         lod_error: Option<f32>,
+        #[command(flatten)]
+        sim: SimArgs,
     },
     /// Open a window onto a .scn scene (or a model file) and fly through it.
     #[command(after_help = view::KEYS)]
@@ -205,6 +207,8 @@ enum Command {
         time: f32,
         #[command(flatten)]
         lod: lod::LodArgs,
+        #[command(flatten)]
+        sim: SimArgs,
     },
     /// Run a simulation (see `glint sim cloth --help`, `glint sim school --help`).
     #[command(subcommand, after_help = EXIT_CODES)]
@@ -276,6 +280,36 @@ struct Picture {
     time_of_day: Option<f32>,
     #[command(flatten)]
     lod: lod::LodArgs,
+    #[command(flatten)]
+    sim: SimArgs,
+}
+
+/// `--sim`, on `render`, `view`, `bench` and `explain`.
+#[derive(clap::Args, Clone, Copy)]
+pub(crate) struct SimArgs {
+    /// Step every fish school here, whatever its block's "sim" says: gpu
+    /// (compute shaders, drawn in place from the simulation's buffers; the
+    /// CPU where the adapter cannot, as on GL) or cpu (the reference).
+    #[arg(long, value_enum)]
+    sim: Option<SimArg>,
+}
+
+impl SimArgs {
+    /// `options` with this choice.
+    pub(crate) fn apply(self, options: LoadOptions) -> LoadOptions {
+        let sim = self.sim.map(|s| match s {
+            SimArg::Cpu => glint::scene::SimPath::Cpu,
+            SimArg::Gpu => glint::scene::SimPath::Gpu,
+        });
+        LoadOptions { sim: sim.or(options.sim), ..options }
+    }
+}
+
+/// `--sim`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub(crate) enum SimArg {
+    Cpu,
+    Gpu,
 }
 
 /// `--time-of-day`: hours, 0..=24.
@@ -330,8 +364,9 @@ pub(crate) fn check_camera(desc: &SceneDesc, scene: &Path, camera: Option<usize>
 }
 
 impl Picture {
-    /// `options` with this picture's cloth solve.
+    /// `options` with this picture's cloth solve, school path and time of day.
     fn load_options(&self, options: LoadOptions) -> LoadOptions {
+        let options = self.sim.apply(options);
         LoadOptions { cloth_solve: self.solve.map(Into::into), time_of_day: self.time_of_day, ..options }
     }
 }
@@ -724,7 +759,7 @@ fn main() -> ExitCode {
             })
         }
         Command::Check { scene } => check(scene, options),
-        Command::Explain { scene, naive, json, view, camera, cull, size, time, lod } => {
+        Command::Explain { scene, naive, json, view, camera, cull, size, time, lod, sim } => {
             explain::explain(explain::ExplainArgs {
                 scene,
                 naive: *naive,
@@ -735,7 +770,7 @@ fn main() -> ExitCode {
                 size: *size,
                 time: *time,
                 lod: *lod,
-                options,
+                options: sim.apply(options),
             })
         }
         Command::Compare { expected, actual, diff } => match compare::run(expected, actual, diff.as_deref()) {
@@ -777,6 +812,7 @@ fn main() -> ExitCode {
             time,
             lod,
             lod_error,
+            sim,
             ..
         } => {
             let config = bench::BenchConfig {
@@ -789,7 +825,7 @@ fn main() -> ExitCode {
                 density: *density,
                 lod: lod::LodArgs { lod_error: *lod_error, ..lod::LodArgs::default() },
             };
-            run_live(scene, &config, (*time, 1.0 / *fps), (*json, *lod), options)
+            run_live(scene, &config, (*time, 1.0 / *fps), (*json, *lod), sim.apply(options))
         }
         Command::Bench {
             scene,
@@ -807,6 +843,7 @@ fn main() -> ExitCode {
             post,
             lod,
             lod_error,
+            sim,
             ..
         } => {
             let config = bench::BenchConfig {
@@ -820,7 +857,7 @@ fn main() -> ExitCode {
                 lod: lod::LodArgs { lod_error: *lod_error, ..lod::LodArgs::default() }.with(*lod != lod::BenchLod::Off),
             };
             let output = BenchOutput { json: *json, plot: plot.as_deref() };
-            run_bench(scene, &config, (*mode, *cull, *lod), output, post.clone().map(|p| p.0), options)
+            run_bench(scene, &config, (*mode, *cull, *lod), output, post.clone().map(|p| p.0), sim.apply(options))
         }
     };
     match result {

@@ -1,12 +1,13 @@
 //! Fish schooling with compute shaders against the CPU's: the same start,
 //! the same rules and the same neighbour order, statistics that agree (not
 //! bit for bit: rounding differs between the two, and grows over steps), two
-//! GPU runs bit for bit alike, and the GPU's counting sort found complete.
+//! GPU runs bit for bit alike, and the GPU's counting sort found complete;
+//! a scene's school drawn in place from the GPU's buffers.
 
 mod common;
 
 use glam::Vec3;
-use glint::scene::Aabb;
+use glint::scene::{Aabb, PathCounts, SimPath};
 use glint::sim::school::{GpuSchool, Hunter, Obstacle, School, SchoolParams};
 
 fn params() -> SchoolParams {
@@ -157,16 +158,18 @@ fn in_a_crowd_the_gpu_samples_neighbours_as_the_cpu_does() {
     assert!(apart < 1e-5 * turned, "CPU and GPU turn the fish alike: {apart} against {turned}");
 }
 
-/// `tests/scenes/school.scn` posed at `time` on `gpu`, 256 × 256 with 4× MSAA.
-fn school_at(gpu: &glint::Gpu, time: f32) -> (image::RgbaImage, glint::World) {
-    let desc = common::load_scene(&common::repo_root().join("tests/scenes/school.scn"));
+/// `tests/scenes/school.scn` posed at `time` on `gpu`, its school stepped
+/// on `sim`, 256 × 256 with 4× MSAA: the picture, the world and the frame's statistics.
+fn school_at(gpu: &glint::Gpu, time: f32, sim: SimPath) -> (image::RgbaImage, glint::World, glint::FrameStats) {
+    let mut desc = common::load_scene(&common::repo_root().join("tests/scenes/school.scn"));
     assert!(desc.warnings.is_empty(), "{:?}", desc.warnings);
+    desc.schools[0].sim = sim;
     let mut renderer = glint::Renderer::new(gpu);
     let mut world = glint::World::place(desc, &mut renderer).expect("placed");
     world.pose(time, &mut renderer).expect("posed");
     let mut target = glint::OffscreenTarget::new(gpu, 256, 256, 4).expect("target");
-    world.draw(&mut renderer, &world.views(None), &mut target).expect("frame");
-    (target.read_rgba8(gpu).expect("readback"), world)
+    let stats = world.draw(&mut renderer, &world.views(None), &mut target).expect("frame").remove(0);
+    (target.read_rgba8(gpu).expect("readback"), world, stats)
 }
 
 fn sun(world: &glint::World) -> Vec3 {
@@ -178,11 +181,13 @@ fn sun(world: &glint::World) -> Vec3 {
 
 #[test]
 fn a_school_scene_draws_the_same_picture_at_the_same_time_and_its_sun_sways() {
+    // The CPU school, the reference.
     let Some(gpu) = common::gpu() else { return };
-    let (picture, world) = school_at(gpu, 3.0);
-    let (again, _) = school_at(gpu, 3.0);
+    let (picture, world, stats) = school_at(gpu, 3.0, SimPath::Cpu);
+    assert_eq!(stats.simulations.schools, PathCounts { cpu: 1, gpu: 0 });
+    let (again, ..) = school_at(gpu, 3.0, SimPath::Cpu);
     assert_eq!(picture, again, "the same time, the same picture");
-    let (later, later_world) = school_at(gpu, 3.5);
+    let (later, later_world, _) = school_at(gpu, 3.5, SimPath::Cpu);
     assert!(common::max_difference(&picture, &later) > 64, "the fish swam on");
     let (a, b) = (sun(&world), sun(&later_world));
     let turned = a.angle_between(b).to_degrees();
@@ -191,10 +196,64 @@ fn a_school_scene_draws_the_same_picture_at_the_same_time_and_its_sun_sways() {
 }
 
 #[test]
+fn the_gpu_school_is_drawn_in_place_the_same_at_the_same_time() {
+    let Some(gpu) = common::gpu() else { return };
+    let (picture, world, stats) = school_at(gpu, 3.0, SimPath::Gpu);
+    if !gpu.culls_on_gpu() {
+        assert_eq!(world.school_paths(), [Some(SimPath::Cpu)], "no compute path: the CPU steps it");
+        return;
+    }
+    assert_eq!(world.school_paths(), [Some(SimPath::Gpu)]);
+    assert_eq!(stats.simulations.schools, PathCounts { cpu: 0, gpu: 1 });
+    let (again, ..) = school_at(gpu, 3.0, SimPath::Gpu);
+    assert!(picture == again, "two GPU runs to the same time draw the same bytes");
+    let (later, ..) = school_at(gpu, 3.5, SimPath::Gpu);
+    assert!(common::max_difference(&picture, &later) > 64, "the fish swam on");
+    // The same rules from the same start: three seconds on, the GPU's
+    // school still looks like the CPU's (each fish placed, turned, scaled
+    // and beating its tail as the CPU places it).
+    common::assert_matches_reference("school", &picture);
+}
+
+#[test]
+fn the_gpu_school_uploads_no_instances_once_running_and_the_cpu_school_does() {
+    let Some(gpu) = common::gpu() else { return };
+    if !gpu.culls_on_gpu() {
+        return;
+    }
+    let uploads = |sim: SimPath| {
+        let mut desc = common::load_scene(&common::repo_root().join("tests/scenes/school.scn"));
+        desc.schools[0].sim = sim;
+        let mut renderer = glint::Renderer::new(gpu);
+        let mut world = glint::World::place(desc, &mut renderer).expect("placed");
+        let mut target = glint::OffscreenTarget::new(gpu, 64, 64, 1).expect("target");
+        let views = world.views(None);
+        (0..4)
+            .map(|frame| {
+                world.pose(1.0 + frame as f32 / 30.0, &mut renderer).expect("posed");
+                let mut stats = world.draw(&mut renderer, &views, &mut target).expect("frame");
+                renderer.wait_for_counts(&mut stats);
+                let stats = &stats[0];
+                assert!(stats.instances_drawn > 300, "the fish are drawn: {}", stats.instances_drawn);
+                stats.bytes_uploaded.instances
+            })
+            .collect::<Vec<u64>>()
+    };
+    let (on_gpu, on_cpu) = (uploads(SimPath::Gpu), uploads(SimPath::Cpu));
+    assert!(on_gpu[0] > 0, "the first frame writes every record once: {on_gpu:?}");
+    assert_eq!(on_gpu[1..], [0, 0, 0], "then the simulation writes them on the GPU");
+    // 400 fish and the shark, 64 bytes each, every frame they move.
+    assert!(on_cpu[1..].iter().all(|&b| b >= 401 * 64), "{on_cpu:?}");
+}
+
+#[test]
 fn gl_and_the_webgl2_path_draw_the_school_alike_and_refuse_the_gpu_school() {
-    // The school steps on the CPU on every path, so their pictures are Vulkan's.
+    // The school steps on the CPU on these paths, whatever the scene asks,
+    // so their pictures are Vulkan's CPU school's.
     for gpu in [common::gl_gpu(), common::webgl2_gpu()].into_iter().flatten() {
-        let (picture, _) = school_at(gpu, 3.0);
+        let (picture, world, stats) = school_at(gpu, 3.0, SimPath::Gpu);
+        assert_eq!(world.school_paths(), [Some(SimPath::Cpu)]);
+        assert_eq!(stats.simulations.schools, PathCounts { cpu: 1, gpu: 0 });
         common::assert_matches_reference("school", &picture);
         let err = GpuSchool::new(gpu, &School::new(params()).unwrap()).err().expect("no compute path here");
         assert!(err.to_string().contains("step the school on the CPU"), "{err}");

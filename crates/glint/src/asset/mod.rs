@@ -73,6 +73,8 @@ pub struct LoadOptions {
     pub texture_memory: u64,
     /// How every cloth is solved, whatever its scene block says (`None`: as it says).
     pub cloth_solve: Option<crate::scene::cloth::Solve>,
+    /// Where every school steps, whatever its block's `"sim"` says (`None`: as it says).
+    pub sim: Option<crate::scene::SimPath>,
     /// A scene file's time of day, whatever its world block says (`None`: as
     /// it says; see [`SceneDesc::set_time_of_day`]).
     pub time_of_day: Option<f32>,
@@ -87,6 +89,7 @@ impl Default for LoadOptions {
             asset_roots: Vec::new(),
             texture_memory: MAX_TEXTURE_MEMORY,
             cloth_solve: None,
+            sim: None,
             time_of_day: None,
             files: Files::Disk,
         }

@@ -140,7 +140,7 @@ pub(super) struct Loader<'a> {
     /// original), and their total against [`MAX_SCENE_TOTAL_BYTES`].
     model_bytes: Vec<u64>,
     bytes_read: u64,
-    options: LoadOptions,
+    pub(super) options: LoadOptions,
     pub(super) placements: Vec<Placement>,
     /// Cloths with their material names, resolved in [`Loader::finish`].
     cloths: Vec<(ClothDesc, Option<(String, usize)>)>,

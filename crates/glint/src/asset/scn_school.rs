@@ -38,6 +38,10 @@ pub struct SchoolDesc {
     pub fish_entity: usize,
     /// The scene entity drawing the predator, with one.
     pub predator_entity: Option<usize>,
+    /// Where it steps (`"sim" "cpu"` or `"gpu"`, the default): on the GPU it
+    /// is drawn in place from the simulation's buffers, where the renderer
+    /// computes; on the CPU (GL, WebGL2) otherwise.
+    pub sim: crate::scene::SimPath,
 }
 
 impl SchoolDesc {
@@ -180,6 +184,11 @@ impl Loader<'_> {
             self.count_instances(1, predator, line)?;
         }
         let draw = Self::draw_options(f)?;
+        let sim = match f.choice("sim", &["cpu", "gpu"])? {
+            Some((0, _)) => crate::scene::SimPath::Cpu,
+            _ => crate::scene::SimPath::Gpu,
+        };
+        let sim = self.options.sim.unwrap_or(sim);
         let mut school = SchoolDesc {
             line,
             params,
@@ -188,6 +197,7 @@ impl Loader<'_> {
             predator_size,
             fish_entity: self.placements.len(),
             predator_entity: None,
+            sim,
         };
         school.params.check().map_err(|m| Diagnostic::at(self.path, line, m))?;
         // The fish in the middle of their bounds until a world places them at

@@ -11,6 +11,58 @@ pub trait GpuSimulation {
     /// Record its pending steps into `encoder` (writing their parameters
     /// through `queue`, and making buffers on `device` if it needs more).
     fn encode(&mut self, device: &wgpu::Device, queue: &wgpu::Queue, encoder: &mut wgpu::CommandEncoder);
+
+    /// After its steps, record the passes that write the instance records of
+    /// the entities it draws ([`Entity::with_gpu_instances`](crate::Entity::with_gpu_instances)),
+    /// where `instances` says their ranges are this frame. None by default.
+    fn place(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        encoder: &mut wgpu::CommandEncoder,
+        instances: &InstanceTargets<'_>,
+    ) {
+        let _ = (device, queue, encoder, instances);
+    }
+}
+
+/// Where a frame's entities drawn from GPU simulations keep their instance
+/// records: the store's buffers, as the frame's simulate stage hands them to
+/// [`GpuSimulation::place`], and each such entity's range in them.
+pub struct InstanceTargets<'a> {
+    /// Every instance record (64 bytes each, `Instance` in `shader/forward.wgsl`).
+    pub records: &'a wgpu::Buffer,
+    /// Every instance's world box (centre, half extent: two `vec4<f32>`),
+    /// which GPU culling and level selection read.
+    pub bounds: &'a wgpu::Buffer,
+    pub(crate) range_of: &'a dyn Fn(u64) -> Option<InstanceRange>,
+}
+
+impl InstanceTargets<'_> {
+    /// Where the records of the entity whose [`key`](crate::Entity::key) is
+    /// `entity` are this frame (they move when the store is compacted); `None`
+    /// when it was not submitted, or the store writes its records from its
+    /// transforms.
+    pub fn range(&self, entity: u64) -> Option<InstanceRange> {
+        (self.range_of)(entity)
+    }
+}
+
+/// One entity's run of instance records, and what each record holds besides
+/// its transform and motion phase.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct InstanceRange {
+    /// Its first record.
+    pub first: u32,
+    /// Its instances.
+    pub count: u32,
+    /// The material index every record names.
+    pub material: u32,
+    /// Whether its records say it receives shadows.
+    pub receive_shadows: bool,
+    /// Its shape's box, grown by its material's motion: an instance's world
+    /// box is this box moved by its transform.
+    pub local: crate::scene::Aabb,
 }
 
 /// Most records one layer holds: one emitter's particles at most

@@ -2,7 +2,7 @@
 //! instance transforms (with tiles, density and compact records for
 //! vegetation, joints for skinned meshes).
 
-use super::{MaterialId, ShapeId, Tiles};
+use super::{Aabb, MaterialId, ShapeId, Tiles};
 use glam::Mat4;
 use std::sync::atomic::{AtomicU64, Ordering};
 
@@ -39,6 +39,7 @@ pub struct Entity {
     pub receive_shadows: bool,
     tiles: Option<Tiles>,
     compact: bool,
+    gpu_instances: Option<Aabb>,
     /// With tiles, the fraction of every tile drawn (0..=1, default 1): its
     /// first ⌈len × density⌉ instances, in every view and shadow view, with no
     /// upload. Without tiles, every instance is drawn.
@@ -64,6 +65,7 @@ impl Clone for Entity {
             receive_shadows: self.receive_shadows,
             tiles: self.tiles.clone(),
             compact: self.compact,
+            gpu_instances: self.gpu_instances,
             density: self.density,
         }
     }
@@ -90,6 +92,7 @@ impl Entity {
             receive_shadows: true,
             tiles: None,
             compact: false,
+            gpu_instances: None,
             density: 1.0,
         }
     }
@@ -153,6 +156,34 @@ impl Entity {
         self.compact
     }
 
+    /// The same entity with its instance records written on the GPU by a
+    /// simulation ([`GpuSimulation::place`](crate::render::GpuSimulation::place)) every
+    /// frame, never uploaded from its transforms after the first frame. Its
+    /// transforms give the instance count and the records until the
+    /// simulation first writes them; the CPU, which does not see where the
+    /// GPU puts them, culls every instance by `bounds` (a world box holding
+    /// every instance whatever the simulation does) and chooses one level of
+    /// detail for all of them, where GPU culling tests each instance's own
+    /// box as the simulation writes it. Not stored compactly or in Morton
+    /// order: record `k` of its range is instance `k`.
+    pub fn with_gpu_instances(mut self, bounds: Aabb) -> Self {
+        self.set_gpu_instances(Some(bounds));
+        self
+    }
+
+    /// Have its instance records written on the GPU inside `bounds`, or
+    /// (`None`) from its transforms again; marks the entity for re-upload.
+    pub fn set_gpu_instances(&mut self, bounds: Option<Aabb>) {
+        self.version += 1;
+        self.gpu_instances = bounds;
+    }
+
+    /// The world box holding its instances where a GPU simulation writes
+    /// them (see [`with_gpu_instances`](Self::with_gpu_instances)).
+    pub fn gpu_instances(&self) -> Option<Aabb> {
+        self.gpu_instances
+    }
+
     /// The same entity with joint matrices, for a skinned shape (see
     /// [`Mesh::with_skin`](super::Mesh::with_skin)): vertex joint `j` moves by
     /// `joints[j]` (a joint's object-space pose times its inverse bind matrix)
@@ -205,8 +236,10 @@ impl Entity {
         self.transforms_mut()[index] = transform;
     }
 
-    /// Identity that stays the same across frames (clones get their own).
-    pub(crate) fn key(&self) -> u64 {
+    /// Its identity, the same across frames (clones get their own): what a
+    /// GPU simulation finds its instances by
+    /// ([`InstanceTargets::range`](crate::render::InstanceTargets::range)).
+    pub fn key(&self) -> u64 {
         self.key
     }
 

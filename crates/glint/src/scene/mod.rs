@@ -25,6 +25,7 @@ mod post;
 pub mod procedural;
 pub mod school;
 pub(crate) mod shadow_layout;
+mod simulation;
 mod states;
 mod texture;
 mod tiles;
@@ -46,6 +47,7 @@ pub use motion::{Motion, Wind, MAX_WIND};
 pub use post::{PostEffect, Tonemap, MAX_POST_EFFECTS};
 pub use procedural::ShapeKind;
 pub use shadow_layout::{ShadowLayout, MAX_CUBES, MAX_SHADOW_MAP_BYTES};
+pub use simulation::{PathCounts, SimPath, SimulationPaths};
 pub use states::{
     BlendState, Compare, Cull, DepthState, ParticleBlend, RasterState, RenderStates, StencilOp, StencilState,
 };

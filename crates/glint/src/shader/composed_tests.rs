@@ -204,7 +204,9 @@ fn the_shaders_without_defs_are_what_naga_oil_composes() {
         (PYRAMID, include_str!("pyramid.wgsl")),
         (PARTICLES_STEP, include_str!("particles_step.wgsl")),
         (SCHOOL, include_str!("school.wgsl")),
+        (SCHOOL_PLACE, include_str!("school_place.wgsl")),
         (SCAN, include_str!("scan.wgsl")),
+        (RADIX, include_str!("radix.wgsl")),
     ];
     let mut composer = composer();
     for (plain, source) in sources {

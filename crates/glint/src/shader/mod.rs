@@ -282,6 +282,8 @@ pub(crate) const SSAO_COMPUTE: &str = assemble::SSAO_COMPUTE;
 pub(crate) const PARTICLES_STEP: &str = assemble::PARTICLES_STEP;
 /// Fish schooling on the GPU (`sim/school/gpu.rs`).
 pub(crate) const SCHOOL: &str = assemble::SCHOOL;
+/// The school's fish written into the instance store (`sim/school/gpu.rs`).
+pub(crate) const SCHOOL_PLACE: &str = assemble::SCHOOL_PLACE;
 /// The running sum of the GPU's counting sorts (`sim/scan.rs`).
 pub(crate) const SCAN: &str = assemble::SCAN;
 /// The stable radix sort of key-value pairs (`sim/radix.rs`).

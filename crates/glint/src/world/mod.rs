@@ -29,7 +29,7 @@ mod player;
 mod school;
 
 use crate::asset::{MeshRef, SceneDesc};
-use crate::scene::{Entity, Lighting, View};
+use crate::scene::{Entity, Lighting, SimPath, View};
 use crate::sim::cloth::ClothView;
 use crate::sim::particles::ParticleKernels;
 use crate::{AfterViews, FrameInput, FrameOutput, FrameStats, OffscreenTarget, RenderError, Renderer};
@@ -69,8 +69,11 @@ impl World {
     /// at its seeded start, no particle spawned. Errors when the device
     /// cannot hold the emitters' layers (out of memory).
     pub fn place(desc: SceneDesc, renderer: &mut Renderer) -> Result<Self, crate::RenderError> {
-        let (placed, cloths, schools) = renderer.place_scene_and_runs(&desc);
+        let (mut placed, cloths, mut schools) = renderer.place_scene_and_runs(&desc);
         let ranges = school::entity_ranges(&desc);
+        for (sim, school) in schools.iter_mut().zip(&desc.schools) {
+            sim.move_to_gpu((school, &desc, &ranges), &mut placed.entities, renderer);
+        }
         // The emitters stepped by compute shaders share one set of kernels.
         let kernels = (renderer.computes() && !desc.emitters.is_empty())
             .then(|| std::sync::Arc::new(ParticleKernels::new(renderer.device_and_queue().0)));
@@ -193,7 +196,7 @@ impl World {
             sim.pose(emitter, time);
         }
         for (sim, school) in self.schools.iter_mut().zip(&desc.schools) {
-            if sim.pose(school, time) {
+            if sim.pose(school, time, renderer.device_and_queue().1) {
                 sim.show(school, desc, &self.ranges, entities);
             }
         }
@@ -250,13 +253,23 @@ impl World {
         let eye = views.last().map_or(glam::Vec3::ZERO, |v| v.camera.eye);
         let lighting = lighting_at(&self.desc, self.moves.then_some(self.time));
         let mut input = FrameInput::new(&self.placed.entities, lighting).views(views);
+        let mut paths = crate::scene::SimulationPaths::default();
         for (sim, emitter) in self.emitters.iter_mut().zip(&self.desc.emitters) {
+            paths.emitters.add(if sim.on_gpu() { SimPath::Gpu } else { SimPath::Cpu });
             if let Some(on_gpu) = sim.draw(emitter, self.time, eye, renderer) {
                 input = input.simulate(on_gpu);
             }
         }
+        for sim in &mut self.schools {
+            sim.path().into_iter().for_each(|path| paths.schools.add(path));
+            if let Some(on_gpu) = sim.simulation() {
+                input = input.simulate(on_gpu);
+            }
+        }
+        paths.cloths.cpu = self.cloths.len() as u32;
         input.after = after;
         let mut output = renderer.render_frame(input, target)?;
+        output.views.iter_mut().for_each(|v| v.simulations = paths);
         particles::count(&self.desc.emitters, (self.drawn_at, self.time), &mut output.views);
         self.drawn_at = self.time;
         Ok(output)
@@ -265,6 +278,13 @@ impl World {
     /// Whether its emitters step with compute shaders (else on the CPU).
     pub fn particles_on_gpu(&self) -> bool {
         self.emitters.iter().any(EmitterSim::on_gpu)
+    }
+
+    /// Where each of its schools steps, in file order (`None`: one that
+    /// cannot run): on the GPU, drawn in place, where its `"sim"` asks and
+    /// the renderer computes.
+    pub fn school_paths(&self) -> Vec<Option<SimPath>> {
+        self.schools.iter().map(SchoolSim::path).collect()
     }
 }
 

@@ -1,46 +1,139 @@
 //! Core layer: a scene's fish school as it runs. The `.scn` block
 //! ([`SchoolDesc`]) is what the file says; a [`SchoolSim`] is the school
-//! stepped from its seeded start to the time of the last pose, on the CPU
-//! (the same time always gives the same school), and the entities it moves.
+//! stepped from its seeded start to the time of the last pose (the same time
+//! always gives the same school), and the entities it moves: on the CPU,
+//! their transforms set after each pose; on the GPU (`"sim" "gpu"` where the
+//! renderer computes), stepped in the frame's simulate stage and written
+//! into their instance records there ([`GpuSchool::draw_in_place`]), the
+//! entities' transforms left at the start.
 
 use crate::asset::{MeshRef, SceneDesc, SchoolDesc};
-use crate::sim::school::School;
-use crate::Entity;
+use crate::render::GpuSimulation;
+use crate::scene::{Aabb, SimPath};
+use crate::sim::school::{GpuSchool, School, SchoolDrawing, Swimmers, MAX_PART_TRANSFORMS};
+use crate::{Entity, Renderer};
+use glam::{Mat4, Vec3};
 use std::ops::Range;
+
+/// Where a school steps.
+enum Run {
+    Cpu(Box<School>),
+    /// On the GPU, with the steps recorded so far (taken or pending).
+    Gpu(Box<GpuSchool>, u64),
+}
 
 /// One school's run, from its start; none for parameters that cannot make a
 /// school (a description changed after loading: [`SceneDesc::check_pose`]
 /// refuses to pose it).
 pub(crate) struct SchoolSim {
-    school: Option<School>,
+    run: Option<Run>,
 }
 
 impl SchoolSim {
-    /// At its start.
+    /// At its start, on the CPU.
     pub(crate) fn new(desc: &SchoolDesc) -> Self {
-        Self { school: School::new(desc.params.clone()).ok() }
+        Self { run: School::new(desc.params.clone()).ok().map(|s| Run::Cpu(Box::new(s))) }
     }
 
-    /// Advance (or restart and advance) to `time`; returns whether it moved.
+    /// Move it onto the GPU, drawn in place, where `desc` asks and `renderer`
+    /// computes: its entities (`ranges`, as [`entity_ranges`] gives them, of
+    /// `scene`'s entity blocks) get their records from the simulation. It
+    /// stays on the CPU where a model part repeats its mesh more than
+    /// [`MAX_PART_TRANSFORMS`] times, or the GPU cannot make its buffers.
+    pub(crate) fn move_to_gpu(
+        &mut self,
+        (desc, scene, ranges): (&SchoolDesc, &SceneDesc, &[Range<usize>]),
+        entities: &mut [Entity],
+        renderer: &Renderer,
+    ) {
+        let Some(Run::Cpu(school)) = &self.run else { return };
+        if desc.sim != SimPath::Gpu || !renderer.computes() {
+            return;
+        }
+        let mut drawings = drawings_of(scene, desc.fish_entity, Swimmers::Fish { size: desc.size }, ranges, entities);
+        if let Some(k) = desc.predator_entity {
+            drawings.extend(drawings_of(scene, k, Swimmers::Predator { size: desc.predator_size }, ranges, entities));
+        }
+        if drawings.iter().any(|(_, d)| d.parts.len() > MAX_PART_TRANSFORMS) {
+            log::warn!(
+                "school (line {}): a model part drawn more than {MAX_PART_TRANSFORMS} times a fish steps on the CPU",
+                desc.line
+            );
+            return;
+        }
+        let on_gpu = GpuSchool::on_device(renderer.device_and_queue(), school).and_then(|mut gpu| {
+            let list = drawings.iter().map(|(_, d)| d.clone()).collect();
+            gpu.draw_in_place(renderer.device_and_queue().0, list).map(|()| gpu)
+        });
+        let gpu = match on_gpu {
+            Ok(gpu) => gpu,
+            Err(e) => return log::warn!("school (line {}): stepped on the CPU: {e}", desc.line),
+        };
+        for (k, drawing) in &drawings {
+            let entity = &mut entities[*k];
+            let reach = renderer.registry().reach(entity.shape, entity.material).map(|r| (r.local, r.walk));
+            let held = held_box(desc, drawing, reach);
+            entity.set_gpu_instances(Some(held));
+        }
+        self.run = Some(Run::Gpu(Box::new(gpu), 0));
+    }
+
+    /// Advance (or restart and advance) to `time`: on the CPU now, on the
+    /// GPU in the next frame's simulate stage ([`simulation`](Self::simulation)).
+    /// Returns whether its CPU fish moved (their entities need [`show`](Self::show)).
     /// The posing budget and parameters were checked before ([`SceneDesc::check_pose`]).
-    pub(crate) fn pose(&mut self, desc: &SchoolDesc, time: f32) -> bool {
+    pub(crate) fn pose(&mut self, desc: &SchoolDesc, time: f32, queue: &wgpu::Queue) -> bool {
         let target = desc.steps_to(time);
-        let restarted = self.school.as_ref().is_some_and(|s| s.steps() > target);
-        if restarted {
-            *self = Self::new(desc);
+        match &mut self.run {
+            None => false,
+            Some(Run::Cpu(school)) => {
+                let restarted = school.steps() > target;
+                if restarted {
+                    *self = Self::new(desc);
+                }
+                let Some(Run::Cpu(school)) = &mut self.run else { return false };
+                let moved = restarted || school.steps() < target;
+                while school.steps() < target {
+                    school.step(desc.dt);
+                }
+                moved
+            }
+            Some(Run::Gpu(gpu, steps)) => {
+                if *steps > target {
+                    // The parameters made a school once: they make it again.
+                    if let Ok(start) = School::new(desc.params.clone()) {
+                        gpu.restart(queue, &start);
+                        *steps = 0;
+                    }
+                }
+                let more = target.saturating_sub(*steps);
+                gpu.advance(queue, u32::try_from(more).unwrap_or(u32::MAX), desc.dt);
+                *steps += more;
+                false
+            }
         }
-        let Some(school) = &mut self.school else { return false };
-        let moved = restarted || school.steps() < target;
-        while school.steps() < target {
-            school.step(desc.dt);
-        }
-        moved
     }
 
-    /// Put its fish and predator into their entities: `ranges` are the placed
+    /// Where it steps; `None` when it cannot run.
+    pub(crate) fn path(&self) -> Option<SimPath> {
+        self.run.as_ref().map(|run| match run {
+            Run::Cpu(_) => SimPath::Cpu,
+            Run::Gpu(..) => SimPath::Gpu,
+        })
+    }
+
+    /// Its steps and placing for the frame's simulate stage, on the GPU.
+    pub(crate) fn simulation(&mut self) -> Option<&mut dyn GpuSimulation> {
+        match &mut self.run {
+            Some(Run::Gpu(gpu, _)) => Some(gpu.as_mut()),
+            _ => None,
+        }
+    }
+
+    /// Put its CPU fish and predator into their entities: `ranges` are the placed
     /// entities of each of `scene`'s entity blocks (a model's parts each have one).
     pub(crate) fn show(&self, desc: &SchoolDesc, scene: &SceneDesc, ranges: &[Range<usize>], entities: &mut [Entity]) {
-        let Some(school) = &self.school else { return };
+        let Some(Run::Cpu(school)) = &self.run else { return };
         let fish: Vec<_> = school.fish().iter().enumerate().map(|(i, f)| f.transform(desc.fish_scale(i))).collect();
         let phases: Vec<f32> = school.fish().iter().map(|f| f.phase).collect();
         place(scene, desc.fish_entity, &fish, &phases, &ranges[desc.fish_entity], entities);
@@ -48,6 +141,54 @@ impl SchoolSim {
             place(scene, k, &[h.transform(desc.predator_size)], &[h.phase], &ranges[k], entities);
         }
     }
+}
+
+/// How entity block `k`'s placed entities draw `swimmers` in place: each
+/// entity's index in `entities` and its drawing (a shape: one instance a
+/// swimmer; a model: each part's own transforms).
+fn drawings_of(
+    scene: &SceneDesc,
+    k: usize,
+    swimmers: Swimmers,
+    ranges: &[Range<usize>],
+    entities: &[Entity],
+) -> Vec<(usize, SchoolDrawing)> {
+    let parts: Vec<Vec<Mat4>> = match scene.entities[k].mesh {
+        MeshRef::Shape(_) => vec![vec![Mat4::IDENTITY]],
+        MeshRef::Model(m) => scene.models[m].parts.iter().map(|p| p.transforms.clone()).collect(),
+    };
+    ranges[k]
+        .clone()
+        .zip(parts)
+        .map(|(i, parts)| (i, SchoolDrawing { entity: entities[i].key(), swimmers, parts }))
+        .collect()
+}
+
+/// A world box holding every instance `drawing` puts anywhere in `desc`'s
+/// bounds, at any heading: the bounds grown by the farthest any point of the
+/// entity's shape (`reach`: its box grown by its material's motion) gets
+/// from the swimmer's position at the largest scale.
+fn held_box(desc: &SchoolDesc, drawing: &SchoolDrawing, reach: Option<(Aabb, f32)>) -> Aabb {
+    let scale = match drawing.swimmers {
+        Swimmers::Fish { size } => size * 1.15,
+        Swimmers::Predator { size } => size,
+    };
+    let (local, walk) = reach.unwrap_or((Aabb { min: Vec3::splat(-1.0), max: Vec3::ONE }, 0.0));
+    let corners = (0..8).map(|c| {
+        Vec3::new(
+            [local.min.x, local.max.x][c & 1],
+            [local.min.y, local.max.y][c >> 1 & 1],
+            [local.min.z, local.max.z][c >> 2],
+        )
+    });
+    let corners: Vec<Vec3> = corners.collect();
+    let farthest =
+        drawing.parts.iter().flat_map(|t| corners.iter().map(|&c| t.transform_point3(c).length())).fold(0.0, f32::max);
+    let grow = Vec3::splat(farthest * scale + walk);
+    // Confinement ends above the floor, even a floor above the bounds.
+    let (lo, mut hi) = (desc.params.bounds.min, desc.params.bounds.max);
+    hi.y = hi.y.max(desc.params.floor.unwrap_or(hi.y));
+    Aabb { min: lo - grow, max: hi + grow }
 }
 
 /// Entity block `k`'s placed entities at `transforms` and tail `phases`.

@@ -191,6 +191,9 @@ pub struct FrameStats {
     pub particles_alive: u64,
     /// Particles the scene's emitters spawned since the previous frame's time.
     pub particles_spawned: u64,
+    /// Where the scene's simulations stepped this frame (filled in by
+    /// [`World::draw`](crate::World::draw)).
+    pub simulations: crate::scene::SimulationPaths,
     /// How the view was culled: [`Culling::Gpu`] only where the device can
     /// (else [`Culling::Cpu`], whatever the view asked for).
     pub culling: Culling,

@@ -83,7 +83,7 @@ pub(crate) fn upload(
     target: &OffscreenTarget,
     stats: &mut FrameStats,
 ) -> Result<(), RenderError> {
-    upload_view_blocks(res, gpu, frame, lighting, shadowed, &mut stats.bytes_uploaded)?;
+    upload_view_blocks(res, gpu, frame, lighting, shadowed, &mut stats.bytes_uploaded);
     let bytes = &mut stats.bytes_uploaded;
     let layout = &res.registry.pipelines.instance_layout;
     let culls = res.cull_pipelines.as_ref().zip(res.instances.bounds());
@@ -116,33 +116,23 @@ pub(crate) fn upload_view_blocks(
     lighting: &Lighting,
     shadowed: &[Option<u32>],
     bytes: &mut UploadStats,
-) -> Result<(), RenderError> {
+) {
     let scene = SceneGpu::new(&lighting.environment, lighting.lights, shadowed)
         .with_specular_levels(res.environment.last_level());
     bytes.scene += gpu.scene_block.update(&res.queue, scene);
     let camera = frame.camera.to_gpu(frame.aspect).with_motion(&lighting.environment).with_far_eye(frame.far_eye);
     bytes.camera += gpu.blocks.update(&res.queue, 0, camera);
-    upload_instances(res, gpu, bytes)
+    upload_instances(res, bytes);
 }
 
-/// Write the instances that changed (all of them when the buffer grew, and
-/// then `gpu`'s draw lists are bound to the new buffer; other views' are
-/// when they are drawn next).
-pub(crate) fn upload_instances(
-    res: &mut Resources,
-    gpu: &mut ViewGpu,
-    bytes: &mut UploadStats,
-) -> Result<(), RenderError> {
-    if res.instances.reserve(&res.device, res.store.len())? {
-        res.store.mark_all_dirty();
-        gpu.refresh(&res.shared());
-    }
+/// Write the instances that changed (all of them when the frame's start
+/// replaced the buffer: [`compact_store`](super::stages::compact_store)).
+pub(crate) fn upload_instances(res: &mut Resources, bytes: &mut UploadStats) {
     for range in res.store.take_dirty() {
         let data = &res.store.instances[range.start as usize..range.end as usize];
         let (instances, bounds) = res.instances.write(&res.queue, range.start, data, &res.store.bounds);
         (bytes.instances, bytes.bounds) = (bytes.instances + instances, bytes.bounds + bounds);
     }
-    Ok(())
 }
 
 #[cfg(test)]

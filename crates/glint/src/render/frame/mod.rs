@@ -10,7 +10,7 @@
 //! | file | stages |
 //! | --- | --- |
 //! | `stages.rs` | the frame's start (entities into the instance store, its encoder), its checks, the order of its views, compacting the store, the clear of uncovered pixels, the work after the views, the one submission |
-//! | `simulate.rs` | GPU simulations' compute passes, before any view |
+//! | `simulate.rs` | GPU simulations' compute passes (their steps, then the instances they draw), before any view |
 //! | `shadow_pass.rs` | shadow views planned once a frame; per view, culled, batched, uploaded and drawn |
 //! | `view.rs` | one view: its target, then prepare → shadows → cull → queue → sort → batch → upload → encode → compose |
 //! | `prepare.rs`, `prepared.rs` | GPU twins and pipelines for what the entities use; the table of what each draws with |
@@ -59,7 +59,8 @@ use crate::render::frame::view::draw_view;
 use crate::render::{RenderError, Renderer};
 
 impl Renderer {
-    /// Draw one frame of `input` into `target`: simulate → plan shadows →
+    /// Draw one frame of `input` into `target`: the instance store compacted →
+    /// simulate → plan shadows →
     /// per view (prepare, shadow views, cull, queue, sort, batch, upload,
     /// encode, compose) → the work after the views → one submission. Errors
     /// (the frame's commands and entities are dropped): more than
@@ -77,9 +78,9 @@ impl Renderer {
         let mut frame = begin_frame(res, &mut self.next, entities); // its number and encoder; entities into the store
         let mut stages = || {
             check_frame(&mut frame, &views, &lighting)?; // lights, ids, viewports, post chains
-            simulate(&mut frame, &res.device, &res.queue, &mut simulations); // GPU simulations' compute passes
             let order = view_order(res, &frame, &views)?; // render targets before the views that show them
-            compact_store(res, &mut frame); // before any command draws from the instance store
+            compact_store(res, &mut frame)?; // and its GPU buffer sized, before any command uses the instance store
+            simulate(res, &mut frame, &mut simulations); // GPU simulations' steps, and the instances they draw
             frame.prefiltered = prepare_environment(res, &lighting)?; // image-based lighting's maps
             let plan = plan_shadows(res, &frame, (&views, target), &lighting, shadows)?; // spot and point lights once, cascades per view
             clear_uncovered(&mut frame, &views, &order, target); // black where the views leave gaps

@@ -293,7 +293,7 @@ fn upload_shadow_views(
     stats: &mut FrameStats,
 ) -> Result<(), RenderError> {
     let bytes = &mut stats.bytes_uploaded;
-    upload_instances(res, gpu, bytes)?;
+    upload_instances(res, bytes);
     for (k, planned) in drawn.iter().enumerate() {
         let record = CameraGpu::for_shadow(&planned.view).with_motion(environment).with_far_eye(far_eye);
         bytes.camera += gpu.blocks.update(&res.queue, 1 + k, record);

@@ -2,32 +2,41 @@
 //! ([`GpuSimulation`]: particles, `sim/particles`; the school, `sim/school`)
 //! is part of the frame's input ([`FrameInput::simulate`](crate::render::FrameInput::simulate))
 //! and records its compute passes into the frame's encoder before the frame's
-//! views (`simulate`), so what it writes (a particle layer's
-//! billboards) is drawn in the same submission, never read back. The outline
-//! shows it as `frame N › simulate`.
+//! views (`simulate`): its steps, then the instance records of the entities
+//! it draws ([`GpuSimulation::place`], into the instance store where
+//! [`compact_store`](super::stages::compact_store) left their ranges), so
+//! what it writes (a particle layer's billboards, the school's fish) is drawn
+//! in the same submission, never read back. The outline shows it as
+//! `frame N › simulate`.
 
-use crate::gpu::GpuSimulation;
+use crate::gpu::{GpuSimulation, InstanceTargets};
 use crate::render::debug::explain::PassType;
 use crate::render::frame::state::Frame;
+use crate::render::resources::Resources;
 
 /// Stage 1 of the frame: record `simulations`' compute passes into the
-/// frame's encoder, before any view, under the debug group "simulate".
+/// frame's encoder, before any view, under the debug group "simulate": every
+/// simulation's steps, then every simulation's placing of its instances.
 /// Where the device has no compute shaders
 /// ([`Renderer::computes`](crate::Renderer::computes) is false) simulations
 /// step on the CPU instead, and give none.
-pub(crate) fn simulate(
-    frame: &mut Frame,
-    device: &wgpu::Device,
-    queue: &wgpu::Queue,
-    simulations: &mut [&mut dyn GpuSimulation],
-) {
+pub(crate) fn simulate(res: &Resources, frame: &mut Frame, simulations: &mut [&mut dyn GpuSimulation]) {
     if simulations.is_empty() {
         return;
     }
+    let (device, queue) = (&res.device, &res.queue);
     frame.outline.enter(&mut frame.encoder, "simulate");
     frame.outline.pass("simulate", PassType::Compute, &[]);
-    for simulation in simulations {
+    for simulation in simulations.iter_mut() {
         simulation.encode(device, queue, &mut frame.encoder);
+    }
+    // Where views cull on the GPU the store keeps boxes, and its records are a storage buffer.
+    if let (Some(bounds), Some(records)) = (res.instances.bounds(), res.instances.array().buffer()) {
+        let range_of = |entity: u64| res.store.gpu_range(entity);
+        let targets = InstanceTargets { records, bounds, range_of: &range_of };
+        for simulation in simulations.iter_mut() {
+            simulation.place(device, queue, &mut frame.encoder, &targets);
+        }
     }
     frame.outline.leave(&mut frame.encoder);
 }

@@ -10,7 +10,6 @@ use crate::render::error::RenderError;
 use crate::render::frame::input::{FrameOutput, ViewKey};
 use crate::render::frame::state::{Frame, NextFrame};
 use crate::render::frame::visible::{shown, Submitted};
-use crate::render::resources::instances::Reach;
 use crate::render::resources::Resources;
 use crate::render::views::ViewStates;
 use crate::scene::{Entity, Lighting, MaterialId, TextureId, View, MAX_LIGHTS, MAX_POST_EFFECTS};
@@ -21,16 +20,12 @@ use web_time::Instant;
 /// to the GPU again only when its version changed), it into `next`'s list; a
 /// shape id that is not `res`'s is kept as the next frame's error.
 pub(crate) fn submit(res: &mut Resources, next: &mut NextFrame, entity: &Entity) {
-    let Some(shape) = res.registry.shapes.get(entity.shape.0 as usize) else {
+    let Some(reach) = res.registry.reach(entity.shape, entity.material) else {
         next.submit_error.get_or_insert(RenderError::UnknownShape(entity.shape));
         return;
     };
-    let material = res.registry.material(entity.material);
-    let (motion, far_field) = material.map_or((None, None), |m| (m.motion, m.far_field));
-    // Widened in the far field first, then moved.
-    let local = far_field.map_or(shape.mesh.aabb(), |f| f.reach(shape.mesh.aabb()));
-    let (local, walk) = motion.map_or((local, 0.0), |m| m.reach(local));
-    let slot = res.store.submit(entity, Reach { local, walk }, next.index);
+    let far_field = res.registry.material(entity.material).and_then(|m| m.far_field);
+    let slot = res.store.submit(entity, reach, next.index);
     next.submitted.push(Submitted {
         slot,
         shape: entity.shape,
@@ -81,14 +76,20 @@ pub(crate) fn check_frame(
     Ok(())
 }
 
-/// Compact the instance store when it holds more garbage than data: at the
-/// frame's start, before any command recorded draws from where instances are.
-pub(crate) fn compact_store(res: &mut Resources, frame: &mut Frame) {
+/// Compact the instance store when it holds more garbage than data, and make
+/// room for every record in its GPU buffer (all written again when the
+/// buffer was replaced): before any command recorded writes or draws
+/// instances where they are. Errors past the adapter's limits.
+pub(crate) fn compact_store(res: &mut Resources, frame: &mut Frame) -> Result<(), RenderError> {
     if let Some(remap) = res.store.compact_if_wasteful(frame.index) {
         for s in &mut frame.submitted {
             s.slot = remap[s.slot];
         }
     }
+    if res.instances.reserve(&res.device, res.store.len())? {
+        res.store.mark_all_dirty();
+    }
+    Ok(())
 }
 
 /// The order to draw `views` in: a view into a render target before every

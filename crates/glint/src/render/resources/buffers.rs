@@ -15,6 +15,7 @@ pub(crate) struct BoundsGpu {
     center: [f32; 4],
     extent: [f32; 4],
 }
+const _: () = assert!(std::mem::size_of::<BoundsGpu>() == 32);
 
 impl BoundsGpu {
     /// Boxes `range` of `boxes`, as the cull pass reads them.

@@ -59,6 +59,8 @@ pub(crate) struct Slot {
     /// ([`CompactGpu`]): then `first` counts records and each instance is
     /// numbered `4 · first + k` (see [`Slot::instance_base`]).
     pub compact: bool,
+    /// Whether a GPU simulation writes its records ([`Entity::with_gpu_instances`]).
+    gpu: bool,
     /// Frame in which the entity was last submitted.
     last_frame: u64,
 }
@@ -107,6 +109,21 @@ impl InstanceStore {
         &self.slots[index]
     }
 
+    /// Where the instances of the entity keyed `entity` are written on the GPU
+    /// ([`Entity::with_gpu_instances`]): its range, with what each record holds
+    /// besides its transform; `None` for an entity not submitted, or whose
+    /// records the store writes.
+    pub(crate) fn gpu_range(&self, entity: u64) -> Option<crate::gpu::InstanceRange> {
+        let slot = &self.slots[*self.by_key.get(&entity)?];
+        (slot.gpu && !slot.compact && slot.joints == 0).then_some(crate::gpu::InstanceRange {
+            first: slot.first,
+            count: slot.count,
+            material: slot.material.0,
+            receive_shadows: slot.receive_shadows,
+            local: slot.reach.local,
+        })
+    }
+
     /// Number of instances stored, garbage included.
     pub(crate) fn len(&self) -> usize {
         self.instances.len()
@@ -136,6 +153,7 @@ impl InstanceStore {
                     clusters: Vec::new(),
                     tiled: false,
                     compact: false,
+                    gpu: false,
                     last_frame: frame,
                 });
                 self.by_key.insert(entity.key(), self.slots.len() - 1);
@@ -174,7 +192,8 @@ impl InstanceStore {
             slot.bounds = written.bounds;
             slot.invalid = written.invalid;
             slot.clusters = written.clusters;
-            slot.tiled = entity.tiles().is_some();
+            slot.tiled = entity.tiles().is_some() && entity.gpu_instances().is_none();
+            slot.gpu = entity.gpu_instances().is_some();
             self.dirty.push(range.start as u32..range.end as u32);
         }
         index
@@ -288,6 +307,7 @@ pub(crate) struct Cluster {
 pub(crate) fn stored_compactly(entity: &Entity) -> bool {
     entity.compact_instances()
         && entity.tiles().is_some()
+        && entity.gpu_instances().is_none()
         && entity.joints().is_empty()
         && entity.material.0 < COMPACT_MATERIALS
 }
@@ -318,8 +338,15 @@ fn write_range(
 ) -> Written {
     let (src, material, receive) = (entity.transforms(), entity.material, entity.receive_shadows);
     let (lc, le) = skinned_box(entity.joints(), reach.local);
-    let world: Vec<Option<(Vec3A, Vec3A)>> =
-        src.iter().map(|m| m.is_finite().then(|| reach.walked(m, transform_aabb(m, lc, le)))).collect();
+    // Where a GPU simulation writes the records, every instance's box is the
+    // one that holds them all (the CPU does not see where each is).
+    let held = entity.gpu_instances().map(|b| (Vec3A::from(b.center()), Vec3A::from(b.half_extent())));
+    let world: Vec<Option<(Vec3A, Vec3A)>> = src
+        .iter()
+        .map(|m| m.is_finite().then(|| held.unwrap_or_else(|| reach.walked(m, transform_aabb(m, lc, le)))))
+        .collect();
+    // A GPU simulation's instances keep their order, not their tiles'.
+    let tiles = entity.tiles().filter(|_| held.is_none());
     let (lo, hi) = world
         .iter()
         .flatten()
@@ -328,11 +355,13 @@ fn write_range(
         });
     let invalid = world.iter().filter(|w| w.is_none()).count() as u32;
     let mut bounds = (invalid < src.len() as u32).then(|| ((lo + hi) * 0.5, (hi - lo) * 0.5));
-    let (order, groups) = match entity.tiles() {
-        Some(tiles) => tile_order(tiles, &world),
-        None => morton_order(&world, (lo, hi)),
+    let (order, groups) = match (held, tiles) {
+        // Record k is instance k, where the simulation writes it.
+        (Some(_), _) => ((0..src.len() as u32).collect(), std::iter::once(0..src.len() as u32).collect()),
+        (None, Some(tiles)) => tile_order(tiles, &world),
+        (None, None) => morton_order(&world, (lo, hi)),
     };
-    let padding = Vec3A::splat(entity.tiles().map_or(0.0, Tiles::padding));
+    let padding = Vec3A::splat(tiles.map_or(0.0, Tiles::padding));
     let mut clusters = Vec::with_capacity(groups.len());
     if compact {
         // Four to a record; the tiles are culled on the CPU only, so no record
@@ -377,7 +406,7 @@ fn write_range(
                     instances[at] = InstanceGpu::new(&src[i as usize], material, receive)
                         .with_joints(offset, joints)
                         .with_phase(phase);
-                    match entity.tiles() {
+                    match tiles {
                         Some(_) => boxes.set(first + at, center, extent),
                         None => boxes.set(first + at, c, e),
                     }
@@ -390,7 +419,7 @@ fn write_range(
         }
         clusters.push(Cluster { first: group.start, valid, center, extent, origins });
     }
-    if entity.tiles().is_some() {
+    if tiles.is_some() {
         // The entity's box holds its tiles' padding too.
         bounds = bounds.map(|(c, e)| (c, e + padding));
     } else if clusters.len() < 2 {

@@ -8,6 +8,7 @@ use crate::gpu::{Gpu, OffscreenTarget, TargetFormat};
 use crate::render::error::RenderError;
 use crate::render::frame_variant::FrameVariant;
 use crate::render::resources::buffers::{MaterialTable, TextureUploader};
+use crate::render::resources::instances::Reach;
 use crate::render::resources::mesh_pool::{MeshPool, MeshRange};
 use crate::render::resources::pipelines::{Pipelines, VertexLayout};
 use crate::scene::Texture;
@@ -270,6 +271,18 @@ impl Registry {
     pub fn add_material(&mut self, material: Material) -> MaterialId {
         self.materials.push(MaterialSlot { material, dirty: true, gpu: None });
         MaterialId(self.materials.len() as u32 - 1)
+    }
+
+    /// How far an instance of `shape` drawn with `material` reaches from its
+    /// transform: the shape's box, widened by the material's far field and
+    /// then its motion. `None` for a shape that is not this registry's.
+    pub(crate) fn reach(&self, shape: ShapeId, material: MaterialId) -> Option<Reach> {
+        let shape = self.shapes.get(shape.0 as usize)?;
+        let (motion, far_field) = self.material(material).map_or((None, None), |m| (m.motion, m.far_field));
+        // Widened in the far field first, then moved.
+        let local = far_field.map_or(shape.mesh.aabb(), |f| f.reach(shape.mesh.aabb()));
+        let (local, walk) = motion.map_or((local, 0.0), |m| m.reach(local));
+        Some(Reach { local, walk })
     }
 
     /// Read a material.

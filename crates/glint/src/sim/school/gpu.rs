@@ -5,9 +5,10 @@
 //! the order atomics ran, so the same start gives the same bits on the same
 //! device.
 
+use super::place::{Placer, SchoolDrawing};
 use super::{School, SchoolParams, Swimmer};
 use crate::gpu::GpuError;
-use crate::gpu::GpuSimulation;
+use crate::gpu::{GpuSimulation, InstanceTargets};
 use crate::sim::radix::{GpuRadixSort, RadixGroup};
 use crate::sim::scan::{GpuScan, ScanGroup};
 use crate::Gpu;
@@ -107,6 +108,8 @@ pub struct GpuSchool {
     cells: u32,
     /// Steps [`GpuSimulation::encode`] records next.
     pending: u32,
+    /// The entities drawing it in place, once [`draw_in_place`](Self::draw_in_place) is called.
+    placer: Option<Placer>,
 }
 
 impl GpuSchool {
@@ -120,11 +123,16 @@ impl GpuSchool {
                 gpu.info().backend
             )));
         }
+        Self::on_device((&gpu.device, &gpu.queue), school)
+    }
+
+    /// [`new`](Self::new) on a device known to compute (a renderer's, where
+    /// [`Renderer::computes`](crate::Renderer::computes)).
+    pub(crate) fn on_device((device, queue): (&wgpu::Device, &wgpu::Queue), school: &School) -> Result<Self, GpuError> {
         let params = school.params().clone();
         if params.obstacles.len() > MAX_GPU_OBSTACLES {
             return Err(GpuError::Failed(format!("GPU schooling takes at most {MAX_GPU_OBSTACLES} obstacles")));
         }
-        let device = &gpu.device;
         let shape = school.grid_shape();
         let cells = shape.cells();
         let n = school.fish().len();
@@ -141,7 +149,7 @@ impl GpuSchool {
         let fish_bytes = 32 * n as u64;
         let fish = [buffer("school: fish a", fish_bytes), buffer("school: fish b", fish_bytes)];
         let fish_data: Vec<FishGpu> = school.fish().iter().map(FishGpu::from).collect();
-        gpu.queue.write_buffer(&fish[0], 0, bytemuck::cast_slice(&fish_data));
+        queue.write_buffer(&fish[0], 0, bytemuck::cast_slice(&fish_data));
         let sorted = buffer("school: fish by cell", fish_bytes);
         let keys = buffer("school: cell and fish", 8 * n as u64);
         let spare = buffer("school: cell and fish, sorting", 8 * n as u64);
@@ -150,7 +158,7 @@ impl GpuSchool {
         let hunt = buffer("school: predator", std::mem::size_of::<HuntGpu>() as u64);
         let predator = school.predator().copied().unwrap_or_default();
         let hunt_data = HuntGpu::from(&predator);
-        gpu.queue.write_buffer(&hunt, 0, bytemuck::bytes_of(&hunt_data));
+        queue.write_buffer(&hunt, 0, bytemuck::bytes_of(&hunt_data));
         let uniform = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("school: parameters"),
             size: std::mem::size_of::<ParamsGpu>() as u64,
@@ -173,10 +181,10 @@ impl GpuSchool {
             .map(|entry| crate::gpu::compute_pipeline(device, &module, entry, &[Some(&layout)]))
             .collect();
         let scan = GpuScan::new(device);
-        let scan_group = scan.group((device, &gpu.queue), &counts, &starts, cells + 1);
+        let scan_group = scan.group((device, queue), &counts, &starts, cells + 1);
         let sort = GpuRadixSort::new(device);
         let cell_bits = u32::BITS - cells.saturating_sub(1).leading_zeros();
-        let sort_group = sort.group((device, &gpu.queue), &scan, (&keys, &spare), (n as u32, cell_bits));
+        let sort_group = sort.group((device, queue), &scan, (&keys, &spare), (n as u32, cell_bits));
         Ok(Self {
             params,
             block,
@@ -192,7 +200,28 @@ impl GpuSchool {
             current: 0,
             cells,
             pending: 0,
+            placer: None,
         })
+    }
+
+    /// Start again from `school`'s state (the same parameters and fish
+    /// count: a scene's school restarted from its seed), dropping pending steps.
+    pub(crate) fn restart(&mut self, queue: &wgpu::Queue, school: &School) {
+        let fish: Vec<FishGpu> = school.fish().iter().map(FishGpu::from).collect();
+        queue.write_buffer(&self.fish[0], 0, bytemuck::cast_slice(&fish));
+        let predator = HuntGpu::from(&school.predator().copied().unwrap_or_default());
+        queue.write_buffer(&self.hunt, 0, bytemuck::bytes_of(&predator));
+        (self.current, self.pending) = (0, 0);
+    }
+
+    /// Draw it in place from now on: after each frame's steps its fish and
+    /// predator are written into the instance records of `drawings`'
+    /// entities ([`GpuSimulation::place`]). Errors for a drawing with no
+    /// part transforms or more than
+    /// [`MAX_PART_TRANSFORMS`](super::MAX_PART_TRANSFORMS).
+    pub fn draw_in_place(&mut self, device: &wgpu::Device, drawings: Vec<SchoolDrawing>) -> Result<(), GpuError> {
+        self.placer = Some(Placer::new(device, drawings)?);
+        Ok(())
     }
 
     /// Record and submit one step of `dt` seconds (not waited for).
@@ -255,6 +284,19 @@ impl GpuSimulation for GpuSchool {
     fn encode(&mut self, _: &wgpu::Device, _: &wgpu::Queue, encoder: &mut wgpu::CommandEncoder) {
         for _ in 0..std::mem::take(&mut self.pending) {
             self.encode_step(encoder);
+        }
+    }
+
+    fn place(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        encoder: &mut wgpu::CommandEncoder,
+        instances: &InstanceTargets<'_>,
+    ) {
+        if let Some(placer) = &mut self.placer {
+            let state = (&self.fish[self.current], &self.hunt, self.block.count);
+            placer.encode((device, queue), encoder, state, instances);
         }
     }
 }

@@ -9,6 +9,7 @@
 
 mod gpu;
 pub mod grid;
+mod place;
 mod rules;
 #[cfg(test)]
 mod tests;
@@ -17,6 +18,7 @@ pub use crate::scene::school::{
     Hunter, Obstacle, SchoolParams, Weights, FISH_STEP_TESTS, MAX_FISH, MAX_NEIGHBOUR_TESTS,
 };
 pub use gpu::{GpuSchool, MAX_GPU_OBSTACLES};
+pub use place::{SchoolDrawing, Swimmers, MAX_PART_TRANSFORMS};
 pub use rules::Forces;
 
 use glam::{Mat3, Mat4, Vec3};

@@ -1,0 +1,61 @@
+//! Beginner layer: where a scene's simulations run ([`SimPath`]) and which
+//! path each took in a frame ([`SimulationPaths`], part of
+//! [`FrameStats`](crate::FrameStats)).
+
+use serde::Serialize;
+
+/// Where a simulation steps: on the CPU (the reference, and the only path
+/// on GL and WebGL2), or on the GPU in the frame's simulate stage, drawn from
+/// its own buffers.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum SimPath {
+    /// On the CPU.
+    Cpu,
+    /// On the GPU where the renderer computes
+    /// ([`Renderer::computes`](crate::Renderer::computes)), else on the CPU.
+    #[default]
+    Gpu,
+}
+
+impl SimPath {
+    /// `"cpu"` or `"gpu"` as the enum; `None` for anything else.
+    pub fn parse(word: &str) -> Option<Self> {
+        match word {
+            "cpu" => Some(Self::Cpu),
+            "gpu" => Some(Self::Gpu),
+            _ => None,
+        }
+    }
+}
+
+/// How many simulations of a kind ran on each path in a frame.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+pub struct PathCounts {
+    /// Stepped on the CPU, drawn from uploaded data.
+    pub cpu: u32,
+    /// Stepped on the GPU, drawn from the simulation's own buffers.
+    pub gpu: u32,
+}
+
+impl PathCounts {
+    /// One more that took `path`.
+    pub fn add(&mut self, path: SimPath) {
+        match path {
+            SimPath::Cpu => self.cpu += 1,
+            SimPath::Gpu => self.gpu += 1,
+        }
+    }
+}
+
+/// Which path each of a scene's simulations took in a frame (filled in by
+/// [`World::draw`](crate::World::draw); zero for frames drawn without one).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+pub struct SimulationPaths {
+    /// Fish schools.
+    pub schools: PathCounts,
+    /// Particle emitters.
+    pub emitters: PathCounts,
+    /// Cloths.
+    pub cloths: PathCounts,
+}
