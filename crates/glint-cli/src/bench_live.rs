@@ -37,6 +37,8 @@ pub struct LiveReport {
     pub shadow_views: u32,
     /// Whether the particles stepped with compute shaders.
     pub particles_on_gpu: bool,
+    /// Where the last frame's simulations stepped.
+    pub simulations: glint::scene::SimulationPaths,
     /// Particles alive in the last frame.
     pub particles_alive: u64,
     /// Instances the last frame submitted.
@@ -138,6 +140,7 @@ pub fn run(gpu: &Gpu, desc: SceneDesc, config: &BenchConfig, (start, step): (f32
         shadow_gpu_ms_median: (timed && !shadow_ms.is_empty()).then(|| median(&mut shadow_ms)),
         shadow_views,
         particles_on_gpu: world.particles_on_gpu(),
+        simulations: last.simulations,
         particles_alive: last.particles_alive,
         instances: last.instances_submitted,
         levels_of_detail: config.lod.lod == crate::lod::LodSwitch::On,

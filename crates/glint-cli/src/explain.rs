@@ -214,6 +214,9 @@ fn describe(e: &Explained) -> String {
         s.instances_culled,
         s.shadow_views
     );
+    if s.simulations != Default::default() {
+        let _ = writeln!(t, "simulations: {}", s.simulations);
+    }
     for (k, pass) in e.passes.iter().enumerate() {
         let kind = match pass.kind {
             glint::render::PassType::Compute => "compute",

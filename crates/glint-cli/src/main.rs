@@ -435,7 +435,7 @@ fn run_live(
 /// One `--live` report for people.
 fn live_text(scene: &Path, adapter: &str, config: &bench::BenchConfig, r: &bench_live::LiveReport) -> String {
     format!(
-            "{} on {adapter}, {}x{}, {} frames from {} s, {:.4} s a frame, levels of detail {}\n  frame {:.2} ms median ({:.2} p95): pose {:.2} ms, draw (CPU) {:.2} ms, forward pass (GPU) {}, shadows (GPU, {} views) {}\n  particles on the {}: {} alive; {} instances; {} triangles drawn ({} in shadows)\n",
+            "{} on {adapter}, {}x{}, {} frames from {} s, {:.4} s a frame, levels of detail {}\n  frame {:.2} ms median ({:.2} p95): pose {:.2} ms, draw (CPU) {:.2} ms, forward pass (GPU) {}, shadows (GPU, {} views) {}\n  simulations: {}; {} particles alive; {} instances; {} triangles drawn ({} in shadows)\n",
             scene.display(),
             config.size.0,
             config.size.1,
@@ -450,7 +450,7 @@ fn live_text(scene: &Path, adapter: &str, config: &bench::BenchConfig, r: &bench
             r.forward_gpu_ms_median.map_or("n/a".into(), |ms| format!("{ms:.2} ms")),
             r.shadow_views,
             r.shadow_gpu_ms_median.map_or("n/a".into(), |ms| format!("{ms:.2} ms")),
-            if r.particles_on_gpu { "GPU" } else { "CPU" },
+            r.simulations,
             r.particles_alive,
             r.instances,
             r.triangles,

@@ -171,6 +171,51 @@ fn sim_school_vs_cpu_times_both_paths_from_one_start() {
 }
 
 #[test]
+fn sim_chooses_where_a_scene_s_school_steps_for_render_explain_and_bench() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let png = dir.path().join("school.png");
+    let (scene, png) = (repo("tests/scenes/school.scn"), png.to_str().expect("path").to_owned());
+    let scene = scene.to_str().expect("path");
+    let render =
+        |sim: &str| glint(&["render", scene, "-o", &png, "--size", "48x48", "--time", "0.5", "--stats", "--sim", sim]);
+    let out = render("cpu");
+    if no_adapter(&out) {
+        return;
+    }
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let stats: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    assert_eq!(stats["simulations"]["schools"], serde_json::json!({"cpu": 1, "gpu": 0}), "{stats}");
+    // Asked for the GPU: there where the adapter computes (it culls on the GPU), else the CPU.
+    let stats: serde_json::Value = serde_json::from_slice(&render("gpu").stdout).expect("JSON");
+    let computes = stats["culling"] == "gpu";
+    let expected =
+        if computes { serde_json::json!({"cpu": 0, "gpu": 1}) } else { serde_json::json!({"cpu": 1, "gpu": 0}) };
+    assert_eq!(stats["simulations"]["schools"], expected, "{stats}");
+    let explained = glint(&["explain", scene, "--size", "48x48", "--time", "0.5", "--sim", "cpu"]);
+    assert!(
+        String::from_utf8_lossy(&explained.stdout).contains("simulations: school on the CPU"),
+        "{}",
+        stderr(&explained)
+    );
+    let args =
+        ["bench", scene, "--live", "30", "--frames", "2", "--warmup", "1", "--size", "48x48", "--json", "--sim", "cpu"];
+    let r: serde_json::Value = serde_json::from_slice(&glint(&args).stdout).expect("JSON");
+    assert_eq!(r["live"]["simulations"]["schools"]["cpu"], 1, "{r}");
+    // Bad choices are usage errors, said of the flag or the file's line.
+    let bad = glint(&["render", scene, "-o", &png, "--sim", "fpga"]);
+    assert_eq!(bad.status.code(), Some(1));
+    assert!(stderr(&bad).contains("--sim"), "{}", stderr(&bad));
+    let text = std::fs::read_to_string(scene)
+        .expect("scene")
+        .replace("\"seed\" \"4\" }", "\"seed\" \"4\"\n\"sim\" \"fpga\" }");
+    let broken = dir.path().join("broken.scn");
+    std::fs::write(&broken, text.replace("../../assets", &repo("assets").display().to_string())).expect("write");
+    let out = glint(&["--allow-outside-assets", "check", broken.to_str().expect("path")]);
+    assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
+    assert!(stderr(&out).contains("broken.scn:") && stderr(&out).contains("sim"), "{}", stderr(&out));
+}
+
+#[test]
 fn sim_particles_times_an_emitter_on_the_cpu() {
     let out = glint(&["sim", "particles", "--alive", "20000", "--steps", "5", "--alpha", "--json"]);
     assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));

@@ -251,6 +251,7 @@ fn stats_panel(ui: &mut egui::Ui, history: &VecDeque<f32>, stats: &[FrameStats])
                 row("tiles", format!("{} drawn of {} tested", s.tiles_drawn, s.tiles_tested));
                 row("shadow views", format!("{} ({} draws)", s.shadow_views, s.passes.shadow.draws));
                 row("particles", format!("{} drawn, {} alive", s.particles_drawn, s.particles_alive));
+                row("simulations", s.simulations.to_string());
                 row("bytes uploaded", s.bytes_uploaded.total.to_string());
                 let c = &s.cpu_ms;
                 let stages = [

@@ -59,3 +59,47 @@ pub struct SimulationPaths {
     /// Cloths.
     pub cloths: PathCounts,
 }
+
+impl std::fmt::Display for SimulationPaths {
+    /// "school on the GPU, 2 emitters on the GPU, cloth on the CPU": each
+    /// kind with any, each path with any; "none" for none.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let kinds = [
+            ("school", "schools", self.schools),
+            ("emitter", "emitters", self.emitters),
+            ("cloth", "cloths", self.cloths),
+        ];
+        let mut parts = Vec::new();
+        for (one, many, counts) in kinds {
+            for (n, path) in [(counts.gpu, "GPU"), (counts.cpu, "CPU")] {
+                match n {
+                    0 => {}
+                    1 => parts.push(format!("{one} on the {path}")),
+                    n => parts.push(format!("{n} {many} on the {path}")),
+                }
+            }
+        }
+        match parts.is_empty() {
+            true => f.write_str("none"),
+            false => f.write_str(&parts.join(", ")),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_paths_read_as_a_list() {
+        let mut paths = SimulationPaths::default();
+        assert_eq!(paths.to_string(), "none");
+        paths.schools.add(SimPath::Gpu);
+        paths.emitters.add(SimPath::Gpu);
+        paths.emitters.add(SimPath::Gpu);
+        paths.cloths.add(SimPath::Cpu);
+        assert_eq!(paths.to_string(), "school on the GPU, 2 emitters on the GPU, cloth on the CPU");
+        assert_eq!(SimPath::parse("cpu"), Some(SimPath::Cpu));
+        assert_eq!(SimPath::parse("GPU"), None);
+    }
+}
