@@ -317,6 +317,37 @@ for (const backend of backends) {
   }
 }
 
+// A school steps on the GPU and is drawn from its own buffers with WebGPU,
+// on the CPU with WebGL2 (tests/scenes/school.scn with cubes for fish,
+// written by test.sh):
+// paused once it has swum a second, the page's picture is `glint render
+// --time` at the same time on the same path.
+for (const backend of backends) {
+  const scene = "scenes/school.scn";
+  const { page, state, logs } = await open(scene, backend);
+  try {
+    if (state.error) {
+      report(false, `a school on ${backend}`, `${state.error}\n  ${logs.join("\n  ")}`);
+      continue;
+    }
+    const { time, simulations } = await page.evaluate(async () => {
+      const canvas = document.getElementById("glint");
+      const frames = window.glintAwaitFrames;
+      while (+canvas.dataset.time < 1) await frames(1);
+      document.querySelector('[data-control="paused"]').click();
+      await frames(1);
+      return { time: canvas.dataset.time, simulations: canvas.dataset.simulations };
+    });
+    const path = backend === "webgpu" ? "gpu" : "cpu";
+    const args = ["--time", time, "--sim", path];
+    const { ok, verdict } = await compareWithGlint(page, logs, scene, backend, args, `web/dist/${scene}`);
+    const stepped = simulations === `school on the ${path.toUpperCase()}`;
+    report(ok && stepped, `a school on ${backend}`, `${simulations}; paused at ${time} s; ${verdict}`);
+  } finally {
+    await page.close();
+  }
+}
+
 // The underwater scene: 24,000 fish schooling, drawn at the levels of detail
 // their size on screen needs (the panel can turn them off).
 for (const backend of backends) {

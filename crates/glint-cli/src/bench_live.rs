@@ -82,6 +82,26 @@ pub fn compare(sides: &[LiveReport]) -> Option<LodComparison> {
     })
 }
 
+/// The simulations as asked against every school on the CPU, in one run.
+#[derive(serde::Serialize)]
+pub struct SimComparison {
+    /// How many times faster the whole frame is as asked (median over median).
+    pub frame_speedup: f64,
+    /// Median pose time as asked, ms (GPU steps are recorded in the frame instead).
+    pub pose_ms: f64,
+    /// Median pose time with the schools on the CPU, ms.
+    pub cpu_pose_ms: f64,
+}
+
+/// `asked` (simulations where the scene or --sim says) against `cpu`.
+pub fn compare_sim(asked: &LiveReport, cpu: &LiveReport) -> SimComparison {
+    SimComparison {
+        frame_speedup: cpu.frame_ms_median / asked.frame_ms_median.max(1e-9),
+        pose_ms: asked.pose_ms_median,
+        cpu_pose_ms: cpu.pose_ms_median,
+    }
+}
+
 fn median(values: &mut [f64]) -> f64 {
     crate::bench::median(values).unwrap_or(0.0)
 }

@@ -143,6 +143,10 @@ enum Command {
         /// from --time: the whole frame, posing included.
         #[arg(long, value_name = "FPS", value_parser = parse_fps)]
         live: Option<f32>,
+        /// With --live: run it again with every school stepped on the CPU,
+        /// and put that whole frame beside the one from --sim (GPU by default).
+        #[arg(long, requires = "live")]
+        vs_cpu: bool,
         /// With --live: the scene time of the first frame, seconds.
         #[arg(long, default_value_t = 0.0, requires = "live", value_parser = parse_time)]
         time: f32,
@@ -395,7 +399,7 @@ fn run_live(
     scene: &Path,
     config: &bench::BenchConfig,
     timing: (f32, f32),
-    (json, lod): (bool, lod::BenchLod),
+    (json, lod, vs_cpu): (bool, lod::BenchLod, bool),
     options: LoadOptions,
 ) -> Result<(), Error> {
     let desc = load(scene, options)?;
@@ -409,6 +413,17 @@ fn run_live(
         sides.push(bench_live::run(&gpu, desc.clone(), &config, timing)?);
     }
     let compared = bench_live::compare(&sides);
+    // The same frames with every school on the CPU, levels as the first side.
+    let on_cpu = match vs_cpu {
+        true => {
+            let mut desc = desc.clone();
+            desc.schools.iter_mut().for_each(|s| s.sim = glint::scene::SimPath::Cpu);
+            let config = bench::BenchConfig { lod: config.lod.with(lod.sides()[0]), ..*config };
+            Some(bench_live::run(&gpu, desc, &config, timing)?)
+        }
+        false => None,
+    };
+    let sim = on_cpu.as_ref().map(|cpu| bench_live::compare_sim(&sides[0], cpu));
     let text = match json {
         true => {
             let mut out = serde_json::json!({"scene": scene.display().to_string(), "adapter": adapter, "size": format!("{}x{}", config.size.0, config.size.1), "live": sides[0]});
@@ -416,14 +431,24 @@ fn run_live(
                 out["full_detail"] = serde_json::to_value(full).expect("report serialises");
                 out["lod"] = serde_json::to_value(compared).expect("comparison serialises");
             }
+            if let (Some(cpu), Some(sim)) = (&on_cpu, &sim) {
+                out["cpu_sim"] = serde_json::to_value(cpu).expect("report serialises");
+                out["sim"] = serde_json::to_value(sim).expect("comparison serialises");
+            }
             format!("{out}\n")
         }
         false => {
-            let mut text: String = sides.iter().map(|r| live_text(scene, &adapter, config, r)).collect();
+            let mut text: String = sides.iter().chain(&on_cpu).map(|r| live_text(scene, &adapter, config, r)).collect();
             if let Some(c) = &compared {
                 text.push_str(&format!(
                     "levels of detail: whole frame {:.2}x faster, {:.2}x fewer triangles, images {:.3}/255 apart (mean), {:.3}/255 at most over a 4x4 block\n",
                     c.frame_speedup, c.triangle_ratio, c.mean_difference, c.block_difference
+                ));
+            }
+            if let Some(c) = &sim {
+                text.push_str(&format!(
+                    "simulations as asked against every school on the CPU: whole frame {:.2}x faster, pose {:.2} ms against {:.2} ms\n",
+                    c.frame_speedup, c.pose_ms, c.cpu_pose_ms
                 ));
             }
             text
@@ -813,6 +838,7 @@ fn main() -> ExitCode {
             lod,
             lod_error,
             sim,
+            vs_cpu,
             ..
         } => {
             let config = bench::BenchConfig {
@@ -825,7 +851,7 @@ fn main() -> ExitCode {
                 density: *density,
                 lod: lod::LodArgs { lod_error: *lod_error, ..lod::LodArgs::default() },
             };
-            run_live(scene, &config, (*time, 1.0 / *fps), (*json, *lod), sim.apply(options))
+            run_live(scene, &config, (*time, 1.0 / *fps), (*json, *lod, *vs_cpu), sim.apply(options))
         }
         Command::Bench {
             scene,

@@ -197,10 +197,16 @@ fn sim_chooses_where_a_scene_s_school_steps_for_render_explain_and_bench() {
         "{}",
         stderr(&explained)
     );
+    // bench --live --vs-cpu: the frame as asked, then every school on the CPU, in one run.
     let args =
-        ["bench", scene, "--live", "30", "--frames", "2", "--warmup", "1", "--size", "48x48", "--json", "--sim", "cpu"];
+        ["bench", scene, "--live", "30", "--frames", "2", "--warmup", "1", "--size", "48x48", "--json", "--vs-cpu"];
     let r: serde_json::Value = serde_json::from_slice(&glint(&args).stdout).expect("JSON");
-    assert_eq!(r["live"]["simulations"]["schools"]["cpu"], 1, "{r}");
+    assert_eq!(r["live"]["simulations"]["schools"], expected, "{r}");
+    assert_eq!(r["cpu_sim"]["simulations"]["schools"]["cpu"], 1, "{r}");
+    let ms = |side: &str| r[side]["frame_ms_median"].as_f64().expect("a number");
+    let speedup = r["sim"]["frame_speedup"].as_f64().expect("a number");
+    assert!((speedup - ms("cpu_sim") / ms("live")).abs() < 1e-9 * speedup, "{r}");
+    assert_eq!(glint(&["bench", scene, "--vs-cpu"]).status.code(), Some(1), "--vs-cpu needs --live");
     // Bad choices are usage errors, said of the flag or the file's line.
     let bad = glint(&["render", scene, "-o", &png, "--sim", "fpga"]);
     assert_eq!(bad.status.code(), Some(1));

@@ -362,6 +362,9 @@ impl Viewer {
         let _ = self.canvas.set_attribute("data-frames", &self.frames.to_string());
         let _ = self.canvas.set_attribute("data-backend", self.backend);
         let _ = self.canvas.set_attribute("data-culling", culling);
+        // Where the simulations stepped: schools and emitters on the GPU with WebGPU, on the CPU with WebGL2.
+        let simulations = stats.first().map(|s| s.simulations.to_string()).unwrap_or_default();
+        let _ = self.canvas.set_attribute("data-simulations", &simulations);
         let shadow_views: u32 = stats.iter().map(|s| s.shadow_views).sum();
         let _ = self.canvas.set_attribute("data-shadow-views", &shadow_views.to_string());
         let _ = self.canvas.set_attribute("data-instances", &drawn.to_string());

@@ -18,17 +18,6 @@ pub enum SimPath {
     Gpu,
 }
 
-impl SimPath {
-    /// `"cpu"` or `"gpu"` as the enum; `None` for anything else.
-    pub fn parse(word: &str) -> Option<Self> {
-        match word {
-            "cpu" => Some(Self::Cpu),
-            "gpu" => Some(Self::Gpu),
-            _ => None,
-        }
-    }
-}
-
 /// How many simulations of a kind ran on each path in a frame.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
 pub struct PathCounts {
@@ -99,7 +88,5 @@ mod tests {
         paths.emitters.add(SimPath::Gpu);
         paths.cloths.add(SimPath::Cpu);
         assert_eq!(paths.to_string(), "school on the GPU, 2 emitters on the GPU, cloth on the CPU");
-        assert_eq!(SimPath::parse("cpu"), Some(SimPath::Cpu));
-        assert_eq!(SimPath::parse("GPU"), None);
     }
 }
