@@ -447,8 +447,11 @@ fn run_live(
             }
             if let Some(c) = &sim {
                 text.push_str(&format!(
-                    "simulations as asked against every school on the CPU: whole frame {:.2}x faster, pose {:.2} ms against {:.2} ms\n",
-                    c.frame_speedup, c.pose_ms, c.cpu_pose_ms
+                    "simulations as asked against every school on the CPU: whole frame {:.2}x faster, pose {:.2} ms against {:.2} ms{}\n",
+                    c.frame_speedup,
+                    c.pose_ms,
+                    c.cpu_pose_ms,
+                    if sides[0].simulations.schools.gpu == 0 { " (no school stepped on the GPU: both on the CPU)" } else { "" }
                 ));
             }
             text
@@ -883,7 +886,11 @@ fn main() -> ExitCode {
                 lod: lod::LodArgs { lod_error: *lod_error, ..lod::LodArgs::default() }.with(*lod != lod::BenchLod::Off),
             };
             let output = BenchOutput { json: *json, plot: plot.as_deref() };
-            run_bench(scene, &config, (*mode, *cull, *lod), output, post.clone().map(|p| p.0), sim.apply(options))
+            match sim.sim {
+                // Without --live the scene stands still at its start: nothing steps.
+                Some(_) => Err(glint::Diagnostic::file(scene, "--sim needs --live (without it nothing steps)").into()),
+                None => run_bench(scene, &config, (*mode, *cull, *lod), output, post.clone().map(|p| p.0), options),
+            }
         }
     };
     match result {

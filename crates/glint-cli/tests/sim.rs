@@ -207,6 +207,9 @@ fn sim_chooses_where_a_scene_s_school_steps_for_render_explain_and_bench() {
     let speedup = r["sim"]["frame_speedup"].as_f64().expect("a number");
     assert!((speedup - ms("cpu_sim") / ms("live")).abs() < 1e-9 * speedup, "{r}");
     assert_eq!(glint(&["bench", scene, "--vs-cpu"]).status.code(), Some(1), "--vs-cpu needs --live");
+    let still = glint(&["bench", scene, "--sim", "gpu"]);
+    assert_eq!(still.status.code(), Some(1), "--sim needs --live on bench");
+    assert!(stderr(&still).contains("--sim needs --live"), "{}", stderr(&still));
     // Bad choices are usage errors, said of the flag or the file's line.
     let bad = glint(&["render", scene, "-o", &png, "--sim", "fpga"]);
     assert_eq!(bad.status.code(), Some(1));

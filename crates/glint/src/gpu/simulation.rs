@@ -41,8 +41,8 @@ pub struct InstanceTargets<'a> {
 impl InstanceTargets<'_> {
     /// Where the records of the entity whose [`key`](crate::Entity::key) is
     /// `entity` are this frame (they move when the store is compacted); `None`
-    /// when it was not submitted, or the store writes its records from its
-    /// transforms.
+    /// when it was not submitted this frame, or the store writes its records
+    /// from its transforms.
     pub fn range(&self, entity: u64) -> Option<InstanceRange> {
         (self.range_of)(entity)
     }
@@ -61,8 +61,12 @@ pub struct InstanceRange {
     /// Whether its records say it receives shadows.
     pub receive_shadows: bool,
     /// Its shape's box, grown by its material's motion: an instance's world
-    /// box is this box moved by its transform.
+    /// box is this box moved by its transform, then grown by `walk`.
     pub local: crate::scene::Aabb,
+    /// How far its material's motion walks each instance from its placed
+    /// position, world units (0: none): its world box then reaches that far
+    /// around the placed position in x and z, at any heading.
+    pub walk: f32,
 }
 
 /// Most records one layer holds: one emitter's particles at most

@@ -47,7 +47,7 @@ mod lod;
 mod passes;
 pub mod queue;
 mod renderer;
-mod resources;
+pub(crate) mod resources;
 mod view;
 mod views;
 

@@ -18,8 +18,10 @@ struct Place {
     // `hunter`); bit 2: each fish's size varied by its number.
     flags: u32,
     size: f32,
-    pad0: u32,
-    pad1: u32,
+    // How far the material's motion walks an instance from its placed
+    // position (InstanceRange::walk; 0: none).
+    walk: f32,
+    pad: u32,
     // The shape's box grown by its motion (Reach::local): centre, half extent.
     local_center: vec4<f32>,
     local_extent: vec4<f32>,
@@ -102,7 +104,15 @@ fn place_swimmers(@builtin(global_invocation_id) id: vec3<u32>) {
     let phase = u32(fract(s.phase) * 65536.0) & 0xffffu;
     records[place.first + k] = Instance(t[0], t[1], t[2], place.material, 0u, 0u, (place.flags & 1u) | (phase << 16u));
     let e = place.local_extent.xyz;
-    let extent = abs(m[0].xyz) * e.x + abs(m[1].xyz) * e.y + abs(m[2].xyz) * e.z;
-    let center = m * vec4<f32>(place.local_center.xyz, 1.0);
-    bounds[place.first + k] = Bounds(vec4<f32>(center.xyz, 0.0), vec4<f32>(extent, 0.0));
+    var extent = abs(m[0].xyz) * e.x + abs(m[1].xyz) * e.y + abs(m[2].xyz) * e.z;
+    var center = (m * vec4<f32>(place.local_center.xyz, 1.0)).xyz;
+    if place.walk > 0.0 {
+        // Reach::walked: around the placed position, the walk's radius plus
+        // the box's own reach from there, at any heading.
+        let o = m[3].xyz;
+        let side = place.walk + sqrt(extent.x * extent.x + extent.z * extent.z) + length((center - o).xy);
+        center = vec3<f32>(o.x, center.y, o.z);
+        extent = vec3<f32>(side, extent.y, side);
+    }
+    bounds[place.first + k] = Bounds(vec4<f32>(center, 0.0), vec4<f32>(extent, 0.0));
 }

@@ -101,7 +101,10 @@ impl World {
         &self.desc
     }
 
-    /// The entities that draw it, as of the last pose.
+    /// The entities that draw it, as of the last pose; a school stepped on
+    /// the GPU keeps its fish's entities at their start (its records are
+    /// written on the GPU: [`Entity::with_gpu_instances`]), so only
+    /// [`draw`](Self::draw) shows them where they swim.
     pub fn entities(&self) -> &[Entity] {
         &self.placed.entities
     }
@@ -244,11 +247,11 @@ impl World {
     /// [`draw`](Self::draw), with `after` recorded into the frame after its
     /// views (an overlay, the blit onto a window: [`FrameInput::then`]), and
     /// the whole frame's output.
-    pub fn draw_then<'a>(
-        &'a mut self,
+    pub fn draw_then(
+        &mut self,
         renderer: &mut Renderer,
-        (views, target): (&'a [View], &mut OffscreenTarget),
-        after: Vec<&'a mut dyn AfterViews>,
+        (views, target): (&[View], &mut OffscreenTarget),
+        after: Vec<&mut dyn AfterViews>,
     ) -> Result<FrameOutput, RenderError> {
         let eye = views.last().map_or(glam::Vec3::ZERO, |v| v.camera.eye);
         let lighting = lighting_at(&self.desc, self.moves.then_some(self.time));
@@ -266,9 +269,15 @@ impl World {
                 input = input.simulate(on_gpu);
             }
         }
-        paths.cloths.cpu = self.cloths.len() as u32;
-        input.after = after;
-        let mut output = renderer.render_frame(input, target)?;
+        paths.cloths.cpu = self.cloths.iter().filter(|c| c.view.is_some()).count() as u32;
+        // Borrowed for this frame only, so the schools can be told if it fails.
+        input.after = after.into_iter().map(|work| -> &mut dyn AfterViews { work }).collect();
+        let output = renderer.render_frame(input, target);
+        if output.is_err() {
+            // The frame's commands, GPU steps among them, were dropped.
+            self.schools.iter_mut().for_each(SchoolSim::frame_failed);
+        }
+        let mut output = output?;
         output.views.iter_mut().for_each(|v| v.simulations = paths);
         particles::count(&self.desc.emitters, (self.drawn_at, self.time), &mut output.views);
         self.drawn_at = self.time;

@@ -61,6 +61,16 @@ impl SchoolSim {
             );
             return;
         }
+        // Skinned or animated models pose their entities on the CPU every frame.
+        let blocks = [Some(desc.fish_entity), desc.predator_entity];
+        let animated = blocks.into_iter().flatten().any(|k| match scene.entities[k].mesh {
+            MeshRef::Model(m) => !scene.models[m].animations.is_empty(),
+            MeshRef::Shape(_) => false,
+        });
+        if animated || drawings.iter().any(|(k, _)| !entities[*k].joints().is_empty()) {
+            log::warn!("school (line {}): a skinned or animated model steps on the CPU", desc.line);
+            return;
+        }
         let on_gpu = GpuSchool::on_device(renderer.device_and_queue(), school).and_then(|mut gpu| {
             let list = drawings.iter().map(|(_, d)| d.clone()).collect();
             gpu.draw_in_place(renderer.device_and_queue().0, list).map(|()| gpu)
@@ -69,10 +79,16 @@ impl SchoolSim {
             Ok(gpu) => gpu,
             Err(e) => return log::warn!("school (line {}): stepped on the CPU: {e}", desc.line),
         };
+        // Where the swimmers start: inside the bounds once they step, but a
+        // cluster's ball or the predator's start may reach outside them.
+        let start = school.fish().iter().chain(school.predator()).map(|f| f.position);
+        let bounds = desc.params.bounds;
+        let start = Aabb::from_points(start)
+            .map_or(bounds, |b| Aabb { min: b.min.min(bounds.min), max: b.max.max(bounds.max) });
         for (k, drawing) in &drawings {
             let entity = &mut entities[*k];
             let reach = renderer.registry().reach(entity.shape, entity.material).map(|r| (r.local, r.walk));
-            let held = held_box(desc, drawing, reach);
+            let held = held_box((desc, start), drawing, reach);
             entity.set_gpu_instances(Some(held));
         }
         self.run = Some(Run::Gpu(Box::new(gpu), 0));
@@ -111,6 +127,14 @@ impl SchoolSim {
                 *steps += more;
                 false
             }
+        }
+    }
+
+    /// A frame that recorded its GPU steps failed and dropped them: start
+    /// again from the seed at the next pose.
+    pub(crate) fn frame_failed(&mut self) {
+        if let Some(Run::Gpu(_, steps)) = &mut self.run {
+            *steps = u64::MAX;
         }
     }
 
@@ -165,10 +189,11 @@ fn drawings_of(
 }
 
 /// A world box holding every instance `drawing` puts anywhere in `desc`'s
-/// bounds, at any heading: the bounds grown by the farthest any point of the
-/// entity's shape (`reach`: its box grown by its material's motion) gets
-/// from the swimmer's position at the largest scale.
-fn held_box(desc: &SchoolDesc, drawing: &SchoolDrawing, reach: Option<(Aabb, f32)>) -> Aabb {
+/// bounds or the box `start` (the bounds and where the swimmers start), at
+/// any heading: grown by the farthest any point of the entity's shape
+/// (`reach`: its box grown by its material's motion) gets from the swimmer's
+/// position at the largest scale.
+fn held_box((desc, start): (&SchoolDesc, Aabb), drawing: &SchoolDrawing, reach: Option<(Aabb, f32)>) -> Aabb {
     let scale = match drawing.swimmers {
         Swimmers::Fish { size } => size * 1.15,
         Swimmers::Predator { size } => size,
@@ -186,7 +211,7 @@ fn held_box(desc: &SchoolDesc, drawing: &SchoolDrawing, reach: Option<(Aabb, f32
         drawing.parts.iter().flat_map(|t| corners.iter().map(|&c| t.transform_point3(c).length())).fold(0.0, f32::max);
     let grow = Vec3::splat(farthest * scale + walk);
     // Confinement ends above the floor, even a floor above the bounds.
-    let (lo, mut hi) = (desc.params.bounds.min, desc.params.bounds.max);
+    let (lo, mut hi) = (start.min, start.max);
     hi.y = hi.y.max(desc.params.floor.unwrap_or(hi.y));
     Aabb { min: lo - grow, max: hi + grow }
 }
@@ -232,4 +257,75 @@ pub(crate) fn entity_ranges(scene: &SceneDesc) -> Vec<Range<usize>> {
             next - count..next
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Run;
+    use crate::render::cull::transform_aabb;
+    use crate::render::resources::blocks::InstanceGpu;
+    use crate::{OffscreenTarget, Renderer, World};
+    use glam::{Mat4, Vec3A, Vec4};
+
+    #[test]
+    fn the_gpu_places_each_fish_as_the_cpu_would_place_the_gpus_fish() {
+        // Half a second in, the fish the GPU stepped (read back) placed as the
+        // CPU places fish (each one's frame, size, material, shadows flag and
+        // tail phase) are the records the placing pass wrote over the start,
+        // and each fish's box is the store's box of that record.
+        let Some(gpu) = crate::gpu::test_gpu() else { return };
+        if !gpu.culls_on_gpu() {
+            return;
+        }
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..").canonicalize().expect("the repo");
+        let options = crate::asset::LoadOptions { asset_roots: vec![root.clone()], ..Default::default() };
+        let desc = crate::asset::load_scene_with(&root.join("tests/scenes/school.scn"), options).expect("scene");
+        let mut renderer = Renderer::new(&gpu);
+        let mut world = World::place(desc, &mut renderer).expect("placed");
+        world.pose(0.5, &mut renderer).expect("posed");
+        let mut target = OffscreenTarget::new(&gpu, 16, 16, 1).expect("target");
+        let frame = world.draw(&mut renderer, &world.views(None), &mut target).expect("frame")[0].frame;
+        let Some(Run::Gpu(on_gpu, 30)) = &world.schools[0].run else { panic!("30 steps on the GPU") };
+        let school = on_gpu.read(&gpu).expect("the school");
+        let desc = &world.desc.schools[0];
+        let swimmers: Vec<Mat4> = (school.fish().iter().enumerate().map(|(i, f)| f.transform(desc.fish_scale(i))))
+            .chain(school.predator().map(|h| h.transform(desc.predator_size)))
+            .collect();
+        let phases: Vec<f32> = school.fish().iter().chain(school.predator()).map(|f| f.phase).collect();
+        let store = &renderer.res.store;
+        let records = gpu.read_buffer(renderer.res.instances.array().buffer().expect("a buffer")).expect("records");
+        let boxes = gpu.read_buffer(renderer.res.instances.bounds().expect("boxes")).expect("boxes");
+        let (records, boxes): (&[[u32; 16]], &[[f32; 8]]) =
+            (bytemuck::cast_slice(&records), bytemuck::cast_slice(&boxes));
+        // The fish's entity, then the shark's: swimmer by swimmer, by each model's one part.
+        let mut swimmer = 0;
+        for block in [desc.fish_entity, desc.predator_entity.expect("a shark")] {
+            let entity = &world.entities()[world.ranges[block].start];
+            let crate::asset::MeshRef::Model(m) = world.desc.entities[block].mesh else { panic!("a model") };
+            let [part] = world.desc.models[m].parts[0].transforms[..] else { panic!("one transform") };
+            let range = store.gpu_range(entity.key(), frame).expect("written on the GPU");
+            let (c, e) = (Vec3A::from(range.local.center()), Vec3A::from(range.local.half_extent()));
+            for k in range.first as usize..(range.first + range.count) as usize {
+                let placed = swimmers[swimmer] * part;
+                let expected =
+                    InstanceGpu::new(&placed, entity.material, entity.receive_shadows).with_phase(phases[swimmer]);
+                let (cpu, on_gpu): ([u32; 16], [u32; 16]) = (bytemuck::cast(expected), records[k]);
+                for i in 0..12 {
+                    let (a, b) = (f32::from_bits(cpu[i]), f32::from_bits(on_gpu[i]));
+                    assert!((a - b).abs() <= 1e-5 * a.abs().max(1.0), "record {k} value {i}: CPU {a}, GPU {b}");
+                }
+                assert_eq!(cpu[12..15], on_gpu[12..15], "material and joints");
+                assert_eq!(cpu[15] & 0xffff, on_gpu[15] & 0xffff, "the shadows flag");
+                assert!((cpu[15] >> 16).abs_diff(on_gpu[15] >> 16) <= 1, "the tail phase");
+                let row = |i: usize| Vec4::from_array(std::array::from_fn(|j| f32::from_bits(on_gpu[4 * i + j])));
+                let m = Mat4::from_cols(row(0), row(1), row(2), Vec4::W).transpose();
+                let (center, extent) = transform_aabb(&m, c, e);
+                let got = (Vec3A::from_slice(&boxes[k][..3]), Vec3A::from_slice(&boxes[k][4..7]));
+                assert!((got.0 - center).abs().max_element() < 1e-4, "box {k}: {got:?} against {center}");
+                assert!((got.1 - extent).abs().max_element() < 1e-4, "box {k}: {got:?} against {extent}");
+                swimmer += 1;
+            }
+        }
+        assert_eq!(swimmer, 401, "400 fish and the shark");
+    }
 }

@@ -14,9 +14,10 @@ use crate::render::debug::explain::PassType;
 use crate::render::frame::state::Frame;
 use crate::render::resources::Resources;
 
-/// Stage 1 of the frame: record `simulations`' compute passes into the
-/// frame's encoder, before any view, under the debug group "simulate": every
-/// simulation's steps, then every simulation's placing of its instances.
+/// The frame's simulate stage: record `simulations`' compute passes into the
+/// frame's encoder, after the instance store is compacted and before any
+/// view, under the debug group "simulate": every simulation's steps, then
+/// every simulation's placing of its instances.
 /// Where the device has no compute shaders
 /// ([`Renderer::computes`](crate::Renderer::computes) is false) simulations
 /// step on the CPU instead, and give none.
@@ -32,7 +33,7 @@ pub(crate) fn simulate(res: &Resources, frame: &mut Frame, simulations: &mut [&m
     }
     // Where views cull on the GPU the store keeps boxes, and its records are a storage buffer.
     if let (Some(bounds), Some(records)) = (res.instances.bounds(), res.instances.array().buffer()) {
-        let range_of = |entity: u64| res.store.gpu_range(entity);
+        let range_of = |entity: u64| res.store.gpu_range(entity, frame.index);
         let targets = InstanceTargets { records, bounds, range_of: &range_of };
         for simulation in simulations.iter_mut() {
             simulation.place(device, queue, &mut frame.encoder, &targets);

@@ -147,8 +147,9 @@ impl InstanceBuffer {
     pub(crate) fn new(device: &wgpu::Device, storage: bool, bounds: bool) -> Self {
         let array = GpuArray::new(device, "renderer block: instances", record_bytes::<InstanceGpu>(), 1024, storage);
         let size = 1024 * u64::from(record_bytes::<BoundsGpu>());
-        let bounds =
-            bounds.then(|| GrowBuffer::new(device, "gpu culling: instance bounds", wgpu::BufferUsages::STORAGE, size));
+        // Copied from only to read it back for inspection.
+        let usage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC;
+        let bounds = bounds.then(|| GrowBuffer::new(device, "gpu culling: instance bounds", usage, size));
         Self { array, bounds, generation: 0 }
     }
 

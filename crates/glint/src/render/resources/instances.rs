@@ -111,16 +111,18 @@ impl InstanceStore {
 
     /// Where the instances of the entity keyed `entity` are written on the GPU
     /// ([`Entity::with_gpu_instances`]): its range, with what each record holds
-    /// besides its transform; `None` for an entity not submitted, or whose
-    /// records the store writes.
-    pub(crate) fn gpu_range(&self, entity: u64) -> Option<crate::gpu::InstanceRange> {
+    /// besides its transform; `None` for an entity not submitted in `frame`,
+    /// or whose records the store writes.
+    pub(crate) fn gpu_range(&self, entity: u64, frame: u64) -> Option<crate::gpu::InstanceRange> {
         let slot = &self.slots[*self.by_key.get(&entity)?];
-        (slot.gpu && !slot.compact && slot.joints == 0).then_some(crate::gpu::InstanceRange {
+        let written = slot.gpu && !slot.compact && slot.joints == 0 && slot.last_frame == frame;
+        written.then_some(crate::gpu::InstanceRange {
             first: slot.first,
             count: slot.count,
             material: slot.material.0,
             receive_shadows: slot.receive_shadows,
             local: slot.reach.local,
+            walk: slot.reach.walk,
         })
     }
 

@@ -56,8 +56,8 @@ struct PlaceGpu {
     material: u32,
     flags: u32,
     size: f32,
-    pad0: u32,
-    pad1: u32,
+    walk: f32,
+    pad: u32,
     local_center: [f32; 4],
     local_extent: [f32; 4],
     parts: [[f32; 16]; MAX_PART_TRANSFORMS],
@@ -75,8 +75,8 @@ pub(crate) struct Placer {
 }
 
 impl Placer {
-    /// The pass for `drawings` of a school of `fish` fish. Errors for a
-    /// drawing without part transforms or with more than [`MAX_PART_TRANSFORMS`].
+    /// The pass for `drawings`. Errors for a drawing without part transforms
+    /// or with more than [`MAX_PART_TRANSFORMS`].
     pub(crate) fn new(device: &wgpu::Device, drawings: Vec<SchoolDrawing>) -> Result<Self, GpuError> {
         if let Some(d) = drawings.iter().find(|d| d.parts.is_empty() || d.parts.len() > MAX_PART_TRANSFORMS) {
             return Err(GpuError::Failed(format!(
@@ -148,8 +148,8 @@ impl Placer {
                 material: range.material,
                 flags: flags | u32::from(range.receive_shadows),
                 size,
-                pad0: 0,
-                pad1: 0,
+                walk: range.walk,
+                pad: 0,
                 local_center: [c.x, c.y, c.z, 0.0],
                 local_extent: [e.x, e.y, e.z, 0.0],
                 parts,
@@ -176,7 +176,7 @@ mod layout_tests {
             PlaceGpu,
             wgsl,
             "Place",
-            [first, count, each, material, flags, size, pad0, pad1, local_center, local_extent, parts]
+            [first, count, each, material, flags, size, walk, pad, local_center, local_extent, parts]
         );
         // The records and boxes it writes are the store's: `InstanceGpu`'s 64
         // bytes, `BoundsGpu`'s 32 (render/resources).
