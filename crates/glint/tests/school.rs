@@ -276,3 +276,32 @@ fn a_school_or_emitter_broken_after_loading_is_an_error_when_posed_not_a_panic()
     let err = world.pose(1.0, &mut renderer).unwrap_err().to_string();
     assert!(err.contains("emitter.scn:35: emitter: lifetime must be min max"), "{err}");
 }
+
+#[test]
+fn after_a_failed_frame_the_gpu_simulations_restart_and_draw_what_an_unbroken_run_draws() {
+    // A frame that fails may have dropped GPU steps it recorded; the school
+    // and the emitters then start again from their seeds at the next pose,
+    // so the next picture is the one a run that never failed draws.
+    let Some(gpu) = common::gpu() else { return };
+    for scene in ["tests/scenes/school.scn", "tests/scenes/emitter.scn"] {
+        let run = |fail: bool| {
+            let desc = common::load_scene(&common::repo_root().join(scene));
+            let mut renderer = glint::Renderer::new(gpu);
+            let mut world = glint::World::place(desc, &mut renderer).expect("placed");
+            let mut target = glint::OffscreenTarget::new(gpu, 64, 64, 1).expect("target");
+            let views = world.views(None);
+            world.pose(0.5, &mut renderer).expect("posed");
+            if fail {
+                let mut bad = views.clone();
+                bad[0].viewport.width = -1.0;
+                assert!(world.draw(&mut renderer, &bad, &mut target).is_err(), "{scene}: a bad viewport fails");
+            } else {
+                world.draw(&mut renderer, &views, &mut target).expect("frame");
+            }
+            world.pose(1.0, &mut renderer).expect("posed");
+            world.draw(&mut renderer, &views, &mut target).expect("frame");
+            target.read_rgba8(gpu).expect("readback")
+        };
+        assert!(run(true) == run(false), "{scene}: the same picture after a failed frame");
+    }
+}

@@ -276,6 +276,7 @@ impl World {
         if output.is_err() {
             // The frame's commands, GPU steps among them, were dropped.
             self.schools.iter_mut().for_each(SchoolSim::frame_failed);
+            self.emitters.iter_mut().for_each(EmitterSim::frame_failed);
         }
         let mut output = output?;
         output.views.iter_mut().for_each(|v| v.simulations = paths);

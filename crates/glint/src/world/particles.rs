@@ -105,6 +105,13 @@ impl EmitterSim {
         }
     }
 
+    /// The frame that recorded its GPU steps failed: start again at the next frame.
+    pub(crate) fn frame_failed(&mut self) {
+        if let Some(Run::Gpu(on_gpu)) = &mut self.run {
+            on_gpu.frame_failed();
+        }
+    }
+
     /// Whether it steps with compute shaders.
     pub(crate) fn on_gpu(&self) -> bool {
         matches!(self.run, Some(Run::Gpu(_)))

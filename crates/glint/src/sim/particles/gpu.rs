@@ -197,6 +197,12 @@ impl GpuParticles {
         self.eye = eye;
     }
 
+    /// The frame its steps were recorded in failed and dropped them: start
+    /// again from time 0 at the next [`advance_to`](Self::advance_to).
+    pub(crate) fn frame_failed(&mut self) {
+        self.steps = u64::MAX;
+    }
+
     /// The state of every slot (waiting for the GPU), for tests.
     pub fn read_slots(&self, gpu: &crate::Gpu) -> Result<Vec<super::Particle>, crate::GpuError> {
         Ok(bytemuck::pod_collect_to_vec(&gpu.read_buffer(&self.state)?))
