@@ -55,6 +55,11 @@ impl SchoolDesc {
         self.steps_to(time).saturating_mul(self.params.step_cost())
     }
 
+    /// The largest scale [`fish_scale`](Self::fish_scale) gives a fish.
+    pub fn largest_fish_scale(&self) -> f32 {
+        self.size * 1.15
+    }
+
     /// Each fish's scale: `size` varied ±15 % by its number.
     pub fn fish_scale(&self, i: usize) -> f32 {
         let h = (i as u32).wrapping_mul(0x9e37_79b9) ^ 0x85eb_ca6b;

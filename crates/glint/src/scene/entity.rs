@@ -161,8 +161,9 @@ impl Entity {
     /// every frame: uploaded from its transforms only when the store writes
     /// them all again (its first frame, a new version, a compaction or a
     /// larger buffer), and then overwritten by the simulation in the same
-    /// submission. Its transforms give the instance count and the start; the CPU, which does not see where the
-    /// GPU puts them, culls every instance by `bounds` (a world box holding
+    /// submission. Its transforms give the instance count and the start; the
+    /// CPU, which does not see where the GPU puts them, culls every instance
+    /// by `bounds` (a world box holding
     /// every instance whatever the simulation does) and chooses one level of
     /// detail for all of them, where GPU culling tests each instance's own
     /// box as the simulation writes it. Not stored compactly or in Morton

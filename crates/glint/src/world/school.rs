@@ -8,6 +8,7 @@
 //! entities' transforms left at the start.
 
 use crate::asset::{MeshRef, SceneDesc, SchoolDesc};
+use crate::render::cull::transform_aabb;
 use crate::render::GpuSimulation;
 use crate::scene::{Aabb, SimPath};
 use crate::sim::school::{GpuSchool, School, SchoolDrawing, Swimmers, MAX_PART_TRANSFORMS};
@@ -39,7 +40,8 @@ impl SchoolSim {
     /// computes: its entities (`ranges`, as [`entity_ranges`] gives them, of
     /// `scene`'s entity blocks) get their records from the simulation. It
     /// stays on the CPU where a model part repeats its mesh more than
-    /// [`MAX_PART_TRANSFORMS`] times, or the GPU cannot make its buffers.
+    /// [`MAX_PART_TRANSFORMS`] times, a model is skinned or animated (posed
+    /// on the CPU every frame), or the GPU cannot make its buffers.
     pub(crate) fn move_to_gpu(
         &mut self,
         (desc, scene, ranges): (&SchoolDesc, &SceneDesc, &[Range<usize>]),
@@ -105,9 +107,11 @@ impl SchoolSim {
             Some(Run::Cpu(school)) => {
                 let restarted = school.steps() > target;
                 if restarted {
-                    *self = Self::new(desc);
+                    // The parameters made a school once: they make it again.
+                    if let Ok(start) = School::new(desc.params.clone()) {
+                        **school = start;
+                    }
                 }
-                let Some(Run::Cpu(school)) = &mut self.run else { return false };
                 let moved = restarted || school.steps() < target;
                 while school.steps() < target {
                     school.step(desc.dt);
@@ -195,20 +199,17 @@ fn drawings_of(
 /// position at the largest scale.
 fn held_box((desc, start): (&SchoolDesc, Aabb), drawing: &SchoolDrawing, reach: Option<(Aabb, f32)>) -> Aabb {
     let scale = match drawing.swimmers {
-        Swimmers::Fish { size } => size * 1.15,
+        Swimmers::Fish { .. } => desc.largest_fish_scale(),
         Swimmers::Predator { size } => size,
     };
     let (local, walk) = reach.unwrap_or((Aabb { min: Vec3::splat(-1.0), max: Vec3::ONE }, 0.0));
-    let corners = (0..8).map(|c| {
-        Vec3::new(
-            [local.min.x, local.max.x][c & 1],
-            [local.min.y, local.max.y][c >> 1 & 1],
-            [local.min.z, local.max.z][c >> 2],
-        )
-    });
-    let corners: Vec<Vec3> = corners.collect();
-    let farthest =
-        drawing.parts.iter().flat_map(|t| corners.iter().map(|&c| t.transform_point3(c).length())).fold(0.0, f32::max);
+    // The farthest corner of each part's box from the swimmer's position.
+    let (c, e) = (local.center().into(), local.half_extent().into());
+    let part_reach = |t: &Mat4| {
+        let (c, e) = transform_aabb(t, c, e);
+        (c.abs() + e).length()
+    };
+    let farthest = drawing.parts.iter().map(part_reach).fold(0.0, f32::max);
     let grow = Vec3::splat(farthest * scale + walk);
     // Confinement ends above the floor, even a floor above the bounds.
     let (lo, mut hi) = (start.min, start.max);
