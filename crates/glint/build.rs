@@ -10,7 +10,7 @@
 //!
 //! The other shaders (`blit`, `post`, `cull`, `pyramid`, `ssao_compute`
 //! (appended to `ssao`), and the simulations' `particles_step`, `school`,
-//! `school_place`, `scan` and `radix`) have no defs: each becomes one string
+//! `school_place`, `scan`, `radix` and `cloth`) have no defs: each becomes one string
 //! there, its imports ahead of its own text, comments dropped too.
 //!
 //! The sources keep to the subset of naga_oil's preprocessor that this reads:
@@ -26,7 +26,7 @@ const COMPOSED: [(&str, &str); 5] =
 
 /// The shaders without defs (their imports ahead of their own text), and the
 /// constant each becomes.
-const PLAIN: [(&str, &str); 10] = [
+const PLAIN: [(&str, &str); 11] = [
     ("BLIT", "blit"),
     ("POST", "post"),
     ("CULL", "cull"),
@@ -37,6 +37,7 @@ const PLAIN: [(&str, &str); 10] = [
     ("SCHOOL_PLACE", "school_place"),
     ("SCAN", "scan"),
     ("RADIX", "radix"),
+    ("CLOTH", "cloth"),
 ];
 
 /// The modules others import: their import path and file.

@@ -5,32 +5,15 @@
 
 mod common;
 
-use glam::DVec3;
+use common::tip;
 use glint::asset::load_scene;
-use glint::sim::cloth::{Cloth, ClothMesh, ClothParams, Integrator, Solve};
+use glint::sim::cloth::{Cloth, Integrator, Solve};
 
-/// The 0.1 m shell cantilever of `cloth_published.rs` on a regular equilateral
-/// sheet (the published mesh's lattice), E = 2·10⁸, clamped where x ≤ 0.01 m,
-/// with `damping`.
+/// The shared cantilever, solved as `solve`, with `damping`.
 fn cantilever(solve: Solve, damping: f64) -> Cloth {
-    let params = ClothParams {
-        thickness: 1e-3,
-        young: 2e8,
-        poisson: 0.5,
-        density: 1200.0,
-        gravity: DVec3::new(0.0, 0.0, -9.81),
-    };
-    let mesh = ClothMesh::sheet(0.1, 0.02, 41, 9);
-    let pinned: Vec<bool> = mesh.nodes.iter().map(|p| p.x <= 0.01 + 1e-9).collect();
-    let mut cloth = Cloth::new(mesh, params, &pinned).expect("cloth");
+    let mut cloth = common::cantilever(damping);
     cloth.set_solve(solve);
-    cloth.set_damping(damping);
     cloth
-}
-
-/// The lowest node's height.
-fn tip(cloth: &Cloth) -> f64 {
-    cloth.positions.iter().map(|p| p.z).fold(f64::INFINITY, f64::min)
 }
 
 fn fastest(cloth: &Cloth) -> f64 {

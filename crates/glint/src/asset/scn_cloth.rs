@@ -33,10 +33,7 @@ pub const MAX_SCENE_CLOTH_NODES: u64 = 4 * 129 * 129;
 /// steps before, a 65 × 65 static sheet that did not converge ran 25–30 s.)
 pub const STATIC_STEPS: u64 = 500;
 
-/// Most colliders one cloth may have: each node is tested against each in every
-/// Newton iteration (10,000 colliders on a 17 × 17 cloth took over 30 s to
-/// pose a second), and 64 stay below the cost of the solve itself.
-pub const MAX_COLLIDERS: usize = 64;
+pub use crate::scene::cloth::MAX_COLLIDERS;
 
 /// Longest `gravity`, m/s² (a thousand g), and fastest `pin_velocity` (m/s) and
 /// `pin_spin` (rad/s): beyond them no time step resolves the motion, and

@@ -207,6 +207,7 @@ fn the_shaders_without_defs_are_what_naga_oil_composes() {
         (SCHOOL_PLACE, include_str!("school_place.wgsl")),
         (SCAN, include_str!("scan.wgsl")),
         (RADIX, include_str!("radix.wgsl")),
+        (CLOTH, include_str!("cloth.wgsl")),
     ];
     let mut composer = composer();
     for (plain, source) in sources {

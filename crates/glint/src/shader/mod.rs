@@ -288,6 +288,8 @@ pub(crate) const SCHOOL_PLACE: &str = assemble::SCHOOL_PLACE;
 pub(crate) const SCAN: &str = assemble::SCAN;
 /// The stable radix sort of key-value pairs (`sim/radix.rs`).
 pub(crate) const RADIX: &str = assemble::RADIX;
+/// Cloth stepped by Vertex Block Descent (`sim/cloth/dynamics/gpu.rs`).
+pub(crate) const CLOTH: &str = assemble::CLOTH;
 
 #[cfg(test)]
 mod tests {

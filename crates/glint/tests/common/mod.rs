@@ -160,3 +160,22 @@ pub fn assert_matches_reference(name: &str, actual: &image::RgbaImage) {
         );
     }
 }
+
+/// The 0.1 m shell cantilever of `cloth_published.rs` on a regular
+/// equilateral sheet (the published mesh's lattice), E = 2·10⁸, clamped where
+/// x ≤ 0.01 m, with `damping`, solved to convergence.
+pub fn cantilever(damping: f64) -> glint::sim::cloth::Cloth {
+    use glint::sim::cloth::{Cloth, ClothMesh, ClothParams};
+    let gravity = glam::DVec3::new(0.0, 0.0, -9.81);
+    let params = ClothParams { thickness: 1e-3, young: 2e8, poisson: 0.5, density: 1200.0, gravity };
+    let mesh = ClothMesh::sheet(0.1, 0.02, 41, 9);
+    let pinned: Vec<bool> = mesh.nodes.iter().map(|p| p.x <= 0.01 + 1e-9).collect();
+    let mut cloth = Cloth::new(mesh, params, &pinned).expect("cloth");
+    cloth.set_damping(damping);
+    cloth
+}
+
+/// The lowest node's height (z).
+pub fn tip(cloth: &glint::sim::cloth::Cloth) -> f64 {
+    cloth.positions.iter().map(|p| p.z).fold(f64::INFINITY, f64::min)
+}

@@ -35,6 +35,7 @@ pub use crate::scene::cloth::{ClothParams, ClothSetup, Integrator, Solve};
 use glam::DVec3;
 use p3_maybe_rayon::prelude::*;
 
+pub mod gpu;
 pub mod realtime;
 
 /// Newmark's β (average acceleration: unconditionally stable, no numerical damping).
@@ -530,8 +531,10 @@ impl Cloth {
         (total, target)
     }
 
-    fn substep(&mut self, dt: f64, integrator: Integrator, depth: u32, stats: &mut StepStats) -> Result<(), StepError> {
-        let (scale, predicted): (f64, Vec<DVec3>) = match integrator {
+    /// The inertia term of a step of `dt` from now: its scale s and the
+    /// predicted positions q̃ (the table in the module's documentation).
+    fn inertia(&self, dt: f64, integrator: Integrator) -> (f64, Vec<DVec3>) {
+        match integrator {
             Integrator::ImplicitEuler => {
                 (1.0 / (dt * dt), self.positions.iter().zip(&self.velocities).map(|(x, v)| *x + dt * *v).collect())
             }
@@ -541,7 +544,23 @@ impl Cloth {
                     .map(|((x, v), a)| *x + dt * *v + dt * dt * (0.5 - NEWMARK_BETA) * *a)
                     .collect(),
             ),
-        };
+        }
+    }
+
+    /// What a step of `dt` with `integrator` from now would minimise, at the
+    /// end positions `q`: the incremental potential (damping folded in,
+    /// contact included), and the norm of its gradient over the free
+    /// degrees of freedom (the residual Newton's method drives to zero).
+    /// For measuring another solver's answer ([`gpu::GpuCloth`]) against
+    /// this one's.
+    pub fn step_objective(&self, q: &[DVec3], dt: f64, integrator: Integrator) -> (f64, f64) {
+        let (scale, predicted) = self.inertia(dt, integrator);
+        let (scale, target) = self.damped(dt, integrator, scale, &predicted);
+        (self.potential(q, scale, &target, 1.0), self.residual(q, scale, &target, 1.0).1)
+    }
+
+    fn substep(&mut self, dt: f64, integrator: Integrator, depth: u32, stats: &mut StepStats) -> Result<(), StepError> {
+        let (scale, predicted) = self.inertia(dt, integrator);
         // Newton starts where the last acceleration would carry each free node
         // (the membrane's forces there are about half those at `predicted`,
         // which ignores acceleration: 2.1 → 3.2 steps/s on the 65 × 65 bench);

@@ -1,5 +1,6 @@
 //! Discrete Elastic Plates cloth.
 
+mod colour;
 pub mod contact;
 pub mod energy;
 pub mod view;
@@ -10,6 +11,7 @@ mod dynamics;
 mod factor;
 mod system;
 
+pub use dynamics::gpu::{GpuCloth, GpuSolve, MAX_ITERATIONS as MAX_GPU_ITERATIONS};
 pub use dynamics::{
     realtime, Cloth, ClothParams, ClothSetup, Integrator, Solve, StepError, StepStats, MAX_HALVINGS,
     MAX_STATIC_ITERATIONS,
