@@ -241,7 +241,7 @@ enum Command {
 enum SimCommand {
     /// Discrete Elastic Plates cloth: write its trajectory as CSV, or benchmark it.
     #[command(after_help = EXIT_CODES)]
-    Cloth(sim::ClothArgs),
+    Cloth(Box<sim::ClothArgs>),
     /// Fish schooling: step a school and print its statistics, or benchmark it.
     #[command(after_help = EXIT_CODES)]
     School(school::SchoolArgs),

@@ -1,9 +1,13 @@
-//! `glint sim cloth`: run a Discrete Elastic Plates simulation without a GPU,
-//! writing the trajectory as CSV and, with `--bench`, its speed.
+//! `glint sim cloth`: run a Discrete Elastic Plates simulation without a window
+//! (on the CPU, or with `--gpu` on compute shaders), writing the trajectory as
+//! CSV and, with `--bench`, its speed (and with `--vs-cpu` the CPU solves'
+//! beside it, and how far the GPU's nodes end from the converged solve's).
 
 use clap::{Args, ValueEnum};
 use glam::DVec3;
-use glint::sim::cloth::{Cloth, ClothMesh, ClothParams, Collider, Integrator, PinSelector, Solve};
+use glint::sim::cloth::{
+    Cloth, ClothMesh, ClothParams, Collider, GpuCloth, GpuSolve, Integrator, PinSelector, Solve, MAX_GPU_ITERATIONS,
+};
 use glint::{Diagnostic, Error};
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -70,6 +74,23 @@ pub struct ClothArgs {
     /// reference) or on a fixed budget for interactive use.
     #[arg(long, value_enum, default_value_t = SolveArg::Converged)]
     solve: SolveArg,
+    /// Step on the GPU's compute shaders (Vertex Block Descent on the same
+    /// energies, a fixed number of iterations a step) instead of the CPU.
+    #[arg(long, conflicts_with = "solve")]
+    gpu: bool,
+    /// With `--gpu`: sweeps over the node colours a step.
+    #[arg(long, requires = "gpu", default_value_t = GpuSolve::default().iterations,
+          value_parser = clap::value_parser!(u32).range(1..=i64::from(MAX_GPU_ITERATIONS)))]
+    iterations: u32,
+    /// With `--gpu`: Chebyshev's ρ accelerating the sweeps, 0 ≤ ρ < 1 (0: none,
+    /// and the step's potential falls at every sweep).
+    #[arg(long, requires = "gpu", default_value_t = GpuSolve::default().acceleration, value_parser = spectral_radius)]
+    acceleration: f64,
+    /// With `--gpu --bench`: take the same steps with the CPU's realtime and
+    /// converged solves too, in the same run, and say how far the GPU's nodes
+    /// end from the converged solve's.
+    #[arg(long, requires = "gpu", requires = "bench")]
+    vs_cpu: bool,
     /// Print steps per second and Newton iterations per step.
     #[arg(long)]
     bench: bool,
@@ -104,7 +125,7 @@ impl From<SolveArg> for Solve {
     }
 }
 
-/// What `--bench --json` prints: one object.
+/// One solve's figures, as `--bench --json` prints them.
 #[derive(serde::Serialize)]
 struct BenchReport {
     nodes: usize,
@@ -117,9 +138,27 @@ struct BenchReport {
     steps: u32,
     seconds: f64,
     steps_per_second: f64,
+    /// Newton iterations, or on the GPU its sweeps over the colours.
     newton_iterations_per_step: f64,
     factorizations_per_step: f64,
     substeps_per_step: f64,
+    /// On the GPU: the node colours (passes a sweep).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    colours: Option<usize>,
+}
+
+/// What `--gpu --bench --vs-cpu --json` prints.
+#[derive(serde::Serialize)]
+struct VersusReport {
+    gpu: BenchReport,
+    realtime: BenchReport,
+    converged: BenchReport,
+    gpu_speedup_over_realtime: f64,
+    gpu_speedup_over_converged: f64,
+    /// Mean and largest distance of the GPU's nodes from the converged
+    /// solve's after the last step, metres.
+    gpu_from_converged_mean_m: f64,
+    gpu_from_converged_worst_m: f64,
 }
 
 /// `--integrator`.
@@ -130,8 +169,72 @@ enum IntegratorArg {
     Static,
 }
 
+/// A finished run: the cloth at the end and its figures.
+struct Run {
+    cloth: Cloth,
+    report: BenchReport,
+}
+
 /// Run `glint sim cloth`.
 pub fn cloth(args: &ClothArgs) -> Result<(), Error> {
+    let (integrator, steps) = match args.integrator {
+        IntegratorArg::ImplicitEuler => (Integrator::ImplicitEuler, args.steps),
+        IntegratorArg::Newmark => (Integrator::Newmark, args.steps),
+        IntegratorArg::Static => (Integrator::Static, 1),
+    };
+    if args.gpu && integrator == Integrator::Static {
+        return Err(usage("--gpu steps in time: a static solve (--integrator static) runs on the CPU"));
+    }
+    let mut out = args.out.as_deref().map(Trajectory::create).transpose()?;
+    let first = match args.gpu {
+        true => gpu_run(args, integrator, steps, out.as_mut())?,
+        false => cpu_run(args, args.solve, integrator, steps, out.as_mut())?,
+    };
+    if let Some(out) = out {
+        out.finish()?;
+    }
+    if !args.bench {
+        return Ok(());
+    }
+    if !args.vs_cpu {
+        let text = match args.json {
+            true => format!("{}\n", serde_json::to_string(&first.report).expect("plain numbers serialise")),
+            false => describe(&first.report, true),
+        };
+        return Ok(crate::output::print(&text)?);
+    }
+    let realtime = cpu_run(args, SolveArg::Realtime, integrator, steps, None)?;
+    let converged = cpu_run(args, SolveArg::Converged, integrator, steps, None)?;
+    let gaps: Vec<f64> =
+        first.cloth.positions.iter().zip(&converged.cloth.positions).map(|(a, b)| a.distance(*b)).collect();
+    let versus = VersusReport {
+        gpu_speedup_over_realtime: first.report.steps_per_second / realtime.report.steps_per_second,
+        gpu_speedup_over_converged: first.report.steps_per_second / converged.report.steps_per_second,
+        gpu_from_converged_mean_m: gaps.iter().sum::<f64>() / gaps.len().max(1) as f64,
+        gpu_from_converged_worst_m: gaps.iter().copied().fold(0.0, f64::max),
+        gpu: first.report,
+        realtime: realtime.report,
+        converged: converged.report,
+    };
+    let text = match args.json {
+        true => format!("{}\n", serde_json::to_string(&versus).expect("plain numbers serialise")),
+        false => format!(
+            "{}{}{}the gpu's steps: {:.2}x the realtime solve's speed, {:.2}x the converged one's; \
+             its nodes end {:.4} m from the converged solve's on average, {:.4} m at most\n",
+            describe(&versus.gpu, true),
+            describe(&versus.realtime, false),
+            describe(&versus.converged, false),
+            versus.gpu_speedup_over_realtime,
+            versus.gpu_speedup_over_converged,
+            versus.gpu_from_converged_mean_m,
+            versus.gpu_from_converged_worst_m
+        ),
+    };
+    Ok(crate::output::print(&text)?)
+}
+
+/// The cloth the options describe, solved as `solve` on the CPU.
+fn build(args: &ClothArgs, solve: SolveArg) -> Result<Cloth, Error> {
     let mesh = match (&args.mesh, args.sheet, args.resolution) {
         (Some(path), _, _) => glint::asset::load_cloth_mesh(path)?,
         (None, Some((w, h)), Some((n, m))) => {
@@ -154,17 +257,22 @@ pub fn cloth(args: &ClothArgs) -> Result<(), Error> {
         density: args.density,
         gravity: args.gravity,
     };
-    let nodes = mesh.nodes.len();
     let mut cloth = Cloth::new(mesh, params, &pinned).map_err(|e| Diagnostic::file(&source, e.to_string()))?;
     cloth.set_colliders(args.collider.clone(), args.thickness.max(1e-3));
     cloth.set_damping(args.damping);
-    cloth.set_solve(args.solve.into());
-    let (integrator, steps) = match args.integrator {
-        IntegratorArg::ImplicitEuler => (Integrator::ImplicitEuler, args.steps),
-        IntegratorArg::Newmark => (Integrator::Newmark, args.steps),
-        IntegratorArg::Static => (Integrator::Static, 1),
-    };
-    let mut out = args.out.as_deref().map(|path| Trajectory::create(path, nodes)).transpose()?;
+    cloth.set_solve(solve.into());
+    Ok(cloth)
+}
+
+/// `steps` steps on the CPU, solved as `solve`, each row written to `out`.
+fn cpu_run(
+    args: &ClothArgs,
+    solve: SolveArg,
+    integrator: Integrator,
+    steps: u32,
+    mut out: Option<&mut Trajectory<'_>>,
+) -> Result<Run, Error> {
+    let mut cloth = build(args, solve)?;
     let (mut stepping, mut iterations, mut factorizations, mut substeps) = (0.0, 0u64, 0u64, 0u64);
     for step in 1..=steps {
         let start = Instant::now();
@@ -173,74 +281,120 @@ pub fn cloth(args: &ClothArgs) -> Result<(), Error> {
         iterations += u64::from(stats.newton_iterations);
         factorizations += u64::from(stats.factorizations);
         substeps += u64::from(stats.substeps);
-        if let Some(out) = &mut out {
+        if let Some(out) = out.as_deref_mut() {
             out.row(step, cloth.time, &cloth.positions)?;
         }
     }
-    if let Some(out) = out {
-        out.finish()?;
-    }
-    if args.bench {
-        let per_step = |n: u64| n as f64 / f64::from(steps);
-        let r = BenchReport {
-            nodes,
-            pinned: pinned.iter().filter(|p| **p).count(),
-            edges: cloth.topology().edges.len(),
-            hinges: cloth.topology().hinges.len(),
-            threads: rayon::current_num_threads(),
-            solve: args.solve.name(),
-            dt: args.dt,
-            steps,
-            seconds: stepping,
-            steps_per_second: f64::from(steps) / stepping,
-            newton_iterations_per_step: per_step(iterations),
-            factorizations_per_step: per_step(factorizations),
-            substeps_per_step: per_step(substeps),
-        };
-        let text = if args.json {
-            format!("{}\n", serde_json::to_string(&r).expect("plain numbers serialise"))
-        } else {
-            format!(
-                "cloth: {} nodes ({} pinned), {} edges, {} hinges, {} threads, {} solve\n\
-                 {steps} steps of {} s in {stepping:.3} s: {:.1} steps/s, {:.2} Newton iterations/step \
-                 ({:.2} factorisations), {:.2} sub-steps/step\n",
-                r.nodes,
-                r.pinned,
-                r.edges,
-                r.hinges,
-                r.threads,
-                r.solve,
-                r.dt,
-                r.steps_per_second,
-                r.newton_iterations_per_step,
-                r.factorizations_per_step,
-                r.substeps_per_step
-            )
-        };
-        crate::output::print(&text)?;
-    }
-    Ok(())
+    let per_step = |n: u64| n as f64 / f64::from(steps);
+    let counts = [per_step(iterations), per_step(factorizations), per_step(substeps)];
+    let report = report(args, &cloth, solve.name(), (steps, stepping), counts, None);
+    Ok(Run { cloth, report })
 }
 
-/// The CSV trajectory being written.
+/// `steps` steps on the GPU, each row written to `out` (read back each step).
+fn gpu_run(
+    args: &ClothArgs,
+    integrator: Integrator,
+    steps: u32,
+    mut out: Option<&mut Trajectory<'_>>,
+) -> Result<Run, Error> {
+    let mut cloth = build(args, SolveArg::Converged)?;
+    let gpu = glint::Gpu::headless()?;
+    let settings = GpuSolve { iterations: args.iterations, acceleration: args.acceleration };
+    let mut on_gpu = GpuCloth::new(&gpu, &cloth, args.dt, integrator, settings)?;
+    gpu.wait()?;
+    let start = Instant::now();
+    for step in 1..=steps {
+        on_gpu.step(&gpu);
+        if let Some(out) = out.as_deref_mut() {
+            on_gpu.read_into(&gpu, &mut cloth)?;
+            out.row(step, cloth.time, &cloth.positions)?;
+        }
+    }
+    gpu.wait()?;
+    let stepping = start.elapsed().as_secs_f64();
+    gpu.check()?;
+    on_gpu.read_into(&gpu, &mut cloth)?;
+    let counts = [f64::from(args.iterations), 0.0, 1.0];
+    let report = report(args, &cloth, "gpu", (steps, stepping), counts, Some(on_gpu.colours()));
+    Ok(Run { cloth, report })
+}
+
+/// The figures of a run of `steps` steps in `seconds`, with its Newton
+/// iterations, factorisations and sub-steps a step.
+fn report(
+    args: &ClothArgs,
+    cloth: &Cloth,
+    solve: &'static str,
+    (steps, seconds): (u32, f64),
+    [iterations, factorizations, substeps]: [f64; 3],
+    colours: Option<usize>,
+) -> BenchReport {
+    let nodes = cloth.positions.len();
+    BenchReport {
+        nodes,
+        pinned: (0..nodes).filter(|&i| cloth.is_pinned(i)).count(),
+        edges: cloth.topology().edges.len(),
+        hinges: cloth.topology().hinges.len(),
+        threads: if colours.is_some() { 0 } else { rayon::current_num_threads() },
+        solve,
+        dt: args.dt,
+        steps,
+        seconds,
+        steps_per_second: f64::from(steps) / seconds,
+        newton_iterations_per_step: iterations,
+        factorizations_per_step: factorizations,
+        substeps_per_step: substeps,
+        colours,
+    }
+}
+
+/// A report as text; the cloth's line first when `header`.
+fn describe(r: &BenchReport, header: bool) -> String {
+    let mut text = String::new();
+    if header {
+        text.push_str(&format!(
+            "cloth: {} nodes ({} pinned), {} edges, {} hinges\n",
+            r.nodes, r.pinned, r.edges, r.hinges
+        ));
+    }
+    let speed = format!("{} steps of {} s in {:.3} s: {:.1} steps/s", r.steps, r.dt, r.seconds, r.steps_per_second);
+    text.push_str(&match r.colours {
+        Some(colours) => format!(
+            "gpu solve: {speed}, {} iterations/step over {colours} node colours\n",
+            r.newton_iterations_per_step
+        ),
+        None => format!(
+            "{} solve ({} threads): {speed}, {:.2} Newton iterations/step ({:.2} factorisations), {:.2} sub-steps/step\n",
+            r.solve, r.threads, r.newton_iterations_per_step, r.factorizations_per_step, r.substeps_per_step
+        ),
+    });
+    text
+}
+
+/// The CSV trajectory being written; its header comes with the first row,
+/// which says how many nodes there are.
 struct Trajectory<'p> {
     path: &'p Path,
     file: std::io::BufWriter<std::fs::File>,
+    rows: u32,
 }
 
 impl<'p> Trajectory<'p> {
-    fn create(path: &'p Path, nodes: usize) -> Result<Self, Error> {
+    fn create(path: &'p Path) -> Result<Self, Error> {
         let file = std::fs::File::create(path).map_err(|e| Diagnostic::file(path, format!("cannot create: {e}")))?;
-        let mut t = Self { path, file: std::io::BufWriter::new(file) };
-        let mut header = String::from("step,t");
-        for n in 1..=nodes {
-            header.push_str(&format!(",x{n},y{n},z{n}"));
-        }
-        t.line(&header)?;
-        Ok(t)
+        Ok(Self { path, file: std::io::BufWriter::new(file), rows: 0 })
     }
 
     fn row(&mut self, step: u32, time: f64, positions: &[DVec3]) -> Result<(), Error> {
+        if self.rows == 0 {
+            let mut header = String::from("step,t");
+            for n in 1..=positions.len() {
+                header.push_str(&format!(",x{n},y{n},z{n}"));
+            }
+            self.line(&header)?;
+        }
+        self.rows += 1;
         let mut line = format!("{step},{time}");
         for p in positions {
             line.push_str(&format!(",{},{},{}", p.x, p.y, p.z));
@@ -289,6 +443,10 @@ fn non_negative(s: &str) -> Result<f64, String> {
         .ok()
         .filter(|v| v.is_finite() && *v >= 0.0)
         .ok_or_else(|| "expected a number 0 or above".into())
+}
+
+fn spectral_radius(s: &str) -> Result<f64, String> {
+    s.trim().parse::<f64>().ok().filter(|v| (0.0..1.0).contains(v)).ok_or_else(|| "expected 0 <= ρ < 1".into())
 }
 
 fn poisson(s: &str) -> Result<f64, String> {

@@ -46,6 +46,56 @@ fn sim_cloth_bench_prints_one_json_object_for_either_solve() {
 }
 
 #[test]
+fn sim_cloth_gpu_times_its_steps_beside_both_cpu_solves_and_says_how_far_it_ends() {
+    // A strip hanging from one end, swinging down for 10 steps.
+    let sheet = ["sim", "cloth", "--sheet", "0.4,0.1", "--resolution", "9,3", "--fix", "x<=0.01", "--steps", "10"];
+    let out = glint(&[&sheet[..], &["--gpu", "--vs-cpu", "--bench", "--json"]].concat());
+    if no_adapter(&out) {
+        return;
+    }
+    if stderr(&out).contains("needs compute shaders") {
+        eprintln!("this adapter has no compute: {}", stderr(&out));
+        return;
+    }
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let r: serde_json::Value = serde_json::from_slice(&out.stdout).expect("one JSON object");
+    let (gpu, realtime, converged) = (&r["gpu"], &r["realtime"], &r["converged"]);
+    let solves = [gpu, realtime, converged].map(|side| side["solve"].as_str());
+    assert_eq!(solves, [Some("gpu"), Some("realtime"), Some("converged")], "{r}");
+    assert_eq!((gpu["nodes"].as_u64(), gpu["steps"].as_u64()), (Some(27), Some(10)), "{r}");
+    assert_eq!(gpu["newton_iterations_per_step"].as_f64(), Some(60.0), "the default sweeps: {r}");
+    assert!(gpu["colours"].as_u64().is_some_and(|c| (2..=13).contains(&c)), "{r}");
+    let speed = |side: &serde_json::Value| side["steps_per_second"].as_f64().expect("a number");
+    let speedup = r["gpu_speedup_over_converged"].as_f64().expect("a number");
+    assert!((speedup - speed(gpu) / speed(converged)).abs() < 1e-9 * speedup, "{r}");
+    // The free end has fallen about 5 cm; the GPU's inexact steps leave its
+    // nodes 0.7 cm from the converged solve's on average, 1.3 cm at most.
+    let (mean, worst) = (r["gpu_from_converged_mean_m"].as_f64(), r["gpu_from_converged_worst_m"].as_f64());
+    assert!(mean.is_some_and(|m| m < 0.01) && worst.is_some_and(|w| w < 0.03), "{r}");
+    // Its trajectory, read back each step.
+    let dir = tempfile::tempdir().expect("temp dir");
+    let csv = dir.path().join("gpu.csv");
+    let out = glint(&[&sheet[..], &["--gpu", "--iterations", "20", "--out", csv.to_str().expect("path")]].concat());
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let (header, rows) = read_trajectory(&csv);
+    assert_eq!((header.len(), rows.len()), (2 + 27 * 3, 10));
+    assert!((rows[9][1] - 0.1).abs() < 1e-9, "time {}", rows[9][1]);
+    // The free end fell; the pinned one did not move.
+    assert!(rows[9][2 + 3 * 8 + 2] < -0.01 && rows[9][2 + 2] == 0.0, "{:?}", &rows[9][..6]);
+    // What it refuses.
+    for (args, says) in [
+        (&["--gpu", "--integrator", "static"][..], "a static solve"),
+        (&["--iterations", "5"][..], "--gpu"),
+        (&["--gpu", "--acceleration", "1"][..], "0 <= ρ < 1"),
+        (&["--gpu", "--solve", "realtime"][..], "cannot be used with"),
+    ] {
+        let out = glint(&[&sheet[..], args].concat());
+        assert_ne!(out.status.code(), Some(0), "{args:?}");
+        assert!(stderr(&out).contains(says), "{args:?}: {}", stderr(&out));
+    }
+}
+
+#[test]
 fn sim_cloth_writes_one_csv_row_per_step_and_benchmarks() {
     let dir = tempfile::tempdir().unwrap();
     let csv = dir.path().join("traj.csv");
