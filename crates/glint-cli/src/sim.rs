@@ -132,7 +132,9 @@ struct BenchReport {
     pinned: usize,
     edges: usize,
     hinges: usize,
-    threads: usize,
+    /// The CPU's threads (none on the GPU).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    threads: Option<usize>,
     solve: &'static str,
     dt: f64,
     steps: u32,
@@ -185,7 +187,7 @@ pub fn cloth(args: &ClothArgs) -> Result<(), Error> {
     if args.gpu && integrator == Integrator::Static {
         return Err(usage("--gpu steps in time: a static solve (--integrator static) runs on the CPU"));
     }
-    let mut out = args.out.as_deref().map(Trajectory::create).transpose()?;
+    let mut out = args.out.as_deref().map(Trajectory::new);
     let first = match args.gpu {
         true => gpu_run(args, integrator, steps, out.as_mut())?,
         false => cpu_run(args, args.solve, integrator, steps, out.as_mut())?,
@@ -303,17 +305,22 @@ fn gpu_run(
     let settings = GpuSolve { iterations: args.iterations, acceleration: args.acceleration };
     let mut on_gpu = GpuCloth::new(&gpu, &cloth, args.dt, integrator, settings)?;
     gpu.wait()?;
-    let start = Instant::now();
+    // Without rows to write, every step is submitted before one wait; with
+    // them, each step is timed to its wait, and its reading back is not.
+    let mut stepping = 0.0;
+    let mut start = Instant::now();
     for step in 1..=steps {
         on_gpu.step(&gpu);
         if let Some(out) = out.as_deref_mut() {
+            gpu.wait()?;
+            stepping += start.elapsed().as_secs_f64();
             on_gpu.read_into(&gpu, &mut cloth)?;
             out.row(step, cloth.time, &cloth.positions)?;
+            start = Instant::now();
         }
     }
     gpu.wait()?;
-    let stepping = start.elapsed().as_secs_f64();
-    gpu.check()?;
+    stepping += start.elapsed().as_secs_f64();
     on_gpu.read_into(&gpu, &mut cloth)?;
     let counts = [f64::from(args.iterations), 0.0, 1.0];
     let report = report(args, &cloth, "gpu", (steps, stepping), counts, Some(on_gpu.colours()));
@@ -336,7 +343,7 @@ fn report(
         pinned: (0..nodes).filter(|&i| cloth.is_pinned(i)).count(),
         edges: cloth.topology().edges.len(),
         hinges: cloth.topology().hinges.len(),
-        threads: if colours.is_some() { 0 } else { rayon::current_num_threads() },
+        threads: colours.is_none().then(rayon::current_num_threads),
         solve,
         dt: args.dt,
         steps,
@@ -366,35 +373,38 @@ fn describe(r: &BenchReport, header: bool) -> String {
         ),
         None => format!(
             "{} solve ({} threads): {speed}, {:.2} Newton iterations/step ({:.2} factorisations), {:.2} sub-steps/step\n",
-            r.solve, r.threads, r.newton_iterations_per_step, r.factorizations_per_step, r.substeps_per_step
+            r.solve,
+            r.threads.unwrap_or(0),
+            r.newton_iterations_per_step, r.factorizations_per_step, r.substeps_per_step
         ),
     });
     text
 }
 
-/// The CSV trajectory being written; its header comes with the first row,
-/// which says how many nodes there are.
+/// The CSV trajectory being written. The file is made with the first row
+/// (which also says how many nodes the header names), so a run refused
+/// before its first step leaves an existing file alone.
 struct Trajectory<'p> {
     path: &'p Path,
-    file: std::io::BufWriter<std::fs::File>,
-    rows: u32,
+    file: Option<std::io::BufWriter<std::fs::File>>,
 }
 
 impl<'p> Trajectory<'p> {
-    fn create(path: &'p Path) -> Result<Self, Error> {
-        let file = std::fs::File::create(path).map_err(|e| Diagnostic::file(path, format!("cannot create: {e}")))?;
-        Ok(Self { path, file: std::io::BufWriter::new(file), rows: 0 })
+    fn new(path: &'p Path) -> Self {
+        Self { path, file: None }
     }
 
     fn row(&mut self, step: u32, time: f64, positions: &[DVec3]) -> Result<(), Error> {
-        if self.rows == 0 {
+        if self.file.is_none() {
+            let file = std::fs::File::create(self.path)
+                .map_err(|e| Diagnostic::file(self.path, format!("cannot create: {e}")))?;
+            self.file = Some(std::io::BufWriter::new(file));
             let mut header = String::from("step,t");
             for n in 1..=positions.len() {
                 header.push_str(&format!(",x{n},y{n},z{n}"));
             }
             self.line(&header)?;
         }
-        self.rows += 1;
         let mut line = format!("{step},{time}");
         for p in positions {
             line.push_str(&format!(",{},{},{}", p.x, p.y, p.z));
@@ -403,11 +413,17 @@ impl<'p> Trajectory<'p> {
     }
 
     fn line(&mut self, text: &str) -> Result<(), Error> {
-        writeln!(self.file, "{text}").map_err(|e| Diagnostic::file(self.path, format!("cannot write: {e}")).into())
+        let file = self.file.as_mut().expect("made with the first row");
+        writeln!(file, "{text}").map_err(|e| Diagnostic::file(self.path, format!("cannot write: {e}")).into())
     }
 
-    fn finish(mut self) -> Result<(), Error> {
-        self.file.flush().map_err(|e| Diagnostic::file(self.path, format!("cannot write: {e}")).into())
+    fn finish(self) -> Result<(), Error> {
+        match self.file {
+            Some(mut file) => {
+                file.flush().map_err(|e| Diagnostic::file(self.path, format!("cannot write: {e}")).into())
+            }
+            None => Ok(()),
+        }
     }
 }
 

@@ -53,7 +53,7 @@ fn sim_cloth_gpu_times_its_steps_beside_both_cpu_solves_and_says_how_far_it_ends
     if no_adapter(&out) {
         return;
     }
-    if stderr(&out).contains("needs compute shaders") {
+    if stderr(&out).contains("compute path") {
         eprintln!("this adapter has no compute: {}", stderr(&out));
         return;
     }

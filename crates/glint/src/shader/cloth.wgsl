@@ -9,7 +9,8 @@
 // the other nodes fixed (nodes of a colour share no element, so they move
 // at once without touching each other's terms); `finish` turns the result
 // into velocities and accelerations. Every node's step is shortened until its
-// own terms' sum falls (or it stays put), so the potential never rises.
+// own terms' sum falls (or it stays put), so the sweeps never raise the
+// potential; `accelerate`, between sweeps where it is on, may.
 //
 // Hessians are the positive semi-definite ones of Hessian::Definite: a
 // squeezed edge's sideways term dropped, the hinge's k ∇θ ∇θᵀ, the contact's

@@ -9,8 +9,10 @@
 //! coloured so that no two of a colour share an edge or hinge
 //! ([`super::super::colour`]), and each of the step's iterations gives every
 //! colour in turn one pass in which each of its nodes takes a 3×3 Newton step
-//! on its own terms, shortened until they fall. The potential never rises;
-//! how close a fixed number of iterations comes to Newton's answer is
+//! on its own terms, shortened until they fall, so that without acceleration
+//! the potential never rises (Chebyshev's acceleration between sweeps, on by
+//! default, trades that for speed); how close a fixed number of sweeps comes
+//! to Newton's answer is
 //! measured (`tests/cloth_gpu.rs`, `docs/cloth.md`). Everything runs in single
 //! precision, and a step has a fixed cost: no step is halved or refused, as
 //! the CPU solves do, since that would need the state read back.
@@ -53,6 +55,8 @@ impl Default for GpuSolve {
     }
 }
 const WORKGROUP: u32 = 64;
+/// Smallest storage buffer made: one element of the largest array (`Hinge`).
+const MIN_BUFFER_BYTES: u64 = std::mem::size_of::<HingeGpu>() as u64;
 /// Bytes between the colours' blocks (the dynamic-offset alignment).
 const STRIDE: u64 = 256;
 
@@ -116,9 +120,10 @@ struct ColourGpu {
     pad: [u32; 2],
 }
 
-/// A cloth stepped on the GPU. Needs compute shaders and eight storage
-/// buffers a stage ([`Gpu::culls_on_gpu`]); elsewhere (GL, WebGL2)
-/// [`GpuCloth::new`] says so and the CPU solve steps instead.
+/// A cloth stepped on the GPU. Needs the renderer's compute path
+/// ([`Gpu::culls_on_gpu`]: compute shaders, eight storage buffers a stage and
+/// indirect drawing, not GL's backend), where the scene's simulations step;
+/// elsewhere (GL, WebGL2) [`GpuCloth::new`] says so and the CPU solve steps instead.
 pub struct GpuCloth {
     nodes: u32,
     /// Position, velocity, acceleration (each xyz of a `vec4<f32>` per node).
@@ -159,8 +164,8 @@ impl GpuCloth {
     ) -> Result<Self, GpuError> {
         if !gpu.culls_on_gpu() {
             return Err(GpuError::Failed(format!(
-                "the GPU cloth solve needs compute shaders and 8 storage buffers a stage, which {} ({:?}) lacks; \
-                 solve the cloth on the CPU",
+                "the GPU cloth solve needs the renderer's compute path (compute shaders, 8 storage buffers a stage \
+                 and indirect drawing, not GL), which {} ({:?}) lacks; solve the cloth on the CPU",
                 gpu.info().name,
                 gpu.info().backend
             )));
@@ -197,7 +202,9 @@ impl GpuCloth {
         let buffer = |label: &str, bytes: &[u8]| {
             let b = device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some(label),
-                size: (bytes.len() as u64).max(16),
+                // At least one element of every array the shader binds (a
+                // mesh may have no hinges).
+                size: (bytes.len() as u64).max(MIN_BUFFER_BYTES),
                 usage: storage,
                 mapped_at_creation: false,
             });
@@ -374,13 +381,15 @@ impl GpuCloth {
 
     /// Copy the state now into `cloth` (the one it was made from, or one
     /// like it): positions, velocities, accelerations and time, waiting for
-    /// the GPU.
+    /// the GPU. Errors when the device reported an error since the last
+    /// check (a step that did not run), or the reading failed.
     pub fn read_into(&self, gpu: &Gpu, cloth: &mut Cloth) -> Result<(), GpuError> {
         let n = self.nodes as usize;
         let [positions, velocities, accelerations] = [&self.state[0], &self.state[1], &self.state[2]]
             .map(|b| gpu.read_buffer(b).map(|bytes| read_vec3s(&bytes, n)));
-        (cloth.positions, cloth.velocities, cloth.accelerations) = (positions?, velocities?, accelerations?);
         let steps = u32::from_le_bytes(gpu.read_buffer(&self.steps_buffer)?[..4].try_into().expect("4 bytes"));
+        gpu.check()?;
+        (cloth.positions, cloth.velocities, cloth.accelerations) = (positions?, velocities?, accelerations?);
         cloth.time = self.start_time + f64::from(steps) * self.dt;
         debug_assert_eq!(u64::from(steps), self.recorded);
         Ok(())
