@@ -265,8 +265,9 @@ struct Picture {
     #[arg(long)]
     camera: Option<usize>,
     /// Solve every cloth this way, whatever its scene block says: Newton's
-    /// method to convergence (the reference) or on a fixed budget for
-    /// interactive use.
+    /// method to convergence (the reference), on a fixed budget for
+    /// interactive use, or on the GPU (compute shaders, drawn from their
+    /// buffers; converged on the CPU where the adapter cannot, as on GL).
     #[arg(long, value_enum)]
     solve: Option<sim::SolveArg>,
     /// Cull every view this way, whatever its camera's "cull" says: off (draw

@@ -71,7 +71,8 @@ pub struct ClothArgs {
     #[arg(long, value_name = "traj.csv")]
     out: Option<PathBuf>,
     /// How each time step is solved: Newton's method to convergence (the
-    /// reference) or on a fixed budget for interactive use.
+    /// reference) or on a fixed budget for interactive use (the GPU's is
+    /// `--gpu`).
     #[arg(long, value_enum, default_value_t = SolveArg::Converged)]
     solve: SolveArg,
     /// Step on the GPU's compute shaders (Vertex Block Descent on the same
@@ -99,11 +100,13 @@ pub struct ClothArgs {
     json: bool,
 }
 
-/// `--solve` (here, and on `render` and `view`).
-#[derive(Clone, Copy, ValueEnum)]
+/// `--solve` (here, and on `render`, `view`, `bench` and `explain`; here the
+/// GPU's is `--gpu`, with its settings).
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum SolveArg {
     Converged,
     Realtime,
+    Gpu,
 }
 
 impl SolveArg {
@@ -112,6 +115,7 @@ impl SolveArg {
         match self {
             SolveArg::Converged => "converged",
             SolveArg::Realtime => "realtime",
+            SolveArg::Gpu => "gpu",
         }
     }
 }
@@ -121,6 +125,7 @@ impl From<SolveArg> for Solve {
         match arg {
             SolveArg::Converged => Solve::Converged,
             SolveArg::Realtime => Solve::Realtime,
+            SolveArg::Gpu => Solve::Gpu,
         }
     }
 }
@@ -184,6 +189,9 @@ pub fn cloth(args: &ClothArgs) -> Result<(), Error> {
         IntegratorArg::Newmark => (Integrator::Newmark, args.steps),
         IntegratorArg::Static => (Integrator::Static, 1),
     };
+    if args.solve == SolveArg::Gpu {
+        return Err(usage("the GPU solve is --gpu here (with --iterations and --acceleration)"));
+    }
     if args.gpu && integrator == Integrator::Static {
         return Err(usage("--gpu steps in time: a static solve (--integrator static) runs on the CPU"));
     }

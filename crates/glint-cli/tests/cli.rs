@@ -519,6 +519,37 @@ fn render_steps_a_cloth_to_the_time_and_refuses_an_endless_one() {
 }
 
 #[test]
+fn render_solves_cloth_on_the_gpu_where_asked_and_says_where_gl_cannot() {
+    // The scene's two cloths ask for the GPU; `--solve converged` overrides
+    // it, and GL, which has no compute path, solves them on the CPU and says so.
+    let scene = repo("tests/scenes/cloth_gpu.scn");
+    let scene = scene.to_str().expect("path");
+    let dir = tempfile::tempdir().expect("temp dir");
+    let png = |name: &str| dir.path().join(name).to_str().expect("path").to_string();
+    let render = |backend: &str, extra: &[&str], out: &str| {
+        let args = [&["render", scene, "-o", out, "--size", "64x64", "--time", "0.3", "--stats"][..], extra].concat();
+        Command::new(env!("CARGO_BIN_EXE_glint")).args(args).env("WGPU_BACKEND", backend).output().expect("run glint")
+    };
+    let gpu = render("vulkan", &[], &png("gpu.png"));
+    if no_adapter(&gpu) {
+        return;
+    }
+    assert_eq!(gpu.status.code(), Some(0), "{}", stderr(&gpu));
+    let stats: serde_json::Value = serde_json::from_slice(&gpu.stdout).expect("stats JSON");
+    let cloths = &stats["simulations"]["cloths"];
+    assert_eq!(cloths["cpu"].as_u64().zip(cloths["gpu"].as_u64()), Some((0, 2)), "{stats}");
+    let cpu = render("vulkan", &["--solve", "converged"], &png("cpu.png"));
+    let stats: serde_json::Value = serde_json::from_slice(&cpu.stdout).expect("stats JSON");
+    assert_eq!(stats["simulations"]["cloths"]["cpu"].as_u64(), Some(2), "{stats}");
+    let gl = render("gl", &["--solve", "gpu"], &png("gl.png"));
+    assert_eq!(gl.status.code(), Some(0), "{}", stderr(&gl));
+    let says = "cloth (line 26): solved on the CPU (converged): the renderer has no compute path";
+    assert!(stderr(&gl).contains(says), "{}", stderr(&gl));
+    let compare = glint(&["compare", &png("cpu.png"), &png("gpu.png")]);
+    assert_eq!(compare.status.code(), Some(0), "the GPU's drape is the converged one's: {}", stderr(&compare));
+}
+
+#[test]
 fn outside_assets_are_read_only_when_allowed() {
     let dir = tempfile::tempdir().expect("temp dir");
     std::fs::create_dir(dir.path().join("model")).expect("mkdir");

@@ -88,6 +88,7 @@ fn sim_cloth_gpu_times_its_steps_beside_both_cpu_solves_and_says_how_far_it_ends
         (&["--iterations", "5"][..], "--gpu"),
         (&["--gpu", "--acceleration", "1"][..], "0 <= ρ < 1"),
         (&["--gpu", "--solve", "realtime"][..], "cannot be used with"),
+        (&["--solve", "gpu"][..], "the GPU solve is --gpu here"),
     ] {
         let out = glint(&[&sheet[..], args].concat());
         assert_ne!(out.status.code(), Some(0), "{args:?}");

@@ -176,9 +176,10 @@ pub(crate) fn parse(f: &mut Fields, assets: &AssetFolder, nodes_before: u64) -> 
     };
     let dt = exact(f.number("dt", 1e-5..=1.0)?.unwrap_or(0.01));
     let damping = exact(f.number("damping", 0.0..=1e6)?.unwrap_or(0.0));
-    let solve = match f.choice("solve", &["converged", "realtime"])? {
+    let solve = match f.choice("solve", &["converged", "realtime", "gpu"])? {
         None | Some((0, _)) => Solve::Converged,
-        Some(_) => Solve::Realtime,
+        Some((1, _)) => Solve::Realtime,
+        Some(_) => Solve::Gpu,
     };
     let debug = f.flag("debug")?.unwrap_or(false);
     let setup = ClothSetup { mesh, params, pinned, pin_motion, colliders, contact_distance, damping, solve };
@@ -264,8 +265,10 @@ mod tests {
         assert_eq!(cloth.setup.solve, Solve::Converged, "the default");
         let realtime = parse("\"size\" \"2 1\"\n\"resolution\" \"3 2\"\n\"solve\" \"realtime\"\n").unwrap();
         assert_eq!(realtime.cloths[0].setup.solve, Solve::Realtime);
+        let gpu = parse("\"size\" \"2 1\"\n\"resolution\" \"3 2\"\n\"solve\" \"gpu\"\n").unwrap();
+        assert_eq!(gpu.cloths[0].setup.solve, Solve::Gpu);
         let wrong = parse("\"size\" \"2 1\"\n\"resolution\" \"3 2\"\n\"solve\" \"fast\"\n").unwrap_err().to_string();
-        assert!(wrong.contains("t.scn:5") && wrong.contains("converged") && wrong.contains("realtime"), "{wrong}");
+        assert!(wrong.contains("t.scn:5") && wrong.contains("converged") && wrong.contains("gpu"), "{wrong}");
         // `--solve` on `render` and `view`: every cloth, whatever its block says.
         let text = "{\n\"classname\" \"cloth\"\n\"size\" \"2 1\"\n\"resolution\" \"3 2\"\n\"solve\" \"realtime\"\n}\n";
         let options = crate::asset::LoadOptions { cloth_solve: Some(Solve::Converged), ..Default::default() };

@@ -21,7 +21,7 @@ pub(crate) use context::read_buffer;
 pub use context::{Gpu, GpuError, WindowHandles};
 pub use heap::keep_freed_heap_memory;
 pub(crate) use simulation::{bind_buffers, buffers_layout, compute_pipeline};
-pub use simulation::{GpuSimulation, InstanceRange, InstanceTargets, ParticleGpu, MAX_LAYER_PARTICLES};
+pub use simulation::{GpuSimulation, InstanceRange, ParticleGpu, PlaceTargets, VertexTarget, MAX_LAYER_PARTICLES};
 pub use target::{OffscreenTarget, Readback, TargetFormat};
 pub use window::{SurfaceFrame, WindowSurface};
 

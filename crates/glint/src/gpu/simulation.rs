@@ -12,33 +12,42 @@ pub trait GpuSimulation {
     /// through `queue`, and making buffers on `device` if it needs more).
     fn encode(&mut self, device: &wgpu::Device, queue: &wgpu::Queue, encoder: &mut wgpu::CommandEncoder);
 
-    /// After its steps, record the passes that write the instance records of
-    /// the entities it draws ([`Entity::with_gpu_instances`](crate::Entity::with_gpu_instances)),
-    /// where `instances` says their ranges are this frame. None by default.
+    /// The shapes whose vertices it writes in place (a cloth's surface):
+    /// the frame's simulate stage puts them in the mesh pool before
+    /// [`place`](Self::place). None by default.
+    fn shapes(&self) -> Vec<crate::scene::ShapeId> {
+        Vec::new()
+    }
+
+    /// After its steps, record the passes that write what it draws: the
+    /// instance records of its entities ([`Entity::with_gpu_instances`](crate::Entity::with_gpu_instances))
+    /// and the vertices of its [`shapes`](Self::shapes), where `targets` says
+    /// they are this frame. None by default.
     fn place(
         &mut self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
         encoder: &mut wgpu::CommandEncoder,
-        instances: &InstanceTargets<'_>,
+        targets: &PlaceTargets<'_>,
     ) {
-        let _ = (device, queue, encoder, instances);
+        let _ = (device, queue, encoder, targets);
     }
 }
 
-/// Where a frame's entities drawn from GPU simulations keep their instance
-/// records: the store's buffers, as the frame's simulate stage hands them to
-/// [`GpuSimulation::place`], and each such entity's range in them.
-pub struct InstanceTargets<'a> {
+/// Where a frame's GPU simulations write what they draw: the instance store's
+/// buffers and each entity's range in them, and the mesh pool's vertex
+/// streams, as the frame's simulate stage hands them to [`GpuSimulation::place`].
+pub struct PlaceTargets<'a> {
     /// Every instance record (64 bytes each, `Instance` in `shader/forward.wgsl`).
     pub records: &'a wgpu::Buffer,
     /// Every instance's world box (centre, half extent: two `vec4<f32>`),
     /// which GPU culling and level selection read.
     pub bounds: &'a wgpu::Buffer,
     pub(crate) range_of: &'a dyn Fn(u64) -> Option<InstanceRange>,
+    pub(crate) vertices_of: &'a dyn Fn(crate::scene::ShapeId) -> Option<VertexTarget<'a>>,
 }
 
-impl InstanceTargets<'_> {
+impl<'a> PlaceTargets<'a> {
     /// Where the records of the entity whose [`key`](crate::Entity::key) is
     /// `entity` are this frame (they move when the store is compacted); `None`
     /// when it was not submitted this frame, or the store writes its records
@@ -46,6 +55,25 @@ impl InstanceTargets<'_> {
     pub fn range(&self, entity: u64) -> Option<InstanceRange> {
         (self.range_of)(entity)
     }
+
+    /// Where `shape`'s vertices are this frame, for one of the simulation's
+    /// [`shapes`](GpuSimulation::shapes); `None` for a shape not in the mesh pool.
+    pub fn vertices(&self, shape: crate::scene::ShapeId) -> Option<VertexTarget<'a>> {
+        (self.vertices_of)(shape)
+    }
+}
+
+/// Where a shape's base vertex stream ([`Vertex`](crate::scene::Vertex),
+/// 48 bytes each) is this frame, for a GPU simulation writing it in place
+/// (pages move when they grow: look it up each frame).
+#[derive(Clone, Copy, Debug)]
+pub struct VertexTarget<'a> {
+    /// The page's base vertex stream, a storage buffer.
+    pub buffer: &'a wgpu::Buffer,
+    /// The shape's first vertex in it.
+    pub first: u32,
+    /// Its vertices.
+    pub count: u32,
 }
 
 /// One entity's run of instance records, and what each record holds besides

@@ -51,7 +51,7 @@ pub(crate) mod resources;
 mod view;
 mod views;
 
-pub use crate::gpu::{GpuSimulation, InstanceRange, InstanceTargets, ParticleGpu, MAX_LAYER_PARTICLES};
+pub use crate::gpu::{GpuSimulation, InstanceRange, ParticleGpu, PlaceTargets, VertexTarget, MAX_LAYER_PARTICLES};
 pub use crate::scene::{ShadowLayout, MAX_CUBES, MAX_SHADOW_MAP_BYTES};
 pub use debug::explain::{BatchCall, DrawCall, FrameCalls, PassCalls, PassType};
 pub use debug::stats::{FrameStats, PassStats, Passes, StageTimes, UploadStats};

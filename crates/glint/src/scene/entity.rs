@@ -240,7 +240,7 @@ impl Entity {
 
     /// Its identity, the same across frames (clones get their own): what a
     /// GPU simulation finds its instances by
-    /// ([`InstanceTargets::range`](crate::render::InstanceTargets::range)).
+    /// ([`PlaceTargets::range`](crate::render::PlaceTargets::range)).
     pub fn key(&self) -> u64 {
         self.key
     }

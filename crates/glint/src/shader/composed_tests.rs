@@ -208,6 +208,7 @@ fn the_shaders_without_defs_are_what_naga_oil_composes() {
         (SCAN, include_str!("scan.wgsl")),
         (RADIX, include_str!("radix.wgsl")),
         (CLOTH, include_str!("cloth.wgsl")),
+        (CLOTH_PLACE, include_str!("cloth_place.wgsl")),
     ];
     let mut composer = composer();
     for (plain, source) in sources {

@@ -290,6 +290,8 @@ pub(crate) const SCAN: &str = assemble::SCAN;
 pub(crate) const RADIX: &str = assemble::RADIX;
 /// Cloth stepped by Vertex Block Descent (`sim/cloth/dynamics/gpu.rs`).
 pub(crate) const CLOTH: &str = assemble::CLOTH;
+/// The GPU cloth's surface written into the mesh pool (`sim/cloth/dynamics/surface.rs`).
+pub(crate) const CLOTH_PLACE: &str = assemble::CLOTH_PLACE;
 
 #[cfg(test)]
 mod tests {

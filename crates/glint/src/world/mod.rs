@@ -69,10 +69,19 @@ impl World {
     /// at its seeded start, no particle spawned. Errors when the device
     /// cannot hold the emitters' layers (out of memory).
     pub fn place(desc: SceneDesc, renderer: &mut Renderer) -> Result<Self, crate::RenderError> {
-        let (mut placed, cloths, mut schools) = renderer.place_scene_and_runs(&desc);
+        let (mut placed, mut cloths, mut schools) = renderer.place_scene_and_runs(&desc);
         let ranges = school::entity_ranges(&desc);
         for (sim, school) in schools.iter_mut().zip(&desc.schools) {
             sim.move_to_gpu((school, &desc, &ranges), &mut placed.entities, renderer);
+        }
+        // Each cloth's entities follow the entity blocks', its surface first.
+        let mut next = ranges.last().map_or(0, |r| r.end);
+        for (sim, cloth) in cloths.iter_mut().zip(&desc.cloths) {
+            let count = place::cloth_entity_count(sim.view.as_ref());
+            if let Some(surface) = placed.entities[next..].first_mut().filter(|_| count > 0) {
+                sim.move_to_gpu(cloth, surface, renderer);
+            }
+            next += count;
         }
         // The emitters stepped by compute shaders share one set of kernels.
         let kernels = (renderer.computes() && !desc.emitters.is_empty())
@@ -117,9 +126,11 @@ impl World {
     }
 
     /// The meshes of cloth `index` (in file order) as of the last pose: its
-    /// surface, and with the debug view its edge ribbons and pins.
+    /// surface, and with the debug view its edge ribbons and pins; `None` for
+    /// one that cannot run, or that steps on the GPU (drawn from its buffers,
+    /// never read back).
     pub fn cloth_view(&self, index: usize) -> Option<&ClothView> {
-        self.cloths.get(index).and_then(|c| c.view.as_ref())
+        self.cloths.get(index).and_then(ClothSim::cpu_view)
     }
 
     /// The time of the last pose, in seconds (0 before the first).
@@ -176,7 +187,11 @@ impl World {
         }
         for (sim, cloth) in self.cloths.iter_mut().zip(&desc.cloths) {
             let count = place::cloth_entity_count(sim.view.as_ref());
-            if sim.pose(cloth, time, &desc.path)? {
+            let on_gpu = match entities[next..].first_mut().filter(|_| count > 0) {
+                Some(surface) => sim.pose_on_gpu(cloth, time, (&desc.path, renderer.device_and_queue().1), surface)?,
+                None => false,
+            };
+            if !on_gpu && sim.pose(cloth, time, &desc.path)? {
                 let Some(view) = &sim.view else { continue };
                 let meshes = std::iter::once(&view.surface).chain(&view.edges);
                 for (entity, mesh) in entities[next..].iter().zip(meshes) {
@@ -269,13 +284,19 @@ impl World {
                 input = input.simulate(on_gpu);
             }
         }
-        paths.cloths.cpu = self.cloths.iter().filter(|c| c.view.is_some()).count() as u32;
-        // Borrowed for this frame only, so the schools can be told if it fails.
+        for sim in &mut self.cloths {
+            sim.path().into_iter().for_each(|path| paths.cloths.add(path));
+            if let Some(on_gpu) = sim.simulation() {
+                input = input.simulate(on_gpu);
+            }
+        }
+        // Borrowed for this frame only, so the simulations can be told if it fails.
         input.after = after.into_iter().map(|work| -> &mut dyn AfterViews { work }).collect();
         let output = renderer.render_frame(input, target);
         if output.is_err() {
             // The frame's commands, GPU steps among them, were dropped.
             self.schools.iter_mut().for_each(SchoolSim::frame_failed);
+            self.cloths.iter_mut().for_each(ClothSim::frame_failed);
             self.emitters.iter_mut().for_each(EmitterSim::frame_failed);
         }
         let mut output = output?;
@@ -288,6 +309,13 @@ impl World {
     /// Whether its emitters step with compute shaders (else on the CPU).
     pub fn particles_on_gpu(&self) -> bool {
         self.emitters.iter().any(EmitterSim::on_gpu)
+    }
+
+    /// Where each of its cloths steps, in file order (`None`: one that
+    /// cannot run): on the GPU, drawn in place, where its `"solve"` asks
+    /// `gpu` and the renderer computes.
+    pub fn cloth_paths(&self) -> Vec<Option<SimPath>> {
+        self.cloths.iter().map(ClothSim::path).collect()
     }
 
     /// Where each of its schools steps, in file order (`None`: one that

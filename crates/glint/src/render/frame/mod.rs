@@ -80,7 +80,7 @@ impl Renderer {
             check_frame(&mut frame, &views, &lighting)?; // lights, ids, viewports, post chains
             let order = view_order(res, &frame, &views)?; // render targets before the views that show them
             compact_store(res, &mut frame)?; // and its GPU buffer sized, before any command uses the instance store
-            simulate(res, &mut frame, &mut simulations); // GPU simulations' steps, and the instances they draw
+            simulate(res, &mut frame, &mut simulations)?; // GPU simulations' steps, and the instances they draw
             frame.prefiltered = prepare_environment(res, &lighting)?; // image-based lighting's maps
             let plan = plan_shadows(res, &frame, (&views, target), &lighting, shadows)?; // spot and point lights once, cascades per view
             clear_uncovered(&mut frame, &views, &order, target); // black where the views leave gaps

@@ -9,6 +9,7 @@ use crate::render::frame::prepared::{sky_pass, PrepareKey, Prepared};
 use crate::render::frame::state::Frame;
 use crate::render::frame_variant::FrameVariant;
 use crate::render::gpu_driven::draw_list::BatchDraw;
+use crate::render::resources::mesh_pool::MeshRange;
 use crate::render::resources::pipelines::{SkyPass, VertexLayout};
 use crate::render::resources::registry::Registry;
 use crate::render::resources::Resources;
@@ -59,6 +60,37 @@ pub(crate) fn prepare(
 }
 
 impl Registry {
+    /// Where `shape` is in the mesh pool, copying it there (with its levels of
+    /// detail, unless it deforms) the first time; and the bytes that took.
+    pub(crate) fn mesh_range(&mut self, shape: ShapeId) -> Result<(MeshRange, u64), RenderError> {
+        let slot = self.shapes.get_mut(shape.0 as usize).ok_or(RenderError::UnknownShape(shape))?;
+        if let Some(range) = slot.gpu {
+            return Ok((range, 0));
+        }
+        let scope = crate::gpu::DriverErrors::watch(&self.device);
+        let levels = match (slot.deforms, &self.level_cache) {
+            (true, _) => Vec::new(),
+            (false, Some(cache)) => cache.levels(&slot.mesh).0,
+            (false, None) => crate::scene::levels::detail_levels(&slot.mesh),
+        };
+        let added = self.mesh_pool.add(&self.device, &self.queue, (&slot.mesh, &levels));
+        if let Some(error) = scope.finish() {
+            return Err(RenderError::Device { what: "the mesh pool", message: error.to_string() });
+        }
+        let (range, bytes) = added.map_err(|source| RenderError::MeshTooLarge { shape, source })?;
+        slot.gpu = Some(range);
+        Ok((range, bytes))
+    }
+
+    /// Where a GPU simulation writes `shape`'s vertices this frame, once
+    /// [`mesh_range`](Self::mesh_range) put it in the pool; `None` before, or
+    /// where the pool's vertices are not storage buffers.
+    pub(crate) fn vertex_target(&self, shape: ShapeId) -> Option<crate::gpu::VertexTarget<'_>> {
+        let slot = self.shapes.get(shape.0 as usize)?;
+        let vertices = slot.mesh.vertices().len() as u32;
+        slot.gpu.and_then(|range| self.mesh_pool.vertex_target(range, vertices))
+    }
+
     /// Stage 1 for the registry: mesh buffers, textures, material blocks and
     /// pipelines for each (shape, material) in `uses`, drawn into `target` under
     /// `environment` in a frame of variant `frame`. Returns what each use draws with.
@@ -80,26 +112,9 @@ impl Registry {
         }
         let mut prepared = Vec::with_capacity(uses.len());
         for &(shape, material, compact) in uses {
-            let slot = self.shapes.get_mut(shape.0 as usize).ok_or(RenderError::UnknownShape(shape))?;
-            let mesh = match slot.gpu {
-                Some(range) => range,
-                None => {
-                    let scope = crate::gpu::DriverErrors::watch(&self.device);
-                    let levels = match (slot.deforms, &self.level_cache) {
-                        (true, _) => Vec::new(),
-                        (false, Some(cache)) => cache.levels(&slot.mesh).0,
-                        (false, None) => crate::scene::levels::detail_levels(&slot.mesh),
-                    };
-                    let added = self.mesh_pool.add(&self.device, &self.queue, (&slot.mesh, &levels));
-                    if let Some(error) = scope.finish() {
-                        return Err(RenderError::Device { what: "the mesh pool", message: error.to_string() });
-                    }
-                    let (range, bytes) = added.map_err(|source| RenderError::MeshTooLarge { shape, source })?;
-                    slot.gpu = Some(range);
-                    stats.bytes_uploaded.meshes += bytes;
-                    range
-                }
-            };
+            let (mesh, bytes) = self.mesh_range(shape)?;
+            stats.bytes_uploaded.meshes += bytes;
+            let slot = &mut self.shapes[shape.0 as usize];
             if std::mem::take(&mut slot.rewrite) {
                 stats.bytes_uploaded.meshes += self.mesh_pool.rewrite_vertices(&self.queue, mesh, &slot.mesh);
             }

@@ -199,6 +199,7 @@ pub(crate) fn submit_frame(
         prepares,
         prefiltered,
         first_view,
+        mesh_bytes,
         before,
         gpu,
         start,
@@ -222,6 +223,7 @@ pub(crate) fn submit_frame(
         first.cpu_ms.submit = ms_since(t);
         first.cpu_ms.total += ms_since(start) - in_views;
         first.submits = submits;
+        first.bytes_uploaded.meshes += mesh_bytes;
     }
     states.drop_unused(index);
     check_device(res)?;

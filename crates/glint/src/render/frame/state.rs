@@ -55,6 +55,9 @@ pub(crate) struct Frame {
     pub prefiltered: bool,
     /// The view drawn first, which carries the frame's own costs.
     pub first_view: Option<usize>,
+    /// Mesh bytes the simulate stage copied into the mesh pool (shapes GPU
+    /// simulations write), counted in the first view's uploads.
+    pub mesh_bytes: u64,
     /// Command buffers to submit before the frame's (the after-view work's).
     pub before: Vec<wgpu::CommandBuffer>,
     /// The newest finished earlier frame's GPU times.
@@ -86,6 +89,7 @@ impl Frame {
             prepares: 0,
             prefiltered: false,
             first_view: None,
+            mesh_bytes: 0,
             before: Vec::new(),
             gpu,
             start,

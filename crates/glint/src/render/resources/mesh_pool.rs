@@ -9,7 +9,10 @@
 //! (the interleaved [`Vertex`](crate::scene::Vertex) stream, plus those of the
 //! optional colours, second uv set and skin weights the layout has). Pages grow by doubling, copying their contents on
 //! the GPU, up to the device's largest buffer; then a new page starts.
+//! Where the renderer computes, the vertex streams are storage buffers too, so
+//! a GPU simulation can write a shape's vertices in place ([`VertexTarget`]).
 
+use crate::gpu::VertexTarget;
 use crate::render::error::MeshTooLarge;
 use crate::render::resources::pipelines::{Stream, VertexLayout};
 use crate::scene::levels::{DetailLevel, MAX_LEVELS};
@@ -65,14 +68,17 @@ struct Page {
 pub(crate) struct MeshPool {
     pages: Vec<Page>,
     max_bytes: u64,
+    /// Whether vertex streams are storage buffers too.
+    storage: bool,
 }
 
 const FIRST_VERTEX_BYTES: u64 = 1 << 20;
 const FIRST_INDEX_BYTES: u64 = 1 << 18;
 
 impl MeshPool {
-    pub(crate) fn new(device: &wgpu::Device) -> Self {
-        Self { pages: Vec::new(), max_bytes: device.limits().max_buffer_size.min(1 << 30) }
+    /// No pages yet; with `storage`, vertex streams can be written by compute shaders.
+    pub(crate) fn new(device: &wgpu::Device, storage: bool) -> Self {
+        Self { pages: Vec::new(), max_bytes: device.limits().max_buffer_size.min(1 << 30), storage }
     }
 
     /// Copy `mesh` and its coarser `levels` into a page of its layout, growing
@@ -103,14 +109,15 @@ impl MeshPool {
         let index = match self.pages.iter().position(fits) {
             Some(i) => i,
             None => {
-                let page = Page::new(device, layout, self.pages.len(), vertex_count, index_count, self.max_bytes);
+                let sizes = (vertex_count, index_count, self.max_bytes);
+                let page = Page::new(device, (layout, self.storage), self.pages.len(), sizes);
                 self.pages.push(page);
                 self.pages.len() - 1
             }
         };
         let page = &mut self.pages[index];
         let (vertices, indices) = (page.vertices_used + vertex_count, page.indices_used + index_count);
-        page.reserve(device, queue, index, vertices, indices, self.max_bytes);
+        page.reserve((device, queue), self.storage, index, (vertices, indices, self.max_bytes));
         for ((buffer, bytes), stream) in page.streams.iter().zip(&streams).zip(layout.streams()) {
             queue.write_buffer(buffer, page.vertices_used * u64::from(stream.stride()), bytes);
         }
@@ -149,6 +156,13 @@ impl MeshPool {
         bytes.len() as u64
     }
 
+    /// Where the shape at `range` (of `vertices` vertices) has its base vertex
+    /// stream; `None` where vertex streams are not storage buffers.
+    pub(crate) fn vertex_target(&self, range: MeshRange, vertices: u32) -> Option<VertexTarget<'_>> {
+        let page = self.pages.get(range.page as usize).filter(|_| self.storage)?;
+        Some(VertexTarget { buffer: &page.streams[0], first: range.base_vertex as u32, count: vertices })
+    }
+
     /// Bind page `page`'s vertex streams and index buffer.
     pub(crate) fn bind(&self, pass: &mut wgpu::RenderPass<'_>, page: u16) {
         self.bind_from(pass, page, 0);
@@ -169,8 +183,14 @@ impl MeshPool {
 }
 
 impl Page {
-    /// A page with room for at least `vertices` and `indices` (at most `max` bytes a buffer).
-    fn new(device: &wgpu::Device, layout: VertexLayout, index: usize, vertices: u64, indices: u64, max: u64) -> Self {
+    /// A page with room for at least `vertices` and `indices` (at most `max`
+    /// bytes a buffer), its vertex streams storage buffers too with `storage`.
+    fn new(
+        device: &wgpu::Device,
+        (layout, storage): (VertexLayout, bool),
+        index: usize,
+        (vertices, indices, max): (u64, u64, u64),
+    ) -> Self {
         let buffer = |label: String, bytes: u64, usage| {
             device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some(&label),
@@ -185,7 +205,11 @@ impl Page {
             .map(|(s, stream)| {
                 let bytes =
                     (vertices * u64::from(stream.stride())).max(FIRST_VERTEX_BYTES).next_power_of_two().min(max);
-                buffer(format!("mesh pool: page {index} ({layout:?}) stream {s}"), bytes, wgpu::BufferUsages::VERTEX)
+                let usage = match storage {
+                    true => wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::STORAGE,
+                    false => wgpu::BufferUsages::VERTEX,
+                };
+                buffer(format!("mesh pool: page {index} ({layout:?}) stream {s}"), bytes, usage)
             })
             .collect();
         let indices = buffer(
@@ -200,18 +224,16 @@ impl Page {
     /// `indices` in all, copying what they hold on the GPU.
     fn reserve(
         &mut self,
-        device: &wgpu::Device,
-        queue: &crate::gpu::SubmitQueue,
+        (device, queue): (&wgpu::Device, &crate::gpu::SubmitQueue),
+        storage: bool,
         index: usize,
-        vertices: u64,
-        indices: u64,
-        max: u64,
+        (vertices, indices, max): (u64, u64, u64),
     ) {
         let stride = u64::from(Stream::Base.stride());
         if vertices * stride <= self.streams[0].size() && indices * 4 <= self.indices.size() {
             return;
         }
-        let mut grown = Page::new(device, self.layout, index, vertices, indices, max);
+        let mut grown = Page::new(device, (self.layout, storage), index, (vertices, indices, max));
         let mut encoder =
             device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("mesh pool: grow page") });
         for ((old, new), stream) in self.streams.iter().zip(&grown.streams).zip(self.layout.streams()) {

@@ -137,7 +137,7 @@ impl Registry {
             occlusion: gpu.occlusion_culls(),
             level_cache: None,
             pipelines: Pipelines::new(&device, gpu.vertex_storage()),
-            mesh_pool: MeshPool::new(&device),
+            mesh_pool: MeshPool::new(&device, gpu.culls_on_gpu()),
             material_table: MaterialTable::new(&device, gpu.vertex_storage()),
             uploader,
             sampler,

@@ -71,6 +71,11 @@ pub enum Solve {
     /// line search (see `sim::cloth::realtime`). Its error against the converged solve is measured in
     /// `tests/cloth_realtime.rs` and `docs/cloth.md`.
     Realtime,
+    /// Vertex Block Descent on compute shaders (`sim::cloth::GpuCloth`), drawn
+    /// from its buffers, where a renderer has the compute path; elsewhere (GL,
+    /// WebGL2, a static solve, the debug view) the converged solve, with a
+    /// warning. The CPU's `Cloth` solves it as [`Converged`](Self::Converged).
+    Gpu,
 }
 
 /// What a cloth starts from.

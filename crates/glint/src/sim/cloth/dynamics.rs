@@ -37,6 +37,7 @@ use p3_maybe_rayon::prelude::*;
 
 pub mod gpu;
 pub mod realtime;
+mod surface;
 
 /// Newmark's β (average acceleration: unconditionally stable, no numerical damping).
 const NEWMARK_BETA: f64 = 0.25;
@@ -572,7 +573,7 @@ impl Cloth {
         let mut q: Vec<DVec3> = (0..self.positions.len()).map(q_start).collect();
         let (solve_scale, target) = self.damped(dt, integrator, scale, &predicted);
         let solved = match self.solve {
-            Solve::Converged => self.newton(&mut q, solve_scale, &target, 1.0, stats),
+            Solve::Converged | Solve::Gpu => self.newton(&mut q, solve_scale, &target, 1.0, stats),
             Solve::Realtime => self.realtime_solve(&mut q, solve_scale, &target, stats),
         };
         match solved.filter(|_| !self.broken(&q)) {

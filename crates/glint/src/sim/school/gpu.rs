@@ -8,7 +8,7 @@
 use super::place::{Placer, SchoolDrawing};
 use super::{School, SchoolParams, Swimmer};
 use crate::gpu::GpuError;
-use crate::gpu::{GpuSimulation, InstanceTargets};
+use crate::gpu::{GpuSimulation, PlaceTargets};
 use crate::sim::radix::{GpuRadixSort, RadixGroup};
 use crate::sim::scan::{GpuScan, ScanGroup};
 use crate::Gpu;
@@ -292,7 +292,7 @@ impl GpuSimulation for GpuSchool {
         device: &wgpu::Device,
         queue: &wgpu::Queue,
         encoder: &mut wgpu::CommandEncoder,
-        instances: &InstanceTargets<'_>,
+        instances: &PlaceTargets<'_>,
     ) {
         if let Some(placer) = &mut self.placer {
             let state = (&self.fish[self.current], &self.hunt, self.block.count);

@@ -5,7 +5,7 @@
 //! ([`GpuSimulation::place`](crate::render::GpuSimulation::place)): nothing
 //! read back, no instance uploaded from the CPU.
 
-use crate::gpu::{GpuError, InstanceTargets};
+use crate::gpu::{GpuError, PlaceTargets};
 use glam::Mat4;
 
 /// Part transforms one drawing multiplies each swimmer by, at most (a model
@@ -108,7 +108,7 @@ impl Placer {
         (device, queue): (&wgpu::Device, &wgpu::Queue),
         encoder: &mut wgpu::CommandEncoder,
         (fish, hunter, fish_count): (&wgpu::Buffer, &wgpu::Buffer, u32),
-        targets: &InstanceTargets<'_>,
+        targets: &PlaceTargets<'_>,
     ) {
         let block = wgpu::BufferBinding {
             buffer: &self.blocks,

@@ -20,8 +20,10 @@
 //! A step is deterministic: each node reads only nodes of other colours and
 //! writes only itself, so the same start gives the same bits on the same device.
 
+use super::surface::SurfacePlacer;
 use super::{contact_stiffness, Cloth, Integrator, NEWMARK_BETA, NEWMARK_GAMMA};
-use crate::gpu::GpuError;
+use crate::gpu::{GpuError, GpuSimulation, PlaceTargets};
+use crate::scene::ShapeId;
 use crate::sim::cloth::colour::colour_nodes;
 use crate::Gpu;
 use glam::DVec3;
@@ -148,6 +150,8 @@ pub struct GpuCloth {
     recorded: u64,
     /// Steps the next [`encode`](Self::encode) records.
     pending: u32,
+    /// The pass writing its surface shape in place, once drawn so.
+    surface: Option<SurfacePlacer>,
 }
 
 impl GpuCloth {
@@ -211,11 +215,11 @@ impl GpuCloth {
             queue.write_buffer(&b, 0, bytes);
             b
         };
-        let vec4s = |v: &[DVec3]| -> Vec<[f32; 4]> { v.iter().map(|p| p.as_vec3().extend(0.0).to_array()).collect() };
+        let state = state_bytes(cloth);
         let state = [
-            buffer("cloth: positions", bytemuck::cast_slice(&vec4s(&cloth.positions))),
-            buffer("cloth: velocities", bytemuck::cast_slice(&vec4s(&cloth.velocities))),
-            buffer("cloth: accelerations", bytemuck::cast_slice(&vec4s(&cloth.accelerations))),
+            buffer("cloth: positions", &state[0]),
+            buffer("cloth: velocities", &state[1]),
+            buffer("cloth: accelerations", &state[2]),
         ];
         let zeros = vec![[0f32; 4]; n];
         let solve = buffer("cloth: step's positions", bytemuck::cast_slice(&zeros));
@@ -319,6 +323,7 @@ impl GpuCloth {
             start_time: cloth.time,
             recorded: 0,
             pending: 0,
+            surface: None,
         })
     }
 
@@ -370,6 +375,29 @@ impl GpuCloth {
         }
     }
 
+    /// Start again from `cloth` (the one it was made from, or one like it):
+    /// its positions, velocities, accelerations and time, no step pending.
+    pub fn restart(&mut self, queue: &wgpu::Queue, cloth: &Cloth) {
+        for (buffer, bytes) in self.state.iter().zip(state_bytes(cloth)) {
+            queue.write_buffer(buffer, 0, &bytes);
+        }
+        queue.write_buffer(&self.steps_buffer, 0, &[0; 4]);
+        (self.start_time, self.recorded, self.pending) = (cloth.time, 0, 0);
+    }
+
+    /// Draw it in place: from the next frame it is a simulation in
+    /// ([`GpuSimulation`]), its place pass writes its positions and normals
+    /// into `shape`'s vertices, a mesh of one vertex per node of `cloth` (the
+    /// one it was made from) such as [`ClothView`](super::super::ClothView)'s surface.
+    pub(crate) fn draw_in_place(
+        &mut self,
+        (device, queue): (&wgpu::Device, &wgpu::Queue),
+        cloth: &Cloth,
+        shape: ShapeId,
+    ) {
+        self.surface = Some(SurfacePlacer::new(device, queue, cloth, shape));
+    }
+
     /// Record and submit one step (not waited for).
     pub fn step(&mut self, gpu: &Gpu) {
         self.advance(1);
@@ -394,6 +422,38 @@ impl GpuCloth {
         debug_assert_eq!(u64::from(steps), self.recorded);
         Ok(())
     }
+}
+
+impl GpuSimulation for GpuCloth {
+    fn encode(&mut self, _: &wgpu::Device, _: &wgpu::Queue, encoder: &mut wgpu::CommandEncoder) {
+        GpuCloth::encode(self, encoder);
+    }
+
+    fn shapes(&self) -> Vec<ShapeId> {
+        self.surface.iter().map(SurfacePlacer::shape).collect()
+    }
+
+    fn place(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        encoder: &mut wgpu::CommandEncoder,
+        targets: &PlaceTargets<'_>,
+    ) {
+        if let Some(surface) = &mut self.surface {
+            surface.encode((device, queue), encoder, &self.state[0], targets);
+        }
+    }
+}
+
+/// `cloth`'s positions, velocities and accelerations, each xyz of a
+/// `vec4<f32>` per node.
+fn state_bytes(cloth: &Cloth) -> [Vec<u8>; 3] {
+    let vec4s = |v: &[DVec3]| -> Vec<u8> {
+        let all: Vec<[f32; 4]> = v.iter().map(|p| p.as_vec3().extend(0.0).to_array()).collect();
+        bytemuck::cast_slice(&all).to_vec()
+    };
+    [vec4s(&cloth.positions), vec4s(&cloth.velocities), vec4s(&cloth.accelerations)]
 }
 
 /// Chebyshev's blocks, [`STRIDE`] apart: block 0 records the start, block n
