@@ -348,6 +348,36 @@ for (const backend of backends) {
   }
 }
 
+// Cloth solved on the GPU and drawn from its buffers with WebGPU, converged
+// on the CPU with WebGL2 (tests/scenes/cloth_gpu.scn, copied by test.sh):
+// paused once the sheets have swung and fallen a while, the page's picture is
+// `glint render --time` at the same time on the same path.
+for (const backend of backends) {
+  const scene = "scenes/cloth_gpu.scn";
+  const { page, state, logs } = await open(scene, backend);
+  try {
+    if (state.error) {
+      report(false, `cloth on ${backend}`, `${state.error}\n  ${logs.join("\n  ")}`);
+      continue;
+    }
+    const { time, simulations } = await page.evaluate(async () => {
+      const canvas = document.getElementById("glint");
+      const frames = window.glintAwaitFrames;
+      while (+canvas.dataset.time < 0.3) await frames(1);
+      document.querySelector('[data-control="paused"]').click();
+      await frames(1);
+      return { time: canvas.dataset.time, simulations: canvas.dataset.simulations };
+    });
+    const path = backend === "webgpu" ? "GPU" : "CPU";
+    const args = ["--time", time, "--solve", backend === "webgpu" ? "gpu" : "converged"];
+    const { ok, verdict } = await compareWithGlint(page, logs, scene, backend, args, `web/dist/${scene}`);
+    const stepped = simulations === `2 cloths on the ${path}`;
+    report(ok && stepped, `cloth on ${backend}`, `${simulations}; paused at ${time} s; ${verdict}`);
+  } finally {
+    await page.close();
+  }
+}
+
 // The underwater scene: 24,000 fish schooling, drawn at the levels of detail
 // their size on screen needs (the panel can turn them off).
 for (const backend of backends) {
