@@ -100,8 +100,8 @@ pub struct ClothArgs {
     json: bool,
 }
 
-/// `--solve` (here, and on `render`, `view`, `bench` and `explain`; here the
-/// GPU's is `--gpu`, with its settings).
+/// `--solve` (here, and on `render` and `view`; here the GPU's is `--gpu`,
+/// with its settings).
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum SolveArg {
     Converged,

@@ -12,7 +12,7 @@ use crate::scene::cloth::{Collider, Solve};
 use crate::scene::{Aabb, SimPath};
 use crate::sim::cloth::{Cloth, ClothView, GpuCloth, GpuSolve, Integrator};
 use crate::{Diagnostic, Entity, Renderer};
-use glam::DVec3;
+use glam::{DVec3, Vec3};
 use std::path::Path;
 
 /// A cloth stepped on the GPU, drawn in place.
@@ -191,10 +191,10 @@ impl ClothSim {
 struct Reach {
     /// Longest rest path from any node to its nearest pin, metres; `None`
     /// when some node has no path to a pin.
-    to_pin: Option<f64>,
+    to_pin: Option<f32>,
     /// The rest mesh's box, and its diagonal.
-    rest: (DVec3, DVec3),
-    diagonal: f64,
+    rest: Aabb,
+    diagonal: f32,
 }
 
 impl Reach {
@@ -203,37 +203,39 @@ impl Reach {
         let pins: Vec<usize> = (0..nodes.len()).filter(|&i| cloth.is_pinned(i)).collect();
         let paths = rest_paths(nodes, &cloth.topology().edges, &pins);
         let to_pin = paths.iter().copied().reduce(f64::max).filter(|d| d.is_finite() && !pins.is_empty());
-        let rest = bounds(nodes.iter().copied()).unwrap_or((DVec3::ZERO, DVec3::ZERO));
-        Self { to_pin, rest, diagonal: (rest.1 - rest.0).length() }
+        let rest =
+            Aabb::from_points(nodes.iter().map(|p| p.as_vec3())).unwrap_or(Aabb { min: Vec3::ZERO, max: Vec3::ZERO });
+        Self { to_pin: to_pin.map(|d| d as f32), rest, diagonal: (rest.max - rest.min).length() }
     }
 
     /// The box holding the cloth `desc` at `time` seconds.
     fn held(&self, desc: &ClothDesc, time: f32) -> Aabb {
         let setup = &desc.setup;
-        let t = f64::from(time.max(0.0));
+        let t = time.max(0.0);
         let pinned = setup.mesh.nodes.iter().zip(&setup.pinned).filter(|(_, &p)| p);
-        let pins = bounds(pinned.map(|(p, _)| setup.pin_motion.at(*p, t)));
+        let pins = Aabb::from_points(pinned.map(|(p, _)| setup.pin_motion.at(*p, f64::from(t)).as_vec3()));
         let (lo, hi) = match (self.to_pin, pins) {
-            (Some(path), Some((lo, hi))) => (lo - DVec3::splat(2.0 * path), hi + DVec3::splat(2.0 * path)),
+            (Some(path), Some(pins)) => (pins.min - Vec3::splat(2.0 * path), pins.max + Vec3::splat(2.0 * path)),
             _ => {
-                let g = setup.params.gravity;
+                let g = setup.params.gravity.as_vec3();
                 let fall = 0.5 * g * t * t;
-                let sideways = DVec3::splat(0.25 * g.length() * t * t) - 0.5 * fall.abs();
-                let (rest_lo, rest_hi) = self.rest;
-                let reach = DVec3::splat(2.0 * self.diagonal) + sideways.max(DVec3::ZERO);
+                let sideways = Vec3::splat(0.25 * g.length() * t * t) - 0.5 * fall.abs();
+                let Aabb { min: rest_lo, max: rest_hi } = self.rest;
+                let reach = Vec3::splat(2.0 * self.diagonal) + sideways.max(Vec3::ZERO);
                 let mut lo = rest_lo.min(rest_lo + fall) - reach;
                 let mut hi = rest_hi.max(rest_hi + fall) + reach;
-                if let Some((pins_lo, pins_hi)) = pins {
-                    (lo, hi) = (lo.min(pins_lo), hi.max(pins_hi));
+                if let Some(pins) = pins {
+                    (lo, hi) = (lo.min(pins.min), hi.max(pins.max));
                 }
                 // Past a floor it starts on only by the contact's give.
-                let give = setup.contact_distance + 0.05 * self.diagonal;
+                let give = setup.contact_distance as f32 + 0.05 * self.diagonal;
                 for collider in &setup.colliders {
                     let Collider::Plane { point, normal } = *collider else { continue };
+                    let (point, normal) = (point.as_vec3(), normal.as_vec3());
                     for axis in 0..3 {
-                        if normal[axis] > 1.0 - 1e-9 && rest_lo[axis] >= point[axis] - give {
+                        if normal[axis] > 1.0 - 1e-6 && rest_lo[axis] >= point[axis] - give {
                             lo[axis] = lo[axis].max(point[axis] - give);
-                        } else if normal[axis] < -1.0 + 1e-9 && rest_hi[axis] <= point[axis] + give {
+                        } else if normal[axis] < -1.0 + 1e-6 && rest_hi[axis] <= point[axis] + give {
                             hi[axis] = hi[axis].min(point[axis] + give);
                         }
                     }
@@ -241,14 +243,9 @@ impl Reach {
                 (lo, hi)
             }
         };
-        let grow = DVec3::splat(setup.contact_distance);
-        Aabb { min: (lo - grow).as_vec3(), max: (hi + grow).as_vec3() }
+        let grow = Vec3::splat(setup.contact_distance as f32);
+        Aabb { min: lo - grow, max: hi + grow }
     }
-}
-
-/// The box around `points` (minimum, maximum); `None` for none.
-fn bounds(points: impl IntoIterator<Item = DVec3>) -> Option<(DVec3, DVec3)> {
-    points.into_iter().fold(None, |b, p| Some(b.map_or((p, p), |(lo, hi): (DVec3, DVec3)| (lo.min(p), hi.max(p)))))
 }
 
 /// Each node's shortest path along the rest mesh's `edges` to one of `pins`
