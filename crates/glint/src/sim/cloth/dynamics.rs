@@ -35,6 +35,8 @@ pub use crate::scene::cloth::{ClothParams, ClothSetup, Integrator, Solve};
 use glam::DVec3;
 use p3_maybe_rayon::prelude::*;
 
+#[cfg(test)]
+mod conditioning;
 pub mod gpu;
 pub mod realtime;
 mod surface;
