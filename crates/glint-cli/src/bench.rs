@@ -255,6 +255,7 @@ pub fn run_mode(
         cull: median_of(&frames, |f| f.cpu_ms.cull),
         queue: median_of(&frames, |f| f.cpu_ms.queue),
         sort: median_of(&frames, |f| f.cpu_ms.sort),
+        lights: median_of(&frames, |f| f.cpu_ms.lights),
         batch: median_of(&frames, |f| f.cpu_ms.batch),
         upload: median_of(&frames, |f| f.cpu_ms.upload),
         encode: median_of(&frames, |f| f.cpu_ms.encode),

@@ -7,6 +7,7 @@
 
 use crate::{check_camera, culled, load, output, CullArg};
 use glint::asset::LoadOptions;
+use glint::render::clusters::MAX_CLUSTER_LIGHTS;
 use glint::render::{FrameCalls, FrameMode, PassCalls};
 use glint::{Diagnostic, Error, FrameStats, Gpu, OffscreenTarget, Renderer, World};
 use serde::Serialize;
@@ -217,6 +218,27 @@ fn describe(e: &Explained) -> String {
     if s.simulations != Default::default() {
         let _ = writeln!(t, "simulations: {}", s.simulations);
     }
+    match &s.light_clusters {
+        Some(c) => {
+            let [x, y, z] = c.grid;
+            let _ = writeln!(
+                t,
+                "light clusters: {x} × {y} tiles of {} px × {z} depth slices ({} clusters, {} empty), binned on the CPU in {:.3} ms; \
+                 {} point and spot lights reach them, {:.2} a cluster on average, {} at most; {} entries over the {MAX_CLUSTER_LIGHTS} a cluster holds",
+                c.tile_pixels,
+                x * y * z,
+                c.empty,
+                s.cpu_ms.lights,
+                c.lights_visible,
+                c.mean_per_cluster,
+                c.max_per_cluster,
+                c.overflow
+            );
+        }
+        None => {
+            let _ = writeln!(t, "light clusters: none (every fragment loops over every light)");
+        }
+    }
     for (k, pass) in e.passes.iter().enumerate() {
         let kind = match pass.kind {
             glint::render::PassType::Compute => "compute",
@@ -242,8 +264,8 @@ fn describe(e: &Explained) -> String {
     let c = &s.cpu_ms;
     let _ = writeln!(
         t,
-        "CPU ms (this frame): prepare {:.3}, cull {:.3}, queue {:.3}, sort {:.3}, batch {:.3}, upload {:.3}, encode {:.3}, submit {:.3}; whole flush {:.3} (median of {COSTED_FRAMES} frames {:.3})",
-        c.prepare, c.cull, c.queue, c.sort, c.batch, c.upload, c.encode, c.submit, c.total, e.cpu_ms_median
+        "CPU ms (this frame): prepare {:.3}, lights {:.3}, cull {:.3}, queue {:.3}, sort {:.3}, batch {:.3}, upload {:.3}, encode {:.3}, submit {:.3}; whole flush {:.3} (median of {COSTED_FRAMES} frames {:.3})",
+        c.prepare, c.lights, c.cull, c.queue, c.sort, c.batch, c.upload, c.encode, c.submit, c.total, e.cpu_ms_median
     );
     if let Some(g) = &s.gpu {
         let post: Vec<String> = g.post_ms.iter().map(|ms| format!("{ms:.3}")).collect();

@@ -1,6 +1,7 @@
 //! `--lod on|off` and `--lod-error PX`: levels of detail on `render`, `view`,
 //! `explain` and `bench` (whose `--lod` also takes `both`: the frame with
-//! levels beside the frame at full detail).
+//! levels beside the frame at full detail); and `--clusters auto|on|off`,
+//! the renderer's other switch those commands share (light clusters).
 
 use glint::{Renderer, View};
 
@@ -37,7 +38,19 @@ impl BenchLod {
     }
 }
 
-/// `--lod` and `--lod-error`.
+/// Whether views shade point and spot lights from light clusters.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum ClustersArg {
+    /// When a frame has more than 8 point and spot lights (the default).
+    #[default]
+    Auto,
+    /// Whenever a frame has one.
+    On,
+    /// Never: every fragment loops over every light (at most 64).
+    Off,
+}
+
+/// `--lod`, `--lod-error` and `--clusters`.
 #[derive(Clone, Copy, Debug, Default, clap::Args)]
 pub struct LodArgs {
     /// Levels of detail: on (each instance at the coarsest level whose error
@@ -48,6 +61,11 @@ pub struct LodArgs {
     /// view, whatever its camera's "lod_error" says (default 1).
     #[arg(long, value_name = "PX", value_parser = parse_lod_error)]
     pub lod_error: Option<f32>,
+    /// Light clusters: auto (when a frame has more than 8 point and spot
+    /// lights), on, or off (every fragment loops over every light, at most
+    /// 64; for comparison and teaching).
+    #[arg(long, value_enum, default_value_t = ClustersArg::Auto)]
+    pub clusters: ClustersArg,
 }
 
 /// `--lod-error`: pixels, 0..=1000.
@@ -61,12 +79,17 @@ impl LodArgs {
         Self { lod: if on { LodSwitch::On } else { LodSwitch::Off }, ..self }
     }
 
-    /// Tell `renderer` whether to draw levels, and to keep large meshes' levels
+    /// Tell `renderer` whether to draw levels and cluster lights, and to keep large meshes' levels
     /// in the user's cache folder between runs (`levels/` under
     /// `$GLINT_CACHE_DIR`, else `$XDG_CACHE_HOME/glint`, else `~/.cache/glint`;
     /// `GLINT_CACHE_DIR=` empty keeps none).
     pub fn apply(self, renderer: &mut Renderer) {
         renderer.set_levels_of_detail(self.lod == LodSwitch::On);
+        renderer.set_clusters(match self.clusters {
+            ClustersArg::Auto => glint::render::Clusters::Auto,
+            ClustersArg::On => glint::render::Clusters::On,
+            ClustersArg::Off => glint::render::Clusters::Off,
+        });
         renderer.set_level_cache(glint::scene::level_cache::LevelCache::user());
     }
 

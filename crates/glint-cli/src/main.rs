@@ -159,6 +159,10 @@ enum Command {
         /// whatever the camera's "lod_error" says (default 1).
         #[arg(long, value_name = "PX", value_parser = lod::parse_lod_error)]
         lod_error: Option<f32>,
+        /// Light clusters: auto (when a frame has more than 8 point and spot
+        /// lights), on, or off (every fragment loops over every light, at most 64).
+        #[arg(long, value_enum, default_value_t = lod::ClustersArg::Auto)]
+        clusters: lod::ClustersArg,
         #[command(flatten)]
         sim: SimArgs,
     },
@@ -659,8 +663,9 @@ pub(crate) fn load(scene: &Path, options: LoadOptions) -> Result<SceneDesc, Erro
     for warning in &desc.warnings {
         eprintln!("warning: {warning}");
     }
-    if desc.lights.len() > glint::scene::MAX_LIGHTS {
-        let message = format!("{} lights, but a frame can use at most {}", desc.lights.len(), glint::scene::MAX_LIGHTS);
+    if desc.lights.len() > glint::scene::MAX_CLUSTERED_LIGHTS {
+        let most = glint::scene::MAX_CLUSTERED_LIGHTS;
+        let message = format!("{} lights, but a frame can use at most {most}", desc.lights.len());
         return Err(glint::Diagnostic::file(scene, message).into());
     }
     Ok(desc)
@@ -843,6 +848,7 @@ fn main() -> ExitCode {
             lod_error,
             sim,
             vs_cpu,
+            clusters,
             ..
         } => {
             let config = bench::BenchConfig {
@@ -853,7 +859,7 @@ fn main() -> ExitCode {
                 orbit: 0.0,
                 settle_ms: 0,
                 density: *density,
-                lod: lod::LodArgs { lod_error: *lod_error, ..lod::LodArgs::default() },
+                lod: lod::LodArgs { lod_error: *lod_error, clusters: *clusters, ..lod::LodArgs::default() },
             };
             run_live(scene, &config, (*time, 1.0 / *fps), (*json, *lod, *vs_cpu), sim.apply(options))
         }
@@ -873,6 +879,7 @@ fn main() -> ExitCode {
             post,
             lod,
             lod_error,
+            clusters,
             sim,
             ..
         } => {
@@ -884,7 +891,8 @@ fn main() -> ExitCode {
                 orbit: *orbit,
                 settle_ms: *settle,
                 density: *density,
-                lod: lod::LodArgs { lod_error: *lod_error, ..lod::LodArgs::default() }.with(*lod != lod::BenchLod::Off),
+                lod: lod::LodArgs { lod_error: *lod_error, clusters: *clusters, ..lod::LodArgs::default() }
+                    .with(*lod != lod::BenchLod::Off),
             };
             let output = BenchOutput { json: *json, plot: plot.as_deref() };
             match sim.sim {

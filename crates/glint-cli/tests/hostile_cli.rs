@@ -117,30 +117,48 @@ fn bench_post_follows_the_scene_files_rules_at_parse() {
 #[test]
 fn a_model_with_more_lights_than_a_frame_holds_is_bad_input_for_render_too() {
     let dir = scratch("lights");
-    let lights: Vec<serde_json::Value> =
-        (0..100).map(|_| serde_json::json!({"type": "point", "intensity": 1.0})).collect();
-    let mut nodes: Vec<serde_json::Value> =
-        (0..100).map(|k| serde_json::json!({"extensions": {"KHR_lights_punctual": {"light": k}}})).collect();
-    nodes.push(serde_json::json!({"mesh": 0}));
-    // One triangle: three VEC3 positions, 36 bytes.
-    let positions: Vec<u8> = [0f32, 0., 0., 1., 0., 0., 0., 1., 0.].iter().flat_map(|f| f.to_le_bytes()).collect();
-    std::fs::write(dir.join("tri.bin"), &positions).unwrap();
-    let doc = serde_json::json!({
-        "asset": {"version": "2.0"},
-        "extensionsUsed": ["KHR_lights_punctual"],
-        "extensions": {"KHR_lights_punctual": {"lights": lights}},
-        "scene": 0,
-        "scenes": [{"nodes": (0..101).collect::<Vec<_>>()}],
-        "nodes": nodes,
-        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}],
-        "buffers": [{"uri": "tri.bin", "byteLength": 36}],
-        "bufferViews": [{"buffer": 0, "byteLength": 36}],
-        "accessors": [{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0]}]
-    });
-    let model = dir.join("lamps.gltf");
-    std::fs::write(&model, doc.to_string()).unwrap();
-    for args in [&["check", path(&model)][..], &["render", path(&model), "-o", path(&dir.join("o.png"))]] {
-        assert_bad_input(&glint(args), "lamps.gltf: 100 lights, but a frame can use at most 64");
+    // A glTF of `n` point lights and one triangle.
+    let model = |n: usize| {
+        let lights: Vec<serde_json::Value> =
+            (0..n).map(|_| serde_json::json!({"type": "point", "intensity": 1.0})).collect();
+        let mut nodes: Vec<serde_json::Value> =
+            (0..n).map(|k| serde_json::json!({"extensions": {"KHR_lights_punctual": {"light": k}}})).collect();
+        nodes.push(serde_json::json!({"mesh": 0}));
+        // One triangle: three VEC3 positions, 36 bytes.
+        let positions: Vec<u8> = [0f32, 0., 0., 1., 0., 0., 0., 1., 0.].iter().flat_map(|f| f.to_le_bytes()).collect();
+        std::fs::write(dir.join("tri.bin"), &positions).unwrap();
+        let doc = serde_json::json!({
+            "asset": {"version": "2.0"},
+            "extensionsUsed": ["KHR_lights_punctual"],
+            "extensions": {"KHR_lights_punctual": {"lights": lights}},
+            "scene": 0,
+            "scenes": [{"nodes": (0..=n).collect::<Vec<_>>()}],
+            "nodes": nodes,
+            "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}],
+            "buffers": [{"uri": "tri.bin", "byteLength": 36}],
+            "bufferViews": [{"buffer": 0, "byteLength": 36}],
+            "accessors": [{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0]}]
+        });
+        let path = dir.join(format!("lamps_{n}.gltf"));
+        std::fs::write(&path, doc.to_string()).unwrap();
+        path
+    };
+    let too_many = model(4097);
+    for args in [&["check", path(&too_many)][..], &["render", path(&too_many), "-o", path(&dir.join("o.png"))]] {
+        assert_bad_input(&glint(args), "lamps_4097.gltf: 4097 lights, but a frame can use at most 4096");
+    }
+    // 100 are drawn with light clusters, and refused without them.
+    let hundred = model(100);
+    let out = glint(&["render", path(&hundred), "-o", path(&dir.join("o.png")), "--size", "32x32"]);
+    if !no_adapter(&out) {
+        assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+        let off = glint(&["render", path(&hundred), "-o", path(&dir.join("o.png")), "--clusters", "off"]);
+        assert_ne!(off.status.code(), Some(0));
+        assert!(
+            stderr(&off).contains("lights with light clusters off given, but a frame can use at most 64"),
+            "{}",
+            stderr(&off)
+        );
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -208,11 +208,11 @@ fn only_the_changed_block_is_uploaded() {
     // A material edit rewrites that material's 128-byte block, nothing else.
     r.material_mut(m).expect("material").base_color.x = 0.1;
     assert_eq!(frame(&mut r, gpu, &[&e], &sun()).bytes_uploaded.uniforms, 128);
-    // A new light rewrites the scene block (112 + 64 × 64 bytes), nothing else.
+    // A new light rewrites the scene block (128 + 64 × 64 bytes), nothing else.
     let mut lights = sun();
     lights.push(Light::point(Vec3::Y, Vec3::ONE, 1.0, 5.0));
     let stats = frame(&mut r, gpu, &[&e], &lights);
-    assert_eq!(stats.bytes_uploaded.scene, 112 + 64 * MAX_LIGHTS as u64);
+    assert_eq!(stats.bytes_uploaded.scene, 128 + 64 * MAX_LIGHTS as u64);
     assert_eq!(stats.bytes_uploaded.uniforms, stats.bytes_uploaded.scene);
 }
 
@@ -349,7 +349,7 @@ fn too_many_lights_and_foreign_ids_are_errors_not_panics() {
     r.submit(&e);
     assert!(matches!(
         r.flush(camera(), &lights, &glint::Shadows::none(), &mut target),
-        Err(RenderError::TooManyLights(65))
+        Err(RenderError::TooManyLights { given: 65, what: "directional lights", most: 64 })
     ));
     r.submit(&e);
     assert!(

@@ -18,7 +18,7 @@ use super::{decoded_bytes, read_environment};
 use super::{AssetFolder, Diagnostic, LoadOptions, Model, ShapeKind, Texture, MAX_SCENE_BYTES, MAX_SCENE_TOTAL_BYTES};
 use crate::scene::{
     AmbientOcclusion, Background, Camera, Culling, Environment, EnvironmentLight, EnvironmentSource, Fog, Light,
-    Material, ShadowLayout, MAX_LIGHTS, MAX_SHADOW_MAP_BYTES,
+    Material, ShadowLayout, MAX_CLUSTERED_LIGHTS, MAX_SHADOW_MAP_BYTES,
 };
 use crate::text::{list, quote};
 use glam::{EulerRot, Mat4, Quat, Vec3};
@@ -75,6 +75,7 @@ pub fn parse_scene_with(path: &Path, text: &str, options: LoadOptions) -> Result
             cloths: Vec::new(),
             schools: Vec::new(),
             light_sways: Vec::new(),
+            light_circles: Vec::new(),
             emitters: Vec::new(),
             warnings: Vec::new(),
             time_of_day: None,
@@ -195,9 +196,14 @@ impl Loader<'_> {
             }
             "light_directional" | "light_point" | "light_spot" => {
                 let light = scn_lights::light(class, &mut f, &mut self.scene.warnings)?;
-                if let crate::scene::LightKind::Directional { direction } = light.kind {
-                    let sway = scn_lights::sway(&mut f, direction, self.scene.lights.len())?;
-                    self.scene.light_sways.extend(sway);
+                let index = self.scene.lights.len();
+                match light.kind {
+                    crate::scene::LightKind::Directional { direction } => {
+                        self.scene.light_sways.extend(scn_lights::sway(&mut f, direction, index)?);
+                    }
+                    crate::scene::LightKind::Point { position, .. } | crate::scene::LightKind::Spot { position, .. } => {
+                        self.scene.light_circles.extend(scn_lights::circle(&mut f, position, index)?);
+                    }
                 }
                 self.add_light(&f, light)?
             }
@@ -375,11 +381,11 @@ impl Loader<'_> {
     }
 
     fn add_light(&mut self, f: &Fields, light: Light) -> Result<(), Diagnostic> {
-        if self.scene.lights.len() == MAX_LIGHTS {
+        if self.scene.lights.len() == MAX_CLUSTERED_LIGHTS {
             return Err(Diagnostic::at(
                 self.path,
                 f.block.line,
-                format!("more than {MAX_LIGHTS} lights: a frame can use at most {MAX_LIGHTS}"),
+                format!("more than {MAX_CLUSTERED_LIGHTS} lights: a frame can use at most {MAX_CLUSTERED_LIGHTS}"),
             ));
         }
         self.scene.lights.push(light);

@@ -400,10 +400,11 @@ fn render_targets_are_drawn_by_their_cameras_and_shown_by_materials() {
 #[test]
 fn more_lights_than_a_frame_holds_is_an_error_at_the_extra_light() {
     let light = "{\n\"classname\" \"light_point\"\n\"origin\" \"0 1 0\"\n}\n";
-    assert_eq!(parse(&light.repeat(MAX_LIGHTS)).unwrap().lights.len(), MAX_LIGHTS);
-    let err = parse(&light.repeat(MAX_LIGHTS + 1)).unwrap_err();
-    assert_eq!(err.line, Some(4 * MAX_LIGHTS + 1));
-    assert!(err.message.contains("more than 64 lights"), "{err}");
+    let most = crate::scene::MAX_CLUSTERED_LIGHTS;
+    assert_eq!(parse(&light.repeat(most)).unwrap().lights.len(), most);
+    let err = parse(&light.repeat(most + 1)).unwrap_err();
+    assert_eq!(err.line, Some(4 * most + 1));
+    assert!(err.message.contains("more than 4096 lights"), "{err}");
 }
 
 /// 10⁶ material blocks (and entities naming the last of them, and one block

@@ -1,14 +1,23 @@
 //! Core layer: [`RenderError`], what a frame can fail with.
 
 use crate::scene::MAX_POST_EFFECTS;
-use crate::scene::{MaterialId, RenderTargetId, ShapeId, TextureId, Viewport, MAX_LIGHTS};
+use crate::scene::{MaterialId, RenderTargetId, ShapeId, TextureId, Viewport};
 
 /// Errors from [`Renderer::flush`](crate::Renderer::flush).
 #[derive(Debug, thiserror::Error)]
 pub enum RenderError {
-    /// More lights than the Scene block holds.
-    #[error("{0} lights given, but a frame can use at most {MAX_LIGHTS}")]
-    TooManyLights(usize),
+    /// More lights than a frame can use: the Scene block's
+    /// [`MAX_LIGHTS`](crate::scene::MAX_LIGHTS) directional lights, or lights in
+    /// all without light clusters; [`MAX_CLUSTERED_LIGHTS`](crate::render::clusters::MAX_CLUSTERED_LIGHTS) with them.
+    #[error("{given} {what} given, but a frame can use at most {most}")]
+    TooManyLights {
+        /// How many were given.
+        given: usize,
+        /// What they are: "lights", "directional lights" or "lights with light clusters off".
+        what: &'static str,
+        /// The most a frame can use.
+        most: usize,
+    },
     /// An entity names a shape this renderer never created.
     #[error("unknown shape id {0:?}: shapes come from this renderer's add_shape")]
     UnknownShape(ShapeId),

@@ -20,6 +20,9 @@ pub(crate) struct FrameVariant {
     pub ambient_occlusion: bool,
     /// The view cross-fades levels of detail (`LOD_FADE`: render/lod.rs).
     pub lod_fade: bool,
+    /// Point and spot lights come from the view's light clusters
+    /// (`CLUSTERED`: render/clusters.rs); the loops' positional count is then 0.
+    pub clustered: bool,
 }
 
 impl FrameVariant {
@@ -33,7 +36,14 @@ impl FrameVariant {
             lights: LightCounts::of(lights),
             ambient_occlusion,
             lod_fade: false,
+            clustered: false,
         }
+    }
+
+    /// The variant with point and spot lights clustered, or not.
+    pub(crate) fn with_clusters(self, clustered: bool) -> Self {
+        let lights = LightCounts { positional: if clustered { 0 } else { self.lights.positional }, ..self.lights };
+        Self { clustered, lights, ..self }
     }
 
     /// The variant with levels of detail cross-faded, or not.
@@ -51,6 +61,7 @@ impl FrameVariant {
             lights: LightCounts::of(lights),
             ambient_occlusion,
             lod_fade: false,
+            clustered: false,
         }
     }
 }

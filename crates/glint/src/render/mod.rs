@@ -37,6 +37,7 @@
 //! `multi_draw_indexed_indirect` call: one indirect command per batch.
 
 pub mod batch;
+pub mod clusters;
 pub mod cull;
 mod debug;
 mod error;
@@ -53,8 +54,9 @@ mod views;
 
 pub use crate::gpu::{GpuSimulation, InstanceRange, ParticleGpu, PlaceTargets, VertexTarget, MAX_LAYER_PARTICLES};
 pub use crate::scene::{ShadowLayout, MAX_CUBES, MAX_SHADOW_MAP_BYTES};
+pub use clusters::Clusters;
 pub use debug::explain::{BatchCall, DrawCall, FrameCalls, PassCalls, PassType};
-pub use debug::stats::{FrameStats, PassStats, Passes, StageTimes, UploadStats};
+pub use debug::stats::{ClusterStats, FrameStats, PassStats, Passes, StageTimes, UploadStats};
 pub use debug::timer::GpuTimes;
 pub use error::{MeshTooLarge, RenderError};
 pub use frame::input::{FrameInput, FrameMode, FrameOutput, ViewKey, KEEP_VIEW_FRAMES};

@@ -7,6 +7,7 @@
 
 use crate::gpu::TargetFormat;
 use crate::gpu::{Gpu, ParticleGpu};
+use crate::render::clusters::Clusters;
 use crate::render::debug::explain::{FrameCalls, Tape};
 use crate::render::debug::inspect::read_list;
 use crate::render::debug::stats::FrameStats;
@@ -21,8 +22,8 @@ use crate::render::passes::particles::{ParticleLook, ParticlesId};
 use crate::render::resources::registry::Registry;
 use crate::render::resources::Resources;
 use crate::render::views::ViewStates;
+use crate::scene::Lighting;
 use crate::scene::{Entity, Material, MaterialId, Mesh, RenderTargetId, ShapeId, Texture, TextureId};
-use crate::scene::{Lighting, MAX_LIGHTS};
 
 /// The renderer, three owners: `res`, what frames draw with and keep (its
 /// [`Registry`] of shapes, materials, textures, render targets and pipelines,
@@ -158,6 +159,12 @@ impl Renderer {
         self.res.levels_of_detail = on;
     }
 
+    /// Shade point and spot lights from each view's light clusters as
+    /// `clusters` says (`render/clusters.rs`; [`Clusters::Auto`] at first).
+    pub fn set_clusters(&mut self, clusters: Clusters) {
+        self.res.clusters = clusters;
+    }
+
     /// Keep the levels of detail of large meshes in `cache` between runs (see
     /// [`LevelCache`](crate::scene::level_cache::LevelCache); the default is
     /// none: they are made each run). Shapes drawn before keep theirs.
@@ -258,11 +265,12 @@ impl Renderer {
         samples: u32,
     ) -> Result<u32, RenderError> {
         let lighting = lighting.into();
-        if lighting.lights.len() > MAX_LIGHTS {
-            return Err(RenderError::TooManyLights(lighting.lights.len()));
-        }
+        self.res.clusters.check(lighting.lights)?;
         // Views fade levels at their default error.
-        let variant = FrameVariant::expected(lighting.lights, false).with_lod_fade(self.res.levels_of_detail);
+        let clustered = self.res.clusters.applies(lighting.lights);
+        let variant = FrameVariant::expected(lighting.lights, false)
+            .with_lod_fade(self.res.levels_of_detail)
+            .with_clusters(clustered);
         prepare_environment(&mut self.res, &lighting)?;
         let mut stats = FrameStats::default();
         let uses: Vec<_> = entities

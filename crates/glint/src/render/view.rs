@@ -15,6 +15,8 @@ pub(crate) struct ViewFrame {
     pub camera: Camera,
     /// Width over height of the rectangle it draws into.
     pub aspect: f32,
+    /// That rectangle's size in pixels.
+    pub size: [u32; 2],
     /// World to view.
     pub view: Mat4,
     /// Its frustum in world space.
@@ -61,6 +63,7 @@ impl ViewFrame {
         Self {
             camera,
             aspect,
+            size: [width, height],
             view: matrix,
             frustum,
             culling,

@@ -4,6 +4,7 @@
 //! draw lists. Records and lists are written only where their bytes change, so
 //! a view that did not change uploads nothing, however many views a frame has.
 
+use crate::render::clusters::LightClusters;
 use crate::render::frame::input::{ViewKey, KEEP_VIEW_FRAMES};
 use crate::render::gpu_driven::draw_list::{DrawList, ListPaths};
 use crate::render::passes::ambient_occlusion::OcclusionTargets;
@@ -13,6 +14,7 @@ use crate::render::passes::shadow_views::MAX_SHADOW_VIEWS;
 use crate::render::resources::blocks::CameraGpu;
 use crate::render::resources::blocks::{SceneGpu, UniformBlock};
 use crate::render::resources::buffers::InstanceBuffer;
+use crate::render::resources::gpu_array::GpuArray;
 use crate::render::resources::pipelines::Pipelines;
 use std::collections::HashMap;
 
@@ -102,6 +104,9 @@ pub(crate) struct ViewGpu {
     pub post_params: PostParams,
     /// Its ambient occlusion's textures, from its first frame with it.
     pub occlusion: Option<OcclusionTargets>,
+    /// Its light clusters' arrays, and this frame's clusters until uploaded
+    /// (`render/frame/lights.rs`).
+    pub clusters: ClusterArrays,
     /// The instance buffer, shadow maps and environment maps generations the bind groups point at.
     generations: (u64, u64, u64),
 }
@@ -113,11 +118,13 @@ impl ViewGpu {
         let list = |label| DrawList::new(device, label, &pipelines.instance_layout, instances.array(), paths);
         let scene_block = UniformBlock::new(device, "renderer: scene block");
         let shadow_block = UniformBlock::new(device, "renderer: shadow block");
+        let clusters = ClusterArrays::new(device, pipelines.vertex_storage());
         Self {
             blocks: ViewBlocks::new(device, &pipelines.camera_layout),
             forward: list("renderer block: forward draw indices"),
             shadows: list("renderer block: shadow draw indices"),
-            scene_group: scene_group(shared, &scene_block, &shadow_block, None),
+            scene_group: scene_group(shared, (&scene_block, &shadow_block), None, &clusters),
+            clusters,
             post_params: PostParams::new(device),
             occlusion: None,
             scene_block,
@@ -149,24 +156,50 @@ impl ViewGpu {
         self.rebind_scene(shared);
     }
 
-    fn rebind_scene(&mut self, shared: &Shared) {
+    /// Point the Scene bind group at the view's current arrays and textures
+    /// (after one was replaced).
+    pub(crate) fn rebind_scene(&mut self, shared: &Shared) {
         let occlusion = self.occlusion.as_ref().map(|o| &o.blurred);
-        self.scene_group = scene_group(shared, &self.scene_block, &self.shadow_block, occlusion);
+        let blocks = (&self.scene_block, &self.shadow_block);
+        self.scene_group = scene_group(shared, blocks, occlusion, &self.clusters);
     }
 }
 
-/// The Scene bind group over a view's blocks, the shared maps, and its ambient
-/// occlusion (white without).
+/// The Scene bind group over a view's blocks, the shared maps, its ambient
+/// occlusion (white without) and its light clusters.
 fn scene_group(
     shared: &Shared,
-    scene: &UniformBlock<SceneGpu>,
-    shadow: &UniformBlock<ShadowGpu>,
+    (scene, shadow): (&UniformBlock<SceneGpu>, &UniformBlock<ShadowGpu>),
     occlusion: Option<&wgpu::TextureView>,
+    clusters: &ClusterArrays,
 ) -> wgpu::BindGroup {
     let layout = &shared.pipelines.scene_layout;
     let blocks = (&scene.buffer, &shadow.buffer);
     let occlusion = occlusion.unwrap_or(shared.white);
-    shared.shadow_maps.scene_group(shared.device, layout, blocks, (shared.environment, occlusion))
+    shared.shadow_maps.scene_group(shared.device, layout, blocks, (shared.environment, occlusion), &clusters.data)
+}
+
+/// A view's light clusters on the GPU (`forward.wgsl`'s `CLUSTERED` array):
+/// its cluster words and its point and spot lights' records in one array of
+/// 16-byte texels (layout in `render/frame/lights.rs`), a storage buffer or a
+/// data texture.
+pub(crate) struct ClusterArrays {
+    /// The texels.
+    pub data: GpuArray,
+    /// This frame's clusters, binned and not yet uploaded.
+    pub binned: Option<LightClusters>,
+    /// What the array holds (written again only when it changes).
+    pub written: Vec<[u32; 4]>,
+}
+
+impl ClusterArrays {
+    fn new(device: &wgpu::Device, storage: bool) -> Self {
+        Self {
+            data: GpuArray::new(device, "renderer: light clusters", 16, 1, storage),
+            binned: None,
+            written: Vec::new(),
+        }
+    }
 }
 
 /// Every view's GPU state, by the caller's key, with the last frame that drew

@@ -1,11 +1,18 @@
 //! Beginner layer: [`Light`], a directional, point or spot light, and its
-//! [`ShadowSettings`] (at most [`MAX_LIGHTS`] a frame).
+//! [`ShadowSettings`] (at most [`MAX_LIGHTS`] a frame, or
+//! [`MAX_CLUSTERED_LIGHTS`] with light clusters).
 
 use glam::Vec3;
 
-/// Most lights one frame can use. All lights live in one uniform block
+/// Most lights one frame without light clusters can use, and most
+/// directional lights with them: they live in one uniform block
 /// (`@group(0)`); [`Renderer::flush`](crate::Renderer::flush) returns an error past this.
 pub const MAX_LIGHTS: usize = 64;
+
+/// Most lights a frame with light clusters may have (`render/clusters.rs`):
+/// its point and spot lights are in each view's light table, its directional
+/// lights (at most [`MAX_LIGHTS`]) in the Scene block.
+pub const MAX_CLUSTERED_LIGHTS: usize = 4096;
 
 /// What kind of light, with its geometry.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -39,7 +39,7 @@ pub use environment::{Background, Environment, EnvironmentLight, EnvironmentSour
 pub use environment_image::{equirect_direction, equirect_uv, EnvironmentImage, MAX_RADIANCE};
 pub use far_field::FarField;
 pub use fly::{FlyCamera, FlyInput};
-pub use light::{Light, LightKind, ShadowSettings, CASCADES, MAX_LIGHTS};
+pub use light::{Light, LightKind, ShadowSettings, CASCADES, MAX_CLUSTERED_LIGHTS, MAX_LIGHTS};
 pub use lighting::Lighting;
 pub use material::{AlphaMode, MapSlots, Material, ShadingModel};
 pub use mesh::{smooth_normals, smooth_normals_in_groups, Aabb, BoundingSphere, Mesh, MeshError, SkinVertex, Vertex};

@@ -24,7 +24,8 @@ struct SceneBlock {
     sky_bottom: vec4<f32>,
     // rgb: fog colour; w: density (0: no fog).
     fog: vec4<f32>,
-    // x: number of lights; y: directional lights (first in `lights`); z, w: reserved.
+    // x: number of lights; y: directional lights (first in `lights`); z: a light
+    // cluster tile's side in pixels; w: depth slices (render/clusters.rs).
     counts: vec4<u32>,
     // Image-based lighting (render/passes/environment.rs): x: intensity (0: none);
     // y, z: cos and sin of the environment's turn about +Y; w: the specular
@@ -32,6 +33,9 @@ struct SceneBlock {
     environment: vec4<f32>,
     // x: the specular level the sky is drawn from (its blur); y, z, w: reserved.
     environment_sky: vec4<f32>,
+    // Light clusters (render/clusters.rs): x, y: tiles across and down; a
+    // fragment's slice is floor(ln(view depth) · z + w), clamped.
+    clusters: vec4<f32>,
     lights: array<Light, 64>,
 }
 

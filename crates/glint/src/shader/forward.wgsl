@@ -500,6 +500,55 @@ fn vs_main(v: VertexIn, @builtin(instance_index) draw_instance: u32) -> VertexOu
     return out;
 }
 
+#ifdef CLUSTERED
+// The view's light clusters (render/clusters.rs, render/frame/lights.rs), in
+// one array of 16-byte texels (one binding: WebGL2 allows 16 textures a
+// stage): words, four a texel, then the view's point and spot lights as Light
+// records of four texels. Word 0 is the texel the records begin at; then per
+// cluster two words, the word its entries begin at and their count; then the
+// entries (lights' numbers).
+#ifdef DATA_TEXTURES
+@group(0) @binding(10) var cluster_texels: texture_2d<u32>;
+
+fn cluster_texel(i: u32) -> vec4<u32> {
+    return texel(cluster_texels, i);
+}
+#else
+@group(0) @binding(10) var<storage, read> cluster_data: array<vec4<u32>>;
+
+fn cluster_texel(i: u32) -> vec4<u32> {
+    return cluster_data[i];
+}
+#endif
+
+fn cluster_word(i: u32) -> u32 {
+    return cluster_texel(i / 4u)[i % 4u];
+}
+
+// Light `i` of the view's, its records beginning at texel `at`.
+fn clustered_light(at: u32, i: u32) -> Light {
+    let first = at + 4u * i;
+    return Light(
+        bitcast<vec4<f32>>(cluster_texel(first)),
+        bitcast<vec4<f32>>(cluster_texel(first + 1u)),
+        bitcast<vec4<f32>>(cluster_texel(first + 2u)),
+        bitcast<vec4<f32>>(cluster_texel(first + 3u)),
+    );
+}
+
+// The light cluster `surface` is in (its pixel's tile and its view depth's
+// slice, the rule of render/clusters.rs): x its entries' first word, y their
+// count, z the texel the light records begin at.
+fn cluster_of(surface: Surface) -> vec3<u32> {
+    let tiles = vec2<u32>(scene.clusters.xy);
+    let tile = min(vec2<u32>(surface.pixel / f32(scene.counts.z)), tiles - 1u);
+    let depth = max(-(camera.view * vec4<f32>(surface.position, 1.0)).z, 1e-6);
+    let slice = clamp(floor(log(depth) * scene.clusters.z + scene.clusters.w), 0.0, f32(scene.counts.w - 1u));
+    let index = tile.x + tiles.x * (tile.y + tiles.y * u32(slice));
+    return vec3<u32>(cluster_word(1u + 2u * index), cluster_word(2u + 2u * index), cluster_word(0u));
+}
+#endif
+
 // The lights this variant loops over (LightCounts, src/shader/mod.rs): the Scene
 // block holds the directional lights first, then the point and spot lights.
 // Counts fixed at compile time unroll the loops, so each light is read at a
@@ -527,9 +576,9 @@ fn directional(i: u32, p: vec3<f32>, ng: vec3<f32>, receive: bool) -> Incoming {
     return Incoming(-normalize(light.position.xyz), light.color.rgb * lit);
 }
 
-// Point or spot light `i` (DIRECTIONAL_LIGHTS <= i < LIGHTS).
-fn positional(i: u32, p: vec3<f32>, ng: vec3<f32>, receive: bool) -> Incoming {
-    let light = scene.lights[i];
+// A point or spot light: the Scene block's (DIRECTIONAL_LIGHTS <= i < LIGHTS)
+// or a cluster's.
+fn positional(light: Light, p: vec3<f32>, ng: vec3<f32>, receive: bool) -> Incoming {
     let to_light = light.position.xyz - p;
     let dist = length(to_light);
     let l = to_light / max(dist, 1e-4);
@@ -677,6 +726,8 @@ struct Surface {
     position: vec3<f32>,
     normal: vec3<f32>,
     receive_shadows: bool,
+    // The fragment's pixel in the view (its light cluster's tile).
+    pixel: vec2<f32>,
 }
 
 fn shade(
@@ -699,9 +750,17 @@ fn shade(
     for (var i = 0u; i < DIRECTIONAL_LIGHTS; i++) {
         color += blinn_phong(directional(i, p, ng, receive), material, n, v, base, specular);
     }
-    for (var i = DIRECTIONAL_LIGHTS; i < LIGHTS; i++) {
-        color += blinn_phong(positional(i, p, ng, receive), material, n, v, base, specular);
+#ifdef CLUSTERED
+    let cluster = cluster_of(surface);
+    for (var k = 0u; k < cluster.y; k++) {
+        let light = clustered_light(cluster.z, cluster_word(cluster.x + k));
+        color += blinn_phong(positional(light, p, ng, receive), material, n, v, base, specular);
     }
+#else
+    for (var i = DIRECTIONAL_LIGHTS; i < LIGHTS; i++) {
+        color += blinn_phong(positional(scene.lights[i], p, ng, receive), material, n, v, base, specular);
+    }
+#endif
     return color;
 }
 
@@ -750,9 +809,16 @@ fn shade_metallic_roughness(
     for (var i = 0u; i < DIRECTIONAL_LIGHTS; i++) {
         color += ggx(directional(i, p, ng, receive), b);
     }
-    for (var i = DIRECTIONAL_LIGHTS; i < LIGHTS; i++) {
-        color += ggx(positional(i, p, ng, receive), b);
+#ifdef CLUSTERED
+    let cluster = cluster_of(surface);
+    for (var k = 0u; k < cluster.y; k++) {
+        color += ggx(positional(clustered_light(cluster.z, cluster_word(cluster.x + k)), p, ng, receive), b);
     }
+#else
+    for (var i = DIRECTIONAL_LIGHTS; i < LIGHTS; i++) {
+        color += ggx(positional(scene.lights[i], p, ng, receive), b);
+    }
+#endif
     return color;
 }
 
@@ -857,9 +923,9 @@ fn fs_main(in: VertexOut, @builtin(front_facing) front: bool) -> @location(0) ve
     let side = select(-1.0, 1.0, front);
     var n = normalize(in.normal) * side;
 #ifdef SHADOWS
-    let surface = Surface(in.world_position, n, in.receive_shadows != 0u);
+    let surface = Surface(in.world_position, n, in.receive_shadows != 0u, in.clip.xy);
 #else
-    let surface = Surface(in.world_position, n, false);
+    let surface = Surface(in.world_position, n, false, in.clip.xy);
 #endif
 #ifdef NORMAL_MAP
     let t = normalize(in.tangent.xyz - n * dot(n, in.tangent.xyz));

@@ -111,6 +111,9 @@ bitflags::bitflags! {
         const FAR_FIELD = 1 << 24;
         /// `LOD_FADE`.
         const LOD_FADE = 1 << 25;
+        /// `CLUSTERED`: point and spot lights from the view's light clusters
+        /// (`render/clusters.rs`) instead of a loop over every one.
+        const CLUSTERED = 1 << 26;
     }
 }
 

@@ -28,6 +28,9 @@ pub struct UploadStats {
     pub textures: u64,
     /// Vertex and index buffers of shapes used for the first time.
     pub meshes: u64,
+    /// The view's light clusters (`@group(0)`): its point and spot lights'
+    /// records and its cluster words, when they changed.
+    pub lights: u64,
     /// Scene + camera + material blocks.
     pub uniforms: u64,
     /// Everything.
@@ -44,7 +47,8 @@ impl UploadStats {
             + self.draw_indices
             + self.indirect
             + self.textures
-            + self.meshes;
+            + self.meshes
+            + self.lights;
     }
 }
 
@@ -59,6 +63,8 @@ pub struct StageTimes {
     pub queue: f64,
     /// Radix-sorting the draw items.
     pub sort: f64,
+    /// Binning point and spot lights into the view's clusters.
+    pub lights: f64,
     /// Merging runs into instanced draws, packing draw indices, making indirect commands.
     pub batch: f64,
     /// Writing changed blocks, changed instances, draw indices and indirect commands.
@@ -121,6 +127,28 @@ pub struct Passes {
     pub transparent: PassStats,
     /// The view's post chain: one draw per full-screen pass (bloom takes four).
     pub post: PassStats,
+}
+
+/// A view's light clusters (`render/clusters.rs`): its grid and how its
+/// point and spot lights fell into it.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct ClusterStats {
+    /// Tiles across and down, and depth slices.
+    pub grid: [u32; 3],
+    /// A tile's side, pixels.
+    pub tile_pixels: u32,
+    /// Point and spot lights that reach at least one cluster.
+    pub lights_visible: u32,
+    /// The most lights one cluster lists.
+    pub max_per_cluster: u32,
+    /// Lights a cluster lists, on average.
+    pub mean_per_cluster: f64,
+    /// Clusters with no light.
+    pub empty: u32,
+    /// Cluster entries left out: lights past
+    /// [`MAX_CLUSTER_LIGHTS`](crate::render::clusters::MAX_CLUSTER_LIGHTS) in a
+    /// cluster (not drawn there).
+    pub overflow: u32,
 }
 
 /// What one view of a frame cost: one per view of
@@ -204,6 +232,9 @@ pub struct FrameStats {
     pub cpu_ms: StageTimes,
     /// Shadow views drawn by this frame's shadow pass.
     pub shadow_views: u32,
+    /// The view's light clusters, where its point and spot lights were
+    /// clustered ([`Clusters`](crate::render::Clusters)).
+    pub light_clusters: Option<ClusterStats>,
     /// Whether this frame prefiltered its environment (image-based lighting):
     /// the first frame with it, and after the environment or the sky it bakes changed.
     pub environment_prefiltered: bool,

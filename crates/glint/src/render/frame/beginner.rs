@@ -8,7 +8,7 @@
 use crate::gpu::OffscreenTarget;
 use crate::render::frame::input::{FrameInput, ViewKey};
 use crate::render::{FrameStats, RenderError, Renderer};
-use crate::scene::{Entity, Light, Lighting, View, MAX_LIGHTS};
+use crate::scene::{Entity, Light, Lighting, View};
 
 /// The shadows a frame's [`shadow_pass`](Renderer::shadow_pass) asked for:
 /// what the [`flush`](Renderer::flush) of the same frame, view and lights draws
@@ -116,9 +116,7 @@ impl Renderer {
         _target: &OffscreenTarget,
     ) -> Result<Shadows, RenderError> {
         let (view, lighting) = (view.into(), lighting.into());
-        if lighting.lights.len() > MAX_LIGHTS {
-            return Err(RenderError::TooManyLights(lighting.lights.len()));
-        }
+        self.res.clusters.check(lighting.lights)?;
         let asked = Asked { frame_index: self.next.index, view, lights: lighting.lights.to_vec() };
         Ok(Shadows { asked: Some(asked) })
     }
@@ -131,8 +129,8 @@ impl Renderer {
     /// [`shadow_pass`](Self::shadow_pass) for the same view and lights
     /// ([`Shadows::none`] draws without shadows).
     ///
-    /// Errors (the submitted entities are dropped): more than
-    /// [`MAX_LIGHTS`] lights, an id that is not this renderer's, a viewport
+    /// Errors (the submitted entities are dropped): more lights than
+    /// [`Clusters::check`](crate::render::Clusters::check) allows, an id that is not this renderer's, a viewport
     /// outside the target, or shadows asked for another frame, view or lights.
     pub fn flush<'l>(
         &mut self,

@@ -3,6 +3,7 @@
 use crate::gpu::OffscreenTarget;
 use crate::render::debug::stats::{FrameStats, UploadStats};
 use crate::render::error::RenderError;
+use crate::render::frame::lights::upload_clusters;
 use crate::render::frame::prepared::Prepared;
 use crate::render::frame::state::Frame;
 use crate::render::lod::level_items;
@@ -83,7 +84,7 @@ pub(crate) fn upload(
     target: &OffscreenTarget,
     stats: &mut FrameStats,
 ) -> Result<(), RenderError> {
-    upload_view_blocks(res, gpu, frame, lighting, shadowed, &mut stats.bytes_uploaded);
+    upload_view_blocks(res, gpu, frame, lighting, shadowed, &mut stats.bytes_uploaded)?;
     let bytes = &mut stats.bytes_uploaded;
     let layout = &res.registry.pipelines.instance_layout;
     let culls = res.cull_pipelines.as_ref().zip(res.instances.bounds());
@@ -107,8 +108,8 @@ pub(crate) fn upload(
     Ok(())
 }
 
-/// The view's Scene and Camera blocks where they changed, and the instances
-/// that changed.
+/// The view's Scene and Camera blocks where they changed, its light
+/// clusters where it clusters, and the instances that changed.
 pub(crate) fn upload_view_blocks(
     res: &mut Resources,
     gpu: &mut ViewGpu,
@@ -116,13 +117,15 @@ pub(crate) fn upload_view_blocks(
     lighting: &Lighting,
     shadowed: &[Option<u32>],
     bytes: &mut UploadStats,
-) {
+) -> Result<(), RenderError> {
     let scene = SceneGpu::new(&lighting.environment, lighting.lights, shadowed)
         .with_specular_levels(res.environment.last_level());
+    let scene = upload_clusters(res, gpu, (scene, lighting.lights, shadowed), bytes)?;
     bytes.scene += gpu.scene_block.update(&res.queue, scene);
     let camera = frame.camera.to_gpu(frame.aspect).with_motion(&lighting.environment).with_far_eye(frame.far_eye);
     bytes.camera += gpu.blocks.update(&res.queue, 0, camera);
     upload_instances(res, bytes);
+    Ok(())
 }
 
 /// Write the instances that changed (all of them when the frame's start

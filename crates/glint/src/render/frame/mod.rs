@@ -35,6 +35,7 @@ pub(crate) mod draw;
 pub(crate) mod encode;
 pub(crate) mod forward;
 pub(crate) mod input;
+pub(crate) mod lights;
 pub(crate) mod naive;
 pub(crate) mod prepare;
 pub(crate) mod prepared;
@@ -61,10 +62,10 @@ use crate::render::{RenderError, Renderer};
 impl Renderer {
     /// Draw one frame of `input` into `target`: the instance store compacted →
     /// simulate → plan shadows →
-    /// per view (prepare, shadow views, cull, queue, sort, batch, upload,
+    /// per view (prepare, shadow views, lights, cull, queue, sort, batch, upload,
     /// encode, compose) → the work after the views → one submission. Errors
-    /// (the frame's commands and entities are dropped): more than
-    /// [`MAX_LIGHTS`](crate::scene::MAX_LIGHTS) lights, an id that is not this
+    /// (the frame's commands and entities are dropped): more lights than
+    /// [`Clusters::check`](crate::render::Clusters::check) allows, an id that is not this
     /// renderer's, a viewport outside its target, views that need each
     /// other's render targets.
     pub fn render_frame(
@@ -77,7 +78,7 @@ impl Renderer {
         let (res, states) = (&mut self.res, &mut self.views);
         let mut frame = begin_frame(res, &mut self.next, entities); // its number and encoder; entities into the store
         let mut stages = || {
-            check_frame(&mut frame, &views, &lighting)?; // lights, ids, viewports, post chains
+            check_frame(&mut frame, &views, (&lighting, res.clusters))?; // lights, ids, viewports, post chains
             let order = view_order(res, &frame, &views)?; // render targets before the views that show them
             compact_store(res, &mut frame)?; // and its GPU buffer sized, before any command uses the instance store
             simulate(res, &mut frame, &mut simulations)?; // GPU simulations' steps, and the instances they draw

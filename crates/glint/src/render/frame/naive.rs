@@ -118,7 +118,7 @@ fn naive_upload(
     stats: &mut FrameStats,
 ) -> Result<(), RenderError> {
     let bytes = &mut stats.bytes_uploaded;
-    upload_view_blocks(res, gpu, frame, lighting, shadowed, bytes);
+    upload_view_blocks(res, gpu, frame, lighting, shadowed, bytes)?;
     for b in &gpu.forward.batches {
         let block = res.registry.materials[b.material.0 as usize].material.to_gpu();
         bytes.material += res.registry.material_table.write(&res.queue, b.material.0, &block);

@@ -5,6 +5,7 @@
 //! its views, and its one submission.
 
 use crate::gpu::{AfterViews, OffscreenTarget};
+use crate::render::clusters::Clusters;
 use crate::render::debug::stats::{ms_since, FrameStats};
 use crate::render::error::RenderError;
 use crate::render::frame::input::{FrameOutput, ViewKey};
@@ -12,7 +13,7 @@ use crate::render::frame::state::{Frame, NextFrame};
 use crate::render::frame::visible::{shown, Submitted};
 use crate::render::resources::Resources;
 use crate::render::views::ViewStates;
-use crate::scene::{Entity, Lighting, MaterialId, TextureId, View, MAX_LIGHTS, MAX_POST_EFFECTS};
+use crate::scene::{Entity, Lighting, MaterialId, TextureId, View, MAX_POST_EFFECTS};
 use std::collections::HashMap;
 use web_time::Instant;
 
@@ -57,14 +58,12 @@ pub(crate) fn begin_frame(res: &mut Resources, next: &mut NextFrame, entities: &
 pub(crate) fn check_frame(
     frame: &mut Frame,
     views: &[(ViewKey, &View)],
-    lighting: &Lighting,
+    (lighting, clusters): (&Lighting, Clusters),
 ) -> Result<(), RenderError> {
     if let Some(e) = frame.submit_error.take() {
         return Err(e);
     }
-    if lighting.lights.len() > MAX_LIGHTS {
-        return Err(RenderError::TooManyLights(lighting.lights.len()));
-    }
+    clusters.check(lighting.lights)?;
     for (_, view) in views {
         if !view.viewport.is_valid() {
             return Err(RenderError::BadViewport(view.viewport));

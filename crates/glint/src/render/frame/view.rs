@@ -10,6 +10,7 @@ use crate::render::frame::ambient_occlusion::{occludes, prepare_ambient_occlusio
 use crate::render::frame::encode::encode;
 use crate::render::frame::forward::{build_queue, upload};
 use crate::render::frame::input::FrameMode;
+use crate::render::frame::lights::cluster_lights;
 use crate::render::frame::naive::naive_frame;
 use crate::render::frame::prepare::prepare;
 use crate::render::frame::shadow_pass::draw_shadows;
@@ -87,7 +88,8 @@ fn draw_into(
 ) -> Result<FrameStats, RenderError> {
     let [x, y, width, height] = view.viewport.pixels(target.width(), target.height());
     let occluded = occludes(res, view.ambient_occlusion);
-    let variant = FrameVariant::after(shadows.first, shadows.views.len(), lighting.lights, occluded);
+    let variant = FrameVariant::after(shadows.first, shadows.views.len(), lighting.lights, occluded)
+        .with_clusters(res.clusters.applies(lighting.lights));
     let renderer = (res.cull_pipelines.is_some(), res.levels_of_detail, hides, variant);
     let view_frame = ViewFrame::new(view, (width, height), renderer);
     let format = scene_format(res, view, target);
@@ -129,18 +131,20 @@ fn scene_format(res: &Resources, view: &View, target: &OffscreenTarget) -> Targe
 /// 2. shadow views — this view's cascades, and (the frame's first view)
 ///    the spot and point lights' views: culled, batched and drawn from every
 ///    submitted caster (`render/frame/shadow_pass.rs`)
-/// 3. cull — each entity's world box, then its instances', against the
+/// 3. lights — where the view clusters, its point and spot lights binned
+///    into its cluster grid on the CPU (`render/frame/lights.rs`)
+/// 4. cull — each entity's world box, then its instances', against the
 ///    view's frustum; culled on the GPU ([`Culling::Gpu`]), every valid
 ///    instance of each entity not blended becomes a candidate the GPU tests
 ///    (`render/gpu_driven/gpu_cull.rs`)
-/// 4. queue — one draw item with a 64-bit sort key per visible run (per instance when blended)
-/// 5. sort — radix sort by key
-/// 6. batch — equal (stage, pipeline, material, shape) runs merged into
+/// 5. queue — one draw item with a 64-bit sort key per visible run (per instance when blended)
+/// 6. sort — radix sort by key
+/// 7. batch — equal (stage, pipeline, material, shape) runs merged into
 ///    instanced draws, one indirect command each
-/// 7. upload — with ambient occlusion, its pre-pass pipelines, textures and
+/// 8. upload — with ambient occlusion, its pre-pass pipelines, textures and
 ///    parameters (`render/passes/ambient_occlusion.rs`); Scene and Camera blocks
 ///    if changed, changed instances, draw indices and indirect commands if changed
-/// 8. encode — culled on the GPU, the cull pass first; with ambient
+/// 9. encode — culled on the GPU, the cull pass first; with ambient
 ///    occlusion, its depth pre-pass (the view's depth, which the forward
 ///    pass then tests for equality), occlusion and blur passes; one pass:
 ///    opaque → alpha-test → sky → transparent (or as `render_order` says)
@@ -148,8 +152,8 @@ fn scene_format(res: &Resources, view: &View, target: &OffscreenTarget) -> Targe
 ///    mesh page go in one multi-draw-indirect call. Occlusion culling
 ///    splits the pass (or the depth pre-pass) around its depth pyramid and
 ///    late cull (`render/gpu_driven/occlusion.rs`)
-/// 9. compose — a view drawn into a target of its own reaches its
-///    rectangle: copied, or through its post chain (`render/passes/post.rs`)
+/// 10. compose — a view drawn into a target of its own reaches its
+///     rectangle: copied, or through its post chain (`render/passes/post.rs`)
 fn view_stages(
     res: &mut Resources,
     frame: &mut Frame,
@@ -165,6 +169,8 @@ fn view_stages(
     stats.cpu_ms.prepare = lap.next();
     draw_shadows(res, frame, gpu, (view, shadows), (&prepared, &lighting.environment), &mut stats)?;
     lap.next();
+    cluster_lights(gpu, view, lighting.lights, &mut stats);
+    stats.cpu_ms.lights = lap.next();
     let forward = if res.mode == FrameMode::Naive { "forward (naive)" } else { "forward" };
     frame.outline.enter(&mut frame.encoder, forward);
     match res.mode {

@@ -7,6 +7,7 @@
 use crate::gpu::DriverErrors;
 use crate::render::error::RenderError;
 use crate::render::passes::shadow_views::{ShadowView, ViewTarget};
+use crate::render::resources::gpu_array::GpuArray;
 use crate::render::resources::pipelines::SHADOW_FORMAT;
 use crate::scene::shadow_layout::MAX_2D_VIEWS;
 use crate::scene::{ShadowLayout, MAX_SHADOW_MAP_BYTES};
@@ -190,13 +191,15 @@ impl ShadowMaps {
     }
 
     /// The Scene block's bind group over `scene` and `shadow` blocks, these
-    /// maps, `environment`'s and the view's ambient `occlusion`.
+    /// maps, `environment`'s, the view's ambient `occlusion` and its light
+    /// `clusters`.
     pub(crate) fn scene_group(
         &self,
         device: &wgpu::Device,
         layout: &wgpu::BindGroupLayout,
         (scene, shadow): (&wgpu::Buffer, &wgpu::Buffer),
         (environment, occlusion): (&crate::render::passes::environment::EnvironmentMaps, &wgpu::TextureView),
+        clusters: &GpuArray,
     ) -> wgpu::BindGroup {
         let entries = [
             wgpu::BindGroupEntry { binding: 0, resource: scene.as_entire_binding() },
@@ -205,6 +208,7 @@ impl ShadowMaps {
             wgpu::BindGroupEntry { binding: 3, resource: wgpu::BindingResource::TextureView(&self.cube_maps) },
             wgpu::BindGroupEntry { binding: 4, resource: wgpu::BindingResource::Sampler(&self.sampler) },
             wgpu::BindGroupEntry { binding: 9, resource: wgpu::BindingResource::TextureView(occlusion) },
+            wgpu::BindGroupEntry { binding: 10, resource: clusters.binding() },
         ];
         device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("renderer: scene block (group 0)"),

@@ -1,10 +1,11 @@
 //! Core layer: GPU twins of the shader data blocks (layouts match `shader/*.wgsl`)
 //! and [`UniformBlock`], which writes a block only when its bytes change.
 
+use crate::render::clusters::ClusterGrid;
 use crate::scene::{AlphaMode, Background, Camera, Environment, Light, LightKind, Material, MaterialId, MAX_LIGHTS};
 use glam::{Mat4, Vec4};
 
-/// One light as the shader reads it (32 bytes).
+/// One light as the shader reads it (64 bytes).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub(crate) struct LightGpu {
@@ -51,7 +52,7 @@ impl Light {
     }
 }
 
-/// The Scene block, `@group(0) @binding(0)` (4,208 bytes).
+/// The Scene block, `@group(0) @binding(0)` (4,224 bytes).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub(crate) struct SceneGpu {
@@ -59,18 +60,21 @@ pub(crate) struct SceneGpu {
     sky_top: [f32; 4],              // 16
     sky_bottom: [f32; 4],           // 16
     fog: [f32; 4],                  // 16: rgb colour, w density
-    counts: [u32; 4],               // 16: lights, directional lights, 2 reserved
+    counts: [u32; 4],               // 16: lights, directional lights, a cluster tile's pixels, depth slices
     environment: [f32; 4],          // 16: intensity (0: none), cos and sin of its turn, last specular level
     environment_sky: [f32; 4],      // 16: the specular level the sky is drawn from, 3 reserved
+    clusters: [f32; 4],             // 16: tiles across and down, slice = ⌊ln(depth)·z + w⌋
     lights: [LightGpu; MAX_LIGHTS], // 64 × 64
 }
-const _: () = assert!(std::mem::size_of::<SceneGpu>() == 112 + 64 * MAX_LIGHTS);
+const _: () = assert!(std::mem::size_of::<SceneGpu>() == 128 + 64 * MAX_LIGHTS);
 
 impl SceneGpu {
-    /// Pack the environment and up to [`MAX_LIGHTS`] lights (the caller checks the
-    /// count), with each light's first shadow view where it has shadow maps. The
-    /// directional lights come first, then the point and spot lights, each kind in
-    /// the order given (the forward shader's light loops, `LightCounts`).
+    /// Pack the environment and up to [`MAX_LIGHTS`] lights, with each light's
+    /// first shadow view where it has shadow maps. The directional lights come
+    /// first, then the point and spot lights, each kind in the order given (the
+    /// forward shader's light loops, `LightCounts`). A clustered frame may have
+    /// more: its directional lights (at most [`MAX_LIGHTS`], checked by the
+    /// caller) are all here, its point and spot lights in its light table.
     pub(crate) fn new(env: &Environment, lights: &[Light], shadows: &[Option<u32>]) -> Self {
         let (top, bottom) = match env.background {
             Background::Color(c) => (c, c),
@@ -84,6 +88,7 @@ impl SceneGpu {
             counts: [lights.len().min(MAX_LIGHTS) as u32, 0, 0, 0],
             environment: [0.0; 4],
             environment_sky: [0.0; 4],
+            clusters: [0.0; 4],
             lights: [LightGpu::default(); MAX_LIGHTS],
         };
         if let Some(light) = env.light {
@@ -109,6 +114,15 @@ impl SceneGpu {
     pub(crate) fn with_specular_levels(mut self, last: f32) -> Self {
         self.environment[3] = last;
         self.environment_sky[0] *= last;
+        self
+    }
+
+    /// The block with the view's light cluster grid (`render/clusters.rs`).
+    pub(crate) fn with_clusters(mut self, grid: &ClusterGrid) -> Self {
+        let (scale, bias) = grid.slice_rule();
+        self.counts[2] = grid.tile_pixels;
+        self.counts[3] = grid.slices;
+        self.clusters = [grid.tiles[0] as f32, grid.tiles[1] as f32, scale, bias];
         self
     }
 }
@@ -372,7 +386,7 @@ mod tests {
             SceneGpu,
             &wgsl,
             "SceneBlock",
-            [ambient, sky_top, sky_bottom, fog, counts, environment, environment_sky, lights]
+            [ambient, sky_top, sky_bottom, fog, counts, environment, environment_sky, clusters, lights]
         );
         assert_mirrors!(CameraGpu, &wgsl, "CameraBlock", [view_proj, view, inv_view_proj, position, motion, far_eye]);
         assert_mirrors!(

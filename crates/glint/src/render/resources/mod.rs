@@ -78,6 +78,8 @@ pub(crate) struct Resources {
     pub mode: FrameMode,
     /// Whether views draw levels of detail (else every mesh at full detail).
     pub levels_of_detail: bool,
+    /// Whether views shade their point and spot lights from clusters.
+    pub clusters: crate::render::clusters::Clusters,
     /// Every tiled entity's density is multiplied by this.
     pub density: f32,
 }
@@ -117,6 +119,7 @@ impl Resources {
             base_vertex: gpu.base_vertex(),
             mode: FrameMode::Optimized,
             levels_of_detail: true,
+            clusters: Default::default(),
             density: 1.0,
             registry,
             device,

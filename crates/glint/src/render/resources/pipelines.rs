@@ -269,6 +269,11 @@ fn depth_features(features: ShaderFeatures, tested: ShaderFeatures) -> ShaderFea
 }
 
 impl Pipelines {
+    /// Whether the shaders' arrays are storage buffers (else data textures).
+    pub(crate) fn vertex_storage(&self) -> bool {
+        self.vertex_storage
+    }
+
     /// The layouts and an empty cache; the material table and the Renderer
     /// block are storage buffers when `vertex_storage`, else data textures
     /// (`render/resources/gpu_array.rs`), in the layouts and in the shaders.
@@ -278,6 +283,7 @@ impl Pipelines {
             device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some(label), entries })
         };
         let fragment = wgpu::ShaderStages::FRAGMENT;
+        let array = |binding, visibility| gpu_array::layout_entry(binding, visibility, vertex_storage);
         let depth_texture = |binding, view_dimension| wgpu::BindGroupLayoutEntry {
             binding,
             visibility: fragment,
@@ -308,11 +314,12 @@ impl Pipelines {
                 sampler_entry(8),
                 // The view's ambient occlusion (render/passes/ambient_occlusion.rs).
                 texture_entry(9),
+                // The view's light clusters: its lists and lights (render/frame/lights.rs).
+                array(10, fragment),
             ],
         );
         // One record per view, picked by a dynamic offset (render/views.rs).
         let camera_layout = layout("renderer: camera block layout (group 1)", &[uniform_entry(0, all, true)]);
-        let array = |binding, visibility| gpu_array::layout_entry(binding, visibility, vertex_storage);
         let material_layout = layout(
             "renderer: material block layout (group 2)",
             &[

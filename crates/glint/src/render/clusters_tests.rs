@@ -1,0 +1,168 @@
+use super::*;
+use rand::{Rng, SeedableRng};
+
+/// A perspective and an orthographic camera, looking down −Z from (1, 2, 8)
+/// with a tilt, and a viewport with cut-short last tiles.
+fn cameras() -> [Camera; 2] {
+    let place = |c: Camera| c.looking_at(Vec3::new(1.0, 2.0, 8.0), Vec3::new(0.0, 0.5, 0.0));
+    [place(Camera::perspective(60.0, 0.1, 60.0)), place(Camera::orthographic(12.0, 0.1, 60.0))]
+}
+const SIZE: [u32; 2] = [250, 190];
+
+/// Random point and spot lights around the view, behind the eye too, with
+/// ranges from 1 cm to 50 m.
+fn random_lights(rng: &mut impl Rng, n: usize) -> Vec<Light> {
+    (0..n)
+        .map(|_| {
+            let position =
+                Vec3::new(rng.random_range(-30.0..30.0), rng.random_range(-20.0..20.0), rng.random_range(-60.0..20.0));
+            let range = 10f32.powf(rng.random_range(-2.0..1.7));
+            if rng.random_bool(0.5) {
+                Light::point(position, Vec3::ONE, 1.0, range)
+            } else {
+                let direction =
+                    Vec3::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0));
+                let outer = rng.random_range(0.05..FRAC_PI_2);
+                Light::spot(position, direction, Vec3::ONE, 1.0, range, (outer * 0.5, outer))
+            }
+        })
+        .collect()
+}
+
+/// Whether `light` sends anything to `p` (forward.wgsl's window and cone are
+/// above zero there).
+fn reaches(light: &Light, p: Vec3) -> bool {
+    match light.kind {
+        LightKind::Directional { .. } => true,
+        LightKind::Point { position, range } => p.distance(position) < range,
+        LightKind::Spot { position, direction, range, outer_angle, .. } => {
+            let to_p = p - position;
+            let outer = outer_angle.clamp(1e-3, FRAC_PI_2).cos();
+            to_p.length() < range && direction.normalize().dot(to_p.normalize_or_zero()) > outer
+        }
+    }
+}
+
+#[test]
+fn every_light_that_reaches_a_point_is_listed_in_its_cluster() {
+    let mut rng = rand_pcg::Pcg64::seed_from_u64(49);
+    for camera in cameras() {
+        let grid = ClusterGrid::new(&camera, SIZE);
+        assert_eq!((grid.tiles, grid.tile_pixels, grid.slices), ([16, 12], 16, DEPTH_SLICES));
+        let view = camera.view();
+        let to_world = view.inverse();
+        let lights = random_lights(&mut rng, 400);
+        let clusters = bin_lights(&grid, view, &lights);
+        assert_eq!(clusters.overflow, 0);
+        let (mut checked, mut lit) = (0, 0);
+        for _ in 0..20_000 {
+            // A fragment: a pixel of the viewport and a depth in the frustum,
+            // placed as the shader finds its cluster.
+            let (px, py) = (rng.random_range(0.0..SIZE[0] as f32), rng.random_range(0.0..SIZE[1] as f32));
+            let depth = grid.near * (grid.far / grid.near).powf(rng.random_range(0.0..1.0));
+            let ndc = [2.0 * px / SIZE[0] as f32 - 1.0, 1.0 - 2.0 * py / SIZE[1] as f32];
+            let v = Vec3::new(grid.view_coordinate(0, ndc[0], depth), grid.view_coordinate(1, ndc[1], depth), -depth);
+            let p = to_world.transform_point3(v);
+            let index = grid.index(grid.tile_of(0, px), grid.tile_of(1, py), grid.slice_of(depth));
+            let listed = clusters.lights(index);
+            for (i, light) in lights.iter().enumerate().filter(|(_, l)| reaches(l, p)) {
+                assert!(listed.contains(&(i as u32)), "light {i} {light:?} reaches {p} (pixel {px} {py}, depth {depth}) but cluster {index} lists {listed:?}");
+                lit += 1;
+            }
+            checked += 1;
+        }
+        assert!(lit > checked, "the test's lights reach its points: {lit} over {checked} points");
+        // And the lists are far shorter than every light.
+        let mean = clusters.indices.len() as f64 / grid.clusters() as f64;
+        assert!(mean < lights.len() as f64 / 4.0, "{mean} lights a cluster of {}", lights.len());
+    }
+}
+
+#[test]
+fn a_small_light_reaches_only_the_clusters_around_it_and_hidden_ones_none() {
+    let [camera, _] = cameras();
+    let grid = ClusterGrid::new(&camera, SIZE);
+    let view = camera.view();
+    let forward = (camera.target - camera.eye).normalize();
+    let at = |depth: f32| camera.eye + forward * depth;
+    let lights = [
+        Light::point(at(10.0), Vec3::ONE, 1.0, 0.2),
+        Light::point(camera.eye - forward * 5.0, Vec3::ONE, 1.0, 2.0),
+        Light::point(at(100.0), Vec3::ONE, 1.0, 5.0),
+        Light::point(at(10.0) + Vec3::X * 40.0, Vec3::ONE, 1.0, 1.0),
+        Light::directional(Vec3::NEG_Y, Vec3::ONE, 1.0),
+    ];
+    let clusters = bin_lights(&grid, view, &lights);
+    assert_eq!(clusters.visible, 1, "behind the eye, beyond the far plane, off to the side and directional: none");
+    let touched: Vec<usize> = (0..grid.clusters()).filter(|&c| !clusters.lights(c).is_empty()).collect();
+    // 0.2 m at 10 m spans less than a tile and about a slice and a half.
+    assert!(!touched.is_empty() && touched.len() <= 8, "{touched:?}");
+    let slice = grid.slice_of(10.0);
+    let tile = [grid.tile_of(0, SIZE[0] as f32 * 0.5), grid.tile_of(1, SIZE[1] as f32 * 0.5)];
+    assert!(touched.contains(&grid.index(tile[0], tile[1], slice)));
+    assert!(clusters.indices.iter().all(|&i| i == 0));
+}
+
+#[test]
+fn each_cluster_lists_its_lights_in_order_and_overflow_is_counted() {
+    let [camera, _] = cameras();
+    let grid = ClusterGrid::new(&camera, SIZE);
+    let forward = (camera.target - camera.eye).normalize();
+    // 300 lights on one spot, then one elsewhere: the spot's clusters keep
+    // the first MAX_CLUSTER_LIGHTS and count the rest.
+    let mut lights: Vec<Light> =
+        (0..300).map(|_| Light::point(camera.eye + forward * 10.0, Vec3::ONE, 1.0, 0.1)).collect();
+    lights.push(Light::point(camera.eye + forward * 30.0, Vec3::ONE, 1.0, 0.5));
+    let clusters = bin_lights(&grid, camera.view(), &lights);
+    assert_eq!(clusters.visible, 301);
+    let crowded: Vec<usize> = (0..grid.clusters()).filter(|&c| clusters.lights(c).contains(&0)).collect();
+    assert!(!crowded.is_empty());
+    for &c in &crowded {
+        let listed = clusters.lights(c);
+        assert_eq!(listed.len(), MAX_CLUSTER_LIGHTS as usize);
+        assert!(listed.iter().enumerate().all(|(k, &i)| i == k as u32), "the lowest-numbered, ascending");
+    }
+    assert_eq!(clusters.overflow, crowded.len() as u32 * (300 - MAX_CLUSTER_LIGHTS));
+    let ranges_cover = clusters.ranges.iter().map(|r| r[1]).sum::<u32>() as usize;
+    assert_eq!(ranges_cover, clusters.indices.len());
+}
+
+#[test]
+fn slices_grow_exponentially_from_near_to_far() {
+    let [camera, _] = cameras();
+    let grid = ClusterGrid::new(&camera, SIZE);
+    assert_eq!(grid.slice_of(0.1), 0);
+    assert_eq!(grid.slice_of(0.01), 0, "nearer than the near plane: the first");
+    assert_eq!(grid.slice_of(1e4), DEPTH_SLICES - 1, "beyond the far plane: the last");
+    for k in 0..DEPTH_SLICES {
+        let (start, end) = (grid.slice_start(k), grid.slice_start(k + 1));
+        assert_eq!(grid.slice_of(start * 1.001), k);
+        assert_eq!(grid.slice_of(end * 0.999), k);
+        let ratio = end / start;
+        assert!((ratio - (600f32).powf(1.0 / DEPTH_SLICES as f32)).abs() < 1e-3, "slice {k}: {ratio}");
+    }
+}
+
+#[test]
+fn a_frame_takes_thousands_of_lights_with_clusters_and_64_without() {
+    let point = Light::point(Vec3::ZERO, Vec3::ONE, 1.0, 1.0);
+    let sun = Light::directional(Vec3::NEG_Y, Vec3::ONE, 1.0);
+    let many = vec![point; MAX_CLUSTERED_LIGHTS];
+    assert!(Clusters::Auto.check(&many).is_ok() && Clusters::On.check(&many).is_ok());
+    let refused = |clusters: Clusters, lights: &[Light]| match clusters.check(lights) {
+        Err(RenderError::TooManyLights { given, what, most }) => (given, what, most),
+        other => panic!("{clusters:?} took {} lights: {other:?}", lights.len()),
+    };
+    assert_eq!(refused(Clusters::Off, &many), (4096, "lights with light clusters off", 64));
+    assert!(Clusters::Off.check(&many[..MAX_LIGHTS]).is_ok());
+    let too_many = vec![point; MAX_CLUSTERED_LIGHTS + 1];
+    assert_eq!(refused(Clusters::Auto, &too_many), (4097, "lights", 4096));
+    let suns = vec![sun; MAX_LIGHTS + 1];
+    assert_eq!(refused(Clusters::On, &suns), (65, "directional lights", 64));
+    // Auto clusters past 8 point and spot lights, whatever the directional ones.
+    let mut few = vec![sun; 3];
+    few.extend([point; AUTO_CLUSTER_LIGHTS]);
+    assert!(!Clusters::Auto.applies(&few) && Clusters::On.applies(&few) && !Clusters::Off.applies(&few));
+    few.push(point);
+    assert!(Clusters::Auto.applies(&few));
+}

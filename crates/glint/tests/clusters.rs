@@ -1,0 +1,128 @@
+//! Clustered forward shading (`render/clusters.rs`): a fragment shading with
+//! its cluster's point and spot lights gives the picture of the loop over
+//! every light, on each path (storage buffers natively, data textures on the
+//! GL and WebGL2 paths), and the frame says how the lights fell.
+
+mod common;
+
+use glam::Vec3;
+use glint::render::Clusters;
+use glint::{Gpu, Light, OffscreenTarget, Renderer};
+
+/// 63 small lights (the sun makes 64, a frame's most) in an 8 × 8 grid over the floor, every colour its own,
+/// every fourth a spot pointing down; ranges from 0.6 to 1.5 m.
+fn lights() -> Vec<Light> {
+    (0..63)
+        .map(|i| {
+            let (x, z) = ((i % 8) as f32, (i / 8) as f32);
+            let position = Vec3::new(-4.2 + 1.2 * x, 0.25 + 0.1 * ((i * 7) % 5) as f32, -4.2 + 1.2 * z);
+            let hue = i as f32 / 64.0 * std::f32::consts::TAU;
+            let color = Vec3::new(hue.cos(), (hue + 2.1).cos(), (hue + 4.2).cos()) * 0.5 + 0.5;
+            let range = 0.6 + 0.9 * ((i * 13) % 8) as f32 / 7.0;
+            match i % 4 {
+                3 => Light::spot(position + Vec3::Y, Vec3::NEG_Y, color, 3.0, range + 1.0, (0.3, 0.6)),
+                _ => Light::point(position, color, 1.5, range),
+            }
+        })
+        .collect()
+}
+
+/// One 256 × 256 frame of `tests/scenes/clusters.scn` with [`lights`], clustered as `clusters` says.
+fn render(gpu: &Gpu, clusters: Clusters) -> (image::RgbaImage, glint::FrameStats) {
+    let mut desc = common::load_scene(&common::repo_root().join("tests/scenes/clusters.scn"));
+    desc.lights.extend(lights());
+    let mut renderer = Renderer::new(gpu);
+    renderer.set_clusters(clusters);
+    let entities = renderer.place_scene(&desc).entities;
+    let mut target = OffscreenTarget::new(gpu, 256, 256, 4).expect("target");
+    let view = glint::View::new(desc.cameras[0]);
+    let stats = renderer.render(&entities, view, desc.lighting(), &mut target).expect("frame");
+    (target.read_rgba8(gpu).expect("readback"), stats)
+}
+
+/// Clustered and not on `gpu`: the same picture (the reference), and the counts.
+fn clustered_equals_every_light(gpu: &Gpu) {
+    let (every, unclustered) = render(gpu, Clusters::Off);
+    let (clustered, stats) = render(gpu, Clusters::Auto);
+    assert_eq!(unclustered.light_clusters, None, "--clusters off loops over every light");
+    let clusters = stats.light_clusters.expect("64 lights are clustered by default");
+    eprintln!("{}: {clusters:?}", gpu.info().name);
+    assert_eq!((clusters.grid, clusters.tile_pixels), ([16, 16, 24], 16));
+    assert_eq!(clusters.overflow, 0);
+    assert!(clusters.lights_visible > 32 && clusters.lights_visible <= 63, "{clusters:?}");
+    assert!(clusters.max_per_cluster < 24 && clusters.mean_per_cluster < 4.0, "{clusters:?}");
+    assert!(stats.bytes_uploaded.lights >= 64 * clusters.lights_visible as u64, "{:?}", stats.bytes_uploaded);
+    let difference = common::max_difference(&every, &clustered);
+    assert!(difference <= 2, "clustered shading differs from every light's by {difference}");
+    common::assert_matches_reference("clusters", &clustered);
+}
+
+#[test]
+fn clustered_shading_draws_what_the_loop_over_every_light_draws() {
+    let Some(gpu) = common::gpu() else { return };
+    clustered_equals_every_light(gpu);
+}
+
+#[test]
+fn clustered_shading_matches_on_gl_and_the_webgl2_path() {
+    for gpu in [common::gl_gpu(), common::webgl2_gpu()].into_iter().flatten() {
+        clustered_equals_every_light(gpu);
+    }
+}
+
+/// `n` × `n` tiny lights 0.15 m apart just over the floor, seen from straight
+/// above, each one of six colours (red, green, blue, yellow, cyan, magenta)
+/// by a hash of its number: each light's colour must appear under it, and
+/// only its own (their ranges do not meet on the floor).
+fn every_light_shows_its_colour_under_it(gpu: &Gpu, n: usize) {
+    const COLOURS: [[f32; 3]; 6] = [[1., 0., 0.], [0., 1., 0.], [0., 0., 1.], [1., 1., 0.], [0., 1., 1.], [1., 0., 1.]];
+    let mut desc = common::load_scene(&common::repo_root().join("tests/scenes/clusters.scn"));
+    desc.lights.clear();
+    desc.entities.truncate(1); // the floor, not the spheres over it
+    let spacing = 0.15;
+    let place = |k: usize| (k as f32 - (n as f32 - 1.0) / 2.0) * spacing;
+    let colour_of = |i: usize| COLOURS[(i * 7 + i / 5) % 6];
+    for i in 0..n * n {
+        let position = Vec3::new(place(i % n), 0.05, place(i / n));
+        desc.lights.push(Light::point(position, Vec3::from(colour_of(i)), 0.003, 0.07));
+    }
+    let side = spacing * n as f32;
+    let camera = glint::Camera::orthographic(side, 0.5, 20.0).looking_at(Vec3::new(0.0, 10.0, 0.0), Vec3::ZERO);
+    let size = (n * 4) as u32;
+    let mut renderer = Renderer::new(gpu);
+    let entities = renderer.place_scene(&desc).entities;
+    let mut target = OffscreenTarget::new(gpu, size, size, 1).expect("target");
+    let stats = renderer.render(&entities, glint::View::new(camera), desc.lighting(), &mut target).expect("frame");
+    let image = target.read_rgba8(gpu).expect("readback");
+    let clusters = stats.light_clusters.expect("clustered");
+    eprintln!("{} lights on {}: {clusters:?}, {:.2} ms binning", n * n, gpu.info().name, stats.cpu_ms.lights);
+    assert_eq!(clusters.overflow, 0);
+    let view_proj = camera.projection(1.0) * camera.view();
+    for (i, light) in desc.lights.iter().enumerate() {
+        let glint::scene::LightKind::Point { position, .. } = light.kind else { unreachable!() };
+        let ndc = view_proj.project_point3(position.with_y(0.0));
+        let (x, y) = (((ndc.x + 1.0) * 0.5 * size as f32) as u32, ((1.0 - ndc.y) * 0.5 * size as f32) as u32);
+        let pixel = image.get_pixel(x.min(size - 1), y.min(size - 1)).0;
+        for (channel, &wanted) in colour_of(i).iter().enumerate() {
+            let lit = pixel[channel] > 60;
+            assert_eq!(
+                lit,
+                wanted > 0.5,
+                "light {i} at {position} ({x}, {y}): pixel {pixel:?}, colour {:?}",
+                colour_of(i)
+            );
+        }
+    }
+}
+
+#[test]
+fn four_thousand_lights_each_light_their_own_spot() {
+    let Some(gpu) = common::gpu() else { return };
+    every_light_shows_its_colour_under_it(gpu, 64);
+}
+
+#[test]
+fn a_thousand_lights_each_light_their_own_spot_on_the_webgl2_path() {
+    let Some(gpu) = common::webgl2_gpu() else { return };
+    every_light_shows_its_colour_under_it(gpu, 32);
+}
