@@ -148,6 +148,22 @@ async function open(scene, backend, init = [], query = "") {
   return { page, state, logs, wall: Date.now() - start };
 }
 
+/** The share of the page's pixels whose colour moved by more than `threshold`
+ * (summed over red, green and blue) over 3 frames. */
+async function movedOver3Frames(page, threshold) {
+  return page.evaluate(async (threshold) => {
+    const a = await window.glintReadFrame();
+    await window.glintAwaitFrames(3);
+    const b = await window.glintReadFrame();
+    let changed = 0;
+    for (let i = 0; i < a.data.length; i += 4) {
+      const d = Math.abs(a.data[i] - b.data[i]) + Math.abs(a.data[i + 1] - b.data[i + 1]) + Math.abs(a.data[i + 2] - b.data[i + 2]);
+      if (d > threshold) changed++;
+    }
+    return changed / (a.width * a.height);
+  }, threshold);
+}
+
 /** Read the page's frame back (as PNG, encoded by the browser), render `scene`
  * (the file at `path`, by default the repository's) with `glint render` at the
  * page's size and `args`, and compare the two with `glint compare` (the
@@ -300,18 +316,36 @@ for (const backend of backends) {
       report(false, `the aquarium on ${backend}`, `${state.error}\n  ${logs.join("\n  ")}`);
       continue;
     }
-    const moved = await page.evaluate(async () => {
-      const a = await window.glintReadFrame();
-      await window.glintAwaitFrames(3);
-      const b = await window.glintReadFrame();
-      let changed = 0;
-      for (let i = 0; i < a.data.length; i += 4) {
-        if (Math.abs(a.data[i] - b.data[i]) + Math.abs(a.data[i + 1] - b.data[i + 1]) + Math.abs(a.data[i + 2] - b.data[i + 2]) > 48) changed++;
-      }
-      return changed / (a.width * a.height);
-    });
+    const moved = await movedOver3Frames(page, 48);
     report(moved > 0.002, `the aquarium on ${backend}`,
       `first frame ${Math.round(state.first)} ms after navigation; ${(100 * moved).toFixed(1)} % of pixels moved over 3 frames`);
+  } finally {
+    await page.close();
+  }
+}
+
+// The night square's 1,264 lights are shaded from each view's light clusters
+// (storage buffers on WebGPU, a data texture on WebGL2), its 1,000 fireflies
+// circling with the page's clock: two frames a while apart differ, and paused
+// once it has run a while, the page's picture is `glint render --time` at
+// the same time.
+for (const backend of backends) {
+  const scene = "scenes/lights.scn";
+  const { page, state, logs } = await open(scene, backend);
+  try {
+    if (state.error) {
+      report(false, `the lights on ${backend}`, `${state.error}\n  ${logs.join("\n  ")}`);
+      continue;
+    }
+    const moved = await movedOver3Frames(page, 24);
+    const time = await page.evaluate(async () => {
+      document.querySelector('[data-control="paused"]').click();
+      await window.glintAwaitFrames(1);
+      return document.getElementById("glint").dataset.time;
+    });
+    const { ok, verdict } = await compareWithGlint(page, logs, scene, backend, ["--time", time]);
+    report(ok && moved > 0.001, `the lights on ${backend}`,
+      `${(100 * moved).toFixed(2)} % of pixels moved over 3 frames; paused at ${time} s; ${verdict}`);
   } finally {
     await page.close();
   }

@@ -103,3 +103,27 @@ fn a_view_the_frame_lacks_is_an_error() {
     assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
     assert!(stderr(&out).contains("--view 3 requested, but the frame has 1 views"), "{}", stderr(&out));
 }
+
+#[test]
+fn explain_shows_the_light_clusters_and_clusters_off_refuses_more_than_64_lights() {
+    let Some(out) = glint_vulkan(&["explain", "scenes/lights.scn", "--size", "320x180"]) else { return };
+    let text = String::from_utf8(out.stdout).expect("UTF-8");
+    let line = text.lines().find(|l| l.starts_with("light clusters:")).expect("a light clusters line");
+    // 320 × 180 in tiles of 16 pixels (the smallest; a 40th of the width
+    // elsewhere), 24 slices; every one of the 1,264 lights is in view, and no
+    // cluster holds more than its 256 (one that did would say how many it left out).
+    assert!(line.starts_with("light clusters: 20 × 12 tiles of 16 px × 24 depth slices (5760 clusters"), "{line}");
+    assert!(line.contains("1264 point and spot lights reach them"), "{line}");
+    assert!(line.ends_with("; 0 entries over the 256 a cluster holds"), "{line}");
+    assert!(text.lines().any(|l| l.starts_with("CPU ms (this frame): prepare") && l.contains(", lights ")), "{text}");
+    let off = glint(&["explain", "scenes/lights.scn", "--size", "64x36", "--clusters", "off"]);
+    assert_ne!(off.status.code(), Some(0));
+    assert!(
+        stderr(&off).contains("1265 lights with light clusters off given, but a frame can use at most 64"),
+        "{}",
+        stderr(&off)
+    );
+    let few = glint(&["explain", "tests/scenes/lights.scn", "--size", "64x36"]);
+    let text = String::from_utf8(few.stdout).expect("UTF-8");
+    assert!(text.contains("light clusters: none (every fragment loops over every light)"), "{text}");
+}

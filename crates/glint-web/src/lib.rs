@@ -33,8 +33,10 @@ use wasm_bindgen::prelude::*;
 use wasm_bindgen::JsCast;
 
 /// The demo scenes the picker offers, under the page.
-const SCENES: [&str; 7] = [
+const SCENES: [&str; 8] = [
     "scenes/showcase.scn",
+    // 1,264 lights, 1,000 of them circling, shaded from light clusters.
+    "scenes/lights.scn",
     "scenes/split.scn",
     "scenes/monitor.scn",
     "scenes/tablecloth.scn",

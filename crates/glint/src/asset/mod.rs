@@ -44,7 +44,9 @@ pub use files::{
     MAX_SCENE_TOTAL_BYTES,
 };
 pub use model::{Model, ModelPart, Morph, Skin};
-pub use scene_desc::{CameraView, DrawOptions, EntityDesc, LightSway, MaterialDesc, MeshRef, SceneDesc, TextureRef};
+pub use scene_desc::{
+    CameraView, DrawOptions, EntityDesc, LightCircle, LightSway, MaterialDesc, MeshRef, SceneDesc, TextureRef,
+};
 pub use scn::{load_scene, load_scene_with, parse_scene, parse_scene_with, MAX_CAMERAS, MAX_INSTANCES};
 pub use scn_cloth::{ClothDesc, MAX_POSE_STEPS};
 pub use scn_emitter::{EmitterDesc, MAX_EMITTERS, MAX_POSE_PARTICLE_STEPS, MAX_SCENE_PARTICLES, STEP_OVERHEAD};

@@ -285,6 +285,7 @@ impl Model {
             cloths: Vec::new(),
             schools: Vec::new(),
             light_sways: Vec::new(),
+            light_circles: Vec::new(),
             emitters: Vec::new(),
             time_of_day: None,
             environment_image: None,

@@ -165,6 +165,8 @@ pub struct SceneDesc {
     pub emitters: Vec<super::EmitterDesc>,
     /// Directional lights whose direction sways with the scene time.
     pub light_sways: Vec<LightSway>,
+    /// Point and spot lights that circle with the scene time.
+    pub light_circles: Vec<LightCircle>,
     /// Non-fatal problems (unknown keys, repeated keys), `path:line: message`.
     pub warnings: Vec<Diagnostic>,
     /// The hour its sun and sky were last set to ([`SceneDesc::set_time_of_day`]).
@@ -185,6 +187,22 @@ pub struct LightSway {
     pub degrees: f32,
     /// Seconds a swing.
     pub period: f32,
+}
+
+/// A point or spot light circling its `origin` in a level circle with time
+/// (`circle` in `.scn`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct LightCircle {
+    /// The light, an index into [`SceneDesc::lights`].
+    pub light: usize,
+    /// The circle's centre (the light's `origin`).
+    pub centre: glam::Vec3,
+    /// Its radius.
+    pub radius: f32,
+    /// Seconds a turn (counter-clockwise seen from above).
+    pub period: f32,
+    /// Where on the circle it is at time 0, degrees from +x towards −z.
+    pub phase: f32,
 }
 
 /// How a camera of a scene draws: where in the image, and its post chain.

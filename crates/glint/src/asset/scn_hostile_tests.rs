@@ -256,11 +256,17 @@ fn compact_instances_past_a_half_float_are_refused_at_their_block() {
 fn time_of_day_without_room_for_a_sun_is_an_error_at_its_line() {
     let point = "{\n\"classname\" \"light_point\"\n\"origin\" \"0 1 0\"\n}\n";
     let world = "{\n\"classname\" \"world\"\n\"time_of_day\" \"12\"\n}\n";
-    let err = parse(&format!("{world}{}", point.repeat(crate::scene::MAX_LIGHTS))).unwrap_err();
+    let most = crate::scene::MAX_CLUSTERED_LIGHTS;
+    let err = parse(&format!("{world}{}", point.repeat(most))).unwrap_err();
     assert_eq!(err.line, Some(3), "{err}");
-    assert!(err.message.contains("time_of_day needs a sun: the scene has 64 lights, none directional"), "{err}");
-    let fits = parse(&format!("{world}{}", point.repeat(crate::scene::MAX_LIGHTS - 1))).unwrap();
-    assert_eq!(fits.lights.len(), crate::scene::MAX_LIGHTS, "the sun is added");
+    assert!(err.message.contains("time_of_day needs a sun: the scene has 4096 lights, none directional"), "{err}");
+    let fits = parse(&format!("{world}{}", point.repeat(most - 1))).unwrap();
+    assert_eq!(fits.lights.len(), most, "the sun is added");
+    // Added first, it moves the circling lights' numbers on by one.
+    let circling = "{\n\"classname\" \"light_point\"\n\"origin\" \"0 1 0\"\n\"circle\" \"1 2\"\n}\n";
+    let scene = parse(&format!("{world}{point}{circling}")).unwrap();
+    assert_eq!(scene.light_circles[0].light, 2);
+    assert!(matches!(scene.lights[2].kind, crate::scene::LightKind::Point { .. }));
 }
 
 #[test]

@@ -65,6 +65,42 @@ pub(super) fn sway(f: &mut Fields, direction: Vec3, light: usize) -> Result<Opti
     }
 }
 
+/// A point or spot light's `circle` key: "RADIUS PERIOD [PHASE]", the light
+/// going round its `origin` in a level circle of that radius, a turn every
+/// PERIOD seconds, starting PHASE degrees round (fireflies, lanterns in wind).
+pub(super) fn circle(f: &mut Fields, centre: Vec3, light: usize) -> Result<Option<super::LightCircle>, Diagnostic> {
+    let Some(pair) = f.get("circle") else { return Ok(None) };
+    let what = "2 or 3 numbers (radius period [phase])";
+    let [radius, period, phase] = match pair.value.split_whitespace().count() {
+        2 => {
+            let [r, p] = numbers::<2>(f.path, pair, what)?;
+            [r, p, 0.0]
+        }
+        _ => numbers::<3>(f.path, pair, what)?,
+    };
+    if !((0.0..=1e4).contains(&radius) && (0.01..=1e6).contains(&period) && (-360.0..=360.0).contains(&phase)) {
+        let message = "\"circle\" must be radius period [phase] with radius 0 to 10000, period 0.01 to 1000000 s, phase -360 to 360 degrees";
+        return Err(Diagnostic::at(f.path, pair.line, message));
+    }
+    Ok(Some(super::LightCircle { light, centre, radius, period, phase }))
+}
+
+/// The fraction of a turn, in radians, `time` seconds into turns of `period`
+/// seconds. Taken modulo one turn in f64 first: 2π·t overflows f32 at
+/// t ≈ 5·10³⁷ s, and sin(∞) is NaN.
+fn turned(time: f32, period: f32) -> f32 {
+    let turns = (f64::from(time) / f64::from(period)).rem_euclid(1.0);
+    (turns * std::f64::consts::TAU) as f32
+}
+
+impl super::LightCircle {
+    /// Where the light is at `time` seconds.
+    pub fn position_at(&self, time: f32) -> Vec3 {
+        let angle = turned(time, self.period) + self.phase.to_radians();
+        self.centre + self.radius * Vec3::new(angle.cos(), 0.0, -angle.sin())
+    }
+}
+
 fn direction(f: &mut Fields) -> Result<Vec3, Diagnostic> {
     let pair = f.require("direction")?;
     let direction = Vec3::from(numbers::<3>(f.path, pair, "3 numbers (x y z)")?);
@@ -88,8 +124,8 @@ impl super::SceneDesc {
     /// ([`Daylight::at`](crate::scene::Daylight::at)): the world's
     /// `time_of_day`. The glare follows the sun, whose direction and colour it takes.
     ///
-    /// A scene with no directional light and already [`MAX_LIGHTS`](crate::scene::MAX_LIGHTS)
-    /// lights has no room for a sun: its sky and ambient light still move, its
+    /// A scene with no directional light and already
+    /// [`MAX_CLUSTERED_LIGHTS`](crate::scene::MAX_CLUSTERED_LIGHTS) lights has no room for a sun: its sky and ambient light still move, its
     /// lights stay as they are, and the error says so.
     pub fn set_time_of_day(&mut self, hours: f32) -> Result<(), Diagnostic> {
         let day = crate::scene::Daylight::at(hours);
@@ -101,8 +137,10 @@ impl super::SceneDesc {
                 sun.kind = crate::scene::LightKind::Directional { direction: day.sun_direction };
                 (sun.color, sun.intensity) = (day.sun_color, day.sun_intensity);
             }
-            None if self.lights.len() < crate::scene::MAX_LIGHTS => {
+            None if self.lights.len() < crate::scene::MAX_CLUSTERED_LIGHTS => {
                 self.lights.insert(0, Light::directional(day.sun_direction, day.sun_color, day.sun_intensity));
+                // The lights that move are one further on.
+                self.light_circles.iter_mut().for_each(|c| c.light += 1);
             }
             None => {}
         }
@@ -117,7 +155,7 @@ impl super::SceneDesc {
                     "time_of_day needs a sun: the scene has {} lights, none directional, and a frame \
                      can use at most {}; make one of them light_directional or leave out a light",
                     self.lights.len(),
-                    crate::scene::MAX_LIGHTS
+                    crate::scene::MAX_CLUSTERED_LIGHTS
                 ),
             )),
         }
@@ -133,14 +171,8 @@ impl super::LightSway {
         let base = self.base.normalize_or(Vec3::NEG_Y);
         let across = base.cross(Vec3::Y).try_normalize().unwrap_or(Vec3::X);
         let other = base.cross(across);
-        // The phase is taken modulo one swing in f64 first: 2π·t overflows f32
-        // at t ≈ 5·10³⁷ s, and sin(∞) is NaN.
-        let phase = |period: f32| {
-            let turns = (f64::from(time) / f64::from(period)).rem_euclid(1.0);
-            (turns * std::f64::consts::TAU) as f32
-        };
-        let a = self.degrees.to_radians() * phase(self.period).sin();
-        let b = 0.5 * self.degrees.to_radians() * (phase(0.7 * self.period) + 1.0).sin();
+        let a = self.degrees.to_radians() * turned(time, self.period).sin();
+        let b = 0.5 * self.degrees.to_radians() * (turned(time, 0.7 * self.period) + 1.0).sin();
         glam::Quat::from_axis_angle(other, b) * (glam::Quat::from_axis_angle(across, a) * base)
     }
 }
@@ -153,6 +185,35 @@ mod tests {
 
     fn parse(text: &str) -> Result<SceneDesc, String> {
         parse_scene(Path::new("t.scn"), text).map_err(|e| e.to_string())
+    }
+
+    #[test]
+    fn a_circling_light_goes_round_its_origin_and_bad_circles_are_errors() {
+        let light = |class: &str, circle: &str| {
+            parse(&format!(
+                "{{\n\"classname\" \"{class}\"\n\"origin\" \"1 2 3\"\n\"direction\" \"0 -1 0\"\n\"circle\" \"{circle}\"\n}}\n"
+            ))
+        };
+        let scene = light("light_point", "0.5 4").unwrap();
+        let circle = &scene.light_circles[0];
+        assert_eq!((circle.light, circle.radius, circle.period, circle.phase), (0, 0.5, 4.0, 0.0));
+        let centre = glam::Vec3::new(1.0, 2.0, 3.0);
+        assert!(circle.position_at(0.0).distance(centre + glam::Vec3::new(0.5, 0.0, 0.0)) < 1e-6);
+        // A quarter turn later it is a quarter round (towards −z), at the same height.
+        assert!(circle.position_at(1.0).distance(centre + glam::Vec3::new(0.0, 0.0, -0.5)) < 1e-6);
+        for t in [0.3, 7.7, 1e9 + 0.25, f32::MAX] {
+            let p = circle.position_at(t);
+            assert!(p.is_finite() && (p.distance(centre) - 0.5).abs() < 1e-5 && p.y == 2.0, "{t}: {p}");
+        }
+        let spot = light("light_spot", "2 1 90").unwrap();
+        assert!(spot.light_circles[0].position_at(0.0).distance(centre + glam::Vec3::new(0.0, 0.0, -2.0)) < 1e-5);
+        for bad in ["1", "-1 2", "1 0", "1 2 400", "1 2 3 4", "a b"] {
+            let e = light("light_point", bad).unwrap_err();
+            assert!(e.contains("t.scn:5") && e.contains("circle"), "{bad}: {e}");
+        }
+        // A directional light does not circle: the key is unknown there.
+        let sun = light("light_directional", "1 2").unwrap();
+        assert!(sun.light_circles.is_empty() && !sun.warnings.is_empty());
     }
 
     #[test]

@@ -210,6 +210,12 @@ impl World {
         for sway in &desc.light_sways {
             desc.lights[sway.light].kind = crate::scene::LightKind::Directional { direction: sway.direction_at(time) };
         }
+        for circle in &desc.light_circles {
+            use crate::scene::LightKind::{Point, Spot};
+            if let Point { position, .. } | Spot { position, .. } = &mut desc.lights[circle.light].kind {
+                *position = circle.position_at(time);
+            }
+        }
         for (sim, emitter) in self.emitters.iter_mut().zip(&desc.emitters) {
             sim.pose(emitter, time);
         }
