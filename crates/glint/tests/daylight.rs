@@ -61,3 +61,20 @@ fn the_webgl2_path_and_gl_draw_the_glare_alike() {
         common::assert_matches_reference("glare_on", &glare);
     }
 }
+
+#[test]
+fn a_sun_added_while_shadows_are_off_leaves_each_light_its_own_shadows() {
+    let Some(gpu) = common::gpu() else { return };
+    // A shadowed point light and no sun: the hour adds one, first.
+    let text = "{\n\"classname\" \"light_point\"\n\"origin\" \"0 2 0\"\n\"shadows\" \"1\"\n}\n";
+    let desc = glint::asset::parse_scene(std::path::Path::new("t.scn"), text).expect("scene");
+    let mut renderer = Renderer::new(gpu);
+    let mut world = World::place(desc, &mut renderer).expect("placed");
+    world.set_shadows(false);
+    world.set_time_of_day(12.0).expect("room for a sun");
+    world.set_shadows(true);
+    let lights = &world.desc().lights;
+    assert_eq!(lights.len(), 2);
+    assert!(matches!(lights[0].kind, glint::scene::LightKind::Directional { .. }) && lights[0].shadows.is_none());
+    assert!(lights[1].shadows.is_some(), "the point light's shadows came back to it");
+}

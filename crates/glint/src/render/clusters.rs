@@ -54,7 +54,8 @@ pub const AUTO_CLUSTER_LIGHTS: usize = 8;
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Clusters {
     /// Clustered when a frame has more than [`AUTO_CLUSTER_LIGHTS`] point
-    /// and spot lights.
+    /// and spot lights, or more lights than the Scene block holds
+    /// ([`MAX_LIGHTS`]).
     #[default]
     Auto,
     /// Clustered whenever a frame has a point or spot light.
@@ -69,11 +70,14 @@ impl Clusters {
     /// [`MAX_LIGHTS`] directional; without, at most [`MAX_LIGHTS`].
     pub fn check(self, lights: &[Light]) -> Result<(), RenderError> {
         let directional = lights.iter().filter(|l| matches!(l.kind, LightKind::Directional { .. })).count();
-        let (given, what, most) = match self.applies(lights) {
-            _ if lights.len() > MAX_CLUSTERED_LIGHTS => (lights.len(), "lights", MAX_CLUSTERED_LIGHTS),
-            _ if directional > MAX_LIGHTS => (directional, "directional lights", MAX_LIGHTS),
-            false if lights.len() > MAX_LIGHTS => (lights.len(), "lights with light clusters off", MAX_LIGHTS),
-            _ => return Ok(()),
+        let (given, what, most) = if directional > MAX_LIGHTS {
+            (directional, "directional lights", MAX_LIGHTS)
+        } else if !self.applies(lights) && lights.len() > MAX_LIGHTS {
+            (lights.len(), "lights with light clusters off", MAX_LIGHTS)
+        } else if lights.len() > MAX_CLUSTERED_LIGHTS {
+            (lights.len(), "lights", MAX_CLUSTERED_LIGHTS)
+        } else {
+            return Ok(());
         };
         Err(RenderError::TooManyLights { given, what, most })
     }
@@ -82,7 +86,7 @@ impl Clusters {
     pub fn applies(self, lights: &[Light]) -> bool {
         let positional = lights.iter().filter(|l| !matches!(l.kind, LightKind::Directional { .. })).count();
         match self {
-            Self::Auto => positional > AUTO_CLUSTER_LIGHTS,
+            Self::Auto => positional > AUTO_CLUSTER_LIGHTS || (positional > 0 && lights.len() > MAX_LIGHTS),
             Self::On => positional > 0,
             Self::Off => false,
         }
@@ -103,6 +107,10 @@ pub struct ClusterGrid {
     /// (orthographic) of the viewport's right and top edges.
     half_extent: [f32; 2],
     perspective: bool,
+    /// Where the view begins: the near plane's depth (an orthographic
+    /// camera's may be 0 or behind the eye).
+    front: f32,
+    /// Where the slices begin (above 0) and end.
     near: f32,
     far: f32,
 }
@@ -119,6 +127,11 @@ impl ClusterGrid {
             }
             Projection::Orthographic { height, near, far } => ([height * 0.5 * aspect, height * 0.5], false, near, far),
         };
+        // The first slice begins at the near plane, or (an orthographic
+        // camera's reaching to or behind the eye) just in front of the eye
+        // and reaches back to that plane.
+        let front = near;
+        let near = near.max(far.abs() * 1e-6).max(1e-6);
         let far = far.max(near * (1.0 + 1e-3));
         let tile = (size[0] / TILES_ACROSS).clamp(MIN_TILE_PIXELS, MAX_TILE_PIXELS);
         Self {
@@ -128,6 +141,7 @@ impl ClusterGrid {
             size,
             half_extent,
             perspective,
+            front,
             near,
             far,
         }
@@ -189,7 +203,8 @@ impl ClusterGrid {
 
     /// The view-space box of cluster (`x`, `y`, `slice`), padded.
     fn cluster_box(&self, x: u32, y: u32, slice: u32) -> (Vec3, Vec3) {
-        let (d0, d1) = (self.slice_start(slice), self.slice_start(slice + 1));
+        let first = if slice == 0 { self.front.min(self.near) } else { self.slice_start(slice) };
+        let (d0, d1) = (first, self.slice_start(slice + 1));
         let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
         for depth in [d0, d1] {
             for px in [x, x + 1] {
@@ -260,9 +275,10 @@ pub fn light_bounds(light: &Light) -> Option<(Vec3, f32)> {
             (position, range, Some((direction.normalize_or(Vec3::NEG_Y), outer_angle.clamp(1e-3, FRAC_PI_2))))
         }
     };
-    // As the light's record has it (`LightGpu`): at least a millimetre.
-    let range = range.max(1e-3);
-    if !(range.is_finite() && position.is_finite()) {
+    // As the light's record has it (`LightGpu`): at least a millimetre (a NaN
+    // range is one); an endless one reaches everything, as far as a sphere can say.
+    let range = if range.is_nan() { 1e-3 } else { range.clamp(1e-3, f32::MAX) };
+    if !position.is_finite() {
         return None;
     }
     Some(match cone {
@@ -319,7 +335,7 @@ pub fn bin_lights(grid: &ClusterGrid, view: Mat4, lights: &[Light]) -> LightClus
 fn touch_clusters(grid: &ClusterGrid, centre: Vec3, radius: f32, mut touch: impl FnMut(usize)) {
     let depth = -centre.z;
     let (d0, d1) = (depth - radius, depth + radius);
-    if d1 < grid.near || d0 > grid.far {
+    if d1 < grid.front || d0 > grid.far {
         return;
     }
     let (s0, s1) = (grid.slice_of(d0.max(grid.near)), grid.slice_of(d1.min(grid.far)));

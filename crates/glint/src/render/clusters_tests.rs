@@ -165,4 +165,27 @@ fn a_frame_takes_thousands_of_lights_with_clusters_and_64_without() {
     assert!(!Clusters::Auto.applies(&few) && Clusters::On.applies(&few) && !Clusters::Off.applies(&few));
     few.push(point);
     assert!(Clusters::Auto.applies(&few));
+    // And past the Scene block's 64, however few point and spot lights.
+    let mut suns = vec![sun; 60];
+    suns.extend([point; 5]);
+    assert!(Clusters::Auto.applies(&suns) && Clusters::Auto.check(&suns).is_ok());
+    assert_eq!(refused(Clusters::Off, &suns), (65, "lights with light clusters off", 64));
+    let thousands = vec![point; MAX_CLUSTERED_LIGHTS + 904];
+    assert_eq!(refused(Clusters::Off, &thousands), (5000, "lights with light clusters off", 64));
+}
+
+#[test]
+fn an_orthographic_view_from_behind_its_eye_and_an_endless_light_are_binned_too() {
+    // An orthographic camera whose near plane is behind its eye sees a light
+    // there; every cluster lists a light of endless range.
+    let camera = Camera::orthographic(10.0, -5.0, 20.0).looking_at(Vec3::new(0.0, 0.0, 5.0), Vec3::ZERO);
+    let grid = ClusterGrid::new(&camera, SIZE);
+    let behind = Light::point(Vec3::new(0.0, 0.0, 7.0), Vec3::ONE, 1.0, 0.5);
+    let endless = Light::point(Vec3::new(3.0, 0.0, 0.0), Vec3::ONE, 1.0, f32::INFINITY);
+    let clusters = bin_lights(&grid, camera.view(), &[behind, endless]);
+    assert_eq!(clusters.visible, 2);
+    let centre = grid.index(grid.tile_of(0, SIZE[0] as f32 * 0.5), grid.tile_of(1, SIZE[1] as f32 * 0.5), 0);
+    assert_eq!(clusters.lights(centre), &[0, 1], "the light 2 m behind the eye, in the first slice");
+    assert!((0..grid.clusters()).all(|c| clusters.lights(c).contains(&1)), "the endless light everywhere");
+    assert!(grid.slice_rule().0.is_finite() && grid.slice_rule().1.is_finite());
 }

@@ -24,7 +24,9 @@ struct SceneBlock {
     sky_bottom: vec4<f32>,
     // rgb: fog colour; w: density (0: no fog).
     fog: vec4<f32>,
-    // x: number of lights; y: directional lights (first in `lights`); z: a light
+    // x: lights in `lights` (at most 64; a clustered frame's other point and spot
+    // lights are in its light clusters only); y: directional lights (first in
+    // `lights`); z: a light
     // cluster tile's side in pixels; w: depth slices (render/clusters.rs).
     counts: vec4<u32>,
     // Image-based lighting (render/passes/environment.rs): x: intensity (0: none);

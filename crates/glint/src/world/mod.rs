@@ -233,7 +233,13 @@ impl World {
     /// [`lighting`](Self::lighting) on. A scene with no room for a sun
     /// keeps its lights, and the error says so (its sky still moves).
     pub fn set_time_of_day(&mut self, hours: f32) -> Result<(), crate::Diagnostic> {
-        self.desc.set_time_of_day(hours)
+        let before = self.desc.lights.len();
+        let set = self.desc.set_time_of_day(hours);
+        // A sun added goes first: the shadows kept while they are off move on with their lights.
+        if let Some(saved) = self.shadows_off.as_mut().filter(|_| self.desc.lights.len() > before) {
+            saved.insert(0, None);
+        }
+        set
     }
 
     /// Turn every light's shadows off (keeping their settings) or back on,

@@ -60,7 +60,7 @@ pub(crate) struct SceneGpu {
     sky_top: [f32; 4],              // 16
     sky_bottom: [f32; 4],           // 16
     fog: [f32; 4],                  // 16: rgb colour, w density
-    counts: [u32; 4],               // 16: lights, directional lights, a cluster tile's pixels, depth slices
+    counts: [u32; 4],               // 16: lights held (≤ 64), directional lights, a cluster tile's pixels, depth slices
     environment: [f32; 4],          // 16: intensity (0: none), cos and sin of its turn, last specular level
     environment_sky: [f32; 4],      // 16: the specular level the sky is drawn from, 3 reserved
     clusters: [f32; 4],             // 16: tiles across and down, slice = ⌊ln(depth)·z + w⌋

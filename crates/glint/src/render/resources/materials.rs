@@ -64,7 +64,10 @@ impl Registry {
         features.set(ShaderFeatures::SHADOW_CUBES, frame.shadow_cubes);
         let lit = !features.intersects(ShaderFeatures::UNLIT | ShaderFeatures::ALPHA_BLEND);
         features.set(ShaderFeatures::AMBIENT_OCCLUSION, frame.ambient_occlusion && lit);
-        features.set(ShaderFeatures::CLUSTERED, frame.clustered && lit);
+        // Blended surfaces are lit too: every lit variant of a clustered frame
+        // takes its point and spot lights from the clusters (its loop over
+        // them has none).
+        features.set(ShaderFeatures::CLUSTERED, frame.clustered && !features.contains(ShaderFeatures::UNLIT));
         let key = Pipelines::key(features, frame.lights, layout, material.render_states(), target);
         let (pipeline, built) = self.pipelines.forward_id(&self.device, key)?;
         stats.pipelines_compiled += u32::from(built);
