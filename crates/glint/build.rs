@@ -10,7 +10,7 @@
 //!
 //! The other shaders (`blit`, `post`, `cull`, `pyramid`, `ssao_compute`
 //! (appended to `ssao`), and the simulations' `particles_step`, `school`,
-//! `school_place`, `scan`, `radix`, `cloth` and `cloth_place`) have no defs: each becomes one string
+//! `school_place`, `scan`, `radix`, `cloth`, `cloth_place` and `bin_lights`) have no defs: each becomes one string
 //! there, its imports ahead of its own text, comments dropped too.
 //!
 //! The sources keep to the subset of naga_oil's preprocessor that this reads:
@@ -26,7 +26,7 @@ const COMPOSED: [(&str, &str); 5] =
 
 /// The shaders without defs (their imports ahead of their own text), and the
 /// constant each becomes.
-const PLAIN: [(&str, &str); 12] = [
+const PLAIN: [(&str, &str); 13] = [
     ("BLIT", "blit"),
     ("POST", "post"),
     ("CULL", "cull"),
@@ -39,6 +39,7 @@ const PLAIN: [(&str, &str); 12] = [
     ("RADIX", "radix"),
     ("CLOTH", "cloth"),
     ("CLOTH_PLACE", "cloth_place"),
+    ("BIN_LIGHTS", "bin_lights"),
 ];
 
 /// The modules others import: their import path and file.

@@ -64,6 +64,9 @@ pub struct ModeReport {
     pub shadow_cpu_ms_median: f64,
     /// Median GPU time of the shadow pass; null where unsupported or without shadow views.
     pub shadow_gpu_ms_median: Option<f64>,
+    /// GPU time binning the view's lights into its clusters, median; `None`
+    /// where the CPU binned them (its time is `stage_ms_median.lights`) or untimed.
+    pub lights_gpu_ms_median: Option<f64>,
     /// The view's post effects, in order (empty without a chain).
     pub post: Vec<&'static str>,
     /// Median GPU time of each post effect (the chain's order); empty where unsupported.
@@ -198,6 +201,7 @@ pub fn run_mode(
     let timed = renderer.enable_gpu_timing();
     let mut gpu_ms = Vec::new();
     let mut shadow_gpu_ms = Vec::new();
+    let mut lights_gpu_ms = Vec::new();
     let entities = renderer.place_scene(desc).entities;
     let refs: Vec<_> = entities.iter().collect();
     renderer.precompile(&refs, desc.lighting(), config.msaa)?;
@@ -232,6 +236,7 @@ pub fn run_mode(
             if let Some(times) = frame_gpu {
                 gpu_ms.push(times.forward_ms);
                 shadow_gpu_ms.extend(times.shadow_ms);
+                lights_gpu_ms.extend(times.lights_ms);
                 for (all, ms) in post_gpu_ms.iter_mut().zip(&times.post_ms) {
                     all.push(*ms);
                 }
@@ -274,6 +279,7 @@ pub fn run_mode(
         gpu_ms_median: timed.then(|| median(&mut gpu_ms)).flatten(),
         shadow_cpu_ms_median: median_of(&frames, |f| f.passes.shadow.cpu_ms),
         shadow_gpu_ms_median: timed.then(|| median(&mut shadow_gpu_ms)).flatten(),
+        lights_gpu_ms_median: timed.then(|| median(&mut lights_gpu_ms)).flatten(),
         post: view.post.iter().map(|e| e.name()).collect(),
         post_gpu_ms_median: post_gpu_ms.iter_mut().filter_map(|all| median(all)).collect(),
         ns_per_instance: percentile(&totals, 0.5) * 1e6 / instances,
@@ -326,6 +332,19 @@ pub fn format_mode(r: &ModeReport) -> String {
             "           resident memory: {at_100:.1} MiB after measured frame {}, {end:.1} MiB at the end ({:+.1} MiB)\n",
             RESIDENT_FRAME.min(r.frames),
             end - at_100
+        ));
+    }
+    if let Some(c) = &st.light_clusters {
+        let [x, y, z] = c.grid;
+        let gpu = r.lights_gpu_ms_median.map_or_else(|| "n/a".to_string(), |ms| format!("{ms:.3} ms"));
+        text.push_str(&format!(
+            "           light clusters: {x}x{y}x{z}, binned on the {} | cpu {:.4} ms median | gpu {gpu} median | {} lights visible, {:.2} a cluster, {} at most, {} left out\n",
+            if c.on_gpu { "GPU" } else { "CPU" },
+            s.lights,
+            c.lights_visible,
+            c.mean_per_cluster,
+            c.max_per_cluster,
+            c.overflow
         ));
     }
     if st.shadow_views > 0 {

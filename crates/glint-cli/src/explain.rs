@@ -221,14 +221,20 @@ fn describe(e: &Explained) -> String {
     match &s.light_clusters {
         Some(c) => {
             let [x, y, z] = c.grid;
+            let binned = match (c.on_gpu, s.gpu.as_ref().and_then(|g| g.lights_ms)) {
+                (true, Some(ms)) => {
+                    format!("on the GPU by the pass 'bin lights' in {ms:.3} ms (CPU {:.3} ms)", s.cpu_ms.lights)
+                }
+                (true, None) => format!("on the GPU by the pass 'bin lights' (CPU {:.3} ms)", s.cpu_ms.lights),
+                (false, _) => format!("on the CPU in {:.3} ms", s.cpu_ms.lights),
+            };
             let _ = writeln!(
                 t,
-                "light clusters: {x} × {y} tiles of {} px × {z} depth slices ({} clusters, {} empty), binned on the CPU in {:.3} ms; \
+                "light clusters: {x} × {y} tiles of {} px × {z} depth slices ({} clusters, {} empty), binned {binned}; \
                  {} point and spot lights reach them, {:.2} a cluster on average, {} at most; {} entries over the {MAX_CLUSTER_LIGHTS} a cluster holds",
                 c.tile_pixels,
                 x * y * z,
                 c.empty,
-                s.cpu_ms.lights,
                 c.lights_visible,
                 c.mean_per_cluster,
                 c.max_per_cluster,
@@ -272,9 +278,10 @@ fn describe(e: &Explained) -> String {
         let shadow = g.shadow_ms.map_or(String::new(), |ms| format!("shadow pass {ms:.3}, "));
         let depth = g.depth_prepass_ms.map_or(String::new(), |ms| format!("depth pre-pass {ms:.3}, "));
         let occlusion = g.ambient_occlusion_ms.map_or(String::new(), |ms| format!("ambient occlusion {ms:.3}, "));
+        let lights = g.lights_ms.map_or(String::new(), |ms| format!("light binning {ms:.3}, "));
         let _ = writeln!(
             t,
-            "GPU ms (frame {}): {shadow}{depth}{occlusion}forward pass {:.3}, post [{}]",
+            "GPU ms (frame {}): {shadow}{lights}{depth}{occlusion}forward pass {:.3}, post [{}]",
             g.frame,
             g.forward_ms,
             post.join(", ")

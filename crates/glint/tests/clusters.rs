@@ -6,8 +6,10 @@
 mod common;
 
 use glam::Vec3;
+use glint::render::clusters::{bin_lights, ClusterGrid, MAX_CLUSTER_LIGHTS};
 use glint::render::Clusters;
 use glint::{Gpu, Light, OffscreenTarget, Renderer};
+use rand::{Rng, SeedableRng};
 
 /// 63 small lights (the sun makes 64, a frame's most) in an 8 × 8 grid over the floor, every colour its own,
 /// every fourth a spot pointing down; ranges from 0.6 to 1.5 m.
@@ -37,6 +39,9 @@ fn render(gpu: &Gpu, clusters: Clusters) -> (image::RgbaImage, glint::FrameStats
     let mut target = OffscreenTarget::new(gpu, 256, 256, 4).expect("target");
     let view = glint::View::new(desc.cameras[0]);
     let stats = renderer.render(&entities, view, desc.lighting(), &mut target).expect("frame");
+    let mut stats = [stats];
+    renderer.wait_for_counts(&mut stats); // binned on the GPU, its counts
+    let [stats] = stats;
     (target.read_rgba8(gpu).expect("readback"), stats)
 }
 
@@ -93,6 +98,9 @@ fn every_light_shows_its_colour_under_it(gpu: &Gpu, n: usize) {
     let entities = renderer.place_scene(&desc).entities;
     let mut target = OffscreenTarget::new(gpu, size, size, 1).expect("target");
     let stats = renderer.render(&entities, glint::View::new(camera), desc.lighting(), &mut target).expect("frame");
+    let mut stats = [stats];
+    renderer.wait_for_counts(&mut stats);
+    let [stats] = stats;
     let image = target.read_rgba8(gpu).expect("readback");
     let clusters = stats.light_clusters.expect("clustered");
     eprintln!("{} lights on {}: {clusters:?}, {:.2} ms binning", n * n, gpu.info().name, stats.cpu_ms.lights);
@@ -125,4 +133,71 @@ fn four_thousand_lights_each_light_their_own_spot() {
 fn a_thousand_lights_each_light_their_own_spot_on_the_webgl2_path() {
     let Some(gpu) = common::webgl2_gpu() else { return };
     every_light_shows_its_colour_under_it(gpu, 32);
+}
+
+/// `n` random point and spot lights around and behind a camera at (1, 2, 8)
+/// looking at (0, 0.5, 0), ranges from 1 cm to 50 m (so straddling cluster
+/// planes, and some reaching through the eye), and 300 small ones on one
+/// spot 10 m ahead (more than a cluster holds).
+fn random_lights(rng: &mut impl Rng, n: usize) -> Vec<Light> {
+    let mut lights: Vec<Light> = (0..n)
+        .map(|_| {
+            let position =
+                Vec3::new(rng.random_range(-30.0..30.0), rng.random_range(-20.0..20.0), rng.random_range(-60.0..20.0));
+            let range = 10f32.powf(rng.random_range(-2.0..1.7));
+            let direction =
+                Vec3::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0));
+            let outer = rng.random_range(0.05..std::f32::consts::FRAC_PI_2);
+            match rng.random_bool(0.5) {
+                true => Light::point(position, Vec3::ONE, 1.0, range),
+                false => Light::spot(position, direction, Vec3::ONE, 1.0, range, (outer * 0.5, outer)),
+            }
+        })
+        .collect();
+    let ahead = Vec3::new(1.0, 2.0, 8.0) + (Vec3::new(0.0, 0.5, 0.0) - Vec3::new(1.0, 2.0, 8.0)).normalize() * 10.0;
+    lights.extend((0..300).map(|_| Light::point(ahead, Vec3::ONE, 1.0, 0.1)));
+    lights
+}
+
+#[test]
+fn the_gpu_bins_the_same_lights_into_each_cluster_as_the_cpu() {
+    let Some(gpu) = common::gpu() else { return };
+    if !Renderer::new(gpu).computes() {
+        eprintln!("skipped: {} culls on the CPU, and bins there too", gpu.info().name);
+        return;
+    }
+    let mut rng = rand_pcg::Pcg64::seed_from_u64(4049);
+    let place = |c: glint::Camera| c.looking_at(Vec3::new(1.0, 2.0, 8.0), Vec3::new(0.0, 0.5, 0.0));
+    let cameras =
+        [place(glint::Camera::perspective(60.0, 0.1, 60.0)), place(glint::Camera::orthographic(12.0, 0.1, 60.0))];
+    for (camera, (width, height)) in cameras.into_iter().zip([(250, 190), (320, 200)]) {
+        let mut desc = common::load_scene(&common::repo_root().join("tests/scenes/clusters.scn"));
+        desc.lights = random_lights(&mut rng, 1200);
+        let mut renderer = Renderer::new(gpu);
+        let entities = renderer.place_scene(&desc).entities;
+        let mut target = OffscreenTarget::new(gpu, width, height, 1).expect("target");
+        let mut frame = |culling| {
+            let view = glint::View::new(camera).with_culling(culling);
+            let mut stats = [renderer.render(&entities, view, desc.lighting(), &mut target).expect("frame")];
+            renderer.wait_for_counts(&mut stats);
+            let [stats] = stats;
+            (stats.light_clusters.expect("clustered"), renderer.gpu_light_clusters().expect("read back"))
+        };
+        let (on_cpu, none) = frame(glint::Culling::Cpu);
+        let (on_gpu, binned) = frame(glint::Culling::Gpu);
+        assert!(!on_cpu.on_gpu && none.is_none(), "a view culled on the CPU bins there");
+        assert!(on_gpu.on_gpu, "a view culled on the GPU bins there");
+        let gpu_clusters = binned.expect("the GPU's clusters");
+        let grid = ClusterGrid::new(&camera, [width, height]);
+        let cpu_clusters = bin_lights(&grid, camera.view(), &desc.lights);
+        assert_eq!(gpu_clusters.grid, grid);
+        for c in 0..grid.clusters() {
+            assert_eq!(gpu_clusters.lights(c), cpu_clusters.lights(c), "cluster {c}");
+        }
+        // The GPU's counts are the CPU's, overflow included.
+        assert_eq!(on_gpu, glint::render::ClusterStats { on_gpu: true, ..on_cpu });
+        assert!(on_cpu.overflow > 0 && on_cpu.max_per_cluster == MAX_CLUSTER_LIGHTS, "{on_cpu:?}");
+        assert!(cpu_clusters.indices.len() > 20_000, "{}", cpu_clusters.indices.len());
+        eprintln!("{}: {on_gpu:?}", gpu.info().name);
+    }
 }

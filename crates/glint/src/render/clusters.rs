@@ -29,7 +29,7 @@
 use crate::render::error::RenderError;
 pub use crate::scene::MAX_CLUSTERED_LIGHTS;
 use crate::scene::{Camera, Light, LightKind, Projection, MAX_LIGHTS};
-use glam::{Mat4, Vec3, Vec4Swizzles};
+use glam::{Mat4, Vec3};
 use std::f32::consts::{FRAC_PI_2, FRAC_PI_4};
 
 /// Tiles across a view, where [`MIN_TILE_PIXELS`] and [`MAX_TILE_PIXELS`] allow.
@@ -179,11 +179,6 @@ impl ClusterGrid {
         self.near * (self.far / self.near).powf(slice as f32 / self.slices as f32)
     }
 
-    /// The tile column (`axis` 0) or row (1) of a pixel coordinate, clamped.
-    fn tile_of(&self, axis: usize, pixel: f32) -> u32 {
-        (pixel / self.tile_pixels as f32).floor().clamp(0.0, (self.tiles[axis] - 1) as f32) as u32
-    }
-
     /// Normalised device coordinate (−1 left or bottom, 1 right or top) of
     /// pixel edge `pixel` on `axis`.
     fn ndc(&self, axis: usize, pixel: u32) -> f32 {
@@ -195,48 +190,92 @@ impl ClusterGrid {
         }
     }
 
-    /// View-space x (`axis` 0) or y (1) of normalised device coordinate `ndc` at `depth`.
-    fn view_coordinate(&self, axis: usize, ndc: f32, depth: f32) -> f32 {
-        let scale = if self.perspective { depth } else { 1.0 };
-        ndc * self.half_extent[axis] * scale
-    }
-
-    /// The view-space box of cluster (`x`, `y`, `slice`), padded.
-    fn cluster_box(&self, x: u32, y: u32, slice: u32) -> (Vec3, Vec3) {
-        let first = if slice == 0 { self.front.min(self.near) } else { self.slice_start(slice) };
-        let (d0, d1) = (first, self.slice_start(slice + 1));
-        let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
-        for depth in [d0, d1] {
-            for px in [x, x + 1] {
-                for py in [y, y + 1] {
-                    let xv = self.view_coordinate(0, self.ndc(0, px * self.tile_pixels), depth);
-                    let yv = self.view_coordinate(1, self.ndc(1, py * self.tile_pixels), depth);
-                    let p = Vec3::new(xv, yv, -depth);
-                    (lo, hi) = (lo.min(p), hi.max(p));
-                }
-            }
-        }
-        let pad = PAD * d1 + 1e-6;
-        (lo - Vec3::splat(pad), hi + Vec3::splat(pad))
-    }
-
-    /// The tiles on `axis` a view-space box [`lo`, `hi`] (in front of the
-    /// near plane) covers, or `None` where it is off the viewport.
-    fn tile_span(&self, axis: usize, (lo, hi): (f32, f32), (d0, d1): (f32, f32)) -> Option<(u32, u32)> {
-        let to_ndc = |v: f32, d: f32| v / (self.half_extent[axis] * if self.perspective { d } else { 1.0 });
-        let ndcs = [to_ndc(lo, d0), to_ndc(lo, d1), to_ndc(hi, d0), to_ndc(hi, d1)];
-        let (min, max) = ndcs.iter().fold((f32::INFINITY, f32::NEG_INFINITY), |(a, b), &n| (a.min(n), b.max(n)));
-        if max < -1.0 || min > 1.0 {
-            return None;
-        }
-        // Pixel coordinates grow right and down.
-        let pixel = |n: f32| {
-            let t = if axis == 0 { (n + 1.0) * 0.5 } else { (1.0 - n) * 0.5 };
-            t * self.size[axis] as f32
+    /// The tables the grid's cluster boxes are built from, on the CPU and the GPU.
+    pub fn boxes(&self) -> ClusterBoxes {
+        let edges = |axis: usize| -> Vec<f32> {
+            (0..=self.tiles[axis]).map(|t| self.ndc(axis, t * self.tile_pixels) * self.half_extent[axis]).collect()
         };
-        let (a, b) = (pixel(min), pixel(max));
-        Some((self.tile_of(axis, a.min(b) - 0.5), self.tile_of(axis, a.max(b) + 0.5)))
+        // Slice 0 begins at the view's front (`front`, never behind the eye in perspective).
+        let first = if self.perspective { self.front.max(1e-6).min(self.near) } else { self.front.min(self.near) };
+        let depths: Vec<f32> = std::iter::once(first).chain((1..=self.slices).map(|k| self.slice_start(k))).collect();
+        let pads = depths[1..].iter().map(|&d1| PAD * d1 + 1e-6).collect();
+        ClusterBoxes { xs: edges(0), ys: edges(1), depths, pads, perspective: self.perspective }
     }
+}
+
+/// A grid's cluster boxes as tables, read alike by the CPU's binning
+/// ([`bin_lights`]) and the GPU's (`bin_lights.wgsl`), so both decide with the
+/// same single-precision products. Cluster (i, j, k)'s view-space box, with
+/// d0 = `depths[k]`, d1 = `depths[k + 1]` and s = d (perspective) or 1:
+/// x from min(`xs[i]`·s0, `xs[i]`·s1) to max(`xs[i+1]`·s0, `xs[i+1]`·s1),
+/// y from min(`ys[j+1]`·s0, `ys[j+1]`·s1) to max(`ys[j]`·s0, `ys[j]`·s1),
+/// z from −d1 to −d0; each side moved out by `pads[k]`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ClusterBoxes {
+    /// View-space x of the tile columns' edges, left to right, at depth 1
+    /// (perspective) or any depth (orthographic).
+    pub xs: Vec<f32>,
+    /// View-space y of the tile rows' edges, top to bottom, likewise.
+    pub ys: Vec<f32>,
+    /// The view depths the slices begin at, and the last one's end.
+    pub depths: Vec<f32>,
+    /// Each slice's padding.
+    pub pads: Vec<f32>,
+    /// Whether x and y grow with depth.
+    pub perspective: bool,
+}
+
+impl ClusterBoxes {
+    /// Slice `k`'s factors for x and y at its front and back, and its padding.
+    fn scales(&self, k: usize) -> (f32, f32, f32) {
+        match self.perspective {
+            true => (self.depths[k], self.depths[k + 1], self.pads[k]),
+            false => (1.0, 1.0, self.pads[k]),
+        }
+    }
+
+    /// The padded view-space box of cluster (`i`, `j`, `k`): its x, y and z
+    /// ranges, each from one table's entries.
+    #[cfg(test)]
+    fn cluster_box(&self, i: usize, j: usize, k: usize) -> (Vec3, Vec3) {
+        let ([x0, x1], [y0, y1], [z0, z1]) = (self.x_range(i, k), self.y_range(j, k), self.z_range(k));
+        (Vec3::new(x0, y0, z0), Vec3::new(x1, y1, z1))
+    }
+
+    /// Column `i`'s padded x range in slice `k`.
+    fn x_range(&self, i: usize, k: usize) -> [f32; 2] {
+        let (s0, s1, pad) = self.scales(k);
+        let (a, b) = (self.xs[i], self.xs[i + 1]);
+        [(a * s0).min(a * s1) - pad, (b * s0).max(b * s1) + pad]
+    }
+
+    /// Row `j`'s padded y range in slice `k` (rows run top to bottom).
+    fn y_range(&self, j: usize, k: usize) -> [f32; 2] {
+        let (s0, s1, pad) = self.scales(k);
+        let (top, bottom) = (self.ys[j], self.ys[j + 1]);
+        [(bottom * s0).min(bottom * s1) - pad, (top * s0).max(top * s1) + pad]
+    }
+
+    /// Slice `k`'s padded z range.
+    fn z_range(&self, k: usize) -> [f32; 2] {
+        [-self.depths[k + 1] - self.pads[k], -self.depths[k] + self.pads[k]]
+    }
+
+    /// Whether the view-space sphere (`centre`, `radius`) meets cluster (`i`,
+    /// `j`, `k`): the rule both binnings follow, term by term as `bin_lights.wgsl` has it.
+    #[cfg(test)]
+    fn meets(&self, (i, j, k): (usize, usize, usize), centre: Vec3, radius: f32) -> bool {
+        let (lo, hi) = self.cluster_box(i, j, k);
+        let d = centre.max(lo).min(hi) - centre;
+        d.x * d.x + d.y * d.y + d.z * d.z <= radius * radius
+    }
+}
+
+/// The square of the distance from `v` to the range [`lo`, `hi`] (0 inside):
+/// one term of [`ClusterBoxes::meets`].
+fn gap_squared(v: f32, [lo, hi]: [f32; 2]) -> f32 {
+    let d = v.max(lo).min(hi) - v;
+    d * d
 }
 
 /// Which point and spot lights reach each cluster of a view.
@@ -300,11 +339,12 @@ pub fn bin_lights(grid: &ClusterGrid, view: Mat4, lights: &[Light]) -> LightClus
     // (cluster, light) pairs in light order, then a stable counting sort.
     let mut pairs: Vec<(u32, u32)> = Vec::new();
     let mut visible = 0;
+    let boxes = grid.boxes();
     for (index, light) in lights.iter().enumerate() {
         let Some((centre, radius)) = light_bounds(light) else { continue };
-        let c = (view * centre.extend(1.0)).xyz();
+        let c = view.transform_point3(centre);
         let before = pairs.len();
-        touch_clusters(grid, c, radius, |cluster| pairs.push((cluster as u32, index as u32)));
+        touch_clusters(&boxes, grid, c, radius, |cluster| pairs.push((cluster as u32, index as u32)));
         visible += u32::from(pairs.len() > before);
     }
     let mut counts = vec![0u32; grid.clusters()];
@@ -331,36 +371,52 @@ pub fn bin_lights(grid: &ClusterGrid, view: Mat4, lights: &[Light]) -> LightClus
     LightClusters { grid: *grid, ranges, indices, overflow, visible }
 }
 
-/// Call `touch` with every cluster the view-space sphere (`centre`, `radius`) meets.
-fn touch_clusters(grid: &ClusterGrid, centre: Vec3, radius: f32, mut touch: impl FnMut(usize)) {
-    let depth = -centre.z;
-    let (d0, d1) = (depth - radius, depth + radius);
-    if d1 < grid.front || d0 > grid.far {
-        return;
-    }
-    let (s0, s1) = (grid.slice_of(d0.max(grid.near)), grid.slice_of(d1.min(grid.far)));
-    // Where the sphere reaches in front of the eye, the tiles its box covers;
-    // one reaching behind (or through) the eye in perspective may cover any.
-    let all = |axis: usize| Some((0, grid.tiles[axis] - 1));
-    let near_box = d0.max(grid.near * 0.5);
-    let span = |axis: usize| {
-        if grid.perspective && d0 <= grid.near * 0.5 {
-            all(axis)
-        } else {
-            grid.tile_span(axis, (centre[axis] - radius, centre[axis] + radius), (near_box, d1))
-        }
-    };
-    let (Some((x0, x1)), Some((y0, y1))) = (span(0), span(1)) else { return };
-    for slice in s0..=s1 {
-        for y in y0..=y1 {
-            for x in x0..=x1 {
-                let (lo, hi) = grid.cluster_box(x, y, slice);
-                if centre.clamp(lo, hi).distance_squared(centre) <= radius * radius {
-                    touch(grid.index(x, y, slice));
+/// Call `touch` with every cluster the view-space sphere (`centre`,
+/// `radius`) meets ([`ClusterBoxes::meets`]), in index order within each
+/// slice. Only the slices, rows and columns whose boxes' sides the sphere
+/// reaches (found by bisection, with a little to spare) are tested.
+fn touch_clusters(b: &ClusterBoxes, grid: &ClusterGrid, centre: Vec3, radius: f32, mut touch: impl FnMut(usize)) {
+    let r = radius * (1.0 + 1e-4) + 1e-6;
+    let (columns, rows) = (grid.tiles[0] as usize, grid.tiles[1] as usize);
+    let k0 = first_false(b.pads.len(), |k| b.z_range(k)[0] > centre.z + r);
+    let k1 = first_false(b.pads.len(), |k| b.z_range(k)[1] >= centre.z - r);
+    let (mut across, mut down) = (Vec::new(), Vec::new());
+    for k in k0..k1 {
+        let i0 = first_false(columns, |i| b.x_range(i, k)[1] < centre.x - r);
+        let i1 = first_false(columns, |i| b.x_range(i, k)[0] <= centre.x + r);
+        let j0 = first_false(rows, |j| b.y_range(j, k)[0] > centre.y + r);
+        let j1 = first_false(rows, |j| b.y_range(j, k)[1] >= centre.y - r);
+        // The sphere's distance from each column, row and the slice, squared
+        // (a box's x range depends on its column and slice only, and so on):
+        // the terms of `ClusterBoxes::meets`, each worked out once.
+        across.clear();
+        across.extend((i0..i1).map(|i| gap_squared(centre.x, b.x_range(i, k))));
+        down.clear();
+        down.extend((j0..j1).map(|j| gap_squared(centre.y, b.y_range(j, k))));
+        let dz = gap_squared(centre.z, b.z_range(k));
+        for (j, dy) in (j0..j1).zip(&down) {
+            for (i, dx) in (i0..i1).zip(&across) {
+                if dx + dy + dz <= radius * radius {
+                    touch(grid.index(i as u32, j as u32, k as u32));
                 }
             }
         }
     }
+}
+
+/// The first of `0..n` where `holds` is false, for a `holds` true up to some
+/// point and false from there on.
+fn first_false(n: usize, holds: impl Fn(usize) -> bool) -> usize {
+    let (mut lo, mut hi) = (0, n);
+    while lo < hi {
+        let mid = (lo + hi) / 2;
+        if holds(mid) {
+            lo = mid + 1;
+        } else {
+            hi = mid;
+        }
+    }
+    lo
 }
 
 #[cfg(test)]

@@ -43,6 +43,11 @@ fn reaches(light: &Light, p: Vec3) -> bool {
     }
 }
 
+/// The tile column (`axis` 0) or row (1) of a pixel coordinate, clamped (the shader's rule).
+fn tile_of(grid: &ClusterGrid, axis: usize, pixel: f32) -> u32 {
+    (pixel / grid.tile_pixels as f32).floor().clamp(0.0, (grid.tiles[axis] - 1) as f32) as u32
+}
+
 #[test]
 fn every_light_that_reaches_a_point_is_listed_in_its_cluster() {
     let mut rng = rand_pcg::Pcg64::seed_from_u64(49);
@@ -61,9 +66,10 @@ fn every_light_that_reaches_a_point_is_listed_in_its_cluster() {
             let (px, py) = (rng.random_range(0.0..SIZE[0] as f32), rng.random_range(0.0..SIZE[1] as f32));
             let depth = grid.near * (grid.far / grid.near).powf(rng.random_range(0.0..1.0));
             let ndc = [2.0 * px / SIZE[0] as f32 - 1.0, 1.0 - 2.0 * py / SIZE[1] as f32];
-            let v = Vec3::new(grid.view_coordinate(0, ndc[0], depth), grid.view_coordinate(1, ndc[1], depth), -depth);
+            let s = if grid.perspective { depth } else { 1.0 };
+            let v = Vec3::new(ndc[0] * grid.half_extent[0] * s, ndc[1] * grid.half_extent[1] * s, -depth);
             let p = to_world.transform_point3(v);
-            let index = grid.index(grid.tile_of(0, px), grid.tile_of(1, py), grid.slice_of(depth));
+            let index = grid.index(tile_of(&grid, 0, px), tile_of(&grid, 1, py), grid.slice_of(depth));
             let listed = clusters.lights(index);
             for (i, light) in lights.iter().enumerate().filter(|(_, l)| reaches(l, p)) {
                 assert!(listed.contains(&(i as u32)), "light {i} {light:?} reaches {p} (pixel {px} {py}, depth {depth}) but cluster {index} lists {listed:?}");
@@ -98,7 +104,7 @@ fn a_small_light_reaches_only_the_clusters_around_it_and_hidden_ones_none() {
     // 0.2 m at 10 m spans less than a tile and about a slice and a half.
     assert!(!touched.is_empty() && touched.len() <= 8, "{touched:?}");
     let slice = grid.slice_of(10.0);
-    let tile = [grid.tile_of(0, SIZE[0] as f32 * 0.5), grid.tile_of(1, SIZE[1] as f32 * 0.5)];
+    let tile = [tile_of(&grid, 0, SIZE[0] as f32 * 0.5), tile_of(&grid, 1, SIZE[1] as f32 * 0.5)];
     assert!(touched.contains(&grid.index(tile[0], tile[1], slice)));
     assert!(clusters.indices.iter().all(|&i| i == 0));
 }
@@ -184,8 +190,43 @@ fn an_orthographic_view_from_behind_its_eye_and_an_endless_light_are_binned_too(
     let endless = Light::point(Vec3::new(3.0, 0.0, 0.0), Vec3::ONE, 1.0, f32::INFINITY);
     let clusters = bin_lights(&grid, camera.view(), &[behind, endless]);
     assert_eq!(clusters.visible, 2);
-    let centre = grid.index(grid.tile_of(0, SIZE[0] as f32 * 0.5), grid.tile_of(1, SIZE[1] as f32 * 0.5), 0);
+    let centre = grid.index(tile_of(&grid, 0, SIZE[0] as f32 * 0.5), tile_of(&grid, 1, SIZE[1] as f32 * 0.5), 0);
     assert_eq!(clusters.lights(centre), &[0, 1], "the light 2 m behind the eye, in the first slice");
     assert!((0..grid.clusters()).all(|c| clusters.lights(c).contains(&1)), "the endless light everywhere");
     assert!(grid.slice_rule().0.is_finite() && grid.slice_rule().1.is_finite());
+}
+
+#[test]
+fn binning_lists_exactly_the_clusters_whose_boxes_a_light_meets() {
+    // The bisection only saves tests: every cluster whose padded box a light's
+    // sphere meets is listed, and no other (the rule the GPU's binning follows).
+    let mut rng = rand_pcg::Pcg64::seed_from_u64(50);
+    for camera in cameras() {
+        let grid = ClusterGrid::new(&camera, SIZE);
+        let boxes = grid.boxes();
+        let view = camera.view();
+        let lights = random_lights(&mut rng, 150);
+        let clusters = bin_lights(&grid, view, &lights);
+        let mut met = 0;
+        for (n, light) in lights.iter().enumerate() {
+            let (centre, radius) = light_bounds(light).unwrap();
+            let c = view.transform_point3(centre);
+            for k in 0..grid.slices as usize {
+                for j in 0..grid.tiles[1] as usize {
+                    for i in 0..grid.tiles[0] as usize {
+                        let index = grid.index(i as u32, j as u32, k as u32);
+                        let meets = boxes.meets((i, j, k), c, radius);
+                        assert_eq!(
+                            clusters.lights(index).contains(&(n as u32)),
+                            meets,
+                            "light {n} cluster {i} {j} {k}"
+                        );
+                        met += usize::from(meets);
+                    }
+                }
+            }
+        }
+        assert_eq!(met, clusters.indices.len());
+        assert!(met > 1000, "{met}");
+    }
 }

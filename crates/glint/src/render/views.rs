@@ -4,9 +4,10 @@
 //! draw lists. Records and lists are written only where their bytes change, so
 //! a view that did not change uploads nothing, however many views a frame has.
 
-use crate::render::clusters::LightClusters;
 use crate::render::frame::input::{ViewKey, KEEP_VIEW_FRAMES};
+use crate::render::frame::lights::Binned;
 use crate::render::gpu_driven::draw_list::{DrawList, ListPaths};
+use crate::render::gpu_driven::light_binning::GpuBins;
 use crate::render::passes::ambient_occlusion::OcclusionTargets;
 use crate::render::passes::post::PostParams;
 use crate::render::passes::shadow_maps::{ShadowGpu, ShadowMaps};
@@ -187,16 +188,25 @@ pub(crate) struct ClusterArrays {
     /// The texels.
     pub data: GpuArray,
     /// This frame's clusters, binned and not yet uploaded.
-    pub binned: Option<LightClusters>,
+    pub binned: Option<Binned>,
+    /// Binning on the GPU, once the view has binned there.
+    pub bins: Option<GpuBins>,
     /// What the array holds (written again only when it changes).
     pub written: Vec<[u32; 4]>,
 }
 
 impl ClusterArrays {
+    /// The grid of the clusters the GPU binned last, where the array holds them.
+    pub(crate) fn gpu_grid(&self) -> Option<crate::render::clusters::ClusterGrid> {
+        let gpu_binned = self.written.first().is_some_and(|t| t[1] == u32::MAX);
+        self.bins.as_ref().and_then(|b| b.grid()).filter(|_| gpu_binned)
+    }
+
     fn new(device: &wgpu::Device, storage: bool) -> Self {
         Self {
             data: GpuArray::new(device, "renderer: light clusters", 16, 1, storage),
             binned: None,
+            bins: None,
             written: Vec::new(),
         }
     }

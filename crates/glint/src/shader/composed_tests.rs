@@ -209,6 +209,7 @@ fn the_shaders_without_defs_are_what_naga_oil_composes() {
         (RADIX, include_str!("radix.wgsl")),
         (CLOTH, include_str!("cloth.wgsl")),
         (CLOTH_PLACE, include_str!("cloth_place.wgsl")),
+        (BIN_LIGHTS, include_str!("bin_lights.wgsl")),
     ];
     let mut composer = composer();
     for (plain, source) in sources {

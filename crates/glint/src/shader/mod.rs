@@ -295,6 +295,8 @@ pub(crate) const RADIX: &str = assemble::RADIX;
 pub(crate) const CLOTH: &str = assemble::CLOTH;
 /// The GPU cloth's surface written into the mesh pool (`sim/cloth/dynamics/surface.rs`).
 pub(crate) const CLOTH_PLACE: &str = assemble::CLOTH_PLACE;
+/// A view's lights binned into its clusters (`render/gpu_driven/light_binning.rs`).
+pub(crate) const BIN_LIGHTS: &str = assemble::BIN_LIGHTS;
 
 #[cfg(test)]
 mod tests {

@@ -149,6 +149,34 @@ pub struct ClusterStats {
     /// [`MAX_CLUSTER_LIGHTS`](crate::render::clusters::MAX_CLUSTER_LIGHTS) in a
     /// cluster (not drawn there).
     pub overflow: u32,
+    /// Whether the GPU binned them (the counts are then a frame or two old,
+    /// and 0 until the first come back; `Renderer::wait_for_counts` waits for them).
+    pub on_gpu: bool,
+}
+
+impl ClusterStats {
+    /// A grid's stats before its counts: its size, tiles and where it was binned.
+    pub(crate) fn of_grid(grid: &crate::render::clusters::ClusterGrid, on_gpu: bool) -> Self {
+        Self {
+            grid: [grid.tiles[0], grid.tiles[1], grid.slices],
+            tile_pixels: grid.tile_pixels,
+            on_gpu,
+            ..Self::default()
+        }
+    }
+
+    /// The stats of clusters binned on the CPU.
+    pub(crate) fn of(clusters: &crate::render::clusters::LightClusters) -> Self {
+        let counts = clusters.ranges.iter().map(|r| r[1]);
+        Self {
+            lights_visible: clusters.visible,
+            max_per_cluster: counts.clone().max().unwrap_or(0),
+            mean_per_cluster: clusters.indices.len() as f64 / clusters.grid.clusters() as f64,
+            empty: counts.filter(|&c| c == 0).count() as u32,
+            overflow: clusters.overflow,
+            ..Self::of_grid(&clusters.grid, false)
+        }
+    }
 }
 
 /// What one view of a frame cost: one per view of

@@ -25,13 +25,15 @@ pub(crate) enum Timed {
     /// pass: from its first pass to its last's end (with occlusion culling,
     /// the depth pyramid and late cull between its phases).
     DepthPrepass,
+    /// Binning the view's lights into its clusters on the GPU.
+    Lights,
     /// Post effect k of the view's chain (all its passes).
     Post(u8),
 }
 
 /// Timestamp pairs of a view: shadow, forward, ambient occlusion, depth
-/// pre-pass, then one per post effect.
-const PAIRS: usize = 4 + MAX_POST_EFFECTS;
+/// pre-pass, light binning, then one per post effect.
+const PAIRS: usize = 5 + MAX_POST_EFFECTS;
 
 /// The views of a frame timed, each with pairs of its own (a frame's later
 /// views are not timed).
@@ -47,7 +49,8 @@ impl Timed {
             Timed::Forward => 1,
             Timed::AmbientOcclusion => 2,
             Timed::DepthPrepass => 3,
-            Timed::Post(k) => 4 + usize::from(k),
+            Timed::Lights => 4,
+            Timed::Post(k) => 5 + usize::from(k),
         }
     }
 }
@@ -68,6 +71,9 @@ pub struct GpuTimes {
     /// The depth pre-pass a view with ambient occlusion shares with its forward
     /// pass (which then draws no depth); `None` without one.
     pub depth_prepass_ms: Option<f64>,
+    /// Binning the view's lights into its clusters, where the GPU binned
+    /// them (`render/gpu_driven/light_binning.rs`); `None` elsewhere.
+    pub lights_ms: Option<f64>,
     /// Each post effect of the views' chains, in order: effect k summed over
     /// the views that have a k-th (empty without one).
     pub post_ms: Vec<f64>,
@@ -285,6 +291,7 @@ impl GpuTimer {
             forward_ms: sum(Timed::Forward).unwrap_or(0.0),
             ambient_occlusion_ms: sum(Timed::AmbientOcclusion),
             depth_prepass_ms: sum(Timed::DepthPrepass),
+            lights_ms: sum(Timed::Lights),
             post_ms: post.collect(),
         })
     }

@@ -112,7 +112,25 @@ impl Renderer {
         self.next.outline.last()
     }
 
-    /// Fill in the instance counts of the last frame's views (`stats`, in the
+    /// The light clusters the GPU binned for the last frame's first view,
+    /// read back from its cluster array (waiting for the GPU); `None` where
+    /// it did not bin on the GPU. Their `overflow` and `visible` are left 0
+    /// (the frame's [`ClusterStats`](crate::render::ClusterStats) count them).
+    #[doc(hidden)]
+    pub fn gpu_light_clusters(&self) -> Result<Option<crate::render::clusters::LightClusters>, RenderError> {
+        let view = self.views.last(0);
+        let (Some(grid), Some(buffer)) =
+            (view.and_then(|v| v.clusters.gpu_grid()), view.and_then(|v| v.clusters.data.buffer()))
+        else {
+            return Ok(None);
+        };
+        let bytes = crate::gpu::read_buffer(&self.res.device, &self.res.queue, buffer)
+            .map_err(|e| RenderError::Device { what: "light clusters", message: e.to_string() })?;
+        Ok(Some(crate::render::gpu_driven::light_binning::read_clusters(&grid, bytemuck::cast_slice(&bytes))))
+    }
+
+    /// Fill in the instance counts (and light clusters' counts, where the GPU
+    /// binned them) of the last frame's views (`stats`, in the
     /// order given) that were culled on the GPU, waiting for the GPU to count
     /// them: for a frame on its own, such as `glint render --stats` draws (in
     /// a running frame loop the counts come a frame or two late, without waiting).
@@ -124,6 +142,10 @@ impl Renderer {
                 let valid = stats.instances_submitted - stats.instances_invalid;
                 stats.set_drawn(drawn);
                 stats.instances_culled = valid.saturating_sub(drawn.instances);
+            }
+            let bins = view.clusters.bins.as_mut().filter(|_| stats.light_clusters.is_some_and(|c| c.on_gpu));
+            if let Some(counted) = bins.and_then(|b| b.stats(&self.res.device, submits, true)) {
+                stats.light_clusters = Some(counted);
             }
         }
     }

@@ -132,7 +132,8 @@ fn scene_format(res: &Resources, view: &View, target: &OffscreenTarget) -> Targe
 ///    the spot and point lights' views: culled, batched and drawn from every
 ///    submitted caster (`render/frame/shadow_pass.rs`)
 /// 3. lights — where the view clusters, its point and spot lights binned
-///    into its cluster grid on the CPU (`render/frame/lights.rs`)
+///    into its cluster grid, by a compute pass where it culls on the GPU,
+///    else on the CPU (`render/frame/lights.rs`)
 /// 4. cull — each entity's world box, then its instances', against the
 ///    view's frustum; culled on the GPU ([`Culling::Gpu`]), every valid
 ///    instance of each entity not blended becomes a candidate the GPU tests
@@ -169,7 +170,7 @@ fn view_stages(
     stats.cpu_ms.prepare = lap.next();
     draw_shadows(res, frame, gpu, (view, shadows), (&prepared, &lighting.environment), &mut stats)?;
     lap.next();
-    cluster_lights(gpu, view, lighting.lights, &mut stats);
+    cluster_lights(res, frame, (gpu, view), lighting.lights, &mut stats)?;
     stats.cpu_ms.lights = lap.next();
     let forward = if res.mode == FrameMode::Naive { "forward (naive)" } else { "forward" };
     frame.outline.enter(&mut frame.encoder, forward);

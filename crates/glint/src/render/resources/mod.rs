@@ -18,6 +18,7 @@ use crate::render::debug::timer::GpuTimer;
 use crate::render::frame::input::FrameMode;
 use crate::render::gpu_driven::cull_pipelines::CullPipelines;
 use crate::render::gpu_driven::draw_list::ListPaths;
+use crate::render::gpu_driven::light_binning::LightBinning;
 use crate::render::passes::ambient_occlusion::AmbientOcclusionPipelines;
 use crate::render::passes::environment::EnvironmentMaps;
 use crate::render::passes::particles::Particles;
@@ -62,6 +63,8 @@ pub(crate) struct Resources {
     pub post: PostChain,
     /// The GPU culling passes, where views can cull on the GPU ([`Gpu::culls_on_gpu`]).
     pub cull_pipelines: Option<CullPipelines>,
+    /// The light binning pass, where views can cull on the GPU.
+    pub light_binning: Option<LightBinning>,
     /// Particle layers, drawn in every view.
     pub particles: Particles,
     /// Ambient occlusion's passes reading a single-sample pre-pass (0) and a
@@ -111,6 +114,7 @@ impl Resources {
             targets: TargetPool::default(),
             post: PostChain::new(&device),
             cull_pipelines: gpu.culls_on_gpu().then(|| CullPipelines::new(&device, gpu.occlusion_culls())),
+            light_binning: gpu.culls_on_gpu().then(|| LightBinning::new(&device)),
             particles,
             ambient_occlusion_pipelines: [None, None],
             gpu_timer: None,
