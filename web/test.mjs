@@ -344,8 +344,27 @@ for (const backend of backends) {
       return document.getElementById("glint").dataset.time;
     });
     const { ok, verdict } = await compareWithGlint(page, logs, scene, backend, ["--time", time]);
-    report(ok && moved > 0.001, `the lights on ${backend}`,
-      `${(100 * moved).toFixed(2)} % of pixels moved over 3 frames; paused at ${time} s; ${verdict}`);
+    // Where the page binned its lights (the CPU on WebGL2, the GPU on WebGPU),
+    // and the CPU's milliseconds, the median of 15 paused frames.
+    const binning = await page.evaluate(async () => {
+      const samples = [];
+      for (let k = 0; k < 15; k++) {
+        await window.glintAwaitFrames(1);
+        samples.push(document.getElementById("glint").dataset.lightBinning.split(" "));
+      }
+      const ms = samples.map((s) => Number(s[1])).sort((a, b) => a - b);
+      return { where: samples[0][0], ms: ms[7] };
+    });
+    const binnedWhere = binning.where === (backend === "webgpu" ? "gpu" : "cpu");
+    // Its heat map of lights per cluster (the controls' toggle) is `glint render --cluster-heat`'s.
+    await page.evaluate(async () => {
+      document.querySelector('[data-control="cluster_heat"]').click();
+      await window.glintAwaitFrames(2);
+    });
+    const heat = await compareWithGlint(page, logs, "scenes/lights_heat", backend, ["--time", time, "--cluster-heat"], scene);
+    report(ok && heat.ok && binnedWhere && moved > 0.001, `the lights on ${backend}`,
+      `${(100 * moved).toFixed(2)} % of pixels moved over 3 frames; paused at ${time} s; ${verdict}; ` +
+      `binned on the ${binning.where}, ${binning.ms.toFixed(3)} ms of the CPU a frame (median of 15); heat map: ${heat.verdict}`);
   } finally {
     await page.close();
   }

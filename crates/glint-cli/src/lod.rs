@@ -1,7 +1,8 @@
 //! `--lod on|off` and `--lod-error PX`: levels of detail on `render`, `view`,
 //! `explain` and `bench` (whose `--lod` also takes `both`: the frame with
-//! levels beside the frame at full detail); and `--clusters auto|on|off`,
-//! the renderer's other switch those commands share (light clusters).
+//! levels beside the frame at full detail); and `--clusters auto|on|off` and
+//! `--cluster-heat`, the renderer's other switches those commands share
+//! (light clusters).
 
 use glint::{Renderer, View};
 
@@ -50,7 +51,7 @@ pub enum ClustersArg {
     Off,
 }
 
-/// `--lod`, `--lod-error` and `--clusters`.
+/// `--lod`, `--lod-error`, `--clusters` and `--cluster-heat`.
 #[derive(Clone, Copy, Debug, Default, clap::Args)]
 pub struct LodArgs {
     /// Levels of detail: on (each instance at the coarsest level whose error
@@ -66,6 +67,12 @@ pub struct LodArgs {
     /// 64; for comparison and teaching).
     #[arg(long, value_enum, default_value_t = ClustersArg::Auto)]
     pub clusters: ClustersArg,
+    /// Draw clustered views as a heat map of the lights in each fragment's
+    /// cluster on the jet scale (dark blue: none; a step for each doubling,
+    /// through blue, cyan, green, yellow and red; dark red: 255 or more),
+    /// each tile's edge darkened.
+    #[arg(long)]
+    pub cluster_heat: bool,
 }
 
 /// `--lod-error`: pixels, 0..=1000.
@@ -79,7 +86,7 @@ impl LodArgs {
         Self { lod: if on { LodSwitch::On } else { LodSwitch::Off }, ..self }
     }
 
-    /// Tell `renderer` whether to draw levels and cluster lights, and to keep large meshes' levels
+    /// Tell `renderer` whether to draw levels, cluster lights and show their heat map, and to keep large meshes' levels
     /// in the user's cache folder between runs (`levels/` under
     /// `$GLINT_CACHE_DIR`, else `$XDG_CACHE_HOME/glint`, else `~/.cache/glint`;
     /// `GLINT_CACHE_DIR=` empty keeps none).
@@ -90,6 +97,7 @@ impl LodArgs {
             ClustersArg::On => glint::render::Clusters::On,
             ClustersArg::Off => glint::render::Clusters::Off,
         });
+        renderer.set_cluster_heat_map(self.cluster_heat);
         renderer.set_level_cache(glint::scene::level_cache::LevelCache::user());
     }
 

@@ -12,9 +12,10 @@
 //! counts, the scene's controls beside the canvas (`panel.rs`: the list the
 //! viewer's overlay shows), and a broken scene's `file:line` message; the
 //! canvas carries `data-frames` (frames drawn), `data-error`, and the last
-//! frame's `data-shadow-views`, `data-instances` (drawn) and `data-time`
-//! (the scene clock) for scripts, and `data-startup`, the first frame's
-//! startup stages (`startup.rs`).
+//! frame's `data-shadow-views`, `data-instances` (drawn), `data-time`
+//! (the scene clock) and `data-light-binning` (where its first view's light
+//! clusters were binned, `cpu` or `gpu`, and the CPU's milliseconds) for
+//! scripts, and `data-startup`, the first frame's startup stages (`startup.rs`).
 #![cfg(target_arch = "wasm32")]
 
 mod decode;
@@ -371,6 +372,9 @@ impl Viewer {
         let _ = self.canvas.set_attribute("data-shadow-views", &shadow_views.to_string());
         let _ = self.canvas.set_attribute("data-instances", &drawn.to_string());
         let _ = self.canvas.set_attribute("data-time", &shown.player.clock.time.to_string());
+        let binning = stats.first().and_then(|s| s.light_clusters.map(|c| (c.on_gpu, s.cpu_ms.lights)));
+        let binning = binning.map(|(gpu, ms)| format!("{} {ms:.3}", if gpu { "gpu" } else { "cpu" }));
+        let _ = self.canvas.set_attribute("data-light-binning", binning.as_deref().unwrap_or(""));
         Ok(())
     }
 

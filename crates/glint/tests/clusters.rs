@@ -201,3 +201,79 @@ fn the_gpu_bins_the_same_lights_into_each_cluster_as_the_cpu() {
         eprintln!("{}: {on_gpu:?}", gpu.info().name);
     }
 }
+
+/// The heat map's colour (`forward.wgsl`'s `cluster_heat`) for a cluster of
+/// `count` lights, before shading: the jet scale at log2(1 + count) / 8.
+fn jet(count: u32) -> [f32; 3] {
+    let t = ((1.0 + count as f32).log2() / 8.0).min(1.0);
+    [3.0, 2.0, 1.0].map(|c: f32| (1.5 - (4.0 * t - c).abs()).clamp(0.0, 1.0))
+}
+
+/// A pixel's colour from sRGB bytes to linear, scaled to its largest channel.
+fn hue(pixel: [u8; 4]) -> [f32; 3] {
+    let linear = [0, 1, 2].map(|c| {
+        let v = pixel[c] as f32 / 255.0;
+        if v <= 0.04045 {
+            v / 12.92
+        } else {
+            ((v + 0.055) / 1.055).powf(2.4)
+        }
+    });
+    let top = linear.iter().copied().fold(1e-6, f32::max);
+    linear.map(|v| v / top)
+}
+
+/// With the heat map on, each tile of a floor seen from straight above shows
+/// the colour of the number of lights its cluster at the floor's depth lists
+/// (as the CPU bins them), on each path.
+fn heat_map_shows_each_clusters_lights(gpu: &Gpu) {
+    let mut desc = common::load_scene(&common::repo_root().join("tests/scenes/clusters.scn"));
+    desc.entities.truncate(1); // the floor
+    desc.lights = lights();
+    let camera = glint::Camera::orthographic(10.0, 0.5, 20.0).looking_at(Vec3::new(0.0, 10.0, 0.0), Vec3::ZERO);
+    let size = 256;
+    let mut renderer = Renderer::new(gpu);
+    renderer.set_cluster_heat_map(true);
+    let entities = renderer.place_scene(&desc).entities;
+    let mut target = OffscreenTarget::new(gpu, size, size, 1).expect("target");
+    renderer.render(&entities, glint::View::new(camera), desc.lighting(), &mut target).expect("frame");
+    let image = target.read_rgba8(gpu).expect("readback");
+    let grid = ClusterGrid::new(&camera, [size, size]);
+    let clusters = bin_lights(&grid, camera.view(), &desc.lights);
+    let slice = grid.slice_of(10.0);
+    let mut seen = std::collections::BTreeSet::new();
+    for y in 0..grid.tiles[1] {
+        for x in 0..grid.tiles[0] {
+            let count = clusters.lights(grid.index(x, y, slice)).len() as u32;
+            let wanted = jet(count);
+            let top = wanted.iter().copied().fold(0.0, f32::max);
+            let centre = (x * grid.tile_pixels + grid.tile_pixels / 2, y * grid.tile_pixels + grid.tile_pixels / 2);
+            let got = hue(image.get_pixel(centre.0, centre.1).0);
+            for c in 0..3 {
+                assert!(
+                    (got[c] - wanted[c] / top).abs() < 0.08,
+                    "tile {x} {y}: {count} lights, {got:?} for {wanted:?}"
+                );
+            }
+            seen.insert(count.min(8));
+        }
+    }
+    assert!(seen.len() >= 4, "the floor shows several counts: {seen:?}");
+    // Off again, the floor is shaded as ever.
+    renderer.set_cluster_heat_map(false);
+    renderer.render(&entities, glint::View::new(camera), desc.lighting(), &mut target).expect("frame");
+    assert!(common::max_difference(&image, &target.read_rgba8(gpu).expect("readback")) > 100);
+}
+
+#[test]
+fn the_heat_map_shows_each_clusters_light_count() {
+    let Some(gpu) = common::gpu() else { return };
+    heat_map_shows_each_clusters_lights(gpu);
+}
+
+#[test]
+fn the_heat_map_shows_each_clusters_light_count_on_gl_and_the_webgl2_path() {
+    for gpu in [common::gl_gpu(), common::webgl2_gpu()].into_iter().flatten() {
+        heat_map_shows_each_clusters_lights(gpu);
+    }
+}

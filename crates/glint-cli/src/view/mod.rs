@@ -227,10 +227,11 @@ impl App {
         let msaa = if gpu.supports_msaa(self.args.msaa) { self.args.msaa } else { 1 };
         let target = OffscreenTarget::new(&gpu, size.width.max(1), size.height.max(1), msaa)?;
         let mut controls = free_controls(&desc, self.args.density);
-        // `--lod` and `--lod-error` as the controls' first choices.
+        // `--lod`, `--lod-error` and `--cluster-heat` as the controls' first choices.
         let lod = self.args.lod;
         let off = (lod.lod == crate::lod::LodSwitch::Off).then_some(("levels", 0.0));
-        for (id, value) in off.into_iter().chain(lod.lod_error.map(|px| ("lod_error", px))) {
+        let heat = lod.cluster_heat.then_some(("cluster_heat", 1.0));
+        for (id, value) in off.into_iter().chain(lod.lod_error.map(|px| ("lod_error", px))).chain(heat) {
             controls.set(id, value).map_err(|e| glint::Diagnostic::file(&self.args.scene, e))?;
         }
         let scene = Scene::new(&gpu, desc, self.args.camera, (self.args.cull, self.args.density, self.args.lod))?;

@@ -165,6 +165,15 @@ impl Renderer {
         self.res.clusters = clusters;
     }
 
+    /// Draw clustered views as a heat map of the lights in each fragment's
+    /// cluster (from dark blue, none, a step of the jet scale for each
+    /// doubling, to dark red, 255 or more: `forward.wgsl`'s `cluster_heat`),
+    /// each tile's edge darkened;
+    /// off at first. Views that are not clustered are drawn as ever.
+    pub fn set_cluster_heat_map(&mut self, on: bool) {
+        self.res.cluster_heat_map = on;
+    }
+
     /// Keep the levels of detail of large meshes in `cache` between runs (see
     /// [`LevelCache`](crate::scene::level_cache::LevelCache); the default is
     /// none: they are made each run). Shapes drawn before keep theirs.

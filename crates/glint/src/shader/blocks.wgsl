@@ -33,7 +33,9 @@ struct SceneBlock {
     // y, z: cos and sin of the environment's turn about +Y; w: the specular
     // map's last level (roughness 1).
     environment: vec4<f32>,
-    // x: the specular level the sky is drawn from (its blur); y, z, w: reserved.
+    // x: the specular level the sky is drawn from (its blur); y: 1 draws the
+    // heat map of lights per light cluster (forward.wgsl cluster_heat), else 0;
+    // z, w: reserved.
     environment_sky: vec4<f32>,
     // Light clusters (render/clusters.rs): x, y: tiles across and down; a
     // fragment's slice is floor(ln(view depth) · z + w), clamped.

@@ -547,6 +547,20 @@ fn cluster_of(surface: Surface) -> vec3<u32> {
     let index = tile.x + tiles.x * (tile.y + tiles.y * u32(slice));
     return vec3<u32>(cluster_word(1u + 2u * index), cluster_word(2u + 2u * index), cluster_word(0u));
 }
+
+// The heat map of lights per cluster (Renderer::set_cluster_heat_map): the
+// count of the fragment's cluster on the jet scale, t = log2(1 + count) / 8:
+// dark blue for none, then a step for each doubling (1, 3, 7, 15, 31, 63,
+// 127) to dark red for 255 or more,
+// shaded by the normal `n` facing the eye, its tile's edges darkened.
+fn cluster_heat(surface: Surface, n: vec3<f32>) -> vec3<f32> {
+    let t = min(log2(1.0 + f32(cluster_of(surface).y)) / 8.0, 1.0);
+    let jet = clamp(1.5 - abs(4.0 * t - vec3<f32>(3.0, 2.0, 1.0)), vec3<f32>(0.0), vec3<f32>(1.0));
+    let facing = abs(dot(n, normalize(camera.position.xyz - surface.position)));
+    let within = surface.pixel % f32(scene.counts.z);
+    let edge = select(1.0, 0.6, any(within < vec2<f32>(1.0)));
+    return jet * (0.4 + 0.6 * facing) * edge;
+}
 #endif
 
 // The lights this variant loops over (LightCounts, src/shader/mod.rs): the Scene
@@ -965,6 +979,11 @@ fn fs_main(in: VertexOut, @builtin(front_facing) front: bool) -> @location(0) ve
     emissive *= textureSample(emissive_map, material_sampler, map_uv(in, SLOT_EMISSIVE)).rgb;
 #endif
     color += emissive;
+#ifdef CLUSTERED
+    if scene.environment_sky.y > 0.0 {
+        color = cluster_heat(surface, n);
+    }
+#endif
 #ifdef FOG
     let distance = length(camera.position.xyz - in.world_position) * scene.fog.w;
     color = mix(scene.fog.rgb, color, exp(-distance * distance));

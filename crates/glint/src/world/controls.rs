@@ -88,6 +88,10 @@ pub struct Controls {
     /// pixels where chosen (else as each camera says).
     levels: bool,
     lod_error: Option<f32>,
+    /// Whether the scene has point or spot lights, and whether clustered
+    /// views draw the heat map of lights per cluster.
+    has_positional: bool,
+    cluster_heat: bool,
     /// Whether the scene has shadow-casting lights, and whether they cast.
     has_shadows: bool,
     shadows: bool,
@@ -124,6 +128,8 @@ impl Controls {
             culling: 0,
             levels: true,
             lod_error: None,
+            has_positional: desc.lights.iter().any(|l| !matches!(l.kind, crate::scene::LightKind::Directional { .. })),
+            cluster_heat: false,
             has_shadows: desc.lights.iter().any(|l| l.shadows.is_some()),
             shadows: true,
             has_tonemap,
@@ -158,6 +164,10 @@ impl Controls {
         let error = self.lod_error.unwrap_or(crate::scene::DEFAULT_LOD_ERROR);
         let kind = ControlKind::Slider { value: error, min: 0.0, max: LOD_ERROR_MAX, step: 0.05 };
         add("lod_error".into(), "View", "level error (px)", kind);
+        if self.has_positional {
+            let kind = ControlKind::Toggle { on: self.cluster_heat };
+            add("cluster_heat".into(), "View", "lights per cluster (heat map)", kind);
+        }
         if self.has_shadows {
             add("shadows".into(), "Scene", "shadows", ControlKind::Toggle { on: self.shadows });
         }
@@ -234,6 +244,7 @@ impl Controls {
             ("camera", ControlKind::Choice { options, .. }) => self.camera = index(options.len()),
             ("culling", ControlKind::Choice { options, .. }) => self.culling = index(options.len()),
             ("levels", _) => self.levels = on,
+            ("cluster_heat", _) => self.cluster_heat = on,
             ("lod_error", _) => self.lod_error = Some(clamp(value)),
             ("shadows", _) => self.shadows = on,
             ("cloth_debug", _) => self.cloth_debug = Some(on),
@@ -343,11 +354,12 @@ impl Controls {
         self.time_of_day = Some(hours.rem_euclid(24.0));
     }
 
-    /// Put the density, levels of detail, time of day and shadows into `world` and `renderer`
+    /// Put the density, levels of detail, the clusters' heat map, time of day and shadows into `world` and `renderer`
     /// (each frame: each is cheap where it did not change).
     pub fn apply(&self, world: &mut World, renderer: &mut Renderer) {
         renderer.set_density(self.density);
         renderer.set_levels_of_detail(self.levels);
+        renderer.set_cluster_heat_map(self.cluster_heat);
         if let Some(hours) = self.time_of_day.filter(|&h| world.desc().time_of_day != Some(h)) {
             if let Err(e) = world.set_time_of_day(hours) {
                 log::warn!("{e}");
@@ -446,10 +458,15 @@ mod tests {
             assert!(ids.contains(&id.to_owned()), "{id} in {ids:?}");
         }
         assert!(!ids.contains(&"density".to_owned()), "no tiles, no density");
+        assert!(!ids.contains(&"cluster_heat".to_owned()), "a sun alone, no clusters");
         assert!(ids.contains(&"post.0.0.intensity".to_owned()) && ids.contains(&"post.0.1.operator".to_owned()));
         let plain = controls("{ \"classname\" \"camera\" }\n{ \"classname\" \"light_point\"\n\"origin\" \"0 1 0\" }\n");
         let ids: Vec<String> = plain.list().into_iter().map(|c| c.id).collect();
         assert!(!ids.iter().any(|i| i == "shadows" || i == "exposure" || i == "time_of_day"), "{ids:?}");
+        assert!(ids.iter().any(|i| i == "cluster_heat"), "a point light: the clusters' heat map {ids:?}");
+        let mut plain = plain;
+        plain.set("cluster_heat", 1.0).unwrap();
+        assert!(plain.list().iter().any(|c| c.id == "cluster_heat" && c.kind == ControlKind::Toggle { on: true }));
     }
 
     #[test]

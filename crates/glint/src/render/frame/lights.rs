@@ -85,7 +85,7 @@ pub(crate) fn cluster_lights(
 }
 
 /// Write the view's binned clusters, if any, and return `scene` with their
-/// grid: binned on the CPU, every word and record; on the GPU, the records
+/// grid (and the heat map where [`Renderer::set_cluster_heat_map`](crate::Renderer::set_cluster_heat_map) asked for it): binned on the CPU, every word and record; on the GPU, the records
 /// (only when they changed since the last frame).
 pub(crate) fn upload_clusters(
     res: &Resources,
@@ -119,7 +119,7 @@ pub(crate) fn upload_clusters(
         };
         gpu.clusters.written = texels;
     }
-    Ok(scene.with_clusters(&grid))
+    Ok(scene.with_clusters(&grid, res.cluster_heat_map))
 }
 
 /// The words of clusters binned on the CPU, four a texel, padded to whole

@@ -62,8 +62,8 @@ pub(crate) struct SceneGpu {
     fog: [f32; 4],                  // 16: rgb colour, w density
     counts: [u32; 4],               // 16: lights held (≤ 64), directional lights, a cluster tile's pixels, depth slices
     environment: [f32; 4],          // 16: intensity (0: none), cos and sin of its turn, last specular level
-    environment_sky: [f32; 4],      // 16: the specular level the sky is drawn from, 3 reserved
-    clusters: [f32; 4],             // 16: tiles across and down, slice = ⌊ln(depth)·z + w⌋
+    environment_sky: [f32; 4], // 16: the specular level the sky is drawn from, 1 for the clusters' heat map, 2 reserved
+    clusters: [f32; 4],        // 16: tiles across and down, slice = ⌊ln(depth)·z + w⌋
     lights: [LightGpu; MAX_LIGHTS], // 64 × 64
 }
 const _: () = assert!(std::mem::size_of::<SceneGpu>() == 128 + 64 * MAX_LIGHTS);
@@ -117,8 +117,10 @@ impl SceneGpu {
         self
     }
 
-    /// The block with the view's light cluster grid (`render/clusters.rs`).
-    pub(crate) fn with_clusters(mut self, grid: &ClusterGrid) -> Self {
+    /// The block with the view's light cluster grid (`render/clusters.rs`),
+    /// drawn as a heat map of lights per cluster when `heat_map`.
+    pub(crate) fn with_clusters(mut self, grid: &ClusterGrid, heat_map: bool) -> Self {
+        self.environment_sky[1] = f32::from(u8::from(heat_map));
         let (scale, bias) = grid.slice_rule();
         self.counts[2] = grid.tile_pixels;
         self.counts[3] = grid.slices;

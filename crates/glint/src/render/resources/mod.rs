@@ -83,6 +83,8 @@ pub(crate) struct Resources {
     pub levels_of_detail: bool,
     /// Whether views shade their point and spot lights from clusters.
     pub clusters: crate::render::clusters::Clusters,
+    /// Whether clustered views draw the heat map of lights per cluster instead of their shading.
+    pub cluster_heat_map: bool,
     /// Every tiled entity's density is multiplied by this.
     pub density: f32,
 }
@@ -124,6 +126,7 @@ impl Resources {
             mode: FrameMode::Optimized,
             levels_of_detail: true,
             clusters: Default::default(),
+            cluster_heat_map: false,
             density: 1.0,
             registry,
             device,
