@@ -14,19 +14,26 @@ def light(f, origin, color, intensity, rng):
     f.write('"color" "%.3f %.3f %.3f"\n"intensity" "%.3f"\n"range" "%.3f" }\n' % (*color, intensity, rng))
 
 
-def bench_64():
-    with open("scenes/bench/lights_64.scn", "w") as f:
-        f.write("// 64 small point lights in an 8 x 8 grid over a 20 m plane: the clustered\n")
-        f.write("// forward pass against the loop over every light (glint bench --clusters on|off).\n")
+def bench_grid(side):
+    """side x side small point lights in a grid over a 20 m plane, each reaching
+    2.5 grid steps."""
+    n = side * side
+    step = 20.0 / side
+    with open("scenes/bench/lights_%d.scn" % n, "w") as f:
+        f.write("// %d small point lights in a grid of %d x %d over a 20 m plane: the clustered\n" % (n, side, side))
+        if n <= 64:
+            f.write("// forward pass against the loop over every light (glint bench --clusters on|off).\n")
+        else:
+            f.write("// forward pass and the binning, on the CPU and the GPU (glint bench --cull cpu|gpu).\n")
         f.write("// Written by scripts/light_scenes.py.\n")
         f.write('{ "classname" "world"\n"background" "0 0 0"\n"ambient" "0.02 0.02 0.02" }\n')
         f.write('{ "classname" "camera"\n"origin" "0 9 13"\n"target" "0 0 0"\n"fov" "50" }\n')
         f.write('{ "classname" "material"\n"name" "floor"\n"base_color" "0.8 0.8 0.8"\n"specular" "0.4"\n"smoothness" "0.5" }\n')
         f.write('{ "classname" "entity"\n"mesh" "plane"\n"material" "floor"\n"scale" "20 1 20" }\n')
-        for i in range(64):
-            x, z = i % 8, i // 8
-            r, g, b = colorsys.hsv_to_rgb(i / 64, 0.8, 1.0)
-            light(f, (-8.75 + 2.5 * x, 0.3, -8.75 + 2.5 * z), (r, g, b), 2.0, 2.0)
+        for i in range(n):
+            x, z = i % side, i // side
+            r, g, b = colorsys.hsv_to_rgb(i / n, 0.8, 1.0)
+            light(f, (-10 + step * (x + 0.5), 0.3, -10 + step * (z + 0.5)), (r, g, b), 2.0 * (8 / side) ** 2, 0.8 * step)
 
 
 def night_square():
@@ -91,7 +98,13 @@ def night_square():
             f.write('{ "classname" "entity"\n"mesh" "sphere"\n"material" "lantern%d"\n"origin" "%.3f %.3f %.3f"\n"scale" "0.07 0.07 0.07" }\n' % (h, x, y, z))
             light(f, (x, y - 0.1, z), hues[h], 0.1, 1.2 + 0.5 * rnd.random())
             count += 1
+        # Mist drifting up from the fountain, lit by the lights around it
+        # (from the view's light clusters).
+        f.write('{ "classname" "emitter"\n"origin" "0 1.2 0"\n"rate" "80"\n"burst" "200"\n"lifetime" "5 7"\n')
+        f.write('"shape" "sphere 2.5"\n"speed" "0.05 0.2"\n"spread" "80"\n"gravity" "0 0.08 0"\n"drag" "0.6"\n"noise" "0.2 0.6"\n')
+        f.write('"color" "0.8 0.8 0.85 0.3"\n"color_end" "0.8 0.8 0.85 0"\n"size" "1"\n"size_end" "1.8"\n"blend" "alpha"\n"lit" "1"\n"seed" "3" }\n')
 
 
-bench_64()
+for side in (8, 32, 64):
+    bench_grid(side)
 night_square()

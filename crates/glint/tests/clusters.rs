@@ -277,3 +277,82 @@ fn the_heat_map_shows_each_clusters_light_count_on_gl_and_the_webgl2_path() {
         heat_map_shows_each_clusters_lights(gpu);
     }
 }
+
+/// A light's pixel on the picture, and its colour.
+type LightPixel = ([u32; 2], [f32; 3]);
+
+/// A wall of lit white particles (10 × 10, 0.5 apart, alpha-blended) facing
+/// the camera, and 5 × 5 small point lights 0.3 in front of it, 1 apart,
+/// each one of six colours, drawn `clusters` as said (or the particles
+/// unlit): the picture, and the lights' pixels with their colours.
+fn lit_particles(gpu: &Gpu, clusters: Clusters, lit: bool) -> (image::RgbaImage, Vec<LightPixel>) {
+    use glint::render::{ParticleBlend, ParticleLook};
+    const COLOURS: [[f32; 3]; 6] = [[1., 0., 0.], [0., 1., 0.], [0., 0., 1.], [1., 1., 0.], [0., 1., 1.], [1., 0., 1.]];
+    let mut renderer = Renderer::new(gpu);
+    renderer.set_clusters(clusters);
+    let look = ParticleLook { blend: ParticleBlend::Alpha, texture: None, soft: 0.0, lit };
+    let layer = renderer.add_particles(100, look).expect("a layer");
+    let records: Vec<glint::render::ParticleGpu> = (0..100)
+        .map(|i| glint::render::ParticleGpu {
+            center_size: [(i % 10) as f32 * 0.5 - 2.25, (i / 10) as f32 * 0.5 - 2.25, 0.0, 0.9],
+            color: [1.0, 1.0, 1.0, 1.0],
+        })
+        .collect();
+    renderer.write_particles(layer, &records);
+    let lights: Vec<Light> = (0..25)
+        .map(|i| {
+            let position = Vec3::new((i % 5) as f32 - 2.0, (i / 5) as f32 - 2.0, 0.3);
+            Light::point(position, Vec3::from(COLOURS[(i * 7 + i / 5) % 6]), 0.2, 0.6)
+        })
+        .collect();
+    let camera = glint::Camera::perspective(60.0, 0.5, 20.0).looking_at(Vec3::new(0.0, 0.0, 6.0), Vec3::ZERO);
+    let environment = glint::Environment { ambient: Vec3::ZERO, ..Default::default() };
+    let size = 128;
+    let mut target = OffscreenTarget::new(gpu, size, size, 1).expect("target");
+    let view = glint::View::new(camera);
+    let input = glint::FrameInput::new(&[], glint::Lighting::new(&lights, environment)).view(glint::ViewKey(0), &view);
+    let stats = renderer.render_frame(input, &mut target).expect("frame").views;
+    assert_eq!(stats[0].light_clusters.is_some(), clusters != Clusters::Off, "{:?}", stats[0].light_clusters);
+    let view_proj = camera.projection(1.0) * camera.view();
+    let under = (lights.iter().enumerate())
+        .map(|(i, light)| {
+            let glint::scene::LightKind::Point { position, .. } = light.kind else { unreachable!() };
+            let ndc = view_proj.project_point3(position.with_z(0.0));
+            let pixel = [((ndc.x + 1.0) * 0.5 * size as f32) as u32, ((1.0 - ndc.y) * 0.5 * size as f32) as u32];
+            (pixel, COLOURS[(i * 7 + i / 5) % 6])
+        })
+        .collect();
+    (target.read_rgba8(gpu).expect("readback"), under)
+}
+
+/// Lit particles take their point lights from the clusters as the loop over
+/// every light gives them, each light's colour on the particles behind it.
+fn particles_are_lit_from_the_clusters(gpu: &Gpu) {
+    let (clustered, under) = lit_particles(gpu, Clusters::On, true);
+    let (every, _) = lit_particles(gpu, Clusters::Off, true);
+    let (unlit, _) = lit_particles(gpu, Clusters::On, false);
+    let difference = common::max_difference(&every, &clustered);
+    assert!(difference <= 2, "{}: lit from the clusters differs from every light's by {difference}", gpu.info().name);
+    for ([x, y], colour) in under {
+        let pixel = clustered.get_pixel(x, y).0;
+        for (channel, &wanted) in colour.iter().enumerate() {
+            assert_eq!(pixel[channel] > 60, wanted > 0.5, "{}: ({x}, {y}) {pixel:?} for {colour:?}", gpu.info().name);
+        }
+        let [r, g, b, _] = unlit.get_pixel(x, y).0;
+        let grey = r.max(g).max(b) - r.min(g).min(b) <= 4;
+        assert!(r > 100 && grey, "unlit particles show their own white (over the sky), however lit: {r} {g} {b}");
+    }
+}
+
+#[test]
+fn lit_particles_take_their_lights_from_the_clusters() {
+    let Some(gpu) = common::gpu() else { return };
+    particles_are_lit_from_the_clusters(gpu);
+}
+
+#[test]
+fn lit_particles_take_their_lights_from_the_clusters_on_gl_and_the_webgl2_path() {
+    for gpu in [common::gl_gpu(), common::webgl2_gpu()].into_iter().flatten() {
+        particles_are_lit_from_the_clusters(gpu);
+    }
+}

@@ -89,7 +89,7 @@ fn gpu_particles_match_the_cpu_slot_for_slot() {
     let dt = 1.0 / 60.0;
     let mut cpu = ParticleSystem::new(params.clone(), dt).unwrap();
     let slots = cpu.schedule().slots() as u32;
-    let look = ParticleLook { blend: ParticleBlend::Additive, texture: None, soft: 0.0 };
+    let look = ParticleLook { blend: ParticleBlend::Additive, texture: None, soft: 0.0, lit: false };
     let layer = renderer.add_particles(slots, look).unwrap();
     let (buffer, capacity) = renderer.particle_buffer(layer).map(|(b, c)| (b.clone(), c)).unwrap();
     let kernels = std::sync::Arc::new(glint::sim::particles::ParticleKernels::new(renderer.device_and_queue().0));

@@ -218,8 +218,9 @@ impl Loader<'_> {
                     return Err(Diagnostic::at(self.path, block.line, "\"texture\": particles show an image file, not a render target"));
                 }
                 let texture = self.texture(&mut f, "texture", true)?;
-                let (blend, soft) = (looks.blend, looks.soft);
-                self.scene.emitters.push(scn_emitter::EmitterDesc { line: block.line, params, blend, soft, texture, dt });
+                let (blend, soft, lit) = (looks.blend, looks.soft, looks.lit);
+                let emitter = scn_emitter::EmitterDesc { line: block.line, params, blend, soft, lit, texture, dt };
+                self.scene.emitters.push(emitter);
             }
             "cloth" => {
                 let nodes: u64 = self.cloths.iter().map(|(c, _)| c.setup.mesh.nodes.len() as u64).sum();

@@ -61,6 +61,9 @@ pub struct EmitterDesc {
     pub blend: ParticleBlend,
     /// World units over which its particles fade in front of geometry (0: none).
     pub soft: f32,
+    /// Whether the scene's lights light its particles (`"lit" "1"`; else
+    /// their colour is a light of its own).
+    pub lit: bool,
     /// The sprite each particle shows (a scene texture), if any.
     pub texture: Option<TextureRef>,
     /// Seconds a step.
@@ -139,6 +142,7 @@ fn shape(f: &mut Fields) -> Result<SpawnShape, Diagnostic> {
 pub(crate) struct Looks {
     pub blend: ParticleBlend,
     pub soft: f32,
+    pub lit: bool,
 }
 
 /// An emitter block's keys but `texture` (the loader's): the emitter, its
@@ -230,7 +234,8 @@ pub(crate) fn parse(f: &mut Fields, line: usize) -> Result<(EmitterParams, Looks
     let dt = f.number("dt", 1e-4..=1.0)?.unwrap_or(1.0 / 60.0);
     params.check().map_err(|m| Diagnostic::at(f.path, line, format!("emitter: {m}")))?;
     let soft = f.number("soft", 0.0..=1e4)?.unwrap_or(0.0);
-    Ok((params, Looks { blend, soft }, dt))
+    let lit = f.flag("lit")?.unwrap_or(false);
+    Ok((params, Looks { blend, soft, lit }, dt))
 }
 
 /// What posing every emitter at `time` takes, for [`SceneDesc::check_pose`](super::SceneDesc::check_pose):
@@ -282,6 +287,9 @@ mod tests {
         assert_eq!((e.blend, e.dt, e.texture, e.soft), (ParticleBlend::Alpha, 0.02, None, 0.0));
         assert_eq!(emitter("\"soft\" \"0.5\"\n").unwrap().emitters[0].soft, 0.5);
         assert!(error("\"soft\" \"-1\"\n").starts_with("e.scn:3: \"soft\""));
+        assert!(!emitter("").unwrap().emitters[0].lit, "unlit unless asked");
+        assert!(emitter("\"lit\" \"1\"\n").unwrap().emitters[0].lit);
+        assert!(error("\"lit\" \"yes\"\n").starts_with("e.scn:3: \"lit\""), "{}", error("\"lit\" \"yes\"\n"));
         assert_eq!(emitter("").unwrap().emitters[0].params.shape, SpawnShape::Point);
     }
 

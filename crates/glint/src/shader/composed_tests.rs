@@ -12,6 +12,7 @@ fn composer() -> Composer {
         ("equirect.wgsl", include_str!("equirect.wgsl")),
         ("blocks.wgsl", include_str!("blocks.wgsl")),
         ("full_screen.wgsl", include_str!("full_screen.wgsl")),
+        ("light_clusters.wgsl", include_str!("light_clusters.wgsl")),
     ];
     for (file_path, source) in shared {
         let module = ComposableModuleDescriptor { source, file_path, ..Default::default() };
@@ -183,7 +184,12 @@ fn the_other_composed_shaders_are_what_naga_oil_composes() {
     check(&mut composer, &sky(), include_str!("sky.wgsl"), &Defs::default());
     check(&mut composer, &prefilter(), include_str!("prefilter.wgsl"), &Defs::default());
     for soft in [None, Some(false), Some(true)] {
-        check(&mut composer, &particles(soft), include_str!("particles.wgsl"), &particle_defs(soft));
+        for lit in [None, Some(false), Some(true)] {
+            for data_textures in [false, true] {
+                let variant = ParticleShading { soft, lit, data_textures };
+                check(&mut composer, &particles(variant), include_str!("particles.wgsl"), &particle_defs(variant));
+            }
+        }
     }
     let (ssao_source, compute) = (include_str!("ssao.wgsl"), include_str!("ssao_compute.wgsl"));
     for multisampled in [false, true] {

@@ -3,6 +3,7 @@
 
 #import glint::blocks::{scene, camera, shadows, shadow_maps, shadow_cubes, shadow_sampler, Light, CASCADES, environment_irradiance, environment_brdf, environment_sampler, environment_sample, ambient_occlusion}
 #import glint::equirect::sh_basis
+#import glint::light_clusters::{cluster_at, clustered_light, cluster_word, towards_light, arriving}
 
 struct MaterialBlock {
     base_color: vec4<f32>,
@@ -501,60 +502,13 @@ fn vs_main(v: VertexIn, @builtin(instance_index) draw_instance: u32) -> VertexOu
 }
 
 #ifdef CLUSTERED
-// The view's light clusters (render/clusters.rs, render/frame/lights.rs), in
-// one array of 16-byte texels (one binding: WebGL2 allows 16 textures a
-// stage): words, four a texel, then the view's point and spot lights as Light
-// records of four texels. Word 0 is the texel the records begin at; then per
-// cluster two words, the word its entries begin at and their count; then the
-// entries (lights' numbers).
-#ifdef DATA_TEXTURES
-@group(0) @binding(10) var cluster_texels: texture_2d<u32>;
-
-fn cluster_texel(i: u32) -> vec4<u32> {
-    return texel(cluster_texels, i);
-}
-#else
-@group(0) @binding(10) var<storage, read> cluster_data: array<vec4<u32>>;
-
-fn cluster_texel(i: u32) -> vec4<u32> {
-    return cluster_data[i];
-}
-#endif
-
-fn cluster_word(i: u32) -> u32 {
-    return cluster_texel(i / 4u)[i % 4u];
-}
-
-// Light `i` of the view's, its records beginning at texel `at`.
-fn clustered_light(at: u32, i: u32) -> Light {
-    let first = at + 4u * i;
-    return Light(
-        bitcast<vec4<f32>>(cluster_texel(first)),
-        bitcast<vec4<f32>>(cluster_texel(first + 1u)),
-        bitcast<vec4<f32>>(cluster_texel(first + 2u)),
-        bitcast<vec4<f32>>(cluster_texel(first + 3u)),
-    );
-}
-
-// The light cluster `surface` is in (its pixel's tile and its view depth's
-// slice, the rule of render/clusters.rs): x its entries' first word, y their
-// count, z the texel the light records begin at.
-fn cluster_of(surface: Surface) -> vec3<u32> {
-    let tiles = vec2<u32>(scene.clusters.xy);
-    let tile = min(vec2<u32>(surface.pixel / f32(scene.counts.z)), tiles - 1u);
-    let depth = max(-(camera.view * vec4<f32>(surface.position, 1.0)).z, 1e-6);
-    let slice = clamp(floor(log(depth) * scene.clusters.z + scene.clusters.w), 0.0, f32(scene.counts.w - 1u));
-    let index = tile.x + tiles.x * (tile.y + tiles.y * u32(slice));
-    return vec3<u32>(cluster_word(1u + 2u * index), cluster_word(2u + 2u * index), cluster_word(0u));
-}
-
 // The heat map of lights per cluster (Renderer::set_cluster_heat_map): the
 // count of the fragment's cluster on the jet scale, t = log2(1 + count) / 8:
 // dark blue for none, then a step for each doubling (1, 3, 7, 15, 31, 63,
 // 127) to dark red for 255 or more,
 // shaded by the normal `n` facing the eye, its tile's edges darkened.
 fn cluster_heat(surface: Surface, n: vec3<f32>) -> vec3<f32> {
-    let t = min(log2(1.0 + f32(cluster_of(surface).y)) / 8.0, 1.0);
+    let t = min(log2(1.0 + f32(cluster_at(surface.pixel, surface.position).y)) / 8.0, 1.0);
     let jet = clamp(1.5 - abs(4.0 * t - vec3<f32>(3.0, 2.0, 1.0)), vec3<f32>(0.0), vec3<f32>(1.0));
     let facing = abs(dot(n, normalize(camera.position.xyz - surface.position)));
     let within = surface.pixel % f32(scene.counts.z);
@@ -593,20 +547,15 @@ fn directional(i: u32, p: vec3<f32>, ng: vec3<f32>, receive: bool) -> Incoming {
 // A point or spot light: the Scene block's (DIRECTIONAL_LIGHTS <= i < LIGHTS)
 // or a cluster's.
 fn positional(light: Light, p: vec3<f32>, ng: vec3<f32>, receive: bool) -> Incoming {
-    let to_light = light.position.xyz - p;
-    let dist = length(to_light);
-    let l = to_light / max(dist, 1e-4);
+    let towards = towards_light(light, p);
+    let l = towards.xyz;
     var lit = 1.0;
 #ifdef SHADOWS
     if receive && light.params.y >= 0.0 {
-        lit = positional_shadow(u32(light.params.y), light, p, ng, l, dist);
+        lit = positional_shadow(u32(light.params.y), light, p, ng, l, towards.w);
     }
 #endif
-    // Inverse square, windowed to reach exactly zero at the range.
-    let x = dist / light.color.w;
-    let window = saturate(1.0 - x * x * x * x);
-    let cone = saturate(dot(light.spot.xyz, -l) * light.spot.w + light.params.x);
-    return Incoming(l, light.color.rgb * lit * window * window * cone * cone / max(dist * dist, 1e-4));
+    return Incoming(l, arriving(light, towards, lit));
 }
 
 // How much of a point or spot light reaches `p` (towards it `l`, `dist` away) past
@@ -765,7 +714,7 @@ fn shade(
         color += blinn_phong(directional(i, p, ng, receive), material, n, v, base, specular);
     }
 #ifdef CLUSTERED
-    let cluster = cluster_of(surface);
+    let cluster = cluster_at(surface.pixel, surface.position);
     for (var k = 0u; k < cluster.y; k++) {
         let light = clustered_light(cluster.z, cluster_word(cluster.x + k));
         color += blinn_phong(positional(light, p, ng, receive), material, n, v, base, specular);
@@ -824,7 +773,7 @@ fn shade_metallic_roughness(
         color += ggx(directional(i, p, ng, receive), b);
     }
 #ifdef CLUSTERED
-    let cluster = cluster_of(surface);
+    let cluster = cluster_at(surface.pixel, surface.position);
     for (var k = 0u; k < cluster.y; k++) {
         color += ggx(positional(clustered_light(cluster.z, cluster_word(cluster.x + k)), p, ng, receive), b);
     }

@@ -246,17 +246,31 @@ pub(crate) fn prefilter() -> String {
     assemble(assemble::PREFILTER, &Defs::default())
 }
 
-/// The defs of the particle billboards' module: with `soft`, `SOFT` (and
-/// `SOFT_MSAA` when `soft` says the depth is multisampled).
-fn particle_defs(soft: Option<bool>) -> Defs {
-    let set = soft.map(|msaa| std::iter::once("SOFT").chain(msaa.then_some("SOFT_MSAA")).collect());
-    Defs { set: set.unwrap_or_default(), values: Vec::new() }
+/// A variant of the particle billboards' module.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub(crate) struct ParticleShading {
+    /// Reading the scene's depth (`SOFT`): multisampled (`SOFT_MSAA`) or not.
+    pub soft: Option<bool>,
+    /// Lit by the frame's lights (`LIT`): from the view's light clusters
+    /// (`CLUSTERED`) or not.
+    pub lit: Option<bool>,
+    /// The light clusters are a data texture (`DATA_TEXTURES`), where
+    /// shaders cannot read storage buffers.
+    pub data_textures: bool,
 }
 
-/// The particle billboards' module: `vs_particle` / `fs_particle`; with
-/// `soft`, reading the scene's depth (multisampled when `soft` says so).
-pub(crate) fn particles(soft: Option<bool>) -> String {
-    assemble(assemble::PARTICLES, &particle_defs(soft))
+/// The defs of the particle billboards' module `variant`.
+fn particle_defs(variant: ParticleShading) -> Defs {
+    let soft = variant.soft.map(|msaa| std::iter::once("SOFT").chain(msaa.then_some("SOFT_MSAA")));
+    let lit = variant.lit.map(|clustered| std::iter::once("LIT").chain(clustered.then_some("CLUSTERED")));
+    let set = soft.into_iter().flatten().chain(lit.into_iter().flatten());
+    let set = set.chain(variant.data_textures.then_some("DATA_TEXTURES")).collect();
+    Defs { set, values: vec![("DATA_WIDTH", DATA_TEXTURE_WIDTH)] }
+}
+
+/// The particle billboards' module: `vs_particle` / `fs_particle`, as `variant` says.
+pub(crate) fn particles(variant: ParticleShading) -> String {
+    assemble(assemble::PARTICLES, &particle_defs(variant))
 }
 
 /// Mip blit shader: `vs_blit` / `fs_blit`, its own group 0.

@@ -3,8 +3,13 @@
 // particle's colour, under the scene's fog. A record of size 0 draws nothing.
 // SOFT (SOFT_MSAA for a multisampled target): the scene's depth is read, and
 // a particle fades out over its layer's soft distance in front of geometry.
+// LIT: the colour is the light the particle scatters, a medium with no
+// normal: the ambient light plus every light arriving at the fragment's point
+// (unshadowed); its point and spot lights from the view's light clusters
+// where CLUSTERED, else the Scene block's.
 
-#import glint::blocks::{scene, camera}
+#import glint::blocks::{scene, camera, Light}
+#import glint::light_clusters::{cluster_at, clustered_light, cluster_word, towards_light, arriving}
 
 @group(2) @binding(0) var sprite: texture_2d<f32>;
 @group(2) @binding(1) var sprite_sampler: sampler;
@@ -59,9 +64,35 @@ fn vs_particle(@builtin(vertex_index) corner: u32, p: ParticleIn) -> ParticleOut
     return out;
 }
 
+#ifdef LIT
+// The light arriving at `p` (the fragment at `pixel`) from every direction.
+fn light_at(p: vec3<f32>, pixel: vec2<f32>) -> vec3<f32> {
+    var light = scene.ambient.rgb;
+    let directional = scene.counts.y;
+    for (var i = 0u; i < directional; i++) {
+        light += scene.lights[i].color.rgb;
+    }
+#ifdef CLUSTERED
+    let cluster = cluster_at(pixel, p);
+    for (var k = 0u; k < cluster.y; k++) {
+        let positional = clustered_light(cluster.z, cluster_word(cluster.x + k));
+        light += arriving(positional, towards_light(positional, p), 1.0);
+    }
+#else
+    for (var i = directional; i < scene.counts.x; i++) {
+        light += arriving(scene.lights[i], towards_light(scene.lights[i], p), 1.0);
+    }
+#endif
+    return light;
+}
+#endif
+
 @fragment
 fn fs_particle(in: ParticleOut) -> @location(0) vec4<f32> {
     var color = textureSample(sprite, sprite_sampler, in.uv) * in.color;
+#ifdef LIT
+    color = vec4<f32>(color.rgb * light_at(in.world_position, in.clip.xy), color.a);
+#endif
     // Fog thins the particle towards nothing (what is behind already has it).
     let distance = length(camera.position.xyz - in.world_position) * scene.fog.w;
     color.a = color.a * exp(-distance * distance);

@@ -37,7 +37,8 @@ impl EmitterSim {
     ) -> Result<Self, RenderError> {
         let slots = crate::sim::particles::Schedule::new(&desc.params).slots() as u32;
         let texture = desc.texture.and_then(|i| textures.get(i)).copied();
-        let layer = renderer.add_particles(slots, ParticleLook { blend: desc.blend, texture, soft: desc.soft })?;
+        let layer = renderer
+            .add_particles(slots, ParticleLook { blend: desc.blend, texture, soft: desc.soft, lit: desc.lit })?;
         let cpu = || ParticleSystem::new(desc.params.clone(), desc.dt).ok().map(|s| Run::Cpu(Box::new(s)));
         let run = match (kernels, renderer.particle_buffer(layer)) {
             (Some(kernels), Some((buffer, capacity))) => {

@@ -131,7 +131,7 @@ pub(crate) fn encode(
         }
         draw_stages(res, &frame.outline, &gpu.forward, &mut pass, (sky_at..end, after_sky), &mut bound, stats);
         if particle_depth.is_none() {
-            res.particles.draw((&mut pass, &frame.outline), target.format(), None, stats);
+            res.particles.draw((&mut pass, &frame.outline), (target.format(), view.variant.clustered), None, stats);
             draw_glare(res, &frame.outline, &mut pass, target, environment, stats);
         }
     }
@@ -144,7 +144,7 @@ pub(crate) fn encode(
             (background, Part::Particles, false),
             stats,
         );
-        res.particles.draw((&mut pass, &frame.outline), target.format(), Some(depth), stats);
+        res.particles.draw((&mut pass, &frame.outline), (target.format(), view.variant.clustered), Some(depth), stats);
         draw_glare(res, &frame.outline, &mut pass, target, environment, stats);
     }
     if let Some(timer) = &mut res.gpu_timer {

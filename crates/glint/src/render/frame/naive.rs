@@ -50,7 +50,7 @@ pub(crate) fn naive_frame(
     stats.cpu_ms.batch = lap.next();
     naive_upload(res, (gpu, view), (lighting, shadowed), stats)?;
     stats.cpu_ms.upload = lap.next();
-    naive_encode(res, (&mut frame.encoder, &frame.outline, frame.index), gpu, (target, lighting), stats);
+    naive_encode(res, (&mut frame.encoder, &frame.outline, frame.index), (gpu, view), (target, lighting), stats);
     stats.cpu_ms.encode = lap.next();
     Ok(())
 }
@@ -134,7 +134,7 @@ fn naive_upload(
 fn naive_encode(
     res: &mut Resources,
     (encoder, outline, index): (&mut wgpu::CommandEncoder, &Outline, u64),
-    gpu: &ViewGpu,
+    (gpu, view): (&ViewGpu, &ViewFrame),
     (target, lighting): (&OffscreenTarget, &Lighting),
     stats: &mut FrameStats,
 ) {
@@ -175,7 +175,7 @@ fn naive_encode(
                 .collect()
         });
         pass.pop_debug_group();
-        res.particles.draw((&mut pass, outline), target.format(), None, stats);
+        res.particles.draw((&mut pass, outline), (target.format(), view.variant.clustered), None, stats);
         draw_glare(res, outline, &mut pass, target, &lighting.environment, stats);
         let n = list.batches.len() as u32;
         (stats.pipelines_bound, stats.bind_groups_set) = (stats.pipelines_bound + n, stats.bind_groups_set + n);

@@ -166,7 +166,7 @@ fn view_stages(
     let mut stats = view_counts(res, frame, view);
     let mut lap = Laps::start();
     let prepared = prepare(res, frame, target.format(), view.variant, &lighting.environment, &mut stats)?;
-    res.particles.prepare(&mut res.registry, target.format(), &mut stats)?;
+    res.particles.prepare(&mut res.registry, (target.format(), view.variant.clustered), &mut stats)?;
     stats.cpu_ms.prepare = lap.next();
     draw_shadows(res, frame, gpu, (view, shadows), (&prepared, &lighting.environment), &mut stats)?;
     lap.next();

@@ -18,6 +18,7 @@ use crate::render::error::RenderError;
 use crate::render::resources::registry::Registry;
 pub use crate::scene::ParticleBlend;
 use crate::scene::{Texture, TextureId};
+use crate::shader::ParticleShading;
 use std::collections::HashMap;
 
 /// What a layer's particles look like.
@@ -34,6 +35,12 @@ pub struct ParticleLook {
     /// occlusion-cull: [`Gpu::occlusion_culls`](crate::Gpu::occlusion_culls));
     /// elsewhere (GL, WebGL2) particles meet geometry hard.
     pub soft: f32,
+    /// Lit by the frame's lights, as a medium with no normal: the sprite
+    /// times the colour times the ambient light and every light arriving at
+    /// the particle's fragment, unshadowed (point and spot lights from the
+    /// view's light clusters where it has them). Else (the default) the
+    /// colour is shown as it is, as a light of its own.
+    pub lit: bool,
 }
 
 /// A particle layer of a [`Renderer`](crate::Renderer) ([`Renderer::add_particles`](crate::Renderer::add_particles)).
@@ -47,6 +54,7 @@ pub(crate) struct ParticleLayer {
     count: u32,
     blend: ParticleBlend,
     soft: f32,
+    lit: bool,
     /// The registry texture it shows, uploaded on its first frame.
     sprite: TextureId,
     look_block: wgpu::Buffer,
@@ -54,8 +62,9 @@ pub(crate) struct ParticleLayer {
     group: Option<wgpu::BindGroup>,
 }
 
-/// A particle pipeline: for a target, a blend, and whether it reads depth.
-type PipelineKey = (TargetFormat, ParticleBlend, bool);
+/// A particle pipeline: for a target, a blend, whether it reads depth, and
+/// whether it is lit (and from light clusters).
+type PipelineKey = (TargetFormat, ParticleBlend, bool, Option<bool>);
 
 /// The particle pipelines and their layouts: the sprite group, and for soft
 /// layers the scene's depth (single-sampled or multisampled).
@@ -64,11 +73,13 @@ pub(crate) struct ParticlePipelines {
     depth_layouts: [wgpu::BindGroupLayout; 2],
     /// Hard; soft on one sample; soft on several.
     layouts: [wgpu::PipelineLayout; 3],
-    modules: HashMap<Option<bool>, wgpu::ShaderModule>,
+    modules: HashMap<ParticleShading, wgpu::ShaderModule>,
     cache: HashMap<PipelineKey, wgpu::RenderPipeline>,
     /// Whether targets' depth is readable here (the devices that
     /// occlusion-cull; GL's shaders cannot load from depth textures).
     soft: bool,
+    /// Whether the light clusters are a data texture (the Scene layout's binding 10).
+    data_textures: bool,
 }
 
 /// The soft round spot a layer without a texture shows.
@@ -85,7 +96,7 @@ impl ParticlePipelines {
     pub(crate) fn new(
         device: &wgpu::Device,
         (scene, camera): (&wgpu::BindGroupLayout, &wgpu::BindGroupLayout),
-        soft: bool,
+        (soft, data_textures): (bool, bool),
     ) -> Self {
         let look = wgpu::BindGroupLayoutEntry {
             binding: 2,
@@ -125,20 +136,23 @@ impl ParticlePipelines {
             })
         };
         let layouts = [layout(None), layout(Some(&depth_layouts[0])), layout(Some(&depth_layouts[1]))];
-        Self { texture_layout, depth_layouts, layouts, modules: HashMap::new(), cache: HashMap::new(), soft }
+        let (modules, cache) = (HashMap::new(), HashMap::new());
+        Self { texture_layout, depth_layouts, layouts, modules, cache, soft, data_textures }
     }
 
     /// Build the pipeline of `key` unless it exists; returns whether it was
     /// built now.
-    fn build(&mut self, device: &wgpu::Device, (target, blend, soft): PipelineKey) -> bool {
-        if self.cache.contains_key(&(target, blend, soft)) {
+    fn build(&mut self, device: &wgpu::Device, key: PipelineKey) -> bool {
+        if self.cache.contains_key(&key) {
             return false;
         }
+        let (target, blend, soft, lit) = key;
         let variant = soft.then_some(target.samples > 1);
-        let module = match self.modules.entry(variant) {
+        let shading = ParticleShading { soft: variant, lit, data_textures: self.data_textures };
+        let module = match self.modules.entry(shading) {
             std::collections::hash_map::Entry::Occupied(built) => built.into_mut(),
             std::collections::hash_map::Entry::Vacant(slot) => {
-                let wgsl = crate::shader::particles(variant);
+                let wgsl = crate::shader::particles(shading);
                 slot.insert(crate::render::resources::pipelines::shader_module(
                     device,
                     "renderer: particle shader",
@@ -199,7 +213,7 @@ impl ParticlePipelines {
             multiview_mask: None,
             cache: None,
         });
-        self.cache.insert((target, blend, soft), pipeline);
+        self.cache.insert(key, pipeline);
         true
     }
 }
@@ -214,13 +228,15 @@ pub(crate) struct Particles {
 
 impl Particles {
     /// No layers yet; pipelines over the Scene and Camera layouts, soft layers
-    /// reading depth where `soft`.
+    /// reading depth where `soft`, lit ones reading the light clusters from a
+    /// data texture where `data_textures`.
     pub(crate) fn new(
         device: &wgpu::Device,
         layouts: (&wgpu::BindGroupLayout, &wgpu::BindGroupLayout),
-        soft: bool,
+        (soft, data_textures): (bool, bool),
     ) -> Self {
-        Self { layers: Vec::new(), spot: None, pipelines: ParticlePipelines::new(device, layouts, soft) }
+        let pipelines = ParticlePipelines::new(device, layouts, (soft, data_textures));
+        Self { layers: Vec::new(), spot: None, pipelines }
     }
 
     /// A particle layer of `capacity` billboards (at most [`MAX_LAYER_PARTICLES`]), drawn in
@@ -258,8 +274,9 @@ impl Particles {
         if let Some(error) = scope.finish() {
             return Err(RenderError::Device { what: "a particle layer", message: error.to_string() });
         }
-        let blend = look.blend;
-        self.layers.push(ParticleLayer { buffer, capacity, count: 0, blend, soft, sprite, look_block, group: None });
+        let (blend, lit) = (look.blend, look.lit);
+        let layer = ParticleLayer { buffer, capacity, count: 0, blend, soft, lit, sprite, look_block, group: None };
+        self.layers.push(layer);
         Ok(ParticlesId(self.layers.len() as u32 - 1))
     }
 
@@ -287,11 +304,12 @@ impl Particles {
     /// Stage 1 for particles: every layer to draw gets its sprite (uploaded
     /// once however many layers and materials show it, counted in `stats`)
     /// and its pipelines for `target` (a soft layer's both ways where depth is
-    /// readable: a view's target may not be).
+    /// readable: a view's target may not be), a lit one's for a view whose
+    /// lights are `clustered` or not.
     pub(crate) fn prepare(
         &mut self,
         registry: &mut Registry,
-        target: TargetFormat,
+        (target, clustered): (TargetFormat, bool),
         stats: &mut FrameStats,
     ) -> Result<(), RenderError> {
         for layer in self.layers.iter_mut().filter(|l| l.count > 0) {
@@ -314,7 +332,8 @@ impl Particles {
                 }));
             }
             for soft in [false, layer.soft > 0.0 && self.pipelines.soft] {
-                let built = self.pipelines.build(&registry.device, (target, layer.blend, soft));
+                let lit = layer.lit.then_some(clustered);
+                let built = self.pipelines.build(&registry.device, (target, layer.blend, soft, lit));
                 stats.pipelines_compiled += u32::from(built);
             }
         }
@@ -336,18 +355,19 @@ impl Particles {
     }
 
     /// Stage 7's last draws before the glare: every layer with records, one
-    /// draw each, soft ones reading `depth` when given (group 3). Leaves
-    /// groups 0 and 1 bound.
+    /// draw each, soft ones reading `depth` when given (group 3), lit ones
+    /// from the view's light clusters where `clustered`. Leaves groups 0 and 1 bound.
     pub(crate) fn draw(
         &self,
         (pass, outline): (&mut wgpu::RenderPass<'_>, &Outline),
-        target: TargetFormat,
+        (target, clustered): (TargetFormat, bool),
         depth: Option<&wgpu::BindGroup>,
         stats: &mut FrameStats,
     ) {
         for layer in self.layers.iter().filter(|l| l.count > 0) {
             let soft = depth.filter(|_| layer.soft > 0.0);
-            let pipeline = self.pipelines.cache.get(&(target, layer.blend, soft.is_some()));
+            let lit = layer.lit.then_some(clustered);
+            let pipeline = self.pipelines.cache.get(&(target, layer.blend, soft.is_some(), lit));
             let (Some(pipeline), Some(group)) = (pipeline, &layer.group) else { continue };
             pass.set_pipeline(pipeline);
             pass.set_bind_group(2, group, &[]);
@@ -358,9 +378,14 @@ impl Particles {
             pass.draw(0..4, 0..layer.count);
             outline.call(|| {
                 let what = format!(
-                    "particles ({}{})",
+                    "particles ({}{}{})",
                     format!("{:?}", layer.blend).to_lowercase(),
-                    if soft.is_some() { ", soft" } else { "" }
+                    if soft.is_some() { ", soft" } else { "" },
+                    match lit {
+                        Some(true) => ", lit from the light clusters",
+                        Some(false) => ", lit",
+                        None => "",
+                    }
                 );
                 let mut changed = vec!["pipeline", "bind group 2 (particle layer)", "vertex buffer 0 (records)"];
                 changed.extend(soft.map(|_| "bind group 3 (scene depth)"));

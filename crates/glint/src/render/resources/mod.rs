@@ -98,7 +98,7 @@ impl Resources {
         let registry = Registry::new(gpu, queue.clone());
         let pipelines = &registry.pipelines;
         let layouts = (&pipelines.scene_layout, &pipelines.camera_layout);
-        let particles = Particles::new(&device, layouts, gpu.occlusion_culls());
+        let particles = Particles::new(&device, layouts, (gpu.occlusion_culls(), !gpu.vertex_storage()));
         let flags = gpu.adapter.get_texture_format_features(crate::gpu::HDR_FORMAT).flags;
         Self {
             submits_counted: queue.submits(),
