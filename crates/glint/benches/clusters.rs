@@ -2,7 +2,8 @@
 //! (`render/clusters.rs`), as the GL and WebGL2 paths do every frame: the
 //! 1,264 lights of `scenes/lights.scn` (at its paused time, from its camera)
 //! and the first 64 and 1,024 of them, and 4,096 small lights on a square
-//! grid, at 1280 × 720. Median, min and max of 200 runs. Run: `cargo bench -p
+//! grid, at 1280 × 720; and lights.scn at the browser test's 256 × 160.
+//! Median, min and max of 200 runs. Run: `cargo bench -p
 //! glint --bench clusters`.
 
 use glam::Vec3;
@@ -14,9 +15,15 @@ use std::time::Instant;
 
 const RUNS: usize = 200;
 const SIZE: [u32; 2] = [1280, 720];
+/// The web page's picture in its browser test.
+const PAGE: [u32; 2] = [256, 160];
 
 fn measure(name: &str, camera: &glint::Camera, lights: &[Light]) {
-    let grid = ClusterGrid::new(camera, SIZE);
+    measure_at(name, camera, lights, SIZE);
+}
+
+fn measure_at(name: &str, camera: &glint::Camera, lights: &[Light], size: [u32; 2]) {
+    let grid = ClusterGrid::new(camera, size);
     let view = camera.view();
     let mut ms = Vec::with_capacity(RUNS);
     let mut binned = bin_lights(&grid, view, lights);
@@ -48,6 +55,7 @@ fn main() {
     measure("lights.scn, first 64", &camera, &positional[..64]);
     measure("lights.scn, first 1,024", &camera, &positional[..1024]);
     measure("lights.scn", &camera, &positional);
+    measure_at("lights.scn at the page's 256 x 160", &camera, &positional, PAGE);
     // 64 × 64 lights 0.5 m apart on the ground, seen from above and aside.
     let grid: Vec<Light> = (0..4096)
         .map(|i| {

@@ -230,7 +230,9 @@ impl App {
         // `--lod`, `--lod-error` and `--cluster-heat` as the controls' first choices.
         let lod = self.args.lod;
         let off = (lod.lod == crate::lod::LodSwitch::Off).then_some(("levels", 0.0));
-        let heat = lod.cluster_heat.then_some(("cluster_heat", 1.0));
+        // (A scene without point or spot lights has no clusters, nor the control.)
+        let heat_control = controls.list().iter().any(|c| c.id == "cluster_heat");
+        let heat = (lod.cluster_heat && heat_control).then_some(("cluster_heat", 1.0));
         for (id, value) in off.into_iter().chain(lod.lod_error.map(|px| ("lod_error", px))).chain(heat) {
             controls.set(id, value).map_err(|e| glint::Diagnostic::file(&self.args.scene, e))?;
         }

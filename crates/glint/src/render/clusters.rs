@@ -23,7 +23,7 @@
 //! the cluster's view-space bounding box, padded by a hair so that a
 //! fragment on a cluster's boundary, placed by single-precision arithmetic
 //! on the GPU, still finds every light that reaches it. Lights fade to
-//! exactly zero at their range (`forward.wgsl`'s window), so shading with a
+//! exactly zero at their range (`light_clusters.wgsl`'s window), so shading with a
 //! cluster's lights changes no pixel against the loop over every light.
 
 use crate::render::error::RenderError;
@@ -43,6 +43,9 @@ pub const DEPTH_SLICES: u32 = 24;
 /// Most lights one cluster lists; more are counted in
 /// [`LightClusters::overflow`] and left out (the lowest-numbered lights stay).
 pub const MAX_CLUSTER_LIGHTS: u32 = 256;
+/// The farthest a light is taken to reach, world units: an endless one's
+/// bounding sphere (its square, and a box's distance's, within `f32`).
+const MAX_LIGHT_REACH: f32 = 1e18;
 /// How much a cluster's box is padded, in proportion to its depth.
 const PAD: f32 = 1e-4;
 
@@ -311,12 +314,15 @@ pub fn light_bounds(light: &Light) -> Option<(Vec3, f32)> {
         LightKind::Directional { .. } => return None,
         LightKind::Point { position, range } => (position, range, None),
         LightKind::Spot { position, direction, range, outer_angle, .. } => {
-            (position, range, Some((direction.normalize_or(Vec3::NEG_Y), outer_angle.clamp(1e-3, FRAC_PI_2))))
+            // A cone of no angle (NaN) is bounded as the widest.
+            let angle = if outer_angle.is_nan() { FRAC_PI_2 } else { outer_angle.clamp(1e-3, FRAC_PI_2) };
+            (position, range, Some((direction.normalize_or(Vec3::NEG_Y), angle)))
         }
     };
     // As the light's record has it (`LightGpu`): at least a millimetre (a NaN
-    // range is one); an endless one reaches everything, as far as a sphere can say.
-    let range = if range.is_nan() { 1e-3 } else { range.clamp(1e-3, f32::MAX) };
+    // range is one); an endless one reaches everything, as far as a sphere
+    // can say whose radius squared stays finite (the GPU may assume no infinities).
+    let range = if range.is_nan() { 1e-3 } else { range.clamp(1e-3, MAX_LIGHT_REACH) };
     if !position.is_finite() {
         return None;
     }

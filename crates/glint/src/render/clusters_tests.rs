@@ -230,3 +230,12 @@ fn binning_lists_exactly_the_clusters_whose_boxes_a_light_meets() {
         assert!(met > 1000, "{met}");
     }
 }
+
+#[test]
+fn a_cone_of_no_angle_is_bounded_as_the_widest_and_an_endless_light_stays_finite() {
+    let spot = |outer| Light::spot(Vec3::ONE, Vec3::X, Vec3::ONE, 1.0, 4.0, (0.1, outer));
+    assert_eq!(light_bounds(&spot(f32::NAN)), light_bounds(&spot(FRAC_PI_2)));
+    let (_, radius) = light_bounds(&Light::point(Vec3::ZERO, Vec3::ONE, 1.0, f32::INFINITY)).unwrap();
+    assert_eq!(radius, MAX_LIGHT_REACH);
+    assert!((radius * radius).is_finite(), "the GPU squares it");
+}

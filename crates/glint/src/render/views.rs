@@ -191,7 +191,9 @@ pub(crate) struct ClusterArrays {
     pub binned: Option<Binned>,
     /// Binning on the GPU, once the view has binned there.
     pub bins: Option<GpuBins>,
-    /// What the array holds (written again only when it changes).
+    /// What the CPU last wrote into the array, to write again only when it
+    /// changes: every texel where the CPU binned; where the GPU did, a marker
+    /// texel (the records' texel, `u32::MAX`) and the records.
     pub written: Vec<[u32; 4]>,
 }
 

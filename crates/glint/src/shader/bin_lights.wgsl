@@ -21,8 +21,10 @@
 //   word 0, the (first, count) pairs from word 1, cluster c's entries from
 //   word `grid[6] + c·most`.
 // `counts`: 0 entries, 1 the most a cluster lists, 2 empty clusters,
-//   3 entries left out, 4 lights visible; from 8, a bit per light, set once
-//   it is in a cluster. Cleared before the pass.
+//   3 entries left out, 4 lights visible, 5–7 the grid's tiles across and
+//   down and its slices (so counts read back late say which grid they
+//   counted); from 8, a bit per light, set once it is in a cluster. Cleared
+//   before the pass.
 // `bounds`: per light, its tile columns [x & 0xffff, x >> 16), rows (y) and
 //   slices (z), written by `bound` for `bin`.
 
@@ -221,5 +223,8 @@ fn bin(@builtin(global_invocation_id) id: vec3<u32>) {
     atomicAdd(&counts[3], left_out);
     if id.x == 0u {
         clusters[0] = grid[7];
+        atomicStore(&counts[5], tiles.x);
+        atomicStore(&counts[6], tiles.y);
+        atomicStore(&counts[7], slices);
     }
 }

@@ -928,14 +928,14 @@ fn fs_main(in: VertexOut, @builtin(front_facing) front: bool) -> @location(0) ve
     emissive *= textureSample(emissive_map, material_sampler, map_uv(in, SLOT_EMISSIVE)).rgb;
 #endif
     color += emissive;
+#ifdef FOG
+    let distance = length(camera.position.xyz - in.world_position) * scene.fog.w;
+    color = mix(scene.fog.rgb, color, exp(-distance * distance));
+#endif
 #ifdef CLUSTERED
     if scene.environment_sky.y > 0.0 {
         color = cluster_heat(surface, n);
     }
-#endif
-#ifdef FOG
-    let distance = length(camera.position.xyz - in.world_position) * scene.fog.w;
-    color = mix(scene.fog.rgb, color, exp(-distance * distance));
 #endif
 #ifdef ALPHA_BLEND
     return vec4<f32>(color, base.a);

@@ -77,8 +77,9 @@ pub(crate) fn cluster_lights(
     let submits = res.queue.submits();
     let at = (res.gpu_timer.as_mut(), frame.index, submits);
     let device = (&res.device, &*res.queue, binning);
-    stats.bytes_uploaded.lights += record_binning(device, bins, (&grid, &spheres), buffer, &mut frame.encoder, at)?;
+    let written = record_binning(device, bins, (&grid, &spheres), buffer, &mut frame.encoder, at);
     frame.outline.leave(&mut frame.encoder);
+    stats.bytes_uploaded.lights += written?;
     stats.light_clusters = Some(bins.stats(&res.device, submits, false).unwrap_or(ClusterStats::of_grid(&grid, true)));
     gpu.clusters.binned = Some(Binned::Gpu(grid));
     Ok(())

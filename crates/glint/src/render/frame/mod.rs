@@ -14,6 +14,7 @@
 //! | `shadow_pass.rs` | shadow views planned once a frame; per view, culled, batched, uploaded and drawn |
 //! | `view.rs` | one view: its target, then prepare → shadows → cull → queue → sort → batch → upload → encode → compose |
 //! | `prepare.rs`, `prepared.rs` | GPU twins and pipelines for what the entities use; the table of what each draws with |
+//! | `lights.rs` | the view's light clusters: binned (by `gpu_driven/light_binning.rs`'s passes where it culls on the GPU, else on the CPU) and uploaded |
 //! | `visible.rs` | which instances a view sees (stage 3, cull) |
 //! | `forward.rs` | the draw queue (stage 4) and the upload (stage 7) |
 //! | `encode.rs`, `draw.rs`, `ambient_occlusion.rs` | the forward pass and its depth pre-pass, occlusion culling's phases, ambient occlusion (stage 8) |
@@ -25,9 +26,9 @@
 //! per-frame `Frame` value, and one submission, which consumes it. Debug
 //! groups nest like the outline (`debug/outline.rs`): frame N › simulate,
 //! then per view (in a group "view k" where the frame has several): shadows,
-//! forward, post; around passes labelled "light n cascade c", "cull
-//! instances", "depth pre-pass", "ambient occlusion", "forward pass: early",
-//! "depth pyramid", "post: …".
+//! lights (where the GPU bins them), forward, post; around passes labelled
+//! "light n cascade c", "bin lights", "cull instances", "depth pre-pass",
+//! "ambient occlusion", "forward pass: early", "depth pyramid", "post: …".
 
 pub(crate) mod ambient_occlusion;
 mod beginner;

@@ -74,7 +74,7 @@ pub(crate) struct GpuBins {
     readback: CountReadback,
     /// The input as last written.
     written: Vec<u32>,
-    /// The grid of the frame whose counts come back next.
+    /// The grid of the last binning recorded.
     grid: Option<ClusterGrid>,
 }
 
@@ -104,11 +104,13 @@ impl GpuBins {
             true => self.readback.wait_all(device, submits)?,
             false => self.readback.collect(device, submits)?,
         };
-        let &[entries, most, empty, overflow, visible, ..] = counts else { return None };
+        // The counts' own grid (a frame or two old, as they are).
+        let &[entries, most, empty, overflow, visible, x, y, z] = counts else { return None };
         Some(ClusterStats {
+            grid: [x, y, z],
             lights_visible: visible,
             max_per_cluster: most,
-            mean_per_cluster: f64::from(entries) / grid.clusters() as f64,
+            mean_per_cluster: f64::from(entries) / (f64::from(x) * f64::from(y) * f64::from(z)).max(1.0),
             empty,
             overflow,
             ..ClusterStats::of_grid(&grid, true)
