@@ -281,6 +281,15 @@ fn gap_squared(v: f32, [lo, hi]: [f32; 2]) -> f32 {
     d * d
 }
 
+/// A view's clusters, binned this frame and not yet uploaded
+/// (`render/frame/lights.rs`).
+pub(crate) enum Binned {
+    /// On the CPU: the lists, written at the upload.
+    Cpu(LightClusters),
+    /// On the GPU, by a pass recorded already: only the records are written at the upload.
+    Gpu(ClusterGrid),
+}
+
 /// Which point and spot lights reach each cluster of a view.
 #[derive(Clone, Debug, PartialEq)]
 pub struct LightClusters {

@@ -4,8 +4,8 @@
 //! draw lists. Records and lists are written only where their bytes change, so
 //! a view that did not change uploads nothing, however many views a frame has.
 
+use crate::render::clusters::Binned;
 use crate::render::frame::input::{ViewKey, KEEP_VIEW_FRAMES};
-use crate::render::frame::lights::Binned;
 use crate::render::gpu_driven::draw_list::{DrawList, ListPaths};
 use crate::render::gpu_driven::light_binning::GpuBins;
 use crate::render::passes::ambient_occlusion::OcclusionTargets;

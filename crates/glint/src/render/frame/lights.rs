@@ -13,7 +13,7 @@
 //! for `MAX_CLUSTER_LIGHTS`); then, from a whole texel, the records of the
 //! point and spot lights in order, four texels each.
 
-use crate::render::clusters::{bin_lights, light_bounds, ClusterGrid, LightClusters};
+use crate::render::clusters::{bin_lights, light_bounds, Binned, ClusterGrid, LightClusters};
 use crate::render::debug::explain::PassType;
 use crate::render::debug::stats::{ClusterStats, FrameStats, UploadStats};
 use crate::render::error::RenderError;
@@ -24,14 +24,6 @@ use crate::render::resources::Resources;
 use crate::render::view::ViewFrame;
 use crate::render::views::ViewGpu;
 use crate::scene::{Culling, Light, LightKind};
-
-/// A view's clusters, binned this frame and not yet uploaded.
-pub(crate) enum Binned {
-    /// On the CPU: the lists, written at the upload.
-    Cpu(LightClusters),
-    /// On the GPU, by a pass recorded already: only the records are written at the upload.
-    Gpu(ClusterGrid),
-}
 
 /// Bin `lights`' point and spot lights (in the order the Scene block holds
 /// them) into `view`'s clusters: on the GPU where it culls there (the pass
