@@ -8,6 +8,7 @@ mod bench;
 mod bench_live;
 mod compare;
 mod explain;
+mod frames;
 mod lod;
 mod output;
 mod particles;
@@ -76,11 +77,17 @@ enum Command {
         /// Frames per second of the sequence (0.001..=1000).
         #[arg(long, default_value_t = 30.0, value_parser = parse_fps)]
         fps: f32,
-        /// Render only frames FIRST up to (not including) END of the --frames
-        /// sequence, numbered and posed as in the whole run, so machines of a
-        /// render farm can each take a part.
-        #[arg(long, value_name = "FIRST..END", value_parser = render::parse_range)]
-        frame_range: Option<std::ops::Range<u32>>,
+        /// Render only these frames of the --frames sequence, numbered and
+        /// posed as in the whole run, so machines of a render farm can each
+        /// take a part: FIRST..END (END not included), or as Slurm and Open Job
+        /// Description list them, inclusive: N, A-B, A-B:STEP, or a
+        /// comma-separated list of those (1,3,5-7).
+        #[arg(long, value_name = "FRAMES", value_parser = frames::parse_frame_range)]
+        frame_range: Option<frames::FrameRange>,
+        /// Leave alone the numbered frames already on disk (so a failed chunk
+        /// can be run again): each is neither posed nor drawn.
+        #[arg(long)]
+        skip_existing: bool,
         /// Write the frames as one animated PNG (-o clip.png) rather than numbered PNGs.
         #[arg(long)]
         apng: bool,
@@ -772,26 +779,37 @@ fn main() -> ExitCode {
         ..LoadOptions::default()
     };
     let result = match &cli.command {
-        Command::Render { scene, output, picture, stats, time, frames, fps, frame_range, apng, turntable } => {
-            render::render(render::RenderArgs {
-                scene,
-                output,
-                size: picture.size,
-                msaa: picture.msaa,
-                camera: picture.camera,
-                stats: *stats,
-                cull: picture.cull,
-                density: picture.density,
-                time: *time,
-                frames: *frames,
-                range: frame_range.clone(),
-                fps: *fps,
-                turntable: *turntable,
-                apng: *apng,
-                lod: picture.lod,
-                options: picture.load_options(options),
-            })
-        }
+        Command::Render {
+            scene,
+            output,
+            picture,
+            stats,
+            time,
+            frames,
+            fps,
+            frame_range,
+            skip_existing,
+            apng,
+            turntable,
+        } => render::render(render::RenderArgs {
+            scene,
+            output,
+            size: picture.size,
+            msaa: picture.msaa,
+            camera: picture.camera,
+            stats: *stats,
+            cull: picture.cull,
+            density: picture.density,
+            time: *time,
+            frames: *frames,
+            range: frame_range.clone(),
+            skip_existing: *skip_existing,
+            fps: *fps,
+            turntable: *turntable,
+            apng: *apng,
+            lod: picture.lod,
+            options: picture.load_options(options),
+        }),
         Command::Check { scene } => check(scene, options),
         Command::Explain { scene, naive, json, view, camera, cull, size, time, lod, sim } => {
             explain::explain(explain::ExplainArgs {

@@ -28,6 +28,17 @@ pub fn write_file(path: &Path, bytes: &[u8]) -> Result<(), Diagnostic> {
     file.write_all(bytes).and_then(|()| file.flush()).map_err(|e| write_failed(path, &e))
 }
 
+/// Write `bytes` to `path` whole or not at all: into a `.part` file beside
+/// it, renamed to `path` once written, so a run killed midway leaves no
+/// truncated frame that `--skip-existing` would keep.
+pub fn write_file_whole(path: &Path, bytes: &[u8]) -> Result<(), Diagnostic> {
+    let mut part = path.as_os_str().to_owned();
+    part.push(".part");
+    let part = std::path::PathBuf::from(part);
+    write_file(&part, bytes)?;
+    std::fs::rename(&part, path).map_err(|e| Diagnostic::file(path, format!("cannot write: {e}")))
+}
+
 /// `image` (RGBA8 or RGB8) encoded as PNG, in memory.
 pub fn png_bytes<P>(image: &image::ImageBuffer<P, Vec<u8>>) -> Result<Vec<u8>, image::ImageError>
 where

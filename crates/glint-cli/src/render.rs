@@ -7,8 +7,7 @@
 use crate::{check_camera, culled, load, output, CullArg};
 use glint::asset::LoadOptions;
 use glint::{Diagnostic, Error, Gpu, OffscreenTarget, Renderer, World};
-use std::io::Write;
-use std::ops::Range;
+use std::io::{IsTerminal, Write};
 use std::path::{Path, PathBuf};
 
 /// What `glint render` was asked for.
@@ -25,8 +24,10 @@ pub struct RenderArgs<'a> {
     pub time: f32,
     /// Frames in the whole sequence.
     pub frames: u32,
-    /// The frames to render (`0..frames` where not given).
-    pub range: Option<Range<u32>>,
+    /// The frames to render (all of them where not given).
+    pub range: Option<crate::frames::FrameRange>,
+    /// Leave the numbered frames already on disk alone.
+    pub skip_existing: bool,
     pub fps: f32,
     /// Orbit the cameras once about their targets over the whole sequence.
     pub turntable: bool,
@@ -43,18 +44,22 @@ pub fn render(args: RenderArgs) -> Result<(), Error> {
         args;
     let desc = load(scene, args.options)?;
     check_camera(&desc, scene, camera)?;
-    let range = args.range.unwrap_or(0..args.frames);
-    if range.is_empty() || range.end > args.frames {
-        let message = format!(
-            "--frame-range {}..{} must be a non-empty part of the sequence's {} frames (--frames)",
-            range.start, range.end, args.frames
-        );
-        return Err(Diagnostic::file(scene, message).into());
-    }
-    let mut sink = Sink::new(output, args.apng, range.len() as u32, fps)?;
+    let listed = match &args.range {
+        Some(range) => range.frames(args.frames).map_err(|m| Diagnostic::file(scene, m))?,
+        None => (0..args.frames).collect(),
+    };
+    let mut sink = Sink::new(output, args.apng, listed.len() as u32, fps)?;
+    let frames = match args.skip_existing {
+        true => sink.missing(&listed)?,
+        false => listed,
+    };
+    let Some(&last) = frames.last() else {
+        eprintln!("every frame asked for is on disk already (--skip-existing): nothing to render");
+        return Ok(());
+    };
     // Refuse simulation work over the limits before starting a GPU: posing at
     // the last frame's time is the most work any frame takes.
-    desc.check_pose(frame_time(time, range.end - 1, fps))?;
+    desc.check_pose(frame_time(time, last, fps))?;
     let gpu = Gpu::headless()?;
     let msaa = if gpu.supports_msaa(msaa) {
         msaa
@@ -68,13 +73,16 @@ pub fn render(args: RenderArgs) -> Result<(), Error> {
     lod.apply(&mut renderer);
     let mut world = World::place(desc, &mut renderer)?;
     let views = lod.views(culled(world.views(camera), cull));
-    let progress = (range.len() > 1).then(|| {
-        let bar = indicatif::ProgressBar::new(range.len() as u64);
+    // A bar on a terminal; else (a farm's log) a line a frame.
+    let lines = !std::io::stderr().is_terminal();
+    let progress = (frames.len() > 1 && !lines).then(|| {
+        let bar = indicatif::ProgressBar::new(frames.len() as u64);
         let style = indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} frames, {elapsed} ({eta} left)");
         bar.set_style(style.expect("valid template"));
         bar
     });
-    for k in range {
+    for k in frames {
+        let started = std::time::Instant::now();
         world.pose(frame_time(time, k, fps), &mut renderer)?;
         let views = match args.turntable {
             true => views.iter().map(|v| turned(v, 360.0 * k as f32 / args.frames as f32)).collect(),
@@ -85,6 +93,10 @@ pub fn render(args: RenderArgs) -> Result<(), Error> {
         gpu.check()?;
         if let Some(bar) = &progress {
             bar.inc(1);
+        }
+        if lines {
+            let seconds = started.elapsed().as_secs_f64();
+            eprintln!("frame {k}: time {:.4} s, drawn and written in {seconds:.3} s", frame_time(time, k, fps));
         }
         if stats {
             // The counts of views culled on the GPU, which a running frame loop reads a frame or two late.
@@ -158,6 +170,31 @@ impl Sink {
         Ok(Self::Pngs { sequence: output.to_string_lossy().contains('%'), pattern: path })
     }
 
+    /// Of `frames`, those whose numbered file is not on disk yet
+    /// (`--skip-existing`, for numbered PNGs only).
+    fn missing(&self, frames: &[u32]) -> Result<Vec<u32>, Diagnostic> {
+        let Self::Pngs { pattern, .. } = self else {
+            let message = "--skip-existing leaves numbered frames alone: an animation is written whole";
+            return Err(Diagnostic::file(self.path(), message));
+        };
+        let mut missing = Vec::new();
+        for &k in frames {
+            let path = numbered(pattern, k).map_err(|m| Diagnostic::file(pattern, m))?;
+            if !path.is_file() {
+                missing.push(k);
+            }
+        }
+        Ok(missing)
+    }
+
+    /// The file or pattern it writes.
+    fn path(&self) -> &Path {
+        match self {
+            Self::Pngs { pattern, .. } => pattern,
+            Self::Gif { path, .. } | Self::Apng { path, .. } => path,
+        }
+    }
+
     /// Add frame `k` of the sequence.
     fn write(&mut self, k: u32, image: image::RgbaImage) -> Result<(), Error> {
         match self {
@@ -169,7 +206,10 @@ impl Sink {
                 }
                 let bytes = output::png_bytes(&image)
                     .map_err(|e| Diagnostic::file(&path, format!("cannot encode the PNG: {e}")))?;
-                output::write_file(&path, &bytes)?;
+                match sequence {
+                    true => output::write_file_whole(&path, &bytes)?,
+                    false => output::write_file(&path, &bytes)?,
+                }
             }
             Self::Gif { path, fps, encoder } => {
                 let (width, height) = (image.width() as u16, image.height() as u16);
@@ -255,16 +295,6 @@ fn frame_delay(fps: f32) -> (u16, u16) {
     }
 }
 
-/// `A..B`: frames A up to (not including) B.
-pub fn parse_range(s: &str) -> Result<Range<u32>, String> {
-    let expected = "expected FIRST..END, frames FIRST up to (not including) END, such as 0..100".to_string();
-    let (a, b) = s.split_once("..").ok_or_else(|| expected.clone())?;
-    match (a.trim().parse::<u32>(), b.trim().parse::<u32>()) {
-        (Ok(a), Ok(b)) if a < b => Ok(a..b),
-        _ => Err(expected),
-    }
-}
-
 /// Widest frame number `%0Nd` may ask for: more digits than any frame count
 /// needs, and far below what a file name can hold.
 const MAX_FRAME_DIGITS: usize = 32;
@@ -290,15 +320,6 @@ fn numbered(pattern: &Path, k: u32) -> Result<PathBuf, String> {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn ranges_parse_and_bad_ones_say_what_was_expected() {
-        assert_eq!(parse_range("500..1000"), Ok(500..1000));
-        assert_eq!(parse_range(" 0 .. 1"), Ok(0..1));
-        for bad in ["5..5", "6..5", "5", "-1..3", "a..b", "1..99999999999"] {
-            assert!(parse_range(bad).unwrap_err().contains("expected FIRST..END"), "{bad}");
-        }
-    }
 
     #[test]
     fn frame_delays_fit_sixteen_bits() {

@@ -94,13 +94,14 @@ fn a_turntable_orbits_the_camera_once_over_the_sequence() {
     assert_eq!(rgba(&dir.path().join("half/2.png")), png(2), "a turntable's range is posed as the whole run");
 }
 
-/// Render frames `0..6` of `scene` whole and as the ranges 0..2, 2..5 and 5..6
-/// into separate folders: every frame is the same, numbered the same.
+/// Render frames `0..6` of `scene` whole and as the ranges 0..2, 2-3,4 and
+/// 5-5:1 (glint's form and a farm's) into separate folders: every frame is
+/// the same, numbered the same.
 fn split_ranges_equal_the_whole_run(scene: &str, time: &str) {
     let dir = tempfile::tempdir().expect("temp dir");
     let sequence = ["--size", "48x48", "--frames", "6", "--fps", "5", "--time", time];
     let Some(_) = render(scene, &dir.path().join("whole/%02d.png"), &sequence) else { return };
-    for (k, range) in ["0..2", "2..5", "5..6"].iter().enumerate() {
+    for (k, range) in ["0..2", "2-3,4", "5-5:1"].iter().enumerate() {
         let folder = dir.path().join(format!("part{k}/%02d.png"));
         render(scene, &folder, &[&sequence[..], &["--frame-range", range]].concat()).expect("adapter");
     }
@@ -137,11 +138,17 @@ fn sequence_arguments_are_checked_before_any_frame() {
     let model = model.to_str().expect("path");
     let dir = tempfile::tempdir().expect("temp dir");
     let out = |name: &str| dir.path().join(name).to_str().expect("path").to_owned();
-    let cases: [(&[&str], &str); 5] = [
+    let cases: [(&[&str], &str); 8] = [
         (&["-o", &out("a.gif"), "--apng"], "--apng writes a PNG"),
         (&["-o", &out("a.png"), "--frames", "3"], "several frames need a numbered output"),
-        (&["-o", &out("%d.png"), "--frames", "3", "--frame-range", "2..4"], "of the sequence's 3 frames"),
-        (&["-o", &out("%d.png"), "--frames", "3", "--frame-range", "2..2"], "expected FIRST..END"),
+        (
+            &["-o", &out("%d.png"), "--frames", "3", "--frame-range", "2..4"],
+            "reaches frame 3, past the sequence's 3 frames",
+        ),
+        (&["-o", &out("%d.png"), "--frames", "3", "--frame-range", "2..2"], "'2..2' is empty"),
+        (&["-o", &out("%d.png"), "--frames", "3", "--frame-range", "2-1"], "runs backwards (2 is after 1)"),
+        (&["-o", &out("%d.png"), "--frames", "3", "--frame-range", "0-2:0"], "a step of 0"),
+        (&["-o", &out("a.gif"), "--frames", "3", "--skip-existing"], "an animation is written whole"),
         (&["-o", "/nonexistent/dir/a.gif", "--frames", "2"], "/nonexistent/dir/a.gif: cannot create"),
     ];
     for (args, want) in cases {
@@ -158,4 +165,35 @@ fn sequence_arguments_are_checked_before_any_frame() {
         let o = glint(&["render", model, "--size", "8x8", "--frames", "2", "-o", "/dev/full", "--apng"]);
         assert_write_failed(&o, "/dev/full");
     }
+}
+
+#[test]
+fn a_rerun_chunk_skips_the_frames_on_disk_and_prints_a_line_a_frame() {
+    let scene = "tests/scenes/emitter.scn";
+    let dir = tempfile::tempdir().expect("temp dir");
+    let frames = dir.path().join("f/%d.png");
+    let sequence = ["--size", "32x32", "--frames", "4", "--fps", "5", "--time", "0.5"];
+    let Some(first) = render(scene, &frames, &sequence) else { return };
+    // Not a terminal: a line a frame, for a farm's log.
+    let lines: Vec<String> = stderr(&first).lines().filter(|l| l.starts_with("frame ")).map(str::to_owned).collect();
+    assert_eq!(lines.len(), 4, "{}", stderr(&first));
+    assert!(lines[1].starts_with("frame 1: time 0.7000 s, drawn and written in "), "{}", lines[1]);
+    let path = |k: u32| dir.path().join(format!("f/{k}.png"));
+    let before: Vec<_> = (0..4).map(|k| rgba(&path(k))).collect();
+    let written = |k: u32| std::fs::metadata(path(k)).and_then(|m| m.modified()).expect("written");
+    let times: Vec<_> = (0..4).map(written).collect();
+    std::fs::remove_file(path(2)).expect("removed");
+    let again = render(scene, &frames, &[&sequence[..], &["--skip-existing"]].concat()).expect("adapter");
+    let text = stderr(&again);
+    let lines: Vec<&str> = text.lines().filter(|l| l.starts_with("frame ")).collect();
+    assert_eq!(lines.len(), 1, "only the missing frame: {text}");
+    assert!(lines[0].starts_with("frame 2: "), "{}", lines[0]);
+    assert_eq!(rgba(&path(2)), before[2], "drawn again as in the whole run");
+    for k in [0, 1, 3] {
+        assert_eq!(written(k), times[k as usize], "frame {k} was left alone");
+    }
+    let all_there = render(scene, &frames, &[&sequence[..], &["--skip-existing"]].concat()).expect("adapter");
+    assert!(stderr(&all_there).contains("nothing to render"), "{}", stderr(&all_there));
+    let leftovers = std::fs::read_dir(dir.path().join("f")).expect("folder").count();
+    assert_eq!(leftovers, 4, "no .part files left behind");
 }
