@@ -355,11 +355,13 @@ pub fn bin_lights(grid: &ClusterGrid, view: Mat4, lights: &[Light]) -> LightClus
     let mut pairs: Vec<(u32, u32)> = Vec::new();
     let mut visible = 0;
     let boxes = grid.boxes();
+    let mut gaps = (Vec::new(), Vec::new()); // touch_clusters' rows and columns, made once
     for (index, light) in lights.iter().enumerate() {
         let Some((centre, radius)) = light_bounds(light) else { continue };
         let c = view.transform_point3(centre);
         let before = pairs.len();
-        touch_clusters(&boxes, grid, c, radius, |cluster| pairs.push((cluster as u32, index as u32)));
+        let touch = |cluster: usize| pairs.push((cluster as u32, index as u32));
+        touch_clusters((&boxes, grid), (c, radius), &mut gaps, touch);
         visible += u32::from(pairs.len() > before);
     }
     let mut counts = vec![0u32; grid.clusters()];
@@ -389,13 +391,18 @@ pub fn bin_lights(grid: &ClusterGrid, view: Mat4, lights: &[Light]) -> LightClus
 /// Call `touch` with every cluster the view-space sphere (`centre`,
 /// `radius`) meets ([`ClusterBoxes::meets`]), in index order within each
 /// slice. Only the slices, rows and columns whose boxes' sides the sphere
-/// reaches (found by bisection, with a little to spare) are tested.
-fn touch_clusters(b: &ClusterBoxes, grid: &ClusterGrid, centre: Vec3, radius: f32, mut touch: impl FnMut(usize)) {
+/// reaches (found by bisection, with a little to spare) are tested; `gaps`
+/// holds the sphere's distances from them.
+fn touch_clusters(
+    (b, grid): (&ClusterBoxes, &ClusterGrid),
+    (centre, radius): (Vec3, f32),
+    (across, down): &mut (Vec<f32>, Vec<f32>),
+    mut touch: impl FnMut(usize),
+) {
     let r = radius * (1.0 + 1e-4) + 1e-6;
     let (columns, rows) = (grid.tiles[0] as usize, grid.tiles[1] as usize);
     let k0 = first_false(b.pads.len(), |k| b.z_range(k)[0] > centre.z + r);
     let k1 = first_false(b.pads.len(), |k| b.z_range(k)[1] >= centre.z - r);
-    let (mut across, mut down) = (Vec::new(), Vec::new());
     for k in k0..k1 {
         let i0 = first_false(columns, |i| b.x_range(i, k)[1] < centre.x - r);
         let i1 = first_false(columns, |i| b.x_range(i, k)[0] <= centre.x + r);
@@ -409,8 +416,8 @@ fn touch_clusters(b: &ClusterBoxes, grid: &ClusterGrid, centre: Vec3, radius: f3
         down.clear();
         down.extend((j0..j1).map(|j| gap_squared(centre.y, b.y_range(j, k))));
         let dz = gap_squared(centre.z, b.z_range(k));
-        for (j, dy) in (j0..j1).zip(&down) {
-            for (i, dx) in (i0..i1).zip(&across) {
+        for (j, dy) in (j0..j1).zip(down.iter()) {
+            for (i, dx) in (i0..i1).zip(across.iter()) {
                 if dx + dy + dz <= radius * radius {
                     touch(grid.index(i as u32, j as u32, k as u32));
                 }
