@@ -320,13 +320,22 @@ impl SceneDesc {
     /// [`SchoolParams::check`](crate::scene::school::SchoolParams::check),
     /// [`EmitterParams::check`](crate::scene::emitter::EmitterParams::check)).
     pub fn check_pose(&self, time: f32) -> Result<(), Diagnostic> {
+        self.check_pose_from(None, time)
+    }
+
+    /// [`check_pose`](Self::check_pose) for posing at `time` with every
+    /// simulation at its state at `from` (`None`: at its start): the work of
+    /// the steps between (all of them where `from` is later than `time`, as
+    /// the simulations start again). A sequence posed frame by frame is
+    /// checked one frame at a time.
+    pub fn check_pose_from(&self, from: Option<f32>, time: f32) -> Result<(), Diagnostic> {
         let mut work = 0u64;
         for cloth in &self.cloths {
             let at =
                 |e: crate::scene::cloth::ClothMeshError| Diagnostic::at(&self.path, cloth.line, format!("cloth: {e}"));
             cloth.setup.check().map_err(at)?;
-            cloth.check_pose(time, work, &self.path)?;
-            work = work.saturating_add(cloth.pose_work(time));
+            cloth.check_pose((from, time), work, &self.path)?;
+            work = work.saturating_add(cloth.pose_work(from, time));
         }
         // A description changed after loading is checked again.
         for s in &self.schools {
@@ -338,10 +347,19 @@ impl SceneDesc {
                 .ok_or_else(|| format!("dt must be above 0, got {}", e.dt));
             e.params.check().and(dt).map_err(|m| Diagnostic::at(&self.path, e.line, format!("emitter: {m}")))?;
         }
-        let fish = super::scn_school::pose_work(&self.schools, time);
+        let fish = super::scn_school::pose_work(&self.schools, (from, time));
         within(&self.path, (super::MAX_POSE_SCHOOL_TESTS, "neighbour tests"), fish)?;
-        let particles = super::scn_emitter::pose_work(&self.emitters, time);
+        let particles = super::scn_emitter::pose_work(&self.emitters, (from, time));
         within(&self.path, (super::MAX_POSE_PARTICLE_STEPS, "particle-steps"), particles)
+    }
+}
+
+/// "time 4 s", or "time 2 s to 4 s" from a simulation state at 2 s (a
+/// later one counts as the start).
+pub(crate) fn span(from: Option<f32>, time: f32) -> String {
+    match from.filter(|&f| f > 0.0 && f <= time) {
+        None => format!("time {time} s"),
+        Some(f) => format!("time {f} s to {time} s"),
     }
 }
 

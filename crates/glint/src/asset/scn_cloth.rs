@@ -73,34 +73,59 @@ impl ClothDesc {
         }
     }
 
-    /// The work of posing at `time` in node²-steps (see `MAX_POSE_NODE_STEPS`).
-    pub fn pose_work(&self, time: f32) -> u64 {
-        let steps = match self.integrator {
-            Integrator::Static => STATIC_STEPS,
-            _ => self.steps_to(time),
+    /// Steps posing at `time` takes from its state at `from` (`None`: from
+    /// rest; a later `from` counts as rest too, as the cloth starts again).
+    pub fn steps_from(&self, from: Option<f32>, time: f32) -> u64 {
+        let taken = match from.filter(|&f| f <= time) {
+            None => 0,
+            Some(f) => self.steps_to(f),
+        };
+        self.steps_to(time).saturating_sub(taken)
+    }
+
+    /// The work of posing at `time` from its state at `from` (as
+    /// [`steps_from`](Self::steps_from)) in node²-steps (see `MAX_POSE_NODE_STEPS`).
+    pub fn pose_work(&self, from: Option<f32>, time: f32) -> u64 {
+        self.steps_work(self.steps_from(from, time))
+    }
+
+    /// The work of `steps` steps in node²-steps (a static solve's, whatever
+    /// their number, is [`STATIC_STEPS`]').
+    fn steps_work(&self, steps: u64) -> u64 {
+        let steps = match (self.integrator, steps) {
+            (_, 0) => 0,
+            (Integrator::Static, _) => STATIC_STEPS,
+            (_, steps) => steps,
         };
         let nodes = self.setup.mesh.nodes.len() as u64;
         steps.saturating_mul(nodes.saturating_mul(nodes))
     }
 
-    /// Check that posing at `time`, after `others` node²-steps spent on the
-    /// scene's other cloths, stays within [`MAX_POSE_STEPS`] and
-    /// `MAX_POSE_NODE_STEPS`, without stepping; returns the steps it takes.
-    pub fn check_pose(&self, time: f32, others: u64, scene: &Path) -> Result<u64, Diagnostic> {
-        let target = self.steps_to(time);
-        if target > MAX_POSE_STEPS {
+    /// Check that posing at `time` from its state at `from` (as
+    /// [`steps_from`](Self::steps_from)), after `others` node²-steps spent on
+    /// the scene's other cloths, stays within [`MAX_POSE_STEPS`] and
+    /// `MAX_POSE_NODE_STEPS`, without stepping.
+    pub fn check_pose(&self, (from, time): (Option<f32>, f32), others: u64, scene: &Path) -> Result<(), Diagnostic> {
+        self.check_steps(self.steps_from(from, time), &super::scene_desc::span(from, time), others, scene)
+    }
+
+    /// Check that taking `steps` steps (`when`: "time T s", for the message),
+    /// after `others` node²-steps spent on the scene's other cloths, stays
+    /// within the posing limits, without stepping.
+    pub(crate) fn check_steps(&self, steps: u64, when: &str, others: u64, scene: &Path) -> Result<(), Diagnostic> {
+        if steps > MAX_POSE_STEPS {
             let message = format!(
-                "cloth: time {time} s is {target} steps of dt {} s, more than the {MAX_POSE_STEPS} one pose may take",
+                "cloth: {when} is {steps} steps of dt {} s, more than the {MAX_POSE_STEPS} one pose may take",
                 self.dt
             );
             return Err(Diagnostic::at(scene, self.line, message));
         }
-        let work = self.pose_work(time).saturating_add(others);
+        let work = self.steps_work(steps).saturating_add(others);
         if work > MAX_POSE_NODE_STEPS {
             let nodes = self.setup.mesh.nodes.len();
             let what = match self.integrator {
                 Integrator::Static => format!("a static solve of {nodes} nodes counts as {STATIC_STEPS} steps"),
-                _ => format!("time {time} s is {target} steps of dt {} s for {nodes} nodes", self.dt),
+                _ => format!("{when} is {steps} steps of dt {} s for {nodes} nodes", self.dt),
             };
             let others = if others > 0 { format!(" with the scene's other cloths ({others})") } else { String::new() };
             let message = format!(
@@ -109,7 +134,7 @@ impl ClothDesc {
             );
             return Err(Diagnostic::at(scene, self.line, message));
         }
-        Ok(target)
+        Ok(())
     }
 }
 
@@ -300,14 +325,25 @@ mod tests {
         let err = two.check_pose(at(fits)).unwrap_err();
         assert_eq!(err.line, Some(7), "{err}");
         assert!(err.message.contains("other cloths"), "{err}");
+        // A sequence posed frame by frame is checked a frame at a time: from a
+        // state at one time, only the steps since count (an earlier time
+        // starts again, and counts every step).
+        let (from, to) = (at(fits + 10), at(2 * fits + 10));
+        assert_eq!(one.cloths[0].steps_from(Some(from), to), fits);
+        assert!(one.check_pose_from(Some(from), to).is_ok());
+        assert!(one.check_pose_from(Some(from), at(2 * fits + 11)).unwrap_err().message.contains(" s to "));
+        assert!(one.check_pose_from(Some(to), from).is_err(), "an earlier time steps from rest");
+        assert!(one.check_pose_from(None, to).is_err());
     }
 
     #[test]
     fn a_static_solve_counts_as_ten_steps_whatever_the_time() {
         let scene = parse("\"resolution\" \"9 9\"\n\"pins\" \"z<=-0.5\"\n\"integrator\" \"static\"\n").unwrap();
         let cloth = &scene.cloths[0];
-        assert_eq!((cloth.steps_to(1e6), cloth.pose_work(1e6)), (1, STATIC_STEPS * 81 * 81));
+        assert_eq!((cloth.steps_to(1e6), cloth.pose_work(None, 1e6)), (1, STATIC_STEPS * 81 * 81));
         assert!(scene.check_pose(1e6).is_ok());
+        // Solved once: posing it again takes no work.
+        assert_eq!(cloth.pose_work(Some(1.0), 1e6), 0);
     }
 
     #[test]

@@ -76,11 +76,18 @@ impl EmitterDesc {
         (f64::from(time.max(0.0)) / f64::from(self.dt)).round() as u64
     }
 
-    /// Particle-steps posing at `time` takes: every slot, every step, and
-    /// each step's own [`STEP_OVERHEAD`].
-    pub fn pose_work(&self, time: f32) -> u64 {
+    /// Steps posing at `time` takes from its state at `from` (`None`: from
+    /// time 0; a later `from` counts as time 0 too, as it starts again).
+    pub fn steps_from(&self, from: Option<f32>, time: f32) -> u64 {
+        let taken = from.filter(|&f| f <= time).map_or(0, |f| self.steps_to(f));
+        self.steps_to(time).saturating_sub(taken)
+    }
+
+    /// Particle-steps posing at `time` from `from` takes: every slot, every
+    /// step ([`steps_from`](Self::steps_from)), and each step's own [`STEP_OVERHEAD`].
+    pub fn pose_work(&self, from: Option<f32>, time: f32) -> u64 {
         let slots = self.params.slots();
-        self.steps_to(time).saturating_mul(slots.saturating_add(STEP_OVERHEAD))
+        self.steps_from(from, time).saturating_mul(slots.saturating_add(STEP_OVERHEAD))
     }
 }
 
@@ -238,16 +245,19 @@ pub(crate) fn parse(f: &mut Fields, line: usize) -> Result<(EmitterParams, Looks
     Ok((params, Looks { blend, soft, lit }, dt))
 }
 
-/// What posing every emitter at `time` takes, for [`SceneDesc::check_pose`](super::SceneDesc::check_pose):
+/// What posing every emitter at `time` from `from` takes, for [`SceneDesc::check_pose_from`](super::SceneDesc::check_pose_from):
 /// each block's line, steps, particle-steps, and what they are.
-pub(crate) fn pose_work(emitters: &[EmitterDesc], time: f32) -> impl Iterator<Item = (usize, u64, u64, String)> + '_ {
+pub(crate) fn pose_work(
+    emitters: &[EmitterDesc],
+    (from, time): (Option<f32>, f32),
+) -> impl Iterator<Item = (usize, u64, u64, String)> + '_ {
     emitters.iter().map(move |e| {
-        let slots = e.params.slots();
+        let (slots, steps) = (e.params.slots(), e.steps_from(from, time));
         let what = format!(
-            "emitter: time {time} s is {} steps of {slots} particle slots (each step counting {STEP_OVERHEAD} more for itself)",
-            e.steps_to(time)
+            "emitter: {} is {steps} steps of {slots} particle slots (each step counting {STEP_OVERHEAD} more for itself)",
+            super::scene_desc::span(from, time),
         );
-        (e.line, e.steps_to(time), e.pose_work(time), what)
+        (e.line, steps, e.pose_work(from, time), what)
     })
 }
 

@@ -50,9 +50,17 @@ impl SchoolDesc {
         (f64::from(time.max(0.0)) / f64::from(self.dt)).round() as u64
     }
 
-    /// Neighbour tests posing at `time` counts as ([`SchoolParams::step_cost`] a step).
-    pub fn pose_work(&self, time: f32) -> u64 {
-        self.steps_to(time).saturating_mul(self.params.step_cost())
+    /// Steps posing at `time` takes from its state at `from` (`None`: from
+    /// its start; a later `from` counts as the start too, as it starts again).
+    pub fn steps_from(&self, from: Option<f32>, time: f32) -> u64 {
+        let taken = from.filter(|&f| f <= time).map_or(0, |f| self.steps_to(f));
+        self.steps_to(time).saturating_sub(taken)
+    }
+
+    /// Neighbour tests posing at `time` from `from` counts as
+    /// ([`SchoolParams::step_cost`] a step, [`steps_from`](Self::steps_from) steps).
+    pub fn pose_work(&self, from: Option<f32>, time: f32) -> u64 {
+        self.steps_from(from, time).saturating_mul(self.params.step_cost())
     }
 
     /// The largest scale [`fish_scale`](Self::fish_scale) gives a fish.
@@ -230,17 +238,21 @@ impl Loader<'_> {
     }
 }
 
-/// What posing every school at `time` takes, for [`SceneDesc::check_pose`](super::SceneDesc::check_pose):
+/// What posing every school at `time` from `from` takes, for [`SceneDesc::check_pose_from`](super::SceneDesc::check_pose_from):
 /// each block's line, steps, neighbour tests, and what they are.
-pub(crate) fn pose_work(schools: &[SchoolDesc], time: f32) -> impl Iterator<Item = (usize, u64, u64, String)> + '_ {
+pub(crate) fn pose_work(
+    schools: &[SchoolDesc],
+    (from, time): (Option<f32>, f32),
+) -> impl Iterator<Item = (usize, u64, u64, String)> + '_ {
     schools.iter().map(move |s| {
+        let steps = s.steps_from(from, time);
         let what = format!(
-            "school: time {time} s is {} steps of {} fish, counted as {} neighbour tests a step",
-            s.steps_to(time),
+            "school: {} is {steps} steps of {} fish, counted as {} neighbour tests a step",
+            super::scene_desc::span(from, time),
             s.params.count,
             s.params.step_cost()
         );
-        (s.line, s.steps_to(time), s.pose_work(time), what)
+        (s.line, steps, s.pose_work(from, time), what)
     })
 }
 

@@ -382,6 +382,28 @@ async fn choose_adapter(
         .map_err(|e| GpuError::NoAdapter(format!(" for backends {backends:?} ({e})")))
 }
 
+/// The bytes of each of `buffers`, as the GPU holds them once its work so
+/// far is done.
+pub(crate) fn read_buffers(
+    (device, queue): (&wgpu::Device, &wgpu::Queue),
+    buffers: &[&wgpu::Buffer],
+) -> Result<Vec<Vec<u8>>, GpuError> {
+    buffers.iter().map(|b| read_buffer(device, queue, b)).collect()
+}
+
+/// Write each `(buffer, bytes, what)`'s bytes over the whole of its buffer,
+/// when every one is its buffer's size (else none is written, and the error
+/// names `what`).
+pub(crate) fn refill(queue: &wgpu::Queue, writes: &[(&wgpu::Buffer, &[u8], &str)]) -> Result<(), String> {
+    for (buffer, bytes, what) in writes {
+        if bytes.len() as u64 != buffer.size() {
+            return Err(format!("{} bytes of {what}, where the simulation holds {}", bytes.len(), buffer.size()));
+        }
+    }
+    writes.iter().for_each(|(buffer, bytes, _)| queue.write_buffer(buffer, 0, bytes));
+    Ok(())
+}
+
 /// The bytes of `buffer` (which allows `COPY_SRC`), copied to a mapped buffer
 /// and read once the GPU is done.
 pub(crate) fn read_buffer(

@@ -17,7 +17,7 @@ mod target;
 mod window;
 
 pub use after_views::AfterViews;
-pub(crate) use context::read_buffer;
+pub(crate) use context::{read_buffer, read_buffers, refill};
 pub use context::{Gpu, GpuError, WindowHandles};
 pub use heap::keep_freed_heap_memory;
 pub(crate) use simulation::{bind_buffers, buffers_layout, compute_pipeline};

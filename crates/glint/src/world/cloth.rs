@@ -6,6 +6,7 @@
 //! written into its surface shape's vertices there
 //! ([`GpuCloth::draw_in_place`]), the CPU's meshes left at rest.
 
+use super::sim_state::{chunks, value_bytes, values, SimKind, SimRecord};
 use crate::asset::ClothDesc;
 use crate::render::GpuSimulation;
 use crate::scene::cloth::{Collider, Solve};
@@ -36,14 +37,19 @@ pub(crate) struct ClothSim {
     gpu: Option<GpuRun>,
     rest: Option<ClothView>,
     pub(crate) view: Option<ClothView>,
+    /// Resumed from a simulation cache since the last pose, so the next
+    /// one shows it even where it takes no step.
+    resumed: bool,
 }
 
 impl ClothSim {
     /// `desc` started, at rest, on the CPU.
     pub(crate) fn new(desc: &ClothDesc) -> Self {
-        let Ok(cloth) = Cloth::start(&desc.setup) else { return Self { run: None, gpu: None, rest: None, view: None } };
+        let Ok(cloth) = Cloth::start(&desc.setup) else {
+            return Self { run: None, gpu: None, rest: None, view: None, resumed: false };
+        };
         let rest = ClothView::new(&cloth, desc.debug).ok();
-        Self { run: rest.is_some().then(|| (Box::new(cloth), 0)), gpu: None, view: rest.clone(), rest }
+        Self { run: rest.is_some().then(|| (Box::new(cloth), 0)), gpu: None, view: rest.clone(), rest, resumed: false }
     }
 
     /// Move it onto the GPU, drawn in place, where `desc` asks (`"solve"
@@ -87,22 +93,22 @@ impl ClothSim {
     /// rest for an earlier time, or after a failed frame) for the next
     /// frame's simulate stage ([`simulation`](Self::simulation)), and move
     /// `surface`'s held box along; returns false, doing nothing, when the CPU
-    /// steps it ([`pose`](Self::pose)). Refuses work past the posing budget as
-    /// [`pose`](Self::pose) does, `scene` naming the file.
+    /// steps it ([`pose`](Self::pose)). The posing budget was checked before
+    /// ([`SceneDesc::check_pose_from`](crate::asset::SceneDesc::check_pose_from)).
     pub(crate) fn pose_on_gpu(
         &mut self,
         desc: &ClothDesc,
         time: f32,
-        (scene, queue): (&Path, &wgpu::Queue),
+        queue: &wgpu::Queue,
         surface: &mut Entity,
-    ) -> Result<bool, crate::Error> {
-        let Some(run) = &mut self.gpu else { return Ok(false) };
-        let target = desc.check_pose(time, 0, scene)?;
+    ) -> bool {
+        let Some(run) = &mut self.gpu else { return false };
+        let target = desc.steps_to(time);
         if run.steps > target {
             run.cloth.restart(queue, &run.start);
             run.steps = 0;
         }
-        // `check_pose` bounds the target by MAX_POSE_STEPS.
+        // `check_pose_from` bounds the steps by MAX_POSE_STEPS.
         let more = target - run.steps;
         run.cloth.advance(u32::try_from(more).unwrap_or(u32::MAX));
         run.steps += more;
@@ -110,17 +116,24 @@ impl ClothSim {
         if surface.gpu_instances() != Some(held) {
             surface.set_gpu_instances(Some(held));
         }
-        Ok(true)
+        true
     }
 
     /// On the CPU, advance (or restart and advance) to `time` seconds and
     /// update the view; returns whether the view changed. A static cloth takes
     /// its one equilibrium step whatever the time. Refuses work past the
-    /// posing budget before stepping ([`ClothDesc::check_pose`]); a step that
-    /// fails is [`Error::Posing`](crate::Error::Posing), naming `scene`, the
+    /// posing budget from the steps it has taken, before stepping
+    /// ([`SceneDesc::check_pose_from`](crate::asset::SceneDesc::check_pose_from)
+    /// checks the whole scene); a step that fails is [`Error::Posing`](crate::Error::Posing), naming `scene`, the
     /// block's line and the time it stepped from.
     pub(crate) fn pose(&mut self, desc: &ClothDesc, time: f32, scene: &Path) -> Result<bool, crate::Error> {
-        let target = desc.check_pose(time, 0, scene)?;
+        let target = desc.steps_to(time);
+        // Checked again here, from the steps it has taken, for a caller that did not.
+        let taken = match &self.run {
+            Some((_, taken)) if *taken <= target => *taken,
+            _ => 0,
+        };
+        desc.check_steps(target - taken, &format!("time {time} s"), 0, scene)?;
         let Some(rest) = &self.rest else { return Ok(false) };
         let (mut run, restarted) = match self.run.take() {
             Some(run) if run.1 <= target => (run, false),
@@ -135,7 +148,7 @@ impl ClothSim {
                 ((Box::new(cloth), 0), true)
             }
         };
-        let moved = restarted || run.1 < target;
+        let moved = restarted || run.1 < target || std::mem::take(&mut self.resumed);
         while run.1 < target {
             let from = run.0.time;
             let failed = |source| {
@@ -150,6 +163,51 @@ impl ClothSim {
         }
         self.run = Some(run);
         Ok(moved)
+    }
+
+    /// Its state for a simulation cache ([`World::sim_state`](super::World::sim_state)),
+    /// `None` when it cannot run or has GPU steps pending.
+    pub(crate) fn save(&self, gpu: (&wgpu::Device, &wgpu::Queue)) -> Result<Option<SimRecord>, crate::GpuError> {
+        let record = |path, steps, chunks| SimRecord { kind: SimKind::Cloth, path, steps, chunks };
+        if let Some(run) = &self.gpu {
+            return Ok(run.cloth.save(gpu)?.map(|chunks| record(SimPath::Gpu, run.steps, chunks)));
+        }
+        let Some((cloth, steps)) = &self.run else { return Ok(None) };
+        let xyz = |v: &[DVec3]| value_bytes(v.iter().map(|p| p.to_array()));
+        let (p, v, a) = (xyz(&cloth.positions), xyz(&cloth.velocities), xyz(cloth.accelerations()));
+        Ok(Some(record(SimPath::Cpu, *steps, vec![p, v, a, value_bytes([cloth.time])])))
+    }
+
+    /// Go on from `record` ([`save`](Self::save)d from the same cloth on the
+    /// same path): the next pose steps on from it.
+    pub(crate) fn load(&mut self, desc: &ClothDesc, record: &SimRecord, queue: &wgpu::Queue) -> Result<(), String> {
+        if let Some(run) = &mut self.gpu {
+            run.cloth.load(queue, (&run.start, record.steps), chunks::<4>(record)?)?;
+            run.steps = record.steps;
+            return Ok(());
+        }
+        let [p, v, a, time] = chunks::<4>(record)?;
+        let xyz = |bytes| -> Result<Vec<DVec3>, String> {
+            Ok(values::<[f64; 3]>(bytes)?.into_iter().map(DVec3::from_array).collect())
+        };
+        let time = match values::<f64>(time)?.as_slice() {
+            [t] => *t,
+            other => return Err(format!("{} values for the time, expected 1", other.len())),
+        };
+        let state = [xyz(p)?, xyz(v)?, xyz(a)?];
+        let (mut cloth, steps) = match self.run.take() {
+            Some(run) => run,
+            None => (Box::new(Cloth::start(&desc.setup).map_err(|e| format!("cloth: {e}"))?), 0),
+        };
+        // Nothing changes where the record does not fit.
+        let resumed = cloth.resume(state, time);
+        self.run = Some((cloth, if resumed.is_ok() { record.steps } else { steps }));
+        resumed?;
+        if let (Some(view), Some((cloth, _))) = (self.view.as_mut(), &self.run) {
+            view.update(cloth);
+        }
+        self.resumed = true;
+        Ok(())
     }
 
     /// A frame that recorded its GPU steps failed and dropped them: start

@@ -27,6 +27,7 @@ mod particles;
 mod place;
 mod player;
 mod school;
+mod sim_state;
 
 use crate::asset::{MeshRef, SceneDesc};
 use crate::scene::{Entity, Lighting, SimPath, View};
@@ -41,6 +42,7 @@ pub use clock::{Played, SceneClock, MAX_FRAME_ADVANCE};
 pub use controls::{Control, ControlKind, Controls};
 pub use place::PlacedScene;
 pub use player::{Moves, Player};
+pub use sim_state::{SimKind, SimRecord, SimState, FORMAT as SIM_STATE_FORMAT};
 
 /// A scene placed in a renderer, with its simulations and clock.
 pub struct World {
@@ -55,6 +57,10 @@ pub struct World {
     /// The placed entities of each entity block of `desc`.
     ranges: Vec<std::ops::Range<usize>>,
     time: f32,
+    /// The time its simulations stand at: the last pose's, or the state's
+    /// they resumed from; `None` at their start (or after a failed pose or
+    /// frame, when they may start again).
+    stepped_to: Option<f32>,
     /// Whether a material moves with time ([`Material::motion`](crate::Material::motion)),
     /// so the frames need the scene time.
     moves: bool,
@@ -100,6 +106,7 @@ impl World {
             drawn_at: -1.0,
             ranges,
             time: 0.0,
+            stepped_to: None,
             moves,
             shadows_off: None,
         })
@@ -138,6 +145,13 @@ impl World {
         self.time
     }
 
+    /// The time its simulations stand at (the last pose's, or the state's
+    /// they resumed from); `None` at their start, or after a failed pose or
+    /// frame.
+    pub fn simulated_to(&self) -> Option<f32> {
+        self.stepped_to
+    }
+
     /// The views a picture of it draws: camera `camera` alone over the whole
     /// image (after the cameras drawing render targets, which it may show), or
     /// else [`SceneDesc::views`]. A camera the scene lacks counts as none.
@@ -156,11 +170,15 @@ impl World {
     /// `renderer` (one vertex-buffer write each).
     ///
     /// Errors (exit code 3 in the CLI) when a cloth cannot reach `time`: more
-    /// steps or work than the posing budget allows (before any step), or a step
+    /// steps or work than the posing budget allows from where the simulations
+    /// stand (the last pose, or their start for an earlier time:
+    /// [`SceneDesc::check_pose_from`]; before any step), or a step
     /// that does not converge ([`Error::Posing`](crate::Error::Posing)).
     pub fn pose(&mut self, time: f32, renderer: &mut Renderer) -> Result<(), crate::Error> {
         let desc = &mut self.desc;
-        desc.check_pose(time)?;
+        desc.check_pose_from(self.stepped_to, time)?;
+        // Set again once every simulation has stepped.
+        self.stepped_to = None;
         let entities = &mut self.placed.entities;
         let mut next = 0;
         let mut posed: Vec<Option<(bool, Vec<usize>)>> = vec![None; desc.models.len()];
@@ -188,7 +206,7 @@ impl World {
         for (sim, cloth) in self.cloths.iter_mut().zip(&desc.cloths) {
             let count = place::cloth_entity_count(sim.view.as_ref());
             let on_gpu = match entities[next..].first_mut().filter(|_| count > 0) {
-                Some(surface) => sim.pose_on_gpu(cloth, time, (&desc.path, renderer.device_and_queue().1), surface)?,
+                Some(surface) => sim.pose_on_gpu(cloth, time, renderer.device_and_queue().1, surface),
                 None => false,
             };
             if !on_gpu && sim.pose(cloth, time, &desc.path)? {
@@ -224,7 +242,7 @@ impl World {
                 sim.show(school, desc, &self.ranges, entities);
             }
         }
-        self.time = time;
+        (self.time, self.stepped_to) = (time, Some(time));
         Ok(())
     }
 
@@ -310,12 +328,100 @@ impl World {
             self.schools.iter_mut().for_each(SchoolSim::frame_failed);
             self.cloths.iter_mut().for_each(ClothSim::frame_failed);
             self.emitters.iter_mut().for_each(EmitterSim::frame_failed);
+            self.stepped_to = None;
         }
         let mut output = output?;
         output.views.iter_mut().for_each(|v| v.simulations = paths);
         particles::count(&self.desc.emitters, (self.drawn_at, self.time), &mut output.views);
         self.drawn_at = self.time;
         Ok(output)
+    }
+
+    /// Its simulations in the order of [`sim_state`](Self::sim_state)'s
+    /// records (cloths, schools, emitters, each in file order), each with
+    /// where it steps (`None`: it cannot run).
+    pub fn simulations(&self) -> Vec<(SimKind, Option<SimPath>)> {
+        (self.cloths.iter().map(|c| (SimKind::Cloth, c.path())))
+            .chain(self.schools.iter().map(|s| (SimKind::School, s.path())))
+            .chain(self.emitters.iter().map(|e| (SimKind::Emitter, e.path())))
+            .collect()
+    }
+
+    /// Every simulation's state as of the last frame drawn (its cloths, then
+    /// its schools, then its emitters), read back from the GPU where they step
+    /// there: what [`resume`](Self::resume) goes on from. Errors for one that
+    /// cannot run, or that was posed since the last frame (its GPU steps
+    /// still pending).
+    pub fn sim_state(&self, renderer: &Renderer) -> Result<SimState, crate::GpuError> {
+        let gpu = renderer.device_and_queue();
+        let missing = |kind: &str, k: usize| {
+            let why = "it cannot run, or was posed after the last frame drawn (its GPU steps pending)";
+            crate::GpuError::Failed(format!("{kind} {} has no state to save: {why}", k + 1))
+        };
+        let mut records = Vec::new();
+        for (k, sim) in self.cloths.iter().enumerate() {
+            records.push(sim.save(gpu)?.ok_or_else(|| missing("cloth", k))?);
+        }
+        for (k, sim) in self.schools.iter().enumerate() {
+            records.push(sim.save(gpu)?.ok_or_else(|| missing("school", k))?);
+        }
+        for (k, sim) in self.emitters.iter().enumerate() {
+            records.push(sim.save(gpu)?.ok_or_else(|| missing("emitter", k))?);
+        }
+        Ok(SimState { time: self.stepped_to.unwrap_or(0.0), records })
+    }
+
+    /// Go on from `state` ([`sim_state`](Self::sim_state) of the same scene,
+    /// on the same paths): each simulation steps on from its record at the
+    /// next pose (or starts again from time 0 for an earlier time), exactly
+    /// as it would have from time 0. Errors, saying which simulation and
+    /// why, where the records are not this world's: other kinds or counts,
+    /// another path (CPU or GPU) (then nothing changes), or records of
+    /// another size (then those before it were resumed: place the world
+    /// again before drawing it).
+    pub fn resume(&mut self, state: &SimState, renderer: &Renderer) -> Result<(), String> {
+        let queue = renderer.device_and_queue().1;
+        let ours = self.simulations();
+        let theirs: Vec<SimKind> = state.records.iter().map(|r| r.kind).collect();
+        if theirs != ours.iter().map(|o| o.0).collect::<Vec<_>>() {
+            return Err(format!(
+                "it holds {}, where the scene has {}",
+                sim_list(&theirs),
+                sim_list(&ours.iter().map(|o| o.0).collect::<Vec<_>>())
+            ));
+        }
+        for (k, (record, (kind, path))) in state.records.iter().zip(&ours).enumerate() {
+            let nth = ours[..k].iter().filter(|o| o.0 == *kind).count() + 1;
+            if *path != Some(record.path) {
+                let on = |p: Option<SimPath>| match p {
+                    Some(SimPath::Gpu) => "on the GPU",
+                    Some(SimPath::Cpu) => "on the CPU",
+                    None => "nowhere (it cannot run)",
+                };
+                return Err(format!(
+                    "{} {nth} stepped {} when it was saved, but steps {} here",
+                    kind.name(),
+                    on(Some(record.path)),
+                    on(*path)
+                ));
+            }
+        }
+        let mut records = state.records.iter();
+        let mut go_on = |k: usize, kind: SimKind, load: &mut dyn FnMut(&SimRecord) -> Result<(), String>| {
+            let record = records.next().expect("the kinds match");
+            load(record).map_err(|e| format!("{} {}: {e}", kind.name(), k + 1))
+        };
+        for (k, (sim, desc)) in self.cloths.iter_mut().zip(&self.desc.cloths).enumerate() {
+            go_on(k, SimKind::Cloth, &mut |r| sim.load(desc, r, queue))?;
+        }
+        for (k, sim) in self.schools.iter_mut().enumerate() {
+            go_on(k, SimKind::School, &mut |r| sim.load(r, queue))?;
+        }
+        for (k, sim) in self.emitters.iter_mut().enumerate() {
+            go_on(k, SimKind::Emitter, &mut |r| sim.load(r, queue))?;
+        }
+        self.stepped_to = Some(state.time);
+        Ok(())
     }
 
     /// Whether its emitters step with compute shaders (else on the CPU).
@@ -336,6 +442,17 @@ impl World {
     pub fn school_paths(&self) -> Vec<Option<SimPath>> {
         self.schools.iter().map(SchoolSim::path).collect()
     }
+}
+
+/// "1 cloth, 2 schools and no emitter": how many of each kind `kinds` holds.
+fn sim_list(kinds: &[SimKind]) -> String {
+    let count = |kind| kinds.iter().filter(|&&k| k == kind).count();
+    let each = [SimKind::Cloth, SimKind::School, SimKind::Emitter].map(|kind| match count(kind) {
+        0 => format!("no {}", kind.name()),
+        1 => format!("1 {}", kind.name()),
+        n => format!("{n} {}s", kind.name()),
+    });
+    format!("{}, {} and {}", each[0], each[1], each[2])
 }
 
 /// `desc`'s lights under its environment, at scene time `time` where a

@@ -3,10 +3,12 @@
 //! where the renderer computes ([`Renderer::computes`]), else on the CPU (GL,
 //! WebGL2), from the same description and seed.
 
+use super::sim_state::{chunks, SimKind, SimRecord};
 use crate::asset::EmitterDesc;
 use crate::render::{GpuSimulation, ParticleBlend, ParticleLook, ParticlesId};
+use crate::scene::SimPath;
 use crate::scene::TextureId;
-use crate::sim::particles::{GpuParticles, ParticleKernels, ParticleSystem};
+use crate::sim::particles::{GpuParticles, Particle, ParticleKernels, ParticleSystem};
 use crate::{FrameStats, RenderError, Renderer};
 use glam::Vec3;
 use std::sync::Arc;
@@ -106,11 +108,51 @@ impl EmitterSim {
         }
     }
 
+    /// Its state for a simulation cache ([`World::sim_state`](super::World::sim_state)),
+    /// `None` when it cannot run.
+    pub(crate) fn save(&self, gpu: (&wgpu::Device, &wgpu::Queue)) -> Result<Option<SimRecord>, crate::GpuError> {
+        let record = |path, steps, slots| SimRecord { kind: SimKind::Emitter, path, steps, chunks: vec![slots] };
+        Ok(match &self.run {
+            None => None,
+            Some(Run::Cpu(system)) => {
+                Some(record(SimPath::Cpu, system.steps(), bytemuck::cast_slice(system.slots()).to_vec()))
+            }
+            Some(Run::Gpu(on_gpu)) => {
+                let (slots, steps) = on_gpu.save(gpu)?;
+                Some(record(SimPath::Gpu, steps, slots))
+            }
+        })
+    }
+
+    /// Go on from `record` ([`save`](Self::save)d from the same emitter on
+    /// the same path).
+    pub(crate) fn load(&mut self, record: &SimRecord, queue: &wgpu::Queue) -> Result<(), String> {
+        let [slots] = chunks::<1>(record)?;
+        match &mut self.run {
+            None => Err("the emitter cannot run".into()),
+            Some(Run::Cpu(system)) => {
+                if slots.len() % std::mem::size_of::<Particle>() != 0 {
+                    return Err(format!("{} bytes is not a whole number of particles", slots.len()));
+                }
+                system.resume(bytemuck::pod_collect_to_vec(slots), record.steps)
+            }
+            Some(Run::Gpu(on_gpu)) => on_gpu.load(queue, slots, record.steps),
+        }
+    }
+
     /// The frame that recorded its GPU steps failed: start again at the next frame.
     pub(crate) fn frame_failed(&mut self) {
         if let Some(Run::Gpu(on_gpu)) = &mut self.run {
             on_gpu.frame_failed();
         }
+    }
+
+    /// Where it steps; `None` when it cannot run.
+    pub(crate) fn path(&self) -> Option<SimPath> {
+        self.run.as_ref().map(|run| match run {
+            Run::Cpu(_) => SimPath::Cpu,
+            Run::Gpu(_) => SimPath::Gpu,
+        })
     }
 
     /// Whether it steps with compute shaders.

@@ -7,11 +7,12 @@
 //! into their instance records there ([`GpuSchool::draw_in_place`]), the
 //! entities' transforms left at the start.
 
+use super::sim_state::{chunks, value_bytes, values, SimKind, SimRecord};
 use crate::asset::{MeshRef, SceneDesc, SchoolDesc};
 use crate::render::cull::transform_aabb;
 use crate::render::GpuSimulation;
 use crate::scene::{Aabb, SimPath};
-use crate::sim::school::{GpuSchool, School, SchoolDrawing, Swimmers, MAX_PART_TRANSFORMS};
+use crate::sim::school::{GpuSchool, School, SchoolDrawing, Swimmer, Swimmers, MAX_PART_TRANSFORMS};
 use crate::{Entity, Renderer};
 use glam::{Mat4, Vec3};
 use std::ops::Range;
@@ -28,12 +29,15 @@ enum Run {
 /// refuses to pose it).
 pub(crate) struct SchoolSim {
     run: Option<Run>,
+    /// Resumed from a simulation cache since the last pose, so the next
+    /// one shows it even where it takes no step.
+    resumed: bool,
 }
 
 impl SchoolSim {
     /// At its start, on the CPU.
     pub(crate) fn new(desc: &SchoolDesc) -> Self {
-        Self { run: School::new(desc.params.clone()).ok().map(|s| Run::Cpu(Box::new(s))) }
+        Self { run: School::new(desc.params.clone()).ok().map(|s| Run::Cpu(Box::new(s))), resumed: false }
     }
 
     /// Move it onto the GPU, drawn in place, where `desc` asks and `renderer`
@@ -112,7 +116,7 @@ impl SchoolSim {
                         **school = start;
                     }
                 }
-                let moved = restarted || school.steps() < target;
+                let moved = restarted || school.steps() < target || std::mem::take(&mut self.resumed);
                 while school.steps() < target {
                     school.step(desc.dt);
                 }
@@ -132,6 +136,52 @@ impl SchoolSim {
                 false
             }
         }
+    }
+
+    /// Its state for a simulation cache ([`World::sim_state`](super::World::sim_state)),
+    /// `None` when it cannot run or has GPU steps pending.
+    pub(crate) fn save(&self, gpu: (&wgpu::Device, &wgpu::Queue)) -> Result<Option<SimRecord>, crate::GpuError> {
+        let record = |path, steps, chunks| SimRecord { kind: SimKind::School, path, steps, chunks };
+        Ok(match &self.run {
+            None => None,
+            Some(Run::Gpu(school, steps)) => school.save(gpu)?.map(|chunks| record(SimPath::Gpu, *steps, chunks)),
+            Some(Run::Cpu(school)) => {
+                let fish = value_bytes(school.fish().iter().map(swimmer_values));
+                let predator = value_bytes(school.predator().into_iter().map(swimmer_values));
+                Some(record(SimPath::Cpu, school.steps(), vec![fish, predator]))
+            }
+        })
+    }
+
+    /// Go on from `record` ([`save`](Self::save)d from the same school on
+    /// the same path): the next pose steps on from it.
+    pub(crate) fn load(&mut self, record: &SimRecord, queue: &wgpu::Queue) -> Result<(), String> {
+        let [fish, predator] = chunks::<2>(record)?;
+        match &mut self.run {
+            None => return Err("the school cannot run".into()),
+            Some(Run::Gpu(school, steps)) => {
+                school.load(queue, fish, predator)?;
+                *steps = record.steps;
+            }
+            Some(Run::Cpu(school)) => {
+                let swimmers = |bytes| -> Result<Vec<Swimmer>, String> {
+                    let swimmer = |[x, y, z, vx, vy, vz, phase]: [f32; 7]| Swimmer {
+                        position: Vec3::new(x, y, z),
+                        velocity: Vec3::new(vx, vy, vz),
+                        phase,
+                    };
+                    Ok(values::<[f32; 7]>(bytes)?.into_iter().map(swimmer).collect())
+                };
+                let predator = match swimmers(predator)?.as_slice() {
+                    [] => None,
+                    [one] => Some(*one),
+                    more => return Err(format!("{} predators, expected at most 1", more.len())),
+                };
+                school.resume(swimmers(fish)?, predator, record.steps)?;
+            }
+        }
+        self.resumed = true;
+        Ok(())
     }
 
     /// A frame that recorded its GPU steps failed and dropped them: start
@@ -169,6 +219,12 @@ impl SchoolSim {
             place(scene, k, &[h.transform(desc.predator_size)], &[h.phase], &ranges[k], entities);
         }
     }
+}
+
+/// A swimmer's state as a simulation cache keeps it: position, velocity, phase.
+fn swimmer_values(f: &Swimmer) -> [f32; 7] {
+    let ([x, y, z], [vx, vy, vz]) = (f.position.to_array(), f.velocity.to_array());
+    [x, y, z, vx, vy, vz, f.phase]
 }
 
 /// How entity block `k`'s placed entities draw `swimmers` in place: each

@@ -473,6 +473,22 @@ impl Cloth {
             })
     }
 
+    /// Node accelerations, m/s² (the Newmark integrator's; zero otherwise).
+    pub fn accelerations(&self) -> &[DVec3] {
+        &self.accelerations
+    }
+
+    /// Go on from `positions`, `velocities` and `accelerations` at `time`
+    /// seconds (a simulation cache's), when they are as many as its nodes.
+    pub fn resume(&mut self, [positions, velocities, accelerations]: [Vec<DVec3>; 3], time: f64) -> Result<(), String> {
+        let n = self.positions.len();
+        if [&positions, &velocities, &accelerations].iter().any(|v| v.len() != n) {
+            return Err(format!("{} node positions, where the cloth has {n} nodes", positions.len()));
+        }
+        (self.positions, self.velocities, self.accelerations, self.time) = (positions, velocities, accelerations, time);
+        Ok(())
+    }
+
     /// Advance by `dt` seconds with `integrator` (a static solve ignores `dt`).
     /// Pinned nodes stay where they are. On failure nothing changes.
     pub fn step(&mut self, dt: f64, integrator: Integrator) -> Result<StepStats, StepError> {

@@ -208,6 +208,20 @@ impl GpuParticles {
         Ok(bytemuck::pod_collect_to_vec(&gpu.read_buffer(&self.state)?))
     }
 
+    /// Its slots as the GPU keeps them and the steps they took (waiting for
+    /// the GPU), for a simulation cache.
+    pub(crate) fn save(&self, gpu: (&wgpu::Device, &wgpu::Queue)) -> Result<(Vec<u8>, u64), crate::GpuError> {
+        let [state] = <[Vec<u8>; 1]>::try_from(crate::gpu::read_buffers(gpu, &[&self.state])?).expect("one");
+        Ok((state, self.steps))
+    }
+
+    /// Go on from slots [`save`](Self::save)d after `steps` steps.
+    pub(crate) fn load(&mut self, queue: &wgpu::Queue, slots: &[u8], steps: u64) -> Result<(), String> {
+        crate::gpu::refill(queue, &[(&self.state, slots, "particles")])?;
+        (self.steps, self.target) = (steps, steps);
+        Ok(())
+    }
+
     /// The step block of step `n` (from 0), sorting from the eye.
     fn step_block(&self, n: u64) -> StepGpu {
         let t = |n: u64| (n as f64 * f64::from(self.dt)) as f32;

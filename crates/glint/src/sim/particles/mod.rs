@@ -188,6 +188,16 @@ impl ParticleSystem {
         &self.slots
     }
 
+    /// Go on from `slots` after `steps` steps (a simulation cache's), when
+    /// they are as many as its own.
+    pub fn resume(&mut self, slots: Vec<Particle>, steps: u64) -> Result<(), String> {
+        if slots.len() != self.slots.len() {
+            return Err(format!("{} particle slots, where the emitter has {}", slots.len(), self.slots.len()));
+        }
+        (self.slots, self.steps) = (slots, steps);
+        Ok(())
+    }
+
     /// One step: every slot whose particle number moved on takes its new
     /// particle (moved from its spawn time to the step's end); the others move
     /// on by `dt`.

@@ -214,6 +214,22 @@ impl GpuSchool {
         (self.current, self.pending) = (0, 0);
     }
 
+    /// Its fish and predator as the GPU keeps them (waiting for the GPU),
+    /// for a simulation cache; `None` while steps are pending.
+    pub(crate) fn save(&self, gpu: (&wgpu::Device, &wgpu::Queue)) -> Result<Option<Vec<Vec<u8>>>, GpuError> {
+        match self.pending {
+            0 => crate::gpu::read_buffers(gpu, &[&self.fish[self.current], &self.hunt]).map(Some),
+            _ => Ok(None),
+        }
+    }
+
+    /// Go on from the fish and predator [`save`](Self::save)d, dropping pending steps.
+    pub(crate) fn load(&mut self, queue: &wgpu::Queue, fish: &[u8], hunt: &[u8]) -> Result<(), String> {
+        crate::gpu::refill(queue, &[(&self.fish[0], fish, "fish"), (&self.hunt, hunt, "the predator")])?;
+        (self.current, self.pending) = (0, 0);
+        Ok(())
+    }
+
     /// Draw it in place from now on: after each frame's steps its fish and
     /// predator are written into the instance records of `drawings`'
     /// entities ([`GpuSimulation::place`]). Errors for a drawing with no

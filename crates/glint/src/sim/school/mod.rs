@@ -155,6 +155,22 @@ impl School {
         Self { params, fish, predator, grid: Grid::new(shape), sorted: Vec::new(), steps: 0 }
     }
 
+    /// Go on from `fish` and `predator` after `steps` steps (a simulation
+    /// cache's), when they are as many as its own.
+    pub fn resume(&mut self, fish: Vec<Swimmer>, predator: Option<Swimmer>, steps: u64) -> Result<(), String> {
+        if fish.len() != self.fish.len() || predator.is_some() != self.predator.is_some() {
+            return Err(format!(
+                "{} fish{}, where the school has {}{}",
+                fish.len(),
+                if predator.is_some() { " and a predator" } else { "" },
+                self.fish.len(),
+                if self.predator.is_some() { " and a predator" } else { "" }
+            ));
+        }
+        (self.fish, self.predator, self.steps) = (fish, predator, steps);
+        Ok(())
+    }
+
     /// Its parameters.
     pub fn params(&self) -> &SchoolParams {
         &self.params

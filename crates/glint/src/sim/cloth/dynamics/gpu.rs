@@ -385,6 +385,41 @@ impl GpuCloth {
         (self.start_time, self.recorded, self.pending) = (cloth.time, 0, 0);
     }
 
+    /// Its positions, velocities, accelerations and steps since the upload
+    /// as the GPU keeps them (waiting for the GPU), for a simulation cache;
+    /// `None` while steps are pending.
+    pub(crate) fn save(&self, gpu: (&wgpu::Device, &wgpu::Queue)) -> Result<Option<Vec<Vec<u8>>>, GpuError> {
+        let [p, v, a] = &self.state;
+        match self.pending {
+            0 => crate::gpu::read_buffers(gpu, &[p, v, a, &self.steps_buffer]).map(Some),
+            _ => Ok(None),
+        }
+    }
+
+    /// Go on from what [`save`](Self::save) read, `recorded` steps after an
+    /// upload of `start` (the one it was made from), dropping pending steps.
+    pub(crate) fn load(
+        &mut self,
+        queue: &wgpu::Queue,
+        (start, recorded): (&Cloth, u64),
+        [p, v, a, steps]: [&[u8]; 4],
+    ) -> Result<(), String> {
+        let counted = steps.get(..4).map(|b| u32::from_le_bytes(b.try_into().expect("4 bytes")));
+        if counted.map(u64::from) != Some(recorded) {
+            return Err(format!("the GPU counted {counted:?} steps, but the record says {recorded}"));
+        }
+        let [positions, velocities, accelerations] = &self.state;
+        let writes = [
+            (positions, p, "positions"),
+            (velocities, v, "velocities"),
+            (accelerations, a, "accelerations"),
+            (&self.steps_buffer, steps, "the step count"),
+        ];
+        crate::gpu::refill(queue, &writes)?;
+        (self.start_time, self.recorded, self.pending) = (start.time, recorded, 0);
+        Ok(())
+    }
+
     /// Draw it in place: from the next frame it is a simulation in
     /// ([`GpuSimulation`]), its place pass writes its positions and normals
     /// into `shape`'s vertices, a mesh of one vertex per node of `cloth` (the
