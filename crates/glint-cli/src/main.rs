@@ -16,6 +16,7 @@ mod plot;
 mod render;
 mod school;
 mod sim;
+mod sim_cache;
 mod view;
 
 use clap::{Parser, Subcommand, ValueEnum};
@@ -88,6 +89,12 @@ enum Command {
         /// can be run again): each is neither posed nor drawn.
         #[arg(long)]
         skip_existing: bool,
+        /// Start each simulation (cloth, school, emitter) from this cache's
+        /// state at or before the first frame (glint bake makes caches): frames
+        /// equal the whole run's. A cache made for another scene, other
+        /// settings, another glint or another adapter is refused.
+        #[arg(long, value_name = "CACHE")]
+        sim_cache: Option<PathBuf>,
         /// Write the frames as one animated PNG (-o clip.png) rather than numbered PNGs.
         #[arg(long)]
         apng: bool,
@@ -95,6 +102,34 @@ enum Command {
         /// (for models without animation).
         #[arg(long)]
         turntable: bool,
+    },
+    /// Step a scene's simulations once through a sequence and store their
+    /// state every few frames in a cache (a folder), so `glint render
+    /// --sim-cache` chunks of the sequence start where they begin.
+    #[command(after_help = EXIT_CODES)]
+    Bake {
+        /// The scene file.
+        scene: PathBuf,
+        /// The cache's folder (made where missing).
+        #[arg(short, long)]
+        output: PathBuf,
+        /// Frames in the sequence, as `glint render --frames` renders it.
+        #[arg(long, value_parser = clap::value_parser!(u32).range(1..=100_000))]
+        frames: u32,
+        /// Frames per second of the sequence (0.001..=1000).
+        #[arg(long, default_value_t = 30.0, value_parser = parse_fps)]
+        fps: f32,
+        /// Scene time of frame 0, in seconds.
+        #[arg(long, default_value_t = 0.0, value_parser = parse_time)]
+        time: f32,
+        /// Store the state every this many frames (1..=100000).
+        #[arg(long, default_value_t = 10, value_parser = clap::value_parser!(u32).range(1..=100_000))]
+        every: u32,
+        /// Solve every cloth this way, as `glint render --solve` would.
+        #[arg(long, value_enum)]
+        solve: Option<sim::SolveArg>,
+        #[command(flatten)]
+        sim: SimArgs,
     },
     /// Measure a scene's steady-state frame cost: the naive baseline, and the
     /// optimized frame culled on the CPU and on the GPU, side by side.
@@ -789,6 +824,7 @@ fn main() -> ExitCode {
             fps,
             frame_range,
             skip_existing,
+            sim_cache,
             apng,
             turntable,
         } => render::render(render::RenderArgs {
@@ -804,11 +840,21 @@ fn main() -> ExitCode {
             frames: *frames,
             range: frame_range.clone(),
             skip_existing: *skip_existing,
+            sim_cache: sim_cache.as_deref(),
             fps: *fps,
             turntable: *turntable,
             apng: *apng,
             lod: picture.lod,
             options: picture.load_options(options),
+        }),
+        Command::Bake { scene, output, frames, fps, time, every, solve, sim } => sim_cache::bake(sim_cache::BakeArgs {
+            scene,
+            output,
+            frames: *frames,
+            fps: *fps,
+            time: *time,
+            every: *every,
+            options: LoadOptions { cloth_solve: solve.map(Into::into), ..sim.apply(options) },
         }),
         Command::Check { scene } => check(scene, options),
         Command::Explain { scene, naive, json, view, camera, cull, size, time, lod, sim } => {

@@ -28,6 +28,8 @@ pub struct RenderArgs<'a> {
     pub range: Option<crate::frames::FrameRange>,
     /// Leave the numbered frames already on disk alone.
     pub skip_existing: bool,
+    /// Start the simulations from this cache's state at or before the first frame.
+    pub sim_cache: Option<&'a Path>,
     pub fps: f32,
     /// Orbit the cameras once about their targets over the whole sequence.
     pub turntable: bool,
@@ -57,9 +59,8 @@ pub fn render(args: RenderArgs) -> Result<(), Error> {
         eprintln!("every frame asked for is on disk already (--skip-existing): nothing to render");
         return Ok(());
     };
-    // Refuse simulation work over the limits before starting a GPU: posing at
-    // the last frame's time is the most work any frame takes.
-    desc.check_pose(frame_time(time, last, fps))?;
+    // Refuse simulation work over the limits before starting a GPU.
+    check_sequence(&desc, (time, fps), last)?;
     let gpu = Gpu::headless()?;
     let msaa = if gpu.supports_msaa(msaa) {
         msaa
@@ -72,7 +73,22 @@ pub fn render(args: RenderArgs) -> Result<(), Error> {
     renderer.set_density(density);
     lod.apply(&mut renderer);
     let mut world = World::place(desc, &mut renderer)?;
+    // The frame the simulations step on from.
+    let mut next = 0;
+    if let Some(cache) = args.sim_cache {
+        let first = frame_time(time, frames[0], fps);
+        match crate::sim_cache::resume(cache, (&mut world, &renderer, gpu.info()), first)? {
+            Some(k) => {
+                eprintln!("simulations resumed from frame {k} of {}", cache.display());
+                next = k + 1;
+            }
+            None => {
+                eprintln!("{} holds no state before frame {}: simulations start at time 0", cache.display(), frames[0])
+            }
+        }
+    }
     let views = lod.views(culled(world.views(camera), cull));
+    let mut scratch = None;
     // A bar on a terminal; else (a farm's log) a line a frame.
     let lines = !std::io::stderr().is_terminal();
     let progress = (frames.len() > 1 && !lines).then(|| {
@@ -83,7 +99,9 @@ pub fn render(args: RenderArgs) -> Result<(), Error> {
     });
     for k in frames {
         let started = std::time::Instant::now();
+        reach(&mut world, (&gpu, &mut renderer, &mut scratch), next..k, (time, fps))?;
         world.pose(frame_time(time, k, fps), &mut renderer)?;
+        next = k + 1;
         let views = match args.turntable {
             true => views.iter().map(|v| turned(v, 360.0 * k as f32 / args.frames as f32)).collect(),
             false => views.clone(),
@@ -122,8 +140,55 @@ pub fn render(args: RenderArgs) -> Result<(), Error> {
     Ok(())
 }
 
+/// Check, before any work, that each pose of the sequence `(time, fps)` up
+/// to frame `last` stays within the posing budget: its first from the
+/// simulations' start, then each one frame on from the last
+/// ([`SceneDesc::check_pose_from`](glint::asset::SceneDesc::check_pose_from)).
+pub(crate) fn check_sequence(
+    desc: &glint::asset::SceneDesc,
+    (time, fps): (f32, f32),
+    last: u32,
+) -> Result<(), Diagnostic> {
+    desc.check_pose(frame_time(time, 0, fps))?;
+    if desc.cloths.is_empty() && desc.schools.is_empty() && desc.emitters.is_empty() {
+        return Ok(());
+    }
+    (0..last).try_for_each(|j| desc.check_pose_from(Some(frame_time(time, j, fps)), frame_time(time, j + 1, fps)))
+}
+
+/// Before posing frame `frames.end`, step `world`'s simulations through the
+/// earlier `frames` one at a time where going there at once would pass the
+/// posing budget (a chunk far into a long sequence, with no cache to start
+/// from), as the whole run does; a simulation stepped on the GPU steps in
+/// a frame drawn into a tiny `scratch` target (made on first use). Elsewhere
+/// it does nothing: the pose steps there itself.
+pub(crate) fn reach(
+    world: &mut World,
+    (gpu, renderer, scratch): (&Gpu, &mut Renderer, &mut Option<OffscreenTarget>),
+    frames: std::ops::Range<u32>,
+    (time, fps): (f32, f32),
+) -> Result<(), Error> {
+    let at = |k: u32| frame_time(time, k, fps);
+    if frames.is_empty() || world.desc().check_pose_from(world.simulated_to(), at(frames.end)).is_ok() {
+        return Ok(());
+    }
+    let on_gpu = world.simulations().iter().any(|(_, path)| *path == Some(glint::scene::SimPath::Gpu));
+    let views = world.views(None);
+    for k in frames {
+        world.pose(at(k), renderer)?;
+        if on_gpu {
+            let target = match scratch {
+                Some(target) => target,
+                None => scratch.insert(OffscreenTarget::new(gpu, 16, 16, 1)?),
+            };
+            world.draw(renderer, &views, target)?;
+        }
+    }
+    Ok(())
+}
+
 /// Scene time of frame `k` of a sequence starting at `time`.
-fn frame_time(time: f32, k: u32, fps: f32) -> f32 {
+pub(crate) fn frame_time(time: f32, k: u32, fps: f32) -> f32 {
     time + k as f32 / fps
 }
 

@@ -133,6 +133,41 @@ fn a_split_school_sequence_equals_the_whole_run() {
 }
 
 #[test]
+fn a_chunk_past_the_posing_budget_steps_there_a_frame_at_a_time() {
+    // An emitter stepping every 0.1 ms: frame 12 of a sequence at 1 fps is
+    // 120,000 steps from its start, more than one pose may take (100,000),
+    // but each frame is 10,000 steps on from the last, as the whole run goes.
+    let dir = tempfile::tempdir().expect("temp dir");
+    let scene = dir.path().join("fine.scn");
+    let text = "{\n\"classname\" \"camera\"\n\"origin\" \"0 1 4\"\n\"target\" \"0 1 0\" }\n\
+                { \"classname\" \"emitter\"\n\"rate\" \"40\"\n\"lifetime\" \"0.5 1.5\"\n\"speed\" \"1 2\"\n\
+                \"size\" \"0.2\"\n\"dt\" \"0.0001\"\n\"seed\" \"9\" }\n";
+    std::fs::write(&scene, text).expect("written");
+    let scene = scene.to_str().expect("path");
+    let alone = glint(&["render", scene, "-o", dir.path().join("alone.png").to_str().expect("path"), "--time", "12"]);
+    if no_adapter(&alone) {
+        return;
+    }
+    assert_eq!(alone.status.code(), Some(1), "{}", stderr(&alone));
+    assert!(stderr(&alone).contains("more than the 100000 steps one pose may take"), "{}", stderr(&alone));
+    for backend in ["vulkan", "gl"] {
+        let sequence = ["--size", "32x32", "--frames", "13", "--fps", "1"];
+        let run = |folder: &str, more: &[&str]| {
+            let out = dir.path().join(format!("{backend}/{folder}/%02d.png"));
+            let args =
+                [&["render", scene, "-o", out.to_str().expect("path"), "--msaa", "1"], &sequence[..], more].concat();
+            let o = glint_with(&args, &[("WGPU_BACKEND", backend)]);
+            assert_eq!(o.status.code(), Some(0), "{backend}: {}", stderr(&o));
+        };
+        run("whole", &[]);
+        run("chunk", &["--frame-range", "12"]);
+        let frame = |folder: &str| rgba(&dir.path().join(format!("{backend}/{folder}/12.png")));
+        assert!(frame("whole") == frame("chunk"), "{backend}: the chunk's frame 12 differs from the whole run's");
+        assert_ne!(frame("whole"), rgba(&dir.path().join(format!("{backend}/whole/11.png"))), "the particles move");
+    }
+}
+
+#[test]
 fn sequence_arguments_are_checked_before_any_frame() {
     let model = repo("tests/models/animated.gltf");
     let model = model.to_str().expect("path");

@@ -8,10 +8,16 @@ use std::process::{Command, Output};
 /// Run glint from the project root, as a user would (scenes there may then use
 /// `../assets`: the current directory is one of their asset roots).
 pub fn glint(args: &[&str]) -> Output {
+    glint_with(args, &[])
+}
+
+/// [`glint`] with the environment variables `vars` set too.
+pub fn glint_with(args: &[&str], vars: &[(&str, &str)]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_glint"))
         .args(args)
         .current_dir(repo(""))
         .env("NODEVICE_SELECT", "1")
+        .envs(vars.iter().copied())
         .output()
         .expect("run glint")
 }
