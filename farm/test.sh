@@ -29,7 +29,14 @@ if [ -z "${GLINT:-}" ]; then
 fi
 venv=$root/target/farm-venv
 if ! "$venv/bin/openjd" --version 2>/dev/null | grep -q "$openjd_version"; then
-  python3 -m venv "$venv" && "$venv/bin/pip" install -q "openjd-cli==$openjd_version" || exit 1
+  rm -rf "$venv"
+  if ! python3 -m venv "$venv" 2>/dev/null; then
+    # Debian's python3 makes virtual environments with python3-venv only.
+    if [ "$(id -u)" = 0 ]; then apt-get install -y -qq python3-venv >/dev/null; else sudo apt-get install -y -qq python3-venv >/dev/null; fi
+    rm -rf "$venv"
+    python3 -m venv "$venv" || exit 1
+  fi
+  "$venv/bin/pip" install -q "openjd-cli==$openjd_version" || exit 1
 fi
 
 work=$(mktemp -d)
@@ -53,9 +60,18 @@ differs() {
   echo "$out"
 }
 
-# Wait for Slurm job $1; "" when every task completed with exit code 0.
+# Wait for Slurm job $1 (at most FARM_TIMEOUT seconds, 600, then it is
+# cancelled); "" when every task completed with exit code 0.
 wait_job() {
-  while [ -n "$(squeue -h -j "$1" 2>/dev/null)" ]; do sleep 0.1; done
+  local deadline=$((SECONDS + ${FARM_TIMEOUT:-600}))
+  while [ -n "$(squeue -h -j "$1" 2>/dev/null)" ]; do
+    if [ "$SECONDS" -ge "$deadline" ]; then
+      scancel "$1"
+      echo "timed out after ${FARM_TIMEOUT:-600} s: $(squeue -h -j "$1" -o '%i %T %r' | head -3)"
+      return
+    fi
+    sleep 0.1
+  done
   scontrol show job "$1" | grep -o 'JobState=[A-Z_]*\|ExitCode=[0-9:]*' | grep -v 'JobState=COMPLETED\|ExitCode=0:0' | sort | uniq -c
 }
 

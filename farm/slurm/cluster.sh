@@ -10,6 +10,7 @@
 # Everything it writes (configuration, munge key and socket, state, logs) lies
 # in one folder, $GLINT_SLURM_DIR (default /tmp/glint-slurm); it needs root (or
 # sudo) for its packages and daemons, as Slurm's daemons do. No systemd needed.
+# Arrays may have up to 100,001 tasks here (MaxArraySize; Slurm's default is 1,001).
 set -euo pipefail
 
 dir=${GLINT_SLURM_DIR:-/tmp/glint-slurm}
@@ -56,16 +57,19 @@ SlurmdLogFile=$dir/log/slurmd.log
 SlurmctldPort=${GLINT_SLURM_PORT:-6817}
 SlurmdPort=$(( ${GLINT_SLURM_PORT:-6817} + 1 ))
 MinJobAge=600
+MaxArraySize=100001
 NodeName=localhost CPUs=$cpus RealMemory=$memory State=UNKNOWN
 PartitionName=local Nodes=localhost Default=YES MaxTime=INFINITE State=UP
 CONF
 }
 
+# Whether the daemon of pid file $1 (named $2) runs.
+alive() { [ -f "$1" ] && [ "$(ps -p "$(cat "$1" 2>/dev/null)" -o comm= 2>/dev/null)" = "$2" ]; }
+
 # Whether its controller runs and answers (scontrol alone waits a minute
 # where no configuration or controller exists yet).
 running() {
-  [ -f "$dir/slurmctld.pid" ] && kill -0 "$(cat "$dir/slurmctld.pid")" 2>/dev/null &&
-    scontrol ping 2>/dev/null | grep -q "is UP"
+  alive "$dir/slurmctld.pid" slurmctld && scontrol ping 2>/dev/null | grep -q "is UP"
 }
 
 start() {
@@ -75,10 +79,12 @@ start() {
     return
   fi
   configure
-  as_root munged --key-file="$dir/munge.key" --socket="$dir/munge.socket" --pid-file="$dir/munged.pid" \
-    --log-file="$dir/log/munged.log" --seed-file="$dir/munged.seed" --force
-  as_root slurmctld -f "$SLURM_CONF"
-  as_root slurmd -f "$SLURM_CONF"
+  # Each daemon not already running (after a start cut short) is started.
+  alive "$dir/munged.pid" munged ||
+    as_root munged --key-file="$dir/munge.key" --socket="$dir/munge.socket" --pid-file="$dir/munged.pid" \
+      --log-file="$dir/log/munged.log" --seed-file="$dir/munged.seed" --force
+  alive "$dir/slurmctld.pid" slurmctld || as_root slurmctld -f "$SLURM_CONF"
+  alive "$dir/slurmd.pid" slurmd || as_root slurmd -f "$SLURM_CONF"
   # Up within a few seconds; the node idle once slurmd has registered.
   for _ in $(seq 1 60); do
     if running && sinfo -h -o %t 2>/dev/null | grep -q idle; then
@@ -92,17 +98,25 @@ start() {
   return 1
 }
 
+daemons=(slurmd slurmctld munged)
+
 stop() {
   if running; then as_root scontrol shutdown >/dev/null 2>&1 || true; fi
-  for pid in "$dir/slurmd.pid" "$dir/slurmctld.pid" "$dir/munged.pid"; do
-    if [ -f "$pid" ]; then as_root kill "$(cat "$pid")" 2>/dev/null || true; fi
+  # Only a pid file's own daemon is stopped (a stale file's number may be another process's now).
+  for name in "${daemons[@]}"; do
+    if alive "$dir/$name.pid" "$name"; then as_root kill "$(cat "$dir/$name.pid" 2>/dev/null)" 2>/dev/null || true; fi
   done
-  # Gone within a few seconds; the folder is kept for its logs.
-  for _ in $(seq 1 20); do
-    running || { echo "slurm: stopped"; return; }
-    sleep 0.5
+  # All gone within a few seconds (so a start right after finds munge's socket free); the folder keeps the logs.
+  for _ in $(seq 1 40); do
+    local left=0
+    for name in "${daemons[@]}"; do alive "$dir/$name.pid" "$name" && left=1; done
+    if [ "$left" = 0 ]; then
+      echo "slurm: stopped"
+      return
+    fi
+    sleep 0.25
   done
-  echo "slurm: still answering after stop" >&2
+  echo "slurm: a daemon is still running after stop (pid files in $dir)" >&2
   return 1
 }
 

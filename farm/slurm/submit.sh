@@ -4,7 +4,9 @@
 #   farm/slurm/submit.sh SCENE FRAMES OUT [sbatch options...]
 #
 # with CHUNK (frames a task, 100), FPS, SIZE, SIM_CACHE, GLINT and GLINT_ARGS
-# passed on to each task (see render.sbatch). Prints the job's id.
+# passed on to each task (see render.sbatch). Prints the job's id. A
+# cluster's MaxArraySize (1,001 by default) bounds the tasks: pick CHUNK so that
+# FRAMES / CHUNK fits.
 set -euo pipefail
 if [ $# -lt 3 ]; then
   echo "usage: $0 SCENE FRAMES OUT [sbatch options...]" >&2

@@ -450,8 +450,8 @@ fn run_live(
     options: LoadOptions,
 ) -> Result<(), Error> {
     let desc = load(scene, options)?;
-    let end = timing.0 + timing.1 * (config.frames + config.warmup) as f32;
-    desc.check_pose(end)?;
+    // Posed a frame at a time: each frame's step is checked, from the one before.
+    render::check_sequence(&desc, (timing.0, 1.0 / timing.1), config.frames as u32)?;
     let gpu = Gpu::headless()?;
     let adapter = format!("{} ({:?})", gpu.info().name, gpu.info().backend);
     let mut sides = Vec::new();

@@ -76,8 +76,7 @@ pub fn render(args: RenderArgs) -> Result<(), Error> {
     // The frame the simulations step on from.
     let mut next = 0;
     if let Some(cache) = args.sim_cache {
-        let first = frame_time(time, frames[0], fps);
-        match crate::sim_cache::resume(cache, (&mut world, &renderer, gpu.info()), first)? {
+        match crate::sim_cache::resume(cache, (&mut world, &renderer, gpu.info()), (time, fps), frames[0])? {
             Some(k) => {
                 eprintln!("simulations resumed from frame {k} of {}", cache.display());
                 next = k + 1;
@@ -153,7 +152,8 @@ pub(crate) fn check_sequence(
     if desc.cloths.is_empty() && desc.schools.is_empty() && desc.emitters.is_empty() {
         return Ok(());
     }
-    (0..last).try_for_each(|j| desc.check_pose_from(Some(frame_time(time, j, fps)), frame_time(time, j + 1, fps)))
+    let at = |k| frame_time(time, k, fps);
+    (0..last).try_for_each(|j| desc.check_pose_work(Some(at(j)), at(j + 1)))
 }
 
 /// Before posing frame `frames.end`, step `world`'s simulations through the

@@ -38,6 +38,11 @@ const KIND: &str = "glint simulation cache";
 /// Largest manifest read (a 100,000-frame sequence's entries fit many times over).
 const MAX_MANIFEST_BYTES: u64 = 64 << 20;
 
+/// Largest state file read: more than the simulations' limits let a scene
+/// hold (4,194,304 particle slots and as many fish, 32 bytes each, and 66,564
+/// cloth nodes), well below this machine's memory.
+const MAX_STATE_BYTES: u64 = 1 << 30;
+
 /// What `glint bake` was asked for.
 pub struct BakeArgs<'a> {
     pub scene: &'a Path,
@@ -63,6 +68,8 @@ struct Manifest {
     frames: u32,
     every: u32,
     adapter: String,
+    /// The CPU's vector instructions ([`cpu_level`]), for cloth solved on the CPU.
+    cpu: String,
     simulations: Vec<Simulation>,
     states: Vec<StateFile>,
     /// xxh3-128 (hex) of the manifest's JSON with this field empty.
@@ -137,6 +144,7 @@ pub fn bake(args: BakeArgs) -> Result<(), Error> {
         frames: args.frames,
         every: args.every,
         adapter: adapter_name(gpu.info()),
+        cpu: cpu_level(),
         simulations,
         states,
         checksum: String::new(),
@@ -155,13 +163,20 @@ pub fn bake(args: BakeArgs) -> Result<(), Error> {
 pub fn resume(
     folder: &Path,
     (world, renderer, adapter): (&mut World, &Renderer, &wgpu::AdapterInfo),
-    time: f32,
+    (time, fps): (f32, f32),
+    first: u32,
 ) -> Result<Option<u32>, Error> {
     let manifest = open(folder)?;
-    check(&manifest, folder, world, adapter)?;
-    let usable = manifest.states.iter().filter(|s| frame_time(manifest.time, s.frame, manifest.fps) <= time);
-    let Some(entry) = usable.max_by_key(|s| s.frame) else { return Ok(None) };
+    check(&manifest, folder, (world, adapter), (time, fps))?;
+    let Some(entry) = manifest.states.iter().filter(|s| s.frame <= first).max_by_key(|s| s.frame) else {
+        return Ok(None);
+    };
     let path = state_path(folder, &entry.file)?;
+    if entry.bytes > MAX_STATE_BYTES {
+        let message =
+            format!("the manifest says {} bytes, more than a state may hold ({MAX_STATE_BYTES})", entry.bytes);
+        return Err(Diagnostic::file(&path, message).into());
+    }
     let bytes = read_limited(&path, entry.bytes)?;
     if bytes.len() as u64 != entry.bytes {
         let message = format!("truncated or changed: {} bytes, where the manifest says {}", bytes.len(), entry.bytes);
@@ -171,6 +186,15 @@ pub fn resume(
         return Err(Diagnostic::file(&path, "corrupt: its hash is not the manifest's (bake the cache again)").into());
     }
     let state = SimState::from_bytes(&bytes).map_err(|e| Diagnostic::file(&path, e))?;
+    if state.time != frame_time(time, entry.frame, fps) {
+        let message = format!(
+            "saved at {} s, not at frame {}'s time ({} s)",
+            state.time,
+            entry.frame,
+            frame_time(time, entry.frame, fps)
+        );
+        return Err(Diagnostic::file(&path, message).into());
+    }
     world.resume(&state, renderer).map_err(|e| Diagnostic::file(&path, format!("cannot resume from it: {e}")))?;
     Ok(Some(entry.frame))
 }
@@ -204,10 +228,23 @@ fn open(folder: &Path) -> Result<Manifest, Error> {
     Ok(manifest)
 }
 
-/// Refuse a cache made for another scene, other settings or another adapter.
-fn check(manifest: &Manifest, folder: &Path, world: &World, info: &wgpu::AdapterInfo) -> Result<(), Error> {
+/// Refuse a cache made for another scene, other settings, another sequence
+/// or another machine.
+fn check(
+    manifest: &Manifest,
+    folder: &Path,
+    (world, info): (&World, &wgpu::AdapterInfo),
+    (time, fps): (f32, f32),
+) -> Result<(), Error> {
     let path = folder.join(MANIFEST);
     let refuse = |message: String| -> Error { Diagnostic::file(&path, message).into() };
+    if (manifest.time, manifest.fps) != (time, fps) {
+        return Err(refuse(format!(
+            "baked for a sequence at {} fps from {} s, but this one is at {fps} fps from {time} s: \
+             render at the cache's --fps and --time, or bake it again",
+            manifest.fps, manifest.time
+        )));
+    }
     let ours = simulations(world);
     let theirs = &manifest.simulations;
     let kinds = |list: &[Simulation]| list.iter().map(|s| s.kind.clone()).collect::<Vec<_>>();
@@ -248,7 +285,31 @@ fn check(manifest: &Manifest, folder: &Path, world: &World, info: &wgpu::Adapter
             manifest.adapter
         )));
     }
+    let cpu = cpu_level();
+    if ours.iter().any(|s| s.kind == "cloth" && s.path == "CPU") && manifest.cpu != cpu {
+        return Err(refuse(format!(
+            "baked on a {} CPU, but this is a {cpu} one: the cloth's solver takes other vector instructions there, \
+             and its steps differ in their last bits",
+            manifest.cpu
+        )));
+    }
     Ok(())
+}
+
+/// The vector instructions this CPU gives the cloth's solver (faer picks
+/// them as it runs): "x86_64 with AVX-512", "x86_64 with AVX2 and FMA",
+/// "x86_64", or the architecture alone.
+fn cpu_level() -> String {
+    #[cfg(target_arch = "x86_64")]
+    {
+        if std::arch::is_x86_feature_detected!("avx512f") {
+            return "x86_64 with AVX-512".into();
+        }
+        if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
+            return "x86_64 with AVX2 and FMA".into();
+        }
+    }
+    std::env::consts::ARCH.into()
 }
 
 /// `world`'s simulations as a manifest lists them.
@@ -315,9 +376,15 @@ fn state_path(folder: &Path, file: &str) -> Result<PathBuf, Error> {
     Ok(folder.join(file))
 }
 
-/// `path`'s bytes, refused when it is larger than `most`.
+/// `path`'s bytes, refused when it is not a regular file (a FIFO would
+/// block, a device never end) or is larger than `most`.
 fn read_limited(path: &Path, most: u64) -> Result<Vec<u8>, Error> {
     use std::io::Read;
+    // Checked before opening: opening a FIFO waits for a writer.
+    let meta = std::fs::metadata(path).map_err(|e| Diagnostic::file(path, format!("cannot read: {e}")))?;
+    if !meta.is_file() {
+        return Err(Diagnostic::file(path, "not a regular file").into());
+    }
     let file = std::fs::File::open(path).map_err(|e| Diagnostic::file(path, format!("cannot read: {e}")))?;
     let mut bytes = Vec::new();
     file.take(most.saturating_add(1))
@@ -345,6 +412,7 @@ mod tests {
             frames: 600,
             every: 10,
             adapter: "lavapipe".into(),
+            cpu: "x86_64".into(),
             simulations: vec![cloth.clone(), Simulation { kind: "emitter".into(), ..cloth.clone() }, cloth],
             states: vec![StateFile { frame: 10, file: "state_000010.bin".into(), bytes: 8, xxh3: "cd".into() }],
             checksum: String::new(),

@@ -146,6 +146,9 @@ fn caches_of_other_scenes_settings_and_paths_are_refused() {
     let with_damping = source.replacen("\"dt\" \"0.01\"", "\"dt\" \"0.01\"\n\"damping\" \"7\"", 1);
     std::fs::write(&damped, with_damping).expect("written");
     refused(text(&damped), &cache, &["--solve", "converged"], "is set up otherwise than when the cache was baked");
+    // Another frame rate or start time: the cache's frames are not this sequence's.
+    refused(text(&cloth), &cache, &["--solve", "converged", "--fps", "24"], "baked for a sequence at 30 fps from 0 s");
+    refused(text(&cloth), &cache, &["--solve", "converged", "--time", "0.5"], "this one is at 30 fps from 0.5 s");
     // The same scene solved another way (its settings differ: the solve is one).
     refused(text(&cloth), &cache, &["--solve", "realtime"], "set up otherwise");
     // A school baked on the GPU, drawn on the CPU.
@@ -183,6 +186,12 @@ fn damaged_caches_are_errors_never_pictures() {
     // Gone.
     std::fs::remove_file(&state).expect("removed");
     refused(text(&scene), &cache, &[], "state_000008.bin: cannot read");
+    // A FIFO in its place: refused before it is opened (opening one waits for a writer).
+    let fifo = std::process::Command::new("mkfifo").arg(&state).status();
+    if fifo.is_ok_and(|s| s.success()) {
+        refused(text(&scene), &cache, &[], "state_000008.bin: not a regular file");
+        std::fs::remove_file(&state).expect("removed");
+    }
     std::fs::write(&state, &good).expect("restored");
 
     // A value of the manifest changed: its own checksum catches it.

@@ -329,15 +329,18 @@ impl SceneDesc {
     /// the simulations start again). A sequence posed frame by frame is
     /// checked one frame at a time.
     pub fn check_pose_from(&self, from: Option<f32>, time: f32) -> Result<(), Diagnostic> {
-        let mut work = 0u64;
+        self.check_simulations()?;
+        self.check_pose_work(from, time)
+    }
+
+    /// Check its cloths', schools' and emitters' descriptions again (one
+    /// changed since loading cannot run).
+    pub fn check_simulations(&self) -> Result<(), Diagnostic> {
         for cloth in &self.cloths {
             let at =
                 |e: crate::scene::cloth::ClothMeshError| Diagnostic::at(&self.path, cloth.line, format!("cloth: {e}"));
             cloth.setup.check().map_err(at)?;
-            cloth.check_pose((from, time), work, &self.path)?;
-            work = work.saturating_add(cloth.pose_work(from, time));
         }
-        // A description changed after loading is checked again.
         for s in &self.schools {
             s.params.check().map_err(|m| Diagnostic::at(&self.path, s.line, format!("school: {m}")))?;
         }
@@ -346,6 +349,18 @@ impl SceneDesc {
                 .then_some(())
                 .ok_or_else(|| format!("dt must be above 0, got {}", e.dt));
             e.params.check().and(dt).map_err(|m| Diagnostic::at(&self.path, e.line, format!("emitter: {m}")))?;
+        }
+        Ok(())
+    }
+
+    /// The posing limits of [`check_pose_from`](Self::check_pose_from)
+    /// alone, its descriptions already checked ([`check_simulations`](Self::check_simulations)):
+    /// cheap, for checking each frame of a long sequence.
+    pub fn check_pose_work(&self, from: Option<f32>, time: f32) -> Result<(), Diagnostic> {
+        let mut work = 0u64;
+        for cloth in &self.cloths {
+            cloth.check_pose((from, time), work, &self.path)?;
+            work = work.saturating_add(cloth.pose_work(from, time));
         }
         let fish = super::scn_school::pose_work(&self.schools, (from, time));
         within(&self.path, (super::MAX_POSE_SCHOOL_TESTS, "neighbour tests"), fish)?;

@@ -178,7 +178,7 @@ impl World {
         let desc = &mut self.desc;
         desc.check_pose_from(self.stepped_to, time)?;
         // Set again once every simulation has stepped.
-        self.stepped_to = None;
+        let from = self.stepped_to.take();
         let entities = &mut self.placed.entities;
         let mut next = 0;
         let mut posed: Vec<Option<(bool, Vec<usize>)>> = vec![None; desc.models.len()];
@@ -242,8 +242,20 @@ impl World {
                 sim.show(school, desc, &self.ranges, entities);
             }
         }
-        (self.time, self.stepped_to) = (time, Some(time));
+        self.time = time;
+        // A simulation on the GPU steps when the next frame is drawn: until
+        // then they all count as where they were (at their start, when this
+        // pose went back), so poses without frames between add up.
+        self.stepped_to = match self.steps_on_gpu() {
+            false => Some(time),
+            true => from.filter(|&f| f <= time),
+        };
         Ok(())
+    }
+
+    /// Whether any of its simulations steps on the GPU.
+    fn steps_on_gpu(&self) -> bool {
+        self.simulations().iter().any(|(_, path)| *path == Some(SimPath::Gpu))
     }
 
     /// Move its sun, sky and glare to `hours` of the day
@@ -331,6 +343,10 @@ impl World {
             self.stepped_to = None;
         }
         let mut output = output?;
+        if self.steps_on_gpu() {
+            // The frame took every step posed.
+            self.stepped_to = Some(self.time);
+        }
         output.views.iter_mut().for_each(|v| v.simulations = paths);
         particles::count(&self.desc.emitters, (self.drawn_at, self.time), &mut output.views);
         self.drawn_at = self.time;
@@ -353,6 +369,11 @@ impl World {
     /// cannot run, or that was posed since the last frame (its GPU steps
     /// still pending).
     pub fn sim_state(&self, renderer: &Renderer) -> Result<SimState, crate::GpuError> {
+        let Some(time) = self.stepped_to else {
+            let why =
+                "its simulations were not posed and drawn since they were placed (or since a failed pose or frame)";
+            return Err(crate::GpuError::Failed(format!("no state to save: {why}")));
+        };
         let gpu = renderer.device_and_queue();
         let missing = |kind: &str, k: usize| {
             let why = "it cannot run, or was posed after the last frame drawn (its GPU steps pending)";
@@ -368,7 +389,7 @@ impl World {
         for (k, sim) in self.emitters.iter().enumerate() {
             records.push(sim.save(gpu)?.ok_or_else(|| missing("emitter", k))?);
         }
-        Ok(SimState { time: self.stepped_to.unwrap_or(0.0), records })
+        Ok(SimState { time, records })
     }
 
     /// Go on from `state` ([`sim_state`](Self::sim_state) of the same scene,
@@ -376,11 +397,14 @@ impl World {
     /// next pose (or starts again from time 0 for an earlier time), exactly
     /// as it would have from time 0. Errors, saying which simulation and
     /// why, where the records are not this world's: other kinds or counts,
-    /// another path (CPU or GPU) (then nothing changes), or records of
-    /// another size (then those before it were resumed: place the world
-    /// again before drawing it).
+    /// another path (CPU or GPU), steps that do not reach the time it was
+    /// saved at (then nothing is resumed), or records of another size (then
+    /// those before it were resumed: place the world again before drawing
+    /// it). After an error the posing limits count from the simulations' start.
     pub fn resume(&mut self, state: &SimState, renderer: &Renderer) -> Result<(), String> {
         let queue = renderer.device_and_queue().1;
+        // Until every record is in, the simulations stand nowhere known.
+        self.stepped_to = None;
         let ours = self.simulations();
         let theirs: Vec<SimKind> = state.records.iter().map(|r| r.kind).collect();
         if theirs != ours.iter().map(|o| o.0).collect::<Vec<_>>() {
@@ -403,6 +427,23 @@ impl World {
                     kind.name(),
                     on(Some(record.path)),
                     on(*path)
+                ));
+            }
+        }
+        // Each record took the steps that reach the time it was saved at:
+        // the posing limits count on from there.
+        let t = state.time;
+        let desc = &self.desc;
+        let steps = (desc.cloths.iter().map(|c| c.steps_to(t)))
+            .chain(desc.schools.iter().map(|s| s.steps_to(t)))
+            .chain(desc.emitters.iter().map(|e| e.steps_to(t)));
+        for (k, (record, want)) in state.records.iter().zip(steps).enumerate() {
+            if record.steps != want {
+                let nth = ours[..k].iter().filter(|o| o.0 == record.kind).count() + 1;
+                let saved = record.steps;
+                return Err(format!(
+                    "{} {nth}: {saved} steps saved at {t} s, where {want} reach that time",
+                    record.kind.name()
                 ));
             }
         }

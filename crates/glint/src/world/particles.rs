@@ -109,7 +109,7 @@ impl EmitterSim {
     }
 
     /// Its state for a simulation cache ([`World::sim_state`](super::World::sim_state)),
-    /// `None` when it cannot run.
+    /// `None` when it cannot run or has GPU steps pending.
     pub(crate) fn save(&self, gpu: (&wgpu::Device, &wgpu::Queue)) -> Result<Option<SimRecord>, crate::GpuError> {
         let record = |path, steps, slots| SimRecord { kind: SimKind::Emitter, path, steps, chunks: vec![slots] };
         Ok(match &self.run {
@@ -117,10 +117,7 @@ impl EmitterSim {
             Some(Run::Cpu(system)) => {
                 Some(record(SimPath::Cpu, system.steps(), bytemuck::cast_slice(system.slots()).to_vec()))
             }
-            Some(Run::Gpu(on_gpu)) => {
-                let (slots, steps) = on_gpu.save(gpu)?;
-                Some(record(SimPath::Gpu, steps, slots))
-            }
+            Some(Run::Gpu(on_gpu)) => on_gpu.save(gpu)?.map(|(slots, steps)| record(SimPath::Gpu, steps, slots)),
         })
     }
 

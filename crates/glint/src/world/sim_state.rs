@@ -242,3 +242,38 @@ mod tests {
         assert!(chunks::<2>(&state().records[0]).is_err());
     }
 }
+
+#[cfg(test)]
+mod world_tests {
+    use crate::{OffscreenTarget, Renderer, World};
+
+    #[test]
+    fn a_world_saves_only_what_it_stepped_and_resumes_only_what_reaches_the_time() {
+        let Some(gpu) = crate::gpu::test_gpu() else { return };
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..").canonicalize().expect("the repo");
+        let options = crate::asset::LoadOptions { asset_roots: vec![root.clone()], ..Default::default() };
+        let desc = crate::asset::load_scene_with(&root.join("tests/scenes/emitter.scn"), options).expect("scene");
+        let mut renderer = Renderer::new(&gpu);
+        let mut world = World::place(desc.clone(), &mut renderer).expect("placed");
+        let err = world.sim_state(&renderer).unwrap_err().to_string();
+        assert!(err.contains("were not posed and drawn"), "{err}");
+        world.pose(0.5, &mut renderer).expect("posed");
+        let mut target = OffscreenTarget::new(&gpu, 16, 16, 1).expect("target");
+        world.draw(&mut renderer, &world.views(None), &mut target).expect("frame");
+        let state = world.sim_state(&renderer).expect("a state");
+        assert_eq!(state.time, 0.5);
+        assert_eq!(state.records.len(), 2, "two emitters");
+        assert_eq!(state.records[0].steps, desc.emitters[0].steps_to(0.5));
+
+        let mut other = World::place(desc, &mut renderer).expect("placed");
+        // Steps that do not reach the time it says are refused: the posing
+        // limits would count from the wrong place.
+        let mut tampered = state.clone();
+        tampered.records[1].steps = 0;
+        let err = other.resume(&tampered, &renderer).unwrap_err();
+        assert!(err.contains("emitter 2: 0 steps saved at 0.5 s, where 30 reach that time"), "{err}");
+        assert_eq!(other.simulated_to(), None, "a refused state leaves it nowhere known");
+        other.resume(&state, &renderer).expect("resumed");
+        assert_eq!(other.simulated_to(), Some(0.5));
+    }
+}
