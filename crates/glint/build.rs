@@ -43,11 +43,12 @@ const PLAIN: [(&str, &str); 13] = [
 ];
 
 /// The modules others import: their import path and file.
-const MODULES: [(&str, &str); 4] = [
+const MODULES: [(&str, &str); 5] = [
     ("glint::blocks", "blocks"),
     ("glint::equirect", "equirect"),
     ("glint::full_screen", "full_screen"),
     ("glint::light_clusters", "light_clusters"),
+    ("glint::shadow_lookup", "shadow_lookup"),
 ];
 
 /// One piece of a shader: text or a def's value, and the tests it is under.

@@ -73,7 +73,7 @@ struct ShadowBlock {
 @group(0) @binding(1) var<uniform> shadows: ShadowBlock;
 @group(0) @binding(2) var shadow_maps: texture_depth_2d_array;
 // Point lights' cubes: cube c's faces are layers 6c..6c+5 (+X −X +Y −Y +Z −Z, each
-// oriented as a cube map's face), sampled as 2D layers (forward.wgsl cube_face):
+// oriented as a cube map's face), sampled as 2D layers (shadow_lookup.wgsl cube_face):
 // lavapipe's process grew every frame a shader holding a cube-map lookup drew.
 @group(0) @binding(3) var shadow_cubes: texture_depth_2d_array;
 @group(0) @binding(4) var shadow_sampler: sampler_comparison;

@@ -13,6 +13,7 @@ fn composer() -> Composer {
         ("blocks.wgsl", include_str!("blocks.wgsl")),
         ("full_screen.wgsl", include_str!("full_screen.wgsl")),
         ("light_clusters.wgsl", include_str!("light_clusters.wgsl")),
+        ("shadow_lookup.wgsl", include_str!("shadow_lookup.wgsl")),
     ];
     for (file_path, source) in shared {
         let module = ComposableModuleDescriptor { source, file_path, ..Default::default() };
@@ -75,7 +76,10 @@ fn normalized(wgsl: &str) -> String {
     let mentions = |name: &str| items.iter().filter(|item| words(item).any(|w| w == name)).count();
     let unused =
         |item: &String| item.strip_prefix("const ").and_then(|l| l.split(':').next()).is_some_and(|n| mentions(n) < 2);
-    let mut kept: Vec<String> = items.iter().filter(|item| !unused(item)).map(|item| renumbered(item)).collect();
+    // Numbered names' stems anywhere: the namer numbers clashing names module-wide.
+    let stems: Vec<&str> = words(wgsl).filter_map(stem).collect();
+    let mut kept: Vec<String> =
+        items.iter().filter(|item| !unused(item)).map(|item| renumbered(item, &stems)).collect();
     kept.sort();
     kept.concat()
 }
@@ -85,11 +89,16 @@ fn words(text: &str) -> impl Iterator<Item = &str> {
 }
 
 /// `item` with its numbered names (`_eN` temporaries, numbered by expression
-/// handles, and the namer's `name_N`, numbered by what it met first) renamed
+/// handles, and the namer's `name_N`, numbered by what it met first, with the
+/// bare `name` of each of `stems`: which of two clashing names keeps the bare
+/// one depends on the order the module's functions came in) renamed
 /// `stem#0`, `stem#1`, ... in order of appearance.
-fn renumbered(item: &str) -> String {
+fn renumbered(item: &str, stems: &[&str]) -> String {
+    fn family<'a>(stems: &[&str], w: &'a str) -> Option<&'a str> {
+        stem(w).or_else(|| stems.contains(&w).then_some(w))
+    }
     let mut names: Vec<&str> = Vec::new();
-    for word in words(item).filter(|w| stem(w).is_some()) {
+    for word in words(item).filter(|w| family(stems, w).is_some()) {
         if !names.contains(&word) {
             names.push(word);
         }
@@ -101,9 +110,9 @@ fn renumbered(item: &str) -> String {
             word.push(c);
             continue;
         }
-        match stem(&word) {
+        match family(stems, &word) {
             Some(s) => {
-                let k = names.iter().filter(|n| stem(n) == Some(s)).position(|n| *n == word).expect("listed");
+                let k = names.iter().filter(|n| family(stems, n) == Some(s)).position(|n| *n == word).expect("listed");
                 out.push_str(&format!("{s}#{k}"));
             }
             None => out.push_str(&word),
