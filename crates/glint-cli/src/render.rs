@@ -90,12 +90,7 @@ pub fn render(args: RenderArgs) -> Result<(), Error> {
     let mut scratch = None;
     // A bar on a terminal; else (a farm's log) a line a frame.
     let lines = !std::io::stderr().is_terminal();
-    let progress = (frames.len() > 1 && !lines).then(|| {
-        let bar = indicatif::ProgressBar::new(frames.len() as u64);
-        let style = indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} frames, {elapsed} ({eta} left)");
-        bar.set_style(style.expect("valid template"));
-        bar
-    });
+    let progress = progress_bar(frames.len(), "frames");
     for k in frames {
         let started = std::time::Instant::now();
         reach(&mut world, (&gpu, &mut renderer, &mut scratch), next..k, (time, fps))?;
@@ -185,6 +180,17 @@ pub(crate) fn reach(
         }
     }
     Ok(())
+}
+
+/// A progress bar of `count` steps counting `what`, where there is more than
+/// one and standard error is a terminal (a farm's log gets a line a step).
+pub(crate) fn progress_bar(count: usize, what: &str) -> Option<indicatif::ProgressBar> {
+    (count > 1 && std::io::stderr().is_terminal()).then(|| {
+        let bar = indicatif::ProgressBar::new(count as u64);
+        let template = format!("{{bar:40}} {{pos}}/{{len}} {what}, {{elapsed}} ({{eta}} left)");
+        bar.set_style(indicatif::ProgressStyle::with_template(&template).expect("valid template"));
+        bar
+    })
 }
 
 /// Scene time of frame `k` of a sequence starting at `time`.

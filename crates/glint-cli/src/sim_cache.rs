@@ -112,8 +112,10 @@ pub fn bake(args: BakeArgs) -> Result<(), Error> {
         let mut target = Some(glint::OffscreenTarget::new(&gpu, 16, 16, 1)?);
         let views = world.views(None);
         let lines = !std::io::stderr().is_terminal();
+        let stored: Vec<u32> = (args.every..args.frames).step_by(args.every as usize).collect();
+        let progress = crate::render::progress_bar(stored.len(), "states");
         let mut next = 0;
-        for frame in (args.every..args.frames).step_by(args.every as usize) {
+        for frame in stored {
             let started = std::time::Instant::now();
             let sequence = (args.time, args.fps);
             crate::render::reach(&mut world, (&gpu, &mut renderer, &mut target), next..frame, sequence)?;
@@ -132,7 +134,9 @@ pub fn bake(args: BakeArgs) -> Result<(), Error> {
                 );
             }
             states.push(StateFile { frame, file, bytes: bytes.len() as u64, xxh3: hash(&bytes) });
+            progress.iter().for_each(|bar| bar.inc(1));
         }
+        progress.iter().for_each(|bar| bar.finish());
     }
     let mut manifest = Manifest {
         kind: KIND.into(),

@@ -255,7 +255,10 @@ impl World {
 
     /// Whether any of its simulations steps on the GPU.
     fn steps_on_gpu(&self) -> bool {
-        self.simulations().iter().any(|(_, path)| *path == Some(SimPath::Gpu))
+        let gpu = Some(SimPath::Gpu);
+        self.cloths.iter().any(|c| c.path() == gpu)
+            || self.schools.iter().any(|s| s.path() == gpu)
+            || self.emitters.iter().any(|e| e.path() == gpu)
     }
 
     /// Move its sun, sky and glare to `hours` of the day
