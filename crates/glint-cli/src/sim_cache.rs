@@ -181,7 +181,7 @@ pub fn resume(
             format!("the manifest says {} bytes, more than a state may hold ({MAX_STATE_BYTES})", entry.bytes);
         return Err(Diagnostic::file(&path, message).into());
     }
-    let bytes = read_limited(&path, entry.bytes)?;
+    let bytes = glint::asset::read_file(&path, entry.bytes)?;
     if bytes.len() as u64 != entry.bytes {
         let message = format!("truncated or changed: {} bytes, where the manifest says {}", bytes.len(), entry.bytes);
         return Err(Diagnostic::file(&path, message).into());
@@ -210,7 +210,7 @@ fn open(folder: &Path) -> Result<Manifest, Error> {
         let message = format!("no {MANIFEST}: not a glint simulation cache (glint bake makes one)");
         return Err(Diagnostic::file(folder, message).into());
     }
-    let bytes = read_limited(&path, MAX_MANIFEST_BYTES)?;
+    let bytes = glint::asset::read_file(&path, MAX_MANIFEST_BYTES)?;
     let manifest: Manifest = serde_json::from_slice(&bytes)
         .map_err(|e| Diagnostic::at(&path, e.line(), format!("not a glint simulation cache's manifest: {e}")))?;
     if manifest.kind != KIND {
@@ -340,17 +340,7 @@ fn simulations(world: &World) -> Vec<Simulation> {
 
 /// "1 cloth, 1 school, 2 emitters": how many of each kind `list` has.
 fn listed(list: &[Simulation]) -> String {
-    if list.is_empty() {
-        return "no simulations".into();
-    }
-    let kinds = [SimKind::Cloth, SimKind::School, SimKind::Emitter];
-    let counts = kinds.map(|k| (k.name(), list.iter().filter(|s| s.kind == k.name()).count()));
-    let parts: Vec<String> = counts
-        .iter()
-        .filter(|(_, n)| *n > 0)
-        .map(|(name, n)| if *n == 1 { format!("1 {name}") } else { format!("{n} {name}s") })
-        .collect();
-    parts.join(", ")
+    SimKind::listed(&list.iter().filter_map(|s| SimKind::named(&s.kind)).collect::<Vec<_>>())
 }
 
 /// "lavapipe (Vulkan, Mesa 22.3.6)": the adapter as a manifest names it.
@@ -378,26 +368,6 @@ fn state_path(folder: &Path, file: &str) -> Result<PathBuf, Error> {
         return Err(Diagnostic::file(&folder.join(MANIFEST), message).into());
     }
     Ok(folder.join(file))
-}
-
-/// `path`'s bytes, refused when it is not a regular file (a FIFO would
-/// block, a device never end) or is larger than `most`.
-fn read_limited(path: &Path, most: u64) -> Result<Vec<u8>, Error> {
-    use std::io::Read;
-    // Checked before opening: opening a FIFO waits for a writer.
-    let meta = std::fs::metadata(path).map_err(|e| Diagnostic::file(path, format!("cannot read: {e}")))?;
-    if !meta.is_file() {
-        return Err(Diagnostic::file(path, "not a regular file").into());
-    }
-    let file = std::fs::File::open(path).map_err(|e| Diagnostic::file(path, format!("cannot read: {e}")))?;
-    let mut bytes = Vec::new();
-    file.take(most.saturating_add(1))
-        .read_to_end(&mut bytes)
-        .map_err(|e| Diagnostic::file(path, format!("cannot read: {e}")))?;
-    if bytes.len() as u64 > most {
-        return Err(Diagnostic::file(path, format!("larger than the {most} bytes expected")).into());
-    }
-    Ok(bytes)
 }
 
 #[cfg(test)]

@@ -255,7 +255,7 @@ fn stays_inside(path: &Path) -> bool {
 /// The size comes from the file's metadata before anything is read, and the read
 /// itself stops one byte past `limit`, so a file that grows meanwhile is refused
 /// too. Errors name `path`.
-fn read_file(path: &Path, limit: u64) -> Result<Vec<u8>, Diagnostic> {
+pub fn read_file(path: &Path, limit: u64) -> Result<Vec<u8>, Diagnostic> {
     let fail = |e: std::io::Error| Diagnostic::file(path, format!("cannot read: {e}"));
     // Checked before opening: opening a FIFO for reading blocks until a writer comes.
     let size = regular_size(path, std::fs::metadata(path).map_err(fail)?, limit)?;

@@ -38,7 +38,7 @@ pub use environment::{
     equirect_direction, equirect_uv, EnvironmentImage, MAX_ENVIRONMENT_PIXELS, MAX_HDR_HEADER_BYTES, MAX_RADIANCE,
 };
 pub(crate) use files::AssetFolder;
-pub use files::{FileSet, Files};
+pub use files::{read_file, FileSet, Files};
 pub use files::{
     MAX_BUFFER_BYTES, MAX_IMAGE_FILE_BYTES, MAX_MATERIAL_LIBRARY_BYTES, MAX_MODEL_BYTES, MAX_SCENE_BYTES,
     MAX_SCENE_TOTAL_BYTES,

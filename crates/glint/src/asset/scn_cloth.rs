@@ -106,16 +106,25 @@ impl ClothDesc {
     /// the scene's other cloths, stays within [`MAX_POSE_STEPS`] and
     /// `MAX_POSE_NODE_STEPS`, without stepping.
     pub fn check_pose(&self, (from, time): (Option<f32>, f32), others: u64, scene: &Path) -> Result<(), Diagnostic> {
-        self.check_steps(self.steps_from(from, time), &super::scene_desc::span(from, time), others, scene)
+        self.check_steps(self.steps_from(from, time), (from, time), others, scene)
     }
 
-    /// Check that taking `steps` steps (`when`: "time T s", for the message),
-    /// after `others` node²-steps spent on the scene's other cloths, stays
-    /// within the posing limits, without stepping.
-    pub(crate) fn check_steps(&self, steps: u64, when: &str, others: u64, scene: &Path) -> Result<(), Diagnostic> {
+    /// Check that taking `steps` steps to `time` from the state at `from`
+    /// (for the message), after `others` node²-steps spent on the scene's
+    /// other cloths, stays within the posing limits, without stepping.
+    pub(crate) fn check_steps(
+        &self,
+        steps: u64,
+        (from, time): (Option<f32>, f32),
+        others: u64,
+        scene: &Path,
+    ) -> Result<(), Diagnostic> {
+        // The message is made only for an error: this runs every pose.
+        let when = || super::scene_desc::span(from, time);
         if steps > MAX_POSE_STEPS {
             let message = format!(
-                "cloth: {when} is {steps} steps of dt {} s, more than the {MAX_POSE_STEPS} one pose may take",
+                "cloth: {} is {steps} steps of dt {} s, more than the {MAX_POSE_STEPS} one pose may take",
+                when(),
                 self.dt
             );
             return Err(Diagnostic::at(scene, self.line, message));
@@ -125,7 +134,7 @@ impl ClothDesc {
             let nodes = self.setup.mesh.nodes.len();
             let what = match self.integrator {
                 Integrator::Static => format!("a static solve of {nodes} nodes counts as {STATIC_STEPS} steps"),
-                _ => format!("{when} is {steps} steps of dt {} s for {nodes} nodes", self.dt),
+                _ => format!("{} is {steps} steps of dt {} s for {nodes} nodes", when(), self.dt),
             };
             let others = if others > 0 { format!(" with the scene's other cloths ({others})") } else { String::new() };
             let message = format!(

@@ -133,7 +133,7 @@ impl ClothSim {
             Some((_, taken)) if *taken <= target => *taken,
             _ => 0,
         };
-        desc.check_steps(target - taken, &format!("time {time} s"), 0, scene)?;
+        desc.check_steps(target - taken, (None, time), 0, scene)?;
         let Some(rest) = &self.rest else { return Ok(false) };
         let (mut run, restarted) = match self.run.take() {
             Some(run) if run.1 <= target => (run, false),

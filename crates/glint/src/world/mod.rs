@@ -410,11 +410,12 @@ impl World {
         self.stepped_to = None;
         let ours = self.simulations();
         let theirs: Vec<SimKind> = state.records.iter().map(|r| r.kind).collect();
-        if theirs != ours.iter().map(|o| o.0).collect::<Vec<_>>() {
+        let kinds: Vec<SimKind> = ours.iter().map(|o| o.0).collect();
+        if theirs != kinds {
             return Err(format!(
                 "it holds {}, where the scene has {}",
-                sim_list(&theirs),
-                sim_list(&ours.iter().map(|o| o.0).collect::<Vec<_>>())
+                SimKind::listed(&theirs),
+                SimKind::listed(&kinds)
             ));
         }
         for (k, (record, (kind, path))) in state.records.iter().zip(&ours).enumerate() {
@@ -486,17 +487,6 @@ impl World {
     pub fn school_paths(&self) -> Vec<Option<SimPath>> {
         self.schools.iter().map(SchoolSim::path).collect()
     }
-}
-
-/// "1 cloth, 2 schools and no emitter": how many of each kind `kinds` holds.
-fn sim_list(kinds: &[SimKind]) -> String {
-    let count = |kind| kinds.iter().filter(|&&k| k == kind).count();
-    let each = [SimKind::Cloth, SimKind::School, SimKind::Emitter].map(|kind| match count(kind) {
-        0 => format!("no {}", kind.name()),
-        1 => format!("1 {}", kind.name()),
-        n => format!("{n} {}s", kind.name()),
-    });
-    format!("{}, {} and {}", each[0], each[1], each[2])
 }
 
 /// `desc`'s lights under its environment, at scene time `time` where a

@@ -39,12 +39,34 @@ pub enum SimKind {
 }
 
 impl SimKind {
+    /// Every kind, in the order a state's records take them.
+    pub const ALL: [SimKind; 3] = [Self::Cloth, Self::School, Self::Emitter];
+
     /// Its name in messages.
     pub fn name(self) -> &'static str {
         match self {
             Self::Cloth => "cloth",
             Self::School => "school",
             Self::Emitter => "emitter",
+        }
+    }
+
+    /// The kind [`name`](Self::name) names.
+    pub fn named(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|k| k.name() == name)
+    }
+
+    /// "2 cloths, 1 emitter" ("no simulations" for none): how many of each
+    /// kind `kinds` holds.
+    pub fn listed(kinds: &[SimKind]) -> String {
+        let parts: Vec<String> = (Self::ALL.into_iter())
+            .map(|k| (k.name(), kinds.iter().filter(|&&o| o == k).count()))
+            .filter(|(_, n)| *n > 0)
+            .map(|(name, n)| if n == 1 { format!("1 {name}") } else { format!("{n} {name}s") })
+            .collect();
+        match parts.is_empty() {
+            true => "no simulations".into(),
+            false => parts.join(", "),
         }
     }
 }

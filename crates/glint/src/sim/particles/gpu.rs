@@ -210,12 +210,14 @@ impl GpuParticles {
 
     /// Its slots as the GPU keeps them and the steps they took (waiting for
     /// the GPU), for a simulation cache; `None` while steps are pending.
-    pub(crate) fn save(&self, gpu: (&wgpu::Device, &wgpu::Queue)) -> Result<Option<(Vec<u8>, u64)>, crate::GpuError> {
+    pub(crate) fn save(
+        &self,
+        (device, queue): (&wgpu::Device, &wgpu::Queue),
+    ) -> Result<Option<(Vec<u8>, u64)>, crate::GpuError> {
         if self.target != self.steps {
             return Ok(None);
         }
-        let [state] = <[Vec<u8>; 1]>::try_from(crate::gpu::read_buffers(gpu, &[&self.state])?).expect("one");
-        Ok(Some((state, self.steps)))
+        Ok(Some((crate::gpu::read_buffer(device, queue, &self.state)?, self.steps)))
     }
 
     /// Go on from slots [`save`](Self::save)d after `steps` steps.
