@@ -8,7 +8,7 @@
 //! a piece of its own. `src/shader/assemble.rs` joins the pieces a set of defs
 //! selects; its tests check the result against naga_oil's composition.
 //!
-//! The other shaders (`blit`, `post`, `cull`, `pyramid`, `ssao_compute`
+//! The other shaders (`blit`, `post`, `accumulate`, `cull`, `pyramid`, `ssao_compute`
 //! (appended to `ssao`), and the simulations' `particles_step`, `school`,
 //! `school_place`, `scan`, `radix`, `cloth`, `cloth_place` and `bin_lights`) have no defs: each becomes one string
 //! there, its imports ahead of its own text, comments dropped too.
@@ -26,9 +26,10 @@ const COMPOSED: [(&str, &str); 5] =
 
 /// The shaders without defs (their imports ahead of their own text), and the
 /// constant each becomes.
-const PLAIN: [(&str, &str); 13] = [
+const PLAIN: [(&str, &str); 14] = [
     ("BLIT", "blit"),
     ("POST", "post"),
+    ("ACCUMULATE", "accumulate"),
     ("CULL", "cull"),
     ("PYRAMID", "pyramid"),
     ("SSAO_COMPUTE", "ssao_compute"),

@@ -35,6 +35,8 @@ pub struct RenderArgs<'a> {
     pub turntable: bool,
     /// Write one animated PNG rather than numbered PNGs.
     pub apng: bool,
+    /// Sub-frames averaged into each frame ([`World::draw_still`]).
+    pub spp: u32,
     /// Levels of detail (`--lod`, `--lod-error`).
     pub lod: crate::lod::LodArgs,
     pub options: LoadOptions,
@@ -100,7 +102,7 @@ pub fn render(args: RenderArgs) -> Result<(), Error> {
             true => views.iter().map(|v| turned(v, 360.0 * k as f32 / args.frames as f32)).collect(),
             false => views.clone(),
         };
-        let mut frame = world.draw(&mut renderer, &views, &mut target)?;
+        let mut frame = world.draw_still(&mut renderer, (&views, &mut target), args.spp)?;
         sink.write(k, target.read_rgba8(&gpu)?)?;
         gpu.check()?;
         if let Some(bar) = &progress {

@@ -95,12 +95,13 @@ fn a_turntable_orbits_the_camera_once_over_the_sequence() {
 }
 
 /// Render frames `0..6` of `scene` whole and as the ranges 0..2, 2-3,4 and
-/// 5-5:1 (glint's form and a farm's) into separate folders: every frame is
-/// the same, numbered the same.
-fn split_ranges_equal_the_whole_run(scene: &str, time: &str) {
+/// 5-5:1 (glint's form and a farm's) into separate folders, with `more`
+/// arguments: every frame is the same, numbered the same. Returns the whole
+/// run's frames (none without an adapter).
+fn split_ranges_equal_the_whole_run(scene: &str, time: &str, more: &[&str]) -> Vec<image::RgbaImage> {
     let dir = tempfile::tempdir().expect("temp dir");
-    let sequence = ["--size", "48x48", "--frames", "6", "--fps", "5", "--time", time];
-    let Some(_) = render(scene, &dir.path().join("whole/%02d.png"), &sequence) else { return };
+    let sequence = [&["--size", "48x48", "--frames", "6", "--fps", "5", "--time", time], more].concat();
+    let Some(_) = render(scene, &dir.path().join("whole/%02d.png"), &sequence) else { return Vec::new() };
     for (k, range) in ["0..2", "2-3,4", "5-5:1"].iter().enumerate() {
         let folder = dir.path().join(format!("part{k}/%02d.png"));
         render(scene, &folder, &[&sequence[..], &["--frame-range", range]].concat()).expect("adapter");
@@ -115,21 +116,35 @@ fn split_ranges_equal_the_whole_run(scene: &str, time: &str) {
             assert!(got == whole[f], "{scene}: frame {f} of part {part} differs from the whole run's");
         }
     }
+    whole
 }
 
 #[test]
 fn a_split_cloth_sequence_equals_the_whole_run() {
-    split_ranges_equal_the_whole_run("tests/scenes/cloth_debug.scn", "0");
+    split_ranges_equal_the_whole_run("tests/scenes/cloth_debug.scn", "0", &[]);
 }
 
 #[test]
 fn a_split_particle_sequence_equals_the_whole_run() {
-    split_ranges_equal_the_whole_run("tests/scenes/emitter.scn", "0.5");
+    split_ranges_equal_the_whole_run("tests/scenes/emitter.scn", "0.5", &[]);
 }
 
 #[test]
 fn a_split_school_sequence_equals_the_whole_run() {
-    split_ranges_equal_the_whole_run("tests/scenes/school.scn", "0");
+    split_ranges_equal_the_whole_run("tests/scenes/school.scn", "0", &[]);
+}
+
+#[test]
+fn a_split_accumulated_sequence_equals_the_whole_run() {
+    // Each frame 4 sub-frames at its time: the school and its emitter, which
+    // step on the GPU, step once a frame, and chunks still equal the whole run.
+    let whole = split_ranges_equal_the_whole_run("tests/scenes/school.scn", "0", &["--spp", "4"]);
+    let Some(first) = whole.first() else { return };
+    let dir = tempfile::tempdir().expect("temp dir");
+    let one = dir.path().join("one.png");
+    render("tests/scenes/school.scn", &one, &["--size", "48x48"]).expect("adapter");
+    let difference = mean_difference(first, &rgba(&one));
+    assert!(difference > 0.05 && difference < 30.0, "4 samples smooth the edges of 1 ({difference})");
 }
 
 #[test]
@@ -173,7 +188,9 @@ fn sequence_arguments_are_checked_before_any_frame() {
     let model = model.to_str().expect("path");
     let dir = tempfile::tempdir().expect("temp dir");
     let out = |name: &str| dir.path().join(name).to_str().expect("path").to_owned();
-    let cases: [(&[&str], &str); 8] = [
+    let cases: [(&[&str], &str); 10] = [
+        (&["-o", &out("a.png"), "--spp", "0"], "0 is not in 1..=4096"),
+        (&["-o", &out("a.png"), "--spp", "4097"], "4097 is not in 1..=4096"),
         (&["-o", &out("a.gif"), "--apng"], "--apng writes a PNG"),
         (&["-o", &out("a.png"), "--frames", "3"], "several frames need a numbered output"),
         (

@@ -53,7 +53,7 @@ pub mod world;
 
 pub use asset::{Diagnostic, Texture};
 pub use gpu::{AfterViews, Gpu, GpuError, OffscreenTarget, SurfaceFrame, WindowSurface};
-pub use render::{FrameInput, FrameMode, FrameOutput, FrameStats, RenderError, Renderer, Shadows, ViewKey};
+pub use render::{FrameInput, FrameMode, FrameOutput, FrameStats, RenderError, Renderer, Shadows, SubFrame, ViewKey};
 pub use scene::{
     AlphaMode, AmbientOcclusion, Background, Camera, Culling, Entity, Environment, Light, Lighting, Material,
     MaterialId, Mesh, RenderTargetId, ShadowSettings, ShapeId, TextureId, Tiles, View, Viewport,

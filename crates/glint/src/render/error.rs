@@ -90,6 +90,17 @@ pub enum RenderError {
     /// A view's viewport is empty or reaches outside the target.
     #[error("viewport {0:?} is not a non-empty rectangle inside 0..1")]
     BadViewport(Viewport),
+    /// A sub-frame of an accumulated still that does not follow the one before
+    /// it for the same view ([`SubFrame`](crate::render::SubFrame)).
+    #[error("sub-frame {index} of {count}: {why}")]
+    SubFrameOutOfOrder {
+        /// Its index.
+        index: u32,
+        /// The still's sub-frames.
+        count: u32,
+        /// What was expected.
+        why: String,
+    },
     /// A view draws into a render target this renderer never created.
     #[error("unknown render target {0:?}: render targets come from this renderer's add_render_target")]
     UnknownRenderTarget(RenderTargetId),

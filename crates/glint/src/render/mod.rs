@@ -59,7 +59,7 @@ pub use debug::explain::{BatchCall, DrawCall, FrameCalls, PassCalls, PassType};
 pub use debug::stats::{ClusterStats, FrameStats, PassStats, Passes, StageTimes, UploadStats};
 pub use debug::timer::GpuTimes;
 pub use error::{MeshTooLarge, RenderError};
-pub use frame::input::{FrameInput, FrameMode, FrameOutput, ViewKey, KEEP_VIEW_FRAMES};
+pub use frame::input::{FrameInput, FrameMode, FrameOutput, SubFrame, ViewKey, KEEP_VIEW_FRAMES, MAX_SUB_FRAMES};
 pub use frame::naive::MAX_NAIVE_DRAWS;
 pub use frame::Shadows;
 pub use gpu_driven::gpu_cull::SKIP_UNPAID_OCCLUSION;

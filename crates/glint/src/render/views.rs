@@ -8,6 +8,7 @@ use crate::render::clusters::Binned;
 use crate::render::frame::input::{ViewKey, KEEP_VIEW_FRAMES};
 use crate::render::gpu_driven::draw_list::{DrawList, ListPaths};
 use crate::render::gpu_driven::light_binning::GpuBins;
+use crate::render::passes::accumulate::Accumulation;
 use crate::render::passes::ambient_occlusion::OcclusionTargets;
 use crate::render::passes::post::PostParams;
 use crate::render::passes::shadow_maps::{ShadowGpu, ShadowMaps};
@@ -105,6 +106,8 @@ pub(crate) struct ViewGpu {
     pub post_params: PostParams,
     /// Its ambient occlusion's textures, from its first frame with it.
     pub occlusion: Option<OcclusionTargets>,
+    /// Its running mean, from its first accumulated still.
+    pub accumulation: Option<Accumulation>,
     /// Its light clusters' arrays, and this frame's clusters until uploaded
     /// (`render/frame/lights.rs`).
     pub clusters: ClusterArrays,
@@ -128,6 +131,7 @@ impl ViewGpu {
             clusters,
             post_params: PostParams::new(device),
             occlusion: None,
+            accumulation: None,
             scene_block,
             shadow_block,
             generations: (instances.generation(), shared.shadow_maps_generation, shared.environment.generation()),

@@ -215,6 +215,7 @@ fn the_shaders_without_defs_are_what_naga_oil_composes() {
     let sources = [
         (BLIT, include_str!("blit.wgsl")),
         (POST, include_str!("post.wgsl")),
+        (ACCUMULATE, include_str!("accumulate.wgsl")),
         (CULL, include_str!("cull.wgsl")),
         (PYRAMID, include_str!("pyramid.wgsl")),
         (PARTICLES_STEP, include_str!("particles_step.wgsl")),

@@ -277,6 +277,8 @@ pub(crate) fn particles(variant: ParticleShading) -> String {
 pub(crate) const BLIT: &str = assemble::BLIT;
 /// The post-processing passes (render/passes/post.rs).
 pub(crate) const POST: &str = assemble::POST;
+/// Accumulated stills' fold and copy (render/passes/accumulate.rs).
+pub(crate) const ACCUMULATE: &str = assemble::ACCUMULATE;
 /// GPU frustum culling of a draw list (`render/gpu_driven/gpu_cull.rs`).
 pub(crate) const CULL: &str = assemble::CULL;
 /// The depth pyramid of occlusion culling (`render/gpu_driven/occlusion.rs`).

@@ -18,7 +18,8 @@ struct AmbientOcclusion {
     // orthographic camera; w: the radius in view units.
     projection: vec4<f32>,
     // x: intensity (the visibility's exponent); y: the largest radius in
-    // full-resolution pixels; z, w: reserved.
+    // full-resolution pixels; z: the sub-frame of an accumulated still (0 for
+    // a frame of its own), which turns the noise; w: reserved.
     params: vec4<f32>,
 }
 
@@ -158,7 +159,8 @@ fn occlusion_of(half_pixel: vec2<i32>, encoded: vec2<f32>, distance: f32) -> f32
     if radius_pixels < 2.0 {
         return 1.0;
     }
-    let turn = noise(vec2<f32>(half_pixel));
+    // Each sub-frame of a still turns every pixel's slices by a further golden ratio.
+    let turn = fract(noise(vec2<f32>(half_pixel)) + ao.params.z * 0.618034);
     let jitter = fract(turn * 7.0 + 0.5);
     var visible = 0.0;
     var open = 0.0;

@@ -33,7 +33,7 @@ use crate::asset::{MeshRef, SceneDesc};
 use crate::scene::{Entity, Lighting, SimPath, View};
 use crate::sim::cloth::ClothView;
 use crate::sim::particles::ParticleKernels;
-use crate::{AfterViews, FrameInput, FrameOutput, FrameStats, OffscreenTarget, RenderError, Renderer};
+use crate::{AfterViews, FrameInput, FrameOutput, FrameStats, OffscreenTarget, RenderError, Renderer, SubFrame};
 use cloth::ClothSim;
 use particles::EmitterSim;
 use school::SchoolSim;
@@ -304,6 +304,28 @@ impl World {
         Ok(self.draw_then(renderer, (views, target), Vec::new())?.views)
     }
 
+    /// [`draw`](Self::draw) as an accumulated still of `samples` sub-frames
+    /// ([`SubFrame`]: jittered cameras and ambient-occlusion noise, averaged
+    /// in HDR before each view's post chain), all at the time of the last
+    /// pose, its simulations stepped once; 1 draws a frame of its own. Returns
+    /// the last sub-frame's statistics, its particles counted since the last
+    /// frame drawn before the still.
+    pub fn draw_still(
+        &mut self,
+        renderer: &mut Renderer,
+        (views, target): (&[View], &mut OffscreenTarget),
+        samples: u32,
+    ) -> Result<Vec<FrameStats>, RenderError> {
+        let since = self.drawn_at;
+        let mut last = Vec::new();
+        for index in 0..samples {
+            self.drawn_at = since; // each sub-frame counts particles over the whole interval
+            let sample = SubFrame { index, count: samples };
+            last = self.draw_sample(renderer, (views, &mut *target), Vec::new(), sample)?.views;
+        }
+        Ok(last)
+    }
+
     /// [`draw`](Self::draw), with `after` recorded into the frame after its
     /// views (an overlay, the blit onto a window: [`FrameInput::then`]), and
     /// the whole frame's output.
@@ -313,9 +335,20 @@ impl World {
         (views, target): (&[View], &mut OffscreenTarget),
         after: Vec<&mut dyn AfterViews>,
     ) -> Result<FrameOutput, RenderError> {
+        self.draw_sample(renderer, (views, target), after, SubFrame::ONE)
+    }
+
+    /// [`draw_then`](Self::draw_then) as sub-frame `sample`.
+    fn draw_sample(
+        &mut self,
+        renderer: &mut Renderer,
+        (views, target): (&[View], &mut OffscreenTarget),
+        after: Vec<&mut dyn AfterViews>,
+        sample: SubFrame,
+    ) -> Result<FrameOutput, RenderError> {
         let eye = views.last().map_or(glam::Vec3::ZERO, |v| v.camera.eye);
         let lighting = lighting_at(&self.desc, self.moves.then_some(self.time));
-        let mut input = FrameInput::new(&self.placed.entities, lighting).views(views);
+        let mut input = FrameInput::new(&self.placed.entities, lighting).views(views).sample(sample);
         let mut paths = crate::scene::SimulationPaths::default();
         for (sim, emitter) in self.emitters.iter_mut().zip(&self.desc.emitters) {
             paths.emitters.add(if sim.on_gpu() { SimPath::Gpu } else { SimPath::Cpu });

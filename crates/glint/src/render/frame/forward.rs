@@ -8,7 +8,7 @@ use crate::render::frame::prepared::Prepared;
 use crate::render::frame::state::Frame;
 use crate::render::lod::level_items;
 use crate::render::queue::{self, DrawItem, Queue};
-use crate::render::resources::blocks::SceneGpu;
+use crate::render::resources::blocks::{CameraGpu, SceneGpu};
 use crate::render::resources::Resources;
 use crate::render::view::ViewFrame;
 use crate::render::views::ViewGpu;
@@ -88,7 +88,7 @@ pub(crate) fn upload(
     let bytes = &mut stats.bytes_uploaded;
     let layout = &res.registry.pipelines.instance_layout;
     let culls = res.cull_pipelines.as_ref().zip(res.instances.bounds());
-    let view_proj = frame.camera.projection(frame.aspect) * frame.view;
+    let view_proj = frame.projection * frame.view;
     let depth = (target.width(), target.height(), target.samples());
     let occlusion = (frame.culling == Culling::Gpu).then_some((view_proj, depth));
     let list = &mut gpu.forward;
@@ -122,7 +122,8 @@ pub(crate) fn upload_view_blocks(
         .with_specular_levels(res.environment.last_level());
     let scene = upload_clusters(res, gpu, (scene, lighting.lights, shadowed), bytes)?;
     bytes.scene += gpu.scene_block.update(&res.queue, scene);
-    let camera = frame.camera.to_gpu(frame.aspect).with_motion(&lighting.environment).with_far_eye(frame.far_eye);
+    let camera =
+        CameraGpu::new(frame.camera, frame.projection).with_motion(&lighting.environment).with_far_eye(frame.far_eye);
     bytes.camera += gpu.blocks.update(&res.queue, 0, camera);
     upload_instances(res, bytes);
     Ok(())

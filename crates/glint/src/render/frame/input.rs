@@ -34,13 +34,76 @@ pub struct FrameInput<'a> {
     /// Work recorded after the views, in this order (an overlay, the blit
     /// onto a window), so that a displayed frame is one submission.
     pub after: Vec<&'a mut dyn AfterViews>,
+    /// Which sub-frame of an accumulated still this frame is
+    /// ([`SubFrame::ONE`]: a frame of its own).
+    pub sample: SubFrame,
+}
+
+/// Most sub-frames one accumulated still averages.
+pub const MAX_SUB_FRAMES: u32 = 4096;
+
+/// Sub-frame `index` of `count` of an accumulated still (`glint render
+/// --spp`): the frame's views into the output are drawn with their cameras
+/// jittered by a fraction of a pixel ([`jitter`](Self::jitter)) and their
+/// ambient occlusion's noise turned, and folded into a running mean in 32-bit
+/// float; only the last sub-frame writes the output, the mean through the
+/// view's post chain (clamped where it has none), so the average is taken in
+/// HDR before tonemapping. A still's sub-frames are consecutive frames of the
+/// same scene at the same time, each view under the same key. Views into
+/// render targets are drawn as in any frame.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SubFrame {
+    /// Its place, from 0.
+    pub index: u32,
+    /// Sub-frames in the still, 1 to [`MAX_SUB_FRAMES`].
+    pub count: u32,
+}
+
+impl SubFrame {
+    /// A frame of its own: no jitter, nothing accumulated.
+    pub const ONE: Self = Self { index: 0, count: 1 };
+
+    /// Whether it is a sub-frame of a still of several.
+    pub fn accumulates(self) -> bool {
+        self.count > 1
+    }
+
+    /// Whether it is the still's last, which writes the output.
+    pub fn is_last(self) -> bool {
+        self.index + 1 == self.count
+    }
+
+    /// Its camera offset in pixels (x right, y down), each within ±0.5: the
+    /// Halton sequence in bases 2 and 3 at `index + 1`, so that any number of
+    /// sub-frames covers the pixel evenly; none for a frame of its own.
+    pub fn jitter(self) -> glam::Vec2 {
+        if !self.accumulates() {
+            return glam::Vec2::ZERO;
+        }
+        let halton = |mut i: u32, base: u32| {
+            let (mut f, mut r) = (1.0, 0.0);
+            while i > 0 {
+                f /= base as f32;
+                r += f * (i % base) as f32;
+                i /= base;
+            }
+            r
+        };
+        glam::Vec2::new(halton(self.index + 1, 2), halton(self.index + 1, 3)) - 0.5
+    }
 }
 
 impl<'a> FrameInput<'a> {
     /// A frame of `entities` under `lighting`, with no view yet.
     pub fn new(entities: &'a [Entity], lighting: impl Into<Lighting<'a>>) -> Self {
         let (views, simulations, after) = (Vec::new(), Vec::new(), Vec::new());
-        Self { entities, views, lighting: lighting.into(), shadows: true, simulations, after }
+        Self { entities, views, lighting: lighting.into(), shadows: true, simulations, after, sample: SubFrame::ONE }
+    }
+
+    /// Draw it as `sample` of an accumulated still.
+    pub fn sample(mut self, sample: SubFrame) -> Self {
+        self.sample = sample;
+        self
     }
 
     /// Add `view`, its GPU state kept under `key`.

@@ -74,10 +74,11 @@ impl Renderer {
         input: FrameInput,
         target: &mut OffscreenTarget,
     ) -> Result<FrameOutput, RenderError> {
-        let FrameInput { entities, views, lighting, shadows, mut simulations, mut after } = input;
+        let FrameInput { entities, views, lighting, shadows, mut simulations, mut after, sample } = input;
         self.views.begin_frame(views.iter().map(|&(key, _)| key)); // the keys `wait_for_counts` reads
         let (res, states) = (&mut self.res, &mut self.views);
         let mut frame = begin_frame(res, &mut self.next, entities); // its number and encoder; entities into the store
+        frame.sample = sample; // a sub-frame of an accumulated still, or a frame of its own
         let mut stages = || {
             check_frame(&mut frame, &views, (&lighting, res.clusters))?; // lights, ids, viewports, post chains
             let order = view_order(res, &frame, &views)?; // render targets before the views that show them

@@ -5,6 +5,7 @@
 use crate::render::debug::outline::Outline;
 use crate::render::debug::timer::GpuTimes;
 use crate::render::error::RenderError;
+use crate::render::frame::input::SubFrame;
 use crate::render::frame::prepared::{PrepareKey, Prepared};
 use crate::render::frame::visible::{Submitted, Visible};
 use web_time::Instant;
@@ -64,6 +65,8 @@ pub(crate) struct Frame {
     pub gpu: Option<GpuTimes>,
     /// When it began, for its own CPU time.
     pub start: Instant,
+    /// Which sub-frame of an accumulated still it is.
+    pub sample: SubFrame,
 }
 
 impl Frame {
@@ -93,6 +96,7 @@ impl Frame {
             before: Vec::new(),
             gpu,
             start,
+            sample: SubFrame::ONE,
         }
     }
 }

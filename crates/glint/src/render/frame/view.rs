@@ -10,6 +10,7 @@ use crate::render::frame::ambient_occlusion::{occludes, prepare_ambient_occlusio
 use crate::render::frame::encode::encode;
 use crate::render::frame::forward::{build_queue, upload};
 use crate::render::frame::input::FrameMode;
+use crate::render::frame::input::SubFrame;
 use crate::render::frame::lights::cluster_lights;
 use crate::render::frame::naive::naive_frame;
 use crate::render::frame::prepare::prepare;
@@ -18,6 +19,7 @@ use crate::render::frame::shadow_pass::ViewShadows;
 use crate::render::frame::state::Frame;
 use crate::render::frame::visible::{cull, shown};
 use crate::render::frame_variant::FrameVariant;
+use crate::render::passes::accumulate::{AccumulatePipelines, Accumulation};
 use crate::render::passes::post::ChainImages;
 use crate::render::queue;
 use crate::render::resources::Resources;
@@ -34,7 +36,14 @@ enum Compose<'a> {
     Copy { from: &'a OffscreenTarget, to: &'a OffscreenTarget, origin: [u32; 2] },
     /// Its post chain, from its HDR target into its rectangle of the output.
     Post { chain: &'a [PostEffect], images: &'a ChainImages<'a> },
+    /// Folded into its running mean as a sub-frame of an accumulated still;
+    /// at the last, the mean through its post chain (clamped without one).
+    Accumulate { chain: &'a [PostEffect], images: &'a ChainImages<'a> },
 }
+
+/// The chain of a view without post effects whose sub-frames were
+/// accumulated in HDR: clamped into the output's 0..1, as drawing into it does.
+const CLAMP: [PostEffect; 1] = [PostEffect::Tonemap { operator: crate::scene::Tonemap::None, exposure: 0.0 }];
 
 /// A view of the frame (in its debug group "view k" where `group` is its
 /// place `k` in a frame of several views), with its GPU state `gpu`: drawn
@@ -76,8 +85,9 @@ pub(crate) fn draw_view(
 
 /// `view` drawn into `target` itself when it covers it and has no post
 /// chain; else into a view target of the viewport's size (HDR for a post
-/// chain, whose last pass writes the rectangle), copied into the
-/// rectangle. `hides`: the view's own render target.
+/// chain, whose last pass writes the rectangle, or for a sub-frame of an
+/// accumulated still), copied into the rectangle. `hides`: the view's own
+/// render target (a view into one is not accumulated).
 fn draw_into(
     res: &mut Resources,
     frame: &mut Frame,
@@ -91,8 +101,9 @@ fn draw_into(
     let variant = FrameVariant::after(shadows.first, shadows.views.len(), lighting.lights, occluded)
         .with_clusters(res.clusters.applies(lighting.lights));
     let renderer = (res.cull_pipelines.is_some(), res.levels_of_detail, hides, variant);
-    let view_frame = ViewFrame::new(view, (width, height), renderer);
-    let format = scene_format(res, view, target);
+    let sample = if hides.is_none() { frame.sample } else { SubFrame::ONE };
+    let view_frame = ViewFrame::new(view, (width, height), renderer, sample);
+    let format = scene_format(res, (view, sample), target);
     if (width, height, format) == (target.width(), target.height(), target.format()) {
         return view_stages(res, frame, gpu, &view_frame, (lighting, shadows), (target, Compose::Direct));
     }
@@ -105,9 +116,10 @@ fn draw_into(
         output_format: target.format().color,
         rect: [x, y, width, height],
     };
-    let compose = match view.post.is_empty() {
-        true => Compose::Copy { from: &own, to: target, origin: [x, y] },
-        false => Compose::Post { chain: &view.post, images: &images },
+    let compose = match (sample.accumulates(), view.post.is_empty()) {
+        (true, _) => Compose::Accumulate { chain: &view.post, images: &images },
+        (false, true) => Compose::Copy { from: &own, to: target, origin: [x, y] },
+        (false, false) => Compose::Post { chain: &view.post, images: &images },
     };
     let drawn = view_stages(res, frame, gpu, &view_frame, (lighting, shadows), (&own, compose));
     res.targets.put_back(own, frame.index);
@@ -115,9 +127,10 @@ fn draw_into(
 }
 
 /// The target a view's scene is drawn into: HDR (with the output's samples
-/// where the adapter can) for a post chain, else the output's own format.
-fn scene_format(res: &Resources, view: &View, target: &OffscreenTarget) -> TargetFormat {
-    match view.post.is_empty() {
+/// where the adapter can) for a post chain or a sub-frame of a still of
+/// several, else the output's own format.
+fn scene_format(res: &Resources, (view, sample): (&View, SubFrame), target: &OffscreenTarget) -> TargetFormat {
+    match view.post.is_empty() && !sample.accumulates() {
         true => target.format(),
         false => TargetFormat { color: HDR_FORMAT, samples: if res.hdr_msaa { target.samples() } else { 1 } },
     }
@@ -240,18 +253,52 @@ fn compose_view(
             wgpu::TexelCopyTextureInfo { origin: wgpu::Origin3d { x, y, z: 0 }, ..to.color_texture().as_image_copy() },
             wgpu::Extent3d { width: from.width(), height: from.height(), depth_or_array_layers: 1 },
         ),
-        Compose::Post { chain, images } => {
-            let t = Instant::now();
-            frame.outline.enter(encoder, "post");
-            let (device, queue, timer) = (&res.device, &res.queue, res.gpu_timer.as_mut());
-            let (params, pool) = (&mut gpu.post_params, &mut res.targets);
-            let at = (frame.index, timer, &frame.outline);
-            stats.passes.post = res.post.encode((device, queue), (params, pool), encoder, chain, images, at)?;
-            stats.draws += stats.passes.post.draws;
-            stats.draw_calls += stats.passes.post.draw_calls;
+        Compose::Post { chain, images } => post(res, frame, gpu, (chain, images), stats)?,
+        Compose::Accumulate { chain, images } => {
+            let sample = frame.sample;
+            let size = images.size;
+            // Out of the view's state while the chain, which takes that state, reads its mean.
+            let mut accumulation = Accumulation::for_sample(&res.device, gpu.accumulation.take(), sample, size)?;
+            let pipelines = match &res.accumulate {
+                Some(pipelines) => pipelines,
+                None => res.accumulate.insert(AccumulatePipelines::new(&res.device)?),
+            };
+            frame.outline.enter(encoder, "accumulate");
+            let last = accumulation.fold((&res.device, &res.queue, pipelines), encoder, images.scene, sample);
             frame.outline.leave(encoder);
-            stats.passes.post.cpu_ms = ms_since(t);
+            let drawn = match last {
+                true => {
+                    let chain = if chain.is_empty() { &CLAMP[..] } else { chain };
+                    let images = ChainImages { scene: accumulation.mean(), ..*images };
+                    post(res, frame, gpu, (chain, &images), stats)
+                }
+                false => Ok(()),
+            };
+            gpu.accumulation = Some(accumulation);
+            drawn?;
         }
     }
+    Ok(())
+}
+
+/// A view's post chain from `images.scene` into its rectangle of the output.
+fn post(
+    res: &mut Resources,
+    frame: &mut Frame,
+    gpu: &mut ViewGpu,
+    (chain, images): (&[PostEffect], &ChainImages),
+    stats: &mut FrameStats,
+) -> Result<(), RenderError> {
+    let t = Instant::now();
+    let encoder = &mut frame.encoder;
+    frame.outline.enter(encoder, "post");
+    let (device, queue, timer) = (&res.device, &res.queue, res.gpu_timer.as_mut());
+    let (params, pool) = (&mut gpu.post_params, &mut res.targets);
+    let at = (frame.index, timer, &frame.outline);
+    stats.passes.post = res.post.encode((device, queue), (params, pool), encoder, chain, images, at)?;
+    stats.draws += stats.passes.post.draws;
+    stats.draw_calls += stats.passes.post.draw_calls;
+    frame.outline.leave(encoder);
+    stats.passes.post.cpu_ms = ms_since(t);
     Ok(())
 }

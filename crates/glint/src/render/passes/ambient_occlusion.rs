@@ -61,11 +61,11 @@ pub(crate) struct AmbientOcclusionGpu {
 
 impl AmbientOcclusionGpu {
     pub(crate) fn new(frame: &ViewFrame, settings: AmbientOcclusion) -> Self {
-        let p = frame.camera.projection(frame.aspect);
+        let p = frame.projection;
         let orthographic = matches!(frame.camera.projection, Projection::Orthographic { .. });
         Self {
             projection: [p.x_axis.x, p.y_axis.y, f32::from(u8::from(orthographic)), settings.radius],
-            params: [settings.intensity, MAX_RADIUS_PIXELS, 0.0, 0.0],
+            params: [settings.intensity, MAX_RADIUS_PIXELS, frame.sample.index as f32, 0.0],
         }
     }
 }

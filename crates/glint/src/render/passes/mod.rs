@@ -1,8 +1,9 @@
 //! Core layer: the GPU passes a view's stages record, each with the pipelines
 //! and images it owns: shadow maps (and the math of shadow views), ambient
 //! occlusion, particle layers, the environment's prefiltered maps, and the
-//! post chain.
+//! post chain, and accumulated stills' running means.
 
+pub(crate) mod accumulate;
 pub(crate) mod ambient_occlusion;
 pub(crate) mod environment;
 pub(crate) mod particles;

@@ -142,23 +142,22 @@ pub(crate) struct CameraGpu {
 }
 const _: () = assert!(std::mem::size_of::<CameraGpu>() == 240);
 
-impl Camera {
-    /// The shader's view of this camera for a target of `aspect` = width / height.
-    pub(crate) fn to_gpu(self, aspect: f32) -> CameraGpu {
-        let view = self.view();
-        let view_proj = self.projection(aspect) * view;
-        CameraGpu {
+impl CameraGpu {
+    /// The shader's view of `camera` through `projection` (its own at the
+    /// target's aspect ratio, or that moved by a sub-frame's jitter).
+    pub(crate) fn new(camera: Camera, projection: glam::Mat4) -> Self {
+        let view = camera.view();
+        let view_proj = projection * view;
+        Self {
             view_proj: view_proj.to_cols_array(),
             view: view.to_cols_array(),
             inv_view_proj: view_proj.inverse().to_cols_array(),
-            position: self.eye.extend(1.0).to_array(),
+            position: camera.eye.extend(1.0).to_array(),
             motion: [0.0; 4],
             far_eye: [0.0; 4],
         }
     }
-}
 
-impl CameraGpu {
     /// A shadow view's record: its matrices, the light's position, and in `w` the
     /// distance scale of cube faces (0 for depth views).
     pub(crate) fn for_shadow(view: &crate::render::passes::shadow_views::ShadowView) -> Self {

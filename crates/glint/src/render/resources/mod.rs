@@ -61,6 +61,8 @@ pub(crate) struct Resources {
     /// Transient targets: views' own and the post chain's images.
     pub targets: TargetPool,
     pub post: PostChain,
+    /// Accumulated stills' passes, made with the first still.
+    pub accumulate: Option<crate::render::passes::accumulate::AccumulatePipelines>,
     /// The GPU culling passes, where views can cull on the GPU ([`Gpu::culls_on_gpu`]).
     pub cull_pipelines: Option<CullPipelines>,
     /// The light binning pass, where views can cull on the GPU.
@@ -115,6 +117,7 @@ impl Resources {
             store: InstanceStore::default(),
             targets: TargetPool::default(),
             post: PostChain::new(&device),
+            accumulate: None,
             cull_pipelines: gpu.culls_on_gpu().then(|| CullPipelines::new(&device, gpu.occlusion_culls())),
             light_binning: gpu.culls_on_gpu().then(|| LightBinning::new(&device)),
             particles,
