@@ -37,7 +37,17 @@ pub(super) fn light(class: &str, f: &mut Fields, warnings: &mut Vec<Diagnostic>)
         depth_bias: f.number("shadow_bias", 0.0..=100.0)?.unwrap_or(defaults.depth_bias),
         normal_bias: f.number("shadow_normal_bias", 0.0..=100.0)?.unwrap_or(defaults.normal_bias),
         distance: if class == "light_directional" { f.number("shadow_distance", 1e-3..=1e9)? } else { None },
+        light_size: match class {
+            "light_directional" => f.number("light_size", 0.0..=20.0)?,
+            _ => f.number("light_size", 0.0..=1e4)?,
+        }
+        .unwrap_or(defaults.light_size),
     };
+    if class == "light_point" && settings.light_size > 0.0 {
+        let why = "\"light_size\" is ignored: a point light's shadows keep the 3x3 filter (soft shadows are for directional and spot lights)";
+        let line = f.get("light_size").map_or(f.block.line, |pair| pair.line);
+        warnings.push(Diagnostic::at(f.path, line, why));
+    }
     if !on && settings != defaults {
         warnings.push(Diagnostic::at(
             f.path,
@@ -256,11 +266,38 @@ mod tests {
         )
         .unwrap();
         assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
-        let sun = ShadowSettings { map_size: 2048, depth_bias: 2.0, normal_bias: 0.5, distance: Some(40.0) };
+        let sun =
+            ShadowSettings { map_size: 2048, depth_bias: 2.0, normal_bias: 0.5, distance: Some(40.0), light_size: 0.0 };
         assert_eq!(scene.lights[0].shadows, Some(sun));
         assert_eq!(scene.lights[1].shadows, Some(ShadowSettings::default()));
         assert!(matches!(scene.lights[2].kind, LightKind::Spot { .. }));
         assert_eq!(scene.lights[2].shadows, None);
+    }
+
+    #[test]
+    fn light_sizes_soften_directional_and_spot_shadows_only() {
+        let scene = parse(
+            "{ \"classname\" \"light_directional\"\n\"direction\" \"0 -1 0\"\n\"shadows\" \"1\"\n\"light_size\" \"0.53\" }\n\
+             { \"classname\" \"light_spot\"\n\"origin\" \"0 2 0\"\n\"direction\" \"0 -1 0\"\n\"shadows\" \"1\"\n\"light_size\" \"0.2\" }\n\
+             { \"classname\" \"light_point\"\n\"origin\" \"0 2 0\"\n\"shadows\" \"1\"\n\"light_size\" \"0.2\" }\n",
+        )
+        .unwrap();
+        let sizes: Vec<f32> = scene.lights.iter().map(|l| l.shadows.expect("shadows").light_size).collect();
+        assert_eq!(sizes, [0.53, 0.2, 0.2]);
+        let soft: Vec<bool> = scene.lights.iter().map(|l| l.shadows.expect("shadows").soft(&l.kind)).collect();
+        assert_eq!(soft, [true, true, false], "a point light keeps the 3x3 filter");
+        assert_eq!(scene.warnings.len(), 1, "{:?}", scene.warnings);
+        assert!(
+            scene.warnings[0].to_string().contains("t.scn:13: \"light_size\" is ignored: a point light"),
+            "{:?}",
+            scene.warnings
+        );
+        let sun = |size: &str| {
+            format!("{{ \"classname\" \"light_directional\"\n\"direction\" \"0 -1 0\"\n\"light_size\" \"{size}\" }}\n")
+        };
+        assert_eq!(parse(&sun("25")).unwrap_err(), "t.scn:3: \"light_size\" is 25, expected a value in 0..=20");
+        assert_eq!(parse(&sun("-1")).unwrap_err(), "t.scn:3: \"light_size\" is -1, expected a value in 0..=20");
+        assert!(parse(&sun("1")).unwrap().warnings.iter().any(|w| w.to_string().contains("shadow keys are ignored")));
     }
 
     #[test]

@@ -14,6 +14,8 @@ pub(crate) struct FrameVariant {
     pub shadows: bool,
     /// The frame samples point lights' shadow cubes (`SHADOW_CUBES`).
     pub shadow_cubes: bool,
+    /// A light with 2D shadow maps has a size: soft shadows (`SOFT_SHADOWS`).
+    pub soft_shadows: bool,
     /// The lights by kind.
     pub lights: LightCounts,
     /// The view has screen-space ambient occlusion (`AMBIENT_OCCLUSION`).
@@ -33,6 +35,7 @@ impl FrameVariant {
         Self {
             shadows: lights.iter().any(|l| l.shadows.is_some()),
             shadow_cubes: lights.iter().any(|l| l.shadows.is_some() && point(l)),
+            soft_shadows: lights.iter().any(soft),
             lights: LightCounts::of(lights),
             ambient_occlusion,
             lod_fade: false,
@@ -58,12 +61,18 @@ impl FrameVariant {
         Self {
             shadows: views > 0,
             shadow_cubes: lights.iter().zip(first_view).any(|(l, v)| v.is_some() && point(l)),
+            soft_shadows: lights.iter().zip(first_view).any(|(l, v)| v.is_some() && soft(l)),
             lights: LightCounts::of(lights),
             ambient_occlusion,
             lod_fade: false,
             clustered: false,
         }
     }
+}
+
+/// Whether `light` casts soft shadows ([`ShadowSettings::soft`](crate::scene::ShadowSettings::soft)).
+fn soft(light: &Light) -> bool {
+    light.shadows.is_some_and(|s| s.soft(&light.kind))
 }
 
 #[cfg(test)]
@@ -87,6 +96,13 @@ mod tests {
         let after = FrameVariant::after(&[Some(0), None], 4, &both, false);
         assert!(after.shadows && !after.shadow_cubes);
         assert!(FrameVariant::after(&[Some(0), Some(0)], 10, &both, false).shadow_cubes);
+        // A sun with a size: soft shadows; a point light's size changes nothing.
+        let soft = ShadowSettings { light_size: 0.5, ..ShadowSettings::default() };
+        assert!(!after.soft_shadows && !expected.soft_shadows);
+        assert!(FrameVariant::expected(&[sun.with_shadows(soft), lamp], false).soft_shadows);
+        assert!(FrameVariant::after(&[Some(0), Some(0)], 10, &[sun.with_shadows(soft), lamp], false).soft_shadows);
+        assert!(!FrameVariant::expected(&[sun, lamp.with_shadows(soft)], false).soft_shadows);
+        assert!(!FrameVariant::after(&[None, Some(0)], 6, &[sun.with_shadows(soft), lamp], false).soft_shadows);
         // No maps: no lookups.
         assert_eq!(
             FrameVariant::after(&[], 0, &both, false),

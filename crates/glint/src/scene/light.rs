@@ -65,11 +65,25 @@ pub struct ShadowSettings {
     /// Directional lights: how far from the camera the cascades reach; `None`
     /// uses the camera's far plane.
     pub distance: Option<f32>,
+    /// The light's size, for soft shadows (percentage-closer soft shadows:
+    /// penumbrae that widen with the distance from caster to receiver): a
+    /// directional light's angular diameter in degrees (the sun's is about
+    /// 0.53), a spot light's radius in world units. 0, the default, keeps the
+    /// 3×3 filter; point lights keep it whatever their size.
+    pub light_size: f32,
 }
 
 impl Default for ShadowSettings {
     fn default() -> Self {
-        Self { map_size: 1024, depth_bias: 1.0, normal_bias: 1.5, distance: None }
+        Self { map_size: 1024, depth_bias: 1.0, normal_bias: 1.5, distance: None, light_size: 0.0 }
+    }
+}
+
+impl ShadowSettings {
+    /// Whether `kind`'s shadows are soft with these settings: a directional
+    /// or spot light with a size.
+    pub fn soft(&self, kind: &LightKind) -> bool {
+        self.light_size > 0.0 && !matches!(kind, LightKind::Point { .. })
     }
 }
 

@@ -35,7 +35,8 @@ struct SceneBlock {
     environment: vec4<f32>,
     // x: the specular level the sky is drawn from (its blur); y: 1 draws the
     // heat map of lights per light cluster (forward.wgsl cluster_heat), else 0;
-    // z, w: reserved.
+    // z, w: the soft-shadow filter grid's offset for this sub-frame of an
+    // accumulated still, in taps (0 for a frame of its own).
     environment_sky: vec4<f32>,
     // Light clusters (render/clusters.rs): x, y: tiles across and down; a
     // fragment's slice is floor(ln(view depth) · z + w), clamped.
@@ -63,7 +64,9 @@ struct ShadowBlock {
     // World to clip of each 2D shadow view (cascades and spot lights).
     view_proj: array<mat4x4<f32>, 16>,
     // x: texel size (world units; per unit of distance for spot views);
-    // y: the camera distance where a cascade ends (0: not a cascade).
+    // y: the camera distance where a cascade ends (0: not a cascade); z: soft
+    // shadows' penumbra width in uv per unit of NDC depth from blocker to
+    // receiver (0: the 3×3 filter; shadow_lookup.wgsl soft_shadow).
     info: array<vec4<f32>, 16>,
     // x: 1 / 2D map size; y: 1 / cube map size; z: cascade blend fraction.
     params: vec4<f32>,

@@ -50,8 +50,10 @@ bitflags::bitflags! {
     /// | 23 | `AMBIENT_OCCLUSION` | darken ambient and environment light by the view's screen-space ambient occlusion (set by the frame, for a view with [`View::ambient_occlusion`](crate::View::ambient_occlusion); not for blended or unlit materials) |
     /// | 24 | `FAR_FIELD` | draw fewer, wider instances far from the camera ([`Material::far_field`]) |
     /// | 25 | `LOD_FADE` | drop the pixels of a fading instance's other level of detail (set by the frame, for a view with levels of detail on; not for blended materials or compact instances: `render/lod.rs`) |
+    /// | 26 | `CLUSTERED` | point and spot lights from the view's light clusters (set by the frame: `render/clusters.rs`) |
+    /// | 27 | `SOFT_SHADOWS` | percentage-closer soft shadows for 2D shadow views whose light has a size (set by the frame, only when one has: [`ShadowSettings::light_size`](crate::scene::ShadowSettings::light_size)) |
     ///
-    /// Bits 26–31 are free for more (shadow receiving comes with shadow maps).
+    /// Bits 28–31 are free for more (shadow receiving comes with shadow maps).
     /// The motion bits stay in shadow passes' variants, so shadows move too.
     ///
     /// One def follows from the bits rather than being one: `TEXCOORDS`, set with
@@ -114,6 +116,8 @@ bitflags::bitflags! {
         /// `CLUSTERED`: point and spot lights from the view's light clusters
         /// (`render/clusters.rs`) instead of a loop over every one.
         const CLUSTERED = 1 << 26;
+        /// `SOFT_SHADOWS`.
+        const SOFT_SHADOWS = 1 << 27;
     }
 }
 

@@ -119,7 +119,8 @@ pub(crate) fn upload_view_blocks(
     bytes: &mut UploadStats,
 ) -> Result<(), RenderError> {
     let scene = SceneGpu::new(&lighting.environment, lighting.lights, shadowed)
-        .with_specular_levels(res.environment.last_level());
+        .with_specular_levels(res.environment.last_level())
+        .with_sub_frame(frame.sample);
     let scene = upload_clusters(res, gpu, (scene, lighting.lights, shadowed), bytes)?;
     bytes.scene += gpu.scene_block.update(&res.queue, scene);
     let camera =

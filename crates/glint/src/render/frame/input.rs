@@ -77,6 +77,18 @@ impl SubFrame {
     /// Halton sequence in bases 2 and 3 at `index + 1`, so that any number of
     /// sub-frames covers the pixel evenly; none for a frame of its own.
     pub fn jitter(self) -> glam::Vec2 {
+        self.offset((2, 3))
+    }
+
+    /// Its offset of the soft-shadow filter's grid, in taps, each within
+    /// ±0.5: the Halton sequence in bases 5 and 7 (apart from the camera's);
+    /// none for a frame of its own.
+    pub fn shadow_offset(self) -> glam::Vec2 {
+        self.offset((5, 7))
+    }
+
+    /// The Halton sequence in `bases` at `index + 1`, less 0.5; 0 for a frame of its own.
+    fn offset(self, (a, b): (u32, u32)) -> glam::Vec2 {
         if !self.accumulates() {
             return glam::Vec2::ZERO;
         }
@@ -89,7 +101,7 @@ impl SubFrame {
             }
             r
         };
-        glam::Vec2::new(halton(self.index + 1, 2), halton(self.index + 1, 3)) - 0.5
+        glam::Vec2::new(halton(self.index + 1, a), halton(self.index + 1, b)) - 0.5
     }
 }
 

@@ -22,7 +22,8 @@ pub(crate) struct ShadowGpu {
     /// World to clip of each 2D view.
     view_proj: [[f32; 16]; MAX_2D_VIEWS],
     /// Per 2D view: x texel size (world units; per unit of distance for
-    /// perspective views), y the cascade's end distance (0: not a cascade).
+    /// perspective views), y the cascade's end distance (0: not a cascade),
+    /// z the soft shadows' penumbra scale (0: the 3×3 filter).
     info: [[f32; 4]; MAX_2D_VIEWS],
     /// x: 1 / 2D map size, y: 1 / cube map size, z: cascade blend fraction.
     params: [f32; 4],
@@ -40,7 +41,7 @@ impl ShadowGpu {
         for v in views {
             if let ViewTarget::Layer(layer) = v.target {
                 block.view_proj[layer as usize] = v.view_proj().to_cols_array();
-                block.info[layer as usize] = [v.texel, v.split, 0.0, 0.0];
+                block.info[layer as usize] = [v.texel, v.split, v.penumbra, 0.0];
             }
         }
         block

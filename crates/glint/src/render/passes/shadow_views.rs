@@ -43,6 +43,28 @@ pub(crate) struct ShadowView {
     pub texel: f32,
     /// Cascades: the camera view distance where this cascade ends; 0 otherwise.
     pub split: f32,
+    /// Soft shadows: the penumbra's width in uv per unit of NDC depth between
+    /// blocker and receiver ([`penumbra_scale`]); 0 keeps the 3×3 filter.
+    pub penumbra: f32,
+}
+
+/// The width of a penumbra, in the shadow map's uv, per unit of NDC depth
+/// between blocker and receiver, for a light of `settings.light_size` seen
+/// through `proj`; 0 for a light without a size. By similar triangles: a
+/// directional light of angular diameter θ casts a penumbra (d_r − d_b)·2·tan(θ/2)
+/// wide, linear in an orthographic view's depth (range 1/|P₂₂|, uv per unit
+/// P₀₀/2); a spot light of radius R casts one (d_r − d_b)·2R/d_b wide at the
+/// receiver, which in its view's uv is R·P₀₀·(1/d_b − 1/d_r), and 1/d is
+/// linear in a perspective view's NDC depth with slope −1/P₃₂.
+pub(crate) fn penumbra_scale(proj: Mat4, settings: &ShadowSettings, directional: bool) -> f32 {
+    let size = settings.light_size;
+    if !(size > 0.0 && size.is_finite()) {
+        return 0.0;
+    }
+    match directional {
+        true => (0.5 * size.to_radians()).tan() * proj.x_axis.x / proj.z_axis.z.abs().max(1e-12),
+        false => size * proj.x_axis.x / (-proj.w_axis.z).max(1e-12),
+    }
 }
 
 impl ShadowView {
@@ -141,6 +163,7 @@ pub(crate) fn cascades(
             target: ViewTarget::Layer(first_layer + i as u32),
             texel,
             split: splits[i],
+            penumbra: penumbra_scale(proj, settings, true),
         }
     })
 }
@@ -167,14 +190,16 @@ pub(crate) fn spot(light: &Light, settings: &ShadowSettings, layer: u32) -> Opti
     let LightKind::Spot { position, direction, range, outer_angle, .. } = light.kind else { return None };
     let half = outer_angle.clamp(1e-3, std::f32::consts::FRAC_PI_2 * 0.99);
     let range = range.max(1e-3);
+    let proj = glam::camera::rh::proj::directx::perspective(2.0 * half, 1.0, range * NEAR_FRACTION, range);
     Some(ShadowView {
         view: light_rotation(direction) * Mat4::from_translation(-position),
-        proj: glam::camera::rh::proj::directx::perspective(2.0 * half, 1.0, range * NEAR_FRACTION, range),
+        proj,
         eye: position,
         distance_scale: 0.0,
         target: ViewTarget::Layer(layer),
         texel: 2.0 * half.tan() / settings.map_size as f32,
         split: 0.0,
+        penumbra: penumbra_scale(proj, settings, false),
     })
 }
 
@@ -211,6 +236,7 @@ pub(crate) fn cube(light: &Light, settings: &ShadowSettings, cube: u32) -> Optio
             target: ViewTarget::CubeFace { cube, face: face as u32 },
             texel: 2.0 / settings.map_size as f32,
             split: 0.0,
+            penumbra: 0.0,
         }
     }))
 }
@@ -325,6 +351,25 @@ mod tests {
             );
             assert!((0.0..=1.0).contains(&p.z), "inside the depth range");
         }
+    }
+
+    #[test]
+    fn the_penumbra_scale_is_the_similar_triangles_ratio_in_uv_per_ndc_depth() {
+        let soft = |light_size| ShadowSettings { light_size, ..Default::default() };
+        // An orthographic view 4 wide and 10 deep: a 2° light's penumbra grows
+        // 2·tan(1°) per unit of distance, 10 units per unit of NDC depth, over 4 units of uv.
+        let ortho = glam::camera::rh::proj::directx::orthographic(-2.0, 2.0, -2.0, 2.0, 1.0, 11.0);
+        let expected = 10.0 * 2.0 * 1f32.to_radians().tan() / 4.0;
+        assert!((penumbra_scale(ortho, &soft(2.0), true) / expected - 1.0).abs() < 1e-5);
+        // A 90° perspective view from 0.1 to 10: a blocker at 2 and a receiver at 4
+        // under a light of radius 0.2 give a penumbra 2·0.2·(4−2)/2 = 0.4 wide at
+        // the receiver, where the view is 8 wide.
+        let proj = glam::camera::rh::proj::directx::perspective(std::f32::consts::FRAC_PI_2, 1.0, 0.1, 10.0);
+        let ndc = |d: f32| proj.project_point3(Vec3::new(0.0, 0.0, -d)).z;
+        let width = penumbra_scale(proj, &soft(0.2), false) * (ndc(4.0) - ndc(2.0));
+        assert!((width / (0.4 / 8.0) - 1.0).abs() < 1e-3, "{width}");
+        assert_eq!(penumbra_scale(ortho, &soft(0.0), true), 0.0, "no size: the 3x3 filter");
+        assert_eq!(penumbra_scale(proj, &soft(f32::NAN), false), 0.0);
     }
 
     #[test]

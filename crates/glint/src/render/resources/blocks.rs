@@ -62,7 +62,7 @@ pub(crate) struct SceneGpu {
     fog: [f32; 4],                  // 16: rgb colour, w density
     counts: [u32; 4],               // 16: lights held (≤ 64), directional lights, a cluster tile's pixels, depth slices
     environment: [f32; 4],          // 16: intensity (0: none), cos and sin of its turn, last specular level
-    environment_sky: [f32; 4], // 16: the specular level the sky is drawn from, 1 for the clusters' heat map, 2 reserved
+    environment_sky: [f32; 4], // 16: the specular level the sky is drawn from, 1 for the clusters' heat map, the soft-shadow filter's offset
     clusters: [f32; 4],        // 16: tiles across and down, slice = ⌊ln(depth)·z + w⌋
     lights: [LightGpu; MAX_LIGHTS], // 64 × 64
 }
@@ -114,6 +114,13 @@ impl SceneGpu {
     pub(crate) fn with_specular_levels(mut self, last: f32) -> Self {
         self.environment[3] = last;
         self.environment_sky[0] *= last;
+        self
+    }
+
+    /// The block for sub-frame `sample` of an accumulated still: its
+    /// soft-shadow filter offset ([`SubFrame::shadow_offset`](crate::render::SubFrame::shadow_offset)).
+    pub(crate) fn with_sub_frame(mut self, sample: crate::render::SubFrame) -> Self {
+        [self.environment_sky[2], self.environment_sky[3]] = sample.shadow_offset().to_array();
         self
     }
 

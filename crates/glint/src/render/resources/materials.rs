@@ -62,6 +62,7 @@ impl Registry {
         let mut features = ShaderFeatures::for_material(&material, environment);
         features.set(ShaderFeatures::SHADOWS, frame.shadows);
         features.set(ShaderFeatures::SHADOW_CUBES, frame.shadow_cubes);
+        features.set(ShaderFeatures::SOFT_SHADOWS, frame.soft_shadows);
         let lit = !features.intersects(ShaderFeatures::UNLIT | ShaderFeatures::ALPHA_BLEND);
         features.set(ShaderFeatures::AMBIENT_OCCLUSION, frame.ambient_occlusion && lit);
         // Blended surfaces are lit too: every lit variant of a clustered frame
