@@ -32,6 +32,8 @@ pub struct ExplainArgs<'a> {
     pub cull: Option<CullArg>,
     pub size: (u32, u32),
     pub time: f32,
+    /// Sub-frames of each frame's accumulated still (1: a frame of its own).
+    pub spp: u32,
     /// Levels of detail (`--lod`, `--lod-error`).
     pub lod: crate::lod::LodArgs,
     pub options: LoadOptions,
@@ -71,6 +73,7 @@ pub fn explain(args: ExplainArgs) -> Result<(), Error> {
         json["adapter"] = adapter.into();
         json["size"] = format!("{width}x{height}").into();
         json["view"] = args.view.into();
+        json["spp"] = args.spp.into();
         if let Some(naive) = modes.get(1) {
             json["naive"] = serde_json::to_value(naive).expect("explanations serialise");
             json["ratios"] = serde_json::to_value(Ratios::of(&modes[0], naive)).expect("ratios serialise");
@@ -78,6 +81,13 @@ pub fn explain(args: ExplainArgs) -> Result<(), Error> {
         format!("{json}\n")
     } else {
         let mut text = format!("{}, view {}, {width}x{height} on {adapter}\n", args.scene.display(), args.view);
+        if args.spp > 1 {
+            let n = args.spp;
+            let _ = writeln!(
+                text,
+                "an accumulated still of {n} sub-frames: below is its last; each draws the frame with its camera jittered, so the still costs about {n} frames, and the last folds it into the mean and runs the post chain on the mean"
+            );
+        }
         for mode in &modes {
             text.push_str(&describe(mode));
         }
@@ -142,7 +152,7 @@ fn explain_mode(
     let mut totals = Vec::new();
     let mut last = Vec::new();
     for _ in 0..WARMUP_FRAMES + COSTED_FRAMES {
-        last = world.draw(&mut renderer, &views, &mut target)?;
+        last = world.draw_still(&mut renderer, (&views, &mut target), args.spp)?;
         gpu.check()?;
         // Each frame starts with the GPU idle, so no submission waits on an
         // earlier frame's work (a CPU rasterizer's queue is short).

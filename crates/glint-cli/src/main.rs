@@ -261,6 +261,11 @@ enum Command {
         /// Pose the scene at this time, in seconds.
         #[arg(long, default_value_t = 0.0, value_parser = parse_time)]
         time: f32,
+        /// Draw each frame as an accumulated still of this many sub-frames,
+        /// as `glint render --spp` does, and explain its last sub-frame (its
+        /// fold into the mean, and the post chain run on it) and its whole cost.
+        #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=glint::render::MAX_SUB_FRAMES as i64))]
+        spp: u32,
         #[command(flatten)]
         lod: lod::LodArgs,
         #[command(flatten)]
@@ -865,7 +870,7 @@ fn main() -> ExitCode {
             options: LoadOptions { cloth_solve: solve.map(Into::into), ..sim.apply(options) },
         }),
         Command::Check { scene } => check(scene, options),
-        Command::Explain { scene, naive, json, view, camera, cull, size, time, lod, sim } => {
+        Command::Explain { scene, naive, json, view, camera, cull, size, time, spp, lod, sim } => {
             explain::explain(explain::ExplainArgs {
                 scene,
                 naive: *naive,
@@ -875,6 +880,7 @@ fn main() -> ExitCode {
                 cull: *cull,
                 size: *size,
                 time: *time,
+                spp: *spp,
                 lod: *lod,
                 options: sim.apply(options),
             })

@@ -133,3 +133,30 @@ fn explain_shows_the_light_clusters_and_clusters_off_refuses_more_than_64_lights
     let text = String::from_utf8(few.stdout).expect("UTF-8");
     assert!(text.contains("light clusters: none (every fragment loops over every light)"), "{text}");
 }
+
+#[test]
+fn explain_shows_an_accumulated_still_and_soft_shadows() {
+    let args = ["explain", "tests/scenes/soft_shadows.scn", "--size", "64x64", "--spp", "4", "--json"];
+    let Some(out) = glint_vulkan(&args) else { return };
+    let json: serde_json::Value = serde_json::from_slice(&out.stdout).expect("one JSON object");
+    assert_eq!(json["spp"], 4);
+    let passes = json["passes"].as_array().expect("passes");
+    let labels: Vec<&str> = passes.iter().filter_map(|p| p["name"].as_str()).collect();
+    let at = |label: &str| labels.iter().position(|l| *l == label).unwrap_or_else(|| panic!("{label} in {labels:?}"));
+    // The forward pass, its fold into the mean, the mean copied out, and the clamp the view's empty chain becomes.
+    assert!(at("forward pass") < at("accumulate: fold"), "{labels:?}");
+    assert!(at("accumulate: fold") < at("accumulate: copy"), "{labels:?}");
+    assert!(at("accumulate: copy") < at("post: tonemap (fs_tonemap)"), "{labels:?}");
+    let soft = passes
+        .iter()
+        .flat_map(|p| p["draw_calls"].as_array().expect("draw_calls"))
+        .flat_map(|c| c["batches"].as_array().expect("batches"))
+        .filter(|b| b["features"].as_array().expect("features").iter().any(|f| f == "SOFT_SHADOWS"))
+        .count();
+    assert!(soft >= 3, "the forward batches take the soft-shadow variant: {soft}");
+    let one = ["explain", "tests/scenes/soft_shadows.scn", "--size", "64x64"];
+    let text = String::from_utf8(glint_vulkan(&one).expect("adapter").stdout).expect("UTF-8");
+    assert!(!text.contains("accumulate") && !text.contains("post:"), "a frame of its own accumulates nothing:\n{text}");
+    let text = String::from_utf8(glint_vulkan(&args[..6]).expect("adapter").stdout).expect("UTF-8");
+    assert!(text.contains("an accumulated still of 4 sub-frames"), "{text}");
+}

@@ -244,3 +244,47 @@ fn the_controls_change_what_they_claim() {
     assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
     assert!(stderr(&out).contains("tiles.scn: no control 'warp'"), "{}", stderr(&out));
 }
+
+/// The sun size and samples-per-pixel controls (the overlay's and the web
+/// page's): hard shadows at size 0, soft at the scene's, and a frame of 16
+/// samples per pixel is what `glint render --spp 16` draws.
+#[test]
+fn the_viewer_softens_shadows_and_accumulates_stills_by_its_controls() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let shot = |name: &str| dir.path().join(format!("{name}.png"));
+    let at = |frame: u32, action: String| ["--at".to_owned(), format!("{frame}:{action}")];
+    let args = ["--size", "96x96", "--msaa", "1", "--frames", "7", "--at", "1:overlay=off"]
+        .map(str::to_owned)
+        .into_iter()
+        .chain(at(1, "set=sun_size=0".into()))
+        .chain(at(2, format!("screenshot={}", shot("hard").display())))
+        .chain(at(3, "set=sun_size=4".into()))
+        .chain(at(4, format!("screenshot={}", shot("soft").display())))
+        .chain(at(5, "set=sun_size=6".into()))
+        .chain(at(5, "set=samples=2".into()))
+        .chain(at(6, format!("screenshot={}", shot("still").display())));
+    let scene = repo("tests/scenes/soft_shadows.scn");
+    let Some(out) = view_under_xvfb(&scene, &args.collect::<Vec<_>>()) else { return };
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let [hard, soft, still] = ["hard", "soft", "still"].map(|n| image::open(shot(n)).expect("png").into_luma8());
+    // Steep steps between neighbouring pixels: hard shadows' edges (and the
+    // silhouettes, the same in every picture) make them; penumbrae and
+    // accumulated sub-frames spread them out.
+    let steep = |i: &image::GrayImage| {
+        let (w, h) = i.dimensions();
+        let step = |a: u32, b: u32, c: u32, d: u32| i.get_pixel(a, b).0[0].abs_diff(i.get_pixel(c, d).0[0]) > 100;
+        let across = (0..h).flat_map(|y| (1..w).map(move |x| (x, y))).filter(|&(x, y)| step(x - 1, y, x, y));
+        let down = (1..h).flat_map(|y| (0..w).map(move |x| (x, y))).filter(|&(x, y)| step(x, y - 1, x, y));
+        across.count() + down.count()
+    };
+    let (h, s, a) = (steep(&hard), steep(&soft), steep(&still));
+    assert!(s * 5 < h * 4 && a < s, "steep steps: hard {h}, soft {s}, 16 samples {a}");
+    let rendered = shot("rendered");
+    let scene = scene.to_str().expect("path");
+    let args = ["render", scene, "-o", rendered.to_str().expect("path"), "--size", "96x96", "--msaa", "1"];
+    let o = glint(&[&args[..], &["--spp", "16"]].concat());
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let rendered = image::open(&rendered).expect("png").into_luma8();
+    let differing = still.pixels().zip(rendered.pixels()).filter(|(p, q)| p.0[0].abs_diff(q.0[0]) > 8).count();
+    assert!(differing < 20, "the viewer's 16-sample frame differs from glint render --spp 16 in {differing} pixels");
+}

@@ -64,10 +64,16 @@ fn render_states_fog_and_unlit_variants() {
 }
 
 #[test]
+fn soft_shadows_from_a_sun_and_a_spot_light_with_a_size() {
+    // Ground, cube, slab: three draws.
+    check("soft_shadows", 3);
+}
+
+#[test]
 fn every_scene_matches_its_reference_culled_on_the_cpu_too() {
     // The tests above cull on the GPU where the adapter can (the default).
     let Some(gpu) = common::gpu() else { return };
-    for name in ["shapes", "textures", "alpha", "lights", "instancing", "ortho", "states", "tiles"] {
+    for name in ["shapes", "textures", "alpha", "lights", "instancing", "ortho", "states", "tiles", "soft_shadows"] {
         let path = common::repo_root().join("tests/scenes").join(format!("{name}.scn"));
         let (image, stats) = common::render_file(gpu, &path, 256, glint::Culling::Cpu);
         assert_eq!(stats.culling, glint::Culling::Cpu);
@@ -78,7 +84,7 @@ fn every_scene_matches_its_reference_culled_on_the_cpu_too() {
 #[test]
 fn every_scene_matches_its_reference_on_gl_which_culls_on_the_cpu() {
     let Some(gl) = common::gl_gpu() else { return };
-    for name in ["shapes", "textures", "alpha", "lights", "instancing", "ortho", "states", "tiles"] {
+    for name in ["shapes", "textures", "alpha", "lights", "instancing", "ortho", "states", "tiles", "soft_shadows"] {
         let path = common::repo_root().join("tests/scenes").join(format!("{name}.scn"));
         let (image, stats) = common::render_file(gl, &path, 256, glint::Culling::Gpu);
         assert_eq!((stats.culling, stats.occlusion), (glint::Culling::Cpu, false), "{name}");

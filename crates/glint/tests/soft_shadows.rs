@@ -145,3 +145,26 @@ fn a_spot_lights_penumbra_widens_as_similar_triangles_say() {
         assert!(measured[1] > measured[0] * 1.4, "{name}: the penumbra widens with the distance: {measured:?}");
     }
 }
+
+#[test]
+fn the_sun_size_control_reaches_every_shadowed_sun_also_while_shadows_are_off() {
+    let Some(gpu) = common::gpu() else { return };
+    let text = "{ \"classname\" \"light_directional\"\n\"direction\" \"0 -1 0\"\n\"shadows\" \"1\" }\n\
+                { \"classname\" \"light_directional\"\n\"direction\" \"1 -1 0\" }\n\
+                { \"classname\" \"light_spot\"\n\"origin\" \"0 2 0\"\n\"direction\" \"0 -1 0\"\n\"shadows\" \"1\"\n\"light_size\" \"0.1\" }\n\
+                { \"classname\" \"entity\"\n\"mesh\" \"cube\" }\n";
+    let desc = glint::asset::parse_scene("t.scn".as_ref(), text).expect("scene");
+    let mut renderer = Renderer::new(gpu);
+    let mut world = glint::World::place(desc, &mut renderer).expect("placed");
+    let sizes = |world: &glint::World| -> Vec<Option<f32>> {
+        world.desc().lights.iter().map(|l| l.shadows.map(|s| s.light_size)).collect()
+    };
+    assert_eq!(world.sun_size(), Some(0.0));
+    world.set_sun_size(0.5);
+    assert_eq!(sizes(&world), [Some(0.5), None, Some(0.1)], "the shadowed sun only; the spot keeps its radius");
+    world.set_shadows(false);
+    world.set_sun_size(2.0);
+    assert_eq!(world.sun_size(), Some(2.0), "the size it will have");
+    world.set_shadows(true);
+    assert_eq!(sizes(&world), [Some(2.0), None, Some(0.1)], "kept while shadows were off");
+}

@@ -113,7 +113,18 @@ pub struct Controls {
     /// Each camera's ambient occlusion settings (the scene's, else the
     /// defaults), and whether it is on.
     occlusion: Vec<(AmbientOcclusion, bool)>,
+    /// Which of [`SAMPLES`] each frame averages.
+    samples: usize,
+    /// The shadow-casting directional lights' angular size in degrees (soft
+    /// shadows), where the scene has such a light.
+    sun_size: Option<f32>,
 }
+
+/// The samples per pixel a frame may average (an accumulated still each
+/// frame: for screenshots, as `glint render --spp`).
+const SAMPLES: [u32; 4] = [1, 4, 16, 64];
+/// The largest sun size the control offers, in degrees (as `.scn` files may give).
+const SUN_SIZE_MAX: f32 = 20.0;
 
 impl Controls {
     /// The controls of the scene `desc` describes, everything as it says, its
@@ -145,6 +156,11 @@ impl Controls {
             occlusion: (desc.camera_views.iter())
                 .map(|c| (c.ambient_occlusion.unwrap_or_default(), c.ambient_occlusion.is_some()))
                 .collect(),
+            samples: 0,
+            sun_size: (desc.lights.iter())
+                .filter(|l| matches!(l.kind, crate::scene::LightKind::Directional { .. }))
+                .find_map(|l| l.shadows)
+                .map(|s| s.light_size.min(SUN_SIZE_MAX)),
         }
     }
 
@@ -164,12 +180,18 @@ impl Controls {
         let error = self.lod_error.unwrap_or(crate::scene::DEFAULT_LOD_ERROR);
         let kind = ControlKind::Slider { value: error, min: 0.0, max: LOD_ERROR_MAX, step: 0.05 };
         add("lod_error".into(), "View", "level error (px)", kind);
+        let options = SAMPLES.iter().map(|n| n.to_string()).collect();
+        add("samples".into(), "View", "samples per pixel", ControlKind::Choice { index: self.samples, options });
         if self.has_positional {
             let kind = ControlKind::Toggle { on: self.cluster_heat };
             add("cluster_heat".into(), "View", "lights per cluster (heat map)", kind);
         }
         if self.has_shadows {
             add("shadows".into(), "Scene", "shadows", ControlKind::Toggle { on: self.shadows });
+        }
+        if let Some(value) = self.sun_size {
+            let kind = ControlKind::Slider { value, min: 0.0, max: SUN_SIZE_MAX, step: 0.1 };
+            add("sun_size".into(), "Scene", "sun size (°): soft shadows", kind);
         }
         if self.has_tonemap {
             let kind = ControlKind::Slider { value: self.exposure, min: -4.0, max: 4.0, step: 0.1 };
@@ -247,6 +269,8 @@ impl Controls {
             ("cluster_heat", _) => self.cluster_heat = on,
             ("lod_error", _) => self.lod_error = Some(clamp(value)),
             ("shadows", _) => self.shadows = on,
+            ("samples", ControlKind::Choice { options, .. }) => self.samples = index(options.len()),
+            ("sun_size", _) => self.sun_size = Some(clamp(value)),
             ("cloth_debug", _) => self.cloth_debug = Some(on),
             ("exposure", _) => self.exposure = clamp(value),
             ("density", _) => self.density = clamp(value),
@@ -354,7 +378,8 @@ impl Controls {
         self.time_of_day = Some(hours.rem_euclid(24.0));
     }
 
-    /// Put the density, levels of detail, the clusters' heat map, time of day and shadows into `world` and `renderer`
+    /// Put the density, levels of detail, the clusters' heat map, time of day,
+    /// shadows and the sun's size into `world` and `renderer`
     /// (each frame: each is cheap where it did not change).
     pub fn apply(&self, world: &mut World, renderer: &mut Renderer) {
         renderer.set_density(self.density);
@@ -366,6 +391,15 @@ impl Controls {
             }
         }
         world.set_shadows(self.shadows);
+        // Only once changed: the scene's suns keep their own sizes until then.
+        if let Some(degrees) = self.sun_size.filter(|&d| world.sun_size() != Some(d)) {
+            world.set_sun_size(degrees);
+        }
+    }
+
+    /// The samples per pixel each frame averages ([`World::draw_still_then`]).
+    pub fn samples_per_pixel(&self) -> u32 {
+        SAMPLES[self.samples]
     }
 
     /// `views` (the world's, for [`scene_camera`](Self::scene_camera)) as
@@ -490,6 +524,17 @@ mod tests {
         assert_eq!((occlusion.radius, occlusion.intensity), (4.0, 2.0), "the radius clamps to 4");
         c.set("post.0.1.operator", 3.0).unwrap();
         assert!(matches!(c.views(base)[0].post[0], PostEffect::Tonemap { operator: Tonemap::Agx, .. }));
+        assert_eq!(c.samples_per_pixel(), 1, "a frame of its own");
+        c.set("samples", 2.0).unwrap();
+        assert_eq!(c.samples_per_pixel(), 16);
+        c.set("samples", 9.0).unwrap();
+        assert_eq!(c.samples_per_pixel(), 64, "the last choice");
+        let sun = |c: &Controls| c.list().into_iter().find(|c| c.id == "sun_size").map(|c| c.kind);
+        assert_eq!(sun(&c), Some(ControlKind::Slider { value: 0.0, min: 0.0, max: SUN_SIZE_MAX, step: 0.1 }));
+        c.set("sun_size", 99.0).unwrap();
+        assert!(matches!(sun(&c), Some(ControlKind::Slider { value, .. }) if value == SUN_SIZE_MAX));
+        let unshadowed = controls("{ \"classname\" \"light_directional\"\n\"direction\" \"0 -1 0\" }\n");
+        assert_eq!(sun(&unshadowed), None, "no shadows, no sun size");
         c.set("speed", 9.0).unwrap();
         assert_eq!(c.advance(0.5), (2.0, false), "speed clamps to 4");
         c.set("paused", 1.0).unwrap();

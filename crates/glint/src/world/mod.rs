@@ -30,7 +30,7 @@ mod school;
 mod sim_state;
 
 use crate::asset::{MeshRef, SceneDesc};
-use crate::scene::{Entity, Lighting, SimPath, View};
+use crate::scene::{Entity, LightKind, Lighting, SimPath, View};
 use crate::sim::cloth::ClothView;
 use crate::sim::particles::ParticleKernels;
 use crate::{AfterViews, FrameInput, FrameOutput, FrameStats, OffscreenTarget, RenderError, Renderer, SubFrame};
@@ -287,6 +287,31 @@ impl World {
         }
     }
 
+    /// The first shadow-casting directional light's angular size in degrees
+    /// (while shadows are off, the size it will have when they are back).
+    pub fn sun_size(&self) -> Option<f32> {
+        let saved = |k: usize| self.shadows_off.as_ref().and_then(|s| s.get(k).copied().flatten());
+        (self.desc.lights.iter().enumerate())
+            .filter(|(_, l)| matches!(l.kind, LightKind::Directional { .. }))
+            .find_map(|(k, l)| l.shadows.or_else(|| saved(k)))
+            .map(|s| s.light_size)
+    }
+
+    /// Give every shadow-casting directional light an angular size of
+    /// `degrees` (soft shadows: [`ShadowSettings::light_size`](crate::scene::ShadowSettings::light_size);
+    /// 0: hard), kept while shadows are off, from the next frame on.
+    pub fn set_sun_size(&mut self, degrees: f32) {
+        for (k, light) in self.desc.lights.iter_mut().enumerate() {
+            if !matches!(light.kind, LightKind::Directional { .. }) {
+                continue;
+            }
+            let saved = self.shadows_off.as_mut().and_then(|s| s.get_mut(k)).and_then(Option::as_mut);
+            for settings in light.shadows.as_mut().into_iter().chain(saved) {
+                settings.light_size = degrees;
+            }
+        }
+    }
+
     /// Draw `views` of it into `target` (one [`Renderer::render_frame`], each
     /// view keyed by its place in `views`) and return each view's statistics,
     /// with the scene's particles alive and spawned since the last frame
@@ -307,7 +332,7 @@ impl World {
     /// [`draw`](Self::draw) as an accumulated still of `samples` sub-frames
     /// ([`SubFrame`]: jittered cameras and ambient-occlusion noise, averaged
     /// in HDR before each view's post chain), all at the time of the last
-    /// pose, its simulations stepped once; 1 draws a frame of its own. Returns
+    /// pose, its simulations stepped once; 1 (or 0) draws a frame of its own. Returns
     /// the last sub-frame's statistics, its particles counted since the last
     /// frame drawn before the still.
     pub fn draw_still(
@@ -316,14 +341,28 @@ impl World {
         (views, target): (&[View], &mut OffscreenTarget),
         samples: u32,
     ) -> Result<Vec<FrameStats>, RenderError> {
+        Ok(self.draw_still_then(renderer, (views, target), Vec::new(), samples)?.views)
+    }
+
+    /// [`draw_still`](Self::draw_still), with `after` recorded into its last
+    /// sub-frame after its views (an overlay, the blit onto a window), and
+    /// that sub-frame's whole output.
+    pub fn draw_still_then(
+        &mut self,
+        renderer: &mut Renderer,
+        (views, target): (&[View], &mut OffscreenTarget),
+        after: Vec<&mut dyn AfterViews>,
+        samples: u32,
+    ) -> Result<FrameOutput, RenderError> {
         let since = self.drawn_at;
-        let mut last = Vec::new();
-        for index in 0..samples {
+        for index in 0..samples.saturating_sub(1) {
             self.drawn_at = since; // each sub-frame counts particles over the whole interval
             let sample = SubFrame { index, count: samples };
-            last = self.draw_sample(renderer, (views, &mut *target), Vec::new(), sample)?.views;
+            self.draw_sample(renderer, (views, &mut *target), Vec::new(), sample)?;
         }
-        Ok(last)
+        self.drawn_at = since;
+        let last = SubFrame { index: samples.max(1) - 1, count: samples.max(1) };
+        self.draw_sample(renderer, (views, target), after, last)
     }
 
     /// [`draw`](Self::draw), with `after` recorded into the frame after its
@@ -335,7 +374,7 @@ impl World {
         (views, target): (&[View], &mut OffscreenTarget),
         after: Vec<&mut dyn AfterViews>,
     ) -> Result<FrameOutput, RenderError> {
-        self.draw_sample(renderer, (views, target), after, SubFrame::ONE)
+        self.draw_still_then(renderer, (views, target), after, 1)
     }
 
     /// [`draw_then`](Self::draw_then) as sub-frame `sample`.

@@ -89,7 +89,7 @@ impl Player {
         }
         // The work's borrows, shortened to this frame's views'.
         let after = after.into_iter().map(|work| -> &mut dyn AfterViews { work }).collect();
-        Ok(world.draw_then(renderer, (&views, target), after)?)
+        Ok(world.draw_still_then(renderer, (&views, target), after, controls.samples_per_pixel())?)
     }
 }
 

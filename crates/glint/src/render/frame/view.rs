@@ -264,7 +264,8 @@ fn compose_view(
                 None => res.accumulate.insert(AccumulatePipelines::new(&res.device)?),
             };
             frame.outline.enter(encoder, "accumulate");
-            let last = accumulation.fold((&res.device, &res.queue, pipelines), encoder, images.scene, sample);
+            let passes = (&res.device, &*res.queue, pipelines);
+            let last = accumulation.fold(passes, (encoder, &frame.outline), images.scene, sample);
             frame.outline.leave(encoder);
             let drawn = match last {
                 true => {

@@ -9,6 +9,8 @@
 //! average is taken before tonemapping (`shader/accumulate.wgsl`).
 
 use crate::gpu::HDR_FORMAT;
+use crate::render::debug::explain::{DrawCall, PassType};
+use crate::render::debug::outline::Outline;
 use crate::render::error::RenderError;
 use crate::render::frame::input::SubFrame;
 
@@ -175,7 +177,7 @@ impl Accumulation {
     pub(crate) fn fold(
         &mut self,
         (device, queue, pipelines): (&wgpu::Device, &wgpu::Queue, &AccumulatePipelines),
-        encoder: &mut wgpu::CommandEncoder,
+        (encoder, outline): (&mut wgpu::CommandEncoder, &Outline),
         scene: &wgpu::TextureView,
         sample: SubFrame,
     ) -> bool {
@@ -183,14 +185,16 @@ impl Accumulation {
         queue.write_buffer(&self.weight, 0, bytemuck::bytes_of(&fold));
         let (from, to) = (self.current, 1 - self.current);
         let read = [&self.means[from], scene];
-        full_screen(device, (pipelines, &pipelines.fold), encoder, (read, &self.weight), (&self.means[to], "fold"));
+        let fold = (pipelines, &pipelines.fold);
+        full_screen(device, fold, (encoder, outline), (read, &self.weight), (&self.means[to], "fold"));
         self.current = to;
         self.next = SubFrame { index: sample.index + 1, ..sample };
         if !sample.is_last() {
             return false;
         }
         let read = [&self.means[to], scene]; // the copy reads only the mean
-        full_screen(device, (pipelines, &pipelines.copy), encoder, (read, &self.weight), (&self.image, "copy"));
+        let copy = (pipelines, &pipelines.copy);
+        full_screen(device, copy, (encoder, outline), (read, &self.weight), (&self.image, "copy"));
         true
     }
 
@@ -200,11 +204,12 @@ impl Accumulation {
     }
 }
 
-/// One full-screen pass of `pipeline` reading `read` and `weight`, writing `target`.
+/// One full-screen pass of `pipeline` reading `read` and `weight`, writing
+/// `target`, as `outline` lists it ("accumulate: fold", "accumulate: copy").
 fn full_screen(
     device: &wgpu::Device,
     (pipelines, pipeline): (&AccumulatePipelines, &wgpu::RenderPipeline),
-    encoder: &mut wgpu::CommandEncoder,
+    (encoder, outline): (&mut wgpu::CommandEncoder, &Outline),
     (read, weight): ([&wgpu::TextureView; 2], &wgpu::Buffer),
     (target, what): (&wgpu::TextureView, &str),
 ) {
@@ -231,6 +236,10 @@ fn full_screen(
     pass.set_pipeline(pipeline);
     pass.set_bind_group(0, &bind_group, &[]);
     pass.draw(0..3, 0..1);
+    drop(pass);
+    outline.pass(&label, PassType::Render, &[]);
+    let changed = ["pipeline", "bind group 0 (the mean, the sub-frame and the weight)"];
+    outline.call(|| DrawCall::single(&label, "draw", (1, 1), &changed));
 }
 
 #[cfg(test)]
