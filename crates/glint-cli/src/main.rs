@@ -262,8 +262,9 @@ enum Command {
         #[arg(long, default_value_t = 0.0, value_parser = parse_time)]
         time: f32,
         /// Draw each frame as an accumulated still of this many sub-frames,
-        /// as `glint render --spp` does, and explain its last sub-frame (its
-        /// fold into the mean, and the post chain run on it) and its whole cost.
+        /// as `glint render --spp` does, and explain its last sub-frame: its
+        /// passes (the fold into the mean, the post chain run on it) and its
+        /// costs (a sub-frame's; the still's are about this many times them).
         #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=glint::render::MAX_SUB_FRAMES as i64))]
         spp: u32,
         #[command(flatten)]

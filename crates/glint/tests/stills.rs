@@ -153,6 +153,45 @@ fn sub_frames_are_averaged_in_hdr_before_the_post_chain() {
 }
 
 #[test]
+fn pixels_on_an_edge_take_the_share_of_them_it_covers() {
+    // A white square whose left edge runs 0.3 of a pixel into column 40 and
+    // whose top edge runs 0.6 of a pixel up into row 20, on black: 256
+    // sub-frames cover each pixel evenly, so a pixel's light is the share of
+    // it the square covers (the jitter's scale and direction, both ways).
+    let pixel = 2.0 / SIZE as f32;
+    let (left, top) = (-1.0 + 40.3 * pixel, 1.0 - 20.4 * pixel);
+    for (name, gpu) in gpus() {
+        let mut renderer = Renderer::new(gpu);
+        let cube = renderer.add_shape(ShapeKind::Cube.mesh());
+        let white = Material { shading: ShadingModel::Unlit, base_color: Vec4::ONE, ..Material::default() };
+        let material = renderer.add_material(white);
+        let place = Mat4::from_scale_rotation_translation(
+            Vec3::new(20.0, 20.0, 0.02),
+            Quat::IDENTITY,
+            Vec3::new(left + 10.0, top - 10.0, 0.0),
+        );
+        let entities = [Entity::new(cube, material, place)];
+        let camera = Camera::orthographic(2.0, 0.1, 20.0).looking_at(Vec3::new(0.0, 0.0, 5.0), Vec3::ZERO);
+        let views = [View::new(camera)];
+        let environment = Environment { background: Background::Color(Vec3::ZERO), ..Default::default() };
+        let mut target = OffscreenTarget::new(gpu, SIZE, SIZE, 1).expect("target");
+        for index in 0..256 {
+            let input = FrameInput::new(&entities, Lighting::new(&[], environment))
+                .views(&views)
+                .sample(SubFrame { index, count: 256 });
+            renderer.render_frame(input, &mut target).expect("sub-frame");
+        }
+        let image = linear(&target.read_rgba8(gpu).expect("readback"));
+        let at = |x: u32, y: u32| image[(y * SIZE + x) as usize];
+        for (x, y, share) in [(40, 40, 0.7), (50, 20, 0.6), (40, 20, 0.42), (39, 40, 0.0), (41, 40, 1.0), (50, 19, 0.0)]
+        {
+            let got = at(x, y);
+            assert!((got - share).abs() < 0.03, "{name}: pixel ({x}, {y}) holds {got:.3}, covered {share}");
+        }
+    }
+}
+
+#[test]
 fn sub_frames_out_of_order_are_errors() {
     let Some(gpu) = common::gpu() else { return };
     let mut renderer = Renderer::new(gpu);
@@ -170,10 +209,13 @@ fn sub_frames_out_of_order_are_errors() {
         other => panic!("expected a sub-frame error, got {other:?}"),
     };
     assert!(message(draw(3, 8)).contains("drew no sub-frame 0"));
-    assert!(message(draw(8, 8)).contains("below the count"));
+    for (index, count) in [(8, 8), (5, 1), (0, 0), (u32::MAX, 8), (0, glint::render::MAX_SUB_FRAMES + 1)] {
+        assert!(message(draw(index, count)).contains("below the count"), "{index} of {count}");
+    }
     draw(0, 8).expect("sub-frame 0");
     draw(1, 8).expect("sub-frame 1");
     assert!(message(draw(3, 8)).contains("expected sub-frame 2 of 8 next"));
-    // Starting again at 0 is always allowed.
+    // The failed frame's commands were dropped: the still starts again.
+    assert!(message(draw(2, 8)).contains("drew no sub-frame 0"));
     (0..4).try_for_each(|k| draw(k, 4)).expect("a still of 4 after the broken one");
 }

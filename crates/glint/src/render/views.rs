@@ -251,6 +251,17 @@ impl ViewStates {
         self.by_key.insert(key, (gpu, frame));
     }
 
+    /// Forget the running means of the last frame's views: a failed frame's
+    /// commands were dropped, so its sub-frame never reached them, and the
+    /// still must start again from sub-frame 0.
+    pub(crate) fn forget_stills(&mut self) {
+        for key in &self.last_keys {
+            if let Some((gpu, _)) = self.by_key.get_mut(key) {
+                gpu.accumulation = None;
+            }
+        }
+    }
+
     /// Give back the state of views not drawn for [`KEEP_VIEW_FRAMES`] frames before `frame`.
     pub(crate) fn drop_unused(&mut self, frame: u64) {
         self.by_key.retain(|_, (_, drawn)| *drawn + KEEP_VIEW_FRAMES >= frame);

@@ -95,7 +95,7 @@ const MAX_PENUMBRA: f32 = 24.0;
 const MIN_PENUMBRA: f32 = 3.0;
 // Taps across the blocker search's square, and its halvings of the blockers' gap.
 const SEARCH_TAPS: i32 = 4;
-const SEARCH_STEPS: i32 = 5;
+const SEARCH_STEPS: i32 = 4;
 // The filter's taps (each bilinear) are at most this many texels apart, so
 // that they cover its square without gaps: 3 to 12 across.
 const FILTER_SPACING: f32 = 2.0;
@@ -122,8 +122,10 @@ fn receiver_slope(layer: u32, q: vec3<f32>, n: vec3<f32>, w: f32) -> vec2<f32> {
     let o = light_uv_depth(layer, q);
     let a = light_uv_depth(layer, q + t * e) - o;
     let b = light_uv_depth(layer, q + cross(n, t) * e) - o;
+    // Seen (nearly) edge on, the plane's tangents project (nearly) parallel:
+    // no slope rather than an unbounded one.
     let det = a.x * b.y - a.y * b.x;
-    if abs(det) < 1e-12 {
+    if abs(det) <= 1e-3 * length(a.xy) * length(b.xy) {
         return vec2<f32>(0.0);
     }
     return vec2<f32>(a.z * b.y - b.z * a.y, a.x * b.z - b.x * a.z) / det;
@@ -154,8 +156,9 @@ fn soft_shadow(layer: u32, receiver: Receiver, scale: f32) -> f32 {
     let widest = MAX_PENUMBRA * texel;
     let search = min(receiver.z * scale, widest);
     let all = blocked(layer, receiver, search, 0.0);
-    if all <= 0.0 {
-        return 1.0;
+    // Nothing nearer the light: lit; everything: in the umbra.
+    if all <= 0.0 || all >= 1.0 {
+        return 1.0 - all;
     }
     // More than half the blockers are further than `low` from the receiver, at most half further than `high`.
     var low = 0.0;

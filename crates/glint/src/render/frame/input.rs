@@ -70,7 +70,13 @@ impl SubFrame {
 
     /// Whether it is the still's last, which writes the output.
     pub fn is_last(self) -> bool {
-        self.index + 1 == self.count
+        self.index.saturating_add(1) == self.count
+    }
+
+    /// Whether it can be drawn: an index below its count, and 1 to
+    /// [`MAX_SUB_FRAMES`] sub-frames.
+    pub fn is_valid(self) -> bool {
+        self.index < self.count && self.count <= MAX_SUB_FRAMES
     }
 
     /// Its camera offset in pixels (x right, y down), each within ±0.5: the
@@ -101,7 +107,8 @@ impl SubFrame {
             }
             r
         };
-        glam::Vec2::new(halton(self.index + 1, a), halton(self.index + 1, b)) - 0.5
+        let i = self.index.saturating_add(1);
+        glam::Vec2::new(halton(i, a), halton(i, b)) - 0.5
     }
 }
 

@@ -53,8 +53,9 @@ pub(crate) fn begin_frame(res: &mut Resources, next: &mut NextFrame, entities: &
     Frame::begin(next, encoder, gpu, start)
 }
 
-/// The errors a frame finds before drawing: a bad id submitted, too many
-/// lights, a viewport outside its target or a post chain too long.
+/// The errors a frame finds before drawing: a bad id submitted, a sub-frame
+/// outside its still, too many lights, a viewport outside its target or a
+/// post chain too long.
 pub(crate) fn check_frame(
     frame: &mut Frame,
     views: &[(ViewKey, &View)],
@@ -62,6 +63,12 @@ pub(crate) fn check_frame(
 ) -> Result<(), RenderError> {
     if let Some(e) = frame.submit_error.take() {
         return Err(e);
+    }
+    let sample = frame.sample;
+    if !sample.is_valid() {
+        let most = crate::render::frame::input::MAX_SUB_FRAMES;
+        let why = format!("expected an index below the count, and 1 to {most} sub-frames");
+        return Err(RenderError::SubFrameOutOfOrder { index: sample.index, count: sample.count, why });
     }
     clusters.check(lighting.lights)?;
     for (_, view) in views {
@@ -187,7 +194,10 @@ pub(crate) fn submit_frame(
     let t = Instant::now();
     match drawn {
         Ok(_) => frame.outline.finish(&mut frame.encoder),
-        Err(_) => frame.outline.drop_frame(),
+        Err(_) => {
+            frame.outline.drop_frame();
+            states.forget_stills();
+        }
     }
     let Frame {
         index,

@@ -102,6 +102,9 @@ fn draw_into(
         .with_clusters(res.clusters.applies(lighting.lights));
     let renderer = (res.cull_pipelines.is_some(), res.levels_of_detail, hides, variant);
     let sample = if hides.is_none() { frame.sample } else { SubFrame::ONE };
+    if !sample.accumulates() {
+        gpu.accumulation = None; // a frame of its own: no still to keep (40 bytes a pixel)
+    }
     let view_frame = ViewFrame::new(view, (width, height), renderer, sample);
     let format = scene_format(res, (view, sample), target);
     if (width, height, format) == (target.width(), target.height(), target.format()) {

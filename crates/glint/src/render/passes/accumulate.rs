@@ -151,10 +151,6 @@ impl Accumulation {
     ) -> Result<Self, RenderError> {
         let out_of_order =
             |why: String| RenderError::SubFrameOutOfOrder { index: sample.index, count: sample.count, why };
-        if sample.index >= sample.count || sample.count > crate::render::frame::input::MAX_SUB_FRAMES {
-            let most = crate::render::frame::input::MAX_SUB_FRAMES;
-            return Err(out_of_order(format!("expected an index below the count, and 1 to {most} sub-frames")));
-        }
         match kept {
             Some(a) if sample.index == 0 && a.size == size => Ok(a),
             _ if sample.index == 0 => Self::new(device, size),
