@@ -73,7 +73,7 @@ fn map_shadow(layer: u32, q: vec3<f32>, n: vec3<f32>) -> f32 {
     let uv = vec2<f32>(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5);
 #ifdef SOFT_SHADOWS
     if shadows.info[layer].z > 0.0 {
-        let receiver = Receiver(uv, ndc.z, receiver_slope(layer, q, n, clip.w));
+        let receiver = Receiver(uv, ndc.z, receiver_slope(layer, q, n, vec3<f32>(uv, ndc.z), clip.w));
         return soft_shadow(layer, receiver, shadows.info[layer].z);
     }
 #endif
@@ -109,17 +109,16 @@ struct Receiver {
 }
 
 // The NDC depth gradient per unit of uv, in layer `layer`'s view, of the plane
-// through `q` facing `n` (`w`: q's clip w), from two points of the plane beside
-// `q` projected as `q` is: so a wide filter compares each texel with the
+// through `q` facing `n` (`o`: q's uv and NDC depth there, `w`: its clip w),
+// from two points of the plane beside `q` projected as `q` was: so a wide filter compares each texel with the
 // receiver's own depth there, not its depth at the centre, and a surface
 // sloped to the light neither shadows itself nor counts as its own blocker
 // (receiver plane depth bias, Isidoro 2006). 0 for a plane seen edge on.
-fn receiver_slope(layer: u32, q: vec3<f32>, n: vec3<f32>, w: f32) -> vec2<f32> {
+fn receiver_slope(layer: u32, q: vec3<f32>, n: vec3<f32>, o: vec3<f32>, w: f32) -> vec2<f32> {
     // A few texels: absolute for a cascade, per unit of distance for a spot view.
     let e = 4.0 * shadows.info[layer].x * select(w, 1.0, shadows.info[layer].y > 0.0);
     let helper = select(vec3<f32>(0.0, 1.0, 0.0), vec3<f32>(1.0, 0.0, 0.0), abs(n.y) > 0.9);
     let t = normalize(cross(n, helper));
-    let o = light_uv_depth(layer, q);
     let a = light_uv_depth(layer, q + t * e) - o;
     let b = light_uv_depth(layer, q + cross(n, t) * e) - o;
     // Seen (nearly) edge on, the plane's tangents project (nearly) parallel:
