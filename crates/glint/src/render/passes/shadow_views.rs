@@ -55,7 +55,8 @@ pub(crate) struct ShadowView {
 /// wide, linear in an orthographic view's depth (range 1/|P₂₂|, uv per unit
 /// P₀₀/2); a spot light of radius R casts one (d_r − d_b)·2R/d_b wide at the
 /// receiver, which in its view's uv is R·P₀₀·(1/d_b − 1/d_r), and 1/d is
-/// linear in a perspective view's NDC depth with slope −1/P₃₂.
+/// linear in a perspective view's NDC depth with slope 1/P₃₂ (negative: the
+/// scale takes its size).
 pub(crate) fn penumbra_scale(proj: Mat4, settings: &ShadowSettings, directional: bool) -> f32 {
     let size = settings.light_size;
     if !(size > 0.0 && size.is_finite()) {
