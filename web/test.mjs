@@ -616,6 +616,34 @@ for (const backend of backends) {
   }
 }
 
+// SMAA on the page is `glint render`'s (its three passes on WebGL2 and
+// WebGPU), and the anti-aliasing control's "none" takes it out of the chain
+// as `glint render --post tonemap` does.
+for (const backend of backends) {
+  const scene = "scenes/smaa.scn";
+  const { page, state, logs } = await open(scene, backend);
+  try {
+    if (state.error) {
+      report(false, `SMAA on ${backend}`, `${state.error}\n  ${logs.join("\n  ")}`);
+      continue;
+    }
+    const smaa = await compareWithGlint(page, logs, scene, backend, [], "tests/scenes/smaa.scn");
+    const chosen = await page.evaluate(async () => {
+      const control = document.querySelector('[data-control="antialiasing"]');
+      if (!control) return false;
+      control.value = "1";
+      control.dispatchEvent(new Event("change"));
+      await window.glintAwaitFrames(2);
+      return true;
+    });
+    let none = { ok: false, verdict: "no anti-aliasing control" };
+    if (chosen) none = await compareWithGlint(page, logs, "scenes/smaa_none.scn", backend, ["--post", "tonemap"], "tests/scenes/smaa.scn");
+    report(smaa.ok && none.ok, `SMAA on ${backend}`, `SMAA: ${smaa.verdict}; none: ${none.verdict}`);
+  } finally {
+    await page.close();
+  }
+}
+
 // A broken scene shows its error, with the file and line, on the page.
 for (const backend of backends) {
   const { page, state } = await open("scenes/broken.scn", backend);

@@ -8,7 +8,7 @@
 //! a piece of its own. `src/shader/assemble.rs` joins the pieces a set of defs
 //! selects; its tests check the result against naga_oil's composition.
 //!
-//! The other shaders (`blit`, `post`, `accumulate`, `cull`, `pyramid`, `ssao_compute`
+//! The other shaders (`blit`, `post`, `smaa`, `accumulate`, `cull`, `pyramid`, `ssao_compute`
 //! (appended to `ssao`), and the simulations' `particles_step`, `school`,
 //! `school_place`, `scan`, `radix`, `cloth`, `cloth_place` and `bin_lights`) have no defs: each becomes one string
 //! there, its imports ahead of its own text, comments dropped too.
@@ -26,9 +26,10 @@ const COMPOSED: [(&str, &str); 5] =
 
 /// The shaders without defs (their imports ahead of their own text), and the
 /// constant each becomes.
-const PLAIN: [(&str, &str); 14] = [
+const PLAIN: [(&str, &str); 15] = [
     ("BLIT", "blit"),
     ("POST", "post"),
+    ("SMAA", "smaa"),
     ("ACCUMULATE", "accumulate"),
     ("CULL", "cull"),
     ("PYRAMID", "pyramid"),
@@ -44,10 +45,11 @@ const PLAIN: [(&str, &str); 14] = [
 ];
 
 /// The modules others import: their import path and file.
-const MODULES: [(&str, &str); 5] = [
+const MODULES: [(&str, &str); 6] = [
     ("glint::blocks", "blocks"),
     ("glint::equirect", "equirect"),
     ("glint::full_screen", "full_screen"),
+    ("glint::post_inputs", "post_inputs"),
     ("glint::light_clusters", "light_clusters"),
     ("glint::shadow_lookup", "shadow_lookup"),
 ];

@@ -38,8 +38,9 @@ impl BenchRun {
 #[derive(Serialize)]
 pub struct ModeReport {
     /// [`BenchRun::name`] (the way asked for: `stats.culling` says which way
-    /// the device culled).
-    pub mode: &'static str,
+    /// the device culled), with the post chain in brackets where a bench
+    /// compares chains (`--post` given more than once).
+    pub mode: String,
     /// Frames measured (after the warm-up).
     pub frames: usize,
     /// Median of the whole frame, ms: from the frame's first call (`submit`)
@@ -268,7 +269,7 @@ pub fn run_mode(
         total: percentile(&totals, 0.5),
     };
     Ok(ModeReport {
-        mode: run.name(),
+        mode: run.name().to_owned(),
         frames: config.frames,
         frame_ms_median,
         frame_ms_p95: percentile(&frame_ms, 0.95),

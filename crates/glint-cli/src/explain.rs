@@ -50,6 +50,8 @@ struct Explained {
     cpu_ms_median: f64,
     /// The view's passes, in encoding order.
     passes: Vec<PassCalls>,
+    /// The view's post effects, in order (the GPU times' `post_ms` are theirs).
+    post: Vec<&'static str>,
 }
 
 /// Explain the frame as `args` says and print it.
@@ -168,7 +170,9 @@ fn explain_mode(
         FrameMode::Naive => "naive",
         _ => "optimized",
     };
-    Ok(Explained { mode, stats: last.swap_remove(args.view), cpu_ms_median: costed[costed.len() / 2], passes })
+    let post = views[args.view].post.iter().map(|e| e.name()).collect();
+    let stats = last.swap_remove(args.view);
+    Ok(Explained { mode, stats, cpu_ms_median: costed[costed.len() / 2], passes, post })
 }
 
 /// A draw call's lines, after its number.
@@ -284,7 +288,7 @@ fn describe(e: &Explained) -> String {
         c.prepare, c.lights, c.cull, c.queue, c.sort, c.batch, c.upload, c.encode, c.submit, c.total, e.cpu_ms_median
     );
     if let Some(g) = &s.gpu {
-        let post: Vec<String> = g.post_ms.iter().map(|ms| format!("{ms:.3}")).collect();
+        let post: Vec<String> = (g.post_ms.iter().zip(&e.post)).map(|(ms, name)| format!("{name} {ms:.3}")).collect();
         let shadow = g.shadow_ms.map_or(String::new(), |ms| format!("shadow pass {ms:.3}, "));
         let depth = g.depth_prepass_ms.map_or(String::new(), |ms| format!("depth pre-pass {ms:.3}, "));
         let occlusion = g.ambient_occlusion_ms.map_or(String::new(), |ms| format!("ambient occlusion {ms:.3}, "));

@@ -108,6 +108,11 @@ enum Command {
         /// (1..=4096; 1 draws each frame once, as without it).
         #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=glint::render::MAX_SUB_FRAMES as i64))]
         spp: u32,
+        /// Post-process every camera that draws into the picture with these
+        /// effects (with the camera's settings for them), e.g. "tonemap
+        /// smaa", instead of its own "post"; "" for none.
+        #[arg(long)]
+        post: Option<String>,
     },
     /// Step a scene's simulations once through a sequence and store their
     /// state every few frames in a cache (a folder), so `glint render
@@ -183,9 +188,11 @@ enum Command {
         plot: Option<PathBuf>,
         /// Post-process the first camera with these effects (with their
         /// defaults), e.g. "bloom tonemap fxaa", instead of its own "post"; ""
-        /// for none.
+        /// for none. Given more than once, each chain is measured in turn in
+        /// the same run (e.g. --post "tonemap fxaa" --post "tonemap smaa"),
+        /// each mode's report naming its chain.
         #[arg(long, value_parser = parse_post)]
-        post: Option<PostArg>,
+        post: Vec<PostArg>,
         /// Run the scene as it plays instead (its fish, particles and cloth
         /// stepping, as in the viewer), FPS frames a second of scene time
         /// from --time: the whole frame, posing included.
@@ -545,12 +552,36 @@ fn live_text(scene: &Path, adapter: &str, config: &bench::BenchConfig, r: &bench
         )
 }
 
+/// The ways `glint bench` builds frames of `view`: as `--mode` says, with the
+/// naive baseline where `with_naive`, and the optimized frame at full detail
+/// beside the frames with levels (with `--mode all`, and wherever `--lod both` asks).
+fn bench_runs(
+    view: &glint::View,
+    (mode, cull, lod): (BenchMode, Option<CullArg>, lod::BenchLod),
+    with_naive: bool,
+) -> Vec<bench::BenchRun> {
+    let optimized = bench::BenchRun::Optimized(cull.map_or(view.culling, CullArg::culling));
+    let mut runs = match mode {
+        BenchMode::All => {
+            let culled = [glint::Culling::Cpu, glint::Culling::Gpu].map(bench::BenchRun::Culled);
+            with_naive.then_some(bench::BenchRun::Naive).into_iter().chain(culled).collect()
+        }
+        BenchMode::Optimized => vec![optimized],
+        BenchMode::Naive => vec![bench::BenchRun::Naive],
+        BenchMode::Both => vec![optimized, bench::BenchRun::Naive],
+    };
+    if lod == lod::BenchLod::Both || (matches!(mode, BenchMode::All) && lod == lod::BenchLod::On) {
+        runs.push(bench::BenchRun::FullDetail(cull.map_or(glint::Culling::Gpu, CullArg::culling)));
+    }
+    runs
+}
+
 fn run_bench(
     scene: &Path,
     config: &bench::BenchConfig,
     (mode, cull, lod): (BenchMode, Option<CullArg>, lod::BenchLod),
     BenchOutput { json, plot }: BenchOutput,
-    post: Option<Vec<glint::scene::PostEffect>>,
+    posts: &[PostArg],
     options: LoadOptions,
 ) -> Result<(), Error> {
     let bench::BenchConfig { frames, warmup, size, msaa, orbit, settle_ms, density, .. } = *config;
@@ -571,25 +602,20 @@ fn run_bench(
         (_, Ok(())) => true,
     };
     let gpu = Gpu::headless()?;
-    let view = bench::bench_view(&desc, post);
-    let optimized = bench::BenchRun::Optimized(cull.map_or(view.culling, CullArg::culling));
-    let mut runs = match mode {
-        BenchMode::All => {
-            let culled = [glint::Culling::Cpu, glint::Culling::Gpu].map(bench::BenchRun::Culled);
-            with_naive.then_some(bench::BenchRun::Naive).into_iter().chain(culled).collect()
-        }
-        BenchMode::Optimized => vec![optimized],
-        BenchMode::Naive => vec![bench::BenchRun::Naive],
-        BenchMode::Both => vec![optimized, bench::BenchRun::Naive],
-    };
-    // The optimized frame at full detail beside the frames with levels:
-    // with --mode all, and wherever --lod both asks.
+    // Each chain asked for in turn (the scene's own where none was).
+    let chains: Vec<Option<&PostArg>> = if posts.is_empty() { vec![None] } else { posts.iter().map(Some).collect() };
     let optimized_culling = cull.map_or(glint::Culling::Gpu, CullArg::culling);
-    if lod == lod::BenchLod::Both || (matches!(mode, BenchMode::All) && lod == lod::BenchLod::On) {
-        runs.push(bench::BenchRun::FullDetail(optimized_culling));
+    let mut reports = Vec::new();
+    for chain in &chains {
+        let view = bench::bench_view(&desc, chain.map(|c| c.0.clone()));
+        for run in bench_runs(&view, (mode, cull, lod), with_naive) {
+            let mut report = bench::run_mode(&gpu, &desc, &view, run, config)?;
+            if chains.len() > 1 {
+                report.mode = format!("{} [{}]", report.mode, report.post.join(" "));
+            }
+            reports.push(report);
+        }
     }
-    let reports =
-        runs.into_iter().map(|r| bench::run_mode(&gpu, &desc, &view, r, config)).collect::<Result<Vec<_>, _>>()?;
     let speedup = match mode {
         BenchMode::Both => Some(reports[1].cpu_ms_median / reports[0].cpu_ms_median),
         BenchMode::All if with_naive => Some(reports[0].cpu_ms_median / reports[2].cpu_ms_median),
@@ -840,6 +866,7 @@ fn main() -> ExitCode {
             apng,
             turntable,
             spp,
+            post,
         } => render::render(render::RenderArgs {
             scene,
             output,
@@ -857,6 +884,7 @@ fn main() -> ExitCode {
             fps: *fps,
             turntable: *turntable,
             spp: *spp,
+            post: post.as_deref(),
             apng: *apng,
             lod: picture.lod,
             options: picture.load_options(options),
@@ -977,7 +1005,7 @@ fn main() -> ExitCode {
             match sim.sim {
                 // Without --live the scene stands still at its start: nothing steps.
                 Some(_) => Err(glint::Diagnostic::file(scene, "--sim needs --live (without it nothing steps)").into()),
-                None => run_bench(scene, &config, (*mode, *cull, *lod), output, post.clone().map(|p| p.0), options),
+                None => run_bench(scene, &config, (*mode, *cull, *lod), output, post, options),
             }
         }
     };

@@ -37,9 +37,30 @@ pub struct RenderArgs<'a> {
     pub apng: bool,
     /// Sub-frames averaged into each frame ([`World::draw_still`]).
     pub spp: u32,
+    /// Effects for every view into the picture, instead of its camera's chain (`--post`).
+    pub post: Option<&'a str>,
     /// Levels of detail (`--lod`, `--lod-error`).
     pub lod: crate::lod::LodArgs,
     pub options: LoadOptions,
+}
+
+/// `views` with the effects `names` lists as the chain of each that draws
+/// into the picture (not into a render target), each effect with the settings
+/// its view's own chain had for it, else its defaults.
+fn posted(views: Vec<glint::View>, names: &str) -> Result<Vec<glint::View>, String> {
+    (views.into_iter())
+        .map(|mut view| {
+            if view.output.is_none() {
+                let mut settings = glint::scene::PostEffect::ALL;
+                for effect in &view.post {
+                    let k = glint::scene::PostEffect::NAMES.iter().position(|n| *n == effect.name());
+                    settings[k.expect("every effect is named")] = *effect;
+                }
+                view.post = glint::scene::PostEffect::chain(names, &settings)?;
+            }
+            Ok(view)
+        })
+        .collect()
 }
 
 /// Render the frames and write them as `args.output` says.
@@ -89,6 +110,10 @@ pub fn render(args: RenderArgs) -> Result<(), Error> {
         }
     }
     let views = lod.views(culled(world.views(camera), cull));
+    let views = match args.post {
+        Some(names) => posted(views, names).map_err(|m| Diagnostic::file(scene, format!("--post: {m}")))?,
+        None => views,
+    };
     let mut scratch = None;
     // A bar on a terminal; else (a farm's log) a line a frame.
     let lines = !std::io::stderr().is_terminal();

@@ -160,3 +160,25 @@ fn explain_shows_an_accumulated_still_and_soft_shadows() {
     let text = String::from_utf8(glint_vulkan(&args[..6]).expect("adapter").stdout).expect("UTF-8");
     assert!(text.contains("an accumulated still of 4 sub-frames"), "{text}");
 }
+
+#[test]
+fn explain_shows_smaa_s_three_passes_and_their_cost() {
+    let args = ["explain", "tests/scenes/smaa.scn", "--size", "64x64", "--json"];
+    let Some(out) = glint_vulkan(&args) else { return };
+    let json: serde_json::Value = serde_json::from_slice(&out.stdout).expect("one JSON object");
+    let passes = json["passes"].as_array().expect("passes");
+    let labels: Vec<&str> = passes.iter().filter_map(|p| p["name"].as_str()).collect();
+    let smaa: Vec<&str> = labels.iter().copied().filter(|l| l.starts_with("post: smaa")).collect();
+    assert_eq!(
+        smaa,
+        ["post: smaa (fs_smaa_edges)", "post: smaa (fs_smaa_weights)", "post: smaa (fs_smaa_blend)"],
+        "{labels:?}"
+    );
+    assert_eq!(json["post"], serde_json::json!(["tonemap", "smaa"]));
+    let text = String::from_utf8(glint_vulkan(&args[..4]).expect("adapter").stdout).expect("UTF-8");
+    let gpu = text.lines().find(|l| l.starts_with("GPU ms")).unwrap_or_default();
+    assert!(
+        gpu.is_empty() || (gpu.contains("tonemap ") && gpu.contains("smaa ")),
+        "each effect's time is named: {gpu}"
+    );
+}

@@ -188,8 +188,9 @@ fn sequence_arguments_are_checked_before_any_frame() {
     let model = model.to_str().expect("path");
     let dir = tempfile::tempdir().expect("temp dir");
     let out = |name: &str| dir.path().join(name).to_str().expect("path").to_owned();
-    let cases: [(&[&str], &str); 10] = [
+    let cases: [(&[&str], &str); 11] = [
         (&["-o", &out("a.png"), "--spp", "0"], "0 is not in 1..=4096"),
+        (&["-o", &out("a.png"), "--post", "tonemap blur"], "--post: 'blur' is not a post effect"),
         (&["-o", &out("a.png"), "--spp", "4097"], "4097 is not in 1..=4096"),
         (&["-o", &out("a.gif"), "--apng"], "--apng writes a PNG"),
         (&["-o", &out("a.png"), "--frames", "3"], "several frames need a numbered output"),

@@ -1,7 +1,7 @@
 //! The post chain on fixed HDR inputs: unlit cubes of known linear colours seen
 //! face on through an orthographic camera, so each pixel's input is known.
 //! Tonemapping is pinned to its operator's formula; bloom spreads light only
-//! around what is above its threshold; edges and FXAA change only pixels at
+//! around what is above its threshold; edges, FXAA and SMAA change only pixels at
 //! geometric edges; the vignette darkens the corners; a chain costs nothing
 //! when empty and says what it drew.
 
@@ -90,9 +90,16 @@ fn tonemapping_maps_a_known_ramp_as_each_operator_says() {
 fn the_post_chain_works_on_gl_too() {
     let Some(gpu) = common::gl_gpu() else { return };
     tonemapped_ramp(gpu);
-    let chain = vec![PostEffect::BLOOM, PostEffect::TONEMAP, PostEffect::Fxaa, PostEffect::EDGES, PostEffect::VIGNETTE];
+    let chain = vec![
+        PostEffect::BLOOM,
+        PostEffect::TONEMAP,
+        PostEffect::Fxaa,
+        PostEffect::SMAA,
+        PostEffect::EDGES,
+        PostEffect::VIGNETTE,
+    ];
     let (image, stats) = draw(gpu, &[(0.0, 0.0, 0.5, 0.3, 4.0)], 0.1, chain, (48, 48));
-    assert_eq!(stats.passes.post.draws, 8, "bloom's four passes and one for each other effect");
+    assert_eq!(stats.passes.post.draws, 11, "bloom's four passes, SMAA's three and one for each other effect");
     // The corner: the background, tonemapped by ACES, then 40 % darker.
     let aces = |x: f64| (x * (2.51 * x + 0.03)) / (x * (2.43 * x + 0.59) + 0.14);
     let corner = image.get_pixel(0, 0).0[0];
@@ -185,21 +192,24 @@ fn edges_are_drawn_exactly_along_geometric_edges() {
 }
 
 #[test]
-fn fxaa_changes_only_pixels_at_edges() {
+fn fxaa_and_smaa_change_only_pixels_at_edges() {
     let Some(gpu) = common::gpu() else { return };
     let square = [(0.0, 0.0, 1.2, 0.5, 0.9)];
     let (plain, _) = draw(gpu, &square, 0.1, Vec::new(), (64, 64));
-    let (smooth, stats) = draw(gpu, &square, 0.1, vec![PostEffect::Fxaa], (64, 64));
-    assert_eq!(stats.passes.post.draws, 1);
-    let mut changed = 0;
-    for (x, y, p) in smooth.enumerate_pixels() {
-        let before = plain.get_pixel(x, y).0;
-        if p.0.iter().zip(before).any(|(a, b)| a.abs_diff(b) > 2) {
-            changed += 1;
-            assert!(near_edge(&plain, x, y, 1), "FXAA changed ({x}, {y}) away from an edge");
+    // FXAA is one pass, SMAA three (edges, blending weights, blending).
+    for (effect, passes) in [(PostEffect::Fxaa, 1), (PostEffect::SMAA, 3)] {
+        let (smooth, stats) = draw(gpu, &square, 0.1, vec![effect], (64, 64));
+        assert_eq!(stats.passes.post.draws, passes, "{effect:?}");
+        let mut changed = 0;
+        for (x, y, p) in smooth.enumerate_pixels() {
+            let before = plain.get_pixel(x, y).0;
+            if p.0.iter().zip(before).any(|(a, b)| a.abs_diff(b) > 2) {
+                changed += 1;
+                assert!(near_edge(&plain, x, y, 1), "{effect:?} changed ({x}, {y}) away from an edge");
+            }
         }
+        assert!(changed > 20, "{effect:?}: the rotated square's stair steps are smoothed: {changed} pixels");
     }
-    assert!(changed > 20, "the rotated square's stair steps are smoothed: {changed} pixels");
 }
 
 #[test]

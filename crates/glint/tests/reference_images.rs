@@ -70,10 +70,18 @@ fn soft_shadows_from_a_sun_and_a_spot_light_with_a_size() {
 }
 
 #[test]
+fn smaa_after_tonemapping() {
+    // Ground, rails (one draw), post, ball (a plain background, no sky).
+    check("smaa", 4);
+}
+
+#[test]
 fn every_scene_matches_its_reference_culled_on_the_cpu_too() {
     // The tests above cull on the GPU where the adapter can (the default).
     let Some(gpu) = common::gpu() else { return };
-    for name in ["shapes", "textures", "alpha", "lights", "instancing", "ortho", "states", "tiles", "soft_shadows"] {
+    for name in
+        ["shapes", "textures", "alpha", "lights", "instancing", "ortho", "states", "tiles", "soft_shadows", "smaa"]
+    {
         let path = common::repo_root().join("tests/scenes").join(format!("{name}.scn"));
         let (image, stats) = common::render_file(gpu, &path, 256, glint::Culling::Cpu);
         assert_eq!(stats.culling, glint::Culling::Cpu);
@@ -84,7 +92,9 @@ fn every_scene_matches_its_reference_culled_on_the_cpu_too() {
 #[test]
 fn every_scene_matches_its_reference_on_gl_which_culls_on_the_cpu() {
     let Some(gl) = common::gl_gpu() else { return };
-    for name in ["shapes", "textures", "alpha", "lights", "instancing", "ortho", "states", "tiles", "soft_shadows"] {
+    for name in
+        ["shapes", "textures", "alpha", "lights", "instancing", "ortho", "states", "tiles", "soft_shadows", "smaa"]
+    {
         let path = common::repo_root().join("tests/scenes").join(format!("{name}.scn"));
         let (image, stats) = common::render_file(gl, &path, 256, glint::Culling::Gpu);
         assert_eq!((stats.culling, stats.occlusion), (glint::Culling::Cpu, false), "{name}");

@@ -1,10 +1,10 @@
 //! A `camera` block's post-processing keys: `post` (the ordered effects) and
 //! each effect's settings (`tonemap`, `exposure`, `bloom_threshold`,
-//! `bloom_intensity`, `edge_color`, `edge_threshold`, `vignette`).
+//! `bloom_intensity`, `edge_color`, `edge_threshold`, `vignette`, `smaa`).
 
 use super::scn_fields::Fields;
 use super::Diagnostic;
-use crate::scene::{PostEffect, Tonemap};
+use crate::scene::{PostEffect, SmaaPreset, Tonemap};
 
 /// The camera's post chain (empty without a `post` key). An effect named twice,
 /// an unknown name, more than [`MAX_POST_EFFECTS`](crate::scene::MAX_POST_EFFECTS) effects or a setting out of
@@ -27,6 +27,11 @@ pub(crate) fn chain(f: &mut Fields) -> Result<Vec<PostEffect>, Diagnostic> {
     }
     if let PostEffect::Vignette { strength } = &mut defaults[4] {
         *strength = f.number("vignette", 0.0..=1.0)?.unwrap_or(*strength);
+    }
+    if let PostEffect::Smaa { preset } = &mut defaults[5] {
+        if let Some((k, _)) = f.choice("smaa", &SmaaPreset::NAMES)? {
+            *preset = SmaaPreset::ALL[k];
+        }
     }
     let Some(pair) = f.get("post") else {
         return Ok(Vec::new());

@@ -296,6 +296,7 @@ fn semantic_errors_name_file_line_and_expectation() {
         ("{\n\"classname\" \"camera\"\n\"tonemap\" \"filmic\"\n}", 3, "expected one of: none, reinhard, aces, agx"),
         ("{\n\"classname\" \"camera\"\n\"exposure\" \"40\"\n}", 3, "expected a value in -20..=20"),
         ("{\n\"classname\" \"camera\"\n\"vignette\" \"2\"\n}", 3, "expected a value in 0..=1"),
+        ("{\n\"classname\" \"camera\"\n\"smaa\" \"best\"\n}", 3, "expected one of: low, medium, high, ultra"),
         ("{\n\"classname\" \"light_point\"\n\"origin\" \"0 0 inf\"\n}", 3, "not a finite number"),
         (&tiled("\"tiles\" \"0\""), 5, "\"tiles\" is '0', expected a whole number in 1..=256"),
         (&tiled("\"tiles\" \"257\""), 5, "expected a whole number in 1..=256"),
@@ -345,17 +346,20 @@ fn cameras_with_viewports_are_the_views_and_without_any_the_first_camera_is() {
     assert_eq!(views[1].viewport.x, 0.0);
     assert!(views.iter().all(|v| v.culling == crate::scene::Culling::Gpu));
     // A post chain, in the listed order, with each effect's settings.
-    let keys = "\"post\" \"tonemap bloom edges\"\n\"tonemap\" \"agx\"\n\"exposure\" \"1.5\"\n\"bloom_threshold\" \"2\"\n\"edge_color\" \"1 0 0\"\n";
+    let keys = "\"post\" \"tonemap bloom edges smaa\"\n\"tonemap\" \"agx\"\n\"exposure\" \"1.5\"\n\"bloom_threshold\" \"2\"\n\"edge_color\" \"1 0 0\"\n\"smaa\" \"ultra\"\n";
     let chain = parse(&camera(keys)).unwrap().camera_view(0).post;
-    use crate::scene::{PostEffect, Tonemap};
+    use crate::scene::{PostEffect, SmaaPreset, Tonemap};
     assert_eq!(
         chain,
         [
             PostEffect::Tonemap { operator: Tonemap::Agx, exposure: 1.5 },
             PostEffect::Bloom { threshold: 2.0, intensity: 0.5 },
             PostEffect::Edges { color: glam::Vec3::X, threshold: 0.4 },
+            PostEffect::Smaa { preset: SmaaPreset::Ultra },
         ]
     );
+    let smaa = parse(&camera("\"post\" \"smaa\"\n")).unwrap().camera_view(0).post;
+    assert_eq!(smaa, [PostEffect::Smaa { preset: SmaaPreset::High }], "the high preset unless one is named");
 }
 
 #[test]

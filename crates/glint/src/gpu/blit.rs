@@ -108,9 +108,22 @@ pub(crate) fn sampler_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
 pub(crate) fn full_screen_pipeline(
     device: &wgpu::Device,
     label: &str,
+    shader: (&wgpu::PipelineLayout, &wgpu::ShaderModule),
+    entries: (&str, &str),
+    format: wgpu::TextureFormat,
+) -> wgpu::RenderPipeline {
+    full_screen_pipeline_with(device, label, shader, entries, format, None)
+}
+
+/// [`full_screen_pipeline`] with a depth-stencil state (SMAA's passes mark
+/// and test the pixels on edges in a stencil).
+pub(crate) fn full_screen_pipeline_with(
+    device: &wgpu::Device,
+    label: &str,
     (layout, module): (&wgpu::PipelineLayout, &wgpu::ShaderModule),
     (vertex, fragment): (&str, &str),
     format: wgpu::TextureFormat,
+    depth_stencil: Option<wgpu::DepthStencilState>,
 ) -> wgpu::RenderPipeline {
     device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
         label: Some(label),
@@ -122,7 +135,7 @@ pub(crate) fn full_screen_pipeline(
             buffers: &[],
         },
         primitive: Default::default(),
-        depth_stencil: None,
+        depth_stencil,
         multisample: Default::default(),
         fragment: Some(wgpu::FragmentState {
             module,

@@ -44,7 +44,7 @@ pub use lighting::Lighting;
 pub use material::{AlphaMode, MapSlots, Material, ShadingModel};
 pub use mesh::{smooth_normals, smooth_normals_in_groups, Aabb, BoundingSphere, Mesh, MeshError, SkinVertex, Vertex};
 pub use motion::{Motion, Wind, MAX_WIND};
-pub use post::{PostEffect, Tonemap, MAX_POST_EFFECTS};
+pub use post::{PostEffect, SmaaPreset, Tonemap, MAX_POST_EFFECTS};
 pub use procedural::ShapeKind;
 pub use shadow_layout::{ShadowLayout, MAX_CUBES, MAX_SHADOW_MAP_BYTES};
 pub use simulation::{PathCounts, SimPath, SimulationPaths};

@@ -21,6 +21,45 @@ pub enum Tonemap {
     Agx,
 }
 
+/// How hard SMAA looks for edges and how far it follows them: the presets of
+/// its shader (Jimenez et al.), from cheapest to sharpest.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SmaaPreset {
+    /// Luma threshold 0.15, 4 search steps, no diagonals or corners.
+    Low,
+    /// Threshold 0.1, 8 steps, no diagonals or corners.
+    Medium,
+    /// Threshold 0.1, 16 steps, diagonals (8 steps) and corner rounding.
+    High,
+    /// Threshold 0.05, 32 steps, diagonals (16 steps) and corner rounding.
+    Ultra,
+}
+
+impl SmaaPreset {
+    /// The presets, in the order of [`SmaaPreset::NAMES`].
+    pub const ALL: [Self; 4] = [Self::Low, Self::Medium, Self::High, Self::Ultra];
+    /// Their names in `.scn` files and controls.
+    pub const NAMES: [&'static str; 4] = ["low", "medium", "high", "ultra"];
+
+    /// The shader's settings: the luma difference that makes an edge, the
+    /// most search steps along a line (two pixels each) and along a
+    /// diagonal (0: none), and the share of a corner's blending kept (1: no
+    /// corner detection).
+    pub fn settings(self) -> [f32; 4] {
+        match self {
+            Self::Low => [0.15, 4.0, 0.0, 1.0],
+            Self::Medium => [0.1, 8.0, 0.0, 1.0],
+            Self::High => [0.1, 16.0, 8.0, 0.25],
+            Self::Ultra => [0.05, 32.0, 16.0, 0.25],
+        }
+    }
+
+    /// Its name.
+    pub fn name(self) -> &'static str {
+        Self::NAMES[self as usize]
+    }
+}
+
 /// One pass of a post chain.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum PostEffect {
@@ -40,6 +79,12 @@ pub enum PostEffect {
     },
     /// Fast approximate anti-aliasing: only pixels on contrast edges change.
     Fxaa,
+    /// Subpixel morphological anti-aliasing (SMAA 1x: edge detection,
+    /// blending weights from the shapes of the edges, neighbourhood blending).
+    Smaa {
+        /// How hard it looks.
+        preset: SmaaPreset,
+    },
     /// Sobel edge detection: pixels whose luma gradient is above `threshold` take `color`.
     Edges {
         /// Colour of the edges (linear).
@@ -63,11 +108,13 @@ impl PostEffect {
     pub const EDGES: Self = Self::Edges { color: Vec3::ZERO, threshold: 0.4 };
     /// A vignette of strength 0.4.
     pub const VIGNETTE: Self = Self::Vignette { strength: 0.4 };
+    /// SMAA at its high preset.
+    pub const SMAA: Self = Self::Smaa { preset: SmaaPreset::High };
 
     /// The effects, with their defaults, in the order of [`PostEffect::NAMES`].
-    pub const ALL: [Self; 5] = [Self::BLOOM, Self::TONEMAP, Self::Fxaa, Self::EDGES, Self::VIGNETTE];
+    pub const ALL: [Self; 6] = [Self::BLOOM, Self::TONEMAP, Self::Fxaa, Self::EDGES, Self::VIGNETTE, Self::SMAA];
     /// Their names.
-    pub const NAMES: [&'static str; 5] = ["bloom", "tonemap", "fxaa", "edges", "vignette"];
+    pub const NAMES: [&'static str; 6] = ["bloom", "tonemap", "fxaa", "edges", "vignette", "smaa"];
 
     /// The effect called `name`, with its defaults.
     pub fn named(name: &str) -> Option<Self> {
@@ -80,7 +127,7 @@ impl PostEffect {
     /// for `.scn` `post` keys and `glint bench --post`: an unknown name, a name
     /// given twice or more than [`MAX_POST_EFFECTS`] effects is an error saying
     /// what was expected.
-    pub fn chain(names: &str, settings: &[Self; 5]) -> Result<Vec<Self>, String> {
+    pub fn chain(names: &str, settings: &[Self; 6]) -> Result<Vec<Self>, String> {
         let mut chain: Vec<Self> = Vec::new();
         for name in names.split_whitespace() {
             let Some(k) = Self::NAMES.iter().position(|e| *e == name) else {
@@ -109,6 +156,7 @@ impl PostEffect {
             Self::Fxaa => "fxaa",
             Self::Edges { .. } => "edges",
             Self::Vignette { .. } => "vignette",
+            Self::Smaa { .. } => "smaa",
         }
     }
 }

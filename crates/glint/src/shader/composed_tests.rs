@@ -12,6 +12,7 @@ fn composer() -> Composer {
         ("equirect.wgsl", include_str!("equirect.wgsl")),
         ("blocks.wgsl", include_str!("blocks.wgsl")),
         ("full_screen.wgsl", include_str!("full_screen.wgsl")),
+        ("post_inputs.wgsl", include_str!("post_inputs.wgsl")),
         ("light_clusters.wgsl", include_str!("light_clusters.wgsl")),
         ("shadow_lookup.wgsl", include_str!("shadow_lookup.wgsl")),
     ];
@@ -215,6 +216,7 @@ fn the_shaders_without_defs_are_what_naga_oil_composes() {
     let sources = [
         (BLIT, include_str!("blit.wgsl")),
         (POST, include_str!("post.wgsl")),
+        (SMAA, include_str!("smaa.wgsl")),
         (ACCUMULATE, include_str!("accumulate.wgsl")),
         (CULL, include_str!("cull.wgsl")),
         (PYRAMID, include_str!("pyramid.wgsl")),

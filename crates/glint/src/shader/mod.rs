@@ -281,6 +281,8 @@ pub(crate) fn particles(variant: ParticleShading) -> String {
 pub(crate) const BLIT: &str = assemble::BLIT;
 /// The post-processing passes (render/passes/post.rs).
 pub(crate) const POST: &str = assemble::POST;
+/// SMAA's three passes, in the post chain (render/passes/post.rs).
+pub(crate) const SMAA: &str = assemble::SMAA;
 /// Accumulated stills' fold and copy (render/passes/accumulate.rs).
 pub(crate) const ACCUMULATE: &str = assemble::ACCUMULATE;
 /// GPU frustum culling of a draw list (`render/gpu_driven/gpu_cull.rs`).

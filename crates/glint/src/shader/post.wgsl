@@ -2,29 +2,10 @@
 // one pass of a view's post chain (render/passes/post.rs). Colours are linear; a pass
 // into the view's output (an sRGB target) is encoded by the hardware.
 //
-// Bindings: the pass's input, a second input (bloom's blurred light), a linear
-// clamping sampler and the pass's parameters.
+// Bindings and parameters: post_inputs.wgsl.
 
 #import glint::full_screen::{full_screen_clip, full_screen_uv}
-
-struct Params {
-    // Per pass: bright: x threshold. blur: xy direction in texels. bloom_add: x
-    // intensity. tonemap: x exposure (EV), y operator (0 none, 1 Reinhard, 2 ACES,
-    // 3 AgX). edges: xyz colour, w threshold. vignette: x strength.
-    a: vec4<f32>,
-    // xy: one texel of the input in uv units.
-    texel: vec4<f32>,
-}
-
-@group(0) @binding(0) var source: texture_2d<f32>;
-@group(0) @binding(1) var extra: texture_2d<f32>;
-@group(0) @binding(2) var linear_clamp: sampler;
-@group(0) @binding(3) var<uniform> params: Params;
-
-struct Varyings {
-    @builtin(position) position: vec4<f32>,
-    @location(0) uv: vec2<f32>,
-}
+#import glint::post_inputs::{Params, Varyings, source, extra, linear_clamp, params}
 
 @vertex
 fn vs_post(@builtin(vertex_index) index: u32) -> Varyings {

@@ -12,7 +12,7 @@
 
 use super::World;
 use crate::asset::SceneDesc;
-use crate::scene::{AmbientOcclusion, Camera, Culling, PostEffect, Tonemap, View};
+use crate::scene::{AmbientOcclusion, Camera, Culling, PostEffect, SmaaPreset, Tonemap, View, MAX_POST_EFFECTS};
 use crate::Renderer;
 use serde::Serialize;
 
@@ -67,6 +67,18 @@ const CULLINGS: [(Culling, &str); 3] = [(Culling::Off, "off"), (Culling::Cpu, "C
 const TONEMAPS: [(Tonemap, &str); 4] =
     [(Tonemap::None, "none"), (Tonemap::Reinhard, "Reinhard"), (Tonemap::Aces, "ACES"), (Tonemap::Agx, "AgX")];
 
+/// The anti-aliasing choices, after "as the scene says": the effect that
+/// ends every view's post chain in place of the chain's own FXAA or SMAA
+/// (`None`: neither).
+const ANTIALIASING: [(Option<PostEffect>, &str); 6] = [
+    (None, "none"),
+    (Some(PostEffect::Fxaa), "FXAA"),
+    (Some(PostEffect::Smaa { preset: SmaaPreset::Low }), "SMAA low"),
+    (Some(PostEffect::Smaa { preset: SmaaPreset::Medium }), "SMAA medium"),
+    (Some(PostEffect::Smaa { preset: SmaaPreset::High }), "SMAA high"),
+    (Some(PostEffect::Smaa { preset: SmaaPreset::Ultra }), "SMAA ultra"),
+];
+
 /// The largest level-of-detail error offered, pixels.
 const LOD_ERROR_MAX: f32 = 8.0;
 
@@ -84,6 +96,8 @@ pub struct Controls {
     camera: usize,
     /// 0 for as each camera says, else 1 + an index of [`CULLINGS`].
     culling: usize,
+    /// 0 for as each camera says, else 1 + an index of [`ANTIALIASING`].
+    antialiasing: usize,
     /// Whether views draw levels of detail, and the error they allow in
     /// pixels where chosen (else as each camera says).
     levels: bool,
@@ -137,6 +151,7 @@ impl Controls {
             cameras: desc.cameras.len().max(1),
             camera: 0,
             culling: 0,
+            antialiasing: 0,
             levels: true,
             lod_error: None,
             has_positional: desc.lights.iter().any(|l| !matches!(l.kind, crate::scene::LightKind::Directional { .. })),
@@ -176,6 +191,10 @@ impl Controls {
         let mut cullings = vec!["as the scene says".to_owned()];
         cullings.extend(CULLINGS.iter().map(|(_, n)| (*n).to_owned()));
         add("culling".into(), "View", "culling", ControlKind::Choice { index: self.culling, options: cullings });
+        let mut options = vec!["as the scene says".to_owned()];
+        options.extend(ANTIALIASING.iter().map(|(_, n)| (*n).to_owned()));
+        let kind = ControlKind::Choice { index: self.antialiasing, options };
+        add("antialiasing".into(), "View", "anti-aliasing (post)", kind);
         add("levels".into(), "View", "levels of detail", ControlKind::Toggle { on: self.levels });
         let error = self.lod_error.unwrap_or(crate::scene::DEFAULT_LOD_ERROR);
         let kind = ControlKind::Slider { value: error, min: 0.0, max: LOD_ERROR_MAX, step: 0.05 };
@@ -243,6 +262,10 @@ impl Controls {
                     let options = TONEMAPS.iter().map(|(_, n)| (*n).to_owned()).collect();
                     add(id("operator"), &section, "operator", ControlKind::Choice { index, options });
                 }
+                if let PostEffect::Smaa { preset } = effect {
+                    let options = SmaaPreset::NAMES.iter().map(|n| (*n).to_owned()).collect();
+                    add(id("preset"), &section, "preset", ControlKind::Choice { index: *preset as usize, options });
+                }
             }
         }
         list
@@ -265,6 +288,7 @@ impl Controls {
         match (id, &control.kind) {
             ("camera", ControlKind::Choice { options, .. }) => self.camera = index(options.len()),
             ("culling", ControlKind::Choice { options, .. }) => self.culling = index(options.len()),
+            ("antialiasing", ControlKind::Choice { options, .. }) => self.antialiasing = index(options.len()),
             ("levels", _) => self.levels = on,
             ("cluster_heat", _) => self.cluster_heat = on,
             ("lod_error", _) => self.lod_error = Some(clamp(value)),
@@ -324,6 +348,9 @@ impl Controls {
                 *operator = TONEMAPS[(value.max(0.0) as usize).min(TONEMAPS.len() - 1)].0
             }
             ("strength", PostEffect::Vignette { strength }) => *strength = value,
+            ("preset", PostEffect::Smaa { preset }) => {
+                *preset = SmaaPreset::ALL[(value.max(0.0) as usize).min(SmaaPreset::ALL.len() - 1)]
+            }
             _ => return Err(format!("no control '{id}'")),
         }
         Ok(())
@@ -404,8 +431,8 @@ impl Controls {
 
     /// `views` (the world's, for [`scene_camera`](Self::scene_camera)) as
     /// chosen: culling, the ambient occlusion of each view of a scene camera,
-    /// and its post chain with the effects turned off left out and the
-    /// exposure added to its tonemapping.
+    /// its post chain with the effects turned off left out and the
+    /// exposure added to its tonemapping, and every chain's anti-aliasing.
     pub fn views(&self, views: Vec<View>) -> Vec<View> {
         (views.into_iter())
             .map(|mut view| {
@@ -421,6 +448,10 @@ impl Controls {
                 }
                 if let Some(&(settings, on)) = camera.and_then(|c| self.occlusion.get(c)) {
                     view.ambient_occlusion = on.then_some(settings);
+                }
+                if let Some((chosen, _)) = self.antialiasing.checked_sub(1).map(|k| ANTIALIASING[k]) {
+                    view.post.retain(|e| !matches!(e, PostEffect::Fxaa | PostEffect::Smaa { .. }));
+                    view.post.extend(chosen.filter(|_| view.post.len() < MAX_POST_EFFECTS));
                 }
                 view
             })
@@ -453,7 +484,7 @@ fn parameters(effect: &PostEffect) -> Vec<(&'static str, f32, f32, f32)> {
             vec![("threshold", threshold, 0.0, 4.0), ("intensity", intensity, 0.0, 2.0)]
         }
         PostEffect::Tonemap { exposure, .. } => vec![("exposure", exposure, -4.0, 4.0)],
-        PostEffect::Fxaa => Vec::new(),
+        PostEffect::Fxaa | PostEffect::Smaa { .. } => Vec::new(),
         PostEffect::Edges { threshold, .. } => vec![("threshold", threshold, 0.0, 1.0)],
         PostEffect::Vignette { strength } => vec![("strength", strength, 0.0, 1.0)],
     }
@@ -555,5 +586,30 @@ mod tests {
         for (id, value) in bad {
             assert!(c.set(id, value).is_err(), "{id}");
         }
+    }
+
+    #[test]
+    fn the_anti_aliasing_choice_ends_every_chain() {
+        let mut c = controls(SCENE);
+        let chain = vec![PostEffect::TONEMAP, PostEffect::Fxaa, PostEffect::VIGNETTE];
+        // Views of a camera not the scene's (a render target's, the free one)
+        // keep their own chains.
+        let other = Camera::orthographic(2.0, 0.1, 20.0);
+        let base = vec![View::new(other).with_post(chain.clone()), View::new(other)];
+        assert_eq!(c.views(base.clone())[0].post, chain, "as the scene says");
+        c.set("antialiasing", 5.0).unwrap();
+        let views = c.views(base.clone());
+        let high = PostEffect::Smaa { preset: SmaaPreset::High };
+        assert_eq!(views[0].post, vec![PostEffect::TONEMAP, PostEffect::VIGNETTE, high], "FXAA gives way to SMAA");
+        assert_eq!(views[1].post, vec![high], "a view without a chain gets one");
+        c.set("antialiasing", 1.0).unwrap();
+        let views = c.views(base);
+        assert_eq!((views[0].post.len(), views[1].post.len()), (2, 0), "none: neither");
+        // A scene's own SMAA has a preset control.
+        let mut own = controls("{ \"classname\" \"camera\"\n\"post\" \"tonemap smaa\" }\n");
+        own.set("post.0.1.preset", 0.0).unwrap();
+        let view = vec![View::new(own.scene_cameras[0]).with_post(vec![PostEffect::TONEMAP, PostEffect::SMAA])];
+        assert_eq!(own.views(view)[0].post[1], PostEffect::Smaa { preset: SmaaPreset::Low });
+        assert!(own.set("post.0.0.preset", 1.0).is_err(), "tonemap has no preset");
     }
 }

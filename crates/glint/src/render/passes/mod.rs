@@ -10,3 +10,4 @@ pub(crate) mod particles;
 pub(crate) mod post;
 pub(crate) mod shadow_maps;
 pub(crate) mod shadow_views;
+pub(crate) mod smaa_area;

@@ -1,11 +1,15 @@
 //! Core layer: a view's post-processing chain. The view was drawn into an HDR
 //! target; each [`PostEffect`] runs in order on full-screen triangles
-//! (`shader/post.wgsl`), between two full-size intermediate targets (bloom also
-//! uses two at half size), and the last pass writes the view's rectangle of the
-//! output. Intermediates are kept between frames by size, never made per frame;
-//! each effect's parameters are written only when they change.
+//! (`shader/post.wgsl`; SMAA's three passes `shader/smaa.wgsl`), between two
+//! full-size intermediate targets (bloom also uses two at half size, SMAA two
+//! more at full size for its edges and blending weights), and the last pass
+//! writes the view's rectangle of the output. Intermediates are kept between
+//! frames by size, never made per frame; each effect's parameters are written
+//! only when they change. SMAA's area texture is computed and uploaded the
+//! first time a chain holds SMAA (`smaa_area.rs`).
 
-use crate::gpu::{sampler_entry, texture_entry, HDR_FORMAT};
+use super::smaa_area;
+use crate::gpu::{sampler_entry, texture_entry, DEPTH_FORMAT, HDR_FORMAT};
 use crate::render::debug::stats::PassStats;
 use crate::render::debug::timer::{GpuTimer, Timed};
 use crate::render::error::RenderError;
@@ -13,7 +17,7 @@ use crate::render::resources::target_pool::TargetPool;
 use crate::scene::{PostEffect, Tonemap, MAX_POST_EFFECTS};
 use std::collections::HashMap;
 
-/// Full-screen passes one chain may take (bloom takes four).
+/// Full-screen passes one chain may take (bloom takes four, SMAA three).
 const MAX_PASSES: usize = 4 * MAX_POST_EFFECTS;
 /// Bytes between pass parameter records: the dynamic-offset alignment every device accepts.
 const PARAMS_STRIDE: u64 = 256;
@@ -28,9 +32,43 @@ enum Pass {
     Fxaa,
     Edges,
     Vignette,
+    SmaaEdges,
+    SmaaWeights,
+    SmaaBlend,
 }
 
+/// The shader module a pass's entry point is in.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+enum Module {
+    Post,
+    Smaa,
+}
+
+/// The intermediate SMAA marks the pixels on edges in (a stencil of
+/// [`DEPTH_FORMAT`]), so that its costly weights pass shades only those.
+const SMAA_STENCIL: usize = 6;
+
 impl Pass {
+    /// How the pass uses SMAA's stencil: the edges pass marks the pixels on
+    /// an edge, the weights pass runs only on them (on GPUs that shade in
+    /// lockstep, as CPU rasterizers do, a branch around the weights'
+    /// searches would not save their cost).
+    fn stencil(self) -> Option<wgpu::StencilFaceState> {
+        let (compare, pass_op) = match self {
+            Pass::SmaaEdges => (wgpu::CompareFunction::Always, wgpu::StencilOperation::Replace),
+            Pass::SmaaWeights => (wgpu::CompareFunction::Equal, wgpu::StencilOperation::Keep),
+            _ => return None,
+        };
+        Some(wgpu::StencilFaceState { compare, pass_op, ..wgpu::StencilFaceState::IGNORE })
+    }
+
+    fn module(self) -> Module {
+        match self {
+            Pass::SmaaEdges | Pass::SmaaWeights | Pass::SmaaBlend => Module::Smaa,
+            _ => Module::Post,
+        }
+    }
+
     fn entry_point(self) -> &'static str {
         match self {
             Pass::Bright => "fs_bright",
@@ -40,11 +78,15 @@ impl Pass {
             Pass::Fxaa => "fs_fxaa",
             Pass::Edges => "fs_edges",
             Pass::Vignette => "fs_vignette",
+            Pass::SmaaEdges => "fs_smaa_edges",
+            Pass::SmaaWeights => "fs_smaa_weights",
+            Pass::SmaaBlend => "fs_smaa_blend",
         }
     }
 }
 
-/// The parameters block of `post.wgsl`: `a`, then the input's texel size.
+/// The parameters block of `post.wgsl` and `smaa.wgsl`: `a`, then the
+/// input's texel size and its size in pixels.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 struct Params {
@@ -57,7 +99,8 @@ struct Params {
 enum Image {
     /// The view as drawn (HDR).
     Scene,
-    /// Intermediate `k`: 0 and 1 full size, 2 and 3 half size.
+    /// Intermediate `k`: 0 and 1 full size, 2 and 3 half size, 4 and 5 full
+    /// size (SMAA's edges and blending weights; [`SMAA_STENCIL`] its stencil).
     Pooled(usize),
     /// The view's rectangle of the output.
     Output,
@@ -103,6 +146,12 @@ fn steps(chain: &[PostEffect]) -> Vec<(usize, Step)> {
                 out.push(step(Pass::Tonemap, [exposure, op, 0.0, 0.0], current, None, target));
             }
             PostEffect::Fxaa => out.push(step(Pass::Fxaa, [0.0; 4], current, None, target)),
+            PostEffect::Smaa { preset } => {
+                let (a, edges, weights) = (preset.settings(), Image::Pooled(4), Image::Pooled(5));
+                out.push(step(Pass::SmaaEdges, a, current, None, edges));
+                out.push(step(Pass::SmaaWeights, a, edges, None, weights));
+                out.push(step(Pass::SmaaBlend, a, current, Some(weights), target));
+            }
             PostEffect::Edges { color, threshold } => {
                 out.push(step(Pass::Edges, [color.x, color.y, color.z, threshold], current, None, target))
             }
@@ -113,6 +162,14 @@ fn steps(chain: &[PostEffect]) -> Vec<(usize, Step)> {
         current = target;
     }
     out
+}
+
+/// The size of intermediate `slot` in a chain of `size`: 2 and 3 are half size.
+fn slot_size(slot: usize, (width, height): (u32, u32)) -> (u32, u32) {
+    match slot {
+        2 | 3 => ((width / 2).max(1), (height / 2).max(1)),
+        _ => (width, height),
+    }
 }
 
 /// What a chain draws from and into.
@@ -152,11 +209,14 @@ impl PostParams {
 pub(crate) struct PostChain {
     layout: wgpu::BindGroupLayout,
     pipeline_layout: wgpu::PipelineLayout,
-    module: Option<wgpu::ShaderModule>,
+    modules: HashMap<Module, wgpu::ShaderModule>,
     sampler: wgpu::Sampler,
     pipelines: HashMap<(Pass, wgpu::TextureFormat), wgpu::RenderPipeline>,
-    /// Bound as the second input where a pass has none.
+    /// Bound as the second input where a pass has none, and as SMAA's area
+    /// texture until a chain holds SMAA.
     black: wgpu::TextureView,
+    /// SMAA's area texture, once a chain has held SMAA.
+    smaa_area: Option<wgpu::TextureView>,
 }
 
 impl PostChain {
@@ -173,7 +233,7 @@ impl PostChain {
         };
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("post: layout"),
-            entries: &[texture_entry(0), texture_entry(1), sampler_entry(2), params_entry],
+            entries: &[texture_entry(0), texture_entry(1), sampler_entry(2), params_entry, texture_entry(4)],
         });
         let black = device.create_texture(&wgpu::TextureDescriptor {
             label: Some("post: black"),
@@ -192,7 +252,7 @@ impl PostChain {
                 immediate_size: 0,
             }),
             layout,
-            module: None,
+            modules: HashMap::new(),
             sampler: device.create_sampler(&wgpu::SamplerDescriptor {
                 label: Some("post: linear clamp"),
                 mag_filter: wgpu::FilterMode::Linear,
@@ -201,6 +261,7 @@ impl PostChain {
             }),
             pipelines: HashMap::new(),
             black: black.create_view(&Default::default()),
+            smaa_area: None,
         }
     }
 
@@ -221,18 +282,17 @@ impl PostChain {
             return Err(RenderError::PostChainTooLong(chain.len()));
         }
         let steps = steps(chain);
-        self.prepare(device, &steps, images, (pool, frame_index))?;
+        self.prepare((device, queue), &steps, images, (pool, frame_index))?;
         let pool = &*pool;
-        let (width, height) = images.size;
-        let half = ((width / 2).max(1), (height / 2).max(1));
         let size_of = |image: Image| match image {
-            Image::Pooled(2 | 3) => half,
+            Image::Pooled(slot) => slot_size(slot, images.size),
             _ => images.size,
         };
         let mut stats = PassStats::default();
         for (k, (effect, step)) in steps.iter().enumerate() {
             let (sw, sh) = size_of(step.source);
-            let record = Params { a: step.a, texel: [1.0 / sw as f32, 1.0 / sh as f32, 0.0, 0.0] };
+            let (w, h) = (sw as f32, sh as f32);
+            let record = Params { a: step.a, texel: [1.0 / w, 1.0 / h, w, h] };
             if params.last[k] != Some(record) {
                 queue.write_buffer(&params.buffer, PARAMS_STRIDE * k as u64, bytemuck::bytes_of(&record));
                 params.last[k] = Some(record);
@@ -257,6 +317,10 @@ impl PostChain {
                             size: wgpu::BufferSize::new(std::mem::size_of::<Params>() as u64),
                         }),
                     },
+                    wgpu::BindGroupEntry {
+                        binding: 4,
+                        resource: wgpu::BindingResource::TextureView(self.smaa_area.as_ref().unwrap_or(&self.black)),
+                    },
                 ],
             });
             let first = k == 0 || steps[k - 1].0 != *effect;
@@ -264,17 +328,31 @@ impl PostChain {
             let writes = timer.as_ref().and_then(|t| t.pass_writes(Timed::Post(*effect as u8), first, last));
             let format = if step.target == Image::Output { images.output_format } else { HDR_FORMAT };
             let label = format!("post: {} ({})", chain[*effect].name(), step.pass.entry_point());
+            // SMAA's passes write only the pixels on edges: the rest is cleared.
+            let stencil = match step.pass.stencil() {
+                Some(_) => Some(self.stencil_attachment(step, images, pool)?),
+                None => None,
+            };
+            let stencil_marks = stencil.is_some();
+            let load = match stencil {
+                Some(_) => wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                None => wgpu::LoadOp::Load,
+            };
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some(&label),
                 color_attachments: &[Some(wgpu::RenderPassColorAttachment {
                     view: self.view(step.target, images, pool)?,
                     depth_slice: None,
                     resolve_target: None,
-                    ops: wgpu::Operations { load: wgpu::LoadOp::Load, store: wgpu::StoreOp::Store },
+                    ops: wgpu::Operations { load, store: wgpu::StoreOp::Store },
                 })],
+                depth_stencil_attachment: stencil,
                 timestamp_writes: writes,
                 ..Default::default()
             });
+            if stencil_marks {
+                pass.set_stencil_reference(1);
+            }
             if step.target == Image::Output {
                 let [x, y, w, h] = images.rect;
                 pass.set_viewport(x as f32, y as f32, w as f32, h as f32, 0.0, 1.0);
@@ -284,8 +362,9 @@ impl PostChain {
             pass.draw(0..3, 0..1);
             drop(pass);
             outline.pass(&label, crate::render::debug::explain::PassType::Render, &[]);
-            let changed = ["pipeline", "bind group 0 (the step's images and parameters)"];
-            outline.call(|| crate::render::debug::explain::DrawCall::single(&label, "draw", (1, 1), &changed));
+            let changed = ["pipeline", "bind group 0 (the step's images and parameters)", "stencil reference"];
+            let changed = &changed[..if stencil_marks { 3 } else { 2 }];
+            outline.call(|| crate::render::debug::explain::DrawCall::single(&label, "draw", (1, 1), changed));
             if last {
                 if let Some(timer) = timer.as_deref_mut() {
                     timer.resolve(encoder, Timed::Post(*effect as u8), frame_index);
@@ -297,44 +376,83 @@ impl PostChain {
         Ok(stats)
     }
 
-    /// Build the pipelines and intermediate targets `steps` need.
+    /// Build the pipelines, intermediate targets and lookup textures `steps` need.
     fn prepare(
         &mut self,
-        device: &wgpu::Device,
+        (device, queue): (&wgpu::Device, &wgpu::Queue),
         steps: &[(usize, Step)],
         images: &ChainImages,
         (pool, frame_index): (&mut TargetPool, u64),
     ) -> Result<(), RenderError> {
         let scope = crate::gpu::DriverErrors::watch(device);
-        let module = self.module.get_or_insert_with(|| {
-            device.create_shader_module(wgpu::ShaderModuleDescriptor {
-                label: Some("post: shader"),
-                source: wgpu::ShaderSource::Wgsl(crate::shader::POST.into()),
-            })
-        });
         for (_, step) in steps {
+            let module = step.pass.module();
+            let module = self.modules.entry(module).or_insert_with(|| {
+                let (label, source) = match module {
+                    Module::Post => ("post: shader", crate::shader::POST),
+                    Module::Smaa => ("post: SMAA shader", crate::shader::SMAA),
+                };
+                let source = wgpu::ShaderSource::Wgsl(source.into());
+                device.create_shader_module(wgpu::ShaderModuleDescriptor { label: Some(label), source })
+            });
             let format = if step.target == Image::Output { images.output_format } else { HDR_FORMAT };
             self.pipelines.entry((step.pass, format)).or_insert_with(|| {
                 let label = format!("post: {} ({format:?})", step.pass.entry_point());
                 let shader = (&self.pipeline_layout, &*module);
-                crate::gpu::full_screen_pipeline(device, &label, shader, ("vs_post", step.pass.entry_point()), format)
+                let stencil = step.pass.stencil().map(|face| wgpu::DepthStencilState {
+                    format: DEPTH_FORMAT,
+                    depth_write_enabled: Some(false),
+                    depth_compare: Some(wgpu::CompareFunction::Always),
+                    stencil: wgpu::StencilState { front: face, back: face, read_mask: 1, write_mask: 1 },
+                    bias: Default::default(),
+                });
+                let entries = ("vs_post", step.pass.entry_point());
+                crate::gpu::full_screen_pipeline_with(device, &label, shader, entries, format, stencil)
             });
         }
-        let (width, height) = images.size;
-        let half = ((width / 2).max(1), (height / 2).max(1));
+        if self.smaa_area.is_none() && steps.iter().any(|(_, s)| s.pass.module() == Module::Smaa) {
+            self.smaa_area = Some(smaa_area_texture(device, queue));
+        }
         let used = |image: &Image| matches!(image, Image::Pooled(_)).then_some(*image);
         for image in steps.iter().flat_map(|(_, s)| [used(&s.source), s.extra, used(&s.target)]).flatten() {
             let Image::Pooled(slot) = image else { continue };
-            pool.keep_image(device, if slot >= 2 { half } else { images.size }, slot, frame_index);
+            pool.keep_image(device, slot_size(slot, images.size), (slot, HDR_FORMAT), frame_index);
+        }
+        if steps.iter().any(|(_, s)| s.pass.stencil().is_some()) {
+            pool.keep_image(device, images.size, (SMAA_STENCIL, DEPTH_FORMAT), frame_index);
         }
         match scope.finish() {
             Some(error) => {
-                self.module = None;
+                self.modules.clear();
                 self.pipelines.clear();
                 Err(RenderError::Device { what: "the post-processing passes", message: error.to_string() })
             }
             None => Ok(()),
         }
+    }
+
+    /// SMAA's stencil for `step`: cleared by the edges pass, which marks the
+    /// pixels on edges; kept for the weights pass, which tests it.
+    fn stencil_attachment<'a>(
+        &self,
+        step: &Step,
+        images: &ChainImages,
+        pool: &'a TargetPool,
+    ) -> Result<wgpu::RenderPassDepthStencilAttachment<'a>, RenderError> {
+        let missing = || RenderError::Device {
+            what: "the post-processing passes",
+            message: format!("no SMAA stencil of {}x{}", images.size.0, images.size.1),
+        };
+        let view = pool.image(images.size, SMAA_STENCIL).ok_or_else(missing)?;
+        let (load, store) = match step.pass {
+            Pass::SmaaEdges => (wgpu::LoadOp::Clear(0), wgpu::StoreOp::Store),
+            _ => (wgpu::LoadOp::Load, wgpu::StoreOp::Discard),
+        };
+        Ok(wgpu::RenderPassDepthStencilAttachment {
+            view,
+            depth_ops: None,
+            stencil_ops: Some(wgpu::Operations { load, store }),
+        })
     }
 
     /// The texture view of `image` (a pooled image as `prepare` made it).
@@ -344,13 +462,11 @@ impl PostChain {
         images: &'a ChainImages,
         pool: &'a TargetPool,
     ) -> Result<&'a wgpu::TextureView, RenderError> {
-        let (width, height) = images.size;
-        let half = ((width / 2).max(1), (height / 2).max(1));
         match image {
             Image::Scene => Ok(images.scene),
             Image::Output => Ok(images.output),
             Image::Pooled(slot) => {
-                let size = if slot >= 2 { half } else { images.size };
+                let size = slot_size(slot, images.size);
                 let missing = || RenderError::Device {
                     what: "the post-processing passes",
                     message: format!("no intermediate image {slot} of {}x{}", size.0, size.1),
@@ -361,6 +477,28 @@ impl PostChain {
     }
 }
 
+/// SMAA's area texture on the GPU (RG8, filtered between distances).
+fn smaa_area_texture(device: &wgpu::Device, queue: &wgpu::Queue) -> wgpu::TextureView {
+    use wgpu::util::DeviceExt;
+    let size = wgpu::Extent3d { width: smaa_area::WIDTH, height: smaa_area::HEIGHT, depth_or_array_layers: 1 };
+    let texture = device.create_texture_with_data(
+        queue,
+        &wgpu::TextureDescriptor {
+            label: Some("post: SMAA area texture"),
+            size,
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: wgpu::TextureFormat::Rg8Unorm,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+            view_formats: &[],
+        },
+        wgpu::util::TextureDataOrder::LayerMajor,
+        smaa_area::bytes(),
+    );
+    texture.create_view(&Default::default())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -368,6 +506,7 @@ mod tests {
     #[test]
     fn the_post_parameters_mirror_their_wgsl_struct() {
         crate::shader::layout::assert_mirrors!(Params, crate::shader::POST, "Params", [a, texel]);
+        crate::shader::layout::assert_mirrors!(Params, crate::shader::SMAA, "Params", [a, texel]);
     }
 
     #[test]
@@ -391,5 +530,23 @@ mod tests {
         assert!(super::steps(&[]).is_empty(), "no chain, no passes");
         let one = super::steps(&[PostEffect::Fxaa]);
         assert_eq!((one.len(), one[0].1.source, one[0].1.target), (1, Image::Scene, Image::Output));
+    }
+
+    #[test]
+    fn smaa_finds_edges_then_weights_then_blends_the_input() {
+        let steps = steps(&[PostEffect::TONEMAP, PostEffect::SMAA]);
+        let shape: Vec<(usize, Pass, Image, Option<Image>, Image)> =
+            steps.iter().map(|(k, s)| (*k, s.pass, s.source, s.extra, s.target)).collect();
+        assert_eq!(
+            shape,
+            vec![
+                (0, Pass::Tonemap, Image::Scene, None, Image::Pooled(0)),
+                (1, Pass::SmaaEdges, Image::Pooled(0), None, Image::Pooled(4)),
+                (1, Pass::SmaaWeights, Image::Pooled(4), None, Image::Pooled(5)),
+                (1, Pass::SmaaBlend, Image::Pooled(0), Some(Image::Pooled(5)), Image::Output),
+            ]
+        );
+        assert_eq!(steps[1].1.a, crate::scene::SmaaPreset::High.settings(), "the preset's settings");
+        assert_eq!((slot_size(4, (9, 5)), slot_size(3, (9, 5))), ((9, 5), (4, 2)));
     }
 }

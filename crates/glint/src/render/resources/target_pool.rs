@@ -4,14 +4,15 @@
 //! images. A target unused for more than two frames is dropped when the pool
 //! makes a new one (a window being resized asks for a new size every frame).
 
-use crate::gpu::{OffscreenTarget, TargetFormat, HDR_FORMAT};
+use crate::gpu::{OffscreenTarget, TargetFormat};
 
 /// What a transient target is for.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) enum TargetUse {
     /// A view's own target: colour and depth, in this format and sample count.
     View(TargetFormat),
-    /// The post chain's intermediate image in this slot: HDR, one sample.
+    /// The post chain's intermediate image in this slot: one sample, in
+    /// the slot's format (HDR colour, or SMAA's stencil).
     PostImage(usize),
 }
 
@@ -69,8 +70,15 @@ impl TargetPool {
         }
     }
 
-    /// Make sure post image `slot` of `size` exists, used in frame `frame`.
-    pub(crate) fn keep_image(&mut self, device: &wgpu::Device, size: (u32, u32), slot: usize, frame: u64) {
+    /// Make sure post image `slot` of `size` and `format` exists (a slot
+    /// keeps one format), used in frame `frame`.
+    pub(crate) fn keep_image(
+        &mut self,
+        device: &wgpu::Device,
+        size: (u32, u32),
+        (slot, format): (usize, wgpu::TextureFormat),
+        frame: u64,
+    ) {
         let usage = TargetUse::PostImage(slot);
         if let Some(entry) = self.entries.iter_mut().find(|e| e.size == size && e.usage == usage) {
             entry.last_used = frame;
@@ -83,7 +91,7 @@ impl TargetPool {
             mip_level_count: 1,
             sample_count: 1,
             dimension: wgpu::TextureDimension::D2,
-            format: HDR_FORMAT,
+            format,
             usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
             view_formats: &[],
         });
@@ -109,7 +117,7 @@ impl TargetPool {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::gpu::{Gpu, COLOR_FORMAT};
+    use crate::gpu::{Gpu, COLOR_FORMAT, HDR_FORMAT};
 
     #[test]
     fn targets_are_kept_by_size_and_use_and_dropped_when_stale() {
@@ -130,8 +138,8 @@ mod tests {
         // The next frame takes them again rather than making new ones.
         let a = pool.take_view(device, (8, 4), (format, false), 1);
         pool.put_back(a, 1);
-        pool.keep_image(device, (8, 4), 0, 1);
-        pool.keep_image(device, (8, 4), 0, 1);
+        pool.keep_image(device, (8, 4), (0, HDR_FORMAT), 1);
+        pool.keep_image(device, (8, 4), (0, HDR_FORMAT), 1);
         assert_eq!(pool.entries.len(), 3, "one post image per size and slot");
         assert!(pool.image((8, 4), 0).is_some() && pool.image((8, 4), 1).is_none());
         // Four frames later a new size drops what was not used since.
