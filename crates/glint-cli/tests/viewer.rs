@@ -288,3 +288,39 @@ fn the_viewer_softens_shadows_and_accumulates_stills_by_its_controls() {
     let differing = still.pixels().zip(rendered.pixels()).filter(|(p, q)| p.0[0].abs_diff(q.0[0]) > 8).count();
     assert!(differing < 20, "the viewer's 16-sample frame differs from glint render --spp 16 in {differing} pixels");
 }
+
+/// The anti-aliasing control (the overlay's and the web page's): "none"
+/// draws what `glint render --post tonemap` does, "SMAA high" what the
+/// scene's own `tonemap smaa` chain does.
+#[test]
+fn the_viewer_chooses_its_anti_aliasing_by_its_control() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let shot = |name: &str| dir.path().join(format!("{name}.png"));
+    let at = |frame: u32, action: String| ["--at".to_owned(), format!("{frame}:{action}")];
+    let args = ["--size", "96x96", "--msaa", "1", "--frames", "5", "--at", "1:overlay=off"]
+        .map(str::to_owned)
+        .into_iter()
+        .chain(at(1, "set=antialiasing=1".into()))
+        .chain(at(2, format!("screenshot={}", shot("none").display())))
+        .chain(at(3, "set=antialiasing=5".into()))
+        .chain(at(4, format!("screenshot={}", shot("smaa").display())));
+    let scene = repo("tests/scenes/smaa.scn");
+    let Some(out) = view_under_xvfb(&scene, &args.collect::<Vec<_>>()) else { return };
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let [none, smaa] = ["none", "smaa"].map(|n| image::open(shot(n)).expect("png").into_rgb8());
+    let differing = |a: &image::RgbImage, b: &image::RgbImage| {
+        a.pixels().zip(b.pixels()).filter(|(p, q)| p.0.iter().zip(q.0).any(|(x, y)| x.abs_diff(y) > 8)).count()
+    };
+    let scene = scene.to_str().expect("path");
+    for (name, post, shown) in [("rendered_none", "tonemap", &none), ("rendered_smaa", "tonemap smaa", &smaa)] {
+        let file = shot(name);
+        let args = ["render", scene, "-o", file.to_str().expect("path"), "--size", "96x96", "--msaa", "1"];
+        let o = glint(&[&args[..], &["--post", post]].concat());
+        assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+        let rendered = image::open(&file).expect("png").into_rgb8();
+        let off = differing(shown, &rendered);
+        assert!(off < 10, "the viewer's frame differs from glint render --post '{post}' in {off} pixels");
+    }
+    let smoothed = differing(&none, &smaa);
+    assert!(smoothed > 30, "SMAA changes the edges' pixels: {smoothed}");
+}
