@@ -109,8 +109,9 @@ enum Command {
         #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=glint::render::MAX_SUB_FRAMES as i64))]
         spp: u32,
         /// Post-process every camera that draws into the picture with these
-        /// effects (with the camera's settings for them), e.g. "tonemap
-        /// smaa", instead of its own "post"; "" for none.
+        /// effects, e.g. "tonemap smaa", instead of its own "post" (each with
+        /// the settings the camera's own chain gave it, else its defaults);
+        /// "" for none.
         #[arg(long)]
         post: Option<String>,
     },
@@ -188,9 +189,9 @@ enum Command {
         plot: Option<PathBuf>,
         /// Post-process the first camera with these effects (with their
         /// defaults), e.g. "bloom tonemap fxaa", instead of its own "post"; ""
-        /// for none. Given more than once, each chain is measured in turn in
-        /// the same run (e.g. --post "tonemap fxaa" --post "tonemap smaa"),
-        /// each mode's report naming its chain.
+        /// for none. Given more than once (with --mode optimized), each chain
+        /// is measured in turn in the same run (e.g. --post "tonemap fxaa"
+        /// --post "tonemap smaa"), each report naming its chain.
         #[arg(long, value_parser = parse_post)]
         post: Vec<PostArg>,
         /// Run the scene as it plays instead (its fish, particles and cloth
@@ -601,6 +602,20 @@ fn run_bench(
         (BenchMode::Optimized, _) => false,
         (_, Ok(())) => true,
     };
+    if posts.len() > 1 {
+        let compared = |what: &str| glint::Diagnostic::file(scene, format!("--post given more than once {what}"));
+        if !matches!(mode, BenchMode::Optimized) || lod == lod::BenchLod::Both {
+            return Err(compared(
+                "compares chains on the optimized frame alone: add --mode optimized (without --lod both)",
+            )
+            .into());
+        }
+        if let Some((k, _)) = posts.iter().enumerate().find(|(k, p)| posts[..*k].iter().any(|q| q.0 == p.0)) {
+            return Err(
+                compared(&format!("names one chain twice (its number {} repeats an earlier one)", k + 1)).into()
+            );
+        }
+    }
     let gpu = Gpu::headless()?;
     // Each chain asked for in turn (the scene's own where none was).
     let chains: Vec<Option<&PostArg>> = if posts.is_empty() { vec![None] } else { posts.iter().map(Some).collect() };

@@ -401,6 +401,24 @@ fn bench_reports_naive_cpu_culled_and_gpu_culled_side_by_side_as_json() {
     assert_eq!(one["modes"].as_object().map(|m| m.len()), Some(1));
     assert_eq!(one["modes"]["optimized"]["stats"]["culling"], "cpu");
     assert_eq!(glint(&["bench", scene, "--frames", "0"]).status.code(), Some(1));
+    // Post chains compared in one run, each report naming its chain and
+    // timing each of its effects where the device has timestamps.
+    let chains = ["--mode", "optimized", "--post", "tonemap fxaa", "--post", "tonemap smaa"];
+    let out = glint(&[&args[..], &chains].concat());
+    let both: serde_json::Value = serde_json::from_slice(&out.stdout).expect("one JSON object");
+    let smaa = &both["modes"]["optimized [tonemap smaa]"];
+    assert_eq!(both["modes"]["optimized [tonemap fxaa]"]["post"], serde_json::json!(["tonemap", "fxaa"]));
+    assert_eq!(smaa["stats"]["passes"]["post"]["draws"], 4, "tonemap, and SMAA's three passes");
+    let timed = smaa["post_gpu_ms_median"].as_array().expect("times");
+    assert!(timed.is_empty() || timed.len() == 2, "one time per effect: {timed:?}");
+    for (extra, says) in [
+        (&["--post", "tonemap", "--post", "tonemap smaa"][..], "add --mode optimized"),
+        (&["--mode", "optimized", "--post", "fxaa", "--post", "fxaa"], "names one chain twice"),
+    ] {
+        let out = glint(&[&args[..], extra].concat());
+        assert_eq!(out.status.code(), Some(1), "{extra:?}: {}", stderr(&out));
+        assert!(stderr(&out).contains(says), "{extra:?}: {}", stderr(&out));
+    }
 }
 
 #[test]

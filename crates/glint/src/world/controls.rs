@@ -67,9 +67,9 @@ const CULLINGS: [(Culling, &str); 3] = [(Culling::Off, "off"), (Culling::Cpu, "C
 const TONEMAPS: [(Tonemap, &str); 4] =
     [(Tonemap::None, "none"), (Tonemap::Reinhard, "Reinhard"), (Tonemap::Aces, "ACES"), (Tonemap::Agx, "AgX")];
 
-/// The anti-aliasing choices, after "as the scene says": the effect that
-/// ends every view's post chain in place of the chain's own FXAA or SMAA
-/// (`None`: neither).
+/// The anti-aliasing choices, after "as the scene says": the chain's own
+/// FXAA or SMAA is taken out and the chosen effect added at the chain's end,
+/// in every view that draws into the picture (`None`: neither).
 const ANTIALIASING: [(Option<PostEffect>, &str); 6] = [
     (None, "none"),
     (Some(PostEffect::Fxaa), "FXAA"),
@@ -449,7 +449,8 @@ impl Controls {
                 if let Some(&(settings, on)) = camera.and_then(|c| self.occlusion.get(c)) {
                     view.ambient_occlusion = on.then_some(settings);
                 }
-                if let Some((chosen, _)) = self.antialiasing.checked_sub(1).map(|k| ANTIALIASING[k]) {
+                let chosen = self.antialiasing.checked_sub(1).map(|k| ANTIALIASING[k]);
+                if let Some((chosen, _)) = chosen.filter(|_| view.output.is_none()) {
                     view.post.retain(|e| !matches!(e, PostEffect::Fxaa | PostEffect::Smaa { .. }));
                     view.post.extend(chosen.filter(|_| view.post.len() < MAX_POST_EFFECTS));
                 }
@@ -592,16 +593,18 @@ mod tests {
     fn the_anti_aliasing_choice_ends_every_chain() {
         let mut c = controls(SCENE);
         let chain = vec![PostEffect::TONEMAP, PostEffect::Fxaa, PostEffect::VIGNETTE];
-        // Views of a camera not the scene's (a render target's, the free one)
-        // keep their own chains.
+        // Views of a camera not the scene's (the free one) keep their own
+        // chains as the scene says; a view into a render target keeps it always.
         let other = Camera::orthographic(2.0, 0.1, 20.0);
-        let base = vec![View::new(other).with_post(chain.clone()), View::new(other)];
+        let into_target = View::new(other).with_post(chain.clone()).with_output(crate::scene::RenderTargetId(0));
+        let base = vec![View::new(other).with_post(chain.clone()), View::new(other), into_target];
         assert_eq!(c.views(base.clone())[0].post, chain, "as the scene says");
         c.set("antialiasing", 5.0).unwrap();
         let views = c.views(base.clone());
         let high = PostEffect::Smaa { preset: SmaaPreset::High };
         assert_eq!(views[0].post, vec![PostEffect::TONEMAP, PostEffect::VIGNETTE, high], "FXAA gives way to SMAA");
         assert_eq!(views[1].post, vec![high], "a view without a chain gets one");
+        assert_eq!(views[2].post, chain, "a render target's view keeps its chain");
         c.set("antialiasing", 1.0).unwrap();
         let views = c.views(base);
         assert_eq!((views[0].post.len(), views[1].post.len()), (2, 0), "none: neither");
