@@ -2,7 +2,8 @@
 // Subpixel Morphological Antialiasing", 2012), the three passes of a post
 // chain's `smaa` effect (render/passes/post.rs), after the reference shader
 // at https://github.com/iryoku/smaa (MIT licence, © 2013 Jorge Jimenez, Jose
-// I. Echevarria, Belen Masia, Fernando Navarro and Diego Gutierrez):
+// I. Echevarria, Belen Masia, Fernando Navarro and Diego Gutierrez; its text in
+// crates/glint/licenses/SMAA-LICENSE.txt):
 //   1. fs_smaa_edges: luma edges between each pixel and its left and top
 //      neighbours (red: left, green: top), kept where they stand out locally;
 //      a pixel without one is discarded, the rest are marked in a stencil;

@@ -3,7 +3,8 @@
 //! edge pattern and the distances to the pattern's two ends. It follows
 //! `Scripts/AreaTex.py` of Jimenez, Echevarria, Sousa and Gutierrez's SMAA
 //! (<https://github.com/iryoku/smaa>, MIT licence, © 2013 Jorge Jimenez, Jose
-//! I. Echevarria, Belen Masia, Fernando Navarro and Diego Gutierrez), reduced
+//! I. Echevarria, Belen Masia, Fernando Navarro and Diego Gutierrez: its text
+//! in `crates/glint/licenses/SMAA-LICENSE.txt`), reduced
 //! to SMAA 1x: its one sub-pixel offset, 0, so the texture is the published
 //! 160×560 texture's first 160×80 rows. A test checks the bytes against
 //! the published ones.
