@@ -51,12 +51,10 @@ fn posted(views: Vec<glint::View>, names: &str) -> Result<Vec<glint::View>, Stri
     (views.into_iter())
         .map(|mut view| {
             if view.output.is_none() {
-                let mut settings = glint::scene::PostEffect::ALL;
-                for effect in &view.post {
-                    let k = glint::scene::PostEffect::NAMES.iter().position(|n| *n == effect.name());
-                    settings[k.expect("every effect is named")] = *effect;
-                }
-                view.post = glint::scene::PostEffect::chain(names, &settings)?;
+                let own = |default: glint::scene::PostEffect| {
+                    view.post.iter().copied().find(|e| e.name() == default.name()).unwrap_or(default)
+                };
+                view.post = glint::scene::PostEffect::chain(names, &glint::scene::PostEffect::ALL.map(own))?;
             }
             Ok(view)
         })

@@ -284,7 +284,7 @@ impl Controls {
             ControlKind::Slider { min, max, .. } => v.clamp(*min, *max),
             _ => v,
         };
-        let index = |options: usize| (value.max(0.0) as usize).min(options.saturating_sub(1));
+        let index = |options: usize| chosen(value, options);
         match (id, &control.kind) {
             ("camera", ControlKind::Choice { options, .. }) => self.camera = index(options.len()),
             ("culling", ControlKind::Choice { options, .. }) => self.culling = index(options.len()),
@@ -344,13 +344,9 @@ impl Controls {
             }
             ("intensity", PostEffect::Bloom { intensity, .. }) => *intensity = value,
             ("exposure", PostEffect::Tonemap { exposure, .. }) => *exposure = value,
-            ("operator", PostEffect::Tonemap { operator, .. }) => {
-                *operator = TONEMAPS[(value.max(0.0) as usize).min(TONEMAPS.len() - 1)].0
-            }
+            ("operator", PostEffect::Tonemap { operator, .. }) => *operator = TONEMAPS[chosen(value, TONEMAPS.len())].0,
             ("strength", PostEffect::Vignette { strength }) => *strength = value,
-            ("preset", PostEffect::Smaa { preset }) => {
-                *preset = SmaaPreset::ALL[(value.max(0.0) as usize).min(SmaaPreset::ALL.len() - 1)]
-            }
+            ("preset", PostEffect::Smaa { preset }) => *preset = SmaaPreset::ALL[chosen(value, SmaaPreset::ALL.len())],
             _ => return Err(format!("no control '{id}'")),
         }
         Ok(())
@@ -476,6 +472,12 @@ impl Controls {
         let restart = std::mem::take(&mut self.restart);
         (if self.paused { 0.0 } else { real * self.speed }, restart)
     }
+}
+
+/// The option a choice control's `value` picks among `options`: its index,
+/// clamped to the list.
+fn chosen(value: f32, options: usize) -> usize {
+    (value.max(0.0) as usize).min(options.saturating_sub(1))
 }
 
 /// An effect's numeric parameters: name, value and range.

@@ -329,15 +329,9 @@ impl PostChain {
             let format = if step.target == Image::Output { images.output_format } else { HDR_FORMAT };
             let label = format!("post: {} ({})", chain[*effect].name(), step.pass.entry_point());
             // SMAA's passes write only the pixels on edges: the rest is cleared.
-            let stencil = match step.pass.stencil() {
-                Some(_) => Some(self.stencil_attachment(step, images, pool)?),
-                None => None,
-            };
+            let stencil = step.pass.stencil().map(|_| self.stencil_attachment(step, images, pool)).transpose()?;
             let stencil_marks = stencil.is_some();
-            let load = match stencil {
-                Some(_) => wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
-                None => wgpu::LoadOp::Load,
-            };
+            let load = if stencil_marks { wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT) } else { wgpu::LoadOp::Load };
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some(&label),
                 color_attachments: &[Some(wgpu::RenderPassColorAttachment {
