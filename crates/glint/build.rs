@@ -26,7 +26,7 @@ const COMPOSED: [(&str, &str); 5] =
 
 /// The shaders without defs (their imports ahead of their own text), and the
 /// constant each becomes.
-const PLAIN: [(&str, &str); 15] = [
+const PLAIN: [(&str, &str); 17] = [
     ("BLIT", "blit"),
     ("POST", "post"),
     ("SMAA", "smaa"),
@@ -42,16 +42,19 @@ const PLAIN: [(&str, &str); 15] = [
     ("CLOTH", "cloth"),
     ("CLOTH_PLACE", "cloth_place"),
     ("BIN_LIGHTS", "bin_lights"),
+    ("TRANSPARENCY", "transparency"),
+    ("TRANSPARENCY_LISTS", "transparency_lists"),
 ];
 
 /// The modules others import: their import path and file.
-const MODULES: [(&str, &str); 6] = [
+const MODULES: [(&str, &str); 7] = [
     ("glint::blocks", "blocks"),
     ("glint::equirect", "equirect"),
     ("glint::full_screen", "full_screen"),
     ("glint::post_inputs", "post_inputs"),
     ("glint::light_clusters", "light_clusters"),
     ("glint::shadow_lookup", "shadow_lookup"),
+    ("glint::transparency_out", "transparency_out"),
 ];
 
 /// One piece of a shader: text or a def's value, and the tests it is under.

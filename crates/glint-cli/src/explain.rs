@@ -9,6 +9,7 @@ use crate::{check_camera, culled, load, output, CullArg};
 use glint::asset::LoadOptions;
 use glint::render::clusters::MAX_CLUSTER_LIGHTS;
 use glint::render::{FrameCalls, FrameMode, PassCalls};
+use glint::scene::Transparency;
 use glint::{Diagnostic, Error, FrameStats, Gpu, OffscreenTarget, Renderer, World};
 use serde::Serialize;
 use std::fmt::Write;
@@ -67,6 +68,9 @@ pub fn explain(args: ExplainArgs) -> Result<(), Error> {
     if args.naive {
         modes.push(explain_mode(&gpu, &desc, &args, FrameMode::Naive)?);
     }
+    // Weighted transparency's error against the exact reference, where both run.
+    let weighted = modes[0].stats.transparency == Transparency::Weighted && gpu.fragment_lists();
+    let error = if weighted { Some(weighted_error(&gpu, &desc, &args)?) } else { None };
     let adapter = format!("{} ({:?})", gpu.info().name, gpu.info().backend);
     let (width, height) = args.size;
     let text = if args.json {
@@ -76,6 +80,9 @@ pub fn explain(args: ExplainArgs) -> Result<(), Error> {
         json["size"] = format!("{width}x{height}").into();
         json["view"] = args.view.into();
         json["spp"] = args.spp.into();
+        if let Some(error) = &error {
+            json["weighted_error"] = serde_json::to_value(error).expect("errors serialise");
+        }
         if let Some(naive) = modes.get(1) {
             json["naive"] = serde_json::to_value(naive).expect("explanations serialise");
             json["ratios"] = serde_json::to_value(Ratios::of(&modes[0], naive)).expect("ratios serialise");
@@ -93,6 +100,13 @@ pub fn explain(args: ExplainArgs) -> Result<(), Error> {
         for mode in &modes {
             text.push_str(&describe(mode));
         }
+        if let Some(e) = &error {
+            let _ = writeln!(
+                text,
+                "weighted transparency against exact (the same frame with per-pixel lists): mean difference {:.4} of full scale over the picture, {:.4} over the {} pixels that differ; largest {} of 255",
+                e.mean, e.mean_differing, e.differing, e.largest
+            );
+        }
         if let Some(naive) = modes.get(1) {
             let r = Ratios::of(&modes[0], naive);
             let _ = writeln!(
@@ -104,6 +118,48 @@ pub fn explain(args: ExplainArgs) -> Result<(), Error> {
         text
     };
     Ok(output::print(&text)?)
+}
+
+/// How far weighted transparency's picture is from the exact one's.
+#[derive(Serialize)]
+struct WeightedError {
+    /// Mean absolute difference of the colour channels, 0..1, over the picture.
+    mean: f64,
+    /// The same over the pixels that differ.
+    mean_differing: f64,
+    /// Pixels that differ.
+    differing: usize,
+    /// The largest difference of a channel, 0..255.
+    largest: u8,
+}
+
+/// The explained frame (the optimized one, all its views) drawn with every
+/// camera's transparency weighted and exact, compared.
+fn weighted_error(gpu: &Gpu, desc: &glint::asset::SceneDesc, args: &ExplainArgs) -> Result<WeightedError, Error> {
+    let picture = |transparency| -> Result<image::RgbaImage, Error> {
+        let mut target = OffscreenTarget::new(gpu, args.size.0, args.size.1, 1)?;
+        let mut renderer = Renderer::new(gpu);
+        args.lod.apply(&mut renderer);
+        let desc = glint::asset::SceneDesc { transparency, ..desc.clone() };
+        let mut world = World::place(desc, &mut renderer)?;
+        let views = args.lod.views(culled(world.views(args.camera), args.cull));
+        world.pose(args.time, &mut renderer)?;
+        world.draw_still(&mut renderer, (&views, &mut target), args.spp)?;
+        Ok(target.read_rgba8(gpu)?)
+    };
+    let (weighted, exact) = (picture(Transparency::Weighted)?, picture(Transparency::Exact)?);
+    let pixels: Vec<[u8; 3]> =
+        weighted.pixels().zip(exact.pixels()).map(|(w, e)| std::array::from_fn(|c| w.0[c].abs_diff(e.0[c]))).collect();
+    let sum = |p: &[u8; 3]| p.iter().map(|&d| f64::from(d)).sum::<f64>();
+    let total: f64 = pixels.iter().map(sum).sum();
+    let differing = pixels.iter().filter(|p| p.iter().any(|&d| d > 0)).count();
+    let channels = |n: usize| (3 * n.max(1)) as f64 * 255.0;
+    Ok(WeightedError {
+        mean: total / channels(pixels.len()),
+        mean_differing: total / channels(differing),
+        differing,
+        largest: pixels.iter().flatten().copied().max().unwrap_or(0),
+    })
 }
 
 /// The naive frame's costs over the optimized one's.
@@ -259,6 +315,23 @@ fn describe(e: &Explained) -> String {
             let _ = writeln!(t, "light clusters: none (every fragment loops over every light)");
         }
     }
+    let _ = writeln!(
+        t,
+        "transparency: {}",
+        match s.transparency {
+            Transparency::Sorted => "sorted (blended instances far to near, alpha-blended particle layers in their records' order)",
+            Transparency::Weighted => "weighted (blended materials and alpha-blended particles drawn in any order into two half-float sums, 'transparency: weighted sums', composited by the pass that ends the view)",
+            Transparency::Exact => "exact (blended materials and alpha-blended particles kept in per-pixel lists, 'transparency: fragment lists', sorted and blended by the pass that ends the view)",
+        }
+    );
+    if let Some(f) = &s.transparent_fragments {
+        let dropped = f.appended.saturating_sub(f.held);
+        let _ = writeln!(
+            t,
+            "  {} transparent fragments appended, the lists hold {}: {dropped} dropped",
+            f.appended, f.held
+        );
+    }
     for (k, pass) in e.passes.iter().enumerate() {
         let kind = match pass.kind {
             glint::render::PassType::Compute => "compute",
@@ -293,9 +366,10 @@ fn describe(e: &Explained) -> String {
         let depth = g.depth_prepass_ms.map_or(String::new(), |ms| format!("depth pre-pass {ms:.3}, "));
         let occlusion = g.ambient_occlusion_ms.map_or(String::new(), |ms| format!("ambient occlusion {ms:.3}, "));
         let lights = g.lights_ms.map_or(String::new(), |ms| format!("light binning {ms:.3}, "));
+        let transparency = g.transparency_ms.map_or(String::new(), |ms| format!(" (transparency pass {ms:.3})"));
         let _ = writeln!(
             t,
-            "GPU ms (frame {}): {shadow}{lights}{depth}{occlusion}forward pass {:.3}, post [{}]",
+            "GPU ms (frame {}): {shadow}{lights}{depth}{occlusion}forward pass {:.3}{transparency}, post [{}]",
             g.frame,
             g.forward_ms,
             post.join(", ")

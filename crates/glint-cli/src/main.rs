@@ -357,7 +357,8 @@ struct Picture {
     sim: SimArgs,
 }
 
-/// `--sim`, on `render`, `view`, `bench` and `explain`.
+/// `--sim` and `--transparency`, on `render`, `view`, `bench`, `explain`
+/// and `bake`: what the scene's own blocks say, overridden.
 #[derive(clap::Args, Clone, Copy)]
 pub(crate) struct SimArgs {
     /// Step every fish school here, whatever its block's "sim" says: gpu
@@ -365,17 +366,32 @@ pub(crate) struct SimArgs {
     /// CPU where the adapter cannot, as on GL) or cpu (the reference).
     #[arg(long, value_enum)]
     sim: Option<SimArg>,
+    /// Draw every camera's blended materials and alpha-blended particles
+    /// this way, whatever the world's "transparency" says: sorted (far to
+    /// near), weighted (weighted blended order-independent transparency) or
+    /// exact (per-pixel lists, the reference; Vulkan and GL only).
+    #[arg(long, value_enum)]
+    transparency: Option<TransparencyArg>,
 }
 
 impl SimArgs {
-    /// `options` with this choice.
+    /// `options` with these choices.
     pub(crate) fn apply(self, options: LoadOptions) -> LoadOptions {
         let sim = self.sim.map(|s| match s {
             SimArg::Cpu => glint::scene::SimPath::Cpu,
             SimArg::Gpu => glint::scene::SimPath::Gpu,
         });
-        LoadOptions { sim: sim.or(options.sim), ..options }
+        let transparency = self.transparency.map(|t| glint::scene::Transparency::ALL[t as usize]);
+        LoadOptions { sim: sim.or(options.sim), transparency: transparency.or(options.transparency), ..options }
     }
+}
+
+/// `--transparency`, in the order of [`glint::scene::Transparency::ALL`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub(crate) enum TransparencyArg {
+    Sorted,
+    Weighted,
+    Exact,
 }
 
 /// `--sim`.
@@ -499,7 +515,10 @@ fn parse_msaa(s: &str) -> Result<u32, String> {
 /// any number) is an error naming the file, for `check` as for `render`.
 pub(crate) fn load(scene: &Path, options: LoadOptions) -> Result<SceneDesc, Error> {
     let desc = if Model::is_model_path(scene) {
-        Model::load_with(scene, options)?.into_shown_scene()
+        let transparency = options.transparency;
+        let mut desc = Model::load_with(scene, options)?.into_shown_scene();
+        desc.transparency = transparency.unwrap_or(desc.transparency);
+        desc
     } else {
         load_scene_with(scene, options)?
     };

@@ -88,7 +88,7 @@ pub fn particles(args: &ParticleArgs) -> Result<(), Error> {
         let mut run = |steps: u32| -> Result<f64, Error> {
             let start = Instant::now();
             let time = dt * steps as f32;
-            on_gpu.advance_to(&gpu.queue, time, eye);
+            on_gpu.advance_to(&gpu.queue, time, Some(eye));
             let mut encoder = gpu.device.create_command_encoder(&Default::default());
             on_gpu.encode(&gpu.device, &gpu.queue, &mut encoder);
             gpu.queue.submit([encoder.finish()]);

@@ -99,7 +99,7 @@ fn gpu_particles_match_the_cpu_slot_for_slot() {
     for _ in 0..100 {
         cpu.step();
     }
-    on_gpu.advance_to(&gpu.queue, cpu.time(), Vec3::ZERO);
+    on_gpu.advance_to(&gpu.queue, cpu.time(), Some(Vec3::ZERO));
     let mut target = OffscreenTarget::new(gpu, 64, 64, 1).unwrap();
     let view = glint::View::new(glint::Camera::perspective(60.0, 0.1, 10.0));
     let lighting = glint::Lighting::new(&[], Default::default());

@@ -80,6 +80,9 @@ pub struct LoadOptions {
     /// A scene file's time of day, whatever its world block says (`None`: as
     /// it says; see [`SceneDesc::set_time_of_day`]).
     pub time_of_day: Option<f32>,
+    /// How every camera of a scene file draws its transparency, whatever its
+    /// world block's `"transparency"` says (`None`: as it says).
+    pub transparency: Option<crate::scene::Transparency>,
     /// Where the files are read (default: the file system).
     pub files: Files,
 }
@@ -93,6 +96,7 @@ impl Default for LoadOptions {
             cloth_solve: None,
             sim: None,
             time_of_day: None,
+            transparency: None,
             files: Files::Disk,
         }
     }

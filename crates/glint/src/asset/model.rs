@@ -288,6 +288,7 @@ impl Model {
             light_circles: Vec::new(),
             emitters: Vec::new(),
             time_of_day: None,
+            transparency: Default::default(),
             environment_image: None,
             models: vec![self],
         }

@@ -174,6 +174,9 @@ pub struct SceneDesc {
     /// The image its environment lights it with, when that is a file's
     /// ([`EnvironmentSource::Image`](crate::scene::EnvironmentSource::Image) of its id).
     pub environment_image: Option<super::EnvironmentImage>,
+    /// The world key `transparency`: how every camera's view blends
+    /// transparent surfaces ([`View::transparency`]).
+    pub transparency: crate::scene::Transparency,
 }
 
 /// A directional light whose direction sways with time (`sway` in `.scn`).
@@ -275,7 +278,7 @@ impl SceneDesc {
     pub fn camera_view(&self, index: usize) -> View {
         let c = &self.camera_views[index];
         let view = View::new(self.cameras[index]).with_post(c.post.clone()).with_culling(c.culling);
-        let view = view.with_ambient_occlusion(c.ambient_occlusion);
+        let view = view.with_ambient_occlusion(c.ambient_occlusion).with_transparency(self.transparency);
         match c.lod_error {
             Some(pixels) => view.with_lod_error(pixels),
             None => view,

@@ -18,7 +18,7 @@ use super::{decoded_bytes, read_environment};
 use super::{AssetFolder, Diagnostic, LoadOptions, Model, ShapeKind, Texture, MAX_SCENE_BYTES, MAX_SCENE_TOTAL_BYTES};
 use crate::scene::{
     AmbientOcclusion, Background, Camera, Culling, Environment, EnvironmentLight, EnvironmentSource, Fog, Light,
-    Material, ShadowLayout, MAX_CLUSTERED_LIGHTS, MAX_SHADOW_MAP_BYTES,
+    Material, ShadowLayout, Transparency, MAX_CLUSTERED_LIGHTS, MAX_SHADOW_MAP_BYTES,
 };
 use crate::text::{list, quote};
 use glam::{EulerRot, Mat4, Quat, Vec3};
@@ -79,6 +79,7 @@ pub fn parse_scene_with(path: &Path, text: &str, options: LoadOptions) -> Result
             emitters: Vec::new(),
             warnings: Vec::new(),
             time_of_day: None,
+            transparency: Default::default(),
             environment_image: None,
         },
         textures: TextureCache::new(options.texture_memory),
@@ -245,6 +246,9 @@ impl Loader<'_> {
     }
 
     fn world(&mut self, f: &mut Fields) -> Result<(), Diagnostic> {
+        if let Some((k, _)) = f.choice("transparency", &Transparency::NAMES)? {
+            self.scene.transparency = Transparency::ALL[k];
+        }
         let env = &mut self.scene.environment;
         if let Some(c) = f.color("background")? {
             env.background = Background::Color(c);
@@ -658,6 +662,9 @@ impl Loader<'_> {
     fn finish(mut self) -> Result<SceneDesc, Diagnostic> {
         if let Some(error) = self.deferred {
             return Err(error);
+        }
+        if let Some(transparency) = self.options.transparency {
+            self.scene.transparency = transparency;
         }
         if let Some(hours) = self.time_of_day {
             self.scene.set_time_of_day(hours).map_err(|e| match self.time_of_day_line {

@@ -105,6 +105,11 @@ struct DrawPaths {
     gpu_cull: bool,
     /// Those passes occlusion-cull too: a depth pyramid in a storage texture.
     occlusion: bool,
+    /// Fragment shaders append to storage buffers, after the depth test
+    /// (exact transparency's per-pixel lists).
+    fragment_lists: bool,
+    /// Half-float colour targets blend (weighted transparency's sums).
+    blends_half_floats: bool,
 }
 
 impl fmt::Debug for Gpu {
@@ -236,7 +241,8 @@ impl Gpu {
             required_features: features
                 & (wgpu::Features::TIMESTAMP_QUERY
                     | wgpu::Features::INDIRECT_FIRST_INSTANCE
-                    | wgpu::Features::MULTI_DRAW_INDIRECT_COUNT),
+                    | wgpu::Features::MULTI_DRAW_INDIRECT_COUNT
+                    | wgpu::Features::SHADER_EARLY_DEPTH_TEST),
             required_limits: limits.using_resolution(adapter.limits()),
             ..Default::default()
         };
@@ -270,7 +276,29 @@ impl Gpu {
                 info.name
             );
         }
-        let paths = DrawPaths { vertex_storage, base_vertex, indirect, gpu_cull, occlusion };
+        // Exact transparency's fragments: the materials, light clusters,
+        // list heads and nodes are four storage buffers in a fragment stage,
+        // the colour packed into half floats.
+        let fragment_lists = vertex_storage
+            && flags
+                .contains(wgpu::DownlevelFlags::FRAGMENT_WRITABLE_STORAGE | wgpu::DownlevelFlags::SHADER_F16_IN_F32)
+            && device.features().contains(wgpu::Features::SHADER_EARLY_DEPTH_TEST)
+            && device.limits().max_storage_buffers_per_shader_stage >= 4;
+        let blendable = |format| {
+            let flags = adapter.get_texture_format_features(format).flags;
+            flags.contains(wgpu::TextureFormatFeatureFlags::BLENDABLE)
+        };
+        let blends_half_floats =
+            blendable(wgpu::TextureFormat::Rgba16Float) && blendable(wgpu::TextureFormat::R16Float);
+        let paths = DrawPaths {
+            vertex_storage,
+            base_vertex,
+            indirect,
+            gpu_cull,
+            occlusion,
+            fragment_lists,
+            blends_half_floats,
+        };
         Ok(Self { adapter, device, queue, info, anisotropy, paths, uncaptured })
     }
 
@@ -346,6 +374,21 @@ impl Gpu {
     /// draw binds its mesh's vertex buffers at the mesh.
     pub fn base_vertex(&self) -> bool {
         self.paths.base_vertex
+    }
+
+    /// Whether fragment shaders can append to per-pixel lists in storage
+    /// buffers, after the depth test: exact transparency
+    /// ([`Transparency::Exact`](crate::scene::Transparency::Exact)) needs it
+    /// (Vulkan and GL; not the WebGL2 path).
+    pub fn fragment_lists(&self) -> bool {
+        self.paths.fragment_lists
+    }
+
+    /// Whether half-float colour targets can be blended: weighted
+    /// transparency ([`Transparency::Weighted`](crate::scene::Transparency::Weighted))
+    /// needs it (WebGL2 with `EXT_float_blend`); elsewhere views stay sorted.
+    pub fn blends_half_floats(&self) -> bool {
+        self.paths.blends_half_floats
     }
 
     /// Largest anisotropy the samplers use (1 when unsupported).

@@ -50,6 +50,14 @@ pub enum RenderError {
         /// Which limit that is.
         limit_name: &'static str,
     },
+    /// A view asks for something this adapter cannot draw.
+    #[error("{what} is not available on this adapter: {why}")]
+    Unavailable {
+        /// What was asked for.
+        what: &'static str,
+        /// Why not, and what to use instead.
+        why: &'static str,
+    },
     /// A frame would make more of something than glint allows.
     #[error("{what} would make {count}, more than the {limit} glint allows (docs/limits.md)")]
     TooMany {

@@ -56,7 +56,7 @@ pub use crate::gpu::{GpuSimulation, InstanceRange, ParticleGpu, PlaceTargets, Ve
 pub use crate::scene::{ShadowLayout, MAX_CUBES, MAX_SHADOW_MAP_BYTES};
 pub use clusters::Clusters;
 pub use debug::explain::{BatchCall, DrawCall, FrameCalls, PassCalls, PassType};
-pub use debug::stats::{ClusterStats, FrameStats, PassStats, Passes, StageTimes, UploadStats};
+pub use debug::stats::{ClusterStats, FrameStats, ListCounts, PassStats, Passes, StageTimes, UploadStats};
 pub use debug::timer::GpuTimes;
 pub use error::{MeshTooLarge, RenderError};
 pub use frame::input::{FrameInput, FrameMode, FrameOutput, SubFrame, ViewKey, KEEP_VIEW_FRAMES, MAX_SUB_FRAMES};

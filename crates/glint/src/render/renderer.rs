@@ -152,6 +152,17 @@ impl Renderer {
         self.res.mode = mode;
     }
 
+    /// How `view` draws its transparency into a target of `samples` here:
+    /// as it asks, or sorted where the device cannot draw weighted, where it
+    /// cannot draw exact (the frame is then an error), and in the naive
+    /// frame ([`Transparency`]).
+    pub fn transparency_of(&self, view: &crate::View, samples: u32) -> crate::scene::Transparency {
+        match self.res.mode {
+            FrameMode::Naive => crate::scene::Transparency::Sorted,
+            _ => self.res.transparency.way(view.transparency, samples).unwrap_or_default(),
+        }
+    }
+
     /// Draw levels of detail (the default: each instance the coarsest level
     /// whose error its view allows, [`View::lod_error`](crate::scene::View::lod_error))
     /// or every mesh at full detail, to compare.

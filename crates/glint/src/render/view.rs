@@ -36,6 +36,9 @@ pub(crate) struct ViewFrame {
     pub lod: LodView,
     /// The pixels of error its levels of detail may make (0: full detail).
     pub lod_error: f32,
+    /// How it asks to blend transparent surfaces (what it gets depends on
+    /// the device: `passes/transparency.rs`).
+    pub transparency: crate::scene::Transparency,
     /// Where far fields are measured from: its camera's eye, `None` with
     /// levels of detail off ([`FarField`](crate::scene::FarField)).
     pub far_eye: Option<glam::Vec3>,
@@ -83,6 +86,7 @@ impl ViewFrame {
             lod,
             lod_error,
             far_eye: (lod_error > 0.0).then_some(camera.eye),
+            transparency: view.transparency,
         }
     }
 }

@@ -13,6 +13,7 @@ use crate::render::passes::ambient_occlusion::OcclusionTargets;
 use crate::render::passes::post::PostParams;
 use crate::render::passes::shadow_maps::{ShadowGpu, ShadowMaps};
 use crate::render::passes::shadow_views::MAX_SHADOW_VIEWS;
+use crate::render::passes::transparency::TransparencyTargets;
 use crate::render::resources::blocks::CameraGpu;
 use crate::render::resources::blocks::{SceneGpu, UniformBlock};
 use crate::render::resources::buffers::InstanceBuffer;
@@ -43,16 +44,24 @@ impl ViewBlocks {
         let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("camera block (group 1)"),
             layout,
-            entries: &[wgpu::BindGroupEntry {
-                binding: 0,
-                resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                    buffer: &buffer,
-                    offset: 0,
-                    size: std::num::NonZeroU64::new(std::mem::size_of::<CameraGpu>() as u64),
-                }),
-            }],
+            entries: &[wgpu::BindGroupEntry { binding: 0, resource: Self::binding(&buffer) }],
         });
         Self { buffer, bind_group, last: vec![None; RECORDS] }
+    }
+
+    /// The records as a group's binding 0, one record at a time (picked by
+    /// [`offset`](Self::offset)): in the Camera block's group, and in exact
+    /// transparency's group beside the fragment lists.
+    pub(crate) fn camera(&self) -> wgpu::BindingResource<'_> {
+        Self::binding(&self.buffer)
+    }
+
+    fn binding(buffer: &wgpu::Buffer) -> wgpu::BindingResource<'_> {
+        wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+            buffer,
+            offset: 0,
+            size: std::num::NonZeroU64::new(std::mem::size_of::<CameraGpu>() as u64),
+        })
     }
 
     /// Write record `index` (0: the camera, 1 + k: shadow view k) if it changed;
@@ -108,6 +117,9 @@ pub(crate) struct ViewGpu {
     pub occlusion: Option<OcclusionTargets>,
     /// Its running mean, from its first accumulated still.
     pub accumulation: Option<Accumulation>,
+    /// Its weighted sums or fragment lists, while it draws transparency so
+    /// and has something to draw (`frame/transparency.rs`).
+    pub transparency: Option<TransparencyTargets>,
     /// Its light clusters' arrays, and this frame's clusters until uploaded
     /// (`render/frame/lights.rs`).
     pub clusters: ClusterArrays,
@@ -132,6 +144,7 @@ impl ViewGpu {
             post_params: PostParams::new(device),
             occlusion: None,
             accumulation: None,
+            transparency: None,
             scene_block,
             shadow_block,
             generations: (instances.generation(), shared.shadow_maps_generation, shared.environment.generation()),

@@ -58,7 +58,7 @@ pub use tiles::Tiles;
 /// emitter: `--time` over its `dt`): a later time is an error rather than
 /// hours of stepping.
 pub const MAX_POSE_STEPS: u64 = 100_000;
-pub use view::{AmbientOcclusion, Culling, View, Viewport, DEFAULT_LOD_ERROR};
+pub use view::{AmbientOcclusion, Culling, Transparency, View, Viewport, DEFAULT_LOD_ERROR};
 pub use view_order::draw_order;
 
 /// Handle to a shape (a mesh uploaded by the renderer), returned by

@@ -88,6 +88,48 @@ impl Culling {
     }
 }
 
+/// How a view blends its transparent surfaces: blended materials
+/// ([`AlphaMode::Blend`](crate::scene::AlphaMode::Blend) with alpha blending)
+/// and alpha-blended particle layers (the world key `transparency` in `.scn`,
+/// `--transparency` in the CLI; `render/passes/transparency.rs`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Transparency {
+    /// Sorted far to near, per instance (particles per layer), and blended
+    /// in that order: exact where surfaces do not cross, wrong where they do.
+    /// The default: on every backend, and the cheapest where nothing crosses.
+    #[default]
+    Sorted,
+    /// Weighted blended order-independent transparency (McGuire and Bavoil
+    /// 2013): drawn in any order into sums of weighted colour and coverage,
+    /// then composited; the same picture in any order, an approximation
+    /// where layers differ much in colour. Needs blendable half-float
+    /// targets; where the adapter has none the view stays sorted.
+    Weighted,
+    /// The reference: every transparent fragment kept in its pixel's list
+    /// and blended in depth order (the nearest 32 of a pixel's fragments).
+    /// Needs storage buffers in fragment shaders (Vulkan, GL): on the WebGL2
+    /// path the frame is refused with an error.
+    Exact,
+}
+
+impl Transparency {
+    /// Every way, in order.
+    pub const ALL: [Self; 3] = [Self::Sorted, Self::Weighted, Self::Exact];
+    /// Their names in the CLI and `.scn` files, in the same order.
+    pub const NAMES: [&'static str; 3] = ["sorted", "weighted", "exact"];
+
+    /// The way named `name` (one of [`Transparency::NAMES`]).
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::NAMES.iter().position(|n| *n == name).map(|k| Self::ALL[k])
+    }
+
+    /// Its name.
+    pub fn name(self) -> &'static str {
+        Self::NAMES[self as usize]
+    }
+}
+
 /// Screen-space ambient occlusion of a view (camera key `ssao`): the contact
 /// shadows an environment cannot give, darkening only ambient and environment
 /// light (`render/passes/ambient_occlusion.rs`).
@@ -146,6 +188,8 @@ pub struct View {
     /// each instance draws the coarsest level of its shape whose error
     /// projects to at most this ([`crate::scene::levels`]).
     pub lod_error: f32,
+    /// How it blends transparent surfaces ([`Transparency::Sorted`] by default).
+    pub transparency: Transparency,
 }
 
 /// A view's default [`View::lod_error`]: half a pixel. At one pixel a scene
@@ -165,12 +209,18 @@ impl View {
             output: None,
             ambient_occlusion: None,
             lod_error: DEFAULT_LOD_ERROR,
+            transparency: Transparency::Sorted,
         }
     }
 
     /// This view allowing `pixels` of error from levels of detail (0: full detail).
     pub fn with_lod_error(self, pixels: f32) -> Self {
         Self { lod_error: pixels, ..self }
+    }
+
+    /// This view blending transparent surfaces as `transparency` says.
+    pub fn with_transparency(self, transparency: Transparency) -> Self {
+        Self { transparency, ..self }
     }
 
     /// This view drawing into `viewport`.

@@ -5,9 +5,14 @@ use super::*;
 use naga_oil::compose::{ComposableModuleDescriptor, Composer, NagaModuleDescriptor, ShaderDefValue};
 use wgpu::naga;
 
-/// naga_oil, with glint's shared modules added.
+/// naga_oil, with glint's shared modules added, validating as wgpu does
+/// where exact transparency runs (half floats packed, the depth test
+/// forced before its fragments append).
 fn composer() -> Composer {
-    let mut composer = Composer::default();
+    use naga::valid::Capabilities;
+    let capabilities =
+        Capabilities::default() | Capabilities::SHADER_FLOAT16_IN_FLOAT32 | Capabilities::EARLY_DEPTH_TEST;
+    let mut composer = Composer::default().with_capabilities(capabilities);
     let shared = [
         ("equirect.wgsl", include_str!("equirect.wgsl")),
         ("blocks.wgsl", include_str!("blocks.wgsl")),
@@ -15,6 +20,7 @@ fn composer() -> Composer {
         ("post_inputs.wgsl", include_str!("post_inputs.wgsl")),
         ("light_clusters.wgsl", include_str!("light_clusters.wgsl")),
         ("shadow_lookup.wgsl", include_str!("shadow_lookup.wgsl")),
+        ("transparency_out.wgsl", include_str!("transparency_out.wgsl")),
     ];
     for (file_path, source) in shared {
         let module = ComposableModuleDescriptor { source, file_path, ..Default::default() };
@@ -183,7 +189,9 @@ fn every_forward_variant_is_what_naga_oil_composes_and_validates() {
             let stored = (module.global_variables.iter())
                 .filter(|(_, v)| matches!(v.space, naga::AddressSpace::Storage { .. }))
                 .count();
-            assert_eq!(stored == 0, !storage, "{features:?}: {stored} storage buffers");
+            // Exact transparency's lists are storage buffers (a path that has them).
+            let lists = features.contains(ShaderFeatures::TRANSPARENCY_LISTS);
+            assert_eq!(stored == 0, !storage && !lists, "{features:?}: {stored} storage buffers");
         }
     });
 }
@@ -195,8 +203,8 @@ fn the_other_composed_shaders_are_what_naga_oil_composes() {
     check(&mut composer, &prefilter(), include_str!("prefilter.wgsl"), &Defs::default());
     for soft in [None, Some(false), Some(true)] {
         for lit in [None, Some(false), Some(true)] {
-            for data_textures in [false, true] {
-                let variant = ParticleShading { soft, lit, data_textures };
+            for (data_textures, lists) in [(false, false), (true, false), (false, true)] {
+                let variant = ParticleShading { soft, lit, data_textures, lists };
                 check(&mut composer, &particles(variant), include_str!("particles.wgsl"), &particle_defs(variant));
             }
         }
@@ -228,6 +236,8 @@ fn the_shaders_without_defs_are_what_naga_oil_composes() {
         (CLOTH, include_str!("cloth.wgsl")),
         (CLOTH_PLACE, include_str!("cloth_place.wgsl")),
         (BIN_LIGHTS, include_str!("bin_lights.wgsl")),
+        (TRANSPARENCY, include_str!("transparency.wgsl")),
+        (TRANSPARENCY_LISTS, include_str!("transparency_lists.wgsl")),
     ];
     let mut composer = composer();
     for (plain, source) in sources {

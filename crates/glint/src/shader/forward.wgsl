@@ -5,6 +5,7 @@
 #import glint::shadow_lookup::{cascaded_shadow, positional_shadow}
 #import glint::equirect::sh_basis
 #import glint::light_clusters::{cluster_at, clustered_light, cluster_word, towards_light, arriving}
+#import glint::transparency_out::{Weighted, weighted_sums, append_fragment}
 
 struct MaterialBlock {
     base_color: vec4<f32>,
@@ -756,6 +757,11 @@ fn base_color(in: VertexOut) -> vec4<f32> {
 
 @fragment
 fn fs_main(in: VertexOut, @builtin(front_facing) front: bool) -> @location(0) vec4<f32> {
+    return forward_color(in, front);
+}
+
+// The fragment's lit colour, and its alpha where the material blends (else 1).
+fn forward_color(in: VertexOut, front: bool) -> vec4<f32> {
     let material = material_at(in.material);
     let base = base_color(in);
     // Double-sided materials light back faces with the flipped normal.
@@ -819,6 +825,26 @@ fn fs_main(in: VertexOut, @builtin(front_facing) front: bool) -> @location(0) ve
     return vec4<f32>(color, 1.0);
 #endif
 }
+
+#ifdef ALPHA_BLEND
+// Weighted blended transparency's sums (glint::transparency_out).
+@fragment
+fn fs_weighted(in: VertexOut, @builtin(front_facing) front: bool) -> Weighted {
+    return weighted_sums(forward_color(in, front), in.world_position);
+}
+#endif
+
+#ifdef TRANSPARENCY_LISTS
+// Exact transparency: the fragment into its pixel's list. The depth test
+// runs before the shader, so hidden fragments append nothing. A fragment is
+// kept whole however few of a multisampled pixel's samples it covers (GL's
+// backend cannot read the sample mask): under MSAA its edges are whole pixels.
+@fragment
+@early_depth_test(force)
+fn fs_exact(in: VertexOut, @builtin(front_facing) front: bool) {
+    append_fragment(forward_color(in, front), in.clip);
+}
+#endif
 
 // The view's ambient occlusion at framebuffer position `pixel`, bilinear
 // between the half-resolution texels around it.

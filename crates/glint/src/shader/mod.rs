@@ -53,7 +53,9 @@ bitflags::bitflags! {
     /// | 26 | `CLUSTERED` | point and spot lights from the view's light clusters (set by the frame: `render/clusters.rs`) |
     /// | 27 | `SOFT_SHADOWS` | percentage-closer soft shadows for 2D shadow views whose light has a size (set by the frame, only when one has: [`ShadowSettings::light_size`](crate::scene::ShadowSettings::light_size)) |
     ///
-    /// Bits 28–31 are free for more (shadow receiving comes with shadow maps).
+    /// | 28 | `TRANSPARENCY_LISTS` | `fs_exact`: append each fragment to its pixel's list (set by the frame, for the exact transparency twins of blended materials: `render/passes/transparency.rs`) |
+    ///
+    /// Bits 29–31 are free for more (shadow receiving comes with shadow maps).
     /// The motion bits stay in shadow passes' variants, so shadows move too.
     ///
     /// One def follows from the bits rather than being one: `TEXCOORDS`, set with
@@ -118,6 +120,8 @@ bitflags::bitflags! {
         const CLUSTERED = 1 << 26;
         /// `SOFT_SHADOWS`.
         const SOFT_SHADOWS = 1 << 27;
+        /// `TRANSPARENCY_LISTS`.
+        const TRANSPARENCY_LISTS = 1 << 28;
     }
 }
 
@@ -261,6 +265,9 @@ pub(crate) struct ParticleShading {
     /// The light clusters are a data texture (`DATA_TEXTURES`), where
     /// shaders cannot read storage buffers.
     pub data_textures: bool,
+    /// `fs_particle_exact` appends to exact transparency's lists
+    /// (`TRANSPARENCY_LISTS`).
+    pub lists: bool,
 }
 
 /// The defs of the particle billboards' module `variant`.
@@ -268,7 +275,8 @@ fn particle_defs(variant: ParticleShading) -> Defs {
     let soft = variant.soft.map(|msaa| std::iter::once("SOFT").chain(msaa.then_some("SOFT_MSAA")));
     let lit = variant.lit.map(|clustered| std::iter::once("LIT").chain(clustered.then_some("CLUSTERED")));
     let set = soft.into_iter().flatten().chain(lit.into_iter().flatten());
-    let set = set.chain(variant.data_textures.then_some("DATA_TEXTURES")).collect();
+    let set = set.chain(variant.data_textures.then_some("DATA_TEXTURES"));
+    let set = set.chain(variant.lists.then_some("TRANSPARENCY_LISTS")).collect();
     Defs { set, values: vec![("DATA_WIDTH", DATA_TEXTURE_WIDTH)] }
 }
 
@@ -285,6 +293,10 @@ pub(crate) const POST: &str = assemble::POST;
 pub(crate) const SMAA: &str = assemble::SMAA;
 /// Accumulated stills' fold and copy (render/passes/accumulate.rs).
 pub(crate) const ACCUMULATE: &str = assemble::ACCUMULATE;
+/// Weighted transparency's composite (render/passes/transparency.rs).
+pub(crate) const TRANSPARENCY: &str = assemble::TRANSPARENCY;
+/// Exact transparency's composite: each pixel's list sorted and blended.
+pub(crate) const TRANSPARENCY_LISTS: &str = assemble::TRANSPARENCY_LISTS;
 /// GPU frustum culling of a draw list (`render/gpu_driven/gpu_cull.rs`).
 pub(crate) const CULL: &str = assemble::CULL;
 /// The depth pyramid of occlusion culling (`render/gpu_driven/occlusion.rs`).

@@ -6,10 +6,12 @@
 // LIT: the colour is the light the particle scatters, a medium with no
 // normal: the ambient light plus every light arriving at the fragment's point
 // (unshadowed); its point and spot lights from the view's light clusters
-// where CLUSTERED, else the Scene block's.
+// where CLUSTERED, else the Scene block's. TRANSPARENCY_LISTS:
+// fs_particle_exact (exact transparency's lists).
 
 #import glint::blocks::{scene, camera, Light}
 #import glint::light_clusters::{cluster_at, clustered_light, cluster_word, towards_light, arriving}
+#import glint::transparency_out::{Weighted, weighted_sums, append_fragment}
 
 @group(2) @binding(0) var sprite: texture_2d<f32>;
 @group(2) @binding(1) var sprite_sampler: sampler;
@@ -89,6 +91,29 @@ fn light_at(p: vec3<f32>, pixel: vec2<f32>) -> vec3<f32> {
 
 @fragment
 fn fs_particle(in: ParticleOut) -> @location(0) vec4<f32> {
+    let color = particle_color(in);
+    // Premultiplied: added as is (additive), or over what is behind (alpha).
+    return vec4<f32>(color.rgb * color.a, color.a);
+}
+
+// An alpha-blended layer's weighted transparency sums (glint::transparency_out).
+@fragment
+fn fs_particle_weighted(in: ParticleOut) -> Weighted {
+    return weighted_sums(particle_color(in), in.world_position);
+}
+
+#ifdef TRANSPARENCY_LISTS
+// An alpha-blended layer's fragment into its pixel's list (exact
+// transparency), after the depth test.
+@fragment
+@early_depth_test(force)
+fn fs_particle_exact(in: ParticleOut) {
+    append_fragment(particle_color(in), in.clip);
+}
+#endif
+
+// The particle's colour at the fragment, not premultiplied.
+fn particle_color(in: ParticleOut) -> vec4<f32> {
     var color = textureSample(sprite, sprite_sampler, in.uv) * in.color;
 #ifdef LIT
     color = vec4<f32>(color.rgb * light_at(in.world_position, in.clip.xy), color.a);
@@ -99,6 +124,5 @@ fn fs_particle(in: ParticleOut) -> @location(0) vec4<f32> {
 #ifdef SOFT
     color.a = color.a * clamp(depth_behind(in.clip, in.world_position) / max(look.x, 1e-4), 0.0, 1.0);
 #endif
-    // Premultiplied: added as is (additive), or over what is behind (alpha).
-    return vec4<f32>(color.rgb * color.a, color.a);
+    return color;
 }

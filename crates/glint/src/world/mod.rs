@@ -30,7 +30,7 @@ mod school;
 mod sim_state;
 
 use crate::asset::{MeshRef, SceneDesc};
-use crate::scene::{Entity, LightKind, Lighting, SimPath, View};
+use crate::scene::{Entity, LightKind, Lighting, SimPath, Transparency, View};
 use crate::sim::cloth::ClothView;
 use crate::sim::particles::ParticleKernels;
 use crate::{AfterViews, FrameInput, FrameOutput, FrameStats, OffscreenTarget, RenderError, Renderer, SubFrame};
@@ -385,7 +385,10 @@ impl World {
         after: Vec<&mut dyn AfterViews>,
         sample: SubFrame,
     ) -> Result<FrameOutput, RenderError> {
-        let eye = views.last().map_or(glam::Vec3::ZERO, |v| v.camera.eye);
+        // Alpha-blended particles are sorted from the picture's own camera,
+        // unless it draws transparency in any order (weighted or exact).
+        let picture = views.last().filter(|v| renderer.transparency_of(v, target.samples()) == Transparency::Sorted);
+        let eye = picture.map(|v| v.camera.eye);
         let lighting = lighting_at(&self.desc, self.moves.then_some(self.time));
         let mut input = FrameInput::new(&self.placed.entities, lighting).views(views).sample(sample);
         let mut paths = crate::scene::SimulationPaths::default();

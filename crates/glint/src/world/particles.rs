@@ -83,17 +83,17 @@ impl EmitterSim {
     }
 
     /// Before the frame: its billboards into its layer, sorted from `eye`
-    /// when alpha-blended: written from the CPU, or stepped to `time` by
+    /// when alpha-blended and given: written from the CPU, or stepped to `time` by
     /// compute passes in the frame's simulate stage (the simulation returned,
     /// for the frame's input).
     pub(crate) fn draw(
         &mut self,
         desc: &EmitterDesc,
         time: f32,
-        eye: Vec3,
+        eye: Option<Vec3>,
         renderer: &mut Renderer,
     ) -> Option<&mut dyn GpuSimulation> {
-        let eye_if_sorted = (desc.blend == ParticleBlend::Alpha).then_some(eye);
+        let eye_if_sorted = eye.filter(|_| desc.blend == ParticleBlend::Alpha);
         match &mut self.run {
             None => None,
             Some(Run::Cpu(system)) => {
@@ -101,7 +101,7 @@ impl EmitterSim {
                 None
             }
             Some(Run::Gpu(on_gpu)) => {
-                on_gpu.advance_to(renderer.device_and_queue().1, time, eye);
+                on_gpu.advance_to(renderer.device_and_queue().1, time, eye_if_sorted);
                 renderer.set_particle_count(self.layer, on_gpu.slots());
                 Some(on_gpu.as_mut())
             }

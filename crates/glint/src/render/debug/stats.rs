@@ -107,6 +107,15 @@ pub struct PassStats {
     pub cpu_ms: f64,
 }
 
+/// Exact transparency's per-pixel lists of one view's frame.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct ListCounts {
+    /// Transparent fragments appended.
+    pub appended: u64,
+    /// Fragments the lists hold: beyond, fragments were dropped.
+    pub held: u64,
+}
+
 /// The frame's passes, in the order they run.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
 pub struct Passes {
@@ -256,6 +265,14 @@ pub struct FrameStats {
     /// Whether it was occlusion-culled too (two phases with a depth pyramid:
     /// culled on the GPU where the device has storage textures).
     pub occlusion: bool,
+    /// How its blended materials were drawn: [`Transparency::Sorted`]
+    /// where the view asked so, where nothing it drew had a twin for the
+    /// way it asked for, or where the device cannot draw weighted
+    /// (`render/passes/transparency.rs`).
+    pub transparency: crate::scene::Transparency,
+    /// Exact transparency's fragments this frame, where the view drew them
+    /// ([`Renderer::wait_for_counts`](crate::Renderer::wait_for_counts) reads them back).
+    pub transparent_fragments: Option<ListCounts>,
     /// CPU time per stage.
     pub cpu_ms: StageTimes,
     /// Shadow views drawn by this frame's shadow pass.

@@ -27,13 +27,16 @@ pub(crate) enum Timed {
     DepthPrepass,
     /// Binning the view's lights into its clusters on the GPU.
     Lights,
+    /// Order-independent transparency's pass: the blended draws into the
+    /// view's sums or lists (inside the forward pass's span).
+    Transparency,
     /// Post effect k of the view's chain (all its passes).
     Post(u8),
 }
 
 /// Timestamp pairs of a view: shadow, forward, ambient occlusion, depth
-/// pre-pass, light binning, then one per post effect.
-const PAIRS: usize = 5 + MAX_POST_EFFECTS;
+/// pre-pass, light binning, transparency, then one per post effect.
+const PAIRS: usize = 6 + MAX_POST_EFFECTS;
 
 /// The views of a frame timed, each with pairs of its own (a frame's later
 /// views are not timed).
@@ -50,7 +53,8 @@ impl Timed {
             Timed::AmbientOcclusion => 2,
             Timed::DepthPrepass => 3,
             Timed::Lights => 4,
-            Timed::Post(k) => 5 + usize::from(k),
+            Timed::Transparency => 5,
+            Timed::Post(k) => 6 + usize::from(k),
         }
     }
 }
@@ -74,6 +78,10 @@ pub struct GpuTimes {
     /// Binning the view's lights into its clusters, where the GPU binned
     /// them (`render/gpu_driven/light_binning.rs`); `None` elsewhere.
     pub lights_ms: Option<f64>,
+    /// Order-independent transparency's pass (weighted sums or exact lists:
+    /// [`Transparency`](crate::scene::Transparency)), which the forward pass's
+    /// time includes; `None` for a view drawing its transparency sorted.
+    pub transparency_ms: Option<f64>,
     /// Each post effect of the views' chains, in order: effect k summed over
     /// the views that have a k-th (empty without one).
     pub post_ms: Vec<f64>,
@@ -292,6 +300,7 @@ impl GpuTimer {
             ambient_occlusion_ms: sum(Timed::AmbientOcclusion),
             depth_prepass_ms: sum(Timed::DepthPrepass),
             lights_ms: sum(Timed::Lights),
+            transparency_ms: sum(Timed::Transparency),
             post_ms: post.collect(),
         })
     }

@@ -131,7 +131,7 @@ pub(crate) fn encode_ambient_occlusion(
         drawn.bind_groups_set += 2;
         let bound = ["bind group 1 (camera)", "bind group 3 (instances, draw indices)"];
         frame.outline.pass(label, PassType::Render, &bound);
-        let mut bound = Bound::twin(Twin::Prepass { shared });
+        let mut bound = Bound::twin(Twin::Prepass { shared }, None);
         draw_stages(res, &frame.outline, list, &mut pass, (0..sky_at, &[late]), &mut bound, &mut drawn);
     }
     let ambient = &mut stats.passes.ambient_occlusion;

@@ -14,7 +14,7 @@ use crate::render::queue::{Queue, SKY_STAGE};
 use crate::render::resources::pipelines::SkyPass;
 use crate::render::resources::Resources;
 use crate::render::views::ViewGpu;
-use crate::scene::Environment;
+use crate::scene::{Environment, Transparency};
 
 /// Which pipeline draws a run: its own, or one of its twins
 /// ([`Pipelines::prepass_id`](crate::render::resources::pipelines::Pipelines::prepass_id)).
@@ -29,6 +29,9 @@ pub(crate) enum Twin {
     /// Its twin testing the shared pre-pass's depth for equality (runs
     /// without one draw with their own).
     Equal,
+    /// Its twin for the order-independent transparency [`Bound::leaves`]
+    /// names (runs without one are skipped).
+    Transparent,
 }
 
 /// What the pass has bound, to skip redundant state changes.
@@ -40,18 +43,24 @@ pub(crate) struct Bound {
     stencil_reference: u32,
     /// Which of each run's pipelines draws it.
     twin: Twin,
+    /// The order-independent transparency whose twins draw blended runs in a
+    /// pass of their own: other passes leave those runs out.
+    leaves: Option<Transparency>,
 }
 
 impl Bound {
-    /// Nothing bound yet, drawing each run with `twin`.
-    pub(crate) fn twin(twin: Twin) -> Self {
-        Self { twin, ..Self::default() }
+    /// Nothing bound yet, drawing each run with `twin`, and leaving the runs
+    /// that have a twin for `transparency` to its pass (drawing only those
+    /// with [`Twin::Transparent`]).
+    pub(crate) fn twin(twin: Twin, transparency: Option<Transparency>) -> Self {
+        Self { twin, leaves: transparency, ..Self::default() }
     }
 
     /// What stays bound after a full-screen draw (the sky) between runs: the
-    /// stencil reference only; each run draws with its own pipeline again.
+    /// stencil reference only; each run draws with its own pipeline again
+    /// (still leaving what it left).
     pub(crate) fn after_full_screen(&self) -> Self {
-        Self { stencil_reference: self.stencil_reference, ..Self::default() }
+        Self { stencil_reference: self.stencil_reference, leaves: self.leaves, ..Self::default() }
     }
 }
 
@@ -150,13 +159,17 @@ fn draw_run(
 ) {
     let (first, draw) = (&list.batches[run.first as usize], &list.draws[run.first as usize]);
     let pipelines = &res.registry.pipelines;
-    let pipeline = match bound.twin {
-        Twin::Own => first.pipeline,
-        Twin::Prepass { shared } => match pipelines.prepass_of(first.pipeline, shared) {
+    let transparent = bound.leaves.and_then(|way| pipelines.transparency_of(first.pipeline, way));
+    let pipeline = match (bound.twin, transparent) {
+        (Twin::Transparent, Some(twin)) => twin,
+        // Left to the transparency pass; or not drawn there.
+        (_, Some(_)) | (Twin::Transparent, None) => return,
+        (Twin::Own, None) => first.pipeline,
+        (Twin::Prepass { shared }, None) => match pipelines.prepass_of(first.pipeline, shared) {
             Some(twin) => twin,
             None => return,
         },
-        Twin::Equal => pipelines.equal_of(first.pipeline).unwrap_or(first.pipeline),
+        (Twin::Equal, None) => pipelines.equal_of(first.pipeline).unwrap_or(first.pipeline),
     };
     let mut changed = 0;
     let reference = pipelines.stencil_reference(pipeline);

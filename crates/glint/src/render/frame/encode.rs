@@ -17,8 +17,10 @@ use crate::render::debug::timer::Timed;
 use crate::render::frame::ambient_occlusion::{encode_ambient_occlusion, prepass_depth};
 use crate::render::frame::draw::{draw_glare, draw_sky, draw_stages, Bound, Twin};
 use crate::render::frame::state::Frame;
+use crate::render::frame::transparency::{draw_composite, encode_transparency};
 use crate::render::gpu_driven::draw_list::run_stage;
 use crate::render::passes::ambient_occlusion::{PrepassDepth, PrepassPart};
+use crate::render::passes::particles::Layers;
 use crate::render::queue::SKY_STAGE;
 use crate::render::resources::Resources;
 use crate::render::view::ViewFrame;
@@ -34,10 +36,12 @@ pub(crate) enum Part {
     First,
     /// Its late draws, the sky and what follows.
     Second,
-    /// What comes before soft particles, after occlusion culling's early draws.
+    /// What comes before the last part, after occlusion culling's early draws.
     Middle,
-    /// Soft particles and the glare, reading the depth they are tested against.
-    Particles,
+    /// The part that ends the view, reading the depth it is tested against:
+    /// the transparency composite, particles and the glare (after the
+    /// transparency pass, or where soft particles read the depth).
+    Last,
 }
 
 /// Stage 7: record the forward pass, cleared to `background`: opaque →
@@ -107,11 +111,14 @@ pub(crate) fn encode(
         }
         _ => (Part::Whole, &[false][..], &[false][..]),
     };
-    // Soft particles read the depth: they and the glare get a pass of their own.
+    // Soft particles read the depth, and order-independent transparency
+    // draws between: the last part gets a pass of its own.
     let particle_depth = res.particles.depth(&res.device, target);
-    let part = match (part, &particle_depth) {
-        (Part::Whole, Some(_)) => Part::First,
-        (Part::Second, Some(_)) => Part::Middle,
+    let transparency = gpu.transparency.as_ref().map(|t| t.way());
+    let last = particle_depth.is_some() || transparency.is_some();
+    let part = match (part, last) {
+        (Part::Whole, true) => Part::First,
+        (Part::Second, true) => Part::Middle,
         (part, _) => part,
     };
     {
@@ -123,28 +130,35 @@ pub(crate) fn encode(
             (background, part, shared),
             stats,
         );
-        let mut bound = Bound::twin(if shared { Twin::Equal } else { Twin::Own });
+        let mut bound = Bound::twin(if shared { Twin::Equal } else { Twin::Own }, transparency);
         draw_stages(res, &frame.outline, &gpu.forward, &mut pass, (0..sky_at, before_sky), &mut bound, stats);
         // The pre-pass drew only the stages before the sky.
         if draw_sky(res, &frame.outline, gpu, &mut pass, target, environment, stats) || shared {
             bound = bound.after_full_screen();
         }
         draw_stages(res, &frame.outline, &gpu.forward, &mut pass, (sky_at..end, after_sky), &mut bound, stats);
-        if particle_depth.is_none() {
-            res.particles.draw((&mut pass, &frame.outline), (target.format(), view.variant.clustered), None, stats);
+        if !last {
+            let layers = (target.format(), view.variant.clustered, Layers::All);
+            res.particles.draw((&mut pass, &frame.outline), layers, None, stats);
             draw_glare(res, &frame.outline, &mut pass, target, environment, stats);
         }
     }
-    if let Some(depth) = &particle_depth {
+    let depth = particle_depth.as_ref();
+    encode_transparency(res, frame, (gpu, view), target, (sky_at..end, after_sky), depth, stats);
+    if last {
         let mut pass = begin_forward_pass(
             res,
             (&mut frame.encoder, &frame.outline),
             gpu,
             target,
-            (background, Part::Particles, false),
+            (background, Part::Last, false),
             stats,
         );
-        res.particles.draw((&mut pass, &frame.outline), (target.format(), view.variant.clustered), Some(depth), stats);
+        draw_composite(res, &frame.outline, &mut pass, (gpu, target), stats);
+        // The alpha-blended layers were drawn with the blended materials.
+        let which = if transparency.is_some() { Layers::Additive } else { Layers::All };
+        let layers = (target.format(), view.variant.clustered, which);
+        res.particles.draw((&mut pass, &frame.outline), layers, depth, stats);
         draw_glare(res, &frame.outline, &mut pass, target, environment, stats);
     }
     if let Some(timer) = &mut res.gpu_timer {
@@ -173,7 +187,7 @@ pub(crate) fn begin_forward_pass<'e>(
         Part::First => target.first_of_two(clear),
         Part::Second => target.second_of_two(),
         Part::Middle => target.middle_of_three(),
-        Part::Particles => target.last_reading_depth(),
+        Part::Last => target.last_reading_depth(),
     };
     let depth = match (drawn, part) {
         (true, Part::Whole) => target.depth_stencil(false, false),
@@ -181,13 +195,13 @@ pub(crate) fn begin_forward_pass<'e>(
         _ => depth,
     };
     let (begins, ends) =
-        (matches!(part, Part::Whole | Part::First), matches!(part, Part::Whole | Part::Second | Part::Particles));
+        (matches!(part, Part::Whole | Part::First), matches!(part, Part::Whole | Part::Second | Part::Last));
     let label = match part {
         Part::Whole => "forward pass",
         Part::First => "forward pass: early",
         Part::Second => "forward pass: late",
-        Part::Middle => "forward pass: before soft particles",
-        Part::Particles => "forward pass: soft particles",
+        Part::Middle => "forward pass: middle",
+        Part::Last => "forward pass: last (transparency composite, particles, glare)",
     };
     let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
         label: Some(label),

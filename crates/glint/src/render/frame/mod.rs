@@ -44,6 +44,7 @@ pub(crate) mod shadow_pass;
 pub(crate) mod simulate;
 pub(crate) mod stages;
 pub(crate) mod state;
+pub(crate) mod transparency;
 mod view;
 pub(crate) mod visible;
 
@@ -132,11 +133,22 @@ impl Renderer {
     }
 
     /// Fill in the instance counts (and light clusters' counts, where the GPU
-    /// binned them) of the last frame's views (`stats`, in the
+    /// binned them; and exact transparency's fragments) of the last frame's views (`stats`, in the
     /// order given) that were culled on the GPU, waiting for the GPU to count
     /// them: for a frame on its own, such as `glint render --stats` draws (in
     /// a running frame loop the counts come a frame or two late, without waiting).
     pub fn wait_for_counts(&mut self, stats: &mut [FrameStats]) {
+        for (k, stats) in stats.iter_mut().enumerate() {
+            let lists = self.views.last(k).and_then(|v| match &v.transparency {
+                Some(crate::render::passes::transparency::TransparencyTargets::Exact(lists)) => Some(lists),
+                _ => None,
+            });
+            let Some(lists) = lists else { continue };
+            let Ok(heads) = crate::gpu::read_buffer(&self.res.device, &self.res.queue, lists.heads()) else { continue };
+            let appended = heads.get(..4).map_or(0, |b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]));
+            stats.transparent_fragments =
+                Some(crate::render::debug::stats::ListCounts { appended: u64::from(appended), held: lists.nodes - 1 });
+        }
         let submits = self.res.queue.submits();
         for (k, stats) in stats.iter_mut().enumerate().filter(|(_, s)| s.culling == crate::scene::Culling::Gpu) {
             let Some(view) = self.views.last_mut(k) else { continue };

@@ -175,7 +175,8 @@ fn naive_encode(
                 .collect()
         });
         pass.pop_debug_group();
-        res.particles.draw((&mut pass, outline), (target.format(), view.variant.clustered), None, stats);
+        let layers = (target.format(), view.variant.clustered, crate::render::passes::particles::Layers::All);
+        res.particles.draw((&mut pass, outline), layers, None, stats);
         draw_glare(res, outline, &mut pass, target, &lighting.environment, stats);
         let n = list.batches.len() as u32;
         (stats.pipelines_bound, stats.bind_groups_set) = (stats.pipelines_bound + n, stats.bind_groups_set + n);

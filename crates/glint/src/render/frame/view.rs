@@ -17,6 +17,7 @@ use crate::render::frame::prepare::prepare;
 use crate::render::frame::shadow_pass::draw_shadows;
 use crate::render::frame::shadow_pass::ViewShadows;
 use crate::render::frame::state::Frame;
+use crate::render::frame::transparency::prepare_transparency;
 use crate::render::frame::visible::{cull, shown};
 use crate::render::frame_variant::FrameVariant;
 use crate::render::passes::accumulate::{AccumulatePipelines, Accumulation};
@@ -210,6 +211,7 @@ fn view_stages(
             gpu.forward.build(0, &visible.instances, (view.frustum, view.lod), draw_of, placed);
             stats.cpu_ms.batch = lap.next();
             prepare_ambient_occlusion(res, gpu, view, target, &mut stats)?;
+            prepare_transparency(res, gpu, view, target, &mut stats)?;
             upload(res, gpu, view, (lighting, shadows.shadowed()), target, &mut stats)?;
             stats.cpu_ms.upload = lap.next();
             encode(res, frame, gpu, (view, target), &lighting.environment, &mut stats);

@@ -15,8 +15,10 @@ use crate::render::debug::explain::DrawCall;
 use crate::render::debug::outline::Outline;
 use crate::render::debug::stats::FrameStats;
 use crate::render::error::RenderError;
+use crate::render::passes::transparency::{WEIGHTED_BLEND, WEIGHTED_FORMATS};
 use crate::render::resources::registry::Registry;
 pub use crate::scene::ParticleBlend;
+use crate::scene::Transparency;
 use crate::scene::{Texture, TextureId};
 use crate::shader::ParticleShading;
 use std::collections::HashMap;
@@ -62,17 +64,35 @@ pub(crate) struct ParticleLayer {
     group: Option<wgpu::BindGroup>,
 }
 
-/// A particle pipeline: for a target, a blend, whether it reads depth, and
-/// whether it is lit (and from light clusters).
-type PipelineKey = (TargetFormat, ParticleBlend, bool, Option<bool>);
+/// A particle pipeline: for a target, a blend, whether it reads depth,
+/// whether it is lit (and from light clusters), and for alpha-blended
+/// layers the transparency it draws for (sorted: blended over the target;
+/// weighted or exact: into the view's sums or lists, `passes/transparency.rs`).
+type PipelineKey = (TargetFormat, ParticleBlend, bool, Option<bool>, Transparency);
+
+/// Which of a frame's layers a pass draws.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Layers {
+    /// All of them, over the target (a view drawing transparency sorted).
+    All,
+    /// The additive ones (the alpha-blended went into the transparency pass).
+    Additive,
+    /// The alpha-blended ones, into the view's sums or lists.
+    Alpha(Transparency),
+}
 
 /// The particle pipelines and their layouts: the sprite group, and for soft
 /// layers the scene's depth (single-sampled or multisampled).
 pub(crate) struct ParticlePipelines {
+    /// The Scene block's (group 0), for the exact layouts.
+    scene_layout: wgpu::BindGroupLayout,
     texture_layout: wgpu::BindGroupLayout,
     depth_layouts: [wgpu::BindGroupLayout; 2],
     /// Hard; soft on one sample; soft on several.
     layouts: [wgpu::PipelineLayout; 3],
+    /// Those with exact transparency's lists in group 1, made with the first
+    /// exact pipeline.
+    exact_layouts: Option<[wgpu::PipelineLayout; 3]>,
     modules: HashMap<ParticleShading, wgpu::ShaderModule>,
     cache: HashMap<PipelineKey, wgpu::RenderPipeline>,
     /// Whether targets' depth is readable here (the devices that
@@ -128,16 +148,21 @@ impl ParticlePipelines {
             })
         };
         let depth_layouts = [depth_layout(false), depth_layout(true)];
-        let layout = |depth: Option<&wgpu::BindGroupLayout>| {
-            device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: Some("renderer: particle pipeline layout"),
-                bind_group_layouts: &[Some(scene), Some(camera), Some(&texture_layout), depth],
-                immediate_size: 0,
-            })
-        };
-        let layouts = [layout(None), layout(Some(&depth_layouts[0])), layout(Some(&depth_layouts[1]))];
+        let layouts = pipeline_layouts(device, [scene, camera, &texture_layout], &depth_layouts);
         let (modules, cache) = (HashMap::new(), HashMap::new());
-        Self { texture_layout, depth_layouts, layouts, modules, cache, soft, data_textures }
+        let exact_layouts = None;
+        let scene_layout = scene.clone();
+        Self {
+            scene_layout,
+            texture_layout,
+            depth_layouts,
+            layouts,
+            exact_layouts,
+            modules,
+            cache,
+            soft,
+            data_textures,
+        }
     }
 
     /// Build the pipeline of `key` unless it exists; returns whether it was
@@ -146,9 +171,10 @@ impl ParticlePipelines {
         if self.cache.contains_key(&key) {
             return false;
         }
-        let (target, blend, soft, lit) = key;
+        let (target, blend, soft, lit, transparency) = key;
         let variant = soft.then_some(target.samples > 1);
-        let shading = ParticleShading { soft: variant, lit, data_textures: self.data_textures };
+        let lists = transparency == Transparency::Exact;
+        let shading = ParticleShading { soft: variant, lit, data_textures: self.data_textures, lists };
         let module = match self.modules.entry(shading) {
             std::collections::hash_map::Entry::Occupied(built) => built.into_mut(),
             std::collections::hash_map::Entry::Vacant(slot) => {
@@ -160,7 +186,11 @@ impl ParticlePipelines {
                 ))
             }
         };
-        let layout = &self.layouts[match variant {
+        let layouts = match lists {
+            true => self.exact_layouts.as_ref().unwrap_or(&self.layouts),
+            false => &self.layouts,
+        };
+        let layout = &layouts[match variant {
             None => 0,
             Some(false) => 1,
             Some(true) => 2,
@@ -184,6 +214,19 @@ impl ParticlePipelines {
             ..Default::default()
         };
         let attributes = wgpu::vertex_attr_array![0 => Float32x4, 1 => Float32x4];
+        let over = [Some(wgpu::ColorTargetState {
+            format: target.color,
+            blend: Some(wgpu::BlendState { color, alpha: keep_alpha }),
+            write_mask: wgpu::ColorWrites::ALL,
+        })];
+        let weighted = WEIGHTED_FORMATS.map(|format| {
+            Some(wgpu::ColorTargetState { format, blend: Some(WEIGHTED_BLEND), write_mask: wgpu::ColorWrites::ALL })
+        });
+        let (entry, targets): (_, &[_]) = match transparency {
+            Transparency::Sorted => ("fs_particle", &over),
+            Transparency::Weighted => ("fs_particle_weighted", &weighted),
+            Transparency::Exact => ("fs_particle_exact", &[]),
+        };
         let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
             label: Some("renderer: particle pipeline"),
             layout: Some(layout),
@@ -202,13 +245,9 @@ impl ParticlePipelines {
             multisample: wgpu::MultisampleState { count: target.samples, ..Default::default() },
             fragment: Some(wgpu::FragmentState {
                 module,
-                entry_point: Some("fs_particle"),
+                entry_point: Some(entry),
                 compilation_options: Default::default(),
-                targets: &[Some(wgpu::ColorTargetState {
-                    format: target.color,
-                    blend: Some(wgpu::BlendState { color, alpha: keep_alpha }),
-                    write_mask: wgpu::ColorWrites::ALL,
-                })],
+                targets,
             }),
             multiview_mask: None,
             cache: None,
@@ -333,11 +372,39 @@ impl Particles {
             }
             for soft in [false, layer.soft > 0.0 && self.pipelines.soft] {
                 let lit = layer.lit.then_some(clustered);
-                let built = self.pipelines.build(&registry.device, (target, layer.blend, soft, lit));
+                let built =
+                    self.pipelines.build(&registry.device, (target, layer.blend, soft, lit, Transparency::Sorted));
                 stats.pipelines_compiled += u32::from(built);
             }
         }
         Ok(())
+    }
+
+    /// A view's order-independent transparency `way` (not sorted) for
+    /// particles: the alpha-blended layers with records get their pipelines
+    /// into its sums or lists (exact ones' group 1 `lists`, the Camera block
+    /// and the lists). Returns whether it has any such layer.
+    pub(crate) fn prepare_transparency(
+        &mut self,
+        device: &wgpu::Device,
+        (target, clustered): (TargetFormat, bool),
+        (way, lists): (Transparency, Option<&wgpu::BindGroupLayout>),
+        stats: &mut FrameStats,
+    ) -> bool {
+        let pipelines = &mut self.pipelines;
+        if let (Some(lists), None) = (lists, &pipelines.exact_layouts) {
+            let groups = [&pipelines.scene_layout, lists, &pipelines.texture_layout];
+            pipelines.exact_layouts = Some(pipeline_layouts(device, groups, &pipelines.depth_layouts));
+        }
+        let mut any = false;
+        for layer in self.layers.iter().filter(|l| l.count > 0 && l.blend == ParticleBlend::Alpha) {
+            for soft in [false, layer.soft > 0.0 && pipelines.soft] {
+                let built = pipelines.build(device, (target, layer.blend, soft, layer.lit.then_some(clustered), way));
+                stats.pipelines_compiled += u32::from(built);
+            }
+            any = true;
+        }
+        any
     }
 
     /// The scene depth a frame's soft layers read from `target`, when some
@@ -354,20 +421,26 @@ impl Particles {
         })
     }
 
-    /// Stage 7's last draws before the glare: every layer with records, one
+    /// Stage 7's last draws before the glare (or, for `Layers::Alpha`, the
+    /// transparency pass's): every layer of `layers` with records, one
     /// draw each, soft ones reading `depth` when given (group 3), lit ones
     /// from the view's light clusters where `clustered`. Leaves groups 0 and 1 bound.
     pub(crate) fn draw(
         &self,
         (pass, outline): (&mut wgpu::RenderPass<'_>, &Outline),
-        (target, clustered): (TargetFormat, bool),
+        (target, clustered, layers): (TargetFormat, bool, Layers),
         depth: Option<&wgpu::BindGroup>,
         stats: &mut FrameStats,
     ) {
-        for layer in self.layers.iter().filter(|l| l.count > 0) {
+        let (drawn, way) = match layers {
+            Layers::All => (None, Transparency::Sorted),
+            Layers::Additive => (Some(ParticleBlend::Additive), Transparency::Sorted),
+            Layers::Alpha(way) => (Some(ParticleBlend::Alpha), way),
+        };
+        for layer in self.layers.iter().filter(|l| l.count > 0 && drawn.is_none_or(|b| b == l.blend)) {
             let soft = depth.filter(|_| layer.soft > 0.0);
             let lit = layer.lit.then_some(clustered);
-            let pipeline = self.pipelines.cache.get(&(target, layer.blend, soft.is_some(), lit));
+            let pipeline = self.pipelines.cache.get(&(target, layer.blend, soft.is_some(), lit, way));
             let (Some(pipeline), Some(group)) = (pipeline, &layer.group) else { continue };
             pass.set_pipeline(pipeline);
             pass.set_bind_group(2, group, &[]);
@@ -398,4 +471,21 @@ impl Particles {
             stats.particles_drawn += layer.count;
         }
     }
+}
+
+/// The particle pipeline layouts over `[scene, camera, sprite]` (group 1
+/// the Camera block, or exact transparency's lists beside it): hard, and
+/// soft reading a single-sampled or a multisampled depth (group 3).
+fn pipeline_layouts(
+    device: &wgpu::Device,
+    [scene, camera, sprite]: [&wgpu::BindGroupLayout; 3],
+    depth: &[wgpu::BindGroupLayout; 2],
+) -> [wgpu::PipelineLayout; 3] {
+    [None, Some(&depth[0]), Some(&depth[1])].map(|depth| {
+        device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("renderer: particle pipeline layout"),
+            bind_group_layouts: &[Some(scene), Some(camera), Some(sprite), depth],
+            immediate_size: 0,
+        })
+    })
 }

@@ -12,6 +12,7 @@ pub(crate) mod mesh_pool;
 pub(crate) mod pipelines;
 pub(crate) mod registry;
 pub(crate) mod target_pool;
+mod transparency_twins;
 
 use crate::gpu::{Gpu, SubmitQueue, UncapturedErrors};
 use crate::render::debug::timer::GpuTimer;
@@ -69,6 +70,8 @@ pub(crate) struct Resources {
     pub light_binning: Option<LightBinning>,
     /// Particle layers, drawn in every view.
     pub particles: Particles,
+    /// Order-independent transparency's composites, and what the device can draw.
+    pub transparency: crate::render::passes::transparency::TransparencyPasses,
     /// Ambient occlusion's passes reading a single-sample pre-pass (0) and a
     /// multisampled one (1), each made with the first view that needs it.
     pub ambient_occlusion_pipelines: [Option<AmbientOcclusionPipelines>; 2],
@@ -121,6 +124,7 @@ impl Resources {
             cull_pipelines: gpu.culls_on_gpu().then(|| CullPipelines::new(&device, gpu.occlusion_culls())),
             light_binning: gpu.culls_on_gpu().then(|| LightBinning::new(&device)),
             particles,
+            transparency: crate::render::passes::transparency::TransparencyPasses::new(gpu),
             ambient_occlusion_pipelines: [None, None],
             gpu_timer: None,
             hdr_msaa: flags.sample_count_supported(4)

@@ -140,6 +140,12 @@ pub(crate) enum PassKind {
     /// A view's depth pre-pass for ambient occlusion: normal and distance
     /// (`fs_prepass`) into its target, depth into the view's (or its own).
     Prepass,
+    /// Weighted transparency's accumulation (`fs_weighted`): the sums into
+    /// the view's two half-float targets, depth tested, not written.
+    Weighted,
+    /// Exact transparency's fragment lists (`fs_exact`): no colour target,
+    /// depth tested before the shader, not written.
+    Exact,
 }
 
 /// Everything that makes one pipeline differ from another.
@@ -179,9 +185,15 @@ pub(crate) struct Pipelines {
     equal_of: HashMap<u16, u16>,
     /// The sky shader's pipelines by target and pass.
     sky_cache: HashMap<(TargetFormat, SkyPass), wgpu::RenderPipeline>,
+    /// Each forward pipeline's twin drawing it for weighted or exact
+    /// transparency, once asked for (`resources/transparency_twins.rs`).
+    pub(super) transparency_of: HashMap<(u16, crate::scene::Transparency), Option<u16>>,
+    /// Group 1 with the fragment lists beside the Camera block, and the
+    /// forward layout with it: made with the first exact twin.
+    pub(super) lists: Option<(wgpu::BindGroupLayout, wgpu::PipelineLayout)>,
 }
 
-fn uniform_entry(binding: u32, visibility: wgpu::ShaderStages, dynamic: bool) -> wgpu::BindGroupLayoutEntry {
+pub(crate) fn uniform_entry(binding: u32, visibility: wgpu::ShaderStages, dynamic: bool) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry {
         binding,
         visibility,
@@ -375,6 +387,8 @@ impl Pipelines {
             prepass_of: HashMap::new(),
             equal_of: HashMap::new(),
             sky_cache: HashMap::new(),
+            transparency_of: HashMap::new(),
+            lists: None,
         }
     }
 
@@ -648,12 +662,23 @@ impl Pipelines {
             blend: blend(key.states.blend),
             write_mask: wgpu::ColorWrites::ALL,
         })];
+        let weighted = crate::render::passes::transparency::WEIGHTED_FORMATS.map(|format| {
+            Some(wgpu::ColorTargetState {
+                format,
+                blend: Some(crate::render::passes::transparency::WEIGHTED_BLEND),
+                write_mask: wgpu::ColorWrites::ALL,
+            })
+        });
+        let lists = self.lists.as_ref().map(|(_, layout)| layout);
         let alpha_tested = key.features.contains(ShaderFeatures::ALPHA_MASK);
         let (layout, fragment, targets): (_, _, &[_]) = match key.pass {
             PassKind::Forward => (&self.layout, Some("fs_main"), &targets),
             PassKind::ShadowDepth => (&self.shadow_layout, alpha_tested.then_some("fs_shadow_mask"), &[]),
             PassKind::ShadowDistance => (&self.shadow_layout, Some("fs_shadow_distance"), &[]),
             PassKind::Prepass => (&self.shadow_layout, Some("fs_prepass"), &targets),
+            PassKind::Weighted => (&self.layout, Some("fs_weighted"), &weighted),
+            // Made before any exact twin (else the layout refuses `fs_exact`'s lists).
+            PassKind::Exact => (lists.unwrap_or(&self.layout), Some("fs_exact"), &[]),
         };
         device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
             label: Some(&label),

@@ -1,7 +1,8 @@
 //! [`GpuParticles`]: an emitter's slots on the GPU, stepped by compute
 //! passes in the frame's encoder ([`FrameInput::simulate`](crate::FrameInput::simulate))
 //! and written into a particle layer as billboards, back to front for
-//! alpha blending (a counting sort by distance, `shader/particles_step.wgsl`).
+//! alpha blending (a counting sort by distance, `shader/particles_step.wgsl`)
+//! unless the view draws transparency in any order.
 
 use super::{EmitterParams, Schedule, SpawnShape};
 use crate::gpu::GpuSimulation;
@@ -94,7 +95,8 @@ pub struct GpuParticles {
     /// Steps recorded so far, and steps asked for.
     steps: u64,
     target: u64,
-    eye: Vec3,
+    /// Where alpha-blended particles are sorted from (`None`: not sorted).
+    eye: Option<Vec3>,
     state: wgpu::Buffer,
     /// The buffers bound besides the step blocks, in binding order.
     bound: [wgpu::Buffer; 6],
@@ -159,7 +161,7 @@ impl GpuParticles {
             slots,
             steps: 0,
             target: 0,
-            eye: Vec3::ZERO,
+            eye: None,
             state,
             bound,
             step_buffer,
@@ -185,8 +187,9 @@ impl GpuParticles {
 
     /// Step on to `time` seconds in the next frame's simulate stage (from the
     /// start again, all slots emptied, for an earlier time), with alpha-blended
-    /// particles sorted from `eye`.
-    pub fn advance_to(&mut self, queue: &wgpu::Queue, time: f32, eye: Vec3) {
+    /// particles sorted from `eye` (`None`: written in slot order, as
+    /// additive ones are, for transparency drawn in any order).
+    pub fn advance_to(&mut self, queue: &wgpu::Queue, time: f32, eye: Option<Vec3>) {
         let target = (f64::from(time.max(0.0)) / f64::from(self.dt)).round() as u64;
         if target < self.steps {
             let empty = vec![0u8; 32 * self.slots as usize];
@@ -235,7 +238,7 @@ impl GpuParticles {
         StepGpu {
             times: [t0, t1, self.dt, self.sort_distance()],
             counts: [stream.min(u64::from(u32::MAX)) as u32, bursts.min(u64::from(u32::MAX)) as u32, 0, 0],
-            eye: self.eye.extend(1.0).into(),
+            eye: self.eye.unwrap_or(Vec3::ZERO).extend(1.0).into(),
         }
     }
 
@@ -249,7 +252,7 @@ impl GpuParticles {
             SpawnShape::Box(half) => half.length(),
         };
         let reach = shape + p.speed.1 * life + 0.5 * (p.gravity.length() + p.noise) * life * life;
-        self.eye.distance(p.origin) + reach.max(1e-3)
+        self.eye.unwrap_or(Vec3::ZERO).distance(p.origin) + reach.max(1e-3)
     }
 }
 
@@ -282,12 +285,12 @@ impl GpuSimulation for GpuParticles {
         }
         let last = [(u64::from(steps) * STEP_STRIDE) as u32];
         pass.set_bind_group(0, &self.group, &last);
-        match self.blend {
-            ParticleBlend::Additive => {
+        match (self.blend, self.eye) {
+            (ParticleBlend::Additive, _) | (ParticleBlend::Alpha, None) => {
                 pass.set_pipeline(&kernels.write);
                 pass.dispatch_workgroups(groups, 1, 1);
             }
-            ParticleBlend::Alpha => {
+            (ParticleBlend::Alpha, Some(_)) => {
                 let [clear, count, scatter] = &kernels.sort;
                 pass.set_pipeline(clear);
                 pass.dispatch_workgroups(groups.max((BUCKETS + 1).div_ceil(WORKGROUP)), 1, 1);
