@@ -398,7 +398,7 @@ impl Shown {
     fn place(desc: glint::asset::SceneDesc, gpu: &Gpu, density: f32) -> Result<Self, String> {
         let mut renderer = Renderer::new(gpu);
         renderer.set_density(density);
-        let controls = Controls::new(&desc, density);
+        let controls = Controls::new(&desc, density).for_adapter(gpu);
         let world = World::place(desc, &mut renderer).map_err(|e| e.to_string())?;
         let views = world.views(None);
         let camera = views.iter().find(|view| view.output.is_none()).ok_or("no camera draws into the page")?.camera;

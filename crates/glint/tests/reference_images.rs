@@ -76,12 +76,29 @@ fn smaa_after_tonemapping() {
 }
 
 #[test]
+fn crossing_glass_drawn_exactly_from_per_pixel_lists() {
+    // Ground, post, three panes and a sphere; the panes and the sphere in
+    // the transparency pass, then its composite.
+    check("transparency", 7);
+}
+
+#[test]
 fn every_scene_matches_its_reference_culled_on_the_cpu_too() {
     // The tests above cull on the GPU where the adapter can (the default).
     let Some(gpu) = common::gpu() else { return };
-    for name in
-        ["shapes", "textures", "alpha", "lights", "instancing", "ortho", "states", "tiles", "soft_shadows", "smaa"]
-    {
+    for name in [
+        "shapes",
+        "textures",
+        "alpha",
+        "lights",
+        "instancing",
+        "ortho",
+        "states",
+        "tiles",
+        "soft_shadows",
+        "smaa",
+        "transparency",
+    ] {
         let path = common::repo_root().join("tests/scenes").join(format!("{name}.scn"));
         let (image, stats) = common::render_file(gpu, &path, 256, glint::Culling::Cpu);
         assert_eq!(stats.culling, glint::Culling::Cpu);
@@ -92,9 +109,19 @@ fn every_scene_matches_its_reference_culled_on_the_cpu_too() {
 #[test]
 fn every_scene_matches_its_reference_on_gl_which_culls_on_the_cpu() {
     let Some(gl) = common::gl_gpu() else { return };
-    for name in
-        ["shapes", "textures", "alpha", "lights", "instancing", "ortho", "states", "tiles", "soft_shadows", "smaa"]
-    {
+    for name in [
+        "shapes",
+        "textures",
+        "alpha",
+        "lights",
+        "instancing",
+        "ortho",
+        "states",
+        "tiles",
+        "soft_shadows",
+        "smaa",
+        "transparency",
+    ] {
         let path = common::repo_root().join("tests/scenes").join(format!("{name}.scn"));
         let (image, stats) = common::render_file(gl, &path, 256, glint::Culling::Gpu);
         assert_eq!((stats.culling, stats.occlusion), (glint::Culling::Cpu, false), "{name}");

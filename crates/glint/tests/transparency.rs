@@ -177,8 +177,8 @@ fn a_frame_without_blended_materials_draws_the_same_whatever_the_way() {
 /// A red particle 0.4 behind a blue one (`near_first`: the blue one's record
 /// first), and with `pane` a green 60% pane between them, drawn with
 /// `transparency` at 4× MSAA: the pixel at the particles' centre (on the
-/// diagonal inside each billboard, where under MSAA each of its triangles
-/// gives that pixel a fragment: exact must count them once).
+/// diagonal inside each billboard, which both its triangles cover part of:
+/// exact must keep one fragment of it).
 fn particles(gpu: &Gpu, transparency: Transparency, near_first: bool, pane: bool) -> [u8; 3] {
     use glint::render::{ParticleBlend, ParticleGpu, ParticleLook};
     let mut renderer = Renderer::new(gpu);

@@ -226,7 +226,7 @@ impl App {
         let surface = WindowSurface::new(&gpu, surface, size.width, size.height)?;
         let msaa = if gpu.supports_msaa(self.args.msaa) { self.args.msaa } else { 1 };
         let target = OffscreenTarget::new(&gpu, size.width.max(1), size.height.max(1), msaa)?;
-        let mut controls = free_controls(&desc, self.args.density);
+        let mut controls = free_controls(&desc, &gpu, self.args.density);
         // `--lod`, `--lod-error` and `--cluster-heat` as the controls' first choices.
         let lod = self.args.lod;
         let off = (lod.lod == crate::lod::LodSwitch::Off).then_some(("levels", 0.0));
@@ -300,7 +300,7 @@ impl View {
                 // The views come from the new file (the chosen camera, or all
                 // views when it has no longer one); the fly camera's place
                 // stays, and so do the density and the free camera.
-                let controls = free_controls(&desc, self.controls.density());
+                let controls = free_controls(&desc, &self.gpu, self.controls.density());
                 match Scene::new(&self.gpu, desc, camera_index, cull) {
                     Ok(scene) => (self.scene, self.controls, self.shown_camera) = (scene, controls, None),
                     Err(e) => {
@@ -476,9 +476,9 @@ fn view_counts(stats: &[glint::FrameStats]) -> String {
     }
 }
 
-/// The controls of `desc` with the free camera chosen, as the viewer starts.
-fn free_controls(desc: &SceneDesc, density: f32) -> Controls {
-    let mut controls = Controls::new(desc, density);
+/// The controls of `desc` on `gpu` with the free camera chosen, as the viewer starts.
+fn free_controls(desc: &SceneDesc, gpu: &Gpu, density: f32) -> Controls {
+    let mut controls = Controls::new(desc, density).for_adapter(gpu);
     controls.toggle_free_camera();
     controls
 }

@@ -274,6 +274,15 @@ impl SceneDesc {
         Lighting::new(&self.lights, self.environment)
     }
 
+    /// Whether it draws anything its [`transparency`](Self::transparency)
+    /// decides: a blended material (of the scene or a model) or an
+    /// alpha-blended emitter.
+    pub fn has_transparency(&self) -> bool {
+        let blended = |m: &MaterialDesc| m.material.alpha_mode == crate::scene::AlphaMode::Blend;
+        self.materials.iter().chain(self.models.iter().flat_map(|m| &m.materials)).any(blended)
+            || self.emitters.iter().any(|e| e.blend == crate::render::ParticleBlend::Alpha)
+    }
+
     /// Camera `index` over the whole image, with its post chain.
     pub fn camera_view(&self, index: usize) -> View {
         let c = &self.camera_views[index];

@@ -495,3 +495,19 @@ fn total_instances_are_capped_across_blocks() {
     assert_eq!(err.line, Some(10));
     assert!(err.message.contains("3000000 instances"), "{err}");
 }
+
+#[test]
+fn the_world_chooses_every_cameras_transparency_and_the_options_override_it() {
+    use crate::scene::Transparency;
+    let text = "{ \"classname\" \"world\"\n\"transparency\" \"exact\" }\n{ \"classname\" \"camera\" }\n";
+    let scene = parse(text).expect("scene");
+    assert_eq!(scene.transparency, Transparency::Exact);
+    assert_eq!(scene.camera_view(0).transparency, Transparency::Exact);
+    assert!(!scene.has_transparency(), "nothing blended in it");
+    assert_eq!(parse("{ \"classname\" \"camera\" }\n").expect("scene").transparency, Transparency::Sorted);
+    let bad = parse("{ \"classname\" \"world\"\n\"transparency\" \"fast\" }\n").unwrap_err().to_string();
+    assert!(bad.contains("t.scn:2") && bad.contains("sorted, weighted, exact"), "{bad}");
+    let options = LoadOptions { transparency: Some(Transparency::Weighted), ..LoadOptions::default() };
+    let scene = parse_scene_with(Path::new("dir/t.scn"), text, options).expect("scene");
+    assert_eq!(scene.camera_view(0).transparency, Transparency::Weighted, "the options' choice");
+}

@@ -108,8 +108,10 @@ pub enum Transparency {
     Weighted,
     /// The reference: every transparent fragment kept in its pixel's list
     /// and blended in depth order (the nearest 32 of a pixel's fragments).
-    /// Needs storage buffers in fragment shaders (Vulkan, GL): on the WebGL2
-    /// path the frame is refused with an error.
+    /// Under MSAA the lists take one sample a pixel (sample 0's), so
+    /// transparent silhouettes are not antialiased. Needs storage buffers in
+    /// fragment shaders (Vulkan, GL): on the WebGL2 path and in browsers the
+    /// frame is refused with an error.
     Exact,
 }
 

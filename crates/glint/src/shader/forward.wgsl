@@ -836,13 +836,16 @@ fn fs_weighted(in: VertexOut, @builtin(front_facing) front: bool) -> Weighted {
 
 #ifdef TRANSPARENCY_LISTS
 // Exact transparency: the fragment into its pixel's list. The depth test
-// runs before the shader, so hidden fragments append nothing. A fragment is
-// kept whole however few of a multisampled pixel's samples it covers (GL's
-// backend cannot read the sample mask): under MSAA its edges are whole pixels.
+// runs before the shader, so hidden fragments append nothing. Under MSAA the
+// shader runs per sample and only sample 0 appends: a pixel gets what one
+// sample a pixel would (one fragment of a surface, whole at its silhouette),
+// not a fragment from each triangle that covers part of it.
 @fragment
 @early_depth_test(force)
-fn fs_exact(in: VertexOut, @builtin(front_facing) front: bool) {
-    append_fragment(forward_color(in, front), in.clip);
+fn fs_exact(in: VertexOut, @builtin(front_facing) front: bool, @builtin(sample_index) sample: u32) {
+    if sample == 0u {
+        append_fragment(forward_color(in, front), in.clip);
+    }
 }
 #endif
 

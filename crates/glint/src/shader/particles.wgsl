@@ -104,11 +104,14 @@ fn fs_particle_weighted(in: ParticleOut) -> Weighted {
 
 #ifdef TRANSPARENCY_LISTS
 // An alpha-blended layer's fragment into its pixel's list (exact
-// transparency), after the depth test.
+// transparency), after the depth test; sample 0's alone, as forward.wgsl's
+// fs_exact.
 @fragment
 @early_depth_test(force)
-fn fs_particle_exact(in: ParticleOut) {
-    append_fragment(particle_color(in), in.clip);
+fn fs_particle_exact(in: ParticleOut, @builtin(sample_index) sample: u32) {
+    if sample == 0u {
+        append_fragment(particle_color(in), in.clip);
+    }
 }
 #endif
 

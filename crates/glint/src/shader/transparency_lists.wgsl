@@ -1,7 +1,6 @@
 // Exact transparency's composite (render/passes/transparency.rs): each
 // pixel's list of transparent fragments (glint::transparency_out's
-// append_fragment) sorted near to far, a surface's fragment counted once,
-// and blended, over what the opaque stages drew. Blended One +
+// append_fragment) sorted near to far and blended, over what the opaque stages drew. Blended One +
 // OneMinusSrcAlpha: the fragments' colour, each behind the ones before it,
 // and the coverage 1 - Π(1 - alpha).
 //
@@ -36,16 +35,6 @@ fn in_front(a: vec4<u32>, b: vec4<u32>) -> bool {
     return a.y < b.y;
 }
 
-// Whether `a` and `b` are one surface's fragment twice: under MSAA a pixel
-// on an edge inside a mesh gets a fragment from each triangle, each kept
-// whole, with the colour and depth of the pixel's centre on the same plane
-// (equal within rounding).
-fn same_fragment(a: vec4<u32>, b: vec4<u32>) -> bool {
-    let colors = abs(vec4<f32>(unpack2x16float(a.x), unpack2x16float(a.y)) - vec4<f32>(unpack2x16float(b.x), unpack2x16float(b.y)));
-    let depths = abs(bitcast<f32>(a.z) - bitcast<f32>(b.z));
-    return all(colors <= vec4<f32>(1.0 / 256.0)) && depths <= 1e-6;
-}
-
 @fragment
 fn fs_composite(@builtin(position) position: vec4<f32>) -> @location(0) vec4<f32> {
     let pixel = vec2<u32>(position.xy);
@@ -63,13 +52,8 @@ fn fs_composite(@builtin(position) position: vec4<f32>) -> @location(0) vec4<f32
         let n = nodes[node];
         node = n.w;
         var at = 0u;
-        var seen = false;
         for (var k = 0u; k < count; k++) {
             at = select(at, k + 1u, in_front(kept[k], n));
-            seen = seen || same_fragment(kept[k], n);
-        }
-        if seen {
-            continue;
         }
         for (var k = min(count, KEPT - 1u); k > at; k--) {
             kept[k] = kept[k - 1u];

@@ -12,7 +12,8 @@
 
 use super::World;
 use crate::asset::SceneDesc;
-use crate::scene::{AmbientOcclusion, Camera, Culling, PostEffect, SmaaPreset, Tonemap, View, MAX_POST_EFFECTS};
+use crate::scene::MAX_POST_EFFECTS;
+use crate::scene::{AmbientOcclusion, Camera, Culling, PostEffect, SmaaPreset, Tonemap, Transparency, View};
 use crate::Renderer;
 use serde::Serialize;
 
@@ -132,6 +133,12 @@ pub struct Controls {
     /// The shadow-casting directional lights' angular size in degrees (soft
     /// shadows), where the scene has such a light.
     sun_size: Option<f32>,
+    /// How every view draws transparency, an index of
+    /// [`Transparency::ALL`], where the scene has something transparent.
+    transparency: Option<usize>,
+    /// Whether exact transparency is offered (where the adapter can draw it:
+    /// [`for_adapter`](Self::for_adapter)).
+    offers_exact: bool,
 }
 
 /// The samples per pixel a frame may average (an accumulated still each
@@ -176,7 +183,19 @@ impl Controls {
                 .filter(|l| matches!(l.kind, crate::scene::LightKind::Directional { .. }))
                 .find_map(|l| l.shadows)
                 .map(|s| s.light_size.min(SUN_SIZE_MAX)),
+            transparency: desc.has_transparency().then_some(desc.transparency as usize),
+            offers_exact: true,
         }
+    }
+
+    /// These controls for `gpu`: exact transparency offered only where it
+    /// can draw it ([`Gpu::fragment_lists`](crate::Gpu::fragment_lists); a
+    /// scene asking for it elsewhere is drawn weighted).
+    pub fn for_adapter(self, gpu: &crate::Gpu) -> Self {
+        let offers_exact = gpu.fragment_lists();
+        let exact = Transparency::Exact as usize;
+        let transparency = self.transparency.map(|k| if k == exact && !offers_exact { exact - 1 } else { k });
+        Self { offers_exact, transparency, ..self }
     }
 
     /// Every control, in the order shown.
@@ -201,6 +220,11 @@ impl Controls {
         add("lod_error".into(), "View", "level error (px)", kind);
         let options = SAMPLES.iter().map(|n| n.to_string()).collect();
         add("samples".into(), "View", "samples per pixel", ControlKind::Choice { index: self.samples, options });
+        if let Some(index) = self.transparency {
+            let offered = if self.offers_exact { Transparency::ALL.len() } else { Transparency::ALL.len() - 1 };
+            let options = Transparency::NAMES[..offered].iter().map(|n| (*n).to_owned()).collect();
+            add("transparency".into(), "View", "transparency", ControlKind::Choice { index, options });
+        }
         if self.has_positional {
             let kind = ControlKind::Toggle { on: self.cluster_heat };
             add("cluster_heat".into(), "View", "lights per cluster (heat map)", kind);
@@ -294,6 +318,7 @@ impl Controls {
             ("lod_error", _) => self.lod_error = Some(clamp(value)),
             ("shadows", _) => self.shadows = on,
             ("samples", ControlKind::Choice { options, .. }) => self.samples = index(options.len()),
+            ("transparency", ControlKind::Choice { options, .. }) => self.transparency = Some(index(options.len())),
             ("sun_size", _) => self.sun_size = Some(clamp(value)),
             ("cloth_debug", _) => self.cloth_debug = Some(on),
             ("exposure", _) => self.exposure = clamp(value),
@@ -437,6 +462,9 @@ impl Controls {
                 }
                 if let Some(pixels) = self.lod_error {
                     view.lod_error = pixels;
+                }
+                if let Some(k) = self.transparency {
+                    view.transparency = Transparency::ALL[k];
                 }
                 let camera = self.scene_cameras.iter().position(|c| *c == view.camera);
                 if let Some(effects) = camera.and_then(|c| self.post.get(c)) {
@@ -616,5 +644,29 @@ mod tests {
         let view = vec![View::new(own.scene_cameras[0]).with_post(vec![PostEffect::TONEMAP, PostEffect::SMAA])];
         assert_eq!(own.views(view)[0].post[1], PostEffect::Smaa { preset: SmaaPreset::Low });
         assert!(own.set("post.0.0.preset", 1.0).is_err(), "tonemap has no preset");
+    }
+
+    #[test]
+    fn the_transparency_choice_is_offered_where_something_is_transparent() {
+        let c = controls(SCENE);
+        assert!(c.list().iter().all(|c| c.id != "transparency"), "nothing transparent, no control");
+        let glass = "{ \"classname\" \"world\"\n\"transparency\" \"weighted\" }\n\
+                     { \"classname\" \"material\"\n\"name\" \"glass\"\n\"alpha_mode\" \"blend\" }\n";
+        let mut c = controls(glass);
+        let choice = |c: &Controls| c.list().into_iter().find(|c| c.id == "transparency").map(|c| c.kind);
+        let options: Vec<String> = Transparency::NAMES.iter().map(|n| (*n).to_owned()).collect();
+        assert_eq!(choice(&c), Some(ControlKind::Choice { index: 1, options }), "as the world says");
+        let view = vec![View::new(Camera::orthographic(2.0, 0.1, 20.0))];
+        assert_eq!(c.views(view.clone())[0].transparency, Transparency::Weighted);
+        c.set("transparency", 2.0).unwrap();
+        assert_eq!(c.views(view.clone())[0].transparency, Transparency::Exact);
+        c.set("transparency", 0.0).unwrap();
+        assert_eq!(c.views(view)[0].transparency, Transparency::Sorted);
+        // Where the adapter cannot keep lists, exact is not offered.
+        let Some(gpu) = crate::gpu::test_gpu().and_then(|g| g.with_webgl2_limits().ok()) else { return };
+        let mut c = controls(glass).for_adapter(&gpu);
+        c.set("transparency", 2.0).unwrap();
+        let options: Vec<String> = Transparency::NAMES[..2].iter().map(|n| (*n).to_owned()).collect();
+        assert_eq!(choice(&c), Some(ControlKind::Choice { index: 1, options }), "weighted at most");
     }
 }

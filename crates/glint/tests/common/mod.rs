@@ -119,7 +119,7 @@ fn render_levels(
     renderer.set_levels_of_detail(levels);
     let entities = renderer.place_scene(desc).entities;
     let mut target = OffscreenTarget::new(gpu, width, height, samples).expect("target");
-    let view = glint::View::new(desc.cameras[0]).with_culling(culling);
+    let view = glint::View::new(desc.cameras[0]).with_culling(culling).with_transparency(desc.transparency);
     let stats = renderer.render(&entities, view, desc.lighting(), &mut target).expect("frame");
     (target.read_rgba8(gpu).expect("readback"), stats)
 }

@@ -121,9 +121,10 @@ pub(crate) fn draw_stages(
         let (start, calls, draws) = (web_time::Instant::now(), stats.draw_calls, stats.draws);
         let name = run_stage(list, &stage[0]);
         pass.push_debug_group(&queue_name(name));
+        let mut drawn = vec![false; stage.len()];
         for &late in phases {
             for (k, run) in stage.iter().enumerate() {
-                draw_run((res, outline), list, pass, (at + k, late), run, bound, stats);
+                drawn[k] |= draw_run((res, outline), list, pass, (at + k, late), run, bound, stats);
             }
         }
         at += stage.len();
@@ -137,9 +138,9 @@ pub(crate) fn draw_stages(
         cost.draw_calls += stats.draw_calls - calls;
         cost.draws += stats.draws - draws;
         // A GPU-culled batch counts its candidates, once for all its levels.
-        let batches = stage
-            .iter()
-            .flat_map(|r| r.batches())
+        let batches = (stage.iter().zip(&drawn))
+            .filter(|(_, &drawn)| drawn)
+            .flat_map(|(r, _)| r.batches())
             .filter(|&k| list.placed[k] != Placed::OnGpu || list.batches[k].level == 0);
         cost.instances += batches.map(|k| u64::from(list.batches[k].instance_count)).sum::<u64>();
         cost.cpu_ms += ms_since(start);
@@ -147,7 +148,8 @@ pub(crate) fn draw_stages(
 }
 
 /// Draw run `k` of `list` (`run`), from the late phase's commands when
-/// `late`, setting only the state that changes.
+/// `late`, setting only the state that changes; whether it drew (not a run
+/// its twin or another pass draws).
 fn draw_run(
     (res, outline): (&Resources, &Outline),
     list: &DrawList,
@@ -156,18 +158,18 @@ fn draw_run(
     run: &Run,
     bound: &mut Bound,
     stats: &mut FrameStats,
-) {
+) -> bool {
     let (first, draw) = (&list.batches[run.first as usize], &list.draws[run.first as usize]);
     let pipelines = &res.registry.pipelines;
     let transparent = bound.leaves.and_then(|way| pipelines.transparency_of(first.pipeline, way));
     let pipeline = match (bound.twin, transparent) {
         (Twin::Transparent, Some(twin)) => twin,
         // Left to the transparency pass; or not drawn there.
-        (_, Some(_)) | (Twin::Transparent, None) => return,
+        (_, Some(_)) | (Twin::Transparent, None) => return false,
         (Twin::Own, None) => first.pipeline,
         (Twin::Prepass { shared }, None) => match pipelines.prepass_of(first.pipeline, shared) {
             Some(twin) => twin,
-            None => return,
+            None => return false,
         },
         (Twin::Equal, None) => pipelines.equal_of(first.pipeline).unwrap_or(first.pipeline),
     };
@@ -232,6 +234,7 @@ fn draw_run(
         }
     };
     outline.calls(|| run_calls((&res.registry, res.base_vertex), list, run, (command, late), changed));
+    true
 }
 
 /// Draw one full-screen triangle with `pipeline` (the sky shader's passes),

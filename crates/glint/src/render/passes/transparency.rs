@@ -14,9 +14,11 @@
 //! - **Exact**: per-pixel lists in storage buffers. The heads (4 bytes a
 //!   pixel, and the count of nodes taken) and the nodes (16 bytes: the colour
 //!   as four half floats, the depth, the next node), [`NODES_PER_PIXEL`] a
-//!   pixel, as many as one storage binding holds. The composite sorts each
-//!   pixel's nearest 32 fragments and blends them; fragments past the nodes
-//!   are dropped (the count read back by `glint explain` says when).
+//!   pixel, as many as one storage binding holds. Under MSAA the shaders run
+//!   per sample and sample 0 alone appends (one fragment of a surface a
+//!   pixel). The composite sorts each pixel's nearest 32 fragments and
+//!   blends them; fragments past the nodes are dropped (the count read back
+//!   by `glint explain` says when).
 
 use crate::gpu::{DriverErrors, TargetFormat, DEPTH_FORMAT};
 use crate::render::error::RenderError;
