@@ -644,6 +644,42 @@ for (const backend of backends) {
   }
 }
 
+// Weighted transparency on the page is `glint render --transparency
+// weighted`'s, the control offers sorted and weighted (not exact, which keeps
+// per-pixel lists that browsers' shaders cannot), and a scene asking for
+// exact is refused with that reason.
+for (const backend of backends) {
+  const scene = "scenes/transparency.scn";
+  const { page, state, logs } = await open(scene, backend);
+  try {
+    if (state.error) {
+      report(false, `transparency on ${backend}`, `${state.error}\n  ${logs.join("\n  ")}`);
+      continue;
+    }
+    const path = "tests/scenes/transparency.scn";
+    const weighted = await compareWithGlint(page, logs, scene, backend, ["--transparency", "weighted"], path);
+    const options = await page.evaluate(async () => {
+      const control = document.querySelector('[data-control="transparency"]');
+      if (!control) return null;
+      const names = [...control.options].map((o) => o.textContent);
+      control.value = "0";
+      control.dispatchEvent(new Event("change"));
+      await window.glintAwaitFrames(2);
+      return names;
+    });
+    let sorted = { ok: false, verdict: "no transparency control" };
+    if (options) sorted = await compareWithGlint(page, logs, "scenes/transparency_sorted.scn", backend, ["--transparency", "sorted"], path);
+    const offered = JSON.stringify(options) === JSON.stringify(["sorted", "weighted"]);
+    report(weighted.ok && sorted.ok && offered, `transparency on ${backend}`, `weighted: ${weighted.verdict}; sorted: ${sorted.verdict}; offered ${JSON.stringify(options)}`);
+  } finally {
+    await page.close();
+  }
+  const exact = await open("scenes/transparency_exact.scn", backend);
+  const said = exact.state.error || "";
+  report(said.includes("exact transparency is not available"), `exact transparency refused on ${backend}`, JSON.stringify(said));
+  await exact.page.close();
+}
+
 // A broken scene shows its error, with the file and line, on the page.
 for (const backend of backends) {
   const { page, state } = await open("scenes/broken.scn", backend);

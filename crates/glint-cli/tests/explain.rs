@@ -182,3 +182,24 @@ fn explain_shows_smaa_s_three_passes_and_their_cost() {
         "each effect's time is named: {gpu}"
     );
 }
+
+#[test]
+fn explain_shows_the_transparency_passes_and_weighted_error_against_exact() {
+    let args = ["explain", "tests/scenes/transparency.scn", "--size", "64x64", "--json", "--transparency", "weighted"];
+    let Some(out) = glint_vulkan(&args) else { return };
+    let json: serde_json::Value = serde_json::from_slice(&out.stdout).expect("one JSON object");
+    assert_eq!(json["stats"]["transparency"], "weighted");
+    let labels: Vec<&str> =
+        json["passes"].as_array().expect("passes").iter().filter_map(|p| p["name"].as_str()).collect();
+    assert!(labels.contains(&"transparency: weighted sums"), "{labels:?}");
+    let error = &json["weighted_error"];
+    let (mean, largest) = (error["mean"].as_f64().expect("mean"), error["largest"].as_u64().expect("largest"));
+    assert!(mean > 0.0 && mean < 0.05 && largest > 0, "weighted against exact: {error}");
+    // The scene's own exact: the lists' fragments counted, none dropped.
+    let Some(out) = glint_vulkan(&args[..5]) else { return };
+    let json: serde_json::Value = serde_json::from_slice(&out.stdout).expect("one JSON object");
+    let fragments = &json["stats"]["transparent_fragments"];
+    let appended = fragments["appended"].as_u64().expect("appended");
+    assert!(appended > 64 * 64 / 4 && appended <= fragments["held"].as_u64().expect("held"), "{fragments}");
+    assert!(json.get("weighted_error").is_none(), "exact is the reference itself");
+}

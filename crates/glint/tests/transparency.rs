@@ -50,8 +50,19 @@ fn draw(
     (transparency, samples): (Transparency, u32),
     (depths, reversed): (f32, bool),
 ) -> Result<(image::RgbaImage, FrameStats), RenderError> {
+    draw_ordered(gpu, (transparency, samples), (depths, reversed), None)
+}
+
+/// [`draw`], the quads drawn at `render_order` (`None`: in the transparent stage).
+fn draw_ordered(
+    gpu: &Gpu,
+    (transparency, samples): (Transparency, u32),
+    (depths, reversed): (f32, bool),
+    render_order: Option<u8>,
+) -> Result<(image::RgbaImage, FrameStats), RenderError> {
     let mut renderer = Renderer::new(gpu);
-    let mut entities = quads(&mut renderer, depths);
+    let mut entities: Vec<Entity> =
+        quads(&mut renderer, depths).into_iter().map(|e| e.with_render_order(render_order)).collect();
     if reversed {
         entities.reverse();
     }
@@ -233,5 +244,19 @@ fn alpha_particles_blend_in_any_order_and_exact_puts_a_pane_between_them() {
         let exact = particles(gpu, Transparency::Exact, false, true);
         assert!(exact[0] < over[0], "{name}: the pane hides more of the red particle {exact:?} {over:?}");
         assert!(exact[1] > 0 && exact[2] > exact[1], "{name}: blue over green over red {exact:?}");
+    }
+}
+
+#[test]
+fn blended_materials_queued_before_the_sky_go_to_the_transparency_pass_too() {
+    for (name, gpu) in gpus() {
+        let ways = [Transparency::Weighted, Transparency::Exact];
+        for way in ways.into_iter().filter(|w| *w != Transparency::Exact || gpu.fragment_lists()) {
+            let (own, _) = draw(gpu, (way, 4), (0.0, false)).expect("frame");
+            // A render order in the opaque stages' range, before the sky.
+            let (early, _) = draw_ordered(gpu, (way, 4), (0.0, false), Some(10)).expect("frame");
+            let most = common::max_difference(&own, &early);
+            assert!(most <= 1, "{name} {way:?}: queued before the sky, the quads differ by {most}");
+        }
     }
 }

@@ -92,7 +92,8 @@ pub struct Gpu {
 const CULL_STORAGE_BUFFERS: u32 = 8;
 
 /// What the renderer's draws may rely on, from the adapter's capabilities
-/// ([`Gpu::with_webgl2_limits`] turns them all off).
+/// ([`Gpu::with_webgl2_limits`] turns them all off but half-float blending,
+/// which WebGL2 has with `EXT_float_blend`).
 #[derive(Clone, Copy, Debug)]
 struct DrawPaths {
     /// Vertex shaders read storage buffers (else data textures).

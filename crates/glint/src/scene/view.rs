@@ -98,6 +98,8 @@ pub enum Transparency {
     /// Sorted far to near, per instance (particles per layer), and blended
     /// in that order: exact where surfaces do not cross, wrong where they do.
     /// The default: on every backend, and the cheapest where nothing crosses.
+    /// The naive baseline ([`FrameMode::Naive`](crate::render::FrameMode::Naive))
+    /// always draws so.
     #[default]
     Sorted,
     /// Weighted blended order-independent transparency (McGuire and Bavoil

@@ -189,13 +189,12 @@ impl Controls {
     }
 
     /// These controls for `gpu`: exact transparency offered only where it
-    /// can draw it ([`Gpu::fragment_lists`](crate::Gpu::fragment_lists); a
-    /// scene asking for it elsewhere is drawn weighted).
+    /// can draw it ([`Gpu::fragment_lists`](crate::Gpu::fragment_lists)), or
+    /// where the scene asks for it (its frames are then refused with the
+    /// reason, until another way is chosen).
     pub fn for_adapter(self, gpu: &crate::Gpu) -> Self {
-        let offers_exact = gpu.fragment_lists();
-        let exact = Transparency::Exact as usize;
-        let transparency = self.transparency.map(|k| if k == exact && !offers_exact { exact - 1 } else { k });
-        Self { offers_exact, transparency, ..self }
+        let asked = self.transparency == Some(Transparency::Exact as usize);
+        Self { offers_exact: gpu.fragment_lists() || asked, ..self }
     }
 
     /// Every control, in the order shown.

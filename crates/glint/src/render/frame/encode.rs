@@ -143,8 +143,10 @@ pub(crate) fn encode(
             draw_glare(res, &frame.outline, &mut pass, target, environment, stats);
         }
     }
+    // Every stage's blended runs (a `render_order` may put some before the
+    // sky), from both phases where occlusion culling split them.
     let depth = particle_depth.as_ref();
-    encode_transparency(res, frame, (gpu, view), target, (sky_at..end, after_sky), depth, stats);
+    encode_transparency(res, frame, (gpu, view), target, (0..end, after_sky), depth, stats);
     if last {
         let mut pass = begin_forward_pass(
             res,

@@ -60,8 +60,8 @@ pub(crate) fn prepare_transparency(
     Ok(())
 }
 
-/// The view's blended runs in `runs` (the stages after the sky), each
-/// from the commands of each of `phases`, and its alpha-blended particle
+/// The view's blended runs in `runs`, each from the commands of each of
+/// `phases`, and its alpha-blended particle
 /// layers (soft ones reading `particle_depth`), drawn by their twins into
 /// its weighted sums or fragment lists, depth-tested against what the
 /// forward pass drew.

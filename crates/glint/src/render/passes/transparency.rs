@@ -91,7 +91,7 @@ impl TransparencyPasses {
             Transparency::Exact if !self.exact => Err(RenderError::Unavailable {
                 what: "exact transparency",
                 why: "it keeps per-pixel lists in storage buffers, which fragment shaders here cannot write \
-                      (the WebGL2 path); use weighted or sorted",
+                      (the WebGL2 path, and WebGPU in browsers); use weighted or sorted",
             }),
             way => Ok(way),
         }
