@@ -280,7 +280,7 @@ impl SceneDesc {
     pub fn has_transparency(&self) -> bool {
         let blended = |m: &MaterialDesc| m.material.alpha_mode == crate::scene::AlphaMode::Blend;
         self.materials.iter().chain(self.models.iter().flat_map(|m| &m.materials)).any(blended)
-            || self.emitters.iter().any(|e| e.blend == crate::render::ParticleBlend::Alpha)
+            || self.emitters.iter().any(|e| e.blend == crate::scene::ParticleBlend::Alpha)
     }
 
     /// Camera `index` over the whole image, with its post chain.

@@ -39,7 +39,8 @@ pub(crate) fn test_gpu() -> Option<Gpu> {
     }
 }
 
-pub(crate) use blit::{full_screen_pipeline, full_screen_pipeline_with, sampler_entry, texture_entry, Blitter};
+pub(crate) use blit::{full_screen_pipeline, full_screen_pipeline_with, Blitter};
+pub(crate) use blit::{sampler_entry, storage_entry, texture_entry};
 pub(crate) use errors::{DriverErrors, UncapturedErrors};
 pub(crate) use submit::SubmitQueue;
 

@@ -9,7 +9,8 @@
 //! - **Weighted** (McGuire and Bavoil 2013): two half-float targets at the
 //!   view's samples, resolved to one: `Rgba16Float` holds Σ colour × alpha ×
 //!   weight (rgb) and the revealage Π(1 − alpha) (a); `R16Float` Σ alpha ×
-//!   weight. Both take [`WEIGHTED_BLEND`]: WebGL2 has no blend state per
+//!   weight. Both take `WEIGHTED_BLEND` (`resources/transparency_twins.rs`,
+//!   beside the twins that draw into them): WebGL2 has no blend state per
 //!   target. Memory: 10 bytes a pixel a sample, and 10 a pixel resolved.
 //! - **Exact**: per-pixel lists in storage buffers. The heads (4 bytes a
 //!   pixel, and the count of nodes taken) and the nodes (16 bytes: the colour
@@ -20,29 +21,12 @@
 //!   blends them; fragments past the nodes are dropped (the count read back
 //!   by `glint explain` says when).
 
-use crate::gpu::{DriverErrors, TargetFormat, DEPTH_FORMAT};
+use crate::gpu::{storage_entry, DriverErrors, TargetFormat, DEPTH_FORMAT};
 use crate::render::error::RenderError;
+use crate::render::resources::pipelines::{shader_module, uniform_entry};
+use crate::render::resources::transparency_twins::WEIGHTED_FORMATS;
 use crate::scene::Transparency;
 use std::collections::HashMap;
-
-/// Weighted transparency's targets: the sums and revealage, the weights.
-pub(crate) const WEIGHTED_FORMATS: [wgpu::TextureFormat; 2] =
-    [wgpu::TextureFormat::Rgba16Float, wgpu::TextureFormat::R16Float];
-
-/// The blend of both weighted targets: colour summed, alpha multiplied by
-/// 1 − the fragment's alpha.
-pub(crate) const WEIGHTED_BLEND: wgpu::BlendState = wgpu::BlendState {
-    color: wgpu::BlendComponent {
-        src_factor: wgpu::BlendFactor::One,
-        dst_factor: wgpu::BlendFactor::One,
-        operation: wgpu::BlendOperation::Add,
-    },
-    alpha: wgpu::BlendComponent {
-        src_factor: wgpu::BlendFactor::Zero,
-        dst_factor: wgpu::BlendFactor::OneMinusSrcAlpha,
-        operation: wgpu::BlendOperation::Add,
-    },
-};
 
 /// Nodes a view's lists hold per pixel on average (fewer where one storage
 /// binding cannot hold them).
@@ -202,19 +186,9 @@ fn composite_layout(
         },
         count: None,
     };
-    let storage = |binding| wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: fragment,
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Storage { read_only: true },
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        },
-        count: None,
-    };
     let (entries, source) = match way {
         Transparency::Exact => (
-            vec![storage(0), storage(1), crate::render::resources::pipelines::uniform_entry(2, fragment, false)],
+            vec![storage_entry(0, true), storage_entry(1, true), uniform_entry(2, fragment, false)],
             crate::shader::TRANSPARENCY_LISTS,
         ),
         _ => (vec![texture(0), texture(1)], crate::shader::TRANSPARENCY),
@@ -228,11 +202,7 @@ fn composite_layout(
         bind_group_layouts: &[Some(&group)],
         immediate_size: 0,
     });
-    let module = crate::render::resources::pipelines::shader_module(
-        device,
-        "transparency: composite shader",
-        source.to_string(),
-    );
+    let module = shader_module(device, "transparency: composite shader", source.to_string());
     (group, layout, module)
 }
 

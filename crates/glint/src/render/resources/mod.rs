@@ -12,7 +12,7 @@ pub(crate) mod mesh_pool;
 pub(crate) mod pipelines;
 pub(crate) mod registry;
 pub(crate) mod target_pool;
-mod transparency_twins;
+pub(crate) mod transparency_twins;
 
 use crate::gpu::{Gpu, SubmitQueue, UncapturedErrors};
 use crate::render::debug::timer::GpuTimer;

@@ -662,10 +662,10 @@ impl Pipelines {
             blend: blend(key.states.blend),
             write_mask: wgpu::ColorWrites::ALL,
         })];
-        let weighted = crate::render::passes::transparency::WEIGHTED_FORMATS.map(|format| {
+        let weighted = super::transparency_twins::WEIGHTED_FORMATS.map(|format| {
             Some(wgpu::ColorTargetState {
                 format,
-                blend: Some(crate::render::passes::transparency::WEIGHTED_BLEND),
+                blend: Some(super::transparency_twins::WEIGHTED_BLEND),
                 write_mask: wgpu::ColorWrites::ALL,
             })
         });

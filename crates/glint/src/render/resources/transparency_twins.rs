@@ -1,13 +1,32 @@
 //! Core layer: the twins that draw blended materials for weighted and exact
 //! transparency (`render/passes/transparency.rs`), beside the forward
-//! pipelines they twin, and the layout exact twins bind their fragment
-//! lists with.
+//! pipelines they twin: the layout exact twins bind their fragment lists
+//! with, and the formats and blend of the weighted targets they (and the
+//! particles' weighted pipelines) draw into.
 
-use crate::gpu::COLOR_FORMAT;
-use crate::render::passes::transparency::WEIGHTED_FORMATS;
+use crate::gpu::{storage_entry, COLOR_FORMAT};
 use crate::render::resources::pipelines::{uniform_entry, PassKind, PipelineKey, Pipelines};
 use crate::scene::{BlendState, DepthState, RenderStates, Transparency};
 use crate::shader::{ShaderError, ShaderFeatures};
+
+/// Weighted transparency's targets: the sums and revealage, the weights.
+pub(crate) const WEIGHTED_FORMATS: [wgpu::TextureFormat; 2] =
+    [wgpu::TextureFormat::Rgba16Float, wgpu::TextureFormat::R16Float];
+
+/// The blend of both weighted targets: colour summed, alpha multiplied by
+/// 1 − the fragment's alpha.
+pub(crate) const WEIGHTED_BLEND: wgpu::BlendState = wgpu::BlendState {
+    color: wgpu::BlendComponent {
+        src_factor: wgpu::BlendFactor::One,
+        dst_factor: wgpu::BlendFactor::One,
+        operation: wgpu::BlendOperation::Add,
+    },
+    alpha: wgpu::BlendComponent {
+        src_factor: wgpu::BlendFactor::Zero,
+        dst_factor: wgpu::BlendFactor::OneMinusSrcAlpha,
+        operation: wgpu::BlendOperation::Add,
+    },
+};
 
 impl Pipelines {
     /// The key of the pipeline drawing what `forward` draws for
@@ -75,22 +94,12 @@ impl Pipelines {
     pub(crate) fn lists_layout(&mut self, device: &wgpu::Device) -> &wgpu::BindGroupLayout {
         let (group, _) = self.lists.get_or_insert_with(|| {
             let fragment = wgpu::ShaderStages::FRAGMENT;
-            let storage = |binding| wgpu::BindGroupLayoutEntry {
-                binding,
-                visibility: fragment,
-                ty: wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Storage { read_only: false },
-                    has_dynamic_offset: false,
-                    min_binding_size: None,
-                },
-                count: None,
-            };
             let group = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
                 label: Some("renderer: camera block and fragment lists layout (group 1)"),
                 entries: &[
                     uniform_entry(0, wgpu::ShaderStages::VERTEX_FRAGMENT, true),
-                    storage(1),
-                    storage(2),
+                    storage_entry(1, false),
+                    storage_entry(2, false),
                     uniform_entry(3, fragment, false),
                 ],
             });
