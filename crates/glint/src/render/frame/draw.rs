@@ -11,7 +11,7 @@ use crate::render::frame::prepared::sky_pass;
 use crate::render::gpu_driven::commands::{Placed, Run, COMMAND_BYTES};
 use crate::render::gpu_driven::draw_list::{run_stage, DrawList};
 use crate::render::queue::{Queue, SKY_STAGE};
-use crate::render::resources::pipelines::SkyPass;
+use crate::render::resources::pipelines::{Pipelines, SkyPass};
 use crate::render::resources::Resources;
 use crate::render::views::ViewGpu;
 use crate::scene::{Environment, Transparency};
@@ -54,6 +54,20 @@ impl Bound {
     /// with [`Twin::Transparent`]).
     pub(crate) fn twin(twin: Twin, transparency: Option<Transparency>) -> Self {
         Self { twin, leaves: transparency, ..Self::default() }
+    }
+
+    /// The pipeline that draws a run of forward pipeline `own` in this pass:
+    /// its twin, or its own; `None` where the pass leaves the run out (to the
+    /// transparency pass, or without a pre-pass or transparency twin).
+    fn pipeline_of(&self, pipelines: &Pipelines, own: u16) -> Option<u16> {
+        let transparent = self.leaves.and_then(|way| pipelines.transparency_of(own, way));
+        match (self.twin, transparent) {
+            (Twin::Transparent, twin) => twin,
+            (_, Some(_)) => None,
+            (Twin::Own, None) => Some(own),
+            (Twin::Prepass { shared }, None) => pipelines.prepass_of(own, shared),
+            (Twin::Equal, None) => Some(pipelines.equal_of(own).unwrap_or(own)),
+        }
     }
 
     /// What stays bound after a full-screen draw (the sky) between runs: the
@@ -121,10 +135,9 @@ pub(crate) fn draw_stages(
         let (start, calls, draws) = (web_time::Instant::now(), stats.draw_calls, stats.draws);
         let name = run_stage(list, &stage[0]);
         pass.push_debug_group(&queue_name(name));
-        let mut drawn = vec![false; stage.len()];
         for &late in phases {
             for (k, run) in stage.iter().enumerate() {
-                drawn[k] |= draw_run((res, outline), list, pass, (at + k, late), run, bound, stats);
+                draw_run((res, outline), list, pass, (at + k, late), run, bound, stats);
             }
         }
         at += stage.len();
@@ -138,9 +151,10 @@ pub(crate) fn draw_stages(
         cost.draw_calls += stats.draw_calls - calls;
         cost.draws += stats.draws - draws;
         // A GPU-culled batch counts its candidates, once for all its levels.
-        let batches = (stage.iter().zip(&drawn))
-            .filter(|(_, &drawn)| drawn)
-            .flat_map(|(r, _)| r.batches())
+        let pipelines = &res.registry.pipelines;
+        let batches = (stage.iter())
+            .filter(|r| bound.pipeline_of(pipelines, list.batches[r.first as usize].pipeline).is_some())
+            .flat_map(|r| r.batches())
             .filter(|&k| list.placed[k] != Placed::OnGpu || list.batches[k].level == 0);
         cost.instances += batches.map(|k| u64::from(list.batches[k].instance_count)).sum::<u64>();
         cost.cpu_ms += ms_since(start);
@@ -148,8 +162,8 @@ pub(crate) fn draw_stages(
 }
 
 /// Draw run `k` of `list` (`run`), from the late phase's commands when
-/// `late`, setting only the state that changes; whether it drew (not a run
-/// its twin or another pass draws).
+/// `late`, setting only the state that changes (nothing for a run this pass
+/// leaves out: [`Bound::pipeline_of`]).
 fn draw_run(
     (res, outline): (&Resources, &Outline),
     list: &DrawList,
@@ -158,21 +172,10 @@ fn draw_run(
     run: &Run,
     bound: &mut Bound,
     stats: &mut FrameStats,
-) -> bool {
+) {
     let (first, draw) = (&list.batches[run.first as usize], &list.draws[run.first as usize]);
     let pipelines = &res.registry.pipelines;
-    let transparent = bound.leaves.and_then(|way| pipelines.transparency_of(first.pipeline, way));
-    let pipeline = match (bound.twin, transparent) {
-        (Twin::Transparent, Some(twin)) => twin,
-        // Left to the transparency pass; or not drawn there.
-        (_, Some(_)) | (Twin::Transparent, None) => return false,
-        (Twin::Own, None) => first.pipeline,
-        (Twin::Prepass { shared }, None) => match pipelines.prepass_of(first.pipeline, shared) {
-            Some(twin) => twin,
-            None => return false,
-        },
-        (Twin::Equal, None) => pipelines.equal_of(first.pipeline).unwrap_or(first.pipeline),
-    };
+    let Some(pipeline) = bound.pipeline_of(pipelines, first.pipeline) else { return };
     let mut changed = 0;
     let reference = pipelines.stencil_reference(pipeline);
     if bound.stencil_reference != reference {
@@ -234,7 +237,6 @@ fn draw_run(
         }
     };
     outline.calls(|| run_calls((&res.registry, res.base_vertex), list, run, (command, late), changed));
-    true
 }
 
 /// Draw one full-screen triangle with `pipeline` (the sky shader's passes),
